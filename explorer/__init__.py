@@ -1,0 +1,21 @@
+"""Valve-Gear Explorer: cam and valve-train motion, forces and elastic dynamics.
+
+    from explorer import load_scene, simulate
+    result = simulate(load_scene("assets/scenes/schenker1902_fig2.toml"))
+    result.columns["valve_lift_m"], result.summary["impact_velocity_opening_m_s"]
+
+Viewers (viser, rerun) are imported only by the commands that use them.
+"""
+
+from .errors import InputError
+from .scene import Scene, load_scene, loads_scene
+
+__all__ = ["InputError", "Scene", "load_scene", "loads_scene", "simulate", "__version__"]
+__version__ = "0.1.0"
+
+
+def simulate(scene):
+    """Compute the scene's effects over one revolution; returns a Result (.columns, .summary)."""
+    from .effects import simulate as _simulate
+
+    return _simulate(scene)

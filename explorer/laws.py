@@ -1,0 +1,135 @@
+"""Normalised motion laws: f(u) for u in [0, 1] with f(0) = 0, f(1) = 1 and analytic f', f'', f'''.
+
+A rise of height h over cam angle beta is L = h f(u), u = (theta - theta0)/beta, so
+dL/dtheta = h f'/beta, d2L/dtheta2 = h f''/beta^2, d3L/dtheta3 = h f'''/beta^3.
+The peak coefficients Cv = max f', Ca = max |f''|, Cj = max |f'''| are the classic table values.
+
+The trapezoid and sine families are built from segments whose acceleration is
+c0 + c1 sin(w x) + c2 cos(w x); velocity and lift are their exact integrals, so nothing here
+is differentiated or integrated numerically.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+TWO_PI = 2.0 * math.pi
+
+
+def _polynomial(coefficients: tuple[float, ...]):
+    """f(u) = sum c_k u^k, with exact derivatives."""
+    p0 = np.polynomial.Polynomial(coefficients)
+    ps = (p0, p0.deriv(1), p0.deriv(2), p0.deriv(3))
+
+    def evaluate(u: np.ndarray) -> np.ndarray:
+        return np.stack([p(u) for p in ps])
+
+    return evaluate
+
+
+def _cycloidal(u: np.ndarray) -> np.ndarray:
+    a = TWO_PI * u
+    return np.stack(
+        [u - np.sin(a) / TWO_PI, 1.0 - np.cos(a), TWO_PI * np.sin(a), TWO_PI**2 * np.cos(a)]
+    )
+
+
+def _harmonic(u: np.ndarray) -> np.ndarray:
+    a = math.pi * u
+    return np.stack(
+        [
+            0.5 * (1.0 - np.cos(a)),
+            0.5 * math.pi * np.sin(a),
+            0.5 * math.pi**2 * np.cos(a),
+            -0.5 * math.pi**3 * np.sin(a),
+        ]
+    )
+
+
+@dataclass(frozen=True)
+class _Segment:
+    start: float
+    end: float
+    c0: float  # constant acceleration part
+    c1: float  # amplitude of sin(w (u - start))
+    c2: float  # amplitude of cos(w (u - start))
+    w: float
+
+
+def _piecewise_harmonic(segments: list[_Segment]):
+    """Exact integration of piecewise acceleration c0 + c1 sin + c2 cos, then scaled to f(1) = 1."""
+    starts = np.array([s.start for s in segments])
+    v0s, s0s = [], []
+    v, s = 0.0, 0.0
+    for seg in segments:
+        v0s.append(v)
+        s0s.append(s)
+        x = seg.end - seg.start
+        v, s = _segment_state(seg, x, v, s)[:2]
+    scale = 1.0 / s  # makes f(1) = 1 exactly (up to rounding)
+
+    def evaluate(u: np.ndarray) -> np.ndarray:
+        u = np.asarray(u, dtype=float)
+        out = np.empty((4,) + u.shape)
+        index = np.clip(np.searchsorted(starts, u, side="right") - 1, 0, len(segments) - 1)
+        for i, seg in enumerate(segments):
+            mask = index == i
+            if not np.any(mask):
+                continue
+            x = u[mask] - seg.start
+            vv, ss, aa, jj = _segment_state(seg, x, v0s[i], s0s[i])
+            out[0][mask] = ss * scale
+            out[1][mask] = vv * scale
+            out[2][mask] = aa * scale
+            out[3][mask] = jj * scale
+        return out
+
+    return evaluate
+
+
+def _segment_state(seg: _Segment, x, v0: float, s0: float):
+    w = seg.w
+    sin, cos = np.sin(w * x), np.cos(w * x)
+    a = seg.c0 + seg.c1 * sin + seg.c2 * cos
+    j = w * (seg.c1 * cos - seg.c2 * sin)
+    v = v0 + seg.c0 * x + seg.c1 * (1.0 - cos) / w + seg.c2 * sin / w
+    s = s0 + v0 * x + 0.5 * seg.c0 * x**2 + seg.c1 * (x / w - sin / w**2) + seg.c2 * (1.0 - cos) / w**2
+    return v, s, a, j
+
+
+_W4 = 4.0 * math.pi
+# Modified trapezoid: sine ramps to +-1 over the first, middle and last eighths, constant between.
+_MOD_TRAPEZOID = _piecewise_harmonic(
+    [
+        _Segment(0.0, 0.125, 0.0, 1.0, 0.0, _W4),
+        _Segment(0.125, 0.375, 1.0, 0.0, 0.0, _W4),
+        _Segment(0.375, 0.625, 0.0, 0.0, 1.0, _W4),
+        _Segment(0.625, 0.875, -1.0, 0.0, 0.0, _W4),
+        _Segment(0.875, 1.0, 0.0, 0.0, -1.0, _W4),
+    ]
+)
+_MOD_SINE = _piecewise_harmonic(
+    [
+        _Segment(0.0, 0.125, 0.0, 1.0, 0.0, _W4),
+        _Segment(0.125, 0.875, 0.0, 0.0, 1.0, _W4 / 3.0),
+        _Segment(0.875, 1.0, 0.0, 0.0, -1.0, _W4),
+    ]
+)
+
+LAWS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
+    "cycloidal": _cycloidal,
+    "harmonic": _harmonic,
+    "polynomial-345": _polynomial((0, 0, 0, 10, -15, 6)),
+    "polynomial-4567": _polynomial((0, 0, 0, 0, 35, -84, 70, -20)),
+    "modified-trapezoid": _MOD_TRAPEZOID,
+    "modified-sine": _MOD_SINE,
+}
+
+
+def law(name: str) -> Callable[[np.ndarray], np.ndarray]:
+    """The normalised law `name`: u -> array (4, ...) of f, f', f'', f'''."""
+    return LAWS[name]

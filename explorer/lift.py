@@ -1,0 +1,89 @@
+"""Follower lift over cam angle: the one curve every effect is computed from.
+
+A lift curve is anything with `derivatives(theta) -> array (4, N)` holding L, dL/dtheta,
+d2L/dtheta2, d3L/dtheta3 (theta in rad, periodic in 2 pi; L in m) and `breakpoints()`, the
+angles in [0, 2 pi) where a derivative may jump. Time derivatives at constant speed follow as
+v = w L', a = w^2 L'', j = w^3 L'''.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from .laws import law as normalised_law
+
+TWO_PI = 2.0 * math.pi
+
+
+class LiftCurve(Protocol):
+    def derivatives(self, theta: np.ndarray) -> np.ndarray: ...
+
+    def breakpoints(self) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class LawLift:
+    """Rise with one law, optional dwell, return with the same or another law, base circle elsewhere."""
+
+    height: float
+    start: float
+    rise: float
+    dwell: float
+    ret: float
+    rise_law: str
+    return_law: str
+
+    def derivatives(self, theta) -> np.ndarray:
+        theta = np.asarray(theta, dtype=float)
+        x = np.mod(theta - self.start, TWO_PI)  # angle since the rise began
+        out = np.zeros((4,) + x.shape)
+        h = self.height
+        rising = x < self.rise
+        if np.any(rising):
+            f = normalised_law(self.rise_law)(x[rising] / self.rise)
+            for k in range(4):
+                out[k][rising] = h * f[k] / self.rise**k
+        top = (x >= self.rise) & (x < self.rise + self.dwell)
+        out[0][top] = h
+        x_ret = x - self.rise - self.dwell
+        falling = (x_ret >= 0.0) & (x_ret < self.ret)
+        if np.any(falling):
+            g = normalised_law(self.return_law)(x_ret[falling] / self.ret)
+            out[0][falling] = h * (1.0 - g[0])
+            for k in range(1, 4):
+                out[k][falling] = -h * g[k] / self.ret**k
+        return out
+
+    def breakpoints(self) -> np.ndarray:
+        marks = np.cumsum([0.0, self.rise, self.dwell, self.ret]) + self.start
+        return np.unique(np.mod(marks, TWO_PI))
+
+
+def build_lift(scene) -> LiftCurve:
+    """The lift curve a validated scene describes (dispatch on lift.law)."""
+    spec = scene.lift
+    if spec.law in ("table",):
+        from .lift_table import build_table_lift
+
+        return build_table_lift(scene)
+    if spec.law == "acceleration":
+        from .lift_acceleration import build_acceleration_lift
+
+        return build_acceleration_lift(scene)
+    if spec.law == "contour":
+        from .geometry.lift_from_contour import build_contour_lift
+
+        return build_contour_lift(scene)
+    return LawLift(
+        height=spec.height,
+        start=spec.start,
+        rise=spec.rise,
+        dwell=spec.dwell,
+        ret=spec.ret,
+        rise_law=spec.law,
+        return_law=spec.return_law or spec.law,
+    )

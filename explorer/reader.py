@@ -1,0 +1,138 @@
+"""Typed access to one table of a scene file, with errors that name file and dotted key.
+
+Every section parser (here and in the modules that own a section) reads through a `Table`, so
+bad input always ends in the same one-line InputError.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Iterable, Mapping
+
+from .errors import InputError
+from .units import to_si
+
+
+@dataclass(frozen=True)
+class Table:
+    data: Mapping[str, Any]
+    file: str
+    prefix: str  # dotted path of this table, "" at top level
+
+    def key(self, name: str) -> str:
+        return f"{self.prefix}.{name}" if self.prefix else name
+
+    def error(self, name: str, reason: str) -> InputError:
+        return InputError(self.file, self.key(name), reason)
+
+    def has(self, name: str) -> bool:
+        return name in self.data
+
+    def table(self, name: str, required: bool = True) -> "Table | None":
+        if name not in self.data:
+            if required:
+                raise self.error(name, "missing section")
+            return None
+        value = self.data[name]
+        if not isinstance(value, Mapping):
+            raise self.error(name, f"expected a table [{self.key(name)}], got {type(value).__name__}")
+        return Table(value, self.file, self.key(name))
+
+    def raw(self, name: str, default: Any = ...) -> Any:
+        if name not in self.data:
+            if default is ...:
+                raise self.error(name, "missing key")
+            return default
+        return self.data[name]
+
+    def quantity(
+        self,
+        name: str,
+        dimension: str,
+        default: Any = ...,
+        *,
+        minimum: float | None = None,
+        maximum: float | None = None,
+        positive: bool = False,
+        nonnegative: bool = False,
+    ) -> float:
+        """SI value of `name`; `default` (SI float or scene string) when absent, error when `...`."""
+        if name not in self.data:
+            if default is ...:
+                raise self.error(name, "missing key")
+            if isinstance(default, (int, float)) and not isinstance(default, bool):
+                return float(default)
+            value = default
+        else:
+            value = self.data[name]
+        number = to_si(value, dimension, file=self.file, key=self.key(name))
+        if positive and not number > 0.0:
+            raise self.error(name, f"must be greater than zero, got {value!r}")
+        if nonnegative and not number >= 0.0:
+            raise self.error(name, f"must not be negative, got {value!r}")
+        if minimum is not None and number < minimum:
+            raise self.error(name, f"must be at least {minimum:g} (SI), got {value!r}")
+        if maximum is not None and number > maximum:
+            raise self.error(name, f"must be at most {maximum:g} (SI), got {value!r}")
+        return number
+
+    def number(
+        self,
+        name: str,
+        default: Any = ...,
+        *,
+        minimum: float | None = None,
+        maximum: float | None = None,
+        integer: bool = False,
+        open_minimum: bool = False,
+        open_maximum: bool = False,
+    ) -> float:
+        if name not in self.data:
+            if default is ...:
+                raise self.error(name, "missing key")
+            return default
+        value = self.data[name]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.error(name, f"expected a plain number, got {value!r}")
+        if integer and (not float(value).is_integer()):
+            raise self.error(name, f"expected a whole number, got {value!r}")
+        number = float(value)
+        if not math.isfinite(number):
+            raise self.error(name, f"value must be finite, got {value!r}")
+        if minimum is not None and (number < minimum or (open_minimum and number == minimum)):
+            raise self.error(name, f"must be {'greater than' if open_minimum else 'at least'} {minimum:g}, got {value!r}")
+        if maximum is not None and (number > maximum or (open_maximum and number == maximum)):
+            raise self.error(name, f"must be {'less than' if open_maximum else 'at most'} {maximum:g}, got {value!r}")
+        return int(number) if integer else number
+
+    def string(self, name: str, default: Any = ..., *, choices: Iterable[str] | None = None) -> str:
+        if name not in self.data:
+            if default is ...:
+                raise self.error(name, "missing key")
+            return default
+        value = self.data[name]
+        if not isinstance(value, str):
+            raise self.error(name, f"expected a string, got {value!r}")
+        if choices is not None:
+            options = list(choices)
+            if value not in options:
+                raise self.error(name, f"unknown value {value!r}; choose one of: {', '.join(options)}")
+        return value
+
+    def boolean(self, name: str, default: Any = ...) -> bool:
+        if name not in self.data:
+            if default is ...:
+                raise self.error(name, "missing key")
+            return default
+        value = self.data[name]
+        if not isinstance(value, bool):
+            raise self.error(name, f"expected true or false, got {value!r}")
+        return value
+
+    def reject_unknown(self, known: Iterable[str]) -> None:
+        """Typos in optional keys must not pass silently."""
+        known = set(known)
+        for name in self.data:
+            if name not in known:
+                raise self.error(name, f"unknown key; known keys here: {', '.join(sorted(known))}")

@@ -1,0 +1,390 @@
+"""Scene files (TOML) -> a validated, frozen Scene with every quantity in SI.
+
+A scene describes one valve gear at one speed and lists the effects to compute. Each section is
+read through `reader.Table`, so any bad value ends in one InputError naming file, key and
+reason. Sections owned by other modules (lift-law options, [cam], [contact], ...) are parsed by
+those modules' `parse_*` functions, called from here so that all validation happens at load time.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import os
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Mapping
+
+from .errors import InputError
+from .laws import LAWS
+from .reader import Table
+
+# effect name -> effects it needs (resolved by effects.resolve); kept here, free of heavy imports,
+# so that a scene can be validated without importing any solver.
+EFFECT_DEPENDENCIES: dict[str, tuple[str, ...]] = {
+    "kinematics": (),
+    "lash": ("kinematics",),
+    "forces": ("kinematics", "lash"),
+    "contact": ("kinematics", "lash", "forces"),
+    "elastic": ("kinematics", "lash"),
+}
+
+SPECIAL_LAWS = ("table", "acceleration", "contour")
+FOLLOWER_TYPES = ("translating-roller",)
+SOLVER_METHODS = ("exact", "schenker1902", "scipy")
+MIN_STEPS = 36
+MAX_STEPS = 10_000_000
+
+# Optional sections parsed by the module that owns them: section -> "module:function".
+# The function takes (Table, partial scene fields dict) and returns a frozen object.
+OWNED_SECTIONS: dict[str, str] = {
+    "cam": "explorer.geometry.spec:parse_cam_section",
+    "contact": "explorer.contact:parse_contact_section",
+}
+# Law-specific [lift] keys, parsed by the module of the law: law -> "module:function".
+LAW_OPTION_PARSERS: dict[str, str] = {
+    "table": "explorer.lift_table:parse_table_options",
+    "acceleration": "explorer.lift_acceleration:parse_acceleration_options",
+}
+LAW_OPTION_KEYS: dict[str, tuple[str, ...]] = {
+    "table": ("file", "angle_unit", "lift_unit", "smoothing"),
+    "acceleration": ("points", "angle_unit", "acceleration_unit", "interpolation"),
+}
+
+
+@dataclass(frozen=True)
+class Drive:
+    rpm: float  # rev/min, > 0
+
+    @property
+    def omega(self) -> float:
+        """Camshaft angular speed in rad/s."""
+        return self.rpm * 2.0 * math.pi / 60.0
+
+
+@dataclass(frozen=True)
+class LiftSpec:
+    law: str
+    height: float = 0.0  # m, follower (roller-centre) lift, lash included
+    start: float = 0.0  # rad
+    rise: float = 0.0  # rad
+    dwell: float = 0.0  # rad
+    ret: float = 0.0  # rad
+    return_law: str | None = None
+    options: Any = None  # law-specific, parsed by the law's module
+
+
+@dataclass(frozen=True)
+class Follower:
+    type: str = "translating-roller"
+    base_radius: float = 0.03  # m, base circle of the cam contour
+    roller_radius: float = 0.0  # m
+    offset: float = 0.0  # m, follower axis offset from the cam centre
+    ratio: float = 1.0  # valve travel per follower travel
+
+
+@dataclass(frozen=True)
+class Valve:
+    mass: float  # kg, effective moving mass referred to the valve
+    lash: float = 0.0  # m, clearance at the valve
+    oscillating_mass: float | None = None  # kg, Schenker's M1 (mass while the linkage is compressed)
+
+
+@dataclass(frozen=True)
+class Spring:
+    preload: float  # N at closed valve
+    rate: float  # N/m
+
+
+@dataclass(frozen=True)
+class Loads:
+    friction: float = 0.0  # N, Coulomb, opposes valve motion
+    closing: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))  # N, + closes
+
+    @property
+    def closing_total(self) -> float:
+        return float(sum(self.closing.values()))
+
+
+@dataclass(frozen=True)
+class Linkage:
+    stiffness: float  # N/m referred to the valve
+    damping: float = 0.0  # N*s/m, viscous, in parallel with the stiffness
+
+
+@dataclass(frozen=True)
+class Seat:
+    restitution: float = 0.0
+
+
+@dataclass(frozen=True)
+class Solver:
+    method: str = "exact"
+    steps_per_revolution: int = 3600
+    scipy_method: str = "DOP853"
+    rtol: float = 1e-10
+    atol: float = 1e-13
+
+
+@dataclass(frozen=True)
+class Scene:
+    name: str
+    effects: tuple[str, ...]
+    drive: Drive
+    lift: LiftSpec
+    follower: Follower
+    valve: Valve | None
+    spring: Spring | None
+    loads: Loads
+    linkage: Linkage | None
+    seat: Seat
+    solver: Solver
+    source: str = "<memory>"  # file the scene came from, for messages and relative paths
+    description: str = ""
+    cam: Any = None  # owned by explorer.geometry.spec
+    contact: Any = None  # owned by explorer.contact
+
+    @property
+    def directory(self) -> Path:
+        return Path(self.source).parent if self.source != "<memory>" else Path.cwd()
+
+    @property
+    def omega(self) -> float:
+        return self.drive.omega
+
+    def with_changes(self, **sections: Any) -> "Scene":
+        """A copy with whole sections replaced (for sweeps and the GUI)."""
+        return replace(self, **sections)
+
+
+TOP_KEYS = (
+    "name", "description", "effects", "drive", "lift", "follower", "valve", "spring", "loads",
+    "linkage", "seat", "solver", *OWNED_SECTIONS,
+)
+
+
+def load_scene(path: str | os.PathLike, overrides: list[str] | tuple[str, ...] = ()) -> Scene:
+    """Read and validate a scene file; `overrides` are "section.key=value" strings (TOML values)."""
+    file = str(path)
+    try:
+        with open(path, "rb") as handle:
+            data = tomllib.load(handle)
+    except FileNotFoundError:
+        raise InputError(file, "-", "file not found") from None
+    except IsADirectoryError:
+        raise InputError(file, "-", "is a directory, not a scene file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(file, "-", f"malformed TOML: {exc}") from None
+    except UnicodeDecodeError:
+        raise InputError(file, "-", "not a UTF-8 text file") from None
+    except OSError as exc:
+        raise InputError(file, "-", f"cannot read: {exc.strerror}") from None
+    data = apply_overrides(data, overrides, file)
+    return scene_from_dict(data, file)
+
+
+def loads_scene(text: str, source: str = "<memory>", overrides=()) -> Scene:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(source, "-", f"malformed TOML: {exc}") from None
+    return scene_from_dict(apply_overrides(data, overrides, source), source)
+
+
+def apply_overrides(data: dict, overrides, file: str) -> dict:
+    """Apply "a.b.c=value" overrides to a copy of the raw TOML dict. Values are TOML when they
+    parse as TOML (numbers, booleans, quoted strings, arrays), otherwise taken as plain strings,
+    so `--set lift.height="12 mm"` and `--set lift.height=12mm` both work."""
+    import copy
+
+    data = copy.deepcopy(data)
+    for item in overrides:
+        if "=" not in item:
+            raise InputError(file, item, "override must look like section.key=value")
+        dotted, text = item.split("=", 1)
+        dotted = dotted.strip()
+        parts = dotted.split(".")
+        if not dotted or any(not p for p in parts):
+            raise InputError(file, dotted or item, "override key must be dotted, such as lift.height")
+        try:
+            value = tomllib.loads(f"v = {text}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()
+        node = data
+        for part in parts[:-1]:
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                raise InputError(file, dotted, f"'{part}' is not a table")
+            node = child
+        node[parts[-1]] = value
+    return data
+
+
+def _import(target: str):
+    module, _, name = target.partition(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
+    top = Table(data, file, "")
+    top.reject_unknown(TOP_KEYS)
+    name = top.string("name", default=Path(file).stem if file != "<memory>" else "scene")
+    description = top.string("description", default="")
+
+    effects_raw = top.raw("effects", default=["kinematics"])
+    if not isinstance(effects_raw, list) or not all(isinstance(e, str) for e in effects_raw):
+        raise top.error("effects", "expected a list of effect names, such as [\"kinematics\", \"lash\"]")
+    for effect in effects_raw:
+        if effect not in EFFECT_DEPENDENCIES:
+            raise top.error("effects", f"unknown effect {effect!r}; known: {', '.join(EFFECT_DEPENDENCIES)}")
+    effects = tuple(dict.fromkeys(effects_raw))
+    if not effects:
+        raise top.error("effects", "list at least one effect")
+
+    drive_t = top.table("drive")
+    drive_t.reject_unknown(("rpm",))
+    rpm_si = drive_t.quantity("rpm", "speed", positive=True)
+    drive = Drive(rpm=rpm_si * 60.0 / (2.0 * math.pi))
+
+    follower = _parse_follower(top.table("follower", required=False), file)
+    lift = _parse_lift(top.table("lift"), file)
+    valve = _parse_valve(top.table("valve", required=False))
+    spring = _parse_spring(top.table("spring", required=False))
+    loads = _parse_loads(top.table("loads", required=False), file)
+    linkage = _parse_linkage(top.table("linkage", required=False))
+    seat_t = top.table("seat", required=False) or Table({}, file, "seat")
+    seat_t.reject_unknown(("restitution",))
+    seat = Seat(restitution=seat_t.number("restitution", 0.0, minimum=0.0, maximum=1.0, open_maximum=True))
+    solver = _parse_solver(top.table("solver", required=False) or Table({}, file, "solver"))
+
+    needs = _closure(effects)
+    if ("forces" in needs or "elastic" in needs) and valve is None:
+        raise InputError(file, "valve", "missing section: effects 'forces' and 'elastic' need [valve] mass")
+    if ("forces" in needs or "elastic" in needs) and spring is None:
+        raise InputError(file, "spring", "missing section: effects 'forces' and 'elastic' need [spring] preload and rate")
+    if "elastic" in needs and linkage is None:
+        raise InputError(file, "linkage", "missing section: effect 'elastic' needs [linkage] stiffness")
+
+    fields: dict[str, Any] = dict(
+        name=name, description=description, effects=effects, drive=drive, lift=lift, follower=follower,
+        valve=valve, spring=spring, loads=loads, linkage=linkage, seat=seat, solver=solver, source=file,
+    )
+    for section, target in OWNED_SECTIONS.items():
+        table = top.table(section, required=False)
+        fields[section] = _import(target)(table, fields) if table is not None or section in needs else None
+    if lift.law in LAW_OPTION_PARSERS:
+        options = _import(LAW_OPTION_PARSERS[lift.law])(top.table("lift"), fields)
+        fields["lift"] = replace(lift, options=options)
+    if lift.law == "contour" and fields.get("cam") is None:
+        raise InputError(file, "cam", "missing section: lift.law = 'contour' takes the lift from [cam]")
+    return Scene(**fields)
+
+
+def _closure(effects) -> set[str]:
+    out: set[str] = set()
+    stack = list(effects)
+    while stack:
+        effect = stack.pop()
+        if effect not in out:
+            out.add(effect)
+            stack.extend(EFFECT_DEPENDENCIES[effect])
+    return out
+
+
+def _parse_follower(t: Table | None, file: str) -> Follower:
+    if t is None:
+        return Follower()
+    t.reject_unknown(("type", "base_radius", "roller_radius", "offset", "ratio"))
+    follower = Follower(
+        type=t.string("type", "translating-roller", choices=FOLLOWER_TYPES),
+        base_radius=t.quantity("base_radius", "length", 0.03, positive=True),
+        roller_radius=t.quantity("roller_radius", "length", 0.0, nonnegative=True),
+        offset=t.quantity("offset", "length", 0.0),
+        ratio=t.number("ratio", 1.0, minimum=0.0, open_minimum=True),
+    )
+    if abs(follower.offset) >= follower.base_radius + follower.roller_radius:
+        raise t.error("offset", "offset must be smaller than base radius + roller radius")
+    return follower
+
+
+def _parse_lift(t: Table, file: str) -> LiftSpec:
+    laws = (*LAWS, *SPECIAL_LAWS)
+    law = t.string("law", choices=laws)
+    common = ("law", "height", "start", "rise", "dwell", "return", "return_law")
+    t.reject_unknown(common + LAW_OPTION_KEYS.get(law, ()))
+    if law == "contour":
+        return LiftSpec(law=law)
+    height = t.quantity("height", "length", positive=True) if law in LAWS else t.quantity("height", "length", 0.0, nonnegative=True)
+    start = t.quantity("start", "angle", 0.0)
+    if not 0.0 <= start < 2.0 * math.pi:
+        raise t.error("start", "must lie in [0 deg, 360 deg)")
+    rise = t.quantity("rise", "angle", positive=True) if law in LAWS else t.quantity("rise", "angle", 0.0, nonnegative=True)
+    dwell = t.quantity("dwell", "angle", 0.0, nonnegative=True)
+    ret = t.quantity("return", "angle", rise, positive=law in LAWS) if law in LAWS else t.quantity("return", "angle", 0.0, nonnegative=True)
+    return_law = t.string("return_law", None, choices=LAWS) if t.has("return_law") else None
+    if rise + dwell + ret > 2.0 * math.pi * (1.0 + 1e-12):
+        total = math.degrees(rise + dwell + ret)
+        raise t.error("return", f"rise + dwell + return = {total:.6g} deg exceeds 360 deg")
+    return LiftSpec(law=law, height=height, start=start, rise=rise, dwell=dwell, ret=ret, return_law=return_law)
+
+
+def _parse_valve(t: Table | None) -> Valve | None:
+    if t is None:
+        return None
+    t.reject_unknown(("mass", "lash", "oscillating_mass"))
+    mass = t.quantity("mass", "mass", positive=True)
+    m1 = t.quantity("oscillating_mass", "mass", positive=True) if t.has("oscillating_mass") else None
+    if m1 is not None and m1 > mass:
+        raise t.error("oscillating_mass", "cannot exceed the total moving mass valve.mass")
+    return Valve(mass=mass, lash=t.quantity("lash", "length", 0.0, nonnegative=True), oscillating_mass=m1)
+
+
+def _parse_spring(t: Table | None) -> Spring | None:
+    if t is None:
+        return None
+    t.reject_unknown(("preload", "rate"))
+    return Spring(
+        preload=t.quantity("preload", "force", nonnegative=True),
+        rate=t.quantity("rate", "stiffness", 0.0, nonnegative=True),
+    )
+
+
+def _parse_loads(t: Table | None, file: str) -> Loads:
+    if t is None:
+        return Loads()
+    t.reject_unknown(("friction", "closing"))
+    friction = t.quantity("friction", "force", 0.0, nonnegative=True)
+    closing: dict[str, float] = {}
+    ct = t.table("closing", required=False)
+    if ct is not None:
+        for key in ct.data:
+            closing[key] = ct.quantity(key, "force")
+    return Loads(friction=friction, closing=MappingProxyType(closing))
+
+
+def _parse_linkage(t: Table | None) -> Linkage | None:
+    if t is None:
+        return None
+    t.reject_unknown(("stiffness", "damping"))
+    return Linkage(
+        stiffness=t.quantity("stiffness", "stiffness", positive=True),
+        damping=t.quantity("damping", "damping", 0.0, nonnegative=True),
+    )
+
+
+def _parse_solver(t: Table) -> Solver:
+    t.reject_unknown(("method", "steps_per_revolution", "scipy_method", "rtol", "atol"))
+    steps = t.number("steps_per_revolution", 3600, integer=True)
+    if steps < MIN_STEPS:
+        raise t.error("steps_per_revolution", f"too few steps: {steps} (at least {MIN_STEPS})")
+    if steps > MAX_STEPS:
+        raise t.error("steps_per_revolution", f"too many steps: {steps} (at most {MAX_STEPS})")
+    return Solver(
+        method=t.string("method", "exact", choices=SOLVER_METHODS),
+        steps_per_revolution=int(steps),
+        scipy_method=t.string("scipy_method", "DOP853", choices=("RK45", "DOP853", "Radau", "LSODA", "BDF", "RK23")),
+        rtol=t.number("rtol", 1e-10, minimum=1e-14, maximum=1e-1),
+        atol=t.number("atol", 1e-13, minimum=1e-20, maximum=1e-1),
+    )

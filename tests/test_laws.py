@@ -1,0 +1,66 @@
+"""Motion laws: classic peak coefficients, boundary conditions, and derivative consistency.
+
+Oracles: the coefficient tables of cam design (e.g. Norton, Cam Design and Manufacturing
+Handbook), and integration of f''' back to f (independent of how f was written down).
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import cumulative_simpson
+
+from explorer.laws import LAWS
+
+U = np.linspace(0.0, 1.0, 400_001)
+
+# (Cv, Ca, Cj): peaks of f', |f''|, |f'''| for a unit rise over a unit angle.
+COEFFICIENTS = {
+    "cycloidal": (2.0, 2 * math.pi, 4 * math.pi**2),
+    "harmonic": (math.pi / 2, math.pi**2 / 2, math.pi**3 / 2),
+    "polynomial-345": (1.875, 5.7735, 60.0),
+    "polynomial-4567": (2.1875, 7.5132, 52.5),
+    "modified-trapezoid": (2.0, 4.8881, 61.426),
+    "modified-sine": (1.7596, 5.5280, 69.466),
+}
+
+
+@pytest.mark.parametrize("name", COEFFICIENTS)
+def test_peak_coefficients(name):
+    f = LAWS[name](U)
+    cv, ca, cj = COEFFICIENTS[name]
+    # 4-5 significant figures in the tables; the grid resolves peaks to ~1e-10 relative.
+    assert f[1].max() == pytest.approx(cv, rel=2e-5)
+    assert np.abs(f[2]).max() == pytest.approx(ca, rel=2e-5)
+    assert np.abs(f[3]).max() == pytest.approx(cj, rel=2e-5)
+
+
+@pytest.mark.parametrize("name", COEFFICIENTS)
+def test_boundary_values(name):
+    f = LAWS[name](np.array([0.0, 1.0]))
+    assert f[0] == pytest.approx([0.0, 1.0], abs=1e-14)
+    assert f[1] == pytest.approx([0.0, 0.0], abs=1e-13)
+    if name != "harmonic":  # the harmonic law has finite end accelerations by construction
+        assert f[2] == pytest.approx([0.0, 0.0], abs=1e-12)
+
+
+@pytest.mark.parametrize("name", COEFFICIENTS)
+def test_derivatives_integrate_back(name):
+    """Integrating f''' three times (Simpson) must return f: the derivatives are consistent."""
+    f = LAWS[name](U)
+    acc = f[2][0] + cumulative_simpson(f[3], x=U, initial=0.0)
+    vel = cumulative_simpson(acc, x=U, initial=0.0)
+    lift = cumulative_simpson(vel, x=U, initial=0.0)
+    # piecewise laws have jerk jumps at segment joints: Simpson error ~ h^2 there
+    assert np.abs(acc - f[2]).max() < 1e-6 * np.abs(f[2]).max()
+    assert np.abs(vel - f[1]).max() < 1e-7
+    assert np.abs(lift - f[0]).max() < 1e-7
+
+
+@pytest.mark.parametrize("name", COEFFICIENTS)
+def test_acceleration_areas_balance(name):
+    """Seed 004: the acceleration areas above and below zero are equal (start and end at rest)."""
+    f = LAWS[name](U)
+    above = np.trapezoid(np.clip(f[2], 0, None), U)
+    below = np.trapezoid(np.clip(f[2], None, 0), U)
+    assert above == pytest.approx(-below, rel=1e-8)
