@@ -1,0 +1,1 @@
+"""Cam geometry: exact envelopes (synthesis), follower lift from a contour (analysis), arc cams."""
