@@ -1,0 +1,98 @@
+"""How long recording one revolution (3600 steps) into a .rrd file takes.
+
+    .venv/bin/python benchmarks/bench_recording.py [SCENE] [--repeats 5]
+
+Rows (median of the repeats; the simulation and the meshes are computed once, outside the timing):
+- columns, series only:  explorer.recording writing the series and events with send_columns
+- columns, with 3D:      the same plus the 3D parts (meshes + one Transform3D per step per part);
+                         this is what `explorer record` does per scene (target <= 0.5 s)
+- loop (baseline):       the series written the naive way, rr.set_time + rr.log per step and
+                         series, into a file in the same process; the ratio column is
+                         baseline time / row time (how much faster whole columns are)
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from explorer import load_scene  # noqa: E402
+from explorer.effects import simulate  # noqa: E402
+from explorer.recording import (  # noqa: E402
+    APP_ID, Run, series_layout, step_indexes, with_parts, write_recordings,
+)
+
+TARGET_S = 0.5
+
+
+def loop_baseline(path: Path, result) -> None:
+    """Per-step logging: what send_columns replaces."""
+    import rerun as rr
+
+    rec = rr.RecordingStream(APP_ID, recording_id="baseline")
+    rec.set_sinks(rr.FileSink(str(path)))
+    index = step_indexes(result)
+    layout = series_layout(result.columns)
+    values = {s.path: np.asarray(result.columns[s.column], dtype=float) for s in layout}
+    for i in range(index["step"].size):
+        rec.set_time("time", duration=float(index["time"][i]))
+        rec.set_time("step", sequence=int(index["step"][i]))
+        rec.set_time("cam_angle_mdeg", sequence=int(index["cam_angle_mdeg"][i]))
+        for path, v in values.items():
+            rec.log(path, rr.Scalars(float(v[i])))
+    rec.disconnect()
+
+
+def timed(function, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - started)
+    return statistics.median(times)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("scene", nargs="?", default=str(ROOT / "assets" / "scenes" / "valve_float_demo.toml"))
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args(argv)
+
+    scene = load_scene(args.scene)
+    result = simulate(scene)
+    steps = result.columns["time_s"].size
+    run_3d = with_parts(scene.name, result)
+    run_series = Run(scene.name, result)
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "bench.rrd"
+        write_recordings(out, [run_series])  # warm-up: imports, rerun's threads
+        rows = [
+            ("columns, series only", timed(lambda: write_recordings(out, [run_series]), args.repeats)),
+            ("columns, with 3D", timed(lambda: write_recordings(out, [run_3d]), args.repeats)),
+        ]
+        size_3d = out.stat().st_size
+        baseline = timed(lambda: loop_baseline(Path(tmp) / "loop.rrd", result), max(1, args.repeats // 2))
+    rows.append(("loop (baseline)", baseline))
+    n_series = len(series_layout(result.columns))
+    print(f"scene {scene.name}: {steps} steps, {n_series} series, {len(run_3d.parts)} parts, "
+          f"file {size_3d / 1e6:.1f} MB with 3D; median of {args.repeats}")
+    print(f"{'method':<24s} {'time [s]':>10s} {'ratio':>8s}")
+    for name, seconds in rows:
+        print(f"{name:<24s} {seconds:10.4f} {baseline / seconds:8.1f}")
+    with_3d = rows[1][1]
+    verdict = "meets" if with_3d <= TARGET_S else "MISSES"
+    print(f"recording with 3D: {with_3d:.3f} s, {verdict} the target of {TARGET_S} s per revolution")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,301 @@
+"""Cam-roller contact: normal force, self-locking, camshaft torque (power balance), Hertz stress,
+the width rule and the allowables of seed 004, bad input."""
+
+import math
+from types import MappingProxyType
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from explorer.contact import (
+    ALLOWABLE,
+    ContactSpec,
+    contact_effect,
+    effective_modulus,
+    hertz_line_stress,
+    roller_normal_force,
+    width_rule,
+)
+from explorer.effects import Context, simulate
+from explorer.errors import InputError
+from explorer.lift import build_lift
+from explorer.scene import load_scene, loads_scene
+from explorer.units import AT, KGF
+
+SCENE = """
+name = "contact test"
+effects = ["contact"]
+[drive]
+rpm = {rpm}
+[lift]
+law = "{law}"
+height = "12 mm"
+start = "30 deg"
+rise = "{rise} deg"
+dwell = "10 deg"
+return = "80 deg"
+[follower]
+base_radius = "{base} mm"
+roller_radius = "{roller} mm"
+offset = "{offset} mm"
+ratio = {ratio}
+[valve]
+mass = "0.15 kg"
+lash = "0.2 mm"
+[spring]
+preload = "300 N"
+rate = "30 N/mm"
+[loads]
+friction = "10 N"
+[loads.closing]
+gas = "20 N"
+[contact]
+{contact}
+"""
+DEFAULTS = dict(rpm=2000, law="cycloidal", rise=70, base=30, roller=10, offset=0, ratio=1.0, contact="")
+
+
+def scene(**changes):
+    return loads_scene(SCENE.format(**(DEFAULTS | changes)))
+
+
+# --- Hertz ---------------------------------------------------------------------------------------------
+
+
+def test_hertz_hand_computed_case():
+    """F = 1000 N on b = 10 mm, roller r = 10 mm on a convex contour of 30 mm, both steel:
+    E* = 210 GPa / (2 * 0.91) = 115.385 GPa, 1/R* = 100 + 33.333 = 133.333 1/m,
+    sigma = sqrt(1000 * 115.385e9 * 133.333 / (pi * 0.01)) = 699.79 MPa (by hand, 5 digits)."""
+    e_star = effective_modulus(210e9, 0.3, 210e9, 0.3)
+    assert e_star == pytest.approx(115.3846e9, rel=1e-6)
+    sigma = hertz_line_stress(1000.0, 0.01, 0.010, 0.030, e_star)
+    assert sigma == pytest.approx(699.79e6, rel=1e-5)
+
+
+@settings(max_examples=50, deadline=None)
+@given(force=st.floats(1.0, 1e5), width=st.floats(1e-3, 0.1), r=st.floats(2e-3, 0.05), rho=st.floats(0.005, 1.0),
+       concave=st.booleans())
+def test_hertz_agrees_with_the_half_width_route(force, width, r, rho, concave):
+    """Independent route (Johnson, Contact Mechanics 4.3): half-width a = sqrt(4 F R*/(pi b E*)),
+    elliptic pressure p_max = 2F/(pi a b). Concave flanks subtract their curvature."""
+    rho_signed = -(rho + r) if concave else rho  # a concave contour is always flatter than the roller
+    e_star = effective_modulus(210e9, 0.3, 200e9, 0.28)
+    r_star = 1.0 / (1.0 / r + 1.0 / rho_signed)
+    a = math.sqrt(4 * force * r_star / (math.pi * width * e_star))
+    assert hertz_line_stress(force, width, r, rho_signed, e_star) == pytest.approx(2 * force / (math.pi * a * width), rel=1e-12)
+
+
+def test_hertz_flat_and_concave_and_unloaded():
+    e_star = effective_modulus(210e9, 0.3, 210e9, 0.3)
+    flat = hertz_line_stress(1000.0, 0.01, 0.01, np.inf, e_star)
+    convex = hertz_line_stress(1000.0, 0.01, 0.01, 0.01, e_star)
+    concave = hertz_line_stress(1000.0, 0.01, 0.01, -0.02, e_star)
+    # curvature sums 100, 200 and 50 1/m: the stress goes with their square root
+    assert convex / flat == pytest.approx(math.sqrt(2)) and concave / flat == pytest.approx(math.sqrt(0.5))
+    assert hertz_line_stress([-5.0, 0.0], 0.01, 0.01, 0.03, e_star).tolist() == [0.0, 0.0]
+
+
+def test_effective_modulus_mixed_materials():
+    # steel roller (210 GPa, 0.3) on cast iron (100 GPa, 0.25): 1/E* = 0.91/210e9 + 0.9375/100e9
+    assert effective_modulus(100e9, 0.25, 210e9, 0.3) == pytest.approx(1 / (0.91 / 210e9 + 0.9375 / 100e9))
+
+
+@pytest.mark.parametrize("nu", [0.5, -1.0, 0.7, -1.5])
+def test_effective_modulus_rejects_poisson(nu):
+    with pytest.raises(InputError, match="poisson_ratio"):
+        effective_modulus(210e9, nu, 210e9, 0.3)
+
+
+# --- width rule and allowables ------------------------------------------------------------------------
+
+
+def test_width_rule_hand_number():
+    # P = 1000 kgf on a roller of D = 10 cm, exhaust k = 40 kgf/cm^2: b = 1000/(40*10) = 2.5 cm
+    assert width_rule(1000 * KGF, 0.10, 40 * AT) == pytest.approx(0.025, rel=1e-12)
+    # intake k = 10: four times as wide
+    assert width_rule(1000 * KGF, 0.10, 10 * AT) == pytest.approx(0.10, rel=1e-12)
+
+
+def test_allowables_of_seed_004():
+    assert ALLOWABLE["large-gas"] / AT == pytest.approx(3500) and ALLOWABLE["diesel"] / AT == pytest.approx(4000)
+    spec = scene(contact='engine = "diesel"\nvalve = "intake"').contact
+    assert spec.allowable_stress == pytest.approx(4000 * AT) and spec.width_rule_k == pytest.approx(10 * AT)
+    assert ContactSpec().width_rule_k == pytest.approx(40 * AT)
+
+
+# --- statics -------------------------------------------------------------------------------------------
+
+
+@settings(max_examples=60, deadline=None)
+@given(p=st.floats(1.0, 1e4), alpha=st.floats(-1.2, 1.2), rho=st.floats(0.0, 0.3), v=st.sampled_from([-1.0, 0.0, 1.0]))
+def test_normal_force_solves_the_follower_free_body(p, alpha, rho, v):
+    """Independent: solve the follower's two equations as a linear system in (N, Q): lateral
+    N sin(alpha) + Q = 0, axial N cos(alpha) - mu |Q| sgn(v) = P (guide friction opposes motion)."""
+    mu = math.tan(rho)
+    s = 1.0 if math.sin(alpha) >= 0 else -1.0  # |Q| = -s Q
+    a = np.array([[math.sin(alpha), 1.0], [math.cos(alpha), mu * s * v]])
+    n_ref, _ = np.linalg.solve(a, [0.0, p])
+    got = roller_normal_force(p, alpha, v, rho)
+    if n_ref > 0:
+        assert got == pytest.approx(n_ref, rel=1e-9)
+        # seed 004's form while the follower moves: N = P cos(rho) / cos(|alpha| + rho sgn v)
+        if v != 0:
+            assert got == pytest.approx(p * math.cos(rho) / math.cos(abs(alpha) + rho * v), rel=1e-9)
+    else:  # no positive solution: self-locked
+        assert got == math.inf
+
+
+def _run(**changes):
+    out = simulate(scene(**changes))
+    return out, out.columns, out.summary
+
+
+@pytest.mark.parametrize("offset", [0.0, 6.0, -8.0])
+def test_power_balance_without_friction(offset):
+    """T w = P v exactly for the frictionless follower; T comes from the contact geometry (force along
+    the normal through the roller centre), P v from the forces and the kinematics."""
+    out, c, s = _run(offset=offset, law="polynomial-345")
+    w = out.scene.omega
+    power_cam = c["camshaft_torque_Nm"] * w
+    power_follower = c["follower_force_N"] * c["follower_velocity_m_s"]
+    scale = np.max(np.abs(power_follower))
+    assert scale > 0
+    assert np.max(np.abs(power_cam - power_follower)) <= 1e-9 * scale
+
+
+def test_friction_dissipates_in_the_guide():
+    """With guide friction: T w - P v = mu N |sin alpha| |v| >= 0 on loaded samples."""
+    out, c, s = _run(offset=4.0, contact='friction_angle = "8 deg"')
+    w = out.scene.omega
+    loaded = c["follower_force_N"] > 0
+    loss = c["camshaft_torque_Nm"] * w - c["follower_force_N"] * c["follower_velocity_m_s"]
+    alpha = np.radians(c["pressure_angle_deg"])
+    expected = math.tan(math.radians(8)) * c["cam_normal_force_N"] * np.abs(np.sin(alpha)) * np.abs(c["follower_velocity_m_s"])
+    assert np.allclose(loss[loaded], expected[loaded], rtol=1e-9, atol=1e-9 * np.max(np.abs(loss)))
+    assert np.all(loss[loaded] >= -1e-9 * np.max(np.abs(loss)))
+
+
+def test_ratio_scales_the_follower_force():
+    """A 1.5:1 lever: the follower carries 1.5 times the valve-side contact force."""
+    out, c, s = _run(ratio=1.5)
+    assert np.allclose(c["follower_force_N"], 1.5 * c["contact_force_N"])
+    assert s["max_cam_normal_force_N"] >= 1.5 * np.max(c["contact_force_N"]) - 1e-9
+
+
+def test_summary_and_columns():
+    out, c, s = _run(contact='friction_angle = "5 deg"\nwidth = "12 mm"')
+    for key in ("max_pressure_angle_deg", "min_self_locking_margin_deg", "max_camshaft_torque_Nm", "max_hertz_stress_Pa",
+                "required_cam_width_m"):
+        assert isinstance(s[key], float) and math.isfinite(s[key])
+    assert np.allclose(c["self_locking_margin_deg"], 90 - 5 - np.abs(c["pressure_angle_deg"]))
+    assert s["min_self_locking_margin_deg"] == pytest.approx(85 - s["max_pressure_angle_deg"])
+    # the width rule on the largest roller force, exhaust k = 40 kgf/cm^2, D = 20 mm
+    assert s["required_cam_width_m"] == pytest.approx(s["max_cam_normal_force_N"] / (40 * AT * 0.020))
+    assert s["hertz_width_m"] == pytest.approx(0.012) and not s["hertz_width_from_rule"]
+    # tangential force = torque / radius of the contact point
+    assert np.all(np.abs(c["cam_tangential_force_N"]) <= np.abs(c["camshaft_torque_Nm"]) / (0.030 - 1e-9))
+    # zero while the valve sits inside the lash
+    seated = c["rigid_valve_lift_m"] == 0
+    assert np.all(c["cam_normal_force_N"][seated] == 0) and np.all(c["hertz_stress_Pa"][seated] == 0)
+
+
+def test_self_locking_warning():
+    out, c, s = _run(law="cycloidal", rise=45, base=20, roller=4, contact='friction_angle = "62 deg"')
+    assert s["min_self_locking_margin_deg"] <= 0
+    w = [x for x in s["warnings"] if "self-locking" in x]
+    assert w and f"{s['max_pressure_angle_deg']:.3f}" in w[0]
+
+
+def test_no_self_locking_warning_with_margin():
+    out, c, s = _run(contact='friction_angle = "5 deg"')
+    assert s["min_self_locking_margin_deg"] > 0 and not any("self-locking" in x for x in s["warnings"])
+
+
+def test_hertz_above_allowable_warns():
+    out, c, s = _run(rpm=2000, contact='width = "2 mm"')
+    assert s["max_hertz_stress_Pa"] > s["hertz_allowable_Pa"]
+    assert any("Hertz" in x and "allowable" in x for x in s["warnings"])
+    assert any("width rule" in x for x in s["warnings"])
+
+
+def test_geometry_columns_are_reused_when_present():
+    """If the kinematics provides pressure_angle_deg and contour_radius_m, contact uses them."""
+    sc = scene()
+    base = simulate(sc)
+    cols = dict(base.columns)
+    cols["pressure_angle_deg"] = np.zeros_like(cols["pressure_angle_deg"])  # a doctored geometry
+    cols["contour_radius_m"] = np.full_like(cols["contour_radius_m"], np.inf)
+    ctx = Context(sc, np.radians(cols["cam_angle_deg"]), cols["time_s"], build_lift(sc), MappingProxyType(cols), MappingProxyType({}))
+    out = contact_effect(ctx)
+    assert "pressure_angle_deg" not in out.columns
+    assert np.allclose(out.columns["cam_normal_force_N"], np.maximum(cols["follower_force_N"], 0) + np.minimum(cols["follower_force_N"], 0))
+    assert out.summary["max_pressure_angle_deg"] == 0.0
+
+
+def test_concave_flanks_are_reported():
+    """Small base circle and a fast harmonic rise make the flanks concave."""
+    out, c, s = _run(law="harmonic", rise=50, base=12, roller=6)
+    assert np.any(c["contour_radius_m"] < 0)
+    assert s["max_hertz_stress_concave_Pa"] > 0
+
+
+# --- bad input ------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "contact, key",
+    [
+        ("poisson_ratio = 0.5", "contact.poisson_ratio"),
+        ("poisson_ratio = -1.0", "contact.poisson_ratio"),
+        ("poisson_ratio = 0.7", "contact.poisson_ratio"),
+        ("roller_poisson_ratio = 0.55", "contact.roller_poisson_ratio"),
+        ('friction_angle = "-3 deg"', "contact.friction_angle"),
+        ('friction_angle = "90 deg"', "contact.friction_angle"),
+        ("friction_coefficient = -0.1", "contact.friction_coefficient"),
+        ('youngs_modulus = "-210 GPa"', "contact.youngs_modulus"),
+        ('youngs_modulus = "210 mm"', "contact.youngs_modulus"),
+        ('engine = "steam"', "contact.engine"),
+        ('width = "0 mm"', "contact.width"),
+        ("colour = 1", "contact.colour"),
+    ],
+)
+def test_contact_section_rejects(contact, key):
+    with pytest.raises(InputError) as err:
+        scene(contact=contact)
+    assert err.value.key == key
+
+
+def test_contact_needs_a_roller():
+    with pytest.raises(InputError) as err:
+        scene(roller=0)
+    assert err.value.key == "follower.roller_radius"
+
+
+def test_contact_without_section_uses_defaults():
+    text = SCENE.format(**DEFAULTS).split("[contact]")[0]
+    sc = loads_scene(text)
+    assert sc.contact == ContactSpec()
+
+
+def test_friction_coefficient_equals_angle():
+    a = simulate(scene(contact="friction_coefficient = 0.1")).summary
+    b = simulate(scene(contact=f'friction_angle = "{math.degrees(math.atan(0.1))!r} deg"')).summary
+    assert a["min_self_locking_margin_deg"] == pytest.approx(b["min_self_locking_margin_deg"], rel=1e-12)
+
+
+def test_builtin_scenes_with_contact(scenes_dir):
+    for name in ("valve_float_demo.toml", "schenker1902_intake_valve.toml"):
+        s = simulate(load_scene(scenes_dir / name)).summary
+        assert s["max_hertz_stress_Pa"] > 0 and s["required_cam_width_m"] > 0
+        assert s["min_self_locking_margin_deg"] > 0
+
+
+def test_contact_refuses_other_follower_types(scenes_dir):
+    path = scenes_dir / "rolling_lever.toml"
+    if not path.exists():
+        pytest.skip("no rolling-lever scene")
+    with pytest.raises(InputError) as err:
+        load_scene(path, ['effects=["contact"]'])
+    assert err.value.key == "follower.type"

@@ -1,0 +1,366 @@
+"""`explorer record`: .rrd files read back with rerun.chunk.RrdReader and compared with
+`explorer simulate` on the same scene (values, entity paths, timelines, events, blueprint, 3D).
+
+Tolerances: the series are float64 in both the CSV (repr round-trips exactly) and the .rrd, so
+they must be equal bit for bit. The `time` timeline is stored as integer nanoseconds: within
+0.5 ns of time_s. Transforms are stored as float32 by rerun: relative 1e-6 of the gear's size.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from explorer import load_scene
+from explorer.cli import main
+from explorer.effects import simulate
+from explorer.recording import entity_path, series_layout
+from explorer.recording_read import read_blueprint_views, read_rrd
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = ROOT / "assets" / "scenes"
+FLOAT = SCENES / "valve_float_demo.toml"  # kinematics, lash, forces, contact: the most columns
+CYCLOIDAL = SCENES / "cycloidal_demo.toml"
+
+
+def simulate_csv(tmp_path: Path, scene: Path, *overrides: str) -> dict[str, np.ndarray]:
+    """`explorer simulate` output as arrays by column name."""
+    out = tmp_path / f"sim_{len(list(tmp_path.iterdir()))}.csv"
+    args = ["simulate", str(scene), "-o", str(out)]
+    for o in overrides:
+        args += ["--set", o]
+    assert main(args) == 0
+    names = out.read_text().splitlines()[0].split(",")
+    table = np.loadtxt(out, delimiter=",", skiprows=1, ndmin=2)
+    return {name: table[:, i] for i, name in enumerate(names)}
+
+
+def record(tmp_path: Path, *args: str, name: str = "run.rrd") -> Path:
+    out = tmp_path / name
+    assert main(["record", *args, "-o", str(out)]) == 0
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# the documented mapping
+
+
+DOCUMENTED = {  # the examples of the module docstring
+    "valve_lift_m": "/valve/lift", "valve_velocity_m_s": "/valve/velocity",
+    "valve_accel_m_s2": "/valve/acceleration", "valve_jerk_m_s3": "/valve/jerk",
+    "follower_lift_m": "/follower/lift", "rigid_valve_lift_m": "/valve_rigid/lift",
+    "linkage_force_N": "/forces/linkage", "spring_force_N": "/forces/spring",
+    "contact_force_N": "/forces/contact", "camshaft_torque_Nm": "/torque/camshaft",
+    "hertz_stress_Pa": "/stress/hertz", "pressure_angle_deg": "/angles/pressure",
+    "contour_radius_m": "/lengths/contour_radius", "mystery": "/other/mystery",
+}
+
+
+def test_documented_entity_paths():
+    import explorer.recording as recording
+
+    for column, path in DOCUMENTED.items():
+        assert entity_path(column) == path, column
+        assert path in recording.__doc__ or column == "mystery", f"{path} not documented"
+
+
+def test_layout_has_unique_paths_and_skips_the_timelines():
+    columns = list(simulate(load_scene(FLOAT)).columns)
+    layout = series_layout(columns)
+    assert len({s.path for s in layout}) == len(layout) == len(columns) - 2
+    assert {s.column for s in layout} == set(columns) - {"cam_angle_deg", "time_s"}
+    # a clash goes to /other instead of overwriting
+    clash = series_layout(["spring_force_N", "spring_N"])
+    assert [s.path for s in clash] == ["/forces/spring", "/other/spring_N"]
+
+
+# ---------------------------------------------------------------------------------------------
+# one scene: values, timelines, events, summary, blueprint, 3D
+
+
+@pytest.fixture(scope="module")
+def float_recording(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("float")
+    csv = simulate_csv(tmp, FLOAT)
+    out = record(tmp, str(FLOAT))
+    return out, csv
+
+
+def test_series_equal_simulate_output(float_recording):
+    out, csv = float_recording
+    runs = read_rrd(out)
+    assert len(runs) == 1
+    run = runs[0]
+    assert run.name == "Valve float demo"
+    assert run.application_id == "valve-gear-explorer"
+    series = run.series
+    n = csv["time_s"].size
+    assert n == 3600
+    for s in series_layout(csv):
+        got = series[s.path]
+        assert np.array_equal(got["value"], csv[s.column]), s.column  # bit for bit
+        assert np.array_equal(got["step"], np.arange(n))
+        assert np.max(np.abs(got["time"] - csv["time_s"] * 1e9)) <= 0.5
+        assert np.array_equal(got["cam_angle_mdeg"], np.rint(csv["cam_angle_deg"] * 1000).astype(np.int64))
+    # the headline quantities are where the docstring says
+    for path in ("/valve/lift", "/valve/velocity", "/valve/acceleration", "/valve/jerk", "/forces/linkage",
+                 "/forces/spring", "/forces/contact", "/torque/camshaft", "/angles/pressure", "/stress/hertz"):
+        assert path in series, path
+    # every series has its name (with unit) for the legend
+    assert run.static["/valve/lift"]["SeriesLines:names"] == ["valve lift [m]"]
+    assert run.static["/forces/linkage"]["SeriesLines:names"] == ["linkage force [N]"]
+
+
+def test_events_and_warnings_are_logged_at_their_instants(float_recording):
+    out, _ = float_recording
+    result = simulate(load_scene(FLOAT))
+    events = result.summary["events"]
+    warnings = result.summary["warnings"]
+    assert events and warnings  # this scene has lash impacts and a float warning
+    log = read_rrd(out)[0].temporal["/events"]
+    texts, levels = list(log["TextLog:text"]), list(log["TextLog:level"])
+    assert len(texts) == len(events) + len(warnings)
+    warn_rows = [i for i, lv in enumerate(levels) if lv == "WARN"]
+    assert [texts[i] for i in warn_rows] == [f"warning: {w}" for w in warnings]
+    assert all(log["time"][i] == 0 for i in warn_rows)
+    info = [i for i, lv in enumerate(levels) if lv == "INFO"]
+    for event in events:
+        rows = [i for i in info if texts[i].startswith(event["kind"] + " at ")]
+        times = [log["time"][i] for i in rows]
+        assert any(abs(t - event["time_s"] * 1e9) <= 0.5 for t in times), event
+        i = rows[int(np.argmin([abs(t - event["time_s"] * 1e9) for t in times]))]
+        assert log["cam_angle_mdeg"][i] == round(event["cam_angle_deg"] * 1000)
+        n = result.columns["time_s"].size  # the step at or before the instant
+        assert log["step"][i] == math.floor(event["cam_angle_deg"] / 360 * n + 1e-9)
+
+
+def test_summary_document(float_recording):
+    out, _ = float_recording
+    doc = read_rrd(out)[0].static["/summary"]
+    text = doc["TextDocument:text"][0]
+    assert text.startswith("# Valve float demo")
+    assert "jump_speed_rpm" in text and "valve float" in text
+
+
+def test_blueprint_has_3d_beside_s_v_p_and_forces(float_recording):
+    out, _ = float_recording
+    views = read_blueprint_views(out)
+    classes = [v["class"] for v in views]
+    assert "3D" in classes and "TextLog" in classes
+    spatial = next(v for v in views if v["class"] == "3D")
+    assert spatial["origin"] == "/parts"
+    series = {v["name"]: v["contents"] for v in views if v["class"] == "TimeSeries"}
+    assert "/valve/lift" in series["valve lift s"]
+    assert "/valve/velocity" in series["velocity v"]
+    assert "/valve/acceleration" in series["acceleration p"]
+    assert series["forces"] == ["/forces/**"]
+    assert "/torque/camshaft" in series["torque"] and "/stress/hertz" in series["stress"]
+
+
+def test_parts_replay_the_motion(float_recording):
+    """Meshes as built by explorer.meshes, poses per step; and an independent physical check:
+    the valve (z up, opening downwards) sits lower by exactly the valve lift."""
+    from explorer import meshes
+
+    out, csv = float_recording
+    run = read_rrd(out)[0]
+    result = simulate(load_scene(FLOAT))
+    parts = meshes.build_parts(result.scene, result)
+    poses = meshes.part_poses(result.scene, result)
+    size = float(np.max(np.abs(np.vstack([m.vertices for m in parts.values()]))))
+    tol = 1e-6 * size  # float32 storage
+    assert run.static["/parts"]["ViewCoordinates:xyz"] is not None
+    for name, mesh in parts.items():
+        static = run.static[f"/parts/{name}"]
+        vertices = np.asarray(static["Mesh3D:vertex_positions"], dtype=float)
+        assert vertices.shape == mesh.vertices.shape
+        assert np.max(np.abs(vertices - mesh.vertices)) <= tol
+        assert np.asarray(static["Mesh3D:triangle_indices"]).shape == mesh.faces.shape
+        positions, wxyz = poses[name]
+        if f"/parts/{name}" in run.temporal:
+            rows = run.temporal[f"/parts/{name}"]
+            assert np.array_equal(rows["step"], np.arange(positions.shape[0]))
+            assert np.max(np.abs(rows["Transform3D:translation"] - positions)) <= tol
+            assert np.max(np.abs(rows["Transform3D:quaternion"] - wxyz[:, [1, 2, 3, 0]])) <= 1e-6
+        else:  # a part that never moves has one static pose
+            assert np.all(positions == positions[0]) and np.all(wxyz == wxyz[0])
+            assert np.max(np.abs(np.asarray(static["Transform3D:translation"][0]) - positions[0])) <= tol
+    valve_z = run.temporal["/parts/valve"]["Transform3D:translation"][:, 2]
+    closed = valve_z[np.argmin(csv["valve_lift_m"])]
+    assert np.max(np.abs((closed - valve_z) - csv["valve_lift_m"])) <= tol
+    cam_q = run.temporal["/parts/cam"]["Transform3D:quaternion"]  # x y z w: turning about y
+    angle = -2.0 * np.arctan2(cam_q[:, 1], cam_q[:, 3])  # counter-clockwise in the cam plane
+    assert np.max(np.abs(np.angle(np.exp(1j * (angle - np.radians(csv["cam_angle_deg"])))))) <= 1e-6
+    scale = run.temporal["/parts/spring"]["Transform3D:scale"]
+    assert np.max(np.abs(scale[:, 2] - meshes.spring_axial_scale(result.scene, result))) <= 1e-6
+    assert np.all(scale[:, :2] == 1.0)
+
+
+# ---------------------------------------------------------------------------------------------
+# several recordings in one file
+
+
+def test_sweep_and_several_scenes_make_separate_recordings(tmp_path):
+    steps = "solver.steps_per_revolution=360"
+    out = record(tmp_path, str(CYCLOIDAL), str(FLOAT), "--set", steps, "--sweep", "drive.rpm=600,1200",
+                 "--no-parts")
+    runs = {r.name: r for r in read_rrd(out)}
+    expected = {f"{scene} [drive.rpm={rpm}]" for scene in ("Cycloidal demo", "Valve float demo")
+                for rpm in (600, 1200)}
+    assert set(runs) == expected
+    assert len({r.recording_id for r in runs.values()}) == 4
+    for scene_file, scene_name in ((CYCLOIDAL, "Cycloidal demo"), (FLOAT, "Valve float demo")):
+        for rpm in (600, 1200):
+            csv = simulate_csv(tmp_path, scene_file, steps, f"drive.rpm={rpm}")
+            series = runs[f"{scene_name} [drive.rpm={rpm}]"].series
+            for s in series_layout(csv):
+                assert np.array_equal(series[s.path]["value"], csv[s.column]), (scene_name, rpm, s.column)
+            # the time axis follows the speed: one revolution lasts 60/rpm s
+            last = series["/valve/lift"]["time"][-1]
+            assert abs(last - 60.0 / rpm * 359 / 360 * 1e9) <= 0.5
+    assert read_blueprint_views(out)  # the layout travels with the merged file
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []  # no leftovers
+
+
+def test_two_sweeps_make_every_combination(tmp_path):
+    out = record(tmp_path, str(CYCLOIDAL), "--set", "solver.steps_per_revolution=72", "--no-parts",
+                 "--sweep", "drive.rpm=600,1200", "--sweep", 'valve.lash=0.1mm,0.2mm')
+    names = sorted(r.name for r in read_rrd(out))
+    assert names == sorted(f"Cycloidal demo [drive.rpm={r}, valve.lash={l}]"
+                           for r in (600, 1200) for l in ("0.1mm", "0.2mm"))
+    lifts = {r.name: r.series["/valve/lift"]["value"].max() for r in read_rrd(out)}
+    # more lash, less valve lift, by exactly the lash difference (ratio 1)
+    a = lifts["Cycloidal demo [drive.rpm=600, valve.lash=0.1mm]"]
+    b = lifts["Cycloidal demo [drive.rpm=600, valve.lash=0.2mm]"]
+    assert abs((a - b) - 0.1e-3) <= 1e-12
+
+
+# ---------------------------------------------------------------------------------------------
+# bad input and interrupted writes
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--sweep", "drive.rpm=100,,200"], "--sweep"),
+    (["--sweep", "rpm=100"], "dotted"),
+    (["--sweep", "drive.rpm=fast"], "drive.rpm"),
+    (["--set", "drive.rpm=-5"], "drive.rpm"),
+    (["--set", "nosuch.key=1"], "nosuch"),
+])
+def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, args, needle):
+    out = tmp_path / "run.rrd"
+    code = main(["record", str(CYCLOIDAL), *args, "-o", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.startswith("error: ") and err.count("\n") == 1 and needle in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_bad_output_and_scene(tmp_path, capsys):
+    for args, needle in ((["-o", str(tmp_path / "run.csv")], ".rrd"),
+                         (["-o", str(tmp_path / "missing" / "run.rrd")], "does not exist"),
+                         (["-o", str(tmp_path)], ".rrd")):
+        assert main(["record", str(CYCLOIDAL), *args]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("error: ") and err.count("\n") == 1 and needle in err
+    assert main(["record", str(tmp_path / "nope.toml"), "-o", str(tmp_path / "run.rrd")]) == 2
+    assert "file not found" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_failure_while_writing_leaves_previous_file_and_no_temporaries(tmp_path, monkeypatch, capsys):
+    import explorer.recording as recording
+
+    out = tmp_path / "run.rrd"
+    out.write_bytes(b"previous content")
+
+    def broken_merge(pieces, target):
+        Path(target).write_bytes(b"half")
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr(recording, "merge_rrd", broken_merge)
+    code = main(["record", str(CYCLOIDAL), "--sweep", "drive.rpm=600,1200", "--no-parts",
+                 "--set", "solver.steps_per_revolution=72", "-o", str(out)])
+    assert code == 1
+    assert capsys.readouterr().err == f"error: {out}: writing failed: disk full\n"
+    assert out.read_bytes() == b"previous content"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.rrd"]
+
+
+def _record_and_kill(tmp_path: Path, out: Path, delay: float) -> int:
+    """Start a long `explorer record`, SIGKILL it `delay` s after its first temporary appears."""
+    cmd = [sys.executable, "-m", "explorer", "record", str(CYCLOIDAL), "--no-parts",
+           "--set", "solver.steps_per_revolution=100000", "--sweep", "drive.rpm=1000,2000,3000", "-o", str(out)]
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and proc.poll() is None:
+            if any(p.name.startswith(f".{out.name}.") for p in tmp_path.iterdir()):
+                break
+            time.sleep(0.002)
+        time.sleep(delay)
+        proc.send_signal(signal.SIGKILL)
+        return proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+@pytest.mark.parametrize("previous", [None, b"the previous recording"])
+def test_killed_midway_never_leaves_a_truncated_target(tmp_path, previous):
+    out = tmp_path / "run.rrd"
+    if previous is not None:
+        out.write_bytes(previous)
+    code = _record_and_kill(tmp_path, out, delay=0.3)
+    assert code == -signal.SIGKILL, "the recording finished before it could be interrupted"
+    # killed while writing: its temporaries are there, under hidden names
+    assert any(p.name.startswith(".run.rrd.") for p in tmp_path.iterdir())
+    if previous is None:
+        assert not out.exists()
+    else:
+        assert out.read_bytes() == previous
+    time.sleep(0.5)  # a merge child may still be finishing its temporary; it never renames
+    if previous is None:
+        assert not out.exists()
+    else:
+        assert out.read_bytes() == previous
+
+
+def test_parts_that_cannot_be_built_leave_a_warning_and_the_series(tmp_path, capsys, monkeypatch):
+    import explorer.recording as recording
+
+    def no_meshes(label, result):
+        raise NotImplementedError("no meshes for this gear")
+
+    monkeypatch.setattr(recording, "with_parts", no_meshes)
+    out = record(tmp_path, str(CYCLOIDAL), "--set", "solver.steps_per_revolution=72")
+    assert "3D parts left out (NotImplementedError: no meshes for this gear)" in capsys.readouterr().err
+    run = read_rrd(out)[0]
+    assert "/valve/lift" in run.series and not any(p.startswith("/parts") for p in run.temporal)
+
+
+def test_an_incomplete_file_is_never_renamed_into_place(tmp_path, monkeypatch, capsys):
+    """rerun's file sink only logs write errors: the footer check stops a broken file."""
+    import explorer.recording as recording
+
+    out = tmp_path / "run.rrd"
+    out.write_bytes(b"previous content")
+    real_write = recording._write_one
+
+    def truncating_write(path, run, layout):
+        real_write(path, run, layout)
+        data = Path(path).read_bytes()
+        Path(path).write_bytes(data[: len(data) // 2])  # as if the disk filled up
+
+    monkeypatch.setattr(recording, "_write_one", truncating_write)
+    code = main(["record", str(CYCLOIDAL), "--no-parts", "--set", "solver.steps_per_revolution=72", "-o", str(out)])
+    assert code == 1 and "incomplete (no rrd footer)" in capsys.readouterr().err
+    assert out.read_bytes() == b"previous content"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.rrd"]
