@@ -11,6 +11,10 @@ from .errors import InputError
 
 COMMAND_MODULES = [
     "explorer.cli_simulate",
+    "explorer.cli_serve",
+    "explorer.cli_record",
+    "explorer.cli_view",
+    "explorer.cli_bench",
 ]
 
 DESCRIPTION = """\
@@ -57,6 +61,9 @@ def main(argv: list[str] | None = None) -> int:
         return int(args.run(args) or 0)
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a file or port the user named cannot be used: one line, no traceback
+        print(f"error: {exc.filename or '-'}: -: {exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

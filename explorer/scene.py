@@ -18,6 +18,7 @@ from types import MappingProxyType
 from typing import Any, Mapping
 
 from .errors import InputError
+from .gears import GEAR_TYPES
 from .laws import LAWS
 from .reader import Table
 
@@ -29,12 +30,19 @@ EFFECT_DEPENDENCIES: dict[str, tuple[str, ...]] = {
     "forces": ("kinematics", "lash"),
     "contact": ("kinematics", "lash", "forces"),
     "elastic": ("kinematics", "lash"),
+    "gear": ("kinematics",),  # explorer.gears: what is particular to the lever, eccentric and trip gears
 }
 
-SPECIAL_LAWS = ("table", "acceleration", "contour")
-FOLLOWER_TYPES = ("translating-roller",)
+SPECIAL_LAWS = ("table", "acceleration", "contour", "gear")  # "gear": the gear's geometry makes the lift
+FOLLOWER_TYPES = ("translating-roller", *GEAR_TYPES)
 SOLVER_METHODS = ("exact", "schenker1902", "scipy")
 MIN_STEPS = 36
+# Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
+# w^3 L''' must not overflow) and catch unit slips such as "10 m" for "10 mm".
+MAX_RPM = 100_000.0
+MAX_LIFT = 1.0  # m
+MIN_EVENT_ANGLE = math.radians(0.1)  # rise and return of the analytic laws
+MAX_RATIO = 100.0
 MAX_STEPS = 10_000_000
 
 # Optional sections parsed by the module that owns them: section -> "module:function".
@@ -42,6 +50,8 @@ MAX_STEPS = 10_000_000
 OWNED_SECTIONS: dict[str, str] = {
     "cam": "explorer.geometry.spec:parse_cam_section",
     "contact": "explorer.contact:parse_contact_section",
+    "spring_design": "explorer.springs:parse_spring_design_section",
+    "gear": "explorer.gears.spec:parse_gear_section",
 }
 # Law-specific [lift] keys, parsed by the module of the law: law -> "module:function".
 LAW_OPTION_PARSERS: dict[str, str] = {
@@ -50,7 +60,7 @@ LAW_OPTION_PARSERS: dict[str, str] = {
 }
 LAW_OPTION_KEYS: dict[str, tuple[str, ...]] = {
     "table": ("file", "angle_unit", "lift_unit", "smoothing"),
-    "acceleration": ("points", "angle_unit", "acceleration_unit", "interpolation"),
+    "acceleration": ("points", "angle_unit", "acceleration_unit", "interpolation", "reference_rpm"),
 }
 
 
@@ -145,6 +155,8 @@ class Scene:
     description: str = ""
     cam: Any = None  # owned by explorer.geometry.spec
     contact: Any = None  # owned by explorer.contact
+    spring_design: Any = None  # owned by explorer.springs (optional advice and historic rules)
+    gear: Any = None  # owned by explorer.gears.spec (pivoted lever, rocking cam, rolling lever, trip gear)
 
     @property
     def directory(self) -> Path:
@@ -246,7 +258,12 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     drive_t = top.table("drive")
     drive_t.reject_unknown(("rpm",))
     rpm_si = drive_t.quantity("rpm", "speed", positive=True)
-    drive = Drive(rpm=rpm_si * 60.0 / (2.0 * math.pi))
+    raw_rpm = drive_t.raw("rpm")
+    # a bare number is rev/min already: keep it exact rather than round-tripping through rad/s
+    rpm = float(raw_rpm) if isinstance(raw_rpm, (int, float)) else rpm_si * 60.0 / (2.0 * math.pi)
+    if rpm > MAX_RPM:
+        raise drive_t.error("rpm", f"more than {MAX_RPM:g} rpm is outside any valve gear, got {raw_rpm!r}")
+    drive = Drive(rpm=rpm)
 
     follower = _parse_follower(top.table("follower", required=False), file)
     lift = _parse_lift(top.table("lift"), file)
@@ -279,6 +296,10 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
         fields["lift"] = replace(lift, options=options)
     if lift.law == "contour" and fields.get("cam") is None:
         raise InputError(file, "cam", "missing section: lift.law = 'contour' takes the lift from [cam]")
+    if follower.type in GEAR_TYPES and fields.get("gear") is None:
+        raise InputError(file, "gear", f"missing section: follower.type '{follower.type}' needs [gear]")
+    if lift.law == "gear" and follower.type not in ("rocking-cam", "rolling-lever"):
+        raise InputError(file, "lift.law", "lift.law = 'gear' is for the rocking-cam and rolling-lever gears")
     return Scene(**fields)
 
 
@@ -302,7 +323,7 @@ def _parse_follower(t: Table | None, file: str) -> Follower:
         base_radius=t.quantity("base_radius", "length", 0.03, positive=True),
         roller_radius=t.quantity("roller_radius", "length", 0.0, nonnegative=True),
         offset=t.quantity("offset", "length", 0.0),
-        ratio=t.number("ratio", 1.0, minimum=0.0, open_minimum=True),
+        ratio=t.number("ratio", 1.0, minimum=0.0, open_minimum=True, maximum=MAX_RATIO),
     )
     if abs(follower.offset) >= follower.base_radius + follower.roller_radius:
         raise t.error("offset", "offset must be smaller than base radius + roller radius")
@@ -320,10 +341,15 @@ def _parse_lift(t: Table, file: str) -> LiftSpec:
     start = t.quantity("start", "angle", 0.0)
     if not 0.0 <= start < 2.0 * math.pi:
         raise t.error("start", "must lie in [0 deg, 360 deg)")
+    if height > MAX_LIFT:
+        raise t.error("height", f"more than {MAX_LIFT:g} m of lift is outside any valve gear, got {t.raw('height')!r}")
     rise = t.quantity("rise", "angle", positive=True) if law in LAWS else t.quantity("rise", "angle", 0.0, nonnegative=True)
     dwell = t.quantity("dwell", "angle", 0.0, nonnegative=True)
     ret = t.quantity("return", "angle", rise, positive=law in LAWS) if law in LAWS else t.quantity("return", "angle", 0.0, nonnegative=True)
     return_law = t.string("return_law", None, choices=LAWS) if t.has("return_law") else None
+    for key, angle in (("rise", rise), ("return", ret)):
+        if law in LAWS and angle < MIN_EVENT_ANGLE:
+            raise t.error(key, f"must be at least {math.degrees(MIN_EVENT_ANGLE):g} deg, got {angle:.3g} rad")
     if rise + dwell + ret > 2.0 * math.pi * (1.0 + 1e-12):
         total = math.degrees(rise + dwell + ret)
         raise t.error("return", f"rise + dwell + return = {total:.6g} deg exceeds 360 deg")
@@ -378,9 +404,9 @@ def _parse_solver(t: Table) -> Solver:
     t.reject_unknown(("method", "steps_per_revolution", "scipy_method", "rtol", "atol"))
     steps = t.number("steps_per_revolution", 3600, integer=True)
     if steps < MIN_STEPS:
-        raise t.error("steps_per_revolution", f"too few steps: {steps} (at least {MIN_STEPS})")
+        raise t.error("steps_per_revolution", f"too few steps: {steps:.6g} (at least {MIN_STEPS})")
     if steps > MAX_STEPS:
-        raise t.error("steps_per_revolution", f"too many steps: {steps} (at most {MAX_STEPS})")
+        raise t.error("steps_per_revolution", f"too many steps: {steps:.6g} (at most {MAX_STEPS})")
     return Solver(
         method=t.string("method", "exact", choices=SOLVER_METHODS),
         steps_per_revolution=int(steps),

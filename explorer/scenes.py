@@ -8,7 +8,8 @@ DEFAULT_SCENE = "schenker1902_fig2.toml"
 
 
 def scenes_dir() -> Path:
-    """assets/scenes of the source tree (editable installs), else the copy shipped in the package."""
+    """assets/scenes of the source tree (editable installs), else the copy shipped in the wheel
+    (explorer/data is a link to assets/ in the source tree, so the wheel carries the files)."""
     here = Path(__file__).resolve().parent
     for candidate in (here.parent / "assets" / "scenes", here / "data" / "scenes"):
         if candidate.is_dir():

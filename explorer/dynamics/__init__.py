@@ -1,0 +1,1 @@
+"""Elastic valve-train dynamics: one model, several interchangeable solvers (see model.solve)."""

@@ -1,0 +1,224 @@
+"""Rigid kinematics and lash against closed forms written out here, independently of the code.
+
+Scene: cycloidal rise (70 deg from 20 deg), 10 deg dwell, harmonic return (80 deg), lever
+ratio 1.5, lash 0.3 mm, 1200 rpm. Closed forms: cycloidal L = h (u - sin(2 pi u)/(2 pi)),
+harmonic return L = h (1 + cos(pi u))/2; valve s = max(0, ratio L - lash), v = ratio w L',
+p = ratio w^2 L'', j = ratio w^3 L''' while open. Tolerances: 1e-12 relative for the columns
+(same formulas, different arithmetic order); 1e-9 deg for the roots (Brent to ~1e-15 rad).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.optimize import brentq
+
+from explorer import loads_scene, simulate
+
+H, START, RISE, DWELL, RET = 0.008, math.radians(20), math.radians(70), math.radians(10), math.radians(80)
+RATIO, LASH, RPM = 1.5, 3e-4, 1200.0
+W = RPM * 2 * math.pi / 60
+
+SCENE = f"""
+name = "kinematics oracle"
+effects = ["kinematics", "lash"]
+[drive]
+rpm = {RPM}
+[lift]
+law = "cycloidal"
+return_law = "harmonic"
+height = "8 mm"
+start = "20 deg"
+rise = "70 deg"
+dwell = "10 deg"
+return = "80 deg"
+[follower]
+ratio = {RATIO}
+[valve]
+mass = "0.1 kg"
+lash = "0.3 mm"
+[solver]
+steps_per_revolution = 7200
+"""
+
+
+def closed_form(theta):
+    """Follower L, L', L'', L''' (per rad) of the scene, written out by hand."""
+    x = np.mod(theta - START, 2 * math.pi)
+    out = np.zeros((4, x.size))
+    u = x / RISE
+    r = x < RISE
+    a = 2 * math.pi * u[r]
+    out[0, r] = H * (u[r] - np.sin(a) / (2 * math.pi))
+    out[1, r] = H / RISE * (1 - np.cos(a))
+    out[2, r] = 2 * math.pi * H / RISE**2 * np.sin(a)
+    out[3, r] = 4 * math.pi**2 * H / RISE**3 * np.cos(a)
+    d = (x >= RISE) & (x < RISE + DWELL)
+    out[0, d] = H
+    f = (x >= RISE + DWELL) & (x < RISE + DWELL + RET)
+    b = math.pi * (x[f] - RISE - DWELL) / RET
+    out[0, f] = H * (1 + np.cos(b)) / 2
+    out[1, f] = -H * math.pi / (2 * RET) * np.sin(b)
+    out[2, f] = -H * math.pi**2 / (2 * RET**2) * np.cos(b)
+    out[3, f] = H * math.pi**3 / (2 * RET**3) * np.sin(b)
+    return out
+
+
+@pytest.fixture(scope="module")
+def result():
+    return simulate(loads_scene(SCENE))
+
+
+def test_follower_columns_are_the_closed_form(result):
+    theta = np.radians(result.columns["cam_angle_deg"])
+    d = closed_form(theta)
+    c = result.columns
+    assert c["follower_lift_m"] == pytest.approx(d[0], rel=1e-12, abs=1e-17)
+    assert c["follower_velocity_m_s"] == pytest.approx(W * d[1], rel=1e-12, abs=1e-14)
+    assert c["follower_accel_m_s2"] == pytest.approx(W**2 * d[2], rel=1e-12, abs=1e-11)
+    assert c["follower_jerk_m_s3"] == pytest.approx(W**3 * d[3], rel=1e-12, abs=1e-8)
+
+
+def test_valve_is_max_of_zero_and_ratio_lift_minus_lash(result):
+    theta = np.radians(result.columns["cam_angle_deg"])
+    d = closed_form(theta)
+    s = np.maximum(0.0, RATIO * d[0] - LASH)
+    is_open = RATIO * d[0] > LASH
+    c = result.columns
+    assert c["valve_lift_m"] == pytest.approx(s, rel=1e-12, abs=1e-17)
+    assert c["valve_velocity_m_s"] == pytest.approx(np.where(is_open, RATIO * W * d[1], 0.0), rel=1e-12, abs=1e-14)
+    assert c["valve_accel_m_s2"] == pytest.approx(np.where(is_open, RATIO * W**2 * d[2], 0.0), rel=1e-12, abs=1e-11)
+    assert c["valve_jerk_m_s3"] == pytest.approx(np.where(is_open, RATIO * W**3 * d[3], 0.0), rel=1e-12, abs=1e-8)
+    assert result.summary["max_valve_lift_m"] == pytest.approx(RATIO * H - LASH, rel=1e-12)
+    # peak velocity of the cycloidal rise: 2 h / beta per rad (Cv = 2), times ratio * w
+    assert result.summary["max_valve_velocity_m_s"] == pytest.approx(RATIO * W * 2 * H / RISE, rel=1e-6)
+
+
+def test_lash_take_up_and_seating_by_root_finding_match_closed_forms(result):
+    # take-up on the cycloidal rise: ratio h (u - sin(2 pi u)/(2 pi)) = lash, solved here independently
+    u_up = brentq(lambda u: RATIO * H * (u - math.sin(2 * math.pi * u) / (2 * math.pi)) - LASH, 0.0, 0.5, xtol=1e-16)
+    theta_up = START + u_up * RISE
+    # seating on the harmonic return, in closed form: ratio h (1 + cos(pi u))/2 = lash
+    u_seat = math.acos(2 * LASH / (RATIO * H) - 1) / math.pi
+    theta_seat = START + RISE + DWELL + u_seat * RET
+    s = result.summary
+    assert s["lash_take_up_angles_deg"] == pytest.approx([math.degrees(theta_up)], abs=1e-9)
+    assert s["seating_angles_deg"] == pytest.approx([math.degrees(theta_seat)], abs=1e-9)
+    v_open = RATIO * W * H / RISE * (1 - math.cos(2 * math.pi * u_up))
+    v_close = RATIO * W * H * math.pi / (2 * RET) * math.sin(math.pi * u_seat)
+    assert s["impact_velocity_opening_m_s"] == pytest.approx(v_open, rel=1e-9)
+    assert s["impact_velocity_closing_m_s"] == pytest.approx(v_close, rel=1e-9)
+    kinds = {e["kind"]: e for e in s["events"]}
+    assert kinds["lash-take-up"]["time_s"] == pytest.approx(theta_up / W, rel=1e-12)
+    assert kinds["seat"]["time_s"] == pytest.approx(theta_seat / W, rel=1e-12)
+    assert kinds["seat"]["velocity_m_s"] == pytest.approx(-v_close, rel=1e-9)
+
+
+def test_symmetric_harmonic_event_impacts_are_equal_and_closed_form():
+    """Harmonic rise and return, both with closed-form roots: theta = beta/pi acos(1 - 2 lash/h)."""
+    text = SCENE.replace('law = "cycloidal"\nreturn_law = "harmonic"', 'law = "harmonic"').replace(
+        'dwell = "10 deg"', 'dwell = "0 deg"').replace('return = "80 deg"', 'return = "70 deg"')
+    s = simulate(loads_scene(text)).summary
+    u = math.acos(1 - 2 * LASH / (RATIO * H)) / math.pi
+    assert s["lash_take_up_angles_deg"] == pytest.approx([math.degrees(START + u * RISE)], abs=1e-9)
+    assert s["seating_angles_deg"] == pytest.approx([math.degrees(START + 2 * RISE - u * RISE)], abs=1e-9)
+    v = RATIO * W * H * math.pi / (2 * RISE) * math.sin(math.pi * u)
+    assert s["impact_velocity_opening_m_s"] == pytest.approx(v, rel=1e-9)
+    assert s["impact_velocity_closing_m_s"] == pytest.approx(v, rel=1e-9)
+
+
+def test_lash_larger_than_lift_never_opens():
+    text = SCENE.replace('lash = "0.3 mm"', 'lash = "13 mm"')  # ratio * h = 12 mm
+    result = simulate(loads_scene(text))
+    assert not np.any(result.columns["valve_lift_m"])
+    assert result.summary["impact_velocity_opening_m_s"] == 0.0
+    assert any("never opens" in w for w in result.summary["warnings"])
+
+
+def test_no_valve_section_means_no_lash():
+    text = SCENE.replace('[valve]\nmass = "0.1 kg"\nlash = "0.3 mm"\n', "")
+    result = simulate(loads_scene(text))
+    c = result.columns
+    assert c["valve_lift_m"] == pytest.approx(RATIO * c["follower_lift_m"], rel=1e-15, abs=0)
+
+
+def _harmonic_scene(start_deg, dwell_deg, lash, height="8 mm", ratio=1.0):
+    return loads_scene(f"""
+effects = ["kinematics", "lash"]
+[drive]
+rpm = {RPM}
+[lift]
+law = "harmonic"
+height = "{height}"
+start = "{start_deg} deg"
+rise = "60 deg"
+dwell = "{dwell_deg} deg"
+return = "60 deg"
+[follower]
+ratio = {ratio}
+[valve]
+mass = "0.1 kg"
+lash = "{lash}"
+""")
+
+
+@pytest.mark.parametrize("dwell", [0, 30])
+def test_lift_exactly_equal_to_lash_never_opens(dwell):
+    """ratio * h == lash: the follower only touches the valve (at the top, or along a whole dwell).
+    s = max(0, ratio L - lash) stays 0, so there is no take-up, no seating and no impact."""
+    result = simulate(_harmonic_scene(20, dwell, "8 mm"))
+    s = result.summary
+    assert not np.any(result.columns["valve_lift_m"])
+    assert s["lash_take_up_angles_deg"] == [] and s["seating_angles_deg"] == []
+    assert s["impact_velocity_opening_m_s"] == 0.0 and s["impact_velocity_closing_m_s"] == 0.0
+    assert not [e for e in s["events"] if e["kind"] in ("lash-take-up", "seat")]
+    assert any("never opens" in w for w in s["warnings"])
+
+
+@pytest.mark.parametrize("start, dwell", [(330, 0), (300, 20), (350, 40)])
+def test_event_wrapping_through_zero(start, dwell):
+    """An event that starts before 360 deg and ends after it: the take-up lies before 0 deg, the
+    seating after it, both at the closed-form angles theta = start + beta/pi acos(1 - 2 lash/h)
+    (mod 360) of the harmonic flank, with equal impact speeds."""
+    s = simulate(_harmonic_scene(start, dwell, "0.3 mm")).summary
+    beta = math.radians(60)
+    u = math.acos(1 - 2 * LASH / H) / math.pi
+    up = math.degrees(math.radians(start) + u * beta) % 360
+    seat = math.degrees(math.radians(start) + 2 * beta + math.radians(dwell) - u * beta) % 360
+    assert s["lash_take_up_angles_deg"] == pytest.approx([up], abs=1e-9)
+    assert s["seating_angles_deg"] == pytest.approx([seat], abs=1e-9)
+    assert seat < up  # the seating comes after 0 deg, in the next revolution's numbering
+    v = W * H * math.pi / (2 * beta) * math.sin(math.pi * u)
+    assert s["impact_velocity_opening_m_s"] == pytest.approx(v, rel=1e-9)
+    assert s["impact_velocity_closing_m_s"] == pytest.approx(v, rel=1e-9)
+    events = sorted((e for e in s["events"] if e["kind"] in ("lash-take-up", "seat")), key=lambda e: e["time_s"])
+    assert [e["kind"] for e in events] == ["seat", "lash-take-up"]  # in time order over 0 .. 360 deg
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    start=st.floats(0.0, 2 * math.pi, exclude_max=True),
+    rise=st.floats(0.01, 2.0),
+    dwell=st.floats(0.0, 1.5),
+    ret=st.floats(0.01, 2.0),
+    law=st.sampled_from(["cycloidal", "harmonic", "polynomial-345", "modified-sine"]),
+)
+def test_law_lift_is_continuous_at_its_breakpoints(start, rise, dwell, ret, law):
+    """The lift is continuous everywhere, so at each breakpoint it must equal its neighbours 1e-9 rad
+    away to within slope * 1e-9 (h / rise * C_v * 1e-9 < 1e-10 m here). A breakpoint that falls in
+    no stretch of the event (it happened on the dwell's end by rounding) read 0 instead of h."""
+    from hypothesis import assume
+
+    from explorer.lift import LawLift
+
+    assume(rise + dwell + ret <= 2 * math.pi)
+    lift = LawLift(0.01, start, rise, dwell, ret, law, law)
+    marks = lift.breakpoints()
+    at = lift.derivatives(marks)[0]
+    before = lift.derivatives(marks - 1e-9)[0]
+    after = lift.derivatives(marks + 1e-9)[0]
+    assert np.all(np.abs(at - before) < 1e-9) and np.all(np.abs(at - after) < 1e-9)
