@@ -27,6 +27,7 @@ EFFECT_FUNCTIONS: dict[str, str] = {
     "forces": "explorer.forces:forces_effect",
     "contact": "explorer.contact:contact_effect",
     "elastic": "explorer.dynamics.effect:elastic_effect",
+    "gear": "explorer.gears.effect:gear_effect",
 }
 
 

@@ -14,6 +14,7 @@ from typing import Protocol
 
 import numpy as np
 
+from .gears import GEAR_TYPES
 from .laws import law as normalised_law
 
 TWO_PI = 2.0 * math.pi
@@ -42,14 +43,18 @@ class LawLift:
         x = np.mod(theta - self.start, TWO_PI)  # angle since the rise began
         out = np.zeros((4,) + x.shape)
         h = self.height
-        rising = x < self.rise
+        # Classify by the signs of successive differences, not by comparing x with sums such as
+        # rise + dwell: (x - rise) - dwell and x < rise + dwell round differently, which left a
+        # point on the dwell's end in no stretch at all (lift 0 there instead of h).
+        x_top = x - self.rise
+        x_ret = x_top - self.dwell
+        rising = x_top < 0.0
         if np.any(rising):
             f = normalised_law(self.rise_law)(x[rising] / self.rise)
             for k in range(4):
                 out[k][rising] = h * f[k] / self.rise**k
-        top = (x >= self.rise) & (x < self.rise + self.dwell)
+        top = (x_top >= 0.0) & (x_ret < 0.0)
         out[0][top] = h
-        x_ret = x - self.rise - self.dwell
         falling = (x_ret >= 0.0) & (x_ret < self.ret)
         if np.any(falling):
             g = normalised_law(self.return_law)(x_ret[falling] / self.ret)
@@ -66,6 +71,10 @@ class LawLift:
 def build_lift(scene) -> LiftCurve:
     """The lift curve a validated scene describes (dispatch on lift.law)."""
     spec = scene.lift
+    if scene.follower.type in GEAR_TYPES:
+        from .gears.build import build_gear_lift
+
+        return build_gear_lift(scene)
     if spec.law in ("table",):
         from .lift_table import build_table_lift
 

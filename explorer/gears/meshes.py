@@ -1,0 +1,415 @@
+"""3D parts of the seeds' other gears, for the browser explorer and the rerun recordings.
+
+Same conventions as explorer.meshes: metres, z up, the gear drawn in the x-z plane (the gear's
+plane (x, y) -> world (x, z)), shafts along y; a counter-clockwise turn by a in the gear's plane
+is the world rotation quat_about_y(-a). Every part's mesh is in its own frame; `gear_poses`
+gives one (positions (N, 3), wxyz (N, 4)) per step of a Result.
+
+The valve, its spring and seat are explorer.meshes' parts, moved so that the valve stem's top
+sits where the gear's valve pin is at rest (`gear_layout`); the valve travels along the gear's
+valve axis (drawn upright: the scenes open their valves downwards). Linkage parts follow the rigid
+kinematics; the valve follows the displayed (possibly elastic, magnified) lift. The trip gear
+keeps the stock valve (opening downwards): its latch pushes a catch on the spindle from above,
+swings aside at the trip, and a dashpot cylinder sits above the spindle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import trimesh
+
+from .. import meshes as M
+from ..meshes import extrude_contour as _extrude_ccw
+from ..meshes import quat_about_y
+
+TWO_PI = 2.0 * math.pi
+
+
+# --------------------------------------------------------------------------------------------
+# simple solids in the x-z plane, extruded along y
+# --------------------------------------------------------------------------------------------
+
+
+def extrude_contour(xy: np.ndarray, width: float) -> trimesh.Trimesh:
+    """explorer.meshes.extrude_contour for a polygon of either orientation (it wants ccw)."""
+    xy = np.asarray(xy, dtype=float)
+    if M._signed_area(xy) < 0.0:
+        xy = xy[::-1]
+    return _extrude_ccw(xy, width)
+
+
+def _bar(length: float, half: float, width: float, sections: int = 16) -> trimesh.Trimesh:
+    """Stadium bar from (0, 0) to (length, 0) in x-z with round ends of radius `half`."""
+    a = np.linspace(-0.5 * math.pi, 0.5 * math.pi, sections)
+    right = np.column_stack([length + half * np.cos(a), half * np.sin(a)])
+    left = np.column_stack([-half * np.cos(a), -half * np.sin(a)])
+    return extrude_contour(np.vstack([right, left]), width)
+
+
+def _bar_between(p, q, half: float, width: float) -> trimesh.Trimesh:
+    """Bar from point p to point q (x-z plane), in the frame of p."""
+    dx, dz = q[0] - p[0], q[1] - p[1]
+    mesh = _bar(math.hypot(dx, dz), half, width)
+    angle = math.atan2(dz, dx)
+    mesh.apply_transform(trimesh.transformations.rotation_matrix(-angle, [0.0, 1.0, 0.0]))
+    return mesh
+
+
+def _disc(radius: float, width: float, centre=(0.0, 0.0), sections: int = 64) -> trimesh.Trimesh:
+    a = np.linspace(0.0, TWO_PI, sections, endpoint=False)
+    return extrude_contour(np.column_stack([centre[0] + radius * np.cos(a), centre[1] + radius * np.sin(a)]), width)
+
+
+def _pin(x: float, z: float, radius: float, width: float) -> trimesh.Trimesh:
+    m = trimesh.creation.cylinder(radius=radius, height=width, sections=24)
+    m.apply_transform(trimesh.transformations.rotation_matrix(math.pi / 2.0, [1.0, 0.0, 0.0]))
+    m.apply_translation([x, 0.0, z])
+    return m
+
+
+def _sector(points: np.ndarray, width: float) -> trimesh.Trimesh:
+    """A lever body: the pivot (origin) joined to a curved face given as points."""
+    return extrude_contour(np.vstack([[0.0, 0.0], points]), width)
+
+
+def _concat(parts) -> trimesh.Trimesh:
+    return trimesh.util.concatenate([p for p in parts if p is not None])
+
+
+def _world(n, x, z):
+    return np.column_stack([np.full(n, x, dtype=float), np.zeros(n), np.full(n, z, dtype=float)])
+
+
+def _ident(n):
+    return np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
+
+
+# --------------------------------------------------------------------------------------------
+# layout: explorer.meshes' valve, spring and seat, moved under the gear's valve pin
+# --------------------------------------------------------------------------------------------
+
+
+def valve_pin_rest(gear_lift) -> tuple[float, float] | None:
+    """Rest position (x, y in the gear's plane) of the pin that pushes the valve, or None."""
+    gear = getattr(gear_lift, "gear", None)
+    if gear is None:
+        return None
+    drive = getattr(gear, "drive", None) if not hasattr(gear, "valve") else gear.valve
+    if hasattr(drive, "valve_pivot"):  # rod and lever
+        beta0 = float(drive.valve_lever_angle(np.array(drive.rest)))
+        e = drive.valve_pivot
+        return (e[0] + drive.arm_out * math.cos(beta0 + drive.bend), e[1] + drive.arm_out * math.sin(beta0 + drive.bend))
+    p = drive.pivot
+    return (p[0] + drive.arm * math.cos(drive.rest + drive.angle), p[1] + drive.arm * math.sin(drive.rest + drive.angle))
+
+
+def gear_layout(scene, result=None, lift=None):
+    """explorer.meshes.Layout sized for the gear's lift, its valve group moved under the gear's
+    valve pin (the trip gear keeps the stock position, its latch is drawn beside the spindle)."""
+    from ..lift import build_lift
+
+    lay = M.layout(_stock_scene(scene), result)
+    lift = lift if lift is not None else build_lift(scene)
+    pin = valve_pin_rest(lift)
+    if pin is None:
+        return lay
+    dx, dz = pin[0] - lay.valve_x, pin[1] - lay.stem_top_rest
+    return replace(lay, valve_x=lay.valve_x + dx, stem_top_rest=lay.stem_top_rest + dz, seat_z=lay.seat_z + dz,
+                   spring_seat_z=lay.spring_seat_z + dz, pivot=(lay.pivot[0] + dx, lay.pivot[1], lay.pivot[2] + dz))
+
+
+def _stock_scene(scene):
+    """The scene as a translating-roller gear: explorer.meshes' own parts and sizes, without its
+    dispatch back to this module."""
+    return scene.with_changes(follower=replace(scene.follower, type="translating-roller"))
+
+
+def _valve_group(scene, result, lay):
+    return M.build_parts(_stock_scene(scene), result, lay=lay, only=("valve", "spring", "seat"))
+
+
+def _valve_poses(scene, result, lay, magnification, axis: float = -0.5 * math.pi):
+    s = M.displayed_valve_lift(result, magnification)
+    n = s.size
+    ux, uz = math.cos(axis), math.sin(axis)
+    # explorer.meshes moves the stem top down by s; along another axis the drawing keeps the
+    # valve upright and moves it along that axis
+    pos = np.column_stack([lay.valve_x + s * ux, np.zeros(n), lay.stem_top_rest + s * uz])
+    return {
+        "valve": (pos, _ident(n)),
+        "spring": (_world(n, lay.valve_x, lay.spring_seat_z), _ident(n)),
+        "seat": (_world(n, 0.0, 0.0), _ident(n)),
+    }
+
+
+# --------------------------------------------------------------------------------------------
+# parts and poses per gear
+# --------------------------------------------------------------------------------------------
+
+
+def gear_parts(scene, result=None, lay=None, lift=None, only=None) -> dict[str, trimesh.Trimesh]:
+    from ..lift import build_lift
+
+    lift = lift if lift is not None else build_lift(scene)
+    lay = lay or gear_layout(scene, result, lift)
+    kind = scene.follower.type
+    parts = {"pivoted-roller": _pivoted_parts, "rocking-cam": _rocking_parts, "rolling-lever": _rolling_parts,
+             "trip": _trip_parts}[kind](scene, lift, lay)
+    from . import GEAR_PART_COLORS
+
+    for name, mesh in parts.items():  # rerun takes a part's colour from its mesh when the table lacks it
+        if name in GEAR_PART_COLORS:
+            mesh.visual.face_colors = (*GEAR_PART_COLORS[name], 255)
+    parts.update(_valve_group(scene, result, lay))
+    return {k: v for k, v in parts.items() if only is None or k in only}
+
+
+def gear_poses(scene, result, magnification: float = 1.0, lay=None, lift=None) -> dict:
+    from ..lift import build_lift
+
+    lift = lift if lift is not None else build_lift(scene)
+    lay = lay or gear_layout(scene, result, lift)
+    theta = np.radians(np.asarray(result.columns["cam_angle_deg"], dtype=float))
+    kind = scene.follower.type
+    poses = {"pivoted-roller": _pivoted_poses, "rocking-cam": _rocking_poses, "rolling-lever": _rolling_poses,
+             "trip": _trip_poses}[kind](scene, lift, lay, theta)
+    axis = -0.5 * math.pi
+    gear = getattr(lift, "gear", None)
+    valve = getattr(gear, "valve", None) or getattr(gear, "drive", None)
+    if valve is not None and hasattr(valve, "axis"):
+        axis = valve.axis
+    poses.update(_valve_poses(scene, result, lay, magnification, axis))
+    return poses
+
+
+def _sizes(lay):
+    w = lay.cam_width
+    half = max(0.5 * lay.lever_half_thickness, 0.04 * (lay.base_radius + lay.roller_radius))
+    return w, half
+
+
+def _roller(lay, radius):
+    r, w = radius, lay.roller_width
+    rim = _disc(r, w)
+    marks = [_pin(0.62 * r * math.cos(a), 0.62 * r * math.sin(a), 0.12 * r, 1.04 * w) for a in (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi)]
+    return _concat([rim, *marks, _pin(0.0, 0.0, 0.28 * r, 1.15 * w)])
+
+
+def _valve_drive_parts(drive, lay, w, half, roller_arm_angle=0.0):
+    """Rocker arm (in the lever's frame) or rod + valve lever parts."""
+    out = {}
+    if hasattr(drive, "valve_pivot"):  # rod and lever (Fig. 3)
+        out["rod"] = _bar((drive.rod), 0.6 * half, 0.5 * w)
+        d_local = (drive.arm_in, 0.0)
+        f_local = (drive.arm_out * math.cos(drive.bend), drive.arm_out * math.sin(drive.bend))
+        out["valve_lever"] = _concat([_bar_between((0.0, 0.0), d_local, half, 0.6 * w),
+                                      _bar_between((0.0, 0.0), f_local, half, 0.6 * w), _pin(0.0, 0.0, 1.2 * half, 0.8 * w)])
+        e = drive.valve_pivot
+        out["valve_lever_pivot"] = _pin(e[0], e[1], 0.7 * half, 1.4 * w)
+    return out
+
+
+def _pivoted_parts(scene, lift, lay):
+    gear = lift.gear
+    w, half = _sizes(lay)
+    theta = np.linspace(0.0, TWO_PI, 720, endpoint=False)
+    contour = gear.geometry(theta).contour
+    r = gear.roller_radius
+    lever = [_bar(gear.arm, half, 0.6 * w), _pin(0.0, 0.0, 1.3 * half, 0.8 * w)]
+    drive = gear.drive
+    if not hasattr(drive, "valve_pivot"):  # rocker: the valve arm on the same lever
+        lever.append(_bar_between((0.0, 0.0), (drive.arm * math.cos(drive.angle), drive.arm * math.sin(drive.angle)),
+                                  half, 0.6 * w))
+    parts = {
+        "cam": extrude_contour(contour, w),
+        "camshaft": _concat([_disc(0.32 * gear.base_radius, 3.2 * w), _pin(0.0, 0.32 * gear.base_radius, 0.1 * gear.base_radius, 3.2 * w)]),
+        "roller": _roller(lay, r),
+        "roller_lever": _concat(lever),
+        "lever_pivot": _pin(gear.pivot[0], gear.pivot[1], 0.7 * half, 1.4 * w),
+    }
+    parts.update(_valve_drive_parts(drive, lay, w, half))
+    return parts
+
+
+def _roller_spin(theta, centre, contact, normal_ground, centre_rate, r):
+    """Roller angle for rolling without slip on the cam: Omega = -((omega x C - v_R) . t) / r per
+    unit omega, t = z x n, integrated by the trapezoid rule (a drawing, not a result)."""
+    tx, ty = -normal_ground[:, 1], normal_ground[:, 0]
+    cam_vx, cam_vy = -contact[:, 1], contact[:, 0]
+    rate = -((cam_vx - centre_rate[:, 0]) * tx + (cam_vy - centre_rate[:, 1]) * ty) / r
+    steps = np.diff(theta)
+    return np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * steps)])
+
+
+def _pivoted_poses(scene, lift, lay, theta):
+    gear = lift.gear
+    n = theta.size
+    g = gear.geometry(theta)
+    psi = g.lever_angle
+    centre = g.roller_centre
+    rate = np.column_stack([-gear.arm * np.sin(psi) * g.lever_rate, gear.arm * np.cos(psi) * g.lever_rate])
+    spin = _roller_spin(theta, centre, g.contact, g.normal_ground, rate, gear.roller_radius)
+    cam_q = quat_about_y(-theta)
+    poses = {
+        "cam": (_world(n, 0.0, 0.0), cam_q),
+        "camshaft": (_world(n, 0.0, 0.0), cam_q),
+        "roller": (np.column_stack([centre[:, 0], np.zeros(n), centre[:, 1]]), quat_about_y(-spin)),
+        "roller_lever": (_world(n, *gear.pivot), quat_about_y(-psi)),
+        "lever_pivot": (_world(n, 0.0, 0.0), _ident(n)),
+    }
+    poses.update(_drive_poses(gear.drive, psi, centre, n))
+    return poses
+
+
+def _drive_poses(drive, psi, roller_centre, n):
+    if not hasattr(drive, "valve_pivot"):
+        return {}
+    beta = np.asarray(drive.valve_lever_angle(np.asarray(psi)), dtype=float)
+    e = drive.valve_pivot
+    dx = e[0] + drive.arm_in * np.cos(beta)
+    dz = e[1] + drive.arm_in * np.sin(beta)
+    rod_angle = np.arctan2(dz - roller_centre[:, 1], dx - roller_centre[:, 0])
+    return {
+        "rod": (np.column_stack([roller_centre[:, 0], np.zeros(n), roller_centre[:, 1]]), quat_about_y(-rod_angle)),
+        "valve_lever": (_world(n, *e), quat_about_y(-beta)),
+        "valve_lever_pivot": (_world(n, 0.0, 0.0), _ident(n)),
+    }
+
+
+def _eccentric_parts(drive, lay, w, half):
+    e = drive.radius
+    sheave = _disc(1.6 * e + 0.2 * e, 0.8 * w, centre=(e * math.cos(drive.phase), e * math.sin(drive.phase)))
+    shaft = _concat([_disc(0.5 * e, 3.0 * w), _pin(0.0, 0.5 * e, 0.15 * e, 3.0 * w)])
+    strap = _disc(1.6 * e + 0.35 * e, 0.5 * w)  # the rod's strap round the sheave, drawn as a ring disc
+    rod = _concat([_bar(drive.rod, 0.6 * half, 0.5 * w), strap])
+    return {"eccentric": sheave, "camshaft": shaft, "eccentric_rod": rod}
+
+
+def _eccentric_poses(drive, theta):
+    n = theta.size
+    ex, ez = drive.centre(theta)
+    bx, bz = drive.pin(theta)
+    q = quat_about_y(-theta)
+    return {
+        "eccentric": (_world(n, 0.0, 0.0), q),
+        "camshaft": (_world(n, 0.0, 0.0), q),
+        "eccentric_rod": (np.column_stack([ex, np.zeros(n), ez]), quat_about_y(-np.arctan2(bz - ez, bx - ex))),
+    }
+
+
+def _rocking_parts(scene, lift, lay):
+    gear = lift.gear
+    w, half = _sizes(lay)
+    contour, _ = gear.contour.contour_points(gear.roller_radius, n=241, margin=0.25)
+    body = _sector(contour, w)
+    arm = _bar(gear.drive.arm, half, 0.6 * w)
+    parts = {
+        "rocking_cam": _concat([body, arm, _pin(0.0, 0.0, 1.3 * half, 0.8 * w)]),
+        "cam_pivot": _pin(gear.cam_pivot[0], gear.cam_pivot[1], 0.7 * half, 1.4 * w),
+        "roller": _roller(lay, gear.roller_radius),
+        "lever_pivot": _pin(gear.lever_pivot[0], gear.lever_pivot[1], 0.7 * half, 1.4 * w),
+    }
+    lever = [_bar(gear.lever_arm, half, 0.6 * w), _pin(0.0, 0.0, 1.3 * half, 0.8 * w)]
+    valve = gear.valve
+    if not hasattr(valve, "valve_pivot"):
+        lever.append(_bar_between((0.0, 0.0), (valve.arm * math.cos(valve.angle), valve.arm * math.sin(valve.angle)), half, 0.6 * w))
+    parts["roller_lever"] = _concat(lever)
+    parts.update(_eccentric_parts(gear.drive, lay, w, half))
+    parts.update(_valve_drive_parts(valve, lay, w, half))
+    return parts
+
+
+def _rocking_poses(scene, lift, lay, theta):
+    gear = lift.gear
+    n = theta.size
+    d = gear.contact_details(theta)
+    centre = d["roller_centre"]
+    psi = d["lever_angle"]
+    poses = {
+        "rocking_cam": (_world(n, *gear.cam_pivot), quat_about_y(-d["rocking_angle"])),
+        "cam_pivot": (_world(n, 0.0, 0.0), _ident(n)),
+        "roller": (np.column_stack([centre[:, 0], np.zeros(n), centre[:, 1]]), _ident(n)),
+        "roller_lever": (_world(n, *gear.lever_pivot), quat_about_y(-psi)),
+        "lever_pivot": (_world(n, 0.0, 0.0), _ident(n)),
+    }
+    poses.update(_eccentric_poses(gear.drive, theta))
+    poses.update(_drive_poses(gear.valve, psi, centre, n))
+    return poses
+
+
+def _rolling_parts(scene, lift, lay):
+    gear = lift.gear
+    w, half = _sizes(lay)
+    face_a, face_b, _ = gear.faces(120)
+    valve = gear.valve
+    parts = {
+        "rolling_lever": _concat([_sector(face_a, w), _bar(gear.drive.arm, half, 0.6 * w), _pin(0.0, 0.0, 1.3 * half, 0.8 * w)]),
+        "valve_lever": _concat([_sector(face_b, w), _pin(0.0, 0.0, 1.3 * half, 0.8 * w),
+                                _bar_between((0.0, 0.0), (valve.arm * math.cos(valve.angle), valve.arm * math.sin(valve.angle)),
+                                             half, 0.6 * w)]),
+        "cam_pivot": _pin(gear.pivot[0], gear.pivot[1], 0.7 * half, 1.4 * w),
+        "valve_lever_pivot": _pin(gear.valve_pivot[0], gear.valve_pivot[1], 0.7 * half, 1.4 * w),
+    }
+    parts.update(_eccentric_parts(gear.drive, lay, w, half))
+    return parts
+
+
+def _rolling_poses(scene, lift, lay, theta):
+    gear = lift.gear
+    n = theta.size
+    alpha = np.asarray(gear.drive.angle(theta), dtype=float)
+    w = gear.rolling_swing(theta).c[0]
+    beta = np.where(w > 0.0, np.asarray(gear.valve_lever_angle(np.maximum(w, 0.0)), dtype=float), gear.rest)
+    poses = {
+        "rolling_lever": (_world(n, *gear.pivot), quat_about_y(-alpha)),
+        "valve_lever": (_world(n, *gear.valve_pivot), quat_about_y(-beta)),
+        "cam_pivot": (_world(n, 0.0, 0.0), _ident(n)),
+        "valve_lever_pivot": (_world(n, 0.0, 0.0), _ident(n)),
+    }
+    poses.update(_eccentric_poses(gear.drive, theta))
+    return poses
+
+
+def _trip_parts(scene, lift, lay):
+    w, half = _sizes(lay)
+    stroke = float(lift.latch.height)
+    hook = 0.6 * lay.valve_radius
+    # the latch pushes the catch from above (the stock valve opens downwards): hook face at z = 0
+    latch = _concat([
+        extrude_contour(np.array([[-hook, 0.0], [hook, 0.0], [hook, 0.6 * half], [-hook, 0.6 * half]]), 0.5 * w),
+        _bar_between((hook, 0.3 * half), (hook, 2.5 * stroke + 4.0 * half), 0.5 * half, 0.5 * w),
+    ])
+    # the catch (collar on the spindle) and the dashpot piston move with the valve
+    collar = extrude_contour(np.array([[-hook, 0.0], [hook, 0.0], [hook, 0.5 * half], [-hook, 0.5 * half]]), 0.5 * w)
+    bore = 1.1 * lay.valve_radius
+    top = lay.stem_top_rest + 2.0 * stroke + 6.0 * half
+    cylinder = trimesh.creation.annulus(r_min=bore, r_max=1.25 * bore, height=3.0 * stroke, sections=48)
+    cylinder.apply_translation([lay.valve_x, 0.0, top + 1.5 * stroke])
+    piston = trimesh.creation.cylinder(radius=0.98 * bore, height=0.4 * stroke, sections=48)
+    rod = trimesh.creation.cylinder(radius=lay.stem_radius, height=top - lay.stem_top_rest, sections=16)
+    rod.apply_translation([0.0, 0.0, 0.5 * (top - lay.stem_top_rest)])
+    piston.apply_translation([0.0, 0.0, top - lay.stem_top_rest + 0.2 * stroke])
+    return {"latch": latch, "catch": collar, "dashpot": cylinder, "dashpot_piston": _concat([rod, piston])}
+
+
+def _trip_poses(scene, lift, lay, theta):
+    n = theta.size
+    latch = np.asarray(lift.latch.derivatives(theta)[0])
+    s = np.maximum(np.asarray(lift.derivatives(theta)[0]) - lift.overtravel, 0.0)
+    phi = np.mod(theta - lift.start, TWO_PI)
+    # tripped: from the release until the latch is back below its catching height
+    tripped = (phi >= lift.phi_trip) & (latch > lift.overtravel - 1e-12)
+    w, half = _sizes(lay)
+    side = np.where(tripped, 1.5 * lay.valve_radius, 0.0)
+    catch_z = lay.stem_top_rest + 2.0 * half
+    # the hook's face meets the catch's top after the over-travel, then both move by X - s_o
+    latch_z = catch_z + 0.5 * half + (lift.overtravel - latch)
+    return {
+        "latch": (np.column_stack([lay.valve_x + side, np.zeros(n), latch_z]), _ident(n)),
+        "catch": (np.column_stack([np.full(n, lay.valve_x), np.zeros(n), catch_z - s]), _ident(n)),
+        "dashpot": (_world(n, 0.0, 0.0), _ident(n)),
+        "dashpot_piston": (np.column_stack([np.full(n, lay.valve_x), np.zeros(n), lay.stem_top_rest - s]), _ident(n)),
+    }

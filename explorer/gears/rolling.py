@@ -1,0 +1,197 @@
+"""Eccentric rolling lever ("Waelzhebel", seed 000 sections 2-4).
+
+The eccentric four-bar (linkage.EccentricDrive) swings the rolling lever about A (angle alpha).
+Once it has swung `contact_swing` from its closed end it meets the valve lever (pivot B, angle
+beta) and the two curved faces roll on each other without slipping until it swings back.
+
+Pure rolling between two bodies turning about fixed pivots: the contact point is the relative
+instant centre, so it lies on the line A-B (Kennedy), at distance rho from A, and
+    d beta / d alpha = -rho / (d - rho),          d = |AB|
+(opposite senses: external rolling). The faces are therefore the centrodes of the motion. We
+prescribe rho to grow linearly with the rolling swing w = sense (alpha - alpha_contact) >= 0,
+    rho(w) = rho_c + k w,
+which makes both faces spirals and the transmission integrable in closed form:
+    beta(w) = beta_rest - sense * I(w),  I(w) = -w + (d/k) ln((d - rho_c) / (d - rho_c - k w)).
+The valve lever drives the valve (linkage.RockerDrive on B). At contact the valve lever is at
+rest but the rolling lever is not: the valve is picked up with a finite velocity (Schenker:
+the ratio at the start is already finite and the eccentric rod moves fastest there).
+
+Elasticity: a torsional stiffness k_t of the rolling lever about A appears at the valve as
+k_t / (ds/dalpha)^2, the eccentric rod's axial stiffness as k_rod / (ds/dl)^2 (l the rod
+length): with a rod force far smaller than the valve force (times the ratio) and its stretch
+reduced once more by the ratio, the rod contributes little - most of the elasticity sits in the
+rolling lever (seed 000, section 3).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..errors import InputError
+from .jet import Jet
+
+TWO_PI = 2.0 * math.pi
+
+
+def log1p(x):
+    if not isinstance(x, Jet):
+        return np.log1p(x)
+    v = x.c[0]
+    w = 1.0 + v
+    return x.compose(np.log1p(v), 1.0 / w, -1.0 / w**2, 2.0 / w**3)
+
+
+@dataclass(frozen=True)
+class RollingLaw:
+    """rho(w) = rho_c + k w: contact distance from the rolling lever's pivot A."""
+
+    distance: float  # d = |AB|, m
+    contact_radius: float  # rho_c, m
+    growth: float  # k, m/rad
+
+    def rho(self, w):
+        return self.contact_radius + self.growth * w
+
+    def integral(self, w):
+        """I(w) = integral_0^w rho / (d - rho) dw', closed form (log1p keeps small k exact)."""
+        d, rc, k = self.distance, self.contact_radius, self.growth
+        if k == 0.0:
+            return w * (rc / (d - rc))
+        return -w - (d / k) * log1p(-(k / (d - rc)) * w)
+
+    def ratio(self, w):
+        """|d beta / d alpha| = rho / (d - rho)."""
+        r = self.rho(w)
+        return r / (self.distance - r)
+
+
+@dataclass(frozen=True)
+class RollingLeverGear:
+    drive: Any  # EccentricDrive: alpha(theta), pivot A = drive.pivot
+    valve_pivot: tuple[float, float]  # B
+    law: RollingLaw
+    sense: int  # +1: the rolling lever lifts turning counter-clockwise
+    closed_end: float  # alpha at the closed end of the swing
+    contact_swing: float  # swing from the closed end at which the levers meet, rad
+    rest: float  # beta at closed valve
+    valve: Any  # RockerDrive on the valve lever (pivot B), rest = self.rest
+    lever_stiffness: float | None = None  # N m / rad, rolling lever about A
+    rod_stiffness: float | None = None  # N / m, eccentric rod, axial
+    file: str = "<memory>"
+
+    @property
+    def pivot(self):
+        return self.drive.pivot
+
+    def rolling_swing(self, theta) -> Jet:
+        alpha = self.drive.angle(Jet.variable(np.asarray(theta, dtype=float)))
+        return self.sense * (alpha - self.closed_end) - self.contact_swing
+
+    def valve_lever_angle(self, w) -> Jet:
+        return self.rest - self.sense * self.law.integral(w)
+
+    def virtual_lift(self, theta) -> Jet:
+        """Valve travel if the faces stayed in contact (negative before contact)."""
+        return self.valve.travel(self.valve_lever_angle(self.rolling_swing(theta)))
+
+    def contact_angles(self) -> np.ndarray:
+        """Shaft angles of pick-up and release: rolling swing w = 0, by Brent on the closed form."""
+        grid = np.linspace(0.0, TWO_PI, 2881)
+        w = self.rolling_swing(grid).c[0]
+        out = []
+        for i in np.nonzero(np.sign(w[:-1]) * np.sign(w[1:]) < 0)[0]:
+            out.append(brentq(lambda t: float(self.rolling_swing(np.array([t])).c[0][0]), grid[i], grid[i + 1],
+                              xtol=1e-15, rtol=1e-15))
+        return np.unique(np.mod(out, TWO_PI))
+
+    def faces(self, n: int = 200):
+        """The two rolling faces in their own body frames (relative to their pivots), over the
+        swing in contact: (driving face (n,2), valve-lever face (n,2), w)."""
+        w_max = self.max_rolling_swing()
+        w = np.linspace(0.0, w_max, n)
+        ax, ay = self.pivot
+        bx, by = self.valve_pivot
+        gamma = math.atan2(by - ay, bx - ax)
+        alpha = self.closed_end + self.sense * (w + self.contact_swing)
+        beta = self.valve_lever_angle(Jet.constant(w)).c[0]
+        rho = self.law.rho(w)
+        d = self.law.distance
+        face_a = np.column_stack([rho * np.cos(gamma - alpha), rho * np.sin(gamma - alpha)])
+        face_b = np.column_stack([(d - rho) * np.cos(gamma + math.pi - beta), (d - rho) * np.sin(gamma + math.pi - beta)])
+        return face_a, face_b, w
+
+    def max_rolling_swing(self) -> float:
+        chis = [float(self.drive.angle(np.array([c]))[0]) for c in self.drive.dead_centres()]
+        return abs(chis[1] - chis[0]) - self.contact_swing
+
+    def stiffness(self, theta) -> dict:
+        """Valve-referred stiffness of the rolling lever and the eccentric rod along the cycle."""
+        theta = np.asarray(theta, dtype=float)
+        w = self.rolling_swing(theta)
+        beta = self.valve_lever_angle(w)
+        s = self.valve.travel(beta)
+        alpha_rate = w.c[1] * self.sense  # d alpha / d theta
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ds_dalpha = s.c[1] / alpha_rate
+        # rod: d alpha / d l at fixed eccentric = 1 / (u_rod . dB/dalpha)
+        bx, by = self.drive.pin(theta)
+        ex, ey = self.drive.centre(theta)
+        ux, uy = bx - ex, by - ey
+        norm = np.hypot(ux, uy)
+        ux, uy = ux / norm, uy / norm
+        alpha = self.drive.angle(theta)
+        dbx, dby = -self.drive.arm * np.sin(alpha), self.drive.arm * np.cos(alpha)
+        ds_dl = ds_dalpha / (ux * dbx + uy * dby)
+        out = {"ds_dalpha": ds_dalpha, "ds_drod": ds_dl}
+        with np.errstate(divide="ignore"):
+            if self.lever_stiffness is not None:
+                out["lever"] = self.lever_stiffness / ds_dalpha**2
+            if self.rod_stiffness is not None:
+                out["rod"] = self.rod_stiffness / ds_dl**2
+        if "lever" in out and "rod" in out:
+            out["total"] = 1.0 / (1.0 / out["lever"] + 1.0 / out["rod"])
+        return out
+
+    def check(self) -> None:
+        w_max = self.max_rolling_swing()
+        if w_max <= 0.0:
+            raise InputError(self.file, "gear.rolling_lever.contact_swing",
+                             "the rolling lever never reaches the valve lever (contact swing beyond its swing)")
+        rho_end = self.law.rho(w_max)
+        if not 0.0 < rho_end < self.law.distance:
+            raise InputError(self.file, "gear.rolling_lever.growth",
+                             f"the rolling point leaves the line between the pivots (rho = {rho_end * 1e3:.4g} mm at full swing, "
+                             f"pivot distance {self.law.distance * 1e3:.4g} mm)")
+        self.valve.travel(self.valve_lever_angle(Jet.constant(np.linspace(0.0, w_max, 50))))
+
+
+@dataclass(frozen=True)
+class RollingLeverLift:
+    """Valve-referred lift of a rolling-lever gear: the virtual lift in contact, zero apart.
+    At the pick-up and release angles the value is 0 and the derivatives are those of the
+    contact branch, so the lash machinery finds the finite pick-up velocity exactly."""
+
+    gear: RollingLeverGear
+    marks: tuple[float, ...]
+
+    def derivatives(self, theta) -> np.ndarray:
+        theta = np.asarray(theta, dtype=float)
+        flat = theta.reshape(-1)
+        s = self.gear.virtual_lift(flat)
+        w = self.gear.rolling_swing(flat).c[0]
+        at_mark = np.zeros(flat.shape, dtype=bool)
+        tm = np.mod(flat, TWO_PI)
+        for m in self.marks:
+            at_mark |= np.abs(tm - m) <= 1e-14
+        contact = (w > 0.0) | at_mark
+        out = np.where(contact[None, :], s.c, 0.0)
+        out[0] = np.where(at_mark, 0.0, np.maximum(out[0], 0.0))
+        return out.reshape((4,) + theta.shape)
+
+    def breakpoints(self) -> np.ndarray:
+        return np.array(sorted(self.marks))

@@ -1,0 +1,111 @@
+"""3D parts of the gears (explorer.gears.meshes via explorer.meshes' dispatch): shapes, colours,
+and contacts that the drawing must keep - roller on cam, valve pin over the valve stem."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from explorer import meshes
+from explorer.effects import simulate
+from explorer.lift import build_lift
+from explorer.scene import load_scene
+
+SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+NAMES = ["pivoted_roller_lever", "rocking_cam", "rolling_lever", "trip_gear_dashpot"]
+
+
+@pytest.fixture(scope="module")
+def built():
+    out = {}
+    for name in NAMES:
+        scene = load_scene(SCENES / f"{name}.toml", ["solver.steps_per_revolution=360", 'effects=["kinematics", "lash"]'])
+        result = simulate(scene)
+        lift = build_lift(scene)
+        lay = meshes.layout(scene, result)
+        parts = meshes.build_parts(scene, result, lay=lay, lift=lift)
+        poses = meshes.part_poses(scene, result, magnification=0.0, lay=lay, lift=lift)
+        out[name] = (scene, result, lift, lay, parts, poses)
+    return out
+
+
+def world(mesh, pose, i):
+    p, q = pose
+    transform = trimesh.transformations.quaternion_matrix(q[i])
+    transform[:3, 3] = p[i]
+    return trimesh.transform_points(mesh.vertices, transform)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_parts_poses_and_colours(built, name):
+    scene, result, lift, lay, parts, poses = built[name]
+    n = len(result.columns["cam_angle_deg"])
+    assert set(parts) == set(poses)
+    for part, (p, q) in poses.items():
+        assert len(meshes.PART_COLORS[part]) == 3  # stock or gear colour, looked up as the viewer does
+        assert p.shape == (n, 3) and q.shape == (n, 4)
+        assert np.all(np.isfinite(p)) and np.allclose(np.linalg.norm(q, axis=1), 1.0)
+        assert len(parts[part].faces) > 0
+    for part in meshes.STATIC_PARTS:
+        if part in poses:
+            assert np.ptp(poses[part][0], axis=0).max() == 0.0
+
+
+@pytest.mark.parametrize("name, cam", [("pivoted_roller_lever", "cam"), ("rocking_cam", "rocking_cam")])
+def test_roller_touches_its_cam_in_the_drawing(built, name, cam):
+    """In world coordinates the roller centre stays one roller radius from the nearest vertex of
+    the cam's side (polygon sampling error ~ spacing^2 / 8r, a few micrometres)."""
+    scene, result, lift, lay, parts, poses = built[name]
+    r = scene.follower.roller_radius
+    for i in range(0, 360, 17):
+        v = world(parts[cam], poses[cam], i)
+        centre = poses["roller"][0][i]
+        d = np.hypot(v[:, 0] - centre[0], v[:, 2] - centre[2])
+        assert d.min() == pytest.approx(r, abs=2e-5), i
+
+
+def test_valve_lever_pin_stays_on_the_valve_stem_over_the_lash(built):
+    """Fig. 3's valve lever end f (drawn part, posed) sits the lash above the stem top when the
+    valve is open, and comes down to it as the lash is taken up (rigid motion)."""
+    scene, result, lift, lay, parts, poses = built["pivoted_roller_lever"]
+    drive = lift.gear.drive
+    f_local = np.array([drive.arm_out * math.cos(drive.bend), 0.0, drive.arm_out * math.sin(drive.bend)])
+    p, q = poses["valve_lever"]
+    lash = scene.valve.lash
+    L = np.asarray(result.columns["follower_lift_m"])
+    for i in range(0, 360, 7):
+        transform = trimesh.transformations.quaternion_matrix(q[i])
+        pin = transform[:3, :3] @ f_local + p[i]
+        stem = poses["valve"][0][i]
+        assert pin[2] - stem[2] == pytest.approx(-min(L[i], lash), abs=1e-12)
+        # the pin swings on an arc: its sideways drift is the arc's sagitta, about L^2 / (2 arm)
+        assert abs(pin[0] - stem[0]) <= L.max() ** 2 / drive.arm_out
+
+
+def test_lever_ends_at_the_roller(built):
+    for name in ("pivoted_roller_lever", "rocking_cam"):
+        scene, result, lift, lay, parts, poses = built[name]
+        gear = lift.gear
+        arm = gear.arm if hasattr(gear, "arm") and not hasattr(gear, "lever_arm") else gear.lever_arm
+        p, q = poses["roller_lever"]
+        for i in range(0, 360, 29):
+            end = trimesh.transformations.quaternion_matrix(q[i])[:3, :3] @ np.array([arm, 0.0, 0.0]) + p[i]
+            assert np.allclose(end, poses["roller"][0][i], atol=1e-12)
+
+
+def test_rolling_faces_touch_while_in_contact(built):
+    """The two rolling faces, each posed by its lever angle, meet on the line of centres."""
+    scene, result, lift, lay, parts, poses = built["rolling_lever"]
+    gear = lift.gear
+    w = gear.rolling_swing(np.radians(result.columns["cam_angle_deg"])).c[0]
+    for i in np.nonzero(w > 0.05)[0][::9]:
+        a = world(parts["rolling_lever"], poses["rolling_lever"], i)
+        b = world(parts["valve_lever"], poses["valve_lever"], i)
+        ax, az = gear.pivot
+        point = np.array([ax, az]) + gear.law.rho(w[i]) * (np.array(gear.valve_pivot) - np.array([ax, az])) / gear.law.distance
+        da = np.hypot(a[:, 0] - point[0], a[:, 2] - point[1]).min()
+        db = np.hypot(b[:, 0] - point[0], b[:, 2] - point[1]).min()
+        spacing = 2.0 * gear.law.rho(gear.max_rolling_swing()) * gear.max_rolling_swing() / 119
+        assert da < spacing and db < spacing
