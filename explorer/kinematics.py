@@ -47,31 +47,55 @@ def kinematics_effect(ctx) -> EffectOutput:
         "max_abs_valve_jerk_m_s3": float(np.abs(valve["valve_jerk_m_s3"]).max()),
         "valve_open_angle_deg": float(360.0 * np.count_nonzero(is_open) / is_open.size),
     }
-    return EffectOutput(columns=columns, summary=summary)
+    if scene.follower.type == "translating-roller":
+        # pressure angle and radii of curvature (closed forms); raises InputError on undercut
+        from .geometry.contour import geometry_columns
+
+        geo_columns, geo_summary = geometry_columns(scene, ctx.theta, d)
+        columns.update(geo_columns)
+        summary.update(geo_summary)
+    # laws that check themselves (table fit, acceleration closure) carry a report and warnings
+    summary.update(getattr(ctx.lift, "report", None) or {})
+    warnings = tuple(getattr(ctx.lift, "warnings", None) or ())
+    return EffectOutput(columns=columns, summary=summary, warnings=warnings)
 
 
 def lash_crossings(lift, ratio: float, lash: float, n_grid: int = 4096) -> tuple[np.ndarray, np.ndarray]:
     """Cam angles (rad) where ratio*L crosses `lash` upwards (take-up) and downwards (seating).
 
-    Brackets come from a grid refined at the curve's breakpoints; each root is polished with
-    Brent's method on the analytic curve to machine precision.
+    Brackets come from a grid refined at the curve's breakpoints and at the lift's local maxima
+    between closed grid points (a brief opening narrower than a grid cell would hide there); each
+    root is polished with Brent's method on the analytic curve to machine precision.
     """
     grid = np.linspace(0.0, 2.0 * math.pi, n_grid + 1)
     grid = np.unique(np.concatenate([grid, np.asarray(lift.breakpoints(), dtype=float)]))
-    g = ratio * lift.derivatives(grid)[0] - lash
+    d = lift.derivatives(grid)
+    g = ratio * d[0] - lash
 
     def f(th: float) -> float:
         return float(ratio * lift.derivatives(np.array([th]))[0, 0] - lash)
 
+    def slope(th: float) -> float:
+        return float(lift.derivatives(np.array([th]))[1, 0])
+
+    hidden = np.nonzero((d[1][:-1] > 0.0) & (d[1][1:] < 0.0) & (g[:-1] <= 0.0) & (g[1:] <= 0.0))[0]
+    if hidden.size:
+        peaks = [brentq(slope, grid[i], grid[i + 1], xtol=1e-15, maxiter=200) for i in hidden]
+        grid = np.unique(np.concatenate([grid, peaks]))
+        g = ratio * lift.derivatives(grid)[0] - lash
+
+    # The valve is open where ratio*L - lash > 0 (the kinematics' own test), so only changes of
+    # that state count: a lift that just touches the lash (g = 0 at a point, or on a whole dwell)
+    # never opens the valve and gives no take-up or seating.
+    is_open = g > 0.0
     ups, downs = [], []
-    for i in np.nonzero(np.sign(g[:-1]) != np.sign(g[1:]))[0]:
+    for i in np.nonzero(is_open[:-1] != is_open[1:])[0]:
         a, b = grid[i], grid[i + 1]
         if g[i] == 0.0 or g[i + 1] == 0.0:
             root = a if g[i] == 0.0 else b
         else:
             root = brentq(f, a, b, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
-        rising = g[i + 1] > g[i]
-        (ups if rising else downs).append(math.fmod(root, 2.0 * math.pi))
+        (ups if is_open[i + 1] else downs).append(math.fmod(root, 2.0 * math.pi))
     return np.unique(ups), np.unique(downs)
 
 

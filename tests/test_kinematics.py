@@ -222,3 +222,33 @@ def test_law_lift_is_continuous_at_its_breakpoints(start, rise, dwell, ret, law)
     before = lift.derivatives(marks - 1e-9)[0]
     after = lift.derivatives(marks + 1e-9)[0]
     assert np.all(np.abs(at - before) < 1e-9) and np.all(np.abs(at - after) < 1e-9)
+
+
+class _Bump:
+    """A smooth periodic lift with no breakpoints (as a table or contour lift has): the cosine
+    bump L = h (1 + cos(theta - c)) / 2, its maximum h at c, between grid points."""
+
+    def __init__(self, h, centre):
+        self.h, self.c = h, centre
+
+    def derivatives(self, theta):
+        x = np.asarray(theta, dtype=float) - self.c
+        h = self.h / 2
+        return np.stack([h * (1 + np.cos(x)), -h * np.sin(x), -h * np.cos(x), h * np.sin(x)])
+
+    def breakpoints(self):
+        return np.zeros(0)
+
+
+def test_a_brief_opening_inside_one_grid_cell_is_found():
+    """Lash 1e-9 m below the peak: the valve is open for 2 acos(1 - 2e-9/h) ~ 0.05 deg, less than a
+    grid cell (360/4096 deg), centred between grid points. Closed form of the crossings:
+    theta = c -+ acos(2 lash/h - 1)."""
+    from explorer.kinematics import lash_crossings
+
+    h, c = 0.01, (100.5 / 4096) * 2 * math.pi  # the peak half-way between grid points
+    lash = h - 1e-9
+    ups, downs = lash_crossings(_Bump(h, c), 1.0, lash)
+    half = math.acos(2 * lash / h - 1)
+    assert 2 * math.degrees(half) < 360 / 4096
+    assert ups == pytest.approx([c - half], abs=1e-9) and downs == pytest.approx([c + half], abs=1e-9)

@@ -71,18 +71,42 @@ def profile_from_derivatives(theta, d, base_radius: float, roller_radius: float,
     )
 
 
+def pitch_geometry(d, base_radius: float, roller_radius: float, offset: float = 0.0):
+    """Pressure angle (rad) and signed pitch-curve radius (m) only: the same closed forms as
+    profile_from_derivatives without the contour points, cheap enough for every simulation."""
+    e = offset
+    rp = base_radius + roller_radius
+    y = math.sqrt(rp * rp - e * e) + d[0]
+    ty = d[1] - e
+    cross = ty * (2.0 * d[1] - e) - y * (d[2] - y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pitch_radius = (y * y + ty * ty) ** 1.5 / cross
+    return np.arctan2(ty, y), pitch_radius
+
+
+def find_undercut(pitch_radius: np.ndarray, roller_radius: float) -> int | None:
+    """Index of the worst sample where a convex stretch of the pitch curve is sharper than the
+    roller (radius <= roller radius, including a cusp, radius 0), or None."""
+    bad = (pitch_radius > 0.0) & (pitch_radius <= roller_radius)
+    if not np.any(bad):
+        return None
+    return int(np.argmin(np.where(bad, pitch_radius, np.inf)))
+
+
+def undercut_error(theta: float, pitch_radius: float, roller_radius: float, file: str,
+                   key: str = "follower.roller_radius") -> InputError:
+    return InputError(
+        file,
+        key,
+        f"undercut: roller radius {roller_radius * 1e3:.4g} mm exceeds the convex pitch-curve radius "
+        f"{pitch_radius * 1e3:.4g} mm at cam angle {math.degrees(theta):.3f} deg "
+        f"(reduce the roller, enlarge the base circle or lengthen the event)",
+    )
+
+
 def check_undercut(profile: Profile, roller_radius: float, file: str, key: str = "follower.roller_radius") -> None:
     """Undercut: a convex stretch of the pitch curve sharper than the roller (the envelope folds
     into a cusp and the cam cannot be made). Raises InputError naming the worst cam angle."""
-    r = profile.pitch_radius
-    convex = r > 0.0
-    bad = convex & (r <= roller_radius)
-    if np.any(bad):
-        i = int(np.argmin(np.where(bad, r, np.inf)))
-        raise InputError(
-            file,
-            key,
-            f"undercut: roller radius {roller_radius * 1e3:.4g} mm exceeds the convex pitch-curve radius "
-            f"{r[i] * 1e3:.4g} mm at cam angle {math.degrees(profile.theta[i]):.3f} deg "
-            f"(reduce the roller, enlarge the base circle or lengthen the event)",
-        )
+    i = find_undercut(profile.pitch_radius, roller_radius)
+    if i is not None:
+        raise undercut_error(float(profile.theta[i]), float(profile.pitch_radius[i]), roller_radius, file, key)
