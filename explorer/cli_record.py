@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import itertools
 import sys
-from pathlib import Path
 
 from .errors import InputError
 
@@ -66,18 +65,6 @@ def parse_sweep(text: str) -> tuple[str, list[str]]:
     return key, values
 
 
-def check_output(path: str) -> Path:
-    out = Path(path)
-    if out.suffix.lower() != ".rrd":
-        raise InputError(path, "--output", "the rerun file must end in .rrd")
-    if out.is_dir():
-        raise InputError(path, "--output", "is a directory")
-    parent = out.resolve().parent
-    if not parent.is_dir():
-        raise InputError(path, "--output", f"directory {parent} does not exist")
-    return out
-
-
 def plan_runs(scene_paths: list[str], overrides: list[str], sweeps: list[str]):
     """(label, scene) for every scene and every combination of sweep values; all validated here."""
     from .scene import load_scene
@@ -120,7 +107,9 @@ def _with_parts_or_warn(label: str, result):
 def run(args) -> int:
     from .effects import simulate
 
-    out = check_output(args.output)
+    from .recording import check_rrd_path
+
+    out = check_rrd_path(args.output, "--output")
     plans = plan_runs(args.scenes, args.overrides, args.sweep)  # every input error before any work
     from .recording import Run, write_recordings
 
@@ -131,7 +120,7 @@ def run(args) -> int:
     try:
         write_recordings(out, runs)
     except (OSError, RuntimeError) as exc:  # disk full, rerun CLI missing: not the user's input
-        print(f"error: {out}: writing failed: {exc}", file=sys.stderr)
+        print(f"error: {out}: --output: writing failed: {exc}", file=sys.stderr)
         return 1
     steps = sum(len(r.result.columns["time_s"]) for r in runs)
     print(f"{out}: {len(runs)} recording{'s' if len(runs) != 1 else ''}, {steps} steps")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -46,14 +47,29 @@ def register(sub) -> None:
 
 
 def _check_writable(path: str, option: str) -> None:
-    parent = Path(path).resolve().parent
+    """Refuse an output path that cannot be written before any work, so that a bad --summary
+    does not leave the CSV written and the summary missing."""
+    target = Path(path)
+    parent = target.resolve().parent
+    if target.is_dir():
+        raise InputError(path, option, "is a directory, not a file name")
     if not parent.is_dir():
         raise InputError(path, option, f"directory {parent} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(path, option, f"directory {parent} is not writable")
+
+
+def _write(path: str, option: str, text: str) -> None:
+    from .result import write_atomic
+
+    try:
+        write_atomic(path, text)
+    except OSError as exc:  # full disk, a race with the checks above: still one line
+        raise InputError(path, option, f"cannot write: {exc.strerror or exc}") from None
 
 
 def run(args) -> int:
     from .effects import simulate
-    from .result import write_atomic
 
     scene = scene_from_args(args)
     for path, option in ((args.output, "--output"), (args.summary, "--summary")):
@@ -61,9 +77,9 @@ def run(args) -> int:
             _check_writable(path, option)
     result = simulate(scene)
     if args.output:
-        write_atomic(args.output, result.csv_text())
+        _write(args.output, "--output", result.csv_text())
     if args.summary:
-        write_atomic(args.summary, result.json_text())
+        _write(args.summary, "--summary", result.json_text())
     if not args.output and not args.summary:
         sys.stdout.write(result.json_text())
     else:

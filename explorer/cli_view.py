@@ -105,7 +105,12 @@ def run(args) -> int:
         raise InputError("--grpc-port", "--grpc-port", "must differ from --port")
     from .recording import rerun_executable
 
-    cmd = [*rerun_executable(), source, "--web-viewer", "--bind", HOST, "--web-viewer-port", str(web_port)]
+    try:
+        executable = rerun_executable()
+    except RuntimeError as exc:  # the rerun-sdk install lacks its CLI: not the user's input
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    cmd = [*executable, source, "--web-viewer", "--bind", HOST, "--web-viewer-port", str(web_port)]
     if _is_url(source):
         data_url = source  # the browser connects to that stream itself; no data server of ours
     else:

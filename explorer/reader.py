@@ -39,12 +39,16 @@ class Table:
             raise self.error(name, f"expected a table [{self.key(name)}], got {type(value).__name__}")
         return Table(value, self.file, self.key(name))
 
+    def _lookup(self, name: str, default: Any) -> tuple[Any, bool]:
+        """(value, present): the key's value, or `default` when absent; `...` means required."""
+        if name in self.data:
+            return self.data[name], True
+        if default is ...:
+            raise self.error(name, "missing key")
+        return default, False
+
     def raw(self, name: str, default: Any = ...) -> Any:
-        if name not in self.data:
-            if default is ...:
-                raise self.error(name, "missing key")
-            return default
-        return self.data[name]
+        return self._lookup(name, default)[0]
 
     def quantity(
         self,
@@ -58,14 +62,9 @@ class Table:
         nonnegative: bool = False,
     ) -> float:
         """SI value of `name`; `default` (SI float or scene string) when absent, error when `...`."""
-        if name not in self.data:
-            if default is ...:
-                raise self.error(name, "missing key")
-            if isinstance(default, (int, float)) and not isinstance(default, bool):
-                return float(default)
-            value = default
-        else:
-            value = self.data[name]
+        value, present = self._lookup(name, default)
+        if not present and isinstance(value, (int, float)) and not isinstance(value, bool):
+            return float(value)  # a default already in SI
         number = to_si(value, dimension, file=self.file, key=self.key(name))
         if positive and not number > 0.0:
             raise self.error(name, f"must be greater than zero, got {value!r}")
@@ -88,11 +87,9 @@ class Table:
         open_minimum: bool = False,
         open_maximum: bool = False,
     ) -> float:
-        if name not in self.data:
-            if default is ...:
-                raise self.error(name, "missing key")
-            return default
-        value = self.data[name]
+        value, present = self._lookup(name, default)
+        if not present:
+            return value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self.error(name, f"expected a plain number, got {value!r}")
         if integer and (not float(value).is_integer()):
@@ -107,11 +104,9 @@ class Table:
         return int(number) if integer else number
 
     def string(self, name: str, default: Any = ..., *, choices: Iterable[str] | None = None) -> str:
-        if name not in self.data:
-            if default is ...:
-                raise self.error(name, "missing key")
-            return default
-        value = self.data[name]
+        value, present = self._lookup(name, default)
+        if not present:
+            return value
         if not isinstance(value, str):
             raise self.error(name, f"expected a string, got {value!r}")
         if choices is not None:
@@ -121,11 +116,9 @@ class Table:
         return value
 
     def boolean(self, name: str, default: Any = ...) -> bool:
-        if name not in self.data:
-            if default is ...:
-                raise self.error(name, "missing key")
-            return default
-        value = self.data[name]
+        value, present = self._lookup(name, default)
+        if not present:
+            return value
         if not isinstance(value, bool):
             raise self.error(name, f"expected true or false, got {value!r}")
         return value

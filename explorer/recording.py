@@ -478,6 +478,22 @@ def write_recordings(path: str | os.PathLike, runs: Sequence[Run]) -> None:
             shutil.rmtree(work_dir, ignore_errors=True)
 
 
+def check_rrd_path(path: str, option: str) -> Path:
+    """An output .rrd path the user named (`option` names the flag in the error), checked before
+    any work: the right suffix, not a directory, in a directory that exists."""
+    from .errors import InputError
+
+    out = Path(path)
+    if out.suffix.lower() != ".rrd":
+        raise InputError(path, option, "the rerun file must end in .rrd")
+    if out.is_dir():
+        raise InputError(path, option, "is a directory")
+    parent = out.resolve().parent
+    if not parent.is_dir():
+        raise InputError(path, option, f"directory {parent} does not exist")
+    return out
+
+
 def temporary_name(path: Path, directory: Path | None = None) -> Path:
     """A hidden, unique name beside `path` (or in `directory`) for writing before the rename.
     Not created here: the writer creates it with the usual permissions (mkstemp would make it

@@ -74,14 +74,9 @@ def open_live_stream(args) -> "LiveStream":
 
 
 def check_save_path(path: str) -> Path:
-    out = Path(path)
-    if out.suffix.lower() != ".rrd":
-        raise InputError(path, "--rerun-save", "the rerun file must end in .rrd")
-    if out.is_dir():
-        raise InputError(path, "--rerun-save", "is a directory")
-    if not out.resolve().parent.is_dir():
-        raise InputError(path, "--rerun-save", f"directory {out.resolve().parent} does not exist")
-    return out
+    from .recording import check_rrd_path
+
+    return check_rrd_path(path, "--rerun-save")
 
 
 def check_port(port: int) -> int:

@@ -237,8 +237,20 @@ def test_geometry_columns_are_reused_when_present():
 def test_concave_flanks_are_reported():
     """Small base circle and a fast harmonic rise make the flanks concave."""
     out, c, s = _run(law="harmonic", rise=50, base=12, roller=6)
-    assert np.any(c["contour_radius_m"] < 0)
-    assert s["max_hertz_stress_concave_Pa"] > 0
+    rho_c = c["contour_radius_m"]
+    loaded = c["cam_normal_force_N"] > 0
+    concave, convex = loaded & (rho_c < 0), loaded & (rho_c > 0) & np.isfinite(rho_c)
+    assert concave.any() and convex.any()
+    assert s["max_hertz_stress_concave_Pa"] == pytest.approx(c["hertz_stress_Pa"][concave].max(), rel=1e-15)
+    assert s["max_hertz_stress_convex_Pa"] == pytest.approx(c["hertz_stress_Pa"][convex].max(), rel=1e-15)
+    # Physics, not the formula: a roller on a hollow flank conforms (stress below that on a flat of
+    # the same load), on a convex flank it does not (above). Flat: 1/R* = 1/r only.
+    e_star = s["effective_modulus_Pa"]
+    flat = np.sqrt(c["cam_normal_force_N"] * e_star / (math.pi * s["hertz_width_m"] * 0.006))
+    ratio = c["hertz_stress_Pa"] / np.where(loaded, flat, np.nan)
+    assert np.all(ratio[concave] < 1.0) and np.all(ratio[convex] > 1.0)
+    # and by exactly sqrt(1 + r/rho_c) (concave: rho_c < 0 subtracts), the curvature sum
+    assert ratio[concave] == pytest.approx(np.sqrt(1 + 0.006 / rho_c[concave]), rel=1e-12)
 
 
 # --- bad input ------------------------------------------------------------------------------------------

@@ -288,7 +288,7 @@ def test_failure_while_writing_leaves_previous_file_and_no_temporaries(tmp_path,
     code = main(["record", str(CYCLOIDAL), "--sweep", "drive.rpm=600,1200", "--no-parts",
                  "--set", "solver.steps_per_revolution=72", "-o", str(out)])
     assert code == 1
-    assert capsys.readouterr().err == f"error: {out}: writing failed: disk full\n"
+    assert capsys.readouterr().err == f"error: {out}: --output: writing failed: disk full\n"
     assert out.read_bytes() == b"previous content"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.rrd"]
 

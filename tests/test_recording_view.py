@@ -93,3 +93,20 @@ def test_view_bad_input(tmp_path, capsys, recording):
         busy.listen()
         assert main(["view", str(recording), "--port", str(busy.getsockname()[1])]) == 2
         assert "in use" in capsys.readouterr().err
+
+
+def test_view_without_a_rerun_cli_is_one_line(tmp_path, capsys, recording, monkeypatch):
+    """No rerun executable (a broken install) or one that cannot start: one line, no traceback."""
+    import explorer.recording as recording_module
+
+    def missing():
+        raise RuntimeError("the rerun command-line tool was not found")
+
+    with monkeypatch.context() as m:
+        m.setattr(recording_module, "rerun_executable", missing)
+        assert main(["view", str(recording), "--port", "0", "--grpc-port", "0"]) == 1
+        assert capsys.readouterr().err == "error: the rerun command-line tool was not found\n"
+    monkeypatch.setenv("RERUN_CLI_PATH", str(tmp_path / "no-such-rerun"))
+    assert main(["view", str(recording), "--port", "0", "--grpc-port", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {tmp_path / 'no-such-rerun'}: -: ") and err.count("\n") == 1, err

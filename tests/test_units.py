@@ -42,3 +42,16 @@ def test_bad_quantities(value, dim):
     with pytest.raises(InputError) as info:
         si(value, dim)
     assert str(info.value).startswith("f.toml: k: ")
+
+
+@pytest.mark.parametrize("value, dim", [("10 m m", "length"), ("1 k N", "force"), ("3 N / m m", "stiffness")])
+def test_spaces_inside_a_unit_are_not_dropped(value, dim):
+    """pint reads "10 m m" as 10 m**2 and "1 k N" as nonsense: the fast path must not turn them
+    into "mm" and "kN" (it used to drop every space)."""
+    with pytest.raises(InputError):
+        si(value, dim)
+
+
+def test_spaces_around_operators_are_fine():
+    assert si("2.9 kgf * s**2 / m", "mass") == pytest.approx(2.9 * G0, rel=1e-15)
+    assert si("25 N / mm", "stiffness") == pytest.approx(25e3, rel=1e-15)
