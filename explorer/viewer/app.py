@@ -1,0 +1,531 @@
+"""The browser explorer: a viser server animating the gear, with controls, plots and read-outs.
+
+Threading (the pattern of viser's examples): GUI callbacks run on viser's thread pool, several
+at once, so they only *record* what was asked (under a lock) and hand recomputations to the
+ComputeWorker (newest request wins). One loop thread owns every scene and GUI update: it takes
+the recorded requests, advances the playback clock and applies one frame under
+`server.atomic()`. When the loop itself assigns a GUI value (the scrub slider following the
+animation, fields refreshed after a scene swap), the `on_update` that viser fires synchronously
+is recognised by a thread-local flag and ignored, so nothing feeds back.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import threading
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from .. import meshes
+from ..laws import LAWS
+from ..scene import EFFECT_DEPENDENCIES, SPECIAL_LAWS
+from .model import (
+    PARAMETERS,
+    SPEEDS,
+    SPRING_RESOLUTION,
+    ComputeWorker,
+    Playback,
+    Prepared,
+    Request,
+    default_speed,
+    override,
+    step_index,
+)
+
+GEAR = "/gear"  # scene-tree root of the moving parts; nodes are /gear/<part>
+PLOT_CURSOR_HZ = 8.0  # the plots' angle cursor is redrawn at most this often
+
+
+def part_node(name: str) -> str:
+    return f"{GEAR}/{name}"
+
+
+def _color(name: str) -> tuple[int, int, int]:
+    try:
+        return meshes.PART_COLORS[name]  # knows the other gears' parts too
+    except KeyError:
+        return (150, 150, 155)
+
+
+def scene_bounds(prepared: Prepared) -> tuple[np.ndarray, np.ndarray]:
+    """World bounding box of every part at the first step (for aiming the camera)."""
+    lows, highs = [], []
+    for name, (vertices, _) in prepared.meshes.items():
+        lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        pos, quat = prepared.poses[name]
+        w, x, y, z = quat[0]
+        r = np.array([
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ])
+        world = corners @ r.T + pos[0]
+        lows.append(world.min(axis=0))
+        highs.append(world.max(axis=0))
+    return np.min(lows, axis=0), np.max(highs, axis=0)
+
+
+class ExplorerApp:
+    """Everything `explorer serve` shows, on an existing viser server."""
+
+    def __init__(
+        self,
+        server,
+        scene_path: str,
+        overrides: tuple[str, ...] | list[str] = (),
+        *,
+        playing: bool = True,
+        fps: float = 60.0,
+        on_result: Callable[[Prepared], None] | None = None,
+        scenes: list[Path] | None = None,
+    ):
+        from ..scenes import builtin_scenes
+
+        self.server = server
+        self.fps = fps
+        self._lock = threading.Lock()
+        self._echo = threading.local()  # set while the loop assigns GUI values itself
+        self._stop = threading.Event()
+        self.frames = 0  # frames applied by the loop (for the benchmark)
+        self.loop_errors = 0  # exceptions caught in the loop (should stay 0)
+
+        # scene choices: built-ins plus the given file when it is elsewhere
+        paths = list(scenes if scenes is not None else builtin_scenes())
+        given = Path(scene_path).resolve()
+        if given not in [p.resolve() for p in paths]:
+            paths.insert(0, given)
+        self.scene_paths: dict[str, str] = {}
+        for p in paths:
+            label = p.name if p.name not in self.scene_paths else str(p)
+            self.scene_paths[label] = str(p)
+        self._scene_label = next(k for k, v in self.scene_paths.items() if Path(v).resolve() == given)
+
+        # requested state (written by callbacks under the lock)
+        self._base_overrides: tuple[str, ...] = tuple(overrides)
+        self._user: dict[str, str] = {}  # parameter key -> override text
+        self._magnification = 1.0
+        self._serial = 0
+        self._refresh_serial = 0  # requests at or after this serial refresh the GUI fields
+        self._scrub: float | None = None
+        self._pause_requested = False
+        self._incoming: Prepared | None = None
+        self._error: tuple[int, str] | None = None
+        self.playback = Playback(playing=playing)
+        self._speed_chosen = False
+
+        # applied state (loop thread only)
+        self.current: Prepared | None = None
+        self.applied_serial = -1
+        self.handled_serial = -1  # newest request shown or rejected
+        self.error_text = ""  # the message the status box shows ("" when fine)
+        self._handles: dict[str, Any] = {}
+        self._shown_meshes: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self._last_index = -1
+        self._last_spring = math.nan
+        self._last_cursor = 0.0
+        self._cursor_index = -1
+        self._plot_handles: list[Any] = []
+        self._plot_signature: list[tuple] = []
+
+        self._build_gui()
+        self.worker = ComputeWorker(on_ready=self._on_ready, on_error=self._on_error, on_result=on_result).start()
+        self._submit(refresh=True)
+        self._thread = threading.Thread(target=self._loop, name="explorer-loop", daemon=True)
+        self._thread.start()
+
+    # ------------------------------------------------------------------ GUI construction
+
+    def _build_gui(self) -> None:
+        gui = self.server.gui
+        gui.configure_theme(control_width="large", dark_mode=False, show_logo=False, show_share_button=False)
+        gui.main_panel.dock_right()
+        gui.main_panel.set_width(380)
+        gui.add_markdown("**Valve-Gear Explorer** — cam, roller, lever, spring, valve")
+        self.status = gui.add_html(self._status_html(""))
+
+        with gui.add_folder("Playback"):
+            self.play = gui.add_checkbox("Play", initial_value=self.playback.playing, hint="play / pause the animation")
+            self.speed = gui.add_dropdown("Speed", [label for label, _ in SPEEDS], initial_value="1/100",
+                                          hint="playback speed relative to the real camshaft speed")
+            self.angle = gui.add_slider("Cam angle [°]", min=0.0, max=360.0, step=0.1, initial_value=0.0,
+                                        hint="scrub: pauses the animation at this angle")
+            self.magnification = gui.add_slider("Magnification", min=1.0, max=50.0, step=1.0, initial_value=1.0,
+                                                hint="enlarges the lash gap and the valve's deviation from rigid motion")
+
+        with gui.add_folder("Scene"):
+            self.scene = gui.add_dropdown("Scene", list(self.scene_paths), initial_value=self._scene_label)
+            laws = list(LAWS) + list(SPECIAL_LAWS)
+            self.fields: dict[str, Any] = {}
+            for key, (label, kind, unit) in PARAMETERS.items():
+                if kind == "choice":
+                    handle = gui.add_dropdown(label, laws, initial_value=laws[0])
+                elif kind == "number":
+                    handle = gui.add_number(label, 1.0, step=1.0)
+                elif kind == "integer":
+                    handle = gui.add_number(label, 3600, step=1)
+                else:
+                    handle = gui.add_text(f"{label} [{unit}]", "", hint=f"a quantity with units, e.g. '1.5 {unit}'")
+                handle.on_update(self._field_callback(key))
+                self.fields[key] = handle
+            self.effects: dict[str, Any] = {}
+            with gui.add_folder("Effects"):
+                for name in EFFECT_DEPENDENCIES:
+                    handle = gui.add_checkbox(name, initial_value=name == "kinematics")
+                    handle.on_update(self._effects_changed)
+                    self.effects[name] = handle
+            self.reset = gui.add_button("Reset to scene file")
+
+        # plots and read-outs in their own panel on the left, beside the 3D view
+        self.side_panel = gui.add_panel()
+        self._plots_tab = self.side_panel.add_tab("Plots")
+        self._readout_tab = self.side_panel.add_tab("Read-outs")
+        with self._readout_tab:
+            self.readout = gui.add_markdown("computing…")
+        self.side_panel.dock_left()
+        self.side_panel.set_width(440)
+
+        self.play.on_update(self._play_changed)
+        self.speed.on_update(self._speed_changed)
+        self.angle.on_update(self._angle_changed)
+        self.magnification.on_update(self._magnification_changed)
+        self.scene.on_update(self._scene_changed)
+        self.reset.on_click(self._reset_clicked)
+
+    @staticmethod
+    def _status_html(message: str) -> str:
+        if not message:
+            return '<div style="color:#2e7d32;font-size:0.85em">ready</div>'
+        import html
+
+        return (
+            '<div role="alert" style="color:#b71c1c;background:#fdecea;border:1px solid #f5c6cb;'
+            'border-radius:4px;padding:4px 6px;font-size:0.85em;white-space:pre-wrap">'
+            f"{html.escape(message)}</div>"
+        )
+
+    # ------------------------------------------------------------------ callbacks (record only)
+
+    def _is_echo(self) -> bool:
+        return bool(getattr(self._echo, "on", False))
+
+    @contextlib.contextmanager
+    def _programmatic(self):
+        self._echo.on = True
+        try:
+            yield
+        finally:
+            self._echo.on = False
+
+    def _field_callback(self, key: str):
+        def callback(event) -> None:
+            if self._is_echo():
+                return
+            value = event.target.value
+            kind = PARAMETERS[key][1]
+            if kind == "integer":
+                value = int(value) if float(value).is_integer() else float(value)
+            elif kind == "number":
+                value = float(value)
+            with self._lock:
+                self._user[key] = override(key, value)
+            self._submit()
+
+        return callback
+
+    def _effects_changed(self, event) -> None:
+        if self._is_echo():
+            return
+        chosen = [name for name, handle in self.effects.items() if handle.value]
+        with self._lock:
+            self._user["effects"] = override("effects", chosen or ["kinematics"])
+        self._submit()
+
+    def _scene_changed(self, event) -> None:
+        if self._is_echo():
+            return
+        with self._lock:
+            self._scene_label = event.target.value
+            self._base_overrides = ()
+            self._user.clear()
+            self._speed_chosen = False
+        self._submit(refresh=True)
+
+    def _reset_clicked(self, event) -> None:
+        with self._lock:
+            self._user.clear()
+        self._submit(refresh=True)
+
+    def _magnification_changed(self, event) -> None:
+        if self._is_echo():
+            return
+        with self._lock:
+            self._magnification = float(event.target.value)
+        self._submit()
+
+    def _play_changed(self, event) -> None:
+        if self._is_echo():
+            return
+        with self._lock:
+            self.playback.playing = bool(event.target.value)
+
+    def _speed_changed(self, event) -> None:
+        if self._is_echo():
+            return
+        with self._lock:
+            self.playback.speed = dict(SPEEDS)[event.target.value]
+            self._speed_chosen = True
+
+    def _angle_changed(self, event) -> None:
+        if self._is_echo():
+            return  # the loop moving the slider along with the animation
+        with self._lock:
+            self._scrub = float(event.target.value)
+            self._pause_requested = True
+
+    def _submit(self, refresh: bool = False) -> None:
+        with self._lock:
+            self._serial += 1
+            if refresh:
+                self._refresh_serial = self._serial
+            request = Request(
+                path=self.scene_paths[self._scene_label],
+                overrides=self._base_overrides + tuple(self._user[k] for k in sorted(self._user)),
+                magnification=self._magnification,
+                serial=self._serial,
+            )
+        self.worker.submit(request)
+
+    def _on_ready(self, prepared: Prepared) -> None:
+        with self._lock:
+            if self._incoming is None or prepared.request.serial > self._incoming.request.serial:
+                self._incoming = prepared
+            if self._error is not None and self._error[0] < prepared.request.serial:
+                self._error = None
+
+    def _on_error(self, request: Request, message: str) -> None:
+        with self._lock:
+            self._error = (request.serial, message)
+
+    # ------------------------------------------------------------------ the loop
+
+    def _loop(self) -> None:
+        period = 1.0 / self.fps
+        last = time.perf_counter()
+        while not self._stop.is_set():
+            now = time.perf_counter()
+            try:
+                self.tick(min(now - last, 0.1))
+            except Exception:  # keep serving; the traceback helps whoever reads the console
+                import traceback
+
+                self.loop_errors += 1
+                traceback.print_exc()
+            last = now
+            self._stop.wait(max(0.0, period - (time.perf_counter() - now)))
+
+    def tick(self, dt: float) -> None:
+        """Apply whatever was requested and advance the animation by dt seconds (one frame)."""
+        with self._lock:
+            incoming, self._incoming = self._incoming, None
+            error, self._error = self._error, None
+            scrub, self._scrub = self._scrub, None
+            pause, self._pause_requested = self._pause_requested, False
+            if scrub is not None:
+                self.playback.angle_deg = scrub % 360.0
+                if pause:
+                    self.playback.playing = False
+            prepared = incoming or self.current
+            if prepared is not None and scrub is None:
+                self.playback.advance(dt, prepared.result.summary["revolution_time_s"])
+            angle = self.playback.angle_deg
+            playing = self.playback.playing
+            refresh = incoming is not None and incoming.request.serial >= self._refresh_serial
+            choose_speed = incoming is not None and not self._speed_chosen
+            if choose_speed:
+                self._speed_chosen = True
+        with self.server.atomic():
+            if incoming is not None:
+                self._apply(incoming, refresh, choose_speed)
+                self.handled_serial = max(self.handled_serial, incoming.request.serial)
+            if error is not None:
+                self.handled_serial = max(self.handled_serial, error[0])
+            if error is not None and (incoming is None or error[0] > incoming.request.serial):
+                self.error_text = error[1]
+                self.status.content = self._status_html(self.error_text)
+            elif incoming is not None and self.error_text:
+                self.error_text = ""
+                self.status.content = self._status_html("")
+            if self.current is not None:
+                self._pose(angle, force=incoming is not None)
+                with self._programmatic():
+                    if self.play.value != playing:
+                        self.play.value = playing
+                    shown = round(angle, 1) % 360.0
+                    if abs(self.angle.value - shown) > 1e-9:
+                        self.angle.value = shown
+        self.server.flush()
+        self.frames += 1
+
+    def _apply(self, prepared: Prepared, refresh: bool, choose_speed: bool) -> None:
+        """A new result (or a new magnification): meshes that changed, plots, read-outs, fields."""
+        previous = self.current
+        self.current = prepared
+        self.applied_serial = prepared.request.serial
+        n = len(prepared.result.columns["cam_angle_deg"])
+        i = step_index(self.playback.angle_deg, n)
+        for name, (vertices, faces) in prepared.meshes.items():
+            shown = self._shown_meshes.get(name)
+            if shown is not None and shown[0] is vertices:
+                continue
+            if shown is not None and shown[0].shape == vertices.shape and np.array_equal(shown[0], vertices) \
+                    and np.array_equal(shown[1], faces):
+                self._shown_meshes[name] = (vertices, faces)
+                continue
+            pos, quat = prepared.poses[name]
+            self._handles[name] = self.server.scene.add_mesh_simple(
+                part_node(name), vertices, faces, color=_color(name),
+                position=tuple(pos[i]), wxyz=tuple(quat[i]),
+                flat_shading=False, side="double" if name == "spring" else "front",
+            )
+            self._shown_meshes[name] = (vertices, faces)
+            if name == "spring":
+                self._last_spring = prepared.layout.spring_rest_length
+        self._last_index = -1
+        if prepared.new_result:
+            self._update_plots(prepared)
+            self.readout.content = prepared.readout
+        if previous is None or Path(previous.request.path) != Path(prepared.request.path):
+            self._aim_camera(prepared)
+        if refresh:
+            self._refresh_fields(prepared)
+        if choose_speed:
+            label = default_speed(prepared.result.summary["revolution_time_s"])
+            with self._lock:
+                self.playback.speed = dict(SPEEDS)[label]
+            with self._programmatic():
+                self.speed.value = label
+
+    def _refresh_fields(self, prepared: Prepared) -> None:
+        values = prepared.values
+        with self._programmatic():
+            label = next((k for k, v in self.scene_paths.items() if Path(v) == Path(prepared.request.path)), None)
+            if label is not None and self.scene.value != label:
+                self.scene.value = label
+            for key, handle in self.fields.items():
+                value = values.get(key)
+                kind = PARAMETERS[key][1]
+                if kind == "quantity":
+                    handle.value = value or ""
+                    handle.disabled = False
+                elif kind == "choice":
+                    if value in handle.options:
+                        handle.value = value
+                elif value is not None:
+                    handle.value = value
+            for name, handle in self.effects.items():
+                handle.value = name in prepared.scene.effects
+
+    def _aim_camera(self, prepared: Prepared) -> None:
+        lo, hi = scene_bounds(prepared)
+        centre = 0.5 * (lo + hi)
+        size = float(np.linalg.norm(hi - lo))
+        position = centre + size * np.array([0.1, -0.72, 0.18])
+        self.server.initial_camera.position = tuple(position)
+        self.server.initial_camera.look_at = tuple(centre)
+        self.server.initial_camera.up = (0.0, 0.0, 1.0)
+        for client in self.server.get_clients().values():
+            client.camera.position = tuple(position)
+            client.camera.look_at = tuple(centre)
+
+    def _pose(self, angle: float, force: bool = False) -> None:
+        prepared = self.current
+        n = len(prepared.result.columns["cam_angle_deg"])
+        i = step_index(angle, n)
+        if i != self._last_index or force:
+            for name, (pos, quat) in prepared.poses.items():
+                if name in meshes.STATIC_PARTS and not force:
+                    continue
+                handle = self._handles.get(name)
+                if handle is None:
+                    continue
+                handle.position = pos[i]
+                handle.wxyz = quat[i]
+            length = float(prepared.spring_lengths[i])
+            if abs(length - self._last_spring) > 1e-9 and "spring" in self._handles:
+                self._handles["spring"].vertices = meshes.spring_vertices(
+                    prepared.layout, length, **SPRING_RESOLUTION).astype(np.float32)
+                self._last_spring = length
+            self._last_index = i
+        now = time.perf_counter()
+        if force or (i != self._cursor_index and now - self._last_cursor >= 1.0 / PLOT_CURSOR_HZ):
+            self._move_cursor(angle)
+            self._last_cursor = now
+            self._cursor_index = i
+
+    # ------------------------------------------------------------------ plots
+
+    def _update_plots(self, prepared: Prepared) -> None:
+        signature = [(p.title, tuple(label for label, _, _ in p.series)) for p in prepared.plots]
+        if signature != self._plot_signature:
+            for handle in self._plot_handles:
+                handle.remove()
+            self._plot_handles = []
+            with self._plots_tab:
+                for plot in prepared.plots:
+                    series = [{"label": "θ [°]"}]
+                    series += [{"label": label, "stroke": colour, "width": 1.5} for label, _, colour in plot.series]
+                    # the cursor: a one-sample spike on its own 0..1 scale whose base lies below the
+                    # visible range, so only a vertical line at the current angle shows
+                    series += [{"label": "now", "stroke": "#111111", "width": 1.5, "scale": "cursor"}]
+                    self._plot_handles.append(self.server.gui.add_uplot(
+                        data=self._plot_data(plot, self.playback.angle_deg), series=tuple(series), title=plot.title,
+                        scales={"x": {"time": False, "auto": False, "range": [0, 360]},
+                                "cursor": {"auto": False, "range": [0.02, 1.0]}},
+                        axes=({"size": 28}, {"size": 62}), aspect=2.3,
+                        legend={"show": True, "live": False},
+                    ))
+            self._plot_signature = signature
+        else:
+            for handle, plot in zip(self._plot_handles, prepared.plots):
+                handle.data = self._plot_data(plot, self.playback.angle_deg)
+
+    @staticmethod
+    def _plot_data(plot, angle: float) -> tuple[np.ndarray, ...]:
+        cursor = np.zeros(len(plot.x))
+        cursor[int(np.argmin(np.abs(plot.x - angle % 360.0)))] = 1.0
+        return (plot.x, *(values for _, values, _ in plot.series), cursor)
+
+    def _move_cursor(self, angle: float) -> None:
+        if self.current is None:
+            return
+        for handle, plot in zip(self._plot_handles, self.current.plots):
+            handle.data = self._plot_data(plot, angle)
+
+    # ------------------------------------------------------------------ control from Python
+
+    def wait_applied(self, timeout: float = 30.0) -> bool:
+        """Wait until the newest request has been computed and shown (or rejected)."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.worker.wait_idle(max(0.0, deadline - time.monotonic())):
+                with self._lock:
+                    pending = self._incoming is not None or self._error is not None or self._scrub is not None
+                    serial = self._serial
+                if not pending and self.handled_serial >= serial:
+                    # one more frame so that pose updates after the last apply are out
+                    frames = self.frames
+                    while self.frames < frames + 2 and time.monotonic() < deadline:
+                        time.sleep(0.002)
+                    return True
+            time.sleep(0.002)
+        return False
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+        self.worker.stop()

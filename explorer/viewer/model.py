@@ -1,0 +1,425 @@
+"""What the browser explorer shows, computed without any viewer: a request (scene file, GUI
+overrides, magnification) becomes a `Prepared` bundle of meshes, per-step poses, plot data and
+read-outs. `ComputeWorker` does this off the GUI threads, newest request wins.
+
+Nothing here imports viser, so it is testable and reusable (the benchmark drives it directly).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import threading
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from ..errors import InputError
+
+# Parameters the GUI edits: scene key -> (label, kind, display unit). Values typed with units
+# are passed to the scene reader as strings, so the GUI accepts exactly what a scene file does.
+PARAMETERS: dict[str, tuple[str, str, str]] = {
+    "lift.law": ("Lift law", "choice", ""),
+    "drive.rpm": ("Camshaft rpm", "number", "rpm"),
+    "valve.lash": ("Lash", "quantity", "mm"),
+    "linkage.stiffness": ("Linkage stiffness", "quantity", "N/mm"),
+    "spring.preload": ("Spring preload", "quantity", "N"),
+    "spring.rate": ("Spring rate", "quantity", "N/mm"),
+    "solver.steps_per_revolution": ("Steps / revolution", "integer", ""),
+}
+
+
+@dataclass(frozen=True)
+class Request:
+    """One thing to show: a scene file, overrides ("section.key=value"), a magnification."""
+
+    path: str
+    overrides: tuple[str, ...] = ()
+    magnification: float = 1.0
+    serial: int = 0  # increases with every request, so the newest is known
+
+
+def override(key: str, value: Any) -> str:
+    """A "section.key=value" override whose value the TOML reader reads back unchanged."""
+    if isinstance(value, bool):
+        return f"{key}={'true' if value else 'false'}"
+    if isinstance(value, (list, tuple)):
+        return f"{key}=[{', '.join(json.dumps(str(v)) for v in value)}]"
+    if isinstance(value, int):
+        return f"{key}={value}"
+    if isinstance(value, float):
+        return f"{key}={value!r}" if math.isfinite(value) else f"{key}={'nan' if math.isnan(value) else ('inf' if value > 0 else '-inf')}"
+    return f"{key}={json.dumps(str(value))}"
+
+
+def scene_values(scene) -> dict[str, Any]:
+    """The scene's current value of each editable parameter, in the GUI's display units
+    (None where the scene has no such section)."""
+    per_si = {"mm": 1e3, "N/mm": 1e-3, "N": 1.0}  # exact factors: no unit registry on this path
+
+    def q(value, unit):
+        return None if value is None else f"{_round(value * per_si[unit])} {unit}"
+
+    return {
+        "lift.law": scene.lift.law,
+        "drive.rpm": float(scene.drive.rpm),
+        "valve.lash": q(scene.valve.lash if scene.valve else None, "mm"),
+        "linkage.stiffness": q(scene.linkage.stiffness if scene.linkage else None, "N/mm"),
+        "spring.preload": q(scene.spring.preload if scene.spring else None, "N"),
+        "spring.rate": q(scene.spring.rate if scene.spring else None, "N/mm"),
+        "solver.steps_per_revolution": int(scene.solver.steps_per_revolution),
+    }
+
+
+def _round(x: float) -> str:
+    return f"{x:.6g}"
+
+
+# The spring is resent every frame while the valve moves: a coarser tube than the default keeps
+# that message small (1.5k vertices, 18 kB) while the coils still look round.
+SPRING_RESOLUTION = {"segments_per_turn": 24, "wire_segments": 8}
+
+# ---------------------------------------------------------------------------------------------
+# Plots
+
+
+@dataclass(frozen=True)
+class Plot:
+    title: str
+    x: np.ndarray  # cam angle, deg (decimated)
+    series: tuple[tuple[str, np.ndarray, str], ...]  # (label, values, colour)
+
+
+SERIES_COLORS = ("#c0392b", "#2471a3", "#7d8a96", "#27ae60", "#8e44ad", "#d68910", "#17a589")
+DISPLAY_POINTS = 720
+
+
+def decimate(x: np.ndarray, ys: list[np.ndarray], points: int = DISPLAY_POINTS) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Thin columns to about `points` samples for the plots, keeping each bucket's extremes
+    (min and max of every series, in their order) so impacts and spikes stay visible."""
+    n = len(x)
+    if n <= points:
+        return x.copy(), [y.copy() for y in ys]
+    buckets = points // 2
+    edges = np.linspace(0, n, buckets + 1).astype(int)
+    starts, ends = edges[:-1], edges[1:]
+    xs = np.empty(2 * buckets)
+    xs[0::2], xs[1::2] = x[starts], x[ends - 1]
+    out = []
+    for y in ys:
+        lo = np.minimum.reduceat(y, starts)
+        hi = np.maximum.reduceat(y, starts)
+        i_lo = _argreduce(y, starts, ends, np.argmin)
+        i_hi = _argreduce(y, starts, ends, np.argmax)
+        first_is_lo = i_lo <= i_hi
+        z = np.empty(2 * buckets)
+        z[0::2] = np.where(first_is_lo, lo, hi)
+        z[1::2] = np.where(first_is_lo, hi, lo)
+        out.append(z)
+    return xs, out
+
+
+def _argreduce(y, starts, ends, fn):
+    width = int((ends - starts).max())
+    idx = np.minimum(starts[:, None] + np.arange(width)[None, :], ends[:, None] - 1)
+    return np.take_along_axis(idx, fn(y[idx], axis=1)[:, None], axis=1)[:, 0]
+
+
+def build_plots(result) -> list[Plot]:
+    """s, v, p and the forces over one revolution, from whatever columns the effects made."""
+    cols = result.columns
+    x = np.asarray(cols["cam_angle_deg"], dtype=float)
+    plots = []
+
+    def add(title, entries):
+        entries = [(label, np.asarray(values, dtype=float) * k) for label, values, k in entries if values is not None]
+        xs, ys = decimate(x, [v for _, v in entries])
+        series = tuple((label, y, SERIES_COLORS[i % len(SERIES_COLORS)]) for i, ((label, _), y) in enumerate(zip(entries, ys)))
+        plots.append(Plot(title, xs, series))
+
+    def maybe_rigid(name):
+        rigid = cols.get(f"rigid_{name}")
+        return rigid if rigid is not None and not np.array_equal(rigid, cols[name]) else None
+
+    scene = result.scene
+    lash = scene.valve.lash if scene.valve is not None else 0.0
+    linkage = scene.follower.ratio * np.asarray(cols["follower_lift_m"]) - lash
+    add("Valve lift s [mm] over cam angle [°]", [
+        ("valve s", cols["valve_lift_m"], 1e3),
+        ("rigid", maybe_rigid("valve_lift_m"), 1e3),
+        ("linkage S - lash", linkage if maybe_rigid("valve_lift_m") is not None else None, 1e3),
+    ])
+    add("Velocity v [m/s]", [("valve v", cols["valve_velocity_m_s"], 1.0), ("rigid", maybe_rigid("valve_velocity_m_s"), 1.0)])
+    add("Acceleration p [m/s²]", [("valve p", cols["valve_accel_m_s2"], 1.0), ("rigid", maybe_rigid("valve_accel_m_s2"), 1.0)])
+    # the linkage force first (Schenker's back-pressure on the camshaft), then the cam contact and
+    # the spring; any further force columns after those, up to five curves
+    preferred = ("linkage_force_N", "contact_force_N", "spring_force_N", "required_spring_force_N",
+                 "camshaft_back_pressure_N")
+    names = [n for n in preferred if n in cols] + sorted(n for n in cols if n.endswith("_N") and n not in preferred)
+    forces = [(name[:-2].replace("_", " "), cols[name], 1.0) for name in names[:5]]
+    if not forces:
+        forces = [("none: tick forces or elastic", np.zeros_like(x), 1.0)]
+    add("Forces [N]", forces)
+    return plots
+
+
+# ---------------------------------------------------------------------------------------------
+# Read-outs
+
+
+UNIT_SUFFIXES = (
+    ("_m_s2", "m/s²", 1.0), ("_m_s3", "m/s³", 1.0), ("_m_s", "m/s", 1.0), ("_rpm", "rpm", 1.0),
+    ("_deg", "°", 1.0), ("_mm", "mm", 1.0), ("_m", "mm", 1e3), ("_N_m", "N·m", 1.0), ("_Nm", "N·m", 1.0),
+    ("_N", "N", 1.0), ("_Pa", "MPa", 1e-6), ("_s", "ms", 1e3), ("_kg", "kg", 1.0), ("_J", "J", 1.0),
+)
+SKIP_SUMMARY = {"scene", "rpm", "steps_per_revolution", "effects", "events", "warnings", "lash_m"}
+
+
+def _fmt_value(key: str, value) -> tuple[str, str]:
+    for suffix, unit, k in UNIT_SUFFIXES:
+        if key.endswith(suffix):
+            return key[: -len(suffix)].replace("_", " "), f"{value * k:.4g} {unit}"
+    return key.replace("_", " "), f"{value:.4g}"
+
+
+def readout_markdown(result, label: str = "") -> str:
+    """Compute times, events, key figures (peaks, jump speed, impact speeds...) and warnings."""
+    s = result.summary
+    lines = [f"**{s.get('scene', '')}** at {s.get('rpm', 0):g} rpm, {s.get('steps_per_revolution', 0)} steps"]
+    if label:
+        lines.append(f"<small>{label}</small>")
+    # warnings first: undercut, self-locking, float... are what a designer must not miss
+    warnings = list(s.get("warnings", []))
+    lines += ["", f"**Warnings** ({len(warnings)})", ""]
+    lines += [f"- ⚠ {w}" for w in warnings] or ["none"]
+    lines += ["", "| effect | compute |", "|---|---:|"]
+    for name, info in s.get("effects", {}).items():
+        lines.append(f"| {name} | {1e3 * info['compute_time_s']:.2f} ms |")
+    events = list(s.get("events", []))
+    lines += ["", f"**Events** ({len(events)})", ""]
+    if events:
+        lines += ["| event | angle | speed |", "|---|---:|---:|"]
+        for e in events[:14]:
+            v = e.get("velocity_m_s", e.get("relative_velocity_m_s"))
+            speed = f"{v:+.3f} m/s" if isinstance(v, (int, float)) else ""
+            lines.append(f"| {e.get('kind', '?')} | {e.get('cam_angle_deg', float('nan')):.2f}° | {speed} |")
+        if len(events) > 14:
+            lines.append(f"| … {len(events) - 14} more | | |")
+    else:
+        lines.append("none")
+    figures = []
+    for key, value in s.items():
+        if key in SKIP_SUMMARY or isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue
+        if not math.isfinite(float(value)):
+            continue
+        figures.append(_fmt_value(key, float(value)))
+    if figures:
+        lines += ["", "**Key figures**", "", "| quantity | value |", "|---|---:|"]
+        lines += [f"| {name} | {text} |" for name, text in figures]
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------------
+# The prepared bundle
+
+
+@dataclass(frozen=True)
+class Prepared:
+    request: Request
+    scene: Any
+    result: Any
+    layout: Any
+    lift: Any  # the lift curve (reused when only the magnification changes)
+    meshes: dict  # part -> (vertices float32 (V, 3), faces uint32 (F, 3))
+    poses: dict  # part -> (positions (N, 3), wxyz (N, 4))
+    spring_lengths: np.ndarray  # (N,)
+    plots: list
+    readout: str
+    label: str
+    values: dict  # scene_values(scene): what the GUI fields show
+    new_result: bool  # False when only the magnification changed
+    seconds: float = 0.0  # wall time of the preparation
+
+
+def _request_label(request: Request) -> str:
+    name = Path(request.path).name
+    return name + ("".join(f"  {o}" for o in request.overrides) if request.overrides else "")
+
+
+def _same_cam(a, b) -> bool:
+    """True when two scenes have the same cam: lift spec, cam section and follower geometry.
+    Sections may hold arrays (point contours) whose == is ambiguous: then they count as different."""
+    try:
+        return bool(a.lift == b.lift and a.cam == b.cam and a.follower == b.follower and a.directory == b.directory)
+    except (ValueError, TypeError):
+        return False
+
+
+def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
+    """Load, simulate and build everything the viewer needs. Raises InputError on bad input.
+    Reuses the previous simulation when only the magnification changed."""
+    from .. import meshes
+    from ..effects import simulate
+    from ..lift import build_lift
+    from ..scene import load_scene
+
+    started = time.perf_counter()
+    same = previous is not None and (previous.request.path, previous.request.overrides) == (request.path, request.overrides)
+    if same:
+        scene, result, lay, parts = previous.scene, previous.result, previous.layout, previous.meshes
+        plots, readout, values = previous.plots, previous.readout, previous.values
+        lift = previous.lift
+    else:
+        scene = load_scene(request.path, list(request.overrides))
+        lift = build_lift(scene)
+        result = simulate(scene, lift=lift)
+        lay = meshes.layout(scene, result)
+        # only the cam depends on more than the layout: keep the other meshes when it is unchanged,
+        # and the cam too when its lift and geometry are (an edit of speed, lash, springs...)
+        keep = previous is not None and previous.layout == lay
+        keep_cam = keep and _same_cam(previous.scene, scene)
+        built = meshes.build_parts(scene, result, lay=lay, lift=lift, only=() if keep_cam else ("cam",) if keep else None)
+        parts = dict(previous.meshes) if keep else {}
+        parts.update({
+            name: (np.ascontiguousarray(m.vertices, dtype=np.float32), np.ascontiguousarray(m.faces, dtype=np.uint32))
+            for name, m in built.items() if name != "spring"
+        })
+        if "spring" in built:
+            parts["spring"] = (
+                meshes.spring_vertices(lay, lay.spring_rest_length, **SPRING_RESOLUTION).astype(np.float32),
+                meshes.spring_faces(lay, **SPRING_RESOLUTION).astype(np.uint32),
+            )
+        plots = build_plots(result)
+        readout = readout_markdown(result, _request_label(request))
+        values = scene_values(scene)
+    poses = meshes.part_poses(scene, result, magnification=request.magnification, lay=lay, lift=lift)
+    lengths = meshes.spring_length(lay, meshes.displayed_valve_lift(result, request.magnification))
+    return Prepared(
+        request=request, scene=scene, result=result, layout=lay, lift=lift, meshes=parts, poses=poses,
+        spring_lengths=np.asarray(lengths, dtype=float), plots=plots, readout=readout,
+        label=_request_label(request), values=values, new_result=not same, seconds=time.perf_counter() - started,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Worker
+
+
+@dataclass
+class ComputeWorker:
+    """One background thread; `submit` replaces any request not yet started (newest wins, no
+    queue). Results go to `on_ready(prepared)`, bad input to `on_error(request, message)`."""
+
+    on_ready: Callable[[Prepared], None]
+    on_error: Callable[[Request, str], None]
+    on_result: Callable[[Prepared], None] | None = None  # e.g. the rerun live stream
+    _pending: Request | None = None
+    _busy: bool = False
+    _stop: bool = False
+    _last: Prepared | None = None
+    _cond: threading.Condition = field(default_factory=threading.Condition)
+    _thread: threading.Thread | None = None
+    computed: int = 0  # how many requests were actually computed (for tests and benchmarks)
+    submitted: int = 0
+    internal_errors: int = 0  # exceptions other than InputError (should stay 0)
+
+    def start(self) -> "ComputeWorker":
+        self._thread = threading.Thread(target=self._run, name="explorer-compute", daemon=True)
+        self._thread.start()
+        return self
+
+    def submit(self, request: Request) -> None:
+        with self._cond:
+            self._pending = request
+            self.submitted += 1
+            self._cond.notify_all()
+
+    def idle(self) -> bool:
+        with self._cond:
+            return self._pending is None and not self._busy
+
+    def wait_idle(self, timeout: float = 30.0) -> bool:
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while self._pending is not None or self._busy:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                self._cond.wait(left)
+        return True
+
+    def stop(self) -> None:
+        with self._cond:
+            self._stop = True
+            self._cond.notify_all()
+        if self._thread is not None:
+            self._thread.join(timeout=10.0)
+
+    def _run(self) -> None:
+        while True:
+            with self._cond:
+                while self._pending is None and not self._stop:
+                    self._cond.wait()
+                if self._stop:
+                    return
+                request, self._pending = self._pending, None
+                self._busy = True
+            try:
+                prepared = prepare(request, self._last)
+            except InputError as exc:
+                self.on_error(request, f"error: {exc}")
+            except Exception as exc:  # a bug must not kill the viewer: show it, keep serving
+                self.internal_errors += 1
+                traceback.print_exc()
+                self.on_error(request, f"internal error: {type(exc).__name__}: {exc}")
+            else:
+                self._last = prepared
+                self.computed += 1
+                self.on_ready(prepared)
+                if self.on_result is not None and prepared.new_result:
+                    try:
+                        self.on_result(prepared)
+                    except Exception:
+                        traceback.print_exc()
+            finally:
+                with self._cond:
+                    self._busy = False
+                    self._cond.notify_all()
+
+
+# ---------------------------------------------------------------------------------------------
+# Playback clock
+
+
+SPEEDS: tuple[tuple[str, float], ...] = (
+    ("real time", 1.0), ("1/2", 0.5), ("1/5", 0.2), ("1/10", 0.1), ("1/20", 0.05), ("1/50", 0.02),
+    ("1/100", 0.01), ("1/200", 0.005), ("1/500", 0.002), ("1/1000", 0.001), ("1/2000", 5e-4),
+    ("1/5000", 2e-4), ("1/10000", 1e-4),
+)
+
+
+def default_speed(revolution_time: float, target_seconds: float = 4.0) -> str:
+    """The listed speed whose slowed revolution lasts closest to `target_seconds` (log scale)."""
+    return min(SPEEDS, key=lambda kv: abs(math.log(revolution_time / kv[1] / target_seconds)))[0]
+
+
+@dataclass
+class Playback:
+    angle_deg: float = 0.0
+    playing: bool = True
+    speed: float = 0.01
+
+    def advance(self, dt: float, revolution_time: float) -> float:
+        if self.playing and revolution_time > 0.0:
+            self.angle_deg = (self.angle_deg + 360.0 * dt * self.speed / revolution_time) % 360.0
+        return self.angle_deg
+
+
+def step_index(angle_deg: float, n: int) -> int:
+    """Step of a revolution sampled at theta_i = 360 i / n that is nearest to `angle_deg`."""
+    return int(round((angle_deg % 360.0) * n / 360.0)) % n
