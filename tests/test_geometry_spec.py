@@ -219,6 +219,17 @@ def test_random_single_arcs_fail_cleanly_or_load(radius, x, unit):
     assert math.isclose(scene.follower.base_radius, scene.cam.min_radius, abs_tol=1e-6)
 
 
+@pytest.mark.parametrize("radius,reason", [("2.2e-311 mm", "at least"), ("1e-4 mm", "at least"), ("11 m", "at most")])
+def test_arc_radius_outside_any_cam_is_refused(radius, reason):
+    """Subnormal radii once reached a ZeroDivisionError in the tangency arithmetic (hypothesis)."""
+    text = HEAD.format(base="10 mm", roller="5 mm", offset="0 mm") + (
+        f'[cam]\n[[cam.arcs]]\nx = "0 mm"\ny = "0 mm"\nradius = "{radius}"\n'
+    )
+    with pytest.raises(InputError) as info:
+        loads_scene(text)
+    assert info.value.key == "cam.arcs[0].radius" and reason in info.value.reason
+
+
 def test_cam_spec_equality_and_description():
     from explorer.geometry.spec import describe
 

@@ -44,6 +44,10 @@ from ..units import to_si
 from .arcs import Arc, ArcContour, ContourError, build_arc_contour
 
 BASE_RADIUS_TOLERANCE = 1e-6  # m: follower.base_radius must match the contour this closely
+# Arcs below a micron or centres beyond 10 m are no valve-gear cam; they also push the tangency
+# arithmetic into subnormal or overflowing floats, so they are refused at load time.
+MIN_ARC_RADIUS = 1e-6  # m
+MAX_CENTRE_DISTANCE = 10.0  # m
 MIN_POINTS = 12
 
 
@@ -123,12 +127,13 @@ def _parse_arcs(table: Table, rotation: float) -> CamSpec:
     for i, item in enumerate(raw):
         t = Table(item, table.file, f"{key}[{i}]")
         t.reject_unknown(("name", "x", "y", "radius", "kind"))
-        x, y = t.quantity("x", "length"), t.quantity("y", "length")
+        x = t.quantity("x", "length", minimum=-MAX_CENTRE_DISTANCE, maximum=MAX_CENTRE_DISTANCE)
+        y = t.quantity("y", "length", minimum=-MAX_CENTRE_DISTANCE, maximum=MAX_CENTRE_DISTANCE)
         arcs.append(
             Arc(
                 x=c * x - s * y,
                 y=s * x + c * y,
-                radius=t.quantity("radius", "length", positive=True),
+                radius=t.quantity("radius", "length", positive=True, minimum=MIN_ARC_RADIUS, maximum=MAX_CENTRE_DISTANCE),
                 concave=t.string("kind", "convex", choices=("convex", "concave")) == "concave",
                 name=t.string("name", ""),
             )
