@@ -21,20 +21,29 @@ DESCRIPTION = """\
 Valve-Gear Explorer: how a cam moves a valve.
 
 A scene file (TOML) describes one valve gear at one camshaft speed and lists the effects to
-compute: kinematics (lift, velocity, acceleration, jerk), lash (take-up and seating impacts),
-forces (spring requirement, float speed), contact (pressure angle, Hertz stress, torque),
-elastic (linkage dynamics with lift-off, separation, re-contact and seat impact).
+compute; exactly those run (plus what they need), each timed:
+  kinematics  lift, velocity, acceleration, jerk; pressure angle, radii of curvature
+  lash        take-up and seating instants with the finite impact velocities (Schenker's v1, v2)
+  forces      spring, friction, loads, contact force, required spring force, float speed
+  contact     contact force, self-locking margin, camshaft torque, Hertz stress, cam width
+  elastic     elastic linkage: lift-off, separation, re-contact, seat impact, linkage force
+  gear        lever ratios and statics of the lever, rocking-cam, rolling-lever and trip gears
 Built-in scenes are in assets/scenes; with no scene, the default is Schenker's 1902 exhaust
-cam (Fig. 2 of his paper).
+cam (Fig. 2 of his paper), computed exactly from its circular arcs.
 """
 
 EPILOG = """\
 examples:
+  explorer serve                       3D explorer of the default scene on http://127.0.0.1:8080
   explorer simulate assets/scenes/schenker1902_fig2.toml -o out.csv --summary out.json
-  explorer simulate SCENE --set drive.rpm=300 --set valve.lash="0.3 mm"
-  explorer <command> --help     details of one command
+  explorer simulate SCENE --set drive.rpm=300 --set valve.lash="0.3 mm" --set 'effects=["elastic"]'
+  explorer record SCENE -o run.rrd --sweep drive.rpm=200,240,300 && explorer view run.rrd
+  explorer bench assets/scenes/schenker1902_fig2.toml --output-dir out   (accuracy vs CPU time)
+  explorer <command> --help            details of one command
 
-Bad input ends with one line 'error: FILE: KEY: reason' and exit status 2.
+Quantities in scene files carry units ("20 mm", "385 kgf", "2.9 kgf*s**2/m"); a bare number
+means the SI unit of its key, except angles (deg) and drive.rpm (rev/min).
+Bad input ends with one line 'error: FILE: KEY: reason' and exit status 2; nothing is written.
 """
 
 
