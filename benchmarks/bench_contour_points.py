@@ -16,32 +16,12 @@ from __future__ import annotations
 
 import argparse
 import math
-import statistics
-import sys
-import time
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-
-import numpy as np  # noqa: E402
+import numpy as np
+from _timing import baseline_workload, median_time, print_table
 
 COUNTS = (90, 180, 360, 720, 1440, 2880)
-
-
-def median_time(function, repeat: int) -> float:
-    function()
-    samples = []
-    for _ in range(repeat):
-        started = time.perf_counter()
-        function()
-        samples.append(time.perf_counter() - started)
-    return statistics.median(samples)
-
-
-def baseline_workload():
-    x = np.linspace(0.0, 100.0, 1_000_000)
-    return np.cumsum(np.sin(x))[-1]
+HEADER = ["case", "points", "lift err m", "v err", "a err", "j err", "time", "x base"]
 
 
 def main(argv=None) -> int:
@@ -62,28 +42,33 @@ def main(argv=None) -> int:
         "polynomial-4567": LawLift(0.008, 0.5, 1.6, 0.3, 1.6, "polynomial-4567", "polynomial-4567"),
         "cycloidal": LawLift(0.008, 0.5, 1.6, 0.3, 1.6, "cycloidal", "cycloidal"),
     }
-    header = f"{'case':32s} {'points':>6s} {'lift err m':>11s} {'v err':>9s} {'a err':>9s} {'j err':>9s} {'time':>9s} {'x base':>7s}"
+
+    def cells(name, n, errors, seconds):
+        return [name, str(n), *(f"{e:.2e}" for e in errors), f"{seconds * 1e3:.1f}ms", f"{seconds / base:.2f}"]
+
     for name, lift in cases.items():
-        print(header)
+        rows = []
         for row in points_accuracy(lift, 0.03, 0.01, 0.0, counts=COUNTS):
             from explorer.geometry.translating import translating_profile
 
             n = row["points"]
             pts = translating_profile(lift, np.arange(n) * 2 * math.pi / n, 0.03, 0.01, 0.0).contour
             seconds = median_time(lambda: make_parametric_lift(SplineContour(pts), 0.01, 0.0, 0.03).derivatives(theta), args.repeat)
-            print(f"{name:32s} {n:6d} {row['max_lift_error_m']:11.2e} {row['max_velocity_error_rel']:9.2e} "
-                  f"{row['max_accel_error_rel']:9.2e} {row['max_jerk_error_rel']:9.2e} {seconds * 1e3:7.1f}ms {seconds / base:7.2f}")
+            errors = [row[key] for key in ("max_lift_error_m", "max_velocity_error_rel", "max_accel_error_rel", "max_jerk_error_rel")]
+            rows.append(cells(name, n, errors, seconds))
+        print_table(HEADER, rows)
     contour = build_arc_contour(arcs(PAPER_DESIGN))
     exact = make_arc_lift(contour, 0.01, 0.0, PAPER_DESIGN.base_radius)
     want = exact.derivatives(theta)
-    print(header)
+    rows = []
     for n in COUNTS:
         pts = contour.points_by_arc_length(n)
         analysed = make_parametric_lift(SplineContour(pts), 0.01, 0.0, PAPER_DESIGN.base_radius)
         got = analysed.derivatives(theta)
         err = [np.abs(got[k] - want[k]).max() / (np.abs(want[k]).max() if k else 1.0) for k in range(4)]
         seconds = median_time(lambda: make_parametric_lift(SplineContour(pts), 0.01, 0.0, PAPER_DESIGN.base_radius).derivatives(theta), args.repeat)
-        print(f"{'Schenker Fig. 2 arcs':32s} {n:6d} {err[0]:11.2e} {err[1]:9.2e} {err[2]:9.2e} {err[3]:9.2e} {seconds * 1e3:7.1f}ms {seconds / base:7.2f}")
+        rows.append(cells("Schenker Fig. 2 arcs", n, err, seconds))
+    print_table(HEADER, rows)
     arc_seconds = median_time(lambda: make_arc_lift(contour, 0.01, 0.0, PAPER_DESIGN.base_radius).derivatives(theta), args.repeat)
     print(f"the same cam as arcs (closed form, exact): {arc_seconds * 1e3:.2f} ms ({arc_seconds / base:.3f} x base)")
     return 0

@@ -18,23 +18,9 @@ import statistics
 import subprocess
 import sys
 import time
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-
-import numpy as np  # noqa: E402
-
-
-def median_time(function, repeat: int, warmup: int = 2) -> float:
-    for _ in range(warmup):
-        function()
-    samples = []
-    for _ in range(repeat):
-        started = time.perf_counter()
-        function()
-        samples.append(time.perf_counter() - started)
-    return statistics.median(samples)
+import numpy as np
+from _timing import ROOT, baseline_workload, median_time, print_table
 
 
 def fresh_python(code: str, repeat: int) -> float:
@@ -47,12 +33,6 @@ def fresh_python(code: str, repeat: int) -> float:
 
     base = statistics.median(run("pass") for _ in range(repeat))
     return statistics.median(run(code) for _ in range(repeat)) - base
-
-
-def baseline_workload():
-    """A fixed numpy job (1e6 sines and a cumulative sum) as the machine's yardstick."""
-    x = np.linspace(0.0, 100.0, 1_000_000)
-    return np.cumsum(np.sin(x))[-1]
 
 
 def main(argv=None) -> int:
@@ -105,14 +85,11 @@ def main(argv=None) -> int:
         ("table law: spline fit of 360 samples (GCV)", median_time(table_fit, max(5, args.repeat // 3)), None),
     ]
     print(f"baseline (numpy yardstick): {1e3 * base:.2f} ms; python {sys.version.split()[0]}, numpy {np.__version__}")
-    print(f"{'task':<58} {'median':>10} {'target':>9} {'ratio':>6} {'x base':>7}")
-    failed = False
-    for name, seconds, target in rows:
-        target_text = f"{1e3 * target:7.1f}ms" if target else "      -  "
-        ratio = seconds / target if target else float("nan")
-        failed |= bool(target) and ratio > 1.0
-        ratio_text = f"{ratio:6.2f}" if target else "     -"
-        print(f"{name:<58} {1e3 * seconds:8.3f}ms {target_text} {ratio_text} {seconds / base:7.2f}")
+    failed = any(target and seconds > target for _name, seconds, target in rows)
+    print_table(["task", "median", "target", "ratio", "x base"],
+                [(name, f"{1e3 * seconds:.3f}ms", f"{1e3 * target:.1f}ms" if target else "-",
+                  f"{seconds / target:.2f}" if target else "-", f"{seconds / base:.2f}")
+                 for name, seconds, target in rows])
     print("all targets met" if not failed else "SOME TARGETS MISSED")
     return 0
 

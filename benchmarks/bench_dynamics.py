@@ -17,15 +17,11 @@ from __future__ import annotations
 
 import argparse
 import math
-import statistics
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
-
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+from _timing import ROOT, median_times, print_table
 
 CASES = [
     ("valve_float_demo.toml", ['linkage.stiffness="5e6 N/m"']),
@@ -50,23 +46,15 @@ def measure(scene, repeat: int) -> list[tuple[str, float, float]]:
     if n >= schenker1902.min_stable_steps(model, drive.omega):
         runs[f"schenker1902, {n} steps"] = lambda: solve(model, drive, t, method="schenker1902")
     errors = {name: float(np.abs(fn().s - reference.s).max()) for name, fn in runs.items()}  # also the warm-up
-    samples: dict[str, list[float]] = {name: [] for name in runs}
-    for _ in range(repeat):  # alternate, so that load changes hit all alike
-        for name, fn in runs.items():
-            started = time.process_time()
-            fn()
-            samples[name].append(time.process_time() - started)
+    medians = median_times(runs, repeat, warmup=0, clock=time.process_time)
     kinds = sorted({e["kind"] for e in reference.events})
     print(f"\n{scene.name}: {scene.drive.rpm:g} rpm, {n} steps, events {', '.join(kinds)} "
           f"({len(reference.events)}), median CPU of {repeat} runs")
-    print(f"  {'case':<38} {'CPU ms':>9} {'ratio':>8} {'max lift error m':>17}")
-    base = statistics.median(samples[next(iter(runs))])
-    rows = []
-    for name in runs:
-        med = statistics.median(samples[name])
-        print(f"  {name:<38} {1e3 * med:9.2f} {base / med:7.1f}x {errors[name]:17.2e}")
-        rows.append((name, med, errors[name]))
-    return rows
+    base = medians[next(iter(runs))]
+    print_table(["case", "CPU ms", "ratio", "max lift error m"],
+                [(name, f"{1e3 * med:.2f}", f"{base / med:.1f}x", f"{errors[name]:.2e}") for name, med in medians.items()],
+                indent="  ")
+    return [(name, med, errors[name]) for name, med in medians.items()]
 
 
 def main() -> None:

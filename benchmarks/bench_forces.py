@@ -12,22 +12,9 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import time
-from pathlib import Path
 
 import numpy as np
-
-ROOT = Path(__file__).resolve().parent.parent
-
-
-def median_time(fn, repeat: int) -> float:
-    fn()  # warm-up: imports, caches
-    samples = []
-    for _ in range(repeat):
-        started = time.perf_counter()
-        fn()
-        samples.append(time.perf_counter() - started)
-    return statistics.median(samples)
+from _timing import ROOT, median_time, print_table
 
 
 def main() -> None:
@@ -82,10 +69,7 @@ def main() -> None:
                         max(1, args.repeat // 3)) * (len(rpms) / len(few))
     rows.append(("sweep 1000 speeds, simulate() per speed (x50 of 20)", t_sim, t_sim / t_loop))
 
-    width = max(len(r[0]) for r in rows)
-    print(f"{'case':<{width}}  {'median':>12}  {'ratio':>8}")
-    for name, seconds, ratio in rows:
-        print(f"{name:<{width}}  {seconds * 1e3:9.3f} ms  {ratio:8.3f}")
+    print_table(["case", "median", "ratio"], [(name, f"{seconds * 1e3:.3f} ms", f"{ratio:.3f}") for name, seconds, ratio in rows])
     print(f"\nscene: {path.name}, {args.repeat} runs each; sweep target <= 200 ms: "
           f"{'met' if t_vec <= 0.2 else 'MISSED'} ({t_vec * 1e3:.1f} ms)")
 

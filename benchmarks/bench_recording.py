@@ -14,20 +14,16 @@ Rows (median of the repeats; the simulation and the meshes are computed once, ou
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
+from _timing import ROOT, median_time, print_table
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from explorer import load_scene  # noqa: E402
-from explorer.effects import simulate  # noqa: E402
-from explorer.recording import (  # noqa: E402
+from explorer import load_scene
+from explorer.effects import simulate
+from explorer.recording import (
     APP_ID, Run, series_layout, step_indexes, with_parts, write_recordings,
 )
 
@@ -52,15 +48,6 @@ def loop_baseline(path: Path, result) -> None:
     rec.disconnect()
 
 
-def timed(function, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        started = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - started)
-    return statistics.median(times)
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("scene", nargs="?", default=str(ROOT / "assets" / "scenes" / "valve_float_demo.toml"))
@@ -76,18 +63,17 @@ def main(argv=None) -> int:
         out = Path(tmp) / "bench.rrd"
         write_recordings(out, [run_series])  # warm-up: imports, rerun's threads
         rows = [
-            ("columns, series only", timed(lambda: write_recordings(out, [run_series]), args.repeats)),
-            ("columns, with 3D", timed(lambda: write_recordings(out, [run_3d]), args.repeats)),
+            ("columns, series only", median_time(lambda: write_recordings(out, [run_series]), args.repeats, warmup=0)),
+            ("columns, with 3D", median_time(lambda: write_recordings(out, [run_3d]), args.repeats, warmup=0)),
         ]
         size_3d = out.stat().st_size
-        baseline = timed(lambda: loop_baseline(Path(tmp) / "loop.rrd", result), max(1, args.repeats // 2))
+        baseline = median_time(lambda: loop_baseline(Path(tmp) / "loop.rrd", result), max(1, args.repeats // 2),
+                               warmup=0)
     rows.append(("loop (baseline)", baseline))
     n_series = len(series_layout(result.columns))
     print(f"scene {scene.name}: {steps} steps, {n_series} series, {len(run_3d.parts)} parts, "
           f"file {size_3d / 1e6:.1f} MB with 3D; median of {args.repeats}")
-    print(f"{'method':<24s} {'time [s]':>10s} {'ratio':>8s}")
-    for name, seconds in rows:
-        print(f"{name:<24s} {seconds:10.4f} {baseline / seconds:8.1f}")
+    print_table(["method", "time [s]", "ratio"], [(name, f"{seconds:.4f}", f"{baseline / seconds:.1f}") for name, seconds in rows])
     with_3d = rows[1][1]
     verdict = "meets" if with_3d <= TARGET_S else "MISSES"
     print(f"recording with 3D: {with_3d:.3f} s, {verdict} the target of {TARGET_S} s per revolution")

@@ -26,6 +26,7 @@ import io
 import math
 import statistics
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -351,15 +352,31 @@ STYLE = {
 FLOOR_M = 1e-16  # errors of exactly 0 drawn here on the log axis
 
 
-def chart_png(report: BenchReport) -> bytes:
-    """Error versus CPU time, log-log, one series per method, the Pareto front dashed."""
+@contextmanager
+def _figure(*grid, **options):
+    """A matplotlib figure and its axes (off-screen backend), closed however the drawing ends."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(8.0, 5.6), dpi=110)
+    fig, axes = plt.subplots(*grid, **options)
     try:
+        yield fig, axes
+    finally:
+        plt.close(fig)
+
+
+def _png(fig) -> bytes:
+    fig.tight_layout()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png")
+    return buffer.getvalue()
+
+
+def chart_png(report: BenchReport) -> bytes:
+    """Error versus CPU time, log-log, one series per method, the Pareto front dashed."""
+    with _figure(figsize=(8.0, 5.6), dpi=110) as (fig, ax):
         for method, style in STYLE.items():
             rows = [r for r in report.runs if r.method == method]
             if not rows:
@@ -385,24 +402,13 @@ def chart_png(report: BenchReport) -> bytes:
                      f"{report.ratio.ratio:.0f}x: exact at {report.ratio.steps} steps vs DOP853 rtol {RATIO_RTOL:g}", fontsize=10)
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=8, loc="upper right")
-        fig.tight_layout()
-        buffer = io.BytesIO()
-        fig.savefig(buffer, format="png")
-        return buffer.getvalue()
-    finally:
-        plt.close(fig)
+        return _png(fig)
 
 
 def differentiation_png(study) -> bytes:
     """Errors of v and p from a fitted measured lift against the sample count, one line per noise."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     cols = study.columns()
-    fig, axes = plt.subplots(1, 2, figsize=(9.0, 4.0), dpi=110)
-    try:
+    with _figure(1, 2, figsize=(9.0, 4.0), dpi=110) as (fig, axes):
         for ax, key, title in ((axes[0], "relative_velocity_error", "velocity v"), (axes[1], "relative_accel_error", "acceleration p")):
             for sigma in sorted(set(cols["noise_m"].tolist())):
                 sel = cols["noise_m"] == sigma
@@ -416,12 +422,7 @@ def differentiation_png(study) -> bytes:
             ax.grid(True, which="major", alpha=0.3)
         axes[1].legend(fontsize=8)
         fig.suptitle(f"Differentiating a measured lift: {study.reference}, {study.rpm:g} rpm", fontsize=10)
-        fig.tight_layout()
-        buffer = io.BytesIO()
-        fig.savefig(buffer, format="png")
-        return buffer.getvalue()
-    finally:
-        plt.close(fig)
+        return _png(fig)
 
 
 @dataclass

@@ -20,31 +20,10 @@ from explorer.dynamics import schenker1902
 from explorer.dynamics.model import solve
 from explorer.errors import InputError
 from explorer.scene import loads_scene
+from dynamics_cases import float_valve_scene
 
 # A small valve with a soft spring at high speed: lift-off, separations, re-contacts and seat.
-FLOAT_SCENE = """
-name = "bench float test"
-effects = ["kinematics"]
-[drive]
-rpm = 4000
-[lift]
-law = "polynomial-345"
-height = "9.25 mm"
-start = "30 deg"
-rise = "75 deg"
-dwell = "10 deg"
-return = "75 deg"
-[valve]
-mass = "0.10 kg"
-lash = "0.25 mm"
-[spring]
-preload = "220 N"
-rate = "30 N/mm"
-[loads]
-friction = "10 N"
-[linkage]
-stiffness = "5e6 N/m"
-"""
+FLOAT_SCENE = float_valve_scene("bench float test", ["kinematics"], '[linkage]\nstiffness = "5e6 N/m"\n')
 
 
 @pytest.fixture(scope="module")

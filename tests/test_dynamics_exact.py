@@ -15,88 +15,18 @@ import pytest
 
 from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
 from explorer.lift import LawLift
-
-REF = dict(method="scipy", scipy_method="DOP853", rtol=1e-12, atol=1e-15)
-
-
-class ConstantLift:
-    """S = height at every angle (the drive stands still)."""
-
-    def __init__(self, height: float):
-        self.height = height
-
-    def derivatives(self, theta):
-        theta = np.asarray(theta, dtype=float)
-        out = np.zeros((4,) + theta.shape)
-        out[0] = self.height
-        return out
-
-    def breakpoints(self):
-        return np.zeros(0)
-
-
-class RampStopLift:
-    """L = base + slope*theta up to theta_stop, then constant: a drive that stops dead."""
-
-    def __init__(self, base: float, slope: float, theta_stop: float):
-        self.base, self.slope, self.theta_stop = base, slope, theta_stop
-
-    def derivatives(self, theta):
-        theta = np.asarray(theta, dtype=float)
-        out = np.zeros((4,) + theta.shape)
-        moving = theta < self.theta_stop
-        out[0] = self.base + self.slope * np.where(moving, theta, self.theta_stop)
-        out[1] = np.where(moving, self.slope, 0.0)
-        return out
-
-    def breakpoints(self):
-        return np.array([self.theta_stop])
-
-
-class BumpLift:
-    """A smooth narrow Gaussian bump of the drive, no breakpoints (a trap for event detection)."""
-
-    def __init__(self, height: float, centre: float, width: float, base: float = 0.0):
-        self.height, self.centre, self.width, self.base = height, centre, width, base
-
-    def derivatives(self, theta):
-        theta = np.asarray(theta, dtype=float)
-        z = (theta - self.centre) / self.width
-        g = self.height * np.exp(-0.5 * z * z)
-        w = self.width
-        return np.stack([self.base + g, -z / w * g, (z * z - 1.0) / w**2 * g, (3.0 * z - z**3) / w**3 * g])
-
-    def breakpoints(self):
-        return np.zeros(0)
-
-
-class OffsetLift:
-    """base + lift(theta): a follower on a raised base circle (the valve starts pre-lifted)."""
-
-    def __init__(self, base: float, lift):
-        self.base, self.lift = base, lift
-
-    def derivatives(self, theta):
-        out = self.lift.derivatives(theta)
-        out[0] = out[0] + self.base
-        return out
-
-    def breakpoints(self):
-        return self.lift.breakpoints()
+from dynamics_cases import (KGF, REF, BumpLift, ConstantLift, flight_case, friction_apex, revolution,
+                            rise_in_contact, stopping_drive)
 
 
 def schenker_like(k_factor: float = 1.0, rpm: float = 240.0, friction_kgf: float = 35.0, restitution: float = 0.0):
     """Schenker's Fig. 4 numbers (kgf, technical mass units) on an analytic 160 deg harmonic flank."""
-    g = 9.80665
+    g = KGF
     lift = LawLift(height=0.0206, start=math.radians(20), rise=math.radians(80), dwell=0.0,
                    ret=math.radians(80), rise_law="harmonic", return_law="harmonic")
     model = LinkageModel(mass=2.9 * g, oscillating_mass=2.6 * g, stiffness=k_factor * 1.8e6 * g, lash=0.6e-3,
                          preload=260 * g, friction=friction_kgf * g, closing_load=90 * g, restitution=restitution)
     return model, Drive(lift, 1.0, rpm * math.pi / 30.0)
-
-
-def revolution(drive, n):
-    return np.arange(n) * (2.0 * math.pi / drive.omega / n)
 
 
 @pytest.mark.parametrize("zeta", [0.0, 0.05, 1.0, 3.0])
@@ -138,11 +68,7 @@ def test_contact_free_vibration_matches_the_damped_oscillator(zeta):
 
 
 def test_flight_is_a_parabola_and_the_landing_time_its_root():
-    M, W = 0.2, 300.0
-    model = LinkageModel(mass=M, oscillating_mass=M, stiffness=1e6, preload=W)
-    drive = Drive(ConstantLift(0.0), 1.0, 10.0)
-    s0, v0, g = 1.0e-3, 2.0, W / M
-    t_land = (v0 + math.sqrt(v0 * v0 + 2 * g * s0)) / g
+    model, drive, (s0, v0), g, t_land = flight_case()
     t = np.linspace(0.0, 2 * t_land, 1001)
     sol = solve(model, drive, t, initial_state=(s0, v0))
     flying = t < t_land
@@ -158,68 +84,41 @@ def test_flight_is_a_parabola_and_the_landing_time_its_root():
 
 
 def test_drive_stopping_dead_gives_closed_form_separation_and_re_contact():
-    # At constant drive speed V the valve follows with steady compression W/k. When the drive
-    # stops, the valve oscillates about H - W/k with amplitude V/omega (omega with M1),
-    # separates when k x = 0, flies under W/M (a parabola) and meets the linkage again at s = H.
-    k, M, m1, W = 1.0e6, 0.3, 0.25, 200.0
-    omega_cam, slope, theta_stop = 100.0, 1.0e-2, 0.5
-    model = LinkageModel(mass=M, oscillating_mass=m1, stiffness=k, preload=W)
-    drive = Drive(RampStopLift(1e-3, slope, theta_stop), 1.0, omega_cam)
-    V, t1 = slope * omega_cam, theta_stop / omega_cam
-    H = 1e-3 + slope * theta_stop
-    w = math.sqrt(k / m1)
-    A = V / w
-    tau_sep = math.asin(W / (k * A)) / w
-    t_sep = t1 + tau_sep
-    s_sep, v_sep = H - W / k + A * math.sin(w * tau_sep), V * math.cos(w * tau_sep)
-    g = W / M
-    tau_fly = (v_sep + math.sqrt(v_sep**2 - 2 * g * (H - s_sep))) / g
-    t_re = t_sep + tau_fly
-    t = np.linspace(0.0, t_re + 0.2 * (t_re - t1), 4001)
-    sol = solve(model, drive, t, initial_state=(1e-3 - W / k, V))
+    # the drive stops dead; separation, flight and re-contact in closed form (see stopping_drive)
+    case = stopping_drive()
+    t, t1, t_sep, t_re = case.t, case.t1, case.t_sep, case.t_re
+    sol = solve(case.model, case.drive, t, initial_state=case.start)
     assert [e["kind"] for e in sol.events[:2]] == ["separation", "re-contact"]
     assert sol.events[0]["time_s"] == pytest.approx(t_sep, abs=1e-15)
     assert sol.events[1]["time_s"] == pytest.approx(t_re, abs=2e-15)
     flying = (t > t_sep) & (t < t_re)
-    tau = t[flying] - t_sep
     # rounding of the carried state over 4000 steps: ~n eps |s| = 5e-15 m on s = 6 mm
-    np.testing.assert_allclose(sol.s[flying], s_sep + v_sep * tau - 0.5 * g * tau**2, rtol=0, atol=5e-15)
+    np.testing.assert_allclose(sol.s[flying], case.flight(t[flying]), rtol=0, atol=5e-15)
     assert not sol.contact[flying].any() and np.all(sol.phase[flying] == PHASE_CODES["flight"])
     before = (t > t1) & (t < t_sep)
-    np.testing.assert_allclose(sol.s[before], H - W / k + A * np.sin(w * (t[before] - t1)), rtol=0, atol=5e-15)
+    np.testing.assert_allclose(sol.s[before], case.oscillation(t[before]), rtol=0, atol=5e-15)
 
 
 def _residual_amplitude(rise_law: str, r: float):
-    """Amplitude of the free vibration after a rise of duration r Tn, the valve kept in contact
-    (W = k base holds it on the raised base circle exactly; undamped, M1 = M)."""
-    k, m1, h, base = 4.0e6, 1.0, 2.0e-3, 5.0e-3
-    w = math.sqrt(k / m1)
-    Tn = 2 * math.pi / w
-    omega_cam = 0.5 / (r * Tn)  # the rise spans 0.5 rad of cam angle
-    lift = LawLift(height=h, start=0.1, rise=0.5, dwell=4.0, ret=0.5, rise_law=rise_law, return_law=rise_law)
-    model = LinkageModel(mass=m1, oscillating_mass=m1, stiffness=k, preload=k * base)
-    drive = Drive(OffsetLift(base, lift), 1.0, omega_cam)
-    t_dwell = 0.6 / omega_cam
-    t = np.linspace(0.0, t_dwell + 3 * Tn, 3001)
-    sol = solve(model, drive, t)
-    dwell = t > t_dwell
-    y, yd = sol.s[dwell] - h, sol.v[dwell]
-    return np.sqrt(y * y + (yd / w) ** 2), h, sol
+    """Amplitude of the free vibration after a rise of duration r Tn (see rise_in_contact)."""
+    case = rise_in_contact(rise_law, r)
+    t = np.linspace(0.0, case.t_dwell + 3 * case.Tn, 3001)
+    sol = solve(case.model, case.drive, t)
+    return case.amplitude(sol, t), case, sol
 
 
 @pytest.mark.parametrize("r", [0.5, 1.0, 1.5, 2.0, 2.7])
 def test_residual_vibration_after_a_cycloidal_rise(r):
-    amplitude, h, sol = _residual_amplitude("cycloidal", r)
-    expected = h * (0.5 if r == 1.0 else abs(math.sin(math.pi * r)) / (math.pi * r * abs(1 - r * r)))
-    assert np.abs(amplitude - expected).max() < 1e-14  # h = 2 mm
+    amplitude, case, sol = _residual_amplitude("cycloidal", r)
+    assert np.abs(amplitude - case.cycloidal_amplitude).max() < 1e-14  # h = 2 mm
     assert [e["kind"] for e in sol.events] == ["lift-off"]
 
 
 @pytest.mark.parametrize("r", [0.7, 1.3, 2.2])
 def test_residual_vibration_after_a_345_rise(r):
-    amplitude, h, _ = _residual_amplitude("polynomial-345", r)
+    amplitude, case, _ = _residual_amplitude("polynomial-345", r)
     lam = 2 * math.pi * r
-    expected = h * 120 * abs((12 - lam**2) * math.sin(lam / 2) - 6 * lam * math.cos(lam / 2)) / lam**5
+    expected = case.h * 120 * abs((12 - lam**2) * math.sin(lam / 2) - 6 * lam * math.cos(lam / 2)) / lam**5
     assert np.abs(amplitude - expected).max() < 1e-14
 
 
@@ -269,21 +168,15 @@ def test_coulomb_friction_in_contact_loses_2R_over_K_per_half_cycle_and_sticks()
 
 @pytest.mark.parametrize("preload", [30.0, 80.0])
 def test_coulomb_friction_at_the_flight_apex_sticks_or_slips(preload):
-    M, mu, v0 = 0.1, 50.0, 1.0
-    model = LinkageModel(mass=M, oscillating_mass=M, stiffness=1e6, preload=preload, friction=mu)
-    drive = Drive(ConstantLift(0.0), 1.0, 10.0)
-    g_up = (preload + mu) / M
-    t_top, top = v0 / g_up, v0 * v0 / (2 * g_up)
-    t = np.linspace(0.0, 4 * t_top, 2001)
-    sol = solve(model, drive, t, initial_state=(0.0, v0))
-    after = t > t_top
-    if preload <= mu:
-        np.testing.assert_allclose(sol.s[after], top, rtol=1e-15)
+    case = friction_apex(preload)
+    t = np.linspace(0.0, 4 * case.t_top, 2001)
+    sol = solve(case.model, case.drive, t, initial_state=case.start)
+    after = t > case.t_top
+    if case.sticks:
+        np.testing.assert_allclose(sol.s[after], case.top, rtol=1e-15)
         assert np.all(sol.v[after] == 0.0) and np.all(sol.phase[after] == PHASE_CODES["stuck"])
     else:
-        tau = t[after] - t_top
-        expected = np.maximum(top - 0.5 * (preload - mu) / M * tau**2, 0.0)
-        np.testing.assert_allclose(sol.s[after], expected, rtol=0, atol=1e-16)
+        np.testing.assert_allclose(sol.s[after], case.fall(t[after]), rtol=0, atol=1e-16)
 
 
 def test_a_narrow_bump_between_two_output_times_is_caught():

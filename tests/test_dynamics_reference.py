@@ -18,75 +18,8 @@ import pytest
 
 from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
 from explorer.lift import LawLift
-
-
-class ConstantLift:
-    """S = height at every angle (the drive stands still)."""
-
-    def __init__(self, height: float):
-        self.height = height
-
-    def derivatives(self, theta):
-        theta = np.asarray(theta, dtype=float)
-        out = np.zeros((4,) + theta.shape)
-        out[0] = self.height
-        return out
-
-    def breakpoints(self):
-        return np.zeros(0)
-
-
-class RampStopLift:
-    """L = base + slope*theta up to theta_stop, then constant: a drive that stops dead."""
-
-    def __init__(self, base: float, slope: float, theta_stop: float):
-        self.base, self.slope, self.theta_stop = base, slope, theta_stop
-
-    def derivatives(self, theta):
-        theta = np.asarray(theta, dtype=float)
-        out = np.zeros((4,) + theta.shape)
-        moving = theta < self.theta_stop
-        out[0] = self.base + self.slope * np.where(moving, theta, self.theta_stop)
-        out[1] = np.where(moving, self.slope, 0.0)
-        return out
-
-    def breakpoints(self):
-        return np.array([self.theta_stop])
-
-
-class BumpLift:
-    """A smooth, narrow Gaussian bump of the drive with no breakpoints (a trap for event detection)."""
-
-    def __init__(self, height: float, centre: float, width: float):
-        self.height, self.centre, self.width = height, centre, width
-
-    def derivatives(self, theta):
-        theta = np.asarray(theta, dtype=float)
-        z = (theta - self.centre) / self.width
-        g = self.height * np.exp(-0.5 * z * z)
-        w = self.width
-        return np.stack([g, -z / w * g, (z * z - 1.0) / w**2 * g, (3.0 * z - z**3) / w**3 * g])
-
-    def breakpoints(self):
-        return np.zeros(0)
-
-
-class OffsetLift:
-    """base + lift(theta): a follower that sits on a raised base circle."""
-
-    def __init__(self, base: float, lift):
-        self.base, self.lift = base, lift
-
-    def derivatives(self, theta):
-        out = self.lift.derivatives(theta)
-        out[0] = out[0] + self.base
-        return out
-
-    def breakpoints(self):
-        return self.lift.breakpoints()
-
-
-REF = dict(method="scipy", scipy_method="DOP853", rtol=1e-12, atol=1e-15)
+from dynamics_cases import (REF, SCHENKER, BumpLift, ConstantLift, flight_case, friction_apex, rise_in_contact,
+                            schenker_drive, stopping_drive)
 
 
 def test_free_vibration_in_contact_is_the_exact_sinusoid():
@@ -109,11 +42,7 @@ def test_free_vibration_in_contact_is_the_exact_sinusoid():
 
 
 def test_flight_is_a_parabola_and_the_landing_time_is_its_root():
-    M, W = 0.2, 300.0  # deceleration W/M = 1500 m/s^2
-    model = LinkageModel(mass=M, oscillating_mass=M, stiffness=1e6, preload=W)
-    drive = Drive(ConstantLift(0.0), 1.0, 10.0)
-    s0, v0, g = 1.0e-3, 2.0, W / M
-    t_land = (v0 + math.sqrt(v0 * v0 + 2 * g * s0)) / g
+    model, drive, (s0, v0), g, t_land = flight_case()
     t = np.linspace(0.0, 2 * t_land, 1001)
     sol = solve(model, drive, t, initial_state=(s0, v0), **REF)
     flying = t < t_land
@@ -127,38 +56,19 @@ def test_flight_is_a_parabola_and_the_landing_time_is_its_root():
 
 
 def test_drive_stopping_dead_gives_closed_form_separation_and_re_contact():
-    # At constant drive speed V the valve follows with the steady compression W/k. When the
-    # drive stops, the valve oscillates about H - W/k with amplitude V/omega (omega with M1),
-    # separates when k x = 0, i.e. omega tau = asin(W/(k V/omega)), flies under W/M and
-    # touches the linkage again when s = H.
-    k, M, m1, W = 1.0e6, 0.3, 0.25, 200.0
-    omega_cam, slope, theta_stop = 100.0, 1.0e-2, 0.5  # V = 1 m/s, stops at t1 = 5 ms
-    model = LinkageModel(mass=M, oscillating_mass=m1, stiffness=k, preload=W)
-    drive = Drive(RampStopLift(1e-3, slope, theta_stop), 1.0, omega_cam)
-    V, t1 = slope * omega_cam, theta_stop / omega_cam
-    H = 1e-3 + slope * theta_stop
-    w = math.sqrt(k / m1)
-    A = V / w
-    tau_sep = math.asin(W / (k * A)) / w
-    t_sep = t1 + tau_sep
-    s_sep, v_sep = H - W / k + A * math.sin(w * tau_sep), V * math.cos(w * tau_sep)
-    g = W / M
-    # flight: s = s_sep + v_sep tau - g tau^2 / 2 meets H (x = 0) again
-    tau_fly = (v_sep + math.sqrt(v_sep**2 - 2 * g * (H - s_sep))) / g
-    t_re = t_sep + tau_fly
-    t = np.linspace(0.0, t_re + 0.2 * (t_re - t1), 4001)
-    sol = solve(model, drive, t, initial_state=(1e-3 - W / k, V), **REF)
+    # the drive stops dead; separation, flight and re-contact in closed form (see stopping_drive)
+    case = stopping_drive()
+    t, t1, t_sep, t_re = case.t, case.t1, case.t_sep, case.t_re
+    sol = solve(case.model, case.drive, t, initial_state=case.start, **REF)
     kinds = [e["kind"] for e in sol.events]
     assert kinds[:2] == ["separation", "re-contact"]
     assert sol.events[0]["time_s"] == pytest.approx(t_sep, abs=1e-13)
     assert sol.events[1]["time_s"] == pytest.approx(t_re, abs=1e-13)
     flying = (t > t_sep) & (t < t_re)
-    tau = t[flying] - t_sep
-    np.testing.assert_allclose(sol.s[flying], s_sep + v_sep * tau - 0.5 * g * tau**2, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(sol.s[flying], case.flight(t[flying]), rtol=0, atol=1e-13)
     assert not sol.contact[flying].any() and np.all(sol.linkage_force[flying] == 0.0)
     before = (t > t1) & (t < t_sep)
-    exact = H - W / k + A * np.sin(w * (t[before] - t1))
-    np.testing.assert_allclose(sol.s[before], exact, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(sol.s[before], case.oscillation(t[before]), rtol=0, atol=1e-13)
 
 
 @pytest.mark.parametrize("r", [0.5, 1.0, 1.5, 2.0, 2.7])
@@ -166,27 +76,15 @@ def test_residual_vibration_after_a_cycloidal_rise(r):
     # Kept in contact (W = k*base holds the valve on its seat exactly until the rise begins),
     # y = s - L obeys M1 y'' + k y = -M1 L'': after a cycloidal rise of duration r Tn the free
     # vibration has amplitude A = h |sin pi r| / (pi r |1 - r^2|) (zero at integer r >= 2).
-    k, m1, h, base = 4.0e6, 1.0, 2.0e-3, 5.0e-3
-    w = math.sqrt(k / m1)
-    Tn = 2 * math.pi / w
-    rise_time = r * Tn
-    omega_cam = 0.5 / rise_time  # rise over 0.5 rad of cam angle
-    lift = LawLift(height=h, start=0.1, rise=0.5, dwell=4.0, ret=0.5, rise_law="cycloidal", return_law="cycloidal")
-    model = LinkageModel(mass=m1, oscillating_mass=m1, stiffness=k, preload=k * base)
-    drive = Drive(OffsetLift(base, lift), 1.0, omega_cam)
-    t_dwell = 0.6 / omega_cam
-    t = np.linspace(0.0, t_dwell + 3 * Tn, 3001)
-    sol = solve(model, drive, t, **REF)
+    case = rise_in_contact("cycloidal", r)
+    t = np.linspace(0.0, case.t_dwell + 3 * case.Tn, 3001)
+    sol = solve(case.model, case.drive, t, **REF)
     assert sol.events[0]["kind"] == "lift-off"
     # the cycloid starts as u^3: below u ~ 3e-6 of the rise the lift vanishes next to `base` in
     # floating point, so the computed lift-off may lag the start of the rise by that much
-    assert sol.events[0]["time_s"] == pytest.approx(0.1 / omega_cam, abs=1e-5 * rise_time)
-    dwell = t > t_dwell
-    y, yd = sol.s[dwell] - h, sol.v[dwell]
-    amplitude = np.sqrt(y * y + (yd / w) ** 2)
-    expected = h * (0.5 if r == 1.0 else abs(math.sin(math.pi * r)) / (math.pi * r * abs(1 - r * r)))
-    assert np.abs(amplitude - expected).max() < 1e-12  # h = 2 mm: ~5e-10 relative
-    assert sol.contact[dwell].all()
+    assert sol.events[0]["time_s"] == pytest.approx(case.t_start, abs=1e-5 * r * case.Tn)
+    assert np.abs(case.amplitude(sol, t) - case.cycloidal_amplitude).max() < 1e-12  # h = 2 mm: ~5e-10 relative
+    assert sol.contact[t > case.t_dwell].all()
 
 
 def test_restitution_bounces_are_geometric_and_end_before_accumulation():
@@ -213,35 +111,25 @@ def test_restitution_bounces_are_geometric_and_end_before_accumulation():
 
 @pytest.mark.parametrize("preload", [30.0, 80.0])
 def test_coulomb_friction_sticks_or_slips_at_the_apex(preload):
-    # Up: deceleration (W + mu)/M to the apex. There the net force is -W: with W <= mu the valve
-    # sticks for good, otherwise it falls with deceleration (W - mu)/M.
-    M, mu, v0 = 0.1, 50.0, 1.0
-    model = LinkageModel(mass=M, oscillating_mass=M, stiffness=1e6, preload=preload, friction=mu)
-    drive = Drive(ConstantLift(0.0), 1.0, 10.0)
-    g_up = (preload + mu) / M
-    t_top = v0 / g_up
-    top = v0 * v0 / (2 * g_up)
-    t = np.linspace(0.0, 4 * t_top, 2001)
-    sol = solve(model, drive, t, initial_state=(0.0, v0), **REF)
-    after = t > t_top
-    if preload <= mu:
-        np.testing.assert_allclose(sol.s[after], top, rtol=1e-13)
+    # sticks at the apex when W <= mu, else falls with deceleration (W - mu)/M (friction_apex)
+    case = friction_apex(preload)
+    t = np.linspace(0.0, 4 * case.t_top, 2001)
+    sol = solve(case.model, case.drive, t, initial_state=case.start, **REF)
+    after = t > case.t_top
+    if case.sticks:
+        np.testing.assert_allclose(sol.s[after], case.top, rtol=1e-13)
         assert np.all(sol.v[after] == 0.0) and np.all(sol.phase[after] == PHASE_CODES["stuck"])
     else:
-        g_down = (preload - mu) / M
-        tau = t[after] - t_top
-        expected = np.maximum(top - 0.5 * g_down * tau**2, 0.0)
-        np.testing.assert_allclose(sol.s[after], expected, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(sol.s[after], case.fall(t[after]), rtol=0, atol=1e-14)
 
 
 @pytest.mark.parametrize("method", ["RK45", "Radau", "LSODA"])
 def test_other_methods_agree_with_dop853(method):
-    k, M, m1, W = 1.0e6, 0.3, 0.25, 200.0
-    model = LinkageModel(mass=M, oscillating_mass=m1, stiffness=k, preload=W)
-    drive = Drive(RampStopLift(1e-3, 1e-2, 0.5), 1.0, 100.0)
+    case = stopping_drive()  # separation and re-contact
+    model, drive, start = case.model, case.drive, case.start
     t = np.linspace(0.0, 0.008, 801)
-    ref = solve(model, drive, t, initial_state=(1e-3 - W / k, 1.0), **REF)
-    other = solve(model, drive, t, initial_state=(1e-3 - W / k, 1.0), method="scipy", scipy_method=method, rtol=1e-10, atol=1e-14)
+    ref = solve(model, drive, t, initial_state=start, **REF)
+    other = solve(model, drive, t, initial_state=start, method="scipy", scipy_method=method, rtol=1e-10, atol=1e-14)
     # rtol 1e-10 on a 6 mm lift through separation and re-contact: ~1e-9 m, LSODA/Radau a bit worse
     assert np.abs(other.s - ref.s).max() < 1e-7
     assert [e["kind"] for e in other.events] == [e["kind"] for e in ref.events]
@@ -308,10 +196,7 @@ def test_watching_event_extrema_finds_a_short_flight_inside_one_step():
     # DOP853 at rtol 1e-10 steps ~1 ms there; plain sign-change detection sees the separation
     # force positive at both ends of the step and misses the flight (and its 6 um aftermath);
     # watching the force's minimum finds it.
-    kgf = 9.80665
-    model = LinkageModel(mass=2.9 * kgf, oscillating_mass=2.6 * kgf, stiffness=1.8e6 * kgf, preload=385.0 * kgf)
-    lift = LawLift(height=0.0206, start=0.2, rise=1.4, dwell=0.0, ret=1.4, rise_law="harmonic", return_law="harmonic")
-    drive = Drive(lift, 1.0, 2 * math.pi * 400 / 60)
+    model, drive = SCHENKER, schenker_drive(400)
     t = np.linspace(0.0, 2 * math.pi / drive.omega, 3601)
     ref = solve(model, drive, t, **REF)
     watched = solve(model, drive, t, method="scipy", rtol=1e-10, atol=1e-13)

@@ -17,39 +17,7 @@ import pytest
 from explorer.dynamics import schenker1902 as sch
 from explorer.dynamics.model import Drive, LinkageModel, solve
 from explorer.lift import LawLift
-
-KGF = 9.80665  # the paper's kg (force) in N; its mass unit kgf s^2/m in kg
-
-
-class ConstantLift:
-    def __init__(self, height: float):
-        self.height = height
-
-    def derivatives(self, theta):
-        theta = np.asarray(theta, dtype=float)
-        out = np.zeros((4,) + theta.shape)
-        out[0] = self.height
-        return out
-
-    def breakpoints(self):
-        return np.zeros(0)
-
-
-class OffsetLift:
-    def __init__(self, base: float, lift):
-        self.base, self.lift = base, lift
-
-    def derivatives(self, theta):
-        out = self.lift.derivatives(theta)
-        out[0] = out[0] + self.base
-        return out
-
-    def breakpoints(self):
-        return self.lift.breakpoints()
-
-
-# Schenker's gear (section 3): M = 2.9, M1 = 2.6 (technical units), k = 1 800 000 kg/m, W = 385 kg.
-SCHENKER = LinkageModel(mass=2.9 * KGF, oscillating_mass=2.6 * KGF, stiffness=1.8e6 * KGF, preload=385.0 * KGF)
+from dynamics_cases import KGF, SCHENKER, ConstantLift, flight_case, rise_in_contact, schenker_drive
 
 
 def free_vibration(h_over_tn: float, steps: int, variant="printed", deviation=(1e-4, 0.0), allow_unstable=False):
@@ -99,11 +67,7 @@ def test_free_vibration_converges_at_second_order():
 
 
 def test_flight_parabola_is_exact_and_landing_is_seen_at_the_next_step_end():
-    M, W = 0.2, 300.0
-    model = LinkageModel(mass=M, oscillating_mass=M, stiffness=1e6, preload=W)
-    drive = Drive(ConstantLift(0.0), 1.0, 10.0)
-    s0, v0, g = 1e-3, 2.0, W / M
-    t_land = (v0 + math.sqrt(v0 * v0 + 2 * g * s0)) / g
+    model, drive, (s0, v0), g, t_land = flight_case()
     t = np.linspace(0.0, 2 * t_land, 401)
     sol = solve(model, drive, t, method="schenker1902", initial_state=(s0, v0))
     flying = t < t_land
@@ -118,21 +82,13 @@ def test_flight_parabola_is_exact_and_landing_is_seen_at_the_next_step_end():
 
 @pytest.mark.parametrize("r", [0.5, 1.5, 2.0])
 def test_residual_vibration_after_a_cycloidal_rise_converges_to_the_closed_form(r):
-    k, m1, h, base = 4.0e6, 1.0, 2.0e-3, 5.0e-3
-    w = math.sqrt(k / m1)
-    Tn = 2 * math.pi / w
-    omega_cam = 0.5 / (r * Tn)
-    lift = LawLift(height=h, start=0.1, rise=0.5, dwell=4.0, ret=0.5, rise_law="cycloidal", return_law="cycloidal")
-    model = LinkageModel(mass=m1, oscillating_mass=m1, stiffness=k, preload=k * base)
-    drive = Drive(OffsetLift(base, lift), 1.0, omega_cam)
-    expected = h * abs(math.sin(math.pi * r)) / (math.pi * r * abs(1 - r * r))
+    case = rise_in_contact("cycloidal", r)
+    h, Tn = case.h, case.Tn
     errors = []
     for per_period in (40, 80, 160):
-        t = np.arange(0.0, 0.6 / omega_cam + 3 * Tn, Tn / per_period)
-        sol = solve(model, drive, t, method="schenker1902")
-        dwell = t > 0.6 / omega_cam
-        y, yd = sol.s[dwell] - h, sol.v[dwell]
-        errors.append(np.abs(np.sqrt(y * y + (yd / w) ** 2) - expected).max())
+        t = np.arange(0.0, case.t_dwell + 3 * Tn, Tn / per_period)
+        sol = solve(case.model, case.drive, t, method="schenker1902")
+        errors.append(np.abs(case.amplitude(sol, t) - case.cycloidal_amplitude).max())
     # lift-off seen one step late costs O(h^3) of lift; the rest of the error is O(h^2)
     assert errors[-1] < 2e-4 * h
     assert errors[0] / errors[1] > 3.0 and errors[1] / errors[2] > 3.0, errors
@@ -199,12 +155,6 @@ def test_refuses_an_unstable_step_and_names_the_steps_needed():
     sol = solve(model, drive, np.linspace(0.0, revolution, needed + 1), method="schenker1902")
     assert sol.stats["step_over_period"] < sch.stability_limit()
     assert needed > 3600 and sch.min_stable_steps(model, drive.omega, "newmark") > 3600
-
-
-def schenker_drive(rpm: float) -> Drive:
-    """Schenker's 20.6 mm of roller lift on a harmonic cam, 80 deg up and 80 deg down."""
-    lift = LawLift(height=0.0206, start=0.2, rise=1.4, dwell=0.0, ret=1.4, rise_law="harmonic", return_law="harmonic")
-    return Drive(lift, 1.0, 2 * math.pi * rpm / 60)
 
 
 def test_schenker_gear_lift_off_flight_deceleration_and_paper_masses():

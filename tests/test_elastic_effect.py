@@ -18,37 +18,18 @@ from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
 from explorer.effects import simulate
 from explorer.lift import build_lift
 from explorer.scene import loads_scene
+from dynamics_cases import float_valve_scene
 
-SCENE = """
-name = "elastic test"
-effects = ["elastic"]
-[drive]
-rpm = 4000
-[lift]
-law = "polynomial-345"
-height = "9.25 mm"
-start = "30 deg"
-rise = "75 deg"
-dwell = "10 deg"
-return = "75 deg"
+SCENE = float_valve_scene("elastic test", ["elastic"], """[loads.closing]
+gas = "15 N"
 [follower]
 base_radius = "30 mm"
 roller_radius = "12 mm"
-[valve]
-mass = "0.10 kg"
-lash = "0.25 mm"
-[spring]
-preload = "220 N"
-rate = "30 N/mm"
-[loads]
-friction = "10 N"
-[loads.closing]
-gas = "15 N"
 [linkage]
 stiffness = "3e6 N/m"
 [seat]
 restitution = 0.3
-"""
+""")
 
 
 @pytest.fixture(scope="module")

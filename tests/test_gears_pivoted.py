@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 from explorer.errors import InputError
+from explorer.gears import jet as J
 from explorer.gears.linkage import RockerDrive
 from explorer.gears.pivoted import (
     PivotedRollerGear,
     analyse_contour,
     analyse_pitch,
-    reparametrise,
 )
 from explorer.lift import LawLift, build_lift
 from explorer.scene import load_scene
@@ -97,7 +97,7 @@ def test_seed_004_arcs_about_O_and_O1_give_back_cam_angle_and_lever_angle(gear):
     px, py = gear.pitch(phi)
     theta, psi = analyse_pitch(px, py, gear.pivot, gear.arm, gear.branch)
     assert np.max(np.abs(np.angle(np.exp(1j * (theta.c[0] - phi))))) < 1e-12
-    psi_t = reparametrise(theta, psi)
+    psi_t = J.reparametrize(psi, theta)
     want = gear.lever_angle(phi)
     for k, tol in ((0, 1e-12), (1, 1e-10), (2, 1e-8), (3, 1e-6)):
         assert np.max(np.abs(psi_t.c[k] - want.c[k])) < tol * max(1.0, np.abs(want.c[k]).max()), k

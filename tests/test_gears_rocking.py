@@ -23,6 +23,19 @@ SCENE = Path(__file__).resolve().parent.parent / "assets" / "scenes" / "rocking_
 TWO_PI = 2.0 * math.pi
 
 
+class GearLift:
+    """A rocking gear's lift jet as a lift curve, for kinematics.lash_crossings."""
+
+    def __init__(self, gear):
+        self.gear = gear
+
+    def derivatives(self, th):
+        return self.gear.lift_jet(np.asarray(th)).c
+
+    def breakpoints(self):
+        return self.gear.flank_angles()
+
+
 def make_gear(drive, rise=0.012, lift_start=math.radians(12), flank=math.radians(26)):
     contour = RockingContour(dwell_radius=0.075, rise=rise, lift_start=lift_start, flank=flank, law="cycloidal", sense=1)
     lever_pivot, arm = (0.35, 0.78), 0.2
@@ -129,14 +142,7 @@ def test_four_bar_timing_asymmetry_is_fixed_by_the_linkage(gear):
     Checked at the valve's opening and closing angles, found on the analytic lift."""
     from explorer.kinematics import lash_crossings
 
-    class Lift:
-        def derivatives(self, th):
-            return gear.lift_jet(np.asarray(th)).c
-
-        def breakpoints(self):
-            return gear.flank_angles()
-
-    ups, downs = lash_crossings(Lift(), 1.0, 0.0005)
+    ups, downs = lash_crossings(GearLift(gear), 1.0, 0.0005)
     td = gear.dead_centre
     measured = np.angle(np.exp(1j * (ups[0] + downs[0] - 2 * td)))
     chi_open = gear.drive.angle(ups)[0]
@@ -232,14 +238,7 @@ def test_fit_contour_reaches_target_lift_and_open_angle(gear):
     fitted = fit_contour(gear, target_lift=0.010, target_open_angle=math.radians(150.0), lash=0.0005)
     from explorer.kinematics import lash_crossings
 
-    class Lift:
-        def derivatives(self, th):
-            return fitted.lift_jet(np.asarray(th)).c
-
-        def breakpoints(self):
-            return fitted.flank_angles()
-
-    ups, downs = lash_crossings(Lift(), 1.0, 0.0005)
+    ups, downs = lash_crossings(GearLift(fitted), 1.0, 0.0005)
     open_angle = np.mod(downs[0] - ups[0], TWO_PI)
     top = fitted.lift_jet(np.array([fitted.dead_centre])).c[0][0] - 0.0005
     assert top == pytest.approx(0.010, rel=1e-8)

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from explorer.geometry import jets
+from explorer import jets
 from explorer.geometry.arcs import Arc, ContourError, build_arc_contour, make_arc_lift
 from explorer.geometry.parametric import SplineContour, make_parametric_lift
 from explorer.geometry.schenker_fig2 import PAPER_DESIGN, arcs as schenker_arcs

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
 from explorer.lift import LawLift
-from test_dynamics_exact import REF, BumpLift, ConstantLift, revolution
+from dynamics_cases import REF, BumpLift, ConstantLift, revolution
 
 
 def automotive(k=2e6, lash=0.3e-3, rpm=3000.0, preload=250.0, rate=25e3, friction=0.0, e=0.0, damping=0.0,

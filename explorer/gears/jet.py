@@ -10,11 +10,17 @@ A Jet holds `c`, an array of shape (4, ...): c[k] = d^k f / dx^k for one indepen
 (the cam angle, or whatever the caller seeds with `Jet.variable`). Plain floats and arrays act
 as constants. `solve_implicit` extends jets through equations F(y, x) = 0 (loop closures, cam
 contact) by Newton's method on the jets themselves.
+
+The arithmetic itself (Leibniz, Faa di Bruno, atan2, the inverse-function rule) is explorer.jets,
+shared with the cam geometry; this module adds the operators, the elementary functions' own
+derivatives and the solvers.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from .. import jets
 
 ORDER = 3
 
@@ -37,11 +43,9 @@ class Jet:
     @staticmethod
     def variable(value) -> "Jet":
         """The independent variable itself: derivative 1, higher derivatives 0."""
-        value = np.asarray(value, dtype=float)
-        c = np.zeros((ORDER + 1,) + value.shape)
-        c[0] = value
-        c[1] = 1.0
-        return Jet(c)
+        x = Jet.constant(value)
+        x.c[1] = 1.0
+        return x
 
     @property
     def value(self) -> np.ndarray:
@@ -76,20 +80,14 @@ class Jet:
     def __mul__(self, other):
         if not isinstance(other, Jet):
             return Jet(self.c * np.asarray(other, dtype=float))
-        f, g = self.c, other.c
-        out = np.empty(np.broadcast_shapes(f.shape, g.shape))
-        out[0] = f[0] * g[0]
-        out[1] = f[1] * g[0] + f[0] * g[1]
-        out[2] = f[2] * g[0] + 2.0 * f[1] * g[1] + f[0] * g[2]
-        out[3] = f[3] * g[0] + 3.0 * f[2] * g[1] + 3.0 * f[1] * g[2] + f[0] * g[3]
-        return Jet(out)
+        return Jet(jets.mul(self.c, other.c))
 
     __rmul__ = __mul__
 
     def __truediv__(self, other):
         if not isinstance(other, Jet):
             return Jet(self.c / np.asarray(other, dtype=float))
-        return self * reciprocal(other)
+        return Jet(jets.div(self.c, other.c))
 
     def __rtruediv__(self, other):
         return reciprocal(self) * other
@@ -102,14 +100,7 @@ class Jet:
 
     def compose(self, f0, f1, f2, f3) -> "Jet":
         """h = f(self) given f and its derivatives f1..f3 evaluated at self.value (Faa di Bruno)."""
-        g = self.c
-        out = np.empty(g.shape)
-        g1 = g[1]
-        out[0] = f0
-        out[1] = f1 * g1
-        out[2] = f2 * g1 * g1 + f1 * g[2]
-        out[3] = (f3 * g1 * g1 + 3.0 * f2 * g[2]) * g1 + f1 * g[3]
-        return Jet(out)
+        return Jet(jets.compose(self.c, f0, f1, f2, f3))
 
     def shift(self) -> "Jet":
         """Jet of the derivative: known to one order less (the top entry is NaN)."""
@@ -117,14 +108,6 @@ class Jet:
         c[:-1] = self.c[1:]
         c[-1] = np.nan
         return Jet(c)
-
-
-def unshift(value, derivative: Jet) -> Jet:
-    """Inverse of shift: the jet whose value is `value` and whose derivative is `derivative`."""
-    c = np.empty_like(derivative.c)
-    c[0] = value
-    c[1:] = derivative.c[:-1]
-    return Jet(c)
 
 
 def as_jet(x) -> Jet:
@@ -158,8 +141,7 @@ def cos(x):
 def sqrt(x):
     if not isinstance(x, Jet):
         return np.sqrt(x)
-    r = np.sqrt(x.c[0])
-    return x.compose(r, 0.5 / r, -0.25 / r**3, 0.375 / r**5)
+    return Jet(jets.sqrt(x.c))
 
 
 def exp(x):
@@ -185,16 +167,19 @@ def acos(x):
 
 
 def atan2(y, x):
-    """Angle of (x, y); derivative (x y' - y x') / (x^2 + y^2), extended by the shift trick."""
+    """Angle of (x, y); derivative (x y' - y x') / (x^2 + y^2)."""
     if not isinstance(y, Jet) and not isinstance(x, Jet):
         return np.arctan2(y, x)
-    y, x = as_jet(y), as_jet(x)
-    d = (x * y.shift() - y * x.shift()) / (x * x + y * y)
-    return unshift(np.arctan2(y.c[0], x.c[0]), d)
+    return Jet(jets.atan2(as_jet(y).c, as_jet(x).c))
 
 
 def hypot(x, y):
     return sqrt(x * x + y * y)
+
+
+def reparametrize(y: Jet, x: Jet) -> Jet:
+    """Derivatives of y with respect to x, both given as jets in a common parameter."""
+    return Jet(jets.reparametrize(y.c, x.c))
 
 
 def solve_implicit(residual, y0, args=(), iterations: int = ORDER):

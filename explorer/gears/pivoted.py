@@ -243,17 +243,6 @@ def analyse_pitch(pitch_x: Jet, pitch_y: Jet, pivot, arm: float, branch: int):
     return theta, psi
 
 
-def reparametrise(theta_of_phi: Jet, y_of_phi: Jet) -> Jet:
-    """Derivatives of y with respect to theta, given both as jets in phi (inverse-function chain
-    rule): y_t = y'/t', y_tt = (y'' - y_t t'') / t'^2, y_ttt = (y''' - 3 y_tt t' t'' - y_t t''') / t'^3."""
-    t1, t2, t3 = theta_of_phi.c[1], theta_of_phi.c[2], theta_of_phi.c[3]
-    y0, y1, y2, y3 = y_of_phi.c
-    yt = y1 / t1
-    ytt = (y2 - yt * t2) / t1**2
-    yttt = (y3 - 3.0 * ytt * t1 * t2 - yt * t3) / t1**3
-    return Jet(np.stack([y0, yt, ytt, yttt]))
-
-
 def analyse_contour(contour_point, theta: np.ndarray, psi_guess: np.ndarray, phi_guess: np.ndarray,
                     pivot, arm: float, roller_radius: float, tol: float = 1e-15, max_iter: int = 60):
     """Lever angle for each cam angle from the contour alone: the roller circle (centre on the

@@ -10,8 +10,8 @@ lies on the offset circle of radius rho = R + r (convex arc) or R - r (concave a
 With c(theta) = R(theta) c0 and the roller centre on x = e,
     y = c_y + s sqrt(rho^2 - (e - c_x)^2),   s = +1 convex (upper root), -1 concave (lower root),
 and the lift is L = y - y0, y0 = sqrt((base_radius + r)^2 - e^2). Its derivatives come from the
-exact jets of cos/sin (jets.py), not from differences. The active arc changes exactly when the
-contact point passes a junction: those cam angles are the curve's breakpoints, where L'' jumps
+exact jets of cos/sin (explorer/jets.py), not from differences. The active arc changes exactly
+when the contact point passes a junction: those cam angles are the curve's breakpoints, where L'' jumps
 (the radius of curvature jumps) and L' has a kink - Schenker's velocity cusp at F.
 """
 
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import jets
+from .. import jets
 
 TWO_PI = 2.0 * math.pi
 

@@ -15,28 +15,27 @@ import numpy as np
 from .translating import find_undercut, pitch_geometry, translating_profile, undercut_error
 
 
+def _profile(scene, lift, n: int):
+    """The scene's translating-roller profile at cam angles 0, 2 pi / n, ... (its own lift unless given)."""
+    if lift is None:
+        from ..lift import build_lift
+
+        lift = build_lift(scene)
+    f = scene.follower
+    theta = np.arange(int(n)) * (2.0 * math.pi / int(n))
+    return translating_profile(lift, theta, f.base_radius, f.roller_radius, f.offset)
+
+
 def cam_contour(scene, lift=None, n: int = 720) -> np.ndarray:
     """(n, 2) cam-surface points in the cam frame (m), at cam angles 0, 2 pi / n, ...: point i is
     where the roller touches the cam at cam angle theta_i. Order: clockwise around the cam (the
     order the roller meets them). Works for any lift law and for [cam] contours."""
-    if lift is None:
-        from ..lift import build_lift
-
-        lift = build_lift(scene)
-    f = scene.follower
-    theta = np.arange(int(n)) * (2.0 * math.pi / int(n))
-    return translating_profile(lift, theta, f.base_radius, f.roller_radius, f.offset).contour
+    return _profile(scene, lift, n).contour
 
 
 def pitch_curve(scene, lift=None, n: int = 720) -> np.ndarray:
     """(n, 2) roller-centre path in the cam frame (m), same sampling as cam_contour."""
-    if lift is None:
-        from ..lift import build_lift
-
-        lift = build_lift(scene)
-    f = scene.follower
-    theta = np.arange(int(n)) * (2.0 * math.pi / int(n))
-    return translating_profile(lift, theta, f.base_radius, f.roller_radius, f.offset).pitch
+    return _profile(scene, lift, n).pitch
 
 
 def geometry_columns(scene, theta: np.ndarray, d: np.ndarray) -> tuple[dict, dict]:

@@ -26,7 +26,7 @@ from typing import Protocol
 
 import numpy as np
 
-from . import jets
+from .. import jets
 
 TWO_PI = 2.0 * math.pi
 
