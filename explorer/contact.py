@@ -1,23 +1,40 @@
 """Cam-roller contact statics and sizing (seed 004): normal force, pressure angle, self-locking,
-camshaft torque, Hertz line-contact stress, the historic width rule.
+camshaft torque, Hertz line-contact stress, the historic width rule - for the translating roller
+and the seeds' other gears (pivoted roller lever, eccentric-driven rocking cam, rolling lever).
 
-Statics of a translating roller follower (massless; the train's masses are already in the follower
-force P of the forces effect, P = ratio x valve contact force). The free roller passes the contact
-force along the contact normal, tilted by the pressure angle alpha from the follower axis; the
-guide pushes back sideways with N |sin alpha| and its friction mu = tan(rho) acts along the axis
-against the follower's motion. Axial balance:
+One statics for every gear. Each gear describes its contact by a ContactGeometry (per cam angle):
+the pressure angle alpha between the contact normal and the direction in which the driven point
+(roller centre, or the valve lever's point of the rolling faces) travels to open the valve; the
+instantaneous ratio q = valve travel per travel of that point; the camshaft torque per newton of
+normal force; and the radii of curvature of the two surfaces. The driven point must be pushed
+along its travel with P = q F (F the valve-side contact force of the forces effect, which holds
+the train's masses; the linkage itself is massless).
+
+Statics of the driven point (seed 004: the roller's travel treated as a straight guide, "radial
+roller travel"). The free roller passes the contact force along the contact normal, tilted by alpha
+from the travel; the guide (for a lever: the pivot, lumped into the same guide friction) pushes
+back sideways with N |sin alpha| and its friction mu = tan(rho) acts along the travel against the
+motion:
     N (cos alpha - mu |sin alpha| sgn v) = P   ->   N = P cos rho / cos(|alpha| + rho sgn v).
 While the cam lifts the follower (v > 0) this blows up at |alpha| + rho = 90 deg: self-locking
 (seed 004: "bei alpha + rho = 90 deg tritt Selbstsperrung ein"); the margin 90 - rho - |alpha| says
-how far off that is. The force on the cam acts along the normal through the roller centre
-q = (e, y0 + L), so the torque the shaft supplies is T = N (e cos alpha + y sin alpha) (geometry,
-not virtual work; the tests check T w = P v without friction, and T w >= P v with it).
+how far off that is. The force on the cam acts along the normal, so the torque the shaft supplies
+is N times the moment arm of that line (about the camshaft; for a rocking cam or rolling lever
+about its pivot, carried to the eccentric shaft by the four-bar's ratio dchi/dtheta). Geometry,
+not virtual work: the tests check T w = F v without friction, and T w >= F v with it.
+A rolling lever's faces roll without sliding, so its friction angle stands for the pivots'
+friction lumped the same way; its margin says how far the frictionless normal is from square to
+the travel (circular faces, k = 0, would have alpha = 90 deg and could drive only by friction).
 
-Hertz line contact between roller (radius r) and contour (signed radius rho_c, > 0 convex,
-< 0 concave): sigma_max = sqrt(N E* / (pi b R*)), 1/R* = 1/r + 1/rho_c,
-1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2. Seed 004's allowables: 3500 kgf/cm^2 for large gas
-engines, about 4000 kgf/cm^2 for Diesel engines; and the width rule b = P/(k D) with the roller
-diameter D, k = 10 (intake) or up to 40 (exhaust) kgf/cm^2.
+Hertz line contact between two cylinders of signed radii r1, r2 (> 0 convex, < 0 concave):
+sigma_max = sqrt(N E* / (pi b R*)), 1/R* = 1/r1 + 1/r2, 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2.
+Seed 004's allowables: 3500 kgf/cm^2 for large gas engines, about 4000 kgf/cm^2 for Diesel
+engines; and the width rule b = P/(k D) with the roller diameter D, k = 10 (intake) or up to 40
+(exhaust) kgf/cm^2. A rolling lever has no roller: it is sized as seed 004 says rolling levers
+are, by the Hertz allowable (the width at which the peak stress equals it).
+
+The trip gear is refused: its latch lifts the valve spindle directly and lets go, there is no cam
+surface working on a roller (the 'gear' effect reports the latch force).
 
 Scene section [contact] (all optional):
     friction_angle        rho of the follower guide (default 0 deg), or
@@ -62,16 +79,29 @@ class ContactSpec:
     allowable_stress: float = ALLOWABLE["large-gas"]  # Pa
 
 
+ROLLER_TYPES = ("translating-roller", "pivoted-roller", "rocking-cam")  # a cam surface on a roller
+CONTACT_TYPES = ROLLER_TYPES + ("rolling-lever",)  # + two faces rolling on each other
+
+
+def check_follower(follower, file: str) -> None:
+    """The follower types the contact statics cover; a roller where the width rule needs one."""
+    if follower.type == "trip":
+        raise InputError(file, "follower.type",
+                         "effect 'contact' needs a cam surface working on a roller or a rolling face; the trip gear's "
+                         "latch lifts the valve spindle directly and lets go (the 'gear' effect reports the latch force)")
+    if follower.type not in CONTACT_TYPES:
+        raise InputError(file, "follower.type", f"effect 'contact' does not model follower type {follower.type!r}")
+    if follower.type in ROLLER_TYPES and follower.roller_radius <= 0.0:
+        raise InputError(file, "follower.roller_radius",
+                         "effect 'contact' needs a roller (roller_radius > 0) for the Hertz stress and the width rule")
+
+
 def parse_contact_section(table, fields) -> ContactSpec:
     """[contact] -> ContactSpec; called with table None when the effect runs without the section."""
     file = fields.get("source", "<memory>")
     follower = fields.get("follower")
-    if "contact" in fields.get("effects", ()) and follower is not None and follower.type != "translating-roller":
-        raise InputError(file, "follower.type",
-                         f"effect 'contact' models a translating roller follower, not {follower.type!r}")
-    if "contact" in fields.get("effects", ()) and follower is not None and follower.roller_radius <= 0.0:
-        raise InputError(file, "follower.roller_radius",
-                         "effect 'contact' needs a roller (roller_radius > 0) for the Hertz stress and the width rule")
+    if "contact" in fields.get("effects", ()) and follower is not None:
+        check_follower(follower, file)
     if table is None:
         return ContactSpec()
     table.reject_unknown((
@@ -120,13 +150,14 @@ def effective_modulus(e1: float, nu1: float, e2: float, nu2: float) -> float:
     return 1.0 / ((1.0 - nu1**2) / e1 + (1.0 - nu2**2) / e2)
 
 
-def hertz_line_stress(force, width: float, roller_radius: float, contour_radius, e_star: float) -> np.ndarray:
+def hertz_line_stress(force, width: float, roller_radius, contour_radius, e_star: float) -> np.ndarray:
     """Peak Hertz pressure of a line contact, sigma = sqrt(F E* / (pi b R*)), 1/R* = 1/r + 1/rho_c.
 
-    contour_radius is signed (> 0 convex, < 0 concave, inf flat); force <= 0 gives 0 (no contact)."""
+    Both radii are signed (> 0 convex, < 0 concave, inf flat): the roller's (or the driven face's)
+    and the contour's; force <= 0 gives 0 (no contact)."""
     force = np.asarray(force, dtype=float)
     with np.errstate(divide="ignore"):
-        curvature = 1.0 / roller_radius + 1.0 / np.asarray(contour_radius, dtype=float)
+        curvature = 1.0 / np.asarray(roller_radius, dtype=float) + 1.0 / np.asarray(contour_radius, dtype=float)
     loaded = np.maximum(force, 0.0)
     with np.errstate(invalid="ignore"):
         sigma = np.sqrt(loaded * e_star * curvature / (math.pi * width))
@@ -178,60 +209,123 @@ def width_rule(roller_force: float, roller_diameter: float, k: float) -> float:
     return max(0.0, float(roller_force)) / (k * roller_diameter)
 
 
-# --- the effect -------------------------------------------------------------------------------------
+# --- the contact of each gear ------------------------------------------------------------------------
 
 
-def _geometry(ctx):
-    """Pressure angle (rad) and signed contour radius (m): the kinematics columns when the geometry
-    provides them, otherwise the exact closed forms of explorer.geometry.translating."""
+@dataclass(frozen=True)
+class ContactGeometry:
+    """What the statics need from a gear's geometry, per cam angle (arrays of the grid's shape).
+
+    The driven point is the roller centre (or, for a rolling lever, the valve lever's point of the
+    rolling faces); the cam body is the cam (the rocking cam, the rolling lever) turning about its
+    pivot, which for a rotating cam is the camshaft."""
+
+    pressure_angle: np.ndarray  # rad, contact normal vs the driven point's opening travel (signed)
+    ratio: np.ndarray  # valve travel per travel of the driven point: P = ratio x valve force
+    torque_arm: np.ndarray  # m, camshaft torque per newton of normal force
+    body_arm: np.ndarray  # m, moment about the cam body's pivot per newton of normal force
+    body_radius: np.ndarray  # m, distance of the contact point from the cam body's pivot
+    contour_radius: np.ndarray  # m, signed radius of the cam surface at the contact (> 0 convex)
+    counter_radius: np.ndarray | float  # m, signed radius of the driven surface (the roller's radius)
+    roller_diameter: float | None  # m, D of the width rule b = P/(k D); None: size by the Hertz allowable
+    from_columns: bool = False  # pressure angle and contour radius already are kinematics columns
+
+
+def translating_geometry(ctx) -> ContactGeometry:
+    """Translating roller: the kinematics' geometry columns when the cam provides them, otherwise
+    the exact closed forms of explorer.geometry.translating. The roller centre q = (e, y0 + L)."""
     c, f = ctx.columns, ctx.scene.follower
     if "pressure_angle_deg" in c and "contour_radius_m" in c:
-        return np.radians(c["pressure_angle_deg"]), np.asarray(c["contour_radius_m"]), False
-    from .geometry.translating import profile_from_derivatives
+        alpha, contour_radius, reused = np.radians(c["pressure_angle_deg"]), np.asarray(c["contour_radius_m"]), True
+    else:
+        from .geometry.translating import profile_from_derivatives
 
-    profile = profile_from_derivatives(ctx.theta, ctx.lift.derivatives(ctx.theta), f.base_radius, f.roller_radius, f.offset)
-    return profile.pressure_angle, profile.contour_radius, True
+        profile = profile_from_derivatives(ctx.theta, ctx.lift.derivatives(ctx.theta), f.base_radius, f.roller_radius,
+                                           f.offset)
+        alpha, contour_radius, reused = profile.pressure_angle, profile.contour_radius, False
+    lift = np.asarray(c["follower_lift_m"])
+    arm = camshaft_torque(1.0, alpha, lift, f.base_radius, f.roller_radius, f.offset)
+    return ContactGeometry(
+        pressure_angle=alpha, ratio=np.full(alpha.shape, f.ratio), torque_arm=arm, body_arm=arm,
+        body_radius=contact_point_radius(alpha, lift, f.base_radius, f.roller_radius, f.offset),
+        contour_radius=contour_radius, counter_radius=f.roller_radius, roller_diameter=2.0 * f.roller_radius,
+        from_columns=reused,
+    )
+
+
+def gear_geometry(ctx) -> ContactGeometry:
+    """The gear's own contact geometry (explorer.gears: pivoted.py, rocking.py, rolling.py)."""
+    lift = ctx.lift
+    if not hasattr(lift, "gear"):
+        from .gears.build import build_gear_lift
+
+        lift = build_gear_lift(ctx.scene)
+    return lift.gear.contact_geometry(ctx.theta)
+
+
+def contact_geometry(ctx) -> ContactGeometry:
+    check_follower(ctx.scene.follower, ctx.scene.source)
+    if ctx.scene.follower.type == "translating-roller":
+        return translating_geometry(ctx)
+    return gear_geometry(ctx)
+
+
+def contact_loads(geometry: ContactGeometry, valve_force, velocity, friction_angle: float) -> dict[str, np.ndarray]:
+    """Normal force, camshaft torque, tangential force on the cam body and self-locking margin for
+    the valve-side contact force F (forces effect) and the driven point's velocity (its sign)."""
+    alpha = np.asarray(geometry.pressure_angle, dtype=float)
+    travel_force = geometry.ratio * np.asarray(valve_force, dtype=float)
+    normal = roller_normal_force(travel_force, alpha, velocity, friction_angle)
+    with np.errstate(invalid="ignore"):
+        torque = normal * geometry.torque_arm
+        tangential = normal * geometry.body_arm / geometry.body_radius
+    return {
+        "cam_normal_force_N": normal,
+        "cam_tangential_force_N": tangential,
+        "camshaft_torque_Nm": torque,
+        "self_locking_margin_deg": 90.0 - math.degrees(friction_angle) - np.degrees(np.abs(alpha)),
+    }
+
+
+def hertz_width(normal, geometry: ContactGeometry, spec: ContactSpec, e_star: float) -> tuple[float, str]:
+    """Required contact width and the rule that gave it: seed 004's b = P/(k D) on the largest
+    normal force for a roller; for rolling faces the width at which the peak Hertz stress equals
+    the allowable, b = N E* / (pi sigma^2 R*) at its worst angle."""
+    finite = np.where(np.isfinite(normal), normal, np.nan)
+    if geometry.roller_diameter is not None:
+        max_normal = float(np.nanmax(finite)) if np.isfinite(finite).any() else 0.0
+        return width_rule(max_normal, geometry.roller_diameter, spec.width_rule_k), "P/(k D)"
+    with np.errstate(divide="ignore", invalid="ignore"):
+        curvature = 1.0 / np.asarray(geometry.counter_radius, dtype=float) + 1.0 / np.asarray(geometry.contour_radius)
+        need = np.maximum(finite, 0.0) * e_star * np.maximum(curvature, 0.0) / (math.pi * spec.allowable_stress**2)
+    need = np.where(np.isfinite(need), need, np.nan)
+    return (float(np.nanmax(need)) if np.isfinite(need).any() else 0.0), "hertz allowable"
+
+
+# --- the effect -------------------------------------------------------------------------------------
 
 
 def contact_effect(ctx) -> EffectOutput:
     scene = ctx.scene
     spec: ContactSpec = scene.contact if scene.contact is not None else ContactSpec()
-    f = scene.follower
-    if f.roller_radius <= 0.0:
-        raise InputError(scene.source, "follower.roller_radius",
-                         "effect 'contact' needs a roller (roller_radius > 0) for the Hertz stress and the width rule")
+    geometry = contact_geometry(ctx)
     c = ctx.columns
-    alpha, contour_radius, own_geometry = _geometry(ctx)
-    follower_force = np.asarray(c["follower_force_N"])
-    follower_lift = np.asarray(c["follower_lift_m"])
-    velocity = np.asarray(c["follower_velocity_m_s"])
+    alpha, contour_radius = np.asarray(geometry.pressure_angle), np.asarray(geometry.contour_radius)
     rho = spec.friction_angle
-
-    normal = roller_normal_force(follower_force, alpha, velocity, rho)
-    torque = camshaft_torque(normal, alpha, follower_lift, f.base_radius, f.roller_radius, f.offset)
-    radius = contact_point_radius(alpha, follower_lift, f.base_radius, f.roller_radius, f.offset)
-    tangential = torque / radius
-    margin = 90.0 - math.degrees(rho) - np.degrees(np.abs(alpha))
+    columns = contact_loads(geometry, c["contact_force_N"], c["follower_velocity_m_s"], rho)
+    normal, torque, margin = columns["cam_normal_force_N"], columns["camshaft_torque_Nm"], columns["self_locking_margin_deg"]
 
     finite_normal = np.where(np.isfinite(normal), normal, np.nan)
     max_normal = float(np.nanmax(finite_normal)) if np.isfinite(finite_normal).any() else 0.0
-    diameter = 2.0 * f.roller_radius
-    required_width = width_rule(max_normal, diameter, spec.width_rule_k)
-    width = spec.width if spec.width is not None else required_width
     e_star = effective_modulus(spec.youngs_modulus, spec.poisson_ratio, spec.roller_youngs_modulus, spec.roller_poisson_ratio)
+    required_width, rule = hertz_width(normal, geometry, spec, e_star)
+    width = spec.width if spec.width is not None else required_width
     if width > 0.0:
-        sigma = hertz_line_stress(normal, width, f.roller_radius, contour_radius, e_star)
+        sigma = hertz_line_stress(normal, width, geometry.counter_radius, contour_radius, e_star)
     else:
         sigma = np.zeros_like(normal)
-
-    columns = {
-        "cam_normal_force_N": normal,
-        "cam_tangential_force_N": tangential,
-        "camshaft_torque_Nm": torque,
-        "self_locking_margin_deg": margin,
-        "hertz_stress_Pa": sigma,
-    }
-    if own_geometry:  # reuse the kinematics' geometry columns when they exist; add them otherwise
+    columns["hertz_stress_Pa"] = sigma
+    if not geometry.from_columns:  # reuse the kinematics' geometry columns when they exist; add them otherwise
         columns["pressure_angle_deg"] = np.degrees(alpha)
         columns["contour_radius_m"] = contour_radius
 
@@ -243,6 +337,7 @@ def contact_effect(ctx) -> EffectOutput:
     i_sigma = int(np.argmax(np.where(np.isfinite(sigma), sigma, -1.0)))
     convex = contour_radius > 0.0
     summary = {
+        "contact_follower_type": scene.follower.type,
         "max_pressure_angle_deg": float(np.degrees(np.abs(alpha[i_alpha]))),
         "max_pressure_angle_cam_angle_deg": float(theta_deg[i_alpha]),
         "friction_angle_deg": math.degrees(rho),
@@ -262,6 +357,7 @@ def contact_effect(ctx) -> EffectOutput:
         "hertz_allowable_Pa": spec.allowable_stress,
         "hertz_utilisation": float(sigma[i_sigma] / spec.allowable_stress),
         "required_cam_width_m": required_width,
+        "required_cam_width_rule": rule,
         "width_rule_k_Pa": spec.width_rule_k,
         "valve_kind": spec.valve,
         "engine": spec.engine,
@@ -282,6 +378,8 @@ def contact_effect(ctx) -> EffectOutput:
         )
     if spec.width is not None and spec.width < required_width:
         warnings.append(
+            f"cam width {spec.width * 1e3:.4g} mm is below the required {required_width * 1e3:.4g} mm ({rule})"
+            if rule != "P/(k D)" else
             f"cam width {spec.width * 1e3:.4g} mm is below the width rule b = P/(k D) = {required_width * 1e3:.4g} mm"
         )
     return EffectOutput(columns=columns, summary=summary, warnings=tuple(warnings))

@@ -304,10 +304,8 @@ def test_builtin_scenes_with_contact(scenes_dir):
         assert s["min_self_locking_margin_deg"] > 0
 
 
-def test_contact_refuses_other_follower_types(scenes_dir):
-    path = scenes_dir / "rolling_lever.toml"
-    if not path.exists():
-        pytest.skip("no rolling-lever scene")
+def test_contact_refuses_the_trip_gear_and_says_why(scenes_dir):
+    """The trip gear's latch lifts the spindle directly: no cam surface on a roller to analyse."""
     with pytest.raises(InputError) as err:
-        load_scene(path, ['effects=["contact"]'])
-    assert err.value.key == "follower.type"
+        load_scene(scenes_dir / "trip_gear_dashpot.toml", ['effects=["kinematics", "contact"]'])
+    assert err.value.key == "follower.type" and "latch" in err.value.reason

@@ -180,10 +180,7 @@ def check_rocking_contour(gear, n: int = 721) -> None:
     """Undercut of the rocking cam: a convex stretch of the pitch curve sharper than the roller."""
     c = gear.contour
     w = np.linspace(c.lift_start, c.lift_start + c.flank, n)
-    phi = Jet.variable(c.reference - c.sense * w)
-    rho = c.radius(phi)
-    r0, r1, r2 = rho.c[0], rho.c[1], rho.c[2]
-    curvature = (r0**2 + 2 * r1**2 - r0 * r2) / (r0**2 + r1**2) ** 1.5
+    curvature = c.pitch_curvature(c.reference - c.sense * w)
     with np.errstate(divide="ignore"):
         radius = 1.0 / curvature
     bad = (radius > 0.0) & (radius <= gear.roller_radius)

@@ -1,15 +1,16 @@
 """Effect 'gear': what is particular to each of the seeds' other gears, along the cycle.
 
-pivoted-roller and rocking-cam: lever angle, valve ratio, pressure angle at the roller (referred
-to the lever), self-locking margin, contour radius at the contact; with [valve] and [spring] also
-the roller's normal force (virtual work: F_n = F |ds/dpsi| / (a cos alpha)), the camshaft torque
-(power balance T = F dL/dtheta) and the Hertz stress (explorer.contact's formula; material and
-width from a [contact] section when present, else steel and seed 004's width rule).
+pivoted-roller and rocking-cam: lever angle and valve ratio; pivoted-roller also the cam's size
+and seed 004's instant-centre check of the lever's velocity.
 rocking-cam also: the swing, equal eccentric arcs against unequal swings, and the opening/closing
 symmetry about the eccentric's dead centre (why Schenker's 2R/M asymmetry is out of reach).
 rolling-lever: lever angles, rolling ratio, pick-up and release, valve-referred stiffness.
 trip: latch lift, buffer force and pressure, the closing (apex, cushion, seat), the latch's
 pick-up impact, Trinks' closing-force rule, and the same valve closed by each buffer.
+
+The contact statics of the roller gears and the rolling lever (pressure angle referred to the
+lever, self-locking margin, normal force, camshaft torque, Hertz stress, cam width) are the
+'contact' effect's (explorer.contact), computed from each gear's `contact_geometry`.
 """
 
 from __future__ import annotations
@@ -44,54 +45,6 @@ def gear_effect(ctx) -> EffectOutput:
 # --------------------------------------------------------------------------------------------
 
 
-def _valve_force(ctx):
-    """Force the linkage must transmit at the valve (rigid train), or None without loads."""
-    scene = ctx.scene
-    if scene.valve is None or scene.spring is None:
-        return None
-    if "contact_force_N" in ctx.columns:
-        return np.asarray(ctx.columns["contact_force_N"])
-    from ..forces import TrainLoads, rigid_train_forces
-
-    c = ctx.columns
-    out = rigid_train_forces(c["rigid_valve_lift_m"], c["rigid_valve_velocity_m_s"], c["rigid_valve_accel_m_s2"],
-                             TrainLoads.from_scene(scene), 1.0)
-    return out["contact_force_N"]
-
-
-def _roller_loads(ctx, lever_arm, valve_per_lever, pressure, contour_radius, roller_radius):
-    """Normal force at the roller, camshaft torque, Hertz stress and self-locking margin."""
-    from ..contact import ContactSpec, effective_modulus, hertz_line_stress, width_rule
-
-    scene = ctx.scene
-    spec = scene.contact if scene.contact is not None else ContactSpec()
-    rho = spec.friction_angle
-    columns = {"self_locking_margin_deg": 90.0 - math.degrees(rho) - np.degrees(np.abs(pressure))}
-    summary = {"friction_angle_deg": math.degrees(rho),
-               "min_self_locking_margin_deg": float(columns["self_locking_margin_deg"].min())}
-    force = _valve_force(ctx)
-    if force is None:
-        return columns, summary
-    loaded = np.maximum(force, 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        normal = loaded * np.abs(valve_per_lever) / (lever_arm * np.cos(pressure))
-    torque = force * ctx.lift.derivatives(ctx.theta)[1]  # frictionless power balance, T w = F v
-    e_star = effective_modulus(spec.youngs_modulus, spec.poisson_ratio, spec.roller_youngs_modulus, spec.roller_poisson_ratio)
-    max_normal = float(np.nanmax(normal)) if np.isfinite(normal).any() else 0.0
-    width = spec.width if spec.width is not None else width_rule(max_normal, 2.0 * roller_radius, spec.width_rule_k)
-    sigma = hertz_line_stress(normal, width, roller_radius, contour_radius, e_star) if width > 0.0 else np.zeros_like(normal)
-    columns.update(roller_normal_force_N=normal, camshaft_torque_Nm=torque, hertz_stress_Pa=sigma)
-    summary.update(
-        max_roller_normal_force_N=max_normal,
-        max_camshaft_torque_Nm=float(torque.max()),
-        min_camshaft_torque_Nm=float(torque.min()),
-        cam_width_m=width,
-        max_hertz_stress_Pa=float(np.max(sigma)),
-        allowable_stress_Pa=spec.allowable_stress,
-    )
-    return columns, summary
-
-
 def _pivoted(ctx, lift):
     from .pivoted import PivotedRollerGear
 
@@ -101,60 +54,38 @@ def _pivoted(ctx, lift):
     columns = {
         "lever_angle_deg": np.degrees(g.lever_angle),
         "lever_ratio": g.ratio,
-        "pressure_angle_deg": np.degrees(g.pressure_angle),
-        "contour_radius_m": g.contour_radius,
     }
-    extra_cols, extra = _roller_loads(ctx, gear.arm, g.valve_per_lever, g.pressure_angle, g.contour_radius,
-                                      gear.roller_radius)
-    columns.update(extra_cols)
-    i = int(np.argmax(np.abs(g.pressure_angle)))
     convex = g.contour_radius[g.contour_radius > 0.0]
     summary = {
         "rest_lever_angle_deg": math.degrees(gear.rest_angle),
         "lever_swing_deg": float(np.degrees(g.lever_angle.max() - g.lever_angle.min())),
         "min_lever_ratio": float(g.ratio.min()),
         "max_lever_ratio": float(g.ratio.max()),
-        "max_pressure_angle_deg": float(np.degrees(abs(g.pressure_angle[i]))),
-        "max_pressure_angle_cam_angle_deg": float(np.degrees(ctx.theta[i])),
         "cam_max_radius_m": float(np.max(np.hypot(g.contour[:, 0], g.contour[:, 1]))),
         "min_convex_contour_radius_m": float(convex.min()) if convex.size else None,
         # seed 004's velocity construction against the analytic chain rule: a built-in self-check
         "instant_centre_check_rad": float(np.max(np.abs(ic - g.lever_rate))),
-        **extra,
     }
     return columns, summary, [], []
 
 
 def _rocking(ctx, lift):
-    from .jet import Jet
     from .rocking import swing_increments
 
     gear = lift.gear
     d = gear.contact_details(ctx.theta)
-    # contour radius at the contact, from the pitch curve's polar form rho(phi)
-    rho = gear.contour.radius(Jet.variable(d["contact_body_angle"]))
-    r0, r1, r2 = rho.c[0], rho.c[1], rho.c[2]
-    with np.errstate(divide="ignore"):
-        pitch_radius = (r0**2 + r1**2) ** 1.5 / (r0**2 + 2 * r1**2 - r0 * r2)
-    contour_radius = pitch_radius - gear.roller_radius
     w = gear.contour.sense * (d["rocking_angle"] - gear.closed_end)
     columns = {
         "rocking_angle_deg": np.degrees(d["rocking_angle"]),
         "rocking_swing_deg": np.degrees(w),
         "lever_angle_deg": np.degrees(d["lever_angle"]),
         "lever_ratio": d["ratio"],
-        "pressure_angle_deg": np.degrees(d["pressure_angle"]),
-        "contour_radius_m": contour_radius,
     }
-    extra_cols, extra = _roller_loads(ctx, gear.lever_arm, d["valve_per_lever"], d["pressure_angle"], contour_radius,
-                                      gear.roller_radius)
-    columns.update(extra_cols)
     sym = symmetry_report(ctx.scene, lift)
     closed_dc = [c for c in gear.drive.dead_centres() if abs(np.angle(np.exp(1j * (c - gear.dead_centre)))) > 1e-9][0]
     start = gear.dead_centre - float(np.mod(gear.dead_centre - closed_dc, TWO_PI))
     theta_eq, increments = swing_increments(gear, start, gear.dead_centre, 12)
     chis = gear.drive.angle(np.array([closed_dc, gear.dead_centre]))
-    i = int(np.argmax(np.abs(d["pressure_angle"])))
     summary = {
         "swing_deg": float(np.degrees(abs(chis[1] - chis[0]))),
         "eccentric_dead_centre_deg": math.degrees(gear.dead_centre),
@@ -162,12 +93,9 @@ def _rocking(ctx, lift):
         "flank_angles_deg": [math.degrees(a) for a in lift.breakpoints()],
         # seed 004: 12 equal eccentric arcs from the closed to the open dead centre give unequal swings
         "swing_per_equal_eccentric_arc_deg": [float(np.degrees(abs(x))) for x in increments],
-        "max_pressure_angle_deg": float(np.degrees(abs(d["pressure_angle"][i]))),
-        "max_pressure_angle_cam_angle_deg": float(np.degrees(ctx.theta[i])),
         "min_lever_ratio": float(d["ratio"].min()),
         "max_lever_ratio": float(d["ratio"].max()),
         "symmetry": sym,
-        **extra,
     }
     return columns, summary, [], []
 

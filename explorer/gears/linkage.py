@@ -67,6 +67,14 @@ def polar(centre, radius, angle):
     return centre[0] + radius * J.cos(angle), centre[1] + radius * J.sin(angle)
 
 
+def polar_curvature(r) -> np.ndarray:
+    """Signed curvature of a curve given in polar form about a pivot, r as a jet in the polar angle:
+    kappa = (r^2 + 2 r'^2 - r r'') / (r^2 + r'^2)^(3/2); > 0 where the curve bends round the pivot
+    as a circle about it does (convex seen from outside), 1/r for that circle."""
+    r0, r1, r2 = r.c[0], r.c[1], r.c[2]
+    return (r0**2 + 2.0 * r1**2 - r0 * r2) / (r0**2 + r1**2) ** 1.5
+
+
 def wrap(angle):
     """Angle in (-pi, pi]."""
     return np.mod(np.asarray(angle) + math.pi, 2.0 * math.pi) - math.pi

@@ -125,6 +125,21 @@ class PivotedRollerGear:
             valve_per_lever=ds_dpsi, ratio=np.abs(ds_dpsi) / self.arm, lift=s.c[0],
         )
 
+    def contact_geometry(self, theta):
+        """explorer.contact's view of the cam-roller contact: pressure angle referred to the lever,
+        ratio |ds/dpsi| / a (valve travel per roller-centre travel), and the torque arm R x n of
+        the normal through the roller centre about the camshaft."""
+        from ..contact import ContactGeometry
+
+        g = self.geometry(theta)
+        r, n = g.roller_centre, g.normal_ground
+        arm = r[:, 0] * n[:, 1] - r[:, 1] * n[:, 0]
+        return ContactGeometry(
+            pressure_angle=g.pressure_angle, ratio=g.ratio, torque_arm=arm, body_arm=arm,
+            body_radius=np.hypot(g.contact[:, 0], g.contact[:, 1]), contour_radius=g.contour_radius,
+            counter_radius=self.roller_radius, roller_diameter=2.0 * self.roller_radius,
+        )
+
     def lifting_sign(self) -> float:
         """+1 if increasing psi moves the roller away from the cam centre at rest, else -1."""
         psi0 = self.rest_angle

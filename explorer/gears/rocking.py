@@ -40,7 +40,7 @@ from ..errors import InputError
 from ..laws import law as normalised_law
 from . import jet as J
 from .jet import Jet
-from .linkage import circle_intersection, polar, wrap
+from .linkage import circle_intersection, polar, polar_curvature, wrap
 
 TWO_PI = 2.0 * math.pi
 
@@ -77,6 +77,10 @@ class RockingContour:
             out[:, mid] = piece.c * self.rise
             out[0][mid] += self.dwell_radius
         return Jet(out)
+
+    def pitch_curvature(self, phi) -> np.ndarray:
+        """Signed curvature of the pitch curve at body angle phi (> 0 convex, as the dwell arc)."""
+        return polar_curvature(self.radius(Jet.variable(np.asarray(phi, dtype=float))))
 
     def contour_points(self, roller_radius: float, n: int = 721, margin: float = 0.3):
         """Contour (metal surface) in the body frame, relative to the pivot, over the flank and
@@ -128,8 +132,8 @@ class RockingCamGear:
         chi = self.drive.angle(Jet.variable(theta))
         rest = self.rest_position()
         guess = math.atan2(rest[1] - self.cam_pivot[1], rest[0] - self.cam_pivot[0]) - chi.c[0]
-        phi0, ok = J.newton(lambda p: self._residual(p, Jet.constant(chi.c[0])), guess,
-                            step_limit=0.05)
+        # first-order jets: the values and slopes Newton uses are the full jets' bit for bit
+        phi0, ok = J.newton(lambda p: self._residual(p, chi.c[0]), guess, step_limit=0.05, order=1)
         # the roller must stay on the near intersection: within a flank's span of the dwell guess
         far = np.abs(wrap(phi0 - guess)) > self.contour.flank + 0.5
         if not np.all(ok) or np.any(far):
@@ -208,8 +212,29 @@ class RockingCamGear:
             "rocking_angle": chi.c[0], "rocking_rate": chi.c[1], "contact_body_angle": phi.c[0],
             "pitch_radius_at_contact": rho.c[0], "lever_angle": psi.c[0], "lever_rate": psi.c[1],
             "pressure_angle": pressure, "valve_per_lever": ds_dpsi, "ratio": np.abs(ds_dpsi) / self.lever_arm,
-            "roller_centre": np.column_stack([rx.c[0], ry.c[0]]),
+            "roller_centre": np.column_stack([rx.c[0], ry.c[0]]), "normal": np.column_stack([nx, ny]),
         }
+
+    def contact_geometry(self, theta):
+        """explorer.contact's view of the rocking-cam contact: pressure angle referred to the roller
+        lever, ratio |ds/dpsi| / a, the normal's moment arm (R - C) x n about the rocking cam's pivot
+        C, carried to the eccentric shaft by the four-bar's dchi/dtheta (massless rod: T = M_C chi'),
+        and the contour radius at the contact (pitch-curve radius less the roller's)."""
+        from ..contact import ContactGeometry
+
+        d = self.contact_details(theta)
+        r = self.roller_radius
+        n = d["normal"]
+        rx = d["roller_centre"][:, 0] - self.cam_pivot[0]
+        ry = d["roller_centre"][:, 1] - self.cam_pivot[1]
+        arm = rx * n[:, 1] - ry * n[:, 0]
+        with np.errstate(divide="ignore"):
+            contour_radius = 1.0 / self.contour.pitch_curvature(d["contact_body_angle"]) - r
+        return ContactGeometry(
+            pressure_angle=d["pressure_angle"], ratio=d["ratio"], torque_arm=arm * d["rocking_rate"], body_arm=arm,
+            body_radius=np.hypot(rx - r * n[:, 0], ry - r * n[:, 1]), contour_radius=contour_radius,
+            counter_radius=r, roller_diameter=2.0 * r,
+        )
 
     def rod_pin_angle(self, chi: np.ndarray) -> np.ndarray:
         """Direction of O -> B for rocking angle chi (B the rod pin on the rocking lever)."""

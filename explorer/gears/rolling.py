@@ -157,6 +157,47 @@ class RollingLeverGear:
             out["total"] = 1.0 / (1.0 / out["lever"] + 1.0 / out["rod"])
         return out
 
+    def contact_geometry(self, theta):
+        """explorer.contact's view of the rolling faces. The contact P lies on A-B at rho from A; the
+        valve lever's point there travels perpendicular to B-P. Face A, seen in the ground at the
+        current swing, is A + rho(w') e(gamma - sense (w' - w)): tangent k e_AB - sense rho e_perp,
+        so the common normal leans from A-B by atan(k / rho) and the pressure angle (normal against
+        the valve lever's travel) is atan(rho / k): circular faces (k = 0) could drive only by
+        friction. Radii of both faces from their polar forms about their own pivots (convex > 0).
+        Before pick-up (no contact, no force) the values are those of the faces' meeting point."""
+        from ..contact import ContactGeometry
+        from . import jet as J
+        from .linkage import polar_curvature
+
+        theta = np.asarray(theta, dtype=float)
+        swing = self.rolling_swing(theta)
+        w = Jet.variable(np.maximum(swing.c[0], 0.0))  # jets in the rolling swing
+        rho = self.law.rho(w)
+        beta = self.valve_lever_angle(w)
+        d, k, sense = self.law.distance, self.law.growth, self.sense
+        (ax, ay), (bx, by) = self.pivot, self.valve_pivot
+        gamma = math.atan2(by - ay, bx - ax)
+        eg, ep = np.array([math.cos(gamma), math.sin(gamma)]), np.array([-math.sin(gamma), math.cos(gamma)])
+        r = rho.c[0]
+        tangent = k * eg[:, None] - sense * r * ep[:, None]  # (2, N)
+        n = np.array([-tangent[1], tangent[0]]) / np.hypot(tangent[0], tangent[1])
+        n = n * np.sign(eg @ n)  # from the rolling lever's face into the valve lever's
+        # the valve lever's point P (P - B = -(d - rho) e_AB) travels along e_z x (P - B) for
+        # increasing beta; the valve opens that way if ds/dbeta > 0
+        ds_dbeta = self.valve.travel(Jet.variable(beta.c[0])).c[1]
+        travel = -ep[:, None] * np.sign(ds_dbeta)
+        pressure = np.arctan2(travel[0] * n[1] - travel[1] * n[0], travel[0] * n[0] + travel[1] * n[1])
+        arm = r * (eg[0] * n[1] - eg[1] * n[0])  # (P - A) x n with P - A = rho e_AB
+        alpha_rate = sense * swing.c[1]  # d alpha / d theta of the rolling lever
+        face_a = polar_curvature(J.reparametrize(rho, gamma - (self.closed_end + sense * (w + self.contact_swing))))
+        face_b = polar_curvature(J.reparametrize(d - rho, gamma + math.pi - beta))
+        with np.errstate(divide="ignore"):
+            radius_a, radius_b = 1.0 / face_a, 1.0 / face_b
+        return ContactGeometry(
+            pressure_angle=pressure, ratio=np.abs(ds_dbeta) / (d - r), torque_arm=arm * alpha_rate, body_arm=arm,
+            body_radius=r, contour_radius=radius_a, counter_radius=radius_b, roller_diameter=None,
+        )
+
     def check(self) -> None:
         w_max = self.max_rolling_swing()
         if w_max <= 0.0:

@@ -231,9 +231,6 @@ def _check_scene(spec: GearSpec, fields: dict) -> None:
     follower, lift, effects = fields["follower"], fields["lift"], fields["effects"]
     if follower.ratio != 1.0:
         raise InputError(file, "follower.ratio", f"the {kind} gear's linkage sets the valve ratio; leave follower.ratio = 1")
-    if "contact" in effects:
-        raise InputError(file, "effects", f"effect 'contact' models a translating roller; for the {kind} gear the 'gear' "
-                         "effect reports pressure angle, normal force, camshaft torque and Hertz stress")
     if kind in ("rocking-cam", "rolling-lever") and lift.law != "gear":
         raise InputError(file, "lift.law", f"the {kind} gear makes its own lift: set lift.law = \"gear\"")
     if kind in ("pivoted-roller", "trip") and lift.law == "gear":
