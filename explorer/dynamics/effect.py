@@ -97,7 +97,8 @@ def elastic_effect(ctx) -> EffectOutput:
     force = rotate(sol.linkage_force)
     contact = np.zeros(n, bool)
     contact[back] = np.asarray(sol.contact)[:n]
-    jerk = rotate(elastic_jerk(model, drive(t_run), sol))
+    # the exact solver returns the jerk; the others get it from the ODE (one more drive evaluation)
+    jerk = rotate(sol.jerk if sol.jerk is not None else elastic_jerk(model, drive(t_run), sol))
     phase = None
     if sol.phase is not None:
         phase = np.empty(n, dtype=np.int64)

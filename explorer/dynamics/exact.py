@@ -18,10 +18,18 @@ omega_n h is small. Longer steps (very stiff linkages) are split. There is no st
 and no tuning knob: the only error is the interpolation of S, O(h^6) (a drive feature narrower
 than the output step, e.g. a bump, is seen only through that interpolation).
 
-From step to step the state follows x[i+1] = Phi(h) x[i] + g[i]; for runs of equal steps this
-linear recurrence is solved in closed form (cumulative sums of the inputs times powers of the
-eigenvalue) in modal coordinates (s, (v + alpha s)/beta), in which Phi is a damped rotation (well
-conditioned for any omega_n h). The module needs numpy only (fast to import).
+From step to step the state follows x[i+1] = Phi(h) x[i] + g[i]. In modal coordinates
+(s, (v + alpha s)/beta) Phi is a damped rotation for any step length, so this recurrence is
+solved in closed form for the whole grid at once (modal.py): the powers of the eigenvalue and the
+cumulative sums of the drive's forcing are computed once per phase kind, and a phase is then a
+few vector operations on slices, whatever its length (no Python loop over steps, no per-phase
+cumulative sum). The module needs numpy only (fast to import).
+
+Cost (issue 4's speed target): a solve is a fixed part -- the drive at the nodes, the step
+polynomials, the modal sums -- plus, per phase, one window of vector operations (states, event
+values, bounds) and two single steps in plain Python (the phase's first partial step, where the
+event that began it sits on its zero, and the step where the next event lies). Everything at the
+scale of one step is plain-float Python: numpy's overhead on tiny arrays would dominate.
 
 Events are roots of the closed forms, per step:
   seated -> lift-off    linkage force k (S - lash) + c S' exceeds preload + closing + friction
@@ -31,12 +39,13 @@ Events are roots of the closed forms, per step:
   velocity zero         (only with friction) the friction force flips, or the valve sticks
 No crossing inside a step is missed. A step is cleared only by a rigorous bound: the event
 function e is at most the larger end value plus h^2/8 sup e''. sup e'' is bounded first for a
-whole chunk of steps from node values and the ODE (cheap), then, for the few steps this does
-not clear, from the step's own Taylor coefficients (values and slopes at both ends and a signed
-bound of e''). Steps still not cleared are sampled at 8 points, recursively, and the first sign
-change is polished to machine precision (Newton steps inside the bracket, or the Illinois
-variant of regula falsi), returning the first representable instant past the zero so that the
-next phase starts on its own side. At a phase start the function that began it sits on its
+whole window of steps from node values and the ODE (cheap), then for the steps this does not
+clear from each one's own left-node values, and for the few left from the step's own Taylor
+coefficients (values and slopes at both ends and a signed bound of e''). Steps still not
+cleared are sampled at 8 points, recursively, and the first sign change is polished to machine
+precision (Newton steps from the secant point inside the bracket, or the Illinois variant of
+regula falsi), returning the first representable instant past the zero so that the next phase
+starts on its own side. At a phase start the function that began it sits on its
 zero: its leading Taylor terms against the positive part of the rest clear an initial stretch
 analytically (e(w) <= w^k (e_k + sum max(e_n, 0) w^(n-k))).
 
@@ -52,11 +61,13 @@ initial_state = (s, v) is given.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from .modal import Propagator
 from .model import PHASE_CODES, DynamicsSolution, LinkageModel
 
 SEATED, CONTACT, FLIGHT, STUCK = (PHASE_CODES[k] for k in ("seated", "contact", "flight", "stuck"))
@@ -66,7 +77,6 @@ MAX_DEPTH = 6  # refinement levels of the event search (8 sub-intervals each: 4e
 SUBDIVISIONS = 8
 ZERO_START = 1e-11  # |e(0)| below this fraction of its terms' size: the function starts on its zero
 MAX_SAME_TIME = 60  # events at one instant before the phase logic is declared looping
-MIN_RUN = 16  # shorter runs of equal steps (or strongly damped ones) use a plain loop
 
 
 @dataclass(frozen=True)
@@ -108,6 +118,8 @@ class _Tables:
 
 def _tables(lin: _Linear, h: np.ndarray, n_terms: int) -> _Tables:
     h = np.asarray(h, dtype=float)
+    if h.size <= 2:
+        return _tables_small(lin, h, n_terms)
     U = h.size
     a = np.zeros((n_terms + 1, 9, U))
     a[0, 0] = 1.0
@@ -128,6 +140,10 @@ def _tables(lin: _Linear, h: np.ndarray, n_terms: int) -> _Tables:
     n_idx = np.arange(n_terms + 1, dtype=float)[:, None, None]
     end = a.sum(axis=0)  # (9, U)
     slope = (n_idx * a).sum(axis=0) / h  # d/dtau
+    return _assemble_tables(h, a, end, slope)
+
+
+def _assemble_tables(h, a, end, slope) -> _Tables:
     Phi = np.array([[end[0], end[1]], [slope[0], slope[1]]])
     return _Tables(
         h=h, A=a[:, 0], B=a[:, 1], C1=a[:, 2], R=a[:, 3:9], Phi=Phi,
@@ -135,20 +151,74 @@ def _tables(lin: _Linear, h: np.ndarray, n_terms: int) -> _Tables:
     )
 
 
-def _expand(lin: _Linear, P, h: float, s: float, v: float, Fc: float, n_terms: int) -> np.ndarray:
-    """Scaled Taylor coefficients of s over one step from (s, v), P the step's drive polynomial."""
+def _tables_small(lin: _Linear, h: np.ndarray, n_terms: int) -> _Tables:
+    """_tables for one or two step lengths in plain Python (the numpy version's cost is the
+    overhead of its ~60 calls on tiny arrays). The same recursion in the same order."""
     m, c, K, kc, cc = lin.m, lin.c, lin.K, lin.kc, lin.cc
-    p = [float(x) for x in P] + [0.0]
-    f = [kc * p[n] + cc * (n + 1) * p[n + 1] / h for n in range(6)]
-    f[0] -= Fc
-    h2 = h * h
-    a = [s, v * h]
-    for n in range(n_terms - 1):
-        rhs = -c * h * (n + 1) * a[n + 1] - K * h2 * a[n]
-        if n < 6:
-            rhs += h2 * f[n]
-        a.append(rhs / (m * (n + 1) * (n + 2)))
+    cols = []
+    for hu in h.tolist():
+        h2 = hu * hu
+        ch, Kh2 = c * hu, K * h2
+        # forcing rows f[n] of the 9 unit responses: A (s0 = 1), B (v0 = 1), C1 (constant),
+        # R_k (drive u^k: kc u^k + cc k u^(k-1) / h)
+        basis = []
+        for b in range(9):
+            a = [0.0] * (n_terms + 1)
+            f = [0.0] * 6
+            if b == 0:
+                a[0] = 1.0
+            elif b == 1:
+                a[1] = hu
+            elif b == 2:
+                f[0] = 1.0
+            else:
+                k = b - 3
+                f[k] += kc
+                if k >= 1:
+                    f[k - 1] += cc * k / hu
+            for n in range(n_terms - 1):
+                rhs = -ch * (n + 1) * a[n + 1] - Kh2 * a[n]
+                if n < 6:
+                    rhs = rhs + h2 * f[n]
+                a[n + 2] = rhs / (m * (n + 1) * (n + 2))
+            basis.append(a)
+        cols.append(basis)
+    a = np.array(cols).transpose(2, 1, 0)  # (n_terms + 1, 9, U)
+    end = a.sum(axis=0)
+    slope = (np.arange(n_terms + 1, dtype=float)[:, None, None] * a).sum(axis=0) / h
+    return _assemble_tables(h, a, end, slope)
+
+
+def _expand(lin: _Linear, P, h: float, s: float, v: float, Fc: float, n_terms: int) -> list:
+    """Scaled Taylor coefficients of s over one step from (s, v), P the step's drive polynomial
+    (a list of floats). Plain Python: one step at a time, no numpy overhead."""
+    m, c, K, kc, cc = lin.m, lin.c, lin.K, lin.kc, lin.cc
+    h2m = h * h / m
+    beta = K * h2m
+    if cc:
+        ch = cc / h
+        f = [(kc * P[n] + ch * (n + 1) * P[n + 1]) * h2m for n in range(5)] + [kc * P[5] * h2m]
+    else:
+        f = [kc * x * h2m for x in P]
+    f[0] -= Fc * h2m
+    f.extend(_ZEROS[:n_terms - 7])
+    a = [s, v * h] + _ZEROS[:n_terms - 1]
+    a0, a1 = s, v * h
+    if c:
+        alpha = c * h / m
+        for n in range(n_terms - 1):
+            a0, a1 = a1, (f[n] - alpha * (n + 1) * a1 - beta * a0) * _INV_PAIR[n]
+            a[n + 2] = a1
+    else:
+        for n in range(n_terms - 1):
+            a0, a1 = a1, (f[n] - beta * a0) * _INV_PAIR[n]
+            a[n + 2] = a1
     return a
+
+
+_INV_PAIR = tuple(1.0 / ((n + 1) * (n + 2)) for n in range(64))
+_ZEROS = [0.0] * 64
+_MAX = np.maximum.reduce  # the ufunc itself: ndarray.max adds a Python layer per call
 
 
 def _n_terms(x: float) -> int:
@@ -174,60 +244,76 @@ def _taylor_shift(D: np.ndarray, d) -> np.ndarray:
     ])
 
 
+def _taylor_shift1(D, d: float) -> list:
+    """_taylor_shift for one point (lists)."""
+    S, S1, S2, S3 = D
+    return [S + d * (S1 + d * (S2 / 2 + d * S3 / 6)), S1 + d * (S2 + d * S3 / 2), S2 + d * S3, S3]
+
+
 def _hermite5(h: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
     """Scaled coefficients (6, n) in u = tau/h of the quintic with S, S', S'' given at both ends."""
-    c0, c1, c2 = start[0], h * start[1], 0.5 * h * h * start[2]
-    d0 = end[0] - (c0 + c1 + c2)
-    d1 = h * end[1] - (c1 + 2.0 * c2)
-    d2 = h * h * end[2] - 2.0 * c2
-    c3 = 10.0 * d0 - 4.0 * d1 + 0.5 * d2
-    c4 = -15.0 * d0 + 7.0 * d1 - d2
-    c5 = 6.0 * d0 - 3.0 * d1 + 0.5 * d2
-    return np.stack([c0, c1, c2, c3, c4, c5])
+    out = np.empty((6, h.size))
+    c0, c1, c2 = out[0], out[1], out[2]
+    c0[...] = start[0]
+    np.multiply(h, start[1], out=c1)
+    hh = h * h
+    np.multiply(hh, start[2], out=c2)
+    c2 *= 0.5
+    d = np.empty((3, h.size))
+    np.subtract(end[0], c0 + c1 + c2, out=d[0])
+    np.subtract(h * end[1], c1 + 2.0 * c2, out=d[1])
+    np.subtract(hh * end[2], 2.0 * c2, out=d[2])
+    np.matmul(_HERMITE_HIGH, d, out=out[3:])
+    return out
 
 
-_BINOM = np.array([[math.comb(n, m) for n in range(6)] for m in range(6)], dtype=float)
-_UPPER = np.triu(np.ones((6, 6)))
-
-
-def _shift_poly(P: np.ndarray, u0: float) -> np.ndarray:
-    """Coefficients in w of P(u0 + (1 - u0) w) for w in [0, 1] (the rest of a step)."""
-    powers = u0 ** np.maximum(np.arange(6)[None, :] - np.arange(6)[:, None], 0)
-    return ((_BINOM * powers * _UPPER) @ P) * (1.0 - u0) ** np.arange(6)
+_HERMITE_HIGH = np.array([[10.0, -4.0, 0.5], [-15.0, 7.0, -1.0], [6.0, -3.0, 0.5]])
+_BOUND_WEIGHTS = np.array([[n, n * (n - 1), n * (n - 1) * (n - 2)] for n in range(6)], dtype=float).T
 
 
 def _shift_list(P, u0: float) -> list:
-    """_shift_poly on a list (plain Python: single steps)."""
+    """Coefficients in w of P(u0 + (1 - u0) w) for w in [0, 1] (the rest of a step; lists)."""
     P = [float(x) for x in P]
     if u0 == 0.0:
         return P
     lam = 1.0 - u0
     out, scale = [], 1.0
     for m in range(6):
-        acc, pw = 0.0, 1.0
-        for n in range(m, 6):
-            acc += math.comb(n, m) * P[n] * pw
-            pw *= u0
+        acc = 0.0
+        for n in range(5, m - 1, -1):  # Horner in u0 over sum_n C(n, m) P[n] u0^(n-m)
+            acc = acc * u0 + _BINOM_LIST[m][n] * P[n]
         out.append(acc * scale)
         scale *= lam
     return out
 
 
+_BINOM_LIST = [[float(math.comb(n, m)) for n in range(6)] for m in range(6)]
+
+
 def _deriv_list(c, h: float) -> list:
     """_deriv on a list."""
-    return [(n + 1) * c[n + 1] / h for n in range(len(c) - 1)] + [0.0]
+    inv = 1.0 / h
+    return [k * x * inv for k, x in enumerate(c) if k] + [0.0]
 
 
 def _coeff_list(comp, P, dP, a, da) -> list:
     """_coefficients for one step on lists (a, da None at rest)."""
     aP, bP, const, l0, l1 = comp
-    n_rows = len(a) if a is not None else 6
-    e = [0.0] * n_rows
     if a is not None and (l0 or l1):
-        e = [l0 * x + l1 * y for x, y in zip(a, da)]
-    if aP or bP:
+        if not l1:
+            e = [l0 * x for x in a]
+        elif not l0:
+            e = [l1 * y for y in da]
+        else:
+            e = [l0 * x + l1 * y for x, y in zip(a, da)]
+    else:
+        e = [0.0] * (len(a) if a is not None else 6)
+    if bP:
         for n in range(6):
             e[n] += aP * P[n] + bP * dP[n]
+    elif aP:
+        for n in range(6):
+            e[n] += aP * P[n]
     e[0] += const
     return e
 
@@ -278,17 +364,19 @@ def _excluded_steps(e: np.ndarray) -> np.ndarray:
 
 def _excluded1(e) -> bool:
     """_excluded_steps for one step, e a list of floats (plain Python: no numpy overhead)."""
-    Ea, Da = e[0], e[1]
-    Eb = Db = 0.0
+    Ea, Eb = e[0], sum(e)
     B2 = 2.0 * e[2]
-    for n, en in enumerate(e):
-        Eb += en
-        Db += n * en
-        if n >= 3 and en > 0.0:
-            B2 += n * (n - 1.0) * en
-    if max(Ea, Eb) + max(B2, 0.0) / 8.0 <= 0.0:
+    for n in range(3, len(e)):
+        en = e[n]
+        if en > 0.0:
+            B2 += _PAIR[n] * en
+    if (Ea if Ea > Eb else Eb) + (0.125 * B2 if B2 > 0.0 else 0.0) <= 0.0:
         return True
-    return min(Ea + _qmax1(Da, B2), Eb + _qmax1(-Db, B2)) <= 0.0
+    Db = sum([n * en for n, en in enumerate(e)])
+    return min(Ea + _qmax1(e[1], B2), Eb + _qmax1(-Db, B2)) <= 0.0
+
+
+_PAIR = tuple(n * (n - 1.0) for n in range(64))
 
 
 def _qmax1(d: float, B: float, D: float = 1.0) -> float:
@@ -323,6 +411,15 @@ def _excluded_range(e, lo: float, hi: float) -> bool:
 
 def _rising_range(e, lo: float, hi: float) -> bool:
     """e' > 0 on [lo, hi], proven from e'(lo) and a signed lower bound of e'' (plain Python)."""
+    if lo == 0.0:  # (the usual case: a whole step) e'(0) = e[1]; lo^(n-2) = 0 beyond n = 2
+        B2lo = 2.0 * e[2]
+        phi = hi
+        for n in range(3, len(e)):
+            en = e[n] * phi
+            if en < 0.0:
+                B2lo += _PAIR[n] * en
+            phi *= hi
+        return e[1] + (B2lo if B2lo < 0.0 else 0.0) * hi > 0.0
     d = 0.0
     for n in range(len(e) - 1, 0, -1):
         d = d * lo + n * e[n]
@@ -335,13 +432,22 @@ def _rising_range(e, lo: float, hi: float) -> bool:
     return d + min(0.0, B2lo) * (hi - lo) > 0.0
 
 
-def _root_rising(e, lo: float, hi: float, xtol: float) -> float:
+def _root_rising(e, lo: float, hi: float, xtol: float, flo: float | None = None,
+                 fhi: float | None = None) -> float:
     """The root of e in [lo, hi] with e(lo) <= 0 < e(hi) and e' > 0 there: Newton steps kept
-    inside the bracket (bisection when they leave it), then the first point with e > 0."""
-    de = [n * e[n] for n in range(1, len(e))]
+    inside the bracket (bisection when they leave it), from the secant point of the bracket
+    (flo, fhi: e at its ends, when known), then the first point with e > 0."""
     x = lo
+    if flo is not None and fhi is not None and fhi > flo:
+        x = lo - flo * (hi - lo) / (fhi - flo)
+        if not lo <= x < hi:
+            x = lo
+    rev = e[::-1]
     for _ in range(100):
-        fx = _horner(e, x)
+        fx, dx = rev[0], 0.0
+        for ck in rev[1:]:  # value and slope in one Horner pass
+            dx = dx * x + fx
+            fx = fx * x + ck
         if fx > 0.0:
             hi = x
         else:
@@ -349,7 +455,6 @@ def _root_rising(e, lo: float, hi: float, xtol: float) -> float:
         tol = xtol + 4.0 * EPS * hi
         if hi - lo <= tol:
             break
-        dx = _horner(de, x)
         x_new = x - fx / dx if dx > 0.0 else 0.5 * (lo + hi)
         if abs(x_new - x) < tol:  # Newton has converged from one side: step across the root
             x_new += tol if fx <= 0.0 else -tol
@@ -426,6 +531,50 @@ def _combine_excluded(ex, comb):
     return ex[0]
 
 
+def _combine_hits(up: np.ndarray, groups) -> np.ndarray:
+    """Steps whose end value of some event function is > 0 (rows combined per event)."""
+    if all(comb == "one" for _, comb in groups):
+        return up.any(axis=0) if up.shape[0] > 1 else up[0]
+    hit = np.zeros(up.shape[1], bool)
+    for rows, comb in groups:
+        if len(rows) == 1:
+            hit |= up[rows[0]]
+        else:
+            hit |= up[rows].all(axis=0) if comb == "min" else up[rows].any(axis=0)
+    return hit
+
+
+def _combine_cleared(ex: np.ndarray, groups) -> np.ndarray:
+    """Steps where every event is excluded, from the per-row exclusions ex (rows, steps)."""
+    if all(comb == "one" for _, comb in groups):
+        return ex.all(axis=0) if ex.shape[0] > 1 else ex[0]
+    cleared = np.ones(ex.shape[1], bool)
+    for rows, comb in groups:
+        cleared &= ex[rows[0]] if len(rows) == 1 else _combine_excluded(ex[rows], comb)
+    return cleared
+
+
+def _combine_cleared1(ex: list, comb: str) -> bool:
+    """_combine_excluded for one event in one step (ex: its rows' exclusions)."""
+    return any(ex) if comb == "min" else all(ex)
+
+
+def _lincomb_into(out: np.ndarray, terms, const: float) -> None:
+    """out = sum of coefficient * array over the terms whose coefficient is not 0, + const."""
+    started = False
+    for coef, arr in terms:
+        if coef:
+            if started:
+                out += coef * arr
+            else:
+                np.multiply(arr, coef, out=out)
+                started = True
+    if not started:
+        out[...] = 0.0
+    if const:
+        out += const
+
+
 @dataclass(frozen=True)
 class _Event:
     """An event function: components e = aP P + bP P' + const + l0 s + l1 s', combined by min/max;
@@ -452,18 +601,16 @@ def _coefficients(comp, P, dP, a, da, n_rows):
     return e
 
 
-def _lincomb(terms, const: float):
-    """const + sum of coefficient * array over the terms whose coefficient is not 0."""
-    out = None
-    for coef, arr in terms:
-        if coef:
-            out = coef * arr if out is None else out + coef * arr
-    return out + const if const else out
-
-
 def _term_scale(comp, P, dP, s0, v0) -> float:
     aP, bP, const, l0, l1 = comp
-    return abs(aP * P[0]) + abs(bP * dP[0]) + abs(const) + abs(l0 * s0) + abs(l1 * v0)
+    scale = abs(aP * P[0]) + abs(const) if aP else abs(const)
+    if bP:
+        scale += abs(bP * dP[0])
+    if l0:
+        scale += abs(l0 * s0)
+    if l1:
+        scale += abs(l1 * v0)
+    return scale
 
 
 def _snap_zero_start(Es, comps, comb, P, dP, s0, v0) -> bool:
@@ -489,119 +636,6 @@ def _horner(c, x: float) -> float:
     return acc
 
 
-def _powers(lam, B: int):
-    """lam^n and lam^-n for n = 1..B from one logarithm: |lam^n| does not drift by n eps as
-    repeated products would; an undamped rotation (|lam| = 1 to rounding) stays exactly on the
-    unit circle."""
-    n = np.arange(1, B + 1)
-    mu = np.log(complex(lam)) if isinstance(lam, complex) else math.log(lam)
-    if isinstance(mu, complex) and abs(abs(lam) - 1.0) <= 4.0 * EPS:
-        mu = complex(0.0, mu.imag)
-    return np.exp(n * mu), np.exp(-n * mu)
-
-
-def _first_order(lam, w: np.ndarray, z0, cache: dict | None = None):
-    """z[i+1] = lam z[i] + w[i] (|lam| <= 1): z[1..L] as lam^n (z0 + cumsum(lam^-(m+1) w[m])),
-    in blocks short enough that |lam|^-B stays below 8 (at most one digit of the inputs lost);
-    None when the blocks would be too short to pay (strong damping: use the loop)."""
-    L = w.size
-    mag = abs(lam)
-    B = L if mag >= 1.0 else int(math.log(8.0) / -math.log(mag)) if mag > 0.0 else 0
-    if B < min(L, 64):
-        return None
-    B = min(B, L)
-    hit = cache.get(lam) if cache is not None else None
-    if hit is not None and hit[0].size >= B:
-        up, down = hit
-    else:
-        up, down = _powers(lam, max(B, 1024))
-        if cache is not None:
-            cache[lam] = (up, down)
-    out = np.empty(L, dtype=np.result_type(lam, w, z0))
-    z = z0
-    for b in range(0, L, B):
-        m = min(B, L - b)
-        out[b:b + m] = up[:m] * (z + np.cumsum(down[:m] * w[b:b + m]))
-        z = out[b + m - 1]
-    return out
-
-
-class _Recurrence:
-    """x[i+1] = Phi x[i] + g[i] for a run of steps sharing Phi (one table column).
-
-    Modal coordinates y = (s, (v + alpha s)/beta) turn Phi into e^(-alpha h) times a rotation
-    (underdamped) or a hyperbolic rotation (overdamped), whose eigenvectors are orthogonal:
-    the recurrence becomes one complex (or two real) first-order recurrences, solved in closed
-    form by _first_order."""
-
-    def __init__(self, lin: _Linear, Phi: np.ndarray):
-        self.Phi = Phi
-        self.cache: dict = {}  # powers of the eigenvalues
-        m, c, K = lin.m, lin.c, lin.K
-        alpha = 0.5 * c / m
-        disc = K / m - alpha * alpha
-        self.alpha = alpha
-        if K == 0.0 and c == 0.0:
-            self.mode = "cumsum"
-            return
-        scale = max(K / m, alpha * alpha)
-        if abs(disc) <= 1e-8 * scale:  # (nearly) critical damping: Jordan block, no modal form
-            self.mode = "loop"
-            return
-        root = math.sqrt(abs(disc))
-        T = np.array([[1.0, 0.0], [alpha / root, 1.0 / root]])
-        Tinv = np.array([[1.0, 0.0], [-alpha, root]])
-        Py = T @ Phi @ Tinv
-        diag, off_a, off_b = 0.5 * (Py[0, 0] + Py[1, 1]), Py[0, 1], Py[1, 0]
-        self.root = root
-        if disc > 0.0:
-            self.mode = "complex"
-            self.lam = complex(diag, 0.5 * (off_b - off_a))
-        else:
-            self.mode = "real"
-            off = 0.5 * (off_a + off_b)
-            self.lam_p, self.lam_m = diag + off, diag - off
-
-    def run(self, g: np.ndarray, s: float, v: float):
-        """Node states after each step: arrays (L,) of s and v."""
-        mode = self.mode
-        L = g.shape[1]
-        if mode == "cumsum":
-            V = v + np.cumsum(g[1])
-            Vprev = np.concatenate([[v], V[:-1]])
-            S = s + np.cumsum(self.Phi[0, 1] * Vprev + g[0])
-            return S, V
-        if mode == "loop" or L < MIN_RUN:
-            return self._loop(g, s, v)
-        a, r = self.alpha, self.root
-        w2 = (a * g[0] + g[1]) / r
-        y2 = (v + a * s) / r
-        if mode == "complex":
-            z = _first_order(self.lam, g[0] + 1j * w2, complex(s, y2), self.cache)
-            if z is None:
-                return self._loop(g, s, v)
-            S = z.real
-            V = r * z.imag - a * S
-            return S, V
-        zp = _first_order(self.lam_p, g[0] + w2, s + y2, self.cache)
-        zm = _first_order(self.lam_m, g[0] - w2, s - y2, self.cache)
-        if zp is None or zm is None:
-            return self._loop(g, s, v)
-        S = 0.5 * (zp + zm)
-        V = r * 0.5 * (zp - zm) - a * S
-        return S, V
-
-    def _loop(self, g, s, v):
-        (p11, p12), (p21, p22) = self.Phi.tolist()
-        g1, g2 = g[0].tolist(), g[1].tolist()
-        L = len(g1)
-        S, V = [0.0] * L, [0.0] * L
-        for i in range(L):
-            s, v = p11 * s + p12 * v + g1[i], p21 * s + p22 * v + g2[i]
-            S[i], V[i] = s, v
-        return np.array(S), np.array(V)
-
-
 class _Solver:
     def __init__(self, model: LinkageModel, drive, t: np.ndarray, initial_state, zeno_height: float,
                  max_events: int, chunk: int):
@@ -622,11 +656,15 @@ class _Solver:
         self._build_grid(drive, t, rho)
         h_max = float(self.h.max()) if self.h.size else 0.0
         self.n_terms = _n_terms(rho * h_max)
-        self.tabs = {kind: _tables(lin, self.h_unique, self.n_terms) for kind, lin in self.lins.items()}
-        self.recurrences: dict = {}
-        self._matrices: dict = {}
+        self._tabs: dict = {}  # step tables per phase kind, built on first use
+        self.props: dict = {}
+        self._setups: dict = {}
+        self._static_cache: dict = {}
+        self._last_length: dict = {}  # steps of the last moving phase of each kind
         nn = self.nodes.size
-        self.out = {name: np.full(nn, np.nan) for name in ("s", "v", "a", "j", "f")}
+        self.out_s = np.full(nn, np.nan)
+        self.out_v = np.full(nn, np.nan)
+        self.out_sigma = np.ones(nn)  # friction sign of moving nodes
         self.out_phase = np.full(nn, -1, dtype=np.int8)
         self.events: list[dict] = []
         self.stats = {
@@ -683,42 +721,65 @@ class _Solver:
             hr = np.where(bi < nodes.size - 1, np.concatenate([h, [np.inf]])[bi], np.inf)
             d = 1e-7 * np.minimum(hl, hr)
             D = np.asarray(drive(np.concatenate([nodes, nodes[bi] + d, nodes[bi] - d])), dtype=float)
-            right, left = D[:, :nodes.size].copy(), D[:, :nodes.size].copy()
-            right[:, bi] = _taylor_shift(D[:, nodes.size:nodes.size + nb], -d)
-            left[:, bi] = _taylor_shift(D[:, nodes.size + nb:], d)
+            nn = nodes.size
+            right, left = D[:, :nn], D[:, :nn].copy()
+            if nb <= 32:  # a few breakpoints: plain Python (numpy's overhead on tiny arrays)
+                Dr, Dl = D[:, nn:nn + nb].T.tolist(), D[:, nn + nb:].T.tolist()
+                for i, di, r, l in zip(bi.tolist(), d.tolist(), Dr, Dl):
+                    right[:, i] = _taylor_shift1(r, -di)
+                    left[:, i] = _taylor_shift1(l, di)
+            else:
+                right[:, bi] = _taylor_shift(D[:, nn:nn + nb], -d)
+                left[:, bi] = _taylor_shift(D[:, nn + nb:], d)
         else:
             right = left = np.asarray(drive(nodes), dtype=float)
-        self.P = _hermite5(h, right[:, :-1], left[:, 1:])  # (6, steps)
-        self.dP = _deriv(self.P, h)
+        P = self.P = _hermite5(h, right[:, :-1], left[:, 1:])  # (6, steps)
+        self.PT = P.T  # rows: one step's polynomial
         # drive at the nodes as the following step sees it (the last node: the end of its step):
-        # S, S', S'', S''' of the step polynomials, so node values match the step expansions
-        fact = np.array([1.0, 1.0, 2.0, 6.0])[:, None]
-        self.Dn = np.empty((4, nodes.size))
-        self.Dn[:, :-1] = fact * self.P[:4] / h ** np.arange(4)[:, None]
-        n = np.arange(6, dtype=float)[:, None]
-        last = self.P[:, -1:]
-        self.Dn[0, -1] = last.sum()
-        self.Dn[1, -1] = (n * last).sum() / h[-1]
-        self.Dn[2, -1] = (n * (n - 1) * last).sum() / h[-1] ** 2
-        self.Dn[3, -1] = (n * (n - 1) * (n - 2) * last).sum() / h[-1] ** 3
-        # per step: bounds of |S'|, |S''|, |S'''| over the step (from the polynomial)
-        nn = n.ravel()
-        weights = np.stack([nn, nn * (nn - 1), nn * (nn - 1) * (nn - 2)])
-        self.Sb = (weights @ np.abs(self.P)) / h ** np.arange(1, 4)[:, None]
-        # steps of (nearly) equal length share their tables
-        if h.max() - h.min() <= 1e-11 * h.max():  # a uniform grid (its steps differ in the last bits)
+        # S, S', S'' of the step polynomials, so node values match the step expansions
+        inv = 1.0 / h
+        inv2 = inv * inv
+        Dn = self.Dn = np.empty((3, nodes.size))
+        Dn[0, :-1] = P[0]
+        np.multiply(P[1], inv, out=Dn[1, :-1])
+        np.multiply(P[2], 2.0 * inv2, out=Dn[2, :-1])
+        last = P[:, -1].tolist()
+        Dn[0, -1] = math.fsum(last)
+        Dn[1, -1] = sum(k * c for k, c in enumerate(last)) * float(inv[-1])
+        Dn[2, -1] = sum(k * (k - 1) * c for k, c in enumerate(last)) * float(inv2[-1])
+        # per step: bounds of |S1|, |S2|, |S3| (derivatives) over the step (from the polynomial)
+        Sb = self.Sb = _BOUND_WEIGHTS @ np.abs(P)
+        Sb[0] *= inv
+        Sb[1] *= inv2
+        Sb[2] *= inv2 * inv
+        # steps of (nearly) equal length share their tables: equal up to 1e-11 relative or up to
+        # the rounding of the node times (a few ulp of t: a uniform grid of 10^5 steps differs
+        # by ~1e-10 relative from step to step). The tables take a group's mean length: a time
+        # warp of the drive by at most those roundings (~1e-18 s), no error of the state.
+        tol = max(1e-11 * float(h.max()), 8.0 * EPS * max(abs(float(nodes[0])), abs(float(nodes[-1]))))
+        self.h_max = float(h.max())
+        self.uniform = float(h.min()) >= self.h_max - tol
+        if self.uniform:
             self.h_unique = np.array([h.mean()])
             self.hidx = np.zeros(h.size, dtype=np.int64)
+            self.base_col = 0
             return
         order = np.argsort(h, kind="stable")
         hs = h[order]
-        new = np.concatenate([[True], np.diff(hs) > 1e-11 * hs[1:]])
+        new = np.concatenate([[True], np.diff(hs) > tol])
         group = np.cumsum(new) - 1
-        # tables for the mean length of a group (unbiased); the state error is |h - mean| |v|,
-        # ~1e-18 m per step for a uniform grid whose steps differ in the last bits
         self.h_unique = np.bincount(group, weights=hs) / np.bincount(group)
         self.hidx = np.empty(h.size, dtype=np.int64)
         self.hidx[order] = group
+        self.base_col = int(np.argmax(np.bincount(group)))  # the most common step length
+
+    @property
+    def dP(self) -> np.ndarray:
+        """Scaled coefficients of dS/dt per step (built on first use)."""
+        dP = self.__dict__.get("_dP")
+        if dP is None:
+            dP = self._dP = _deriv(self.P, self.h)
+        return dP
 
     def time(self, j: int, u: float) -> float:
         if j >= self.h.size:
@@ -741,17 +802,42 @@ class _Solver:
             events.append(_Event("velocity-zero", ((0.0, 0.0, 0.0, 0.0, -sigma),)))
         return events
 
-    def _event_matrix(self, kind: int, sigma: float, events):
-        """Rows (aP, bP, l0, l1, const) of all event components, and per event its rows and
-        combination (cached per phase kind and friction sign)."""
+    def _moving_setup(self, kind: int, sigma: float):
+        """The events of a moving phase and, for scanning windows of nodes: their components as
+        rows (aP, bP, const, l0, l1), per event its rows and combination, the drive's part of
+        every row at all nodes (aP S + bP S' + const), the rows' state coefficients (l0, l1), and
+        the drive's part of the phase's force kc S + cc S' at all nodes (for the acceleration).
+        Cached per phase kind and friction sign: a window then costs one small matrix product."""
         key = (kind, sigma)
-        hit = self._matrices.get(key)
+        hit = self._setups.get(key)
         if hit is None:
+            events = self._moving_events(kind, sigma)
             rows, groups = [], []
             for ev in events:
                 groups.append((list(range(len(rows), len(rows) + len(ev.comps))), ev.comb))
-                rows.extend((aP, bP, l0, l1, const) for aP, bP, const, l0, l1 in ev.comps)
-            hit = self._matrices[key] = (np.array(rows, dtype=float), groups)
+                rows.extend(ev.comps)
+            D0, D1 = self.Dn[0], self.Dn[1]
+            # the drive parts do not depend on the friction sign (only the velocity row's state
+            # coefficient does): shared between both signs
+            other = self._setups.get((kind, -sigma))
+            if other is not None and len(other[1]) == len(rows):
+                Ed, Fd = other[3], other[5]
+            else:
+                Ed = []  # (row, drive part at all nodes, or a constant): rows without one skipped
+                for r, (aP, bP, const, _, _) in enumerate(rows):
+                    if aP or bP:
+                        part = np.empty(D0.size)
+                        _lincomb_into(part, ((aP, D0), (bP, D1)), const)
+                        Ed.append((r, part))
+                    elif const:
+                        Ed.append((r, const))
+                lin = self.lins[kind]
+                Fd = np.zeros(D0.size)
+                _lincomb_into(Fd, ((lin.kc, D0), (lin.cc, D1)), 0.0)
+            Cs = np.array([[l0, l1] for _, _, _, l0, l1 in rows])
+            simple = all(comb == "one" for _, comb in groups)
+            absrows = np.abs(np.array([[aP, bP, l0, l1] for aP, bP, _, l0, l1 in rows]))  # for sag bounds
+            hit = self._setups[key] = (events, rows, groups, Ed, Cs, Fd, simple, absrows)
         return hit
 
     def _static_events(self, s_star: float) -> list[_Event]:
@@ -777,26 +863,36 @@ class _Solver:
         coefficient vectors over w in [0, 1]."""
         best = None
         for ev, Es, zero in zip(events, coeff_sets, zero_flags):
-            lists = [e.tolist() if isinstance(e, np.ndarray) else e for e in Es]
+            lists = Es
             w_lo = 0.0
             if zero:
                 # starting on its zero: most often it leaves it downwards and the plain test for
                 # the whole step suffices; otherwise clear the start analytically, test the rest
-                ex = [_excluded1(e) for e in lists]
-                if (any(ex) if ev.comb == "min" else all(ex)):
-                    continue
+                if len(lists) == 1:
+                    if _excluded1(lists[0]):
+                        continue
+                else:
+                    ex = [_excluded1(e) for e in lists]
+                    if (any(ex) if ev.comb == "min" else all(ex)):
+                        continue
                 clear = [_start_clearance(e) if e[0] == 0.0 else 0.0 for e in lists]
                 w_lo = max(clear) if ev.comb == "min" else min(clear)
                 if w_lo >= 1.0:
                     continue
-            ex = [_excluded1(e) if w_lo == 0.0 else _excluded_range(e, w_lo, 1.0) for e in lists]
-            if (any(ex) if ev.comb == "min" else all(ex)):
-                continue
+            if len(lists) == 1:
+                if _excluded1(lists[0]) if w_lo == 0.0 else _excluded_range(lists[0], w_lo, 1.0):
+                    continue
+            else:
+                ex = [_excluded1(e) if w_lo == 0.0 else _excluded_range(e, w_lo, 1.0) for e in lists]
+                if (any(ex) if ev.comb == "min" else all(ex)):
+                    continue
             e = lists[0]
-            if (ev.comb == "one" and _horner(e, w_lo) <= 0.0 < _horner(e, 1.0)
+            if ev.comb == "one":
+                e_lo, e_hi = _horner(e, w_lo), sum(e)
+            if (ev.comb == "one" and e_lo <= 0.0 < e_hi
                     and _rising_range(e, w_lo, 1.0)):  # one simple crossing: polish it directly
                 self.stats["newton_roots"] = self.stats.get("newton_roots", 0) + 1
-                w = _root_rising(e, w_lo, 1.0, max(0.5 * math.ulp(abs(t_abs)) / h_loc, 1e-300))
+                w = _root_rising(e, w_lo, 1.0, max(0.5 * math.ulp(abs(t_abs)) / h_loc, 1e-300), e_lo, e_hi)
             else:
                 w = self._first_root(Es, ev.comb, w_lo, t_abs, h_loc)
             if w is None:
@@ -891,49 +987,51 @@ class _Solver:
         return _illinois(f, lo, hi, flo, f(hi), xtol)
 
     # ---------------------------------------------------------------- recording
-    def _static_force_nodes(self, sl, s_star: float):
-        D = self.Dn[:, sl]
-        x = D[0] - self.lash - s_star
-        return np.where(x >= 0.0, np.maximum(0.0, self.k * x + self.c * D[1]), 0.0)
-
     def _record_static(self, j0: int, j1: int, s_star: float, phase: int) -> None:
         """Nodes j0..j1-1 at rest at s_star."""
         if j1 <= j0:
             return
-        sl = slice(j0, j1)
-        self.out["s"][sl] = s_star
-        self.out["v"][sl] = 0.0
-        self.out["a"][sl] = 0.0
-        self.out["j"][sl] = 0.0
-        self.out["f"][sl] = self._static_force_nodes(sl, s_star)
-        self.out_phase[sl] = phase
+        self.out_s[j0:j1] = s_star
+        self.out_v[j0:j1] = 0.0
+        self.out_phase[j0:j1] = phase
 
-    def _node_motion(self, kind: int, sl: slice, S, V, Fc: float):
-        """Acceleration and jerk at nodes from the phase ODE (exact: the closed form's derivatives)."""
-        lin = self.lins[kind]
-        D = self.Dn[:, sl]
-        f = lin.kc * D[0] + lin.cc * D[1] - Fc  # Fc holds kc * lash
-        A = (f - lin.c * V - lin.K * S) / lin.m
-        J = (lin.kc * D[1] + lin.cc * D[2] - lin.c * A - lin.K * V) / lin.m
-        return A, J
-
-    def _record_moving(self, kind: int, j0: int, S, V, A, J) -> None:
+    def _record_moving(self, kind: int, j0: int, S, V, sigma: float) -> None:
+        """Nodes j0.. moving with the states S (and V, at least as long). Acceleration, jerk and
+        linkage force follow from the phase ODE at the end (solution), for the output nodes only."""
         n = len(S)
         if n == 0:
             return
         sl = slice(j0, j0 + n)
-        self.out["s"][sl] = S
-        self.out["v"][sl] = V
-        self.out["a"][sl] = A
-        self.out["j"][sl] = J
-        if kind == CONTACT:
-            D = self.Dn[:, sl]
-            self.out["f"][sl] = np.maximum(0.0, self.k * (D[0] - self.lash - S) + self.c * (D[1] - V))
-        else:
-            self.out["f"][sl] = 0.0
+        self.out_s[sl] = S
+        self.out_v[sl] = V[:n]
         self.out_phase[sl] = kind
+        self.out_sigma[sl] = sigma
 
     # ---------------------------------------------------------------- phases
+    def _static_setup(self, s_star: float):
+        """Events of a valve at rest at s_star, per event its component rows, and the steps of
+        the whole grid that the bound max(e_i, e_i+1) + h^2/8 sup|e''| <= 0 does not clear (with
+        the per-row exclusions). A resting valve's event functions depend on the drive only, so
+        this is computed once per rest height (cached; all seated phases share it)."""
+        hit = self._static_cache.get(s_star)
+        if hit is None:
+            events = self._static_events(s_star)
+            rows, groups = [], []
+            for ev in events:
+                groups.append((list(range(len(rows), len(rows) + len(ev.comps))), ev.comb))
+                rows.extend(ev.comps)
+            D0, D1 = self.Dn[0], self.Dn[1]
+            h2 = self.h * self.h / 8.0
+            ex = np.empty((len(rows), self.h.size), dtype=bool)
+            E = np.empty(self.nodes.size)
+            for r, (aP, bP, const, _, _) in enumerate(rows):
+                _lincomb_into(E, ((aP, D0), (bP, D1)), const)
+                sag = abs(aP) * self.Sb[1] + abs(bP) * self.Sb[2] if bP else abs(aP) * self.Sb[1]
+                np.less_equal(np.maximum(E[:-1], E[1:]) + h2 * sag, 0.0, out=ex[r])
+            cand = np.flatnonzero(~_combine_cleared(ex, groups))
+            hit = self._static_cache[s_star] = (events, groups, ex, cand)
+        return hit
+
     def _run_static(self, j: int, u0: float, s_star: float, phase: int):
         """Valve at rest at s_star from (j, u0). Returns (kind, j, u) of the release, or None."""
         nsteps = self.h.size
@@ -942,9 +1040,9 @@ class _Solver:
         if j >= nsteps:
             self._record_static(j, nsteps + 1, s_star, phase)
             return None
-        events = self._static_events(s_star)
+        events, groups, ex, cand = self._static_setup(s_star)
         # first (possibly partial) step
-        P = _shift_list(self.P[:, j], u0)
+        P = _shift_list(self.PT[j], u0)
         h_loc = (1.0 - u0) * float(self.h[j])
         dP = _deriv_list(P, h_loc)
         sets, zeros = [], []
@@ -958,71 +1056,89 @@ class _Solver:
         if best is not None:
             return best[0], j, u0 + best[1] * (1.0 - u0)
         j += 1
-        while j < nsteps:
-            L = min(nsteps - j, 65536)
-            sl = slice(j, j + L + 1)
-            h = self.h[j:j + L]
-            suspect = np.zeros(L, bool)
-            for ev in events:
-                ex = []
-                for aP, bP, const, _, _ in ev.comps:
-                    E = aP * self.Dn[0, sl] + bP * self.Dn[1, sl] + const
-                    sag = h * h / 8.0 * (abs(aP) * self.Sb[1, j:j + L] + abs(bP) * self.Sb[2, j:j + L])
-                    ex.append(np.maximum(E[:-1], E[1:]) + sag <= 0.0)
-                suspect |= ~_combine_excluded(np.array(ex), ev.comb)
-            cand = np.nonzero(suspect)[0]
-            if cand.size:
-                P = self.P[:, j + cand]
-                dP = self.dP[:, j + cand]
-                sets = [[_coefficients(cp, P, dP, None, None, 6) for cp in ev.comps] for ev in events]
-                for i_c, i in enumerate(cand):
-                    col = [[e[:, i_c] for e in Es] for Es in sets]
-                    best = self._earliest(events, col, [False] * len(events), self.time(j + i, 0.0), float(h[i]))
-                    if best is not None:
-                        self._record_static(j, j + i + (1 if best[1] > 0.0 else 0), s_star, phase)
-                        return best[0], j + i, best[1]
-            self._record_static(j, j + L, s_star, phase)
-            j += L
-        self._record_static(nsteps, nsteps + 1, s_star, phase)
+        # the steps not cleared by the bound, in order, searched one by one (converted a few at
+        # a time: the list can hold every step of the lift)
+        k0 = int(np.searchsorted(cand, j))
+        for i in itertools.chain.from_iterable(cand[k:k + 16].tolist() for k in range(k0, cand.size, 16)):
+            h_i = float(self.h[i])
+            P = self.PT[i].tolist()
+            dP = _deriv_list(P, h_i)
+            check, col = [], []
+            for ev, (rr, comb) in zip(events, groups):
+                if not _combine_cleared1(ex[rr, i].tolist(), comb):
+                    check.append(ev)
+                    col.append([_coeff_list(cp, P, dP, None, None) for cp in ev.comps])
+            best = self._earliest(check, col, [False] * len(check), self.time(i, 0.0), h_i)
+            if best is not None:
+                self._record_static(j, i + (1 if best[1] > 0.0 else 0), s_star, phase)
+                return best[0], i, best[1]
+        self._record_static(j, nsteps + 1, s_star, phase)
         return None
 
-    def _recurrence(self, kind: int, col: int) -> _Recurrence:
-        key = (kind, col)
-        rec = self.recurrences.get(key)
-        if rec is None:
-            rec = self.recurrences[key] = _Recurrence(self.lins[kind], self.tabs[kind].Phi[:, :, col])
-        return rec
+    def tab(self, kind: int) -> _Tables:
+        """The step tables of a phase kind (built on first use: a flight needs none unless its
+        events must be searched in many steps at once)."""
+        tab = self._tabs.get(kind)
+        if tab is None:
+            tab = self._tabs[kind] = _tables(self.lins[kind], self.h_unique, self.n_terms)
+        return tab
 
-    def _propagate(self, kind: int, j: int, L: int, s: float, v: float, Fc: float):
-        """Node states at j+1..j+L from (s, v) at node j: runs of equal steps in closed form."""
-        tab = self.tabs[kind]
-        idx = self.hidx[j:j + L]
-        cuts = np.concatenate([[0], np.nonzero(np.diff(idx))[0] + 1, [L]])
-        S_out, V_out = np.empty(L), np.empty(L)
-        for r0, r1 in zip(cuts[:-1], cuts[1:]):
-            col = idx[r0]
-            g = tab.WP[:, :, col] @ self.P[:, j + r0:j + r1] - Fc * tab.g1[:, col][:, None]
-            S, V = self._recurrence(kind, col).run(g, s, v)
-            S_out[r0:r1], V_out[r0:r1] = S, V
-            s, v = float(S[-1]), float(V[-1])
-        return S_out, V_out
+    def _forcing(self, kind: int) -> np.ndarray:
+        """(2, steps): s and v at the end of every step from rest under the drive's forcing
+        kc S + cc S' alone. Steps of the most common length by their table (one matrix product);
+        the few others (ends at inserted breakpoints, Python) by their own expansion, so that no
+        table is built for them."""
+        lin = self.lins[kind]
+        odd = np.flatnonzero(self.hidx != self.base_col) if self.h_unique.size > 1 else None
+        if odd is not None and odd.size > 64:  # a non-uniform grid: every table, vectorised
+            WP = self.tab(kind).WP
+            G = WP[:, :, self.base_col] @ self.P
+            G[:, odd] = np.einsum("knm,nm->km", WP[:, :, self.hidx[odd]], self.P[:, odd])
+            return G
+        hb = self.h_unique[self.base_col:self.base_col + 1]
+        WP = (self._tabs[kind] if kind in self._tabs else _tables(lin, hb, self.n_terms)).WP
+        G = WP[:, :, self.base_col if kind in self._tabs else 0] @ self.P
+        if odd is not None:
+            N = self.n_terms
+            for m, hu in zip(odd.tolist(), self.h_unique[self.hidx[odd]].tolist()):
+                a = _expand(lin, self.PT[m].tolist(), hu, 0.0, 0.0, 0.0, N)
+                G[0, m] = sum(a)
+                G[1, m] = sum([k * x for k, x in enumerate(a)]) / hu
+        return G
+
+    def _prop(self, kind: int) -> Propagator:
+        """The closed-form propagator of a phase kind over the whole grid (built on first use)."""
+        prop = self.props.get(kind)
+        if prop is None:
+            lin = self.lins[kind]
+            G = None
+            if lin.kc or lin.cc:  # the drive's forcing over every step, (s, v) response from rest
+                G = self._forcing(kind)
+
+            def phi_of_step(j: int, L: int):
+                tab = self.tab(kind)
+                cols = self.hidx[j:j + L]
+                return tab.Phi[:, :, cols].tolist(), tab.g1[:, cols].tolist()
+
+            prop = self.props[kind] = Propagator(lin.m, lin.c, lin.K, self.nodes, G, phi_of_step, self.hidx,
+                                                 self.h_unique)
+        return prop
 
     def _run_moving(self, kind: int, j: int, u0: float, s: float, v: float, sigma: float, release: bool = False):
         """Valve moving (contact or flight) from (j, u0) with state (s, v) and friction sign sigma.
         release: the valve starts from rest, pushed in the direction sigma.
         Returns (event kind, j, u, s, v) or None at the end of the grid."""
-        lin, tab = self.lins[kind], self.tabs[kind]
+        lin = self.lins[kind]
         Fc = lin.kc * self.lash + self.W0 + self.R * sigma
-        events = self._moving_events(kind, sigma)
+        setup = self._moving_setup(kind, sigma)
+        events = setup[0]
         nsteps = self.h.size
         N = self.n_terms
         if j >= nsteps:
-            sl = slice(nsteps, nsteps + 1)
-            A, J = self._node_motion(kind, sl, np.array([s]), np.array([v]), Fc)
-            self._record_moving(kind, nsteps, [s], [v], A, J)
+            self._record_moving(kind, nsteps, [s], [v], sigma)
             return None
         # first (possibly partial) step: event functions may start on their zero here
-        P = _shift_list(self.P[:, j], u0)
+        P = _shift_list(self.PT[j], u0)
         h_loc = (1.0 - u0) * float(self.h[j])
         a = _expand(lin, P, h_loc, s, v, Fc, N)
         if release:
@@ -1042,110 +1158,150 @@ class _Solver:
             sets.append(Es)
         best = self._earliest(events, sets, zeros, self.time(j, u0), h_loc)
         if u0 == 0.0:
-            A, J = self._node_motion(kind, slice(j, j + 1), np.array([s]), np.array([v]), Fc)
-            self._record_moving(kind, j, [s], [v], A, J)
+            self._record_moving(kind, j, [s], [v], sigma)
         if best is not None:
             w = best[1]
             return best[0], j, u0 + w * (1.0 - u0), _horner(a, w), _horner(da, w)
         s, v = math.fsum(a), math.fsum(da)
         j += 1
-        L = self.chunk
-        m, c, K = lin.m, lin.c, lin.K
+        prop = self._prop(kind)
+        # first window: twice the last phase of this kind (a window costs in proportion to its
+        # length; most phases are short), then 8x as long until an event is found
+        L = max(self.chunk, 2 * self._last_length.get(kind, 0))
+        j_start = j
         while j < nsteps:
             L = min(nsteps - j, L)
-            S, V = self._propagate(kind, j, L, s, v, Fc)
-            S = np.concatenate([[s], S])  # nodes j..j+L
-            V = np.concatenate([[v], V])
-            sl = slice(j, j + L + 1)
-            A, J = self._node_motion(kind, sl, S, V, Fc)
-            h = self.h[j:j + L]
-            H = float(h.max())
-            # chunk bounds of |a| and |jerk| between nodes (see the module docstring): from the
-            # node maxima and the ODE, a = a_node + int j, j = (f' - c a - K v)/m
-            q = H * (c + K * H) / m
-            Vn = float(np.abs(V).max())
-            prefilter = q < 0.5
-            if prefilter:
-                S1b, S2b, S3b = (float(x.max()) for x in self.Sb[:, j:j + L])
-                F1 = lin.kc * S1b + lin.cc * S2b
-                Ahat = (float(np.abs(A).max()) + H * (F1 + K * Vn) / m) / (1.0 - q)
-                Jhat = (F1 + c * Ahat + K * (Vn + H * Ahat)) / m
-            # all event components at the nodes at once: rows of C times (S, S', s, v, 1)
-            C, groups = self._event_matrix(kind, sigma, events)
-            X = np.empty((5, L + 1))
-            X[0], X[1], X[2], X[3], X[4] = self.Dn[0, sl], self.Dn[1, sl], S, V, 1.0
-            E = C @ X
-            # an event happens at the latest in the step where some function turns > 0
-            last = L
-            up_rows = E[:, 1:] > 0.0
-            for rows, comb in groups:
-                hit = up_rows[rows[0]] if len(rows) == 1 else (
-                    up_rows[rows].all(axis=0) if comb == "min" else up_rows[rows].any(axis=0))
-                first = int(np.argmax(hit))
-                if hit[first]:
-                    last = min(last, first + 1)
-            if prefilter:
-                sag = H * H / 8.0 * (np.abs(C[:, :4]) @ np.array([S2b, S3b, Ahat, Jhat]))
-                ex = np.maximum(E[:, :-1], E[:, 1:]) + sag[:, None] <= 0.0
-                suspect = np.zeros(L, bool)
-                for rows, comb in groups:
-                    suspect |= ~(ex[rows[0]] if len(rows) == 1 else _combine_excluded(ex[rows], comb))
-                cand = np.nonzero(suspect[:last])[0]
-            else:
-                cand = np.arange(last)
-            if 0 < cand.size <= 4:  # the usual case near an event: expand those steps in Python
-                for i in cand.tolist():
-                    h_i = float(self.h[j + i])
-                    P = self.P[:, j + i].tolist()
-                    a = _expand(lin, P, h_i, float(S[i]), float(V[i]), Fc, N)
-                    da, dP = _deriv_list(a, h_i), _deriv_list(P, h_i)
-                    col = [[_coeff_list(cp, P, dP, a, da) for cp in ev.comps] for ev in events]
-                    best = self._earliest(events, col, [False] * len(events), self.time(j + i, 0.0), h_i)
-                    if best is not None:
-                        w = best[1]
-                        n_rec = i + (1 if w > 0.0 else 0)
-                        self._record_moving(kind, j, S[:n_rec], V[:n_rec], A[:n_rec], J[:n_rec])
-                        return best[0], j + i, w, _horner(a, w), _horner(da, w)
-            elif cand.size:
-                steps = j + cand
-                cols = self.hidx[steps]
-                P = self.P[:, steps]
-                hc = self.h[steps]
-                a = (tab.A[:, cols] * S[cand] + tab.B[:, cols] * V[cand]
-                     + np.einsum("nku,ku->nu", tab.R[:, :, cols], P) - Fc * tab.C1[:, cols])
-                da = _deriv(a, hc)
-                dP = self.dP[:, steps]
-                sets = [[_coefficients(cp, P, dP, a, da, N + 1) for cp in ev.comps] for ev in events]
-                if cand.size > 32:  # many (stiff linkage): the exact per-step test vectorized first
-                    still = np.zeros(cand.size, bool)
-                    for ev, Es in zip(events, sets):
-                        still |= ~_combine_excluded(np.array([_excluded_steps(e) for e in Es]), ev.comb)
-                    order = np.nonzero(still)[0]
-                else:  # few: _earliest tests each step in plain Python
-                    order = range(cand.size)
-                for i_c in order:
-                    i = int(cand[i_c])
-                    col = [[e[:, i_c] for e in Es] for Es in sets]
-                    best = self._earliest(events, col, [False] * len(events), self.time(j + i, 0.0), float(hc[i_c]))
-                    if best is not None:
-                        w = best[1]
-                        n_rec = i + (1 if w > 0.0 else 0)
-                        self._record_moving(kind, j, S[:n_rec], V[:n_rec], A[:n_rec], J[:n_rec])
-                        return best[0], j + i, w, _horner(a[:, i_c], w), _horner(da[:, i_c], w)
-            self._record_moving(kind, j, S[:L], V[:L], A[:L], J[:L])
-            s, v = float(S[L]), float(V[L])
-            j += L
-            L = min(4 * L, 16384)
-        A, J = self._node_motion(kind, slice(nsteps, nsteps + 1), np.array([s]), np.array([v]), Fc)
-        self._record_moving(kind, nsteps, [s], [v], A, J)
+            SV = prop.states(j, L, s, v, Fc)  # nodes j..j+L
+            S, V = SV
+            found, n_done = self._scan_window(kind, lin, j, L, SV, Fc, setup)
+            if found is not None:
+                which, i, w, s_ev, v_ev = found
+                self._last_length[kind] = j + i - j_start
+                self._record_moving(kind, j, S[:i + (1 if w > 0.0 else 0)], V, sigma)
+                return which, j + i, w, s_ev, v_ev
+            self._record_moving(kind, j, S[:n_done], V, sigma)
+            s, v = float(S[n_done]), float(V[n_done])
+            j += n_done
+            L = 8 * L
+        self._record_moving(kind, nsteps, [s], [v], sigma)
         return None
+
+    def _scan_window(self, kind, lin, j: int, L: int, SV, Fc: float, setup):
+        """The first event in the steps j..j+L-1, given the node states SV = (s, v) at j..j+L.
+        Returns ((kind, i, w, s, v), i) for an event in step j+i at w, or (None, n): the
+        first n steps are clear of events.
+
+        Event values at all nodes at once; a function > 0 at a node ends the search there (the
+        event lies at the latest in the step before). Steps before it are cleared by the bound
+        max(e_i, e_i+1) + h^2/8 sup|e2| <= 0, sup|e2| from window bounds of |S2|, |S3|, |a|,
+        |jerk| (from the node maxima and the ODE: a = a_node + int jerk, jerk = (f' - c a - K v)/m).
+        The few steps not cleared are expanded and searched one by one."""
+        events, rows, groups, Ed, Cs, Fd, simple, absrows = setup
+        S, V = SV
+        E = Cs @ SV
+        for r, part in Ed:
+            E[r] += part[j:j + L + 1] if isinstance(part, np.ndarray) else part
+        if simple:  # every event one row: the largest row decides where one turns > 0
+            top = _MAX(E[:, 1:], axis=0) if len(rows) > 1 else E[0, 1:]
+            first = int((top > 0.0).argmax())
+            last = first + 1 if top[first] > 0.0 else L
+        else:
+            hit = _combine_hits(E[:, 1:] > 0.0, groups)
+            first = int(hit.argmax())
+            last = first + 1 if hit[first] else L
+        n = last
+        m, c, K = lin.m, lin.c, lin.K
+        H = self.h_max if self.uniform else float(_MAX(self.h[j:j + n]))
+        q = H * (c + K * H) / m
+        if q < 0.5:
+            S1b, S2b, S3b = _MAX(self.Sb[:, j:j + n], axis=1).tolist()
+            Sw, Vw = S[:n], V[:n]
+            Vn = float(_MAX(np.abs(Vw)))
+            A = Fd[j:j + n] - Fc - K * Sw
+            if c:
+                A -= c * Vw
+            An = float(_MAX(np.abs(A))) / m
+            F1 = lin.kc * S1b + lin.cc * S2b
+            Ahat = (An + H * (F1 + K * Vn) / m) / (1.0 - q)
+            Jhat = (F1 + c * Ahat + K * (Vn + H * Ahat)) / m
+            H8 = H * H / 8.0
+            sag = absrows @ np.array([H8 * S2b, H8 * S3b, H8 * Ahat, H8 * Jhat])
+            ex = np.maximum(E[:, :n], E[:, 1:n + 1]) + sag[:, None] <= 0.0
+            cand = np.flatnonzero(~_combine_cleared(ex, groups))
+            if cand.size > 1:
+                # the window's maxima are loose where a function starts near its zero (a phase
+                # begun by an event): the same bound with each step's own left-node values
+                steps = j + cand
+                Vi = np.abs(V[cand])
+                F1i = lin.kc * self.Sb[0, steps] + lin.cc * self.Sb[1, steps] if lin.kc else 0.0
+                Ai = (np.abs(A[cand]) / m + H * (F1i + K * Vi) / m) / (1.0 - q)
+                Ji = (F1i + c * Ai + K * (Vi + H * Ai)) / m
+                S2i, S3i = self.Sb[1, steps], self.Sb[2, steps]
+                sag_i = H8 * (absrows @ np.array([S2i, S3i, Ai, Ji]))
+                ex_i = np.maximum(E[:, cand], E[:, cand + 1]) + sag_i <= 0.0
+                keep = ~_combine_cleared(ex_i, groups)
+                ex[:, cand] = ex_i
+                cand = cand[keep]
+        else:
+            ex = None
+            cand = np.arange(n)
+        if 0 < cand.size <= 4:  # the usual case near an event: expand those steps in Python
+            N = self.n_terms
+            for i in cand.tolist():
+                h_i = float(self.h[j + i])
+                P = self.PT[j + i].tolist()
+                a = _expand(lin, P, h_i, float(S[i]), float(V[i]), Fc, N)
+                da, dP = _deriv_list(a, h_i), _deriv_list(P, h_i)
+                if ex is None:
+                    check = events
+                    col = [[_coeff_list(cp, P, dP, a, da) for cp in ev.comps] for ev in events]
+                else:  # only the events the window bound did not clear in this step
+                    check, col = [], []
+                    exi = ex[:, i].tolist()
+                    for ev, (rr, comb) in zip(events, groups):
+                        cleared = exi[rr[0]] if len(rr) == 1 else _combine_cleared1([exi[r] for r in rr], comb)
+                        if not cleared:
+                            check.append(ev)
+                            col.append([_coeff_list(cp, P, dP, a, da) for cp in ev.comps])
+                best = self._earliest(check, col, [False] * len(check), self.time(j + i, 0.0), h_i)
+                if best is not None:
+                    w = best[1]
+                    return (best[0], i, w, _horner(a, w), _horner(da, w)), i
+        elif cand.size:
+            tab = self.tab(kind)
+            N = self.n_terms
+            steps = j + cand
+            cols = self.hidx[steps]
+            P = self.P[:, steps]
+            hc = self.h[steps]
+            a = (tab.A[:, cols] * S[cand] + tab.B[:, cols] * V[cand]
+                 + np.einsum("nku,ku->nu", tab.R[:, :, cols], P) - Fc * tab.C1[:, cols])
+            da = _deriv(a, hc)
+            dP = self.dP[:, steps]
+            sets = [[_coefficients(cp, P, dP, a, da, N + 1) for cp in ev.comps] for ev in events]
+            if cand.size > 32:  # many (stiff linkage): the exact per-step test vectorized first
+                still = np.zeros(cand.size, bool)
+                for ev, Es in zip(events, sets):
+                    still |= ~_combine_excluded(np.array([_excluded_steps(e) for e in Es]), ev.comb)
+                order = np.nonzero(still)[0]
+            else:  # few: _earliest tests each step in plain Python
+                order = range(cand.size)
+            for i_c in order:
+                i = int(cand[i_c])
+                col = [[e[:, i_c].tolist() for e in Es] for Es in sets]
+                best = self._earliest(events, col, [False] * len(events), self.time(j + i, 0.0), float(hc[i_c]))
+                if best is not None:
+                    w = best[1]
+                    return (best[0], i, w, _horner(a[:, i_c], w), _horner(da[:, i_c], w)), i
+        return None, n
 
     # ---------------------------------------------------------------- helpers at an instant
     def _drive_at(self, j: int, u: float):
         """S, S' of the step polynomial at (j, u) (the last node: its left value)."""
         if j >= self.h.size:
             return float(self.Dn[0, -1]), float(self.Dn[1, -1])
-        return _horner(self.P[:, j], u), _horner(self.dP[:, j], u)
+        P = self.PT[j].tolist()
+        return _horner(P, u), _horner(_deriv_list(P, float(self.h[j])), u)
 
     def _static_force(self, S: float, S1: float, s: float) -> float:
         x = S - self.lash - s
@@ -1276,14 +1432,45 @@ class _Solver:
         return kind, 0.0, rebound, 1.0, j, u
 
     def solution(self, t_req: np.ndarray, inverse) -> DynamicsSolution:
-        sel = self.is_out
-        pick = {k: v[sel][inverse] for k, v in self.out.items()}
-        phase = self.out_phase[sel][inverse]
+        """The results at the output times (inverse: node of each output time, None: one each)."""
+        s, v, phase = self.out_s, self.out_v, self.out_phase
+        D0, D1, D2 = self.Dn
+        # acceleration and jerk from the phase ODEs (exact: the closed form's derivatives), with
+        # each node's coefficients looked up by its phase code (at rest: a = jerk = 0)
+        table = np.zeros((7, 4))
+        table[1] = 1.0  # m
+        for code, lin in self.lins.items():
+            table[:, code] = (1.0, lin.m, lin.c, lin.K, lin.kc, lin.cc, lin.kc * self.lash + self.W0)
+        moving, m, c, K, kc, cc, Fc = table[:, phase]
+        if self.R:
+            Fc += self.R * self.out_sigma
+        if self.c:
+            acc = (kc * D0 + cc * D1 - Fc - c * v - K * s) / m * moving
+            jerk = (kc * D1 + cc * D2 - c * acc - K * v) / m * moving
+        else:  # the same without the (zero) damping terms
+            acc = (kc * D0 - Fc - K * s) / m * moving
+            jerk = (kc * D1 - K * v) / m * moving
+        # linkage force: in contact the stretched linkage; at rest the static force; in flight 0
+        x = D0 - self.lash - s
+        kx = self.k * x
+        if self.c:
+            contact_force = np.maximum(0.0, kx + self.c * (D1 - v))
+            rest_force = np.where(x >= 0.0, np.maximum(0.0, kx + self.c * D1), 0.0)
+            force = np.where(phase == CONTACT, contact_force, np.where(moving > 0.0, 0.0, rest_force))
+        else:  # undamped: contact and rest alike max(0, k x) (k x < 0 exactly where x < 0)
+            force = np.maximum(kx, 0.0)
+            force[phase == FLIGHT] = 0.0
         self.stats["events"] = len(self.events)
+        if inverse is None and self.is_out.all():  # the output times are the nodes
+            pick = slice(None)
+        else:
+            out = np.flatnonzero(self.is_out)
+            pick = out if inverse is None else out[inverse]
+        force = force[pick]
         return DynamicsSolution(
-            t=t_req, s=pick["s"], v=pick["v"], a=pick["a"], linkage_force=pick["f"],
-            contact=pick["f"] > 0.0, events=tuple(self.events), stats=self.stats,
-            jerk=pick["j"], phase=phase.astype(np.int64),
+            t=t_req, s=s[pick], v=v[pick], a=acc[pick], linkage_force=force,
+            contact=force > 0.0, events=tuple(self.events), stats=self.stats,
+            jerk=jerk[pick], phase=phase[pick].astype(np.int64),
         )
 
 
@@ -1294,21 +1481,28 @@ def solve(
     initial_state: tuple[float, float] | None = None,
     zeno_height: float = 1e-12,
     max_events: int = 100_000,
-    chunk: int = 256,
+    chunk: int = 512,
 ) -> DynamicsSolution:
     """Piecewise-exact solution at the output times t (sorted).
 
     initial_state: (s, v) at t[0]; default: at rest on the seat.
     zeno_height: seat chatter ends (in closed form) once a rebound would rise less than this (m).
     max_events: guard against a motion that never settles (raises RuntimeError).
-    chunk: steps advanced at the start of a phase before the events are scanned (grows 4x).
+    chunk: fewest steps propagated and scanned at once at the start of a moving phase (then twice
+      the last phase of its kind, growing 8x while no event is found).
     """
     t_req = np.asarray(t, dtype=float).ravel()
-    if t_req.size == 0 or np.any(np.diff(t_req) < 0.0) or not np.all(np.isfinite(t_req)):
+    steps = np.diff(t_req)
+    if t_req.size == 0 or np.any(steps < 0.0) or not np.all(np.isfinite(t_req)):
         raise ValueError("output times must be a non-empty, sorted array of finite numbers")
-    t_nodes, inverse = np.unique(t_req, return_inverse=True)
-    if t_nodes.size == 1:  # one instant: the state itself
-        t_nodes = np.array([t_nodes[0], t_nodes[0] + 1e-9])
+    if t_req.size > 1 and steps.min() > 0.0:  # strictly increasing: the nodes themselves
+        t_nodes, inverse = t_req, None
+    else:
+        t_nodes, inverse = np.unique(t_req, return_inverse=True)
+        inverse = inverse.ravel()
+        if t_nodes.size == 1:  # one instant: the state itself
+            t_nodes = np.array([t_nodes[0], t_nodes[0] + 1e-9])
+            inverse = np.zeros(t_req.size, dtype=np.int64)
     solver = _Solver(model, drive, t_nodes, initial_state, zeno_height, max_events, chunk)
     solver.run()
-    return solver.solution(t_req, inverse.ravel())
+    return solver.solution(t_req, inverse)
