@@ -189,6 +189,13 @@ class ClosureCheck:
 
 
 def closure_of_points(angles, values, interpolation: str = "linear") -> ClosureCheck:
+    """See _closure_of_points. Absurd inputs (hypothesis tries them) may overflow to inf; the
+    non-finite result is refused by the caller with an InputError, so numpy need not warn."""
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        return _closure_of_points(angles, values, interpolation)
+
+
+def _closure_of_points(angles, values, interpolation: str = "linear") -> ClosureCheck:
     """The closure check in closed form, piece by piece (numpy only, used when a scene loads;
     AccelerationLift.closure_check computes the same from the PPoly antiderivatives). On a piece
     of width w with end accelerations a0, a1 (a1 = a0 for steps) and k = (a1 - a0)/w:
