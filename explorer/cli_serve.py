@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import ipaddress
+import signal
 import sys
+import threading
 import time
 
 from .errors import InputError
@@ -15,7 +18,8 @@ as computed, with plots of s, v, p and forces over the revolution and a read-out
 peaks and warnings. Change the scene, the lift law, speed, lash, stiffness, spring and the
 effects in the side panel; every change is recomputed at once.
 
-Binds 127.0.0.1 (this machine only) unless --host says otherwise. Ctrl-C stops it.
+Binds 127.0.0.1 (this machine only) unless --host says otherwise. Ctrl-C (or SIGTERM) stops it
+cleanly: the --rerun stream is flushed and the --rerun-save file completed.
 """
 
 
@@ -45,6 +49,27 @@ def _is_loopback(host: str) -> bool:
         return False
 
 
+@contextlib.contextmanager
+def _sigterm_as_ctrl_c():
+    """SIGTERM (kill, systemd, a container stopping) stops the server like Ctrl-C, so the
+    `finally` below closes the live stream (the default action ends the process on the spot and
+    a --rerun-save file is never merged). A second SIGTERM during that clean-up ends it at once."""
+    if threading.current_thread() is not threading.main_thread():
+        yield  # signal handlers belong to the main thread; whoever runs us there handles them
+        return
+    previous = signal.getsignal(signal.SIGTERM)
+
+    def handler(signum, frame):
+        signal.signal(signal.SIGTERM, previous)
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def run(args) -> int:
     from .cli_simulate import scene_from_args
 
@@ -54,31 +79,35 @@ def run(args) -> int:
     if not _is_loopback(args.host):
         print(f"warning: listening on {args.host}: anyone who can reach this machine can open the explorer",
               file=sys.stderr)
-    stream = None
     if args.rerun or args.rerun_save:
         try:
             from .recording import open_live_stream
         except ImportError as exc:
             raise InputError("--rerun", "--rerun", f"rerun streaming is not available ({exc})") from None
-        stream = open_live_stream(args)
 
     import viser
 
     from .viewer.app import ExplorerApp
 
-    server = viser.ViserServer(host=args.host, port=args.port, verbose=False)
-    on_result = (lambda prepared: stream.log(prepared.result, prepared.label)) if stream is not None else None
-    app = ExplorerApp(server, scene.source, args.overrides, playing=not args.paused, on_result=on_result)
-    shown_host = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
-    print(f"Valve-Gear Explorer: http://{shown_host}:{server.get_port()}  (Ctrl-C stops)", flush=True)
-    try:
-        while True:
-            time.sleep(0.5)
-    except KeyboardInterrupt:
-        print("stopping", file=sys.stderr)
-    finally:
-        app.stop()
-        server.stop()
-        if stream is not None:
-            stream.close()
+    with _sigterm_as_ctrl_c():
+        stream = server = app = None
+        try:
+            if args.rerun or args.rerun_save:
+                stream = open_live_stream(args)
+            server = viser.ViserServer(host=args.host, port=args.port, verbose=False)
+            on_result = (lambda prepared: stream.log(prepared.result, prepared.label)) if stream is not None else None
+            app = ExplorerApp(server, scene.source, args.overrides, playing=not args.paused, on_result=on_result)
+            shown_host = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
+            print(f"Valve-Gear Explorer: http://{shown_host}:{server.get_port()}  (Ctrl-C stops)", flush=True)
+            while True:
+                time.sleep(0.5)
+        except KeyboardInterrupt:
+            print("stopping", file=sys.stderr)
+        finally:
+            if app is not None:
+                app.stop()
+            if server is not None:
+                server.stop()
+            if stream is not None:
+                stream.close()
     return 0

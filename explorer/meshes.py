@@ -68,6 +68,10 @@ class _PartColors(dict):
 
 PART_COLORS = _PartColors(PART_COLORS)
 
+# The drawn rollers (this module's and explorer.gears.meshes') have four bores, a quarter turn
+# apart: they look the same after a quarter turn.
+ROLLER_MARKS = 4
+
 SPRING_ACTIVE_COILS = 6
 SPRING_DEAD_COILS = 1.0  # closed, touching coil at each end
 SPRING_SEGMENTS_PER_TURN = 36
@@ -409,7 +413,7 @@ def _roller_mesh(lay: Layout) -> trimesh.Trimesh:
     hub = _cylinder_y(0.28 * r, 1.15 * w, 24)
     marks = [
         _cylinder_y(0.12 * r, 1.04 * w, 12, (0.62 * r * math.cos(a), 0.0, 0.62 * r * math.sin(a)))
-        for a in (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi)
+        for a in (2.0 * math.pi / ROLLER_MARKS) * np.arange(ROLLER_MARKS)
     ]
     return _concat([rim, hub, *marks])
 
@@ -602,7 +606,10 @@ def displayed_valve_lift(result, magnification: float = 1.0) -> np.ndarray:
 def roller_spin(scene, lift, theta: np.ndarray) -> np.ndarray:
     """Roller angle (rad, counter-clockwise in the cam plane) for rolling without slip on the cam,
     zero at theta[0]. Pure rolling: the roller's surface speed at the contact equals the cam's,
-    omega_r rr = (omega x p - v_f) . t, integrated over the (uniform or not) samples."""
+    omega_r rr = (omega x p - v_f) . t, integrated over the (uniform or not) samples.
+
+    Over a revolution the roller turns by perimeter / rr, in general not a whole number of turns:
+    `part_poses` draws it with `loop_spin` so that a looped animation does not jump at 360 -> 0."""
     rr = scene.follower.roller_radius
     if rr <= 0.0:
         return np.zeros_like(theta)
@@ -622,6 +629,26 @@ def roller_spin(scene, lift, theta: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * steps)])
 
 
+def loop_spin(spin: np.ndarray, total: float, marks: int = ROLLER_MARKS) -> np.ndarray:
+    """The roller spin as drawn in a looped animation of one revolution.
+
+    A revolution turns the roller by `total` (rad), in general not a whole number of quarter
+    turns, so replaying the revolution made the bores jump at 360 -> 0 (by up to 45 degrees,
+    against a fraction of a degree per step). The drawing scales the spin by the least factor
+    that makes `total` a whole number of the marks' period 2 pi / marks: the roller then rolls as
+    if its radius were off by that factor, at most (pi / marks) / |total| (3.4 % for Schenker's
+    Fig. 2 gear) and looks the same at the end of the revolution as at its start. A roller that
+    turns less than half a period in a revolution gets a constant correction instead (a ramp of
+    at most (pi / marks) / (2 pi) rad per radian of cam angle). `spin` holds the n uniform steps
+    of one revolution, zero at the first."""
+    period = 2.0 * math.pi / marks
+    turns = round(total / period)
+    if turns == 0:
+        theta_fraction = np.arange(len(spin)) / len(spin)
+        return spin - total * theta_fraction
+    return spin * (turns * period / total)
+
+
 def part_poses(scene, result, magnification: float = 1.0, lay: Layout | None = None, lift=None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """One world pose per step of `result.columns` for every part: name -> (positions (N, 3),
     wxyz (N, 4)). The spring's pose is fixed; its shape follows `spring_length(lay,
@@ -631,7 +658,10 @@ def part_poses(scene, result, magnification: float = 1.0, lay: Layout | None = N
     if scene.follower.type in GEAR_TYPES:
         from .gears.meshes import gear_poses
 
-        return gear_poses(scene, result, magnification=magnification, lay=lay, lift=lift)
+        poses = gear_poses(scene, result, magnification=magnification, lay=lay, lift=lift)
+        if "roller" in poses:
+            poses["roller"] = (poses["roller"][0], _looped_roller_rotation(poses["roller"][1]))
+        return poses
     lay = lay or layout(scene, result)
     cols = result.columns
     theta = np.radians(np.asarray(cols["cam_angle_deg"], dtype=float))
@@ -649,7 +679,9 @@ def part_poses(scene, result, magnification: float = 1.0, lay: Layout | None = N
     cam_q = quat_about_y(-theta)
     roller_pos = np.column_stack([np.full(n, lay.offset), np.zeros(n), lay.prime_y + L])
     lift = lift if lift is not None else build_lift(scene)
-    spin = roller_spin(scene, lift, theta)
+    # the revolution's last step back to 2 pi too: the spin over the whole revolution
+    spin = roller_spin(scene, lift, np.append(theta, theta[0] + 2.0 * math.pi))
+    spin = loop_spin(spin[:-1], spin[-1])
     phi = np.arcsin(np.clip(L / lay.arm_follower, -1.0, 1.0))
     px, py, pz = lay.pivot
     stem_top = lay.stem_top_rest - s_disp
@@ -670,6 +702,19 @@ def part_poses(scene, result, magnification: float = 1.0, lay: Layout | None = N
         "spring": (fixed(lay.valve_x, 0.0, lay.spring_seat_z), ident.copy()),
         "seat": (fixed(0.0, 0.0, 0.0), ident.copy()),
     }
+
+
+def _looped_roller_rotation(wxyz: np.ndarray) -> np.ndarray:
+    """`loop_spin` for a roller given as per-step rotations about y (the other gears' rollers,
+    whose spin explorer.gears.meshes integrates from its own geometry). The revolution's last
+    step back to the start is estimated from its neighbours (a drawing, not a result)."""
+    wxyz = np.asarray(wxyz, dtype=float)
+    if len(wxyz) < 3 or not np.allclose(wxyz[:, [1, 3]], 0.0, atol=1e-12):
+        return wxyz
+    angle = np.unwrap(2.0 * np.arctan2(wxyz[:, 2], wxyz[:, 0]))
+    steps = np.diff(angle)
+    total = angle[-1] - angle[0] + 0.5 * (steps[-1] + steps[0])
+    return quat_about_y(angle[0] + loop_spin(angle - angle[0], total))
 
 
 def spring_axial_scale(scene, result, magnification: float = 1.0, lay: Layout | None = None) -> np.ndarray:

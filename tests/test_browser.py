@@ -28,12 +28,40 @@ pytestmark = [
 ]
 
 
+# CI runs the whole suite on 2 cores with software WebGL: every wait is generous and waits for a
+# concrete state of the page, never for a fixed time. The server starts paused, so its animation
+# loop sends nothing unless asked and cannot starve the browser.
+WAIT_S = 120.0
+WAIT_MS = int(1000 * WAIT_S)
+
+NODE_POSITION = (
+    "(name) => { const n = window.__viserMutable?.nodeRefFromName?.[name];"
+    " return n ? [n.position.x, n.position.y, n.position.z] : null; }"
+)
+# true once the page holds every named node at the given position (to 1e-6 m)
+NODES_AT = """(expected) => Object.entries(expected).every(([name, p]) => {
+    const n = window.__viserMutable?.nodeRefFromName?.[name];
+    return n !== undefined && Math.abs(n.position.x - p[0]) < 1e-6 && Math.abs(n.position.y - p[1]) < 1e-6
+        && Math.abs(n.position.z - p[2]) < 1e-6; })"""
+# resolves after the page has drawn two more frames (so the last update is on the canvas)
+TWO_FRAMES = "() => new Promise(resolve => requestAnimationFrame(() => requestAnimationFrame(() => resolve(true))))"
+
+
 def _node_position(page, name):
-    return page.evaluate(
-        "(name) => { const n = window.__viserMutable.nodeRefFromName[name];"
-        " return n ? [n.position.x, n.position.y, n.position.z] : null; }",
-        name,
-    )
+    return page.evaluate(NODE_POSITION, name)
+
+
+def _server_positions(app, names):
+    return {f"/gear/{name}": [float(v) for v in app.server.scene.get_handle_by_name(f"/gear/{name}").position]
+            for name in names}
+
+
+def _wait_in_step(page, app, names):
+    """Wait until the page shows the server's current positions of `names`; return them."""
+    assert app.wait_applied(WAIT_S)
+    expected = _server_positions(app, names)
+    page.wait_for_function(NODES_AT, arg=expected, timeout=WAIT_MS)
+    return expected
 
 
 def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
@@ -48,33 +76,34 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = ExplorerApp(server, str(default_scene()), playing=False)
     try:
-        assert app.wait_applied(60)
+        assert app.wait_applied(WAIT_S)
+        assert not app.playback.playing
         # start in mid-lift, where lever, spring and valve are visibly displaced
         s = app.current.result.columns["valve_lift_m"]
         rising = np.nonzero((s > 0.55 * s.max()) & (np.gradient(s) > 0))[0]
         start_angle = float(app.current.result.columns["cam_angle_deg"][rising[0] if rising.size else 0])
         app.angle.value = round(start_angle, 1)
-        assert app.wait_applied(10)
+        assert app.wait_applied(WAIT_S)
         url = f"http://127.0.0.1:{server.get_port()}/"
         with sync_api.sync_playwright() as pw:
             context = pw.chromium.launch_persistent_context(
                 str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=ARGS,
-                viewport={"width": 1600, "height": 1000},
+                viewport={"width": 1600, "height": 1000}, timeout=WAIT_MS,
             )
+            context.set_default_timeout(WAIT_MS)  # locators, clicks, the screenshot
+            context.set_default_navigation_timeout(WAIT_MS)
             try:
                 page = context.new_page()
                 page.goto(url)
                 page.wait_for_function(
-                    "() => window.__viserMutable?.nodeRefFromName?.['/gear/valve'] !== undefined", timeout=60000
+                    "() => window.__viserMutable?.nodeRefFromName?.['/gear/valve'] !== undefined", timeout=WAIT_MS
                 )
-                page.get_by_text("Connected").first.wait_for(timeout=30000)
+                page.get_by_text("Connected").first.wait_for(timeout=WAIT_MS)
                 # the page holds the poses the server computed
-                page.wait_for_timeout(1500)
-                for name in ("valve", "roller", "adjuster", "follower"):
-                    np.testing.assert_allclose(
-                        _node_position(page, f"/gear/{name}"), app.server.scene.get_handle_by_name(f"/gear/{name}").position,
-                        atol=1e-6, err_msg=name,
-                    )
+                parts = ("valve", "roller", "adjuster", "follower")
+                expected = _wait_in_step(page, app, parts)
+                for name, position in expected.items():
+                    np.testing.assert_allclose(_node_position(page, name), position, atol=1e-6, err_msg=name)
                 valve_before = _node_position(page, "/gear/valve")
 
                 # a person clicks the cam-angle slider in the middle of the longest closed stretch
@@ -88,13 +117,25 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                 target = (best_end - best / 2.0) % len(s_all) * 360.0 / len(s_all)
                 slider_id = page.locator("label", has_text="Cam angle").first.get_attribute("for")
                 box = page.locator(f"[id='{slider_id}']").bounding_box()
-                page.mouse.click(box["x"] + target / 360.0 * box["width"], box["y"] + 0.5 * box["height"])
+                thumb = f"[id='{slider_id}'] [role=slider]"
+                shown_before = page.locator(thumb).get_attribute("aria-valuenow")
+                page.mouse.move(box["x"] + target / 360.0 * box["width"], box["y"] + 0.5 * box["height"])
+                # press, see the thumb jump there, release: the slider takes the pointer's position
+                # in an animation frame, which a busy software renderer may run only after a
+                # quick click's release (then the click is lost)
+                page.mouse.down()
+                page.wait_for_function(
+                    "([thumb, before]) => document.querySelector(thumb)?.getAttribute('aria-valuenow') !== before",
+                    arg=[thumb, shown_before], timeout=WAIT_MS,
+                )
+                page.mouse.up()
                 page.wait_for_function(
                     "(z) => Math.abs(window.__viserMutable.nodeRefFromName['/gear/valve'].position.z - z) > 1e-6",
-                    arg=valve_before[2], timeout=60000,
+                    arg=valve_before[2], timeout=WAIT_MS,
                 )
+                # the click's value went to the server, which drew that angle, and the page shows it
+                _wait_in_step(page, app, ("valve",))
                 assert app.playback.angle_deg == pytest.approx(target, abs=6.0)
-                assert app.wait_applied(10)
                 valve_after = _node_position(page, "/gear/valve")
                 result, lay = app.current.result, app.current.layout
                 i = step_index(app.playback.angle_deg, len(result.columns["cam_angle_deg"]))
@@ -107,34 +148,42 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                 for name in ("forces", "elastic"):
                     app.effects[name].value = True
                 app.magnification.value = 10.0
-                assert app.wait_applied(60)
+                assert app.wait_applied(WAIT_S)
                 if app.error_text:  # a scene without [linkage] or [spring]: keep its own effects
                     for name in ("forces", "elastic"):
                         app.effects[name].value = name in app.current.scene.effects
-                    assert app.wait_applied(60)
+                    assert app.wait_applied(WAIT_S)
+                assert app.error_text == ""
                 cols, scene = app.current.result.columns, app.current.scene
                 lash = scene.valve.lash if scene.valve is not None else 0.0
                 linkage = scene.follower.ratio * cols["follower_lift_m"] - lash
                 gap = np.where(linkage > 0.1 * linkage.max(), cols["valve_lift_m"] - linkage, -np.inf)
                 picture_angle = float(cols["cam_angle_deg"][int(np.argmax(gap))]) if gap.max() > 0 else start_angle
                 app.angle.value = round(picture_angle, 1)
-                assert app.wait_applied(10)
-                z_server = float(app.server.scene.get_handle_by_name("/gear/valve").position[2])
+                _wait_in_step(page, app, parts)
+                # the page's plots are those of the result shown: titles and series (and the cursor)
+                plots = [[plot.title, [label for label, _, _ in plot.series] + ["now"]] for plot in app.current.plots]
                 page.wait_for_function(
-                    "(z) => Math.abs(window.__viserMutable.nodeRefFromName['/gear/valve'].position.z - z) < 1e-6",
-                    arg=z_server, timeout=30000,
+                    "(expected) => JSON.stringify([...document.querySelectorAll('.uplot')].map(u => ["
+                    "u.querySelector('.u-title')?.textContent,"
+                    " [...u.querySelectorAll('.u-series .u-label')].map(e => e.textContent)])) === JSON.stringify(expected)",
+                    arg=plots, timeout=WAIT_MS,
                 )
-                # dismiss the "software WebGL" notice
+                # dismiss the "software WebGL" notice; no tooltip in the picture
                 page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
-                page.mouse.move(700, 950)  # no tooltip in the picture
-                page.wait_for_timeout(1500)
+                page.mouse.move(700, 950)
+                page.wait_for_function(
+                    "() => [...document.querySelectorAll('.mantine-Notification-root')].every("
+                    "e => getComputedStyle(e).display === 'none')", timeout=WAIT_MS)
+                assert page.evaluate(TWO_FRAMES)  # the canvas has drawn the final pose
                 shot = tmp_path / "screenshot.png"
-                page.screenshot(path=str(shot))
+                page.screenshot(path=str(shot), timeout=WAIT_MS)
             finally:
                 context.close()
     finally:
         app.stop()
         server.stop()
+    assert app.loop_errors == 0 and app.worker.internal_errors == 0
 
     import matplotlib.image
 

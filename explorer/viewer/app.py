@@ -128,6 +128,8 @@ class ExplorerApp:
         self._last_index = -1
         self._last_spring = math.nan
         self._last_cursor = 0.0
+        self._play_shown = playing  # what the loop last put in the Play box and the slider
+        self._slider_shown = 0.0
         self._cursor_index = -1
         self._plot_handles: list[Any] = []
         self._plot_signature: list[tuple] = []
@@ -362,14 +364,30 @@ class ExplorerApp:
                 self.status.content = self._status_html("")
             if self.current is not None:
                 self._pose(angle, force=incoming is not None)
-                with self._programmatic():
-                    if self.play.value != playing:
-                        self.play.value = playing
-                    shown = round(angle, 1) % 360.0
-                    if abs(self.angle.value - shown) > 1e-9:
-                        self.angle.value = shown
+                self._sync_controls(angle, playing, scrub)
         self.server.flush()
         self.frames += 1
+
+    def _sync_controls(self, angle: float, playing: bool, scrub: float | None) -> None:
+        """Keep the Play box and the cam-angle slider in step with the playback, without ever
+        overwriting a person's input. viser stores a browser's new value in the handle first and
+        runs the callback later (on its thread pool, late on a busy machine); a loop that set
+        the control back to the playback state in between made the callback read its own value,
+        and the click was lost. So the loop moves a control only while it still holds what the
+        loop last put there; a value it did not put there is in flight, and is left alone until
+        its callback has acted on it."""
+        with self._programmatic():
+            box = self.play.value
+            if box == playing:
+                self._play_shown = box
+            elif box == self._play_shown:
+                self.play.value = self._play_shown = playing
+            shown = round(angle, 1) % 360.0
+            slider = self.angle.value
+            if abs(slider - shown) < 1e-9 or (scrub is not None and abs(slider - scrub) < 1e-9):
+                self._slider_shown = slider  # in step, or the scrub just applied came from it
+            if abs(slider - self._slider_shown) < 1e-9 and abs(slider - shown) > 1e-9:
+                self.angle.value = self._slider_shown = shown
 
     def _apply(self, prepared: Prepared, refresh: bool, choose_speed: bool) -> None:
         """A new result (or a new magnification): meshes that changed, plots, read-outs, fields."""
@@ -378,6 +396,13 @@ class ExplorerApp:
         self.applied_serial = prepared.request.serial
         n = len(prepared.result.columns["cam_angle_deg"])
         i = step_index(self.playback.angle_deg, n)
+        # parts the new gear does not have (a rocking cam's eccentric after a swap to a
+        # translating roller) leave the scene; re-adding a name replaces only that node
+        for name in [name for name in self._shown_meshes if name not in prepared.meshes]:
+            handle = self._handles.pop(name, None)
+            if handle is not None:
+                handle.remove()
+            del self._shown_meshes[name]
         for name, (vertices, faces) in prepared.meshes.items():
             shown = self._shown_meshes.get(name)
             if shown is not None and shown[0] is vertices:
@@ -396,7 +421,10 @@ class ExplorerApp:
             if name == "spring":
                 self._last_spring = prepared.layout.spring_rest_length
         self._last_index = -1
-        if prepared.new_result:
+        # compared with what is shown, not with the worker's previous bundle (`new_result`): a
+        # new result and a magnification change coming in the same frame arrive as one bundle
+        # with new_result False, which must still redraw the plots
+        if previous is None or prepared.result is not previous.result:
             self._update_plots(prepared)
             self.readout.content = prepared.readout
         if previous is None or Path(previous.request.path) != Path(prepared.request.path):

@@ -242,7 +242,7 @@ class Prepared:
     readout: str
     label: str
     values: dict  # scene_values(scene): what the GUI fields show
-    new_result: bool  # False when only the magnification changed
+    new_result: bool  # False when only the magnification changed since the worker's previous bundle
     seconds: float = 0.0  # wall time of the preparation
 
 
@@ -265,6 +265,7 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
     Reuses the previous simulation when only the magnification changed."""
     from .. import meshes
     from ..effects import simulate
+    from ..gears import GEAR_TYPES
     from ..lift import build_lift
     from ..scene import load_scene
 
@@ -280,9 +281,14 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
         result = simulate(scene, lift=lift)
         lay = meshes.layout(scene, result)
         # only the cam depends on more than the layout: keep the other meshes when it is unchanged,
-        # and the cam too when its lift and geometry are (an edit of speed, lash, springs...)
-        keep = previous is not None and previous.layout == lay
+        # and the cam too when its lift and geometry are (an edit of speed, lash, springs...).
+        # Another kind of gear has other parts; the seeds' other gears (explorer.gears) draw
+        # levers and links from their own geometry, so they keep parts only with the same cam.
+        keep = previous is not None and previous.scene.follower.type == scene.follower.type \
+            and previous.layout == lay
         keep_cam = keep and _same_cam(previous.scene, scene)
+        if keep and not keep_cam and scene.follower.type in GEAR_TYPES:
+            keep = False
         built = meshes.build_parts(scene, result, lay=lay, lift=lift, only=() if keep_cam else ("cam",) if keep else None)
         parts = dict(previous.meshes) if keep else {}
         parts.update({
