@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -272,13 +273,18 @@ class ArcLift:
     def derivatives(self, theta) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
         flat = theta.reshape(-1)
-        active = self.active_arc(flat)
-        out = np.empty((4, flat.size))
-        for k in np.unique(active):
-            mask = active == k
-            out[:, mask] = self.arc_candidate(int(k), flat[mask])
+        # Each angle gets its active arc's parameters, then one jet evaluation serves all arcs:
+        # the same arithmetic as roller_height_on_arc, without a pass per arc (the elastic solver
+        # evaluates this drive every revolution, so the per-arc loop was its largest cost).
+        x, y, rho, sign = self._arc_parameters[:, self.active_arc(flat)]
+        out = _roller_height(x, y, rho, sign, flat, self.offset, 4)
         out[0] -= self.y0
         return out.reshape((4,) + theta.shape)
+
+    @cached_property
+    def _arc_parameters(self) -> np.ndarray:
+        """(4, n): centre x, centre y, offset radius rho = R +- r and branch sign of every arc."""
+        return np.array([[a.x, a.y, _offset_radius(a, self.roller_radius), a.sign] for a in self.contour.arcs]).T
 
     def contact_angle_on_arc(self, k: int, theta: np.ndarray) -> np.ndarray:
         """Polar angle (cam frame, about arc k's centre) of the contact point if arc k is touched."""
@@ -293,15 +299,25 @@ class ArcLift:
 def roller_height_on_arc(arc: Arc, theta, roller_radius: float, offset: float, rows: int = 4) -> np.ndarray:
     """Jet (rows, N) in theta of the roller-centre height y while the roller touches `arc`:
     y = c_y + s sqrt(rho^2 - (e - c_x)^2), c = R(theta) c0, rho = R +- r (module docstring)."""
+    return _roller_height(arc.x, arc.y, _offset_radius(arc, roller_radius), arc.sign, theta, offset, rows)
+
+
+def _offset_radius(arc: Arc, roller_radius: float) -> float:
+    """Radius of the roller-centre path about the arc's centre."""
+    return arc.radius + roller_radius if not arc.concave else arc.radius - roller_radius
+
+
+def _roller_height(x, y, rho, sign, theta, offset: float, rows: int) -> np.ndarray:
+    """Jet of y = c_y + sign sqrt(rho^2 - (e - c_x)^2) for centre(s) (x, y) turned by theta;
+    x, y, rho, sign are scalars or arrays shaped like theta."""
     cos_t, sin_t = jets.rotation(np.asarray(theta, dtype=float), rows)
-    cx = arc.x * cos_t - arc.y * sin_t  # ground-frame centre, exact jets in theta
-    cy = arc.x * sin_t + arc.y * cos_t
-    rho = arc.radius + roller_radius if not arc.concave else arc.radius - roller_radius
+    cx = x * cos_t - y * sin_t  # ground-frame centre, exact jets in theta
+    cy = x * sin_t + y * cos_t
     u = -cx
     u[0] = u[0] + offset
     radicand = -jets.mul(u, u)
     radicand[0] = radicand[0] + rho * rho
-    return cy + arc.sign * jets.sqrt(radicand)
+    return cy + sign * jets.sqrt(radicand)
 
 
 def make_arc_lift(contour: ArcContour, roller_radius: float, offset: float, base_radius: float) -> ArcLift:
