@@ -109,3 +109,17 @@ def test_rolling_faces_touch_while_in_contact(built):
         db = np.hypot(b[:, 0] - point[0], b[:, 2] - point[1]).min()
         spacing = 2.0 * gear.law.rho(gear.max_rolling_swing()) * gear.max_rolling_swing() / 119
         assert da < spacing and db < spacing
+
+
+def test_dashpot_piston_stays_inside_its_cylinder(built):
+    """Seen in the browser: at full lift the trip gear's piston hung below the dashpot. Over the
+    whole revolution the posed piston's vertical extent lies within the cylinder's (exact bounds
+    of the meshes, 1e-9 m for rounding)."""
+    scene, result, lift, lay, parts, poses = built["trip_gear_dashpot"]
+    cyl = world(parts["dashpot"], poses["dashpot"], 0)
+    lo, hi = cyl[:, 2].min(), cyl[:, 2].max()
+    s = np.asarray(result.columns["valve_lift_m"])
+    for i in (int(np.argmax(s)), *range(0, 360, 23)):
+        rod = world(parts["dashpot_piston"], poses["dashpot_piston"], i)
+        assert rod[:, 2].max() <= hi + 1e-9, i
+        assert rod[:, 2].max() >= lo + 0.4 * float(lift.latch.height) - 1e-9, i  # piston head in the bore

@@ -387,7 +387,9 @@ def _trip_parts(scene, lift, lay):
     bore = 1.1 * lay.valve_radius
     top = lay.stem_top_rest + 2.0 * stroke + 6.0 * half
     cylinder = trimesh.creation.annulus(r_min=bore, r_max=1.25 * bore, height=3.0 * stroke, sections=48)
-    cylinder.apply_translation([lay.valve_x, 0.0, top + 1.5 * stroke])
+    # the piston (top of the rod, 0.4 stroke thick) runs from z = top down by the lift, at most the
+    # latch stroke: the bore spans top - 1.2 stroke .. top + 1.8 stroke so it never leaves it
+    cylinder.apply_translation([lay.valve_x, 0.0, top + 0.3 * stroke])
     piston = trimesh.creation.cylinder(radius=0.98 * bore, height=0.4 * stroke, sections=48)
     rod = trimesh.creation.cylinder(radius=lay.stem_radius, height=top - lay.stem_top_rest, sections=16)
     rod.apply_translation([0.0, 0.0, 0.5 * (top - lay.stem_top_rest)])
