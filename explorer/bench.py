@@ -160,7 +160,12 @@ def model_and_drive(scene):
     for section in ("valve", "spring", "linkage"):
         if getattr(scene, section) is None:
             raise InputError(scene.source, section, f"missing section: explorer bench times the elastic model, which needs [{section}]")
-    return LinkageModel.from_scene(scene), Drive(build_lift(scene), scene.follower.ratio, scene.drive.omega)
+    lift = build_lift(scene)
+    if getattr(lift, "linkage_stiffness", None) is not None:
+        raise InputError(scene.source, "gear", "explorer bench measures the exact solver against the others, and the "
+                         "exact solver needs a constant stiffness; this gear's changes along the lift (lever_stiffness, "
+                         "rod_stiffness): bench a scene without them")
+    return LinkageModel.from_scene(scene), Drive(lift, scene.follower.ratio, scene.drive.omega)
 
 
 def _timed(fn: Callable[[], Any], repeats: int):

@@ -15,6 +15,7 @@ COMMAND_MODULES = [
     "explorer.cli_record",
     "explorer.cli_view",
     "explorer.cli_bench",
+    "explorer.cli_fit",
 ]
 
 DESCRIPTION = """\
@@ -39,6 +40,7 @@ examples:
   explorer simulate SCENE --set drive.rpm=300 --set valve.lash="0.3 mm" --set 'effects=["elastic"]'
   explorer record SCENE -o run.rrd --sweep drive.rpm=200,240,300 && explorer view run.rrd
   explorer bench assets/scenes/schenker1902_fig2.toml --output-dir out   (accuracy vs CPU time)
+  explorer fit assets/scenes/rocking_cam.toml --lift "9 mm" --open-angle "220 deg"   (rocking-cam contour)
   explorer <command> --help            details of one command
 
 Quantities in scene files carry units ("20 mm", "385 kgf", "2.9 kgf*s**2/m"); a bare number

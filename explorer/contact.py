@@ -33,8 +33,10 @@ engines; and the width rule b = P/(k D) with the roller diameter D, k = 10 (inta
 (exhaust) kgf/cm^2. A rolling lever has no roller: it is sized as seed 004 says rolling levers
 are, by the Hertz allowable (the width at which the peak stress equals it).
 
-The trip gear is refused: its latch lifts the valve spindle directly and lets go, there is no cam
-surface working on a roller (the 'gear' effect reports the latch force).
+The trip gear has no cam surface: its latch lifts the valve spindle directly and lets go. Its
+contact statics are the latch face's (explorer.gears.trip_effects): the latch force at the
+release, the friction the trip must overcome to pull the latch out, the face's bearing pressure;
+their keys are in [gear.trip] (latch_friction, latch_width, latch_depth), not in [contact].
 
 Scene section [contact] (all optional):
     friction_angle        rho of the follower guide (default 0 deg), or
@@ -85,10 +87,8 @@ CONTACT_TYPES = ROLLER_TYPES + ("rolling-lever",)  # + two faces rolling on each
 
 def check_follower(follower, file: str) -> None:
     """The follower types the contact statics cover; a roller where the width rule needs one."""
-    if follower.type == "trip":
-        raise InputError(file, "follower.type",
-                         "effect 'contact' needs a cam surface working on a roller or a rolling face; the trip gear's "
-                         "latch lifts the valve spindle directly and lets go (the 'gear' effect reports the latch force)")
+    if follower.type == "trip":  # the latch statics (explorer.gears.trip_effects): no roller needed
+        return
     if follower.type not in CONTACT_TYPES:
         raise InputError(file, "follower.type", f"effect 'contact' does not model follower type {follower.type!r}")
     if follower.type in ROLLER_TYPES and follower.roller_radius <= 0.0:
@@ -104,6 +104,9 @@ def parse_contact_section(table, fields) -> ContactSpec:
         check_follower(follower, file)
     if table is None:
         return ContactSpec()
+    if follower is not None and follower.type == "trip":
+        raise InputError(file, "contact", "the trip gear has no cam and roller: its latch keys are latch_friction, "
+                         "latch_width and latch_depth in [gear.trip]")
     table.reject_unknown((
         "friction_angle", "friction_coefficient", "youngs_modulus", "poisson_ratio", "roller_youngs_modulus",
         "roller_poisson_ratio", "width", "valve", "width_rule_k", "engine", "allowable_stress",
@@ -306,6 +309,10 @@ def hertz_width(normal, geometry: ContactGeometry, spec: ContactSpec, e_star: fl
 
 
 def contact_effect(ctx) -> EffectOutput:
+    if ctx.scene.follower.type == "trip":  # a latch on the spindle, no cam surface
+        from .gears.trip_effects import trip_contact_effect
+
+        return trip_contact_effect(ctx)
     scene = ctx.scene
     spec: ContactSpec = scene.contact if scene.contact is not None else ContactSpec()
     geometry = contact_geometry(ctx)

@@ -23,6 +23,9 @@ crossings and the velocity zeros where friction flips), refined by bounded Brent
 Sign conventions: forces are positive in the valve's opening direction for F, and positive when
 they load the linkage (act to close the valve) for the loads. Friction at rest takes the direction
 the valve is about to move (sign of the acceleration): its one-sided limit right after the instant.
+
+The trip gear's latch drives the valve only from the pick-up to the trip; its forces are those
+of that window (explorer.gears.trip_effects), not of the free closing after it.
 """
 
 from __future__ import annotations
@@ -384,6 +387,10 @@ def contact_loss_crossings(lift, loads: TrainLoads, omega: float, ratio: float, 
 
 
 def forces_effect(ctx) -> EffectOutput:
+    if ctx.scene.follower.type == "trip":  # the latch drives only from the pick-up to the trip
+        from .gears.trip_effects import trip_forces_effect
+
+        return trip_forces_effect(ctx)
     scene, w = ctx.scene, ctx.omega
     loads = TrainLoads.from_scene(scene)
     ratio = scene.follower.ratio

@@ -163,3 +163,15 @@ def test_command_scene_without_linkage_fails_cleanly(tmp_path):
     proc = run_cli("bench", scene, "--quick", "--output-dir", tmp_path)
     assert proc.returncode == 2 and proc.stderr.strip().count("\n") == 0
     assert "linkage" in proc.stderr and list(tmp_path.iterdir()) == [scene]
+
+
+def test_run_all_lists_the_benchmarks_and_refuses_unknown_names():
+    """`make bench` runs benchmarks/run_all.py: every bench_*.py is known to it by name."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "run_all.py"
+    done = subprocess.run([sys.executable, str(script), "--only", "no_such_bench"], capture_output=True, text=True)
+    assert done.returncode == 2
+    assert "dynamics" in done.stderr and "core" in done.stderr and "no_such_bench" in done.stderr

@@ -304,8 +304,9 @@ def test_builtin_scenes_with_contact(scenes_dir):
         assert s["min_self_locking_margin_deg"] > 0
 
 
-def test_contact_refuses_the_trip_gear_and_says_why(scenes_dir):
-    """The trip gear's latch lifts the spindle directly: no cam surface on a roller to analyse."""
+def test_contact_refuses_a_contact_section_on_the_trip_gear(scenes_dir):
+    """The trip gear's latch lifts the spindle directly: no cam and roller for [contact] to describe;
+    its latch statics take their keys from [gear.trip] (tests/test_trip_gear.py)."""
     with pytest.raises(InputError) as err:
-        load_scene(scenes_dir / "trip_gear_dashpot.toml", ['effects=["kinematics", "contact"]'])
-    assert err.value.key == "follower.type" and "latch" in err.value.reason
+        load_scene(scenes_dir / "trip_gear_dashpot.toml", ['contact.friction_angle="5 deg"'])
+    assert err.value.key == "contact" and "latch" in err.value.reason

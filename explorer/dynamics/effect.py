@@ -15,6 +15,11 @@ ODE right-hand side); for other solvers it is computed the same way from their s
 analytic drive: M1 j = k (S' - v) + c (S'' - a) - rate v in contact, M j = -rate v in flight,
 0 at rest. It jumps where the acceleration jumps (events, S'' jumps).
 
+Stiffness that changes along the cycle: a lift curve may carry its own elasticity
+(`linkage_stiffness`: theta -> (k, dk/dtheta), the rolling lever's, which follows the changing
+ratio). It is then put in series with [linkage] stiffness (the rest of the chain) as k(t), and
+only the solvers that accept k(t) can run it (model.VARYING_STIFFNESS; the scene loader says so).
+
 Periodic start: the solvers start with the valve at rest on its seat, so the revolution is
 solved from the angle where the drive is lowest (the valve surely rests there) and the arrays
 are rotated back; a warning says when the valve has not come back to rest one revolution later.
@@ -23,11 +28,12 @@ are rotated back; a warning says when the valve has not come back to rest one re
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from ..result import EffectOutput
-from .model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, solve
+from .model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, StiffnessProfile, solve
 
 
 def _solver_options(scene) -> dict:
@@ -62,16 +68,36 @@ def elastic_jerk(model: LinkageModel, drive_values: np.ndarray, sol) -> np.ndarr
         resting = (sol.v == 0.0) & (sol.a == 0.0)
         moving_contact = sol.contact & ~resting
         flight = ~sol.contact & ~resting
-    contact_jerk = (model.stiffness * (S1 - sol.v) + model.damping * (S2 - sol.a)
+    if model.stiffness_profile is not None:  # k(t): d/dt [k (S - lash - s)] has a k' term
+        k, dk = model.stiffness_profile(sol.t)
+        spring_part = dk * (drive_values[0] - model.lash - sol.s) + k * (S1 - sol.v)
+    else:
+        spring_part = model.stiffness * (S1 - sol.v)
+    contact_jerk = (spring_part + model.damping * (S2 - sol.a)
                     - model.spring_rate * sol.v) / model.oscillating_mass
     flight_jerk = -model.spring_rate * sol.v / model.mass
     return np.where(moving_contact, contact_jerk, np.where(flight, flight_jerk, 0.0))
 
 
+def linkage_model(scene, lift, omega: float) -> LinkageModel:
+    """The scene's linkage model; with the lift's own elasticity (a rolling lever) k(t) in series
+    with [linkage] stiffness, `stiffness` then being the largest k (the solvers' step bounds)."""
+    model = LinkageModel.from_scene(scene)
+    own = getattr(lift, "linkage_stiffness", None)
+    if own is None:
+        return model
+    profile = StiffnessProfile(own, omega, series=scene.linkage.stiffness)
+    return replace(model, stiffness=profile.bounds()[1], stiffness_profile=profile)
+
+
 def elastic_effect(ctx) -> EffectOutput:
+    if ctx.scene.follower.type == "trip":  # the latch drives until the trip, then the valve closes freely
+        from ..gears.trip_effects import trip_elastic_effect
+
+        return trip_elastic_effect(ctx)
     scene = ctx.scene
     omega = ctx.omega
-    model = LinkageModel.from_scene(scene)
+    model = linkage_model(scene, ctx.lift, omega)
     ratio = scene.follower.ratio
     drive = Drive(ctx.lift, ratio, omega)
     n = ctx.time.size
@@ -112,7 +138,8 @@ def elastic_effect(ctx) -> EffectOutput:
     # Schenker's curve S - lash - W/k, with W the resistance the valve feels
     W = model.preload + model.closing_load + model.spring_rate * s + model.friction * np.where(v < 0.0, -1.0, 1.0)
     open_valve = s > 0.0
-    deviation = np.where(open_valve, s - (D[0] - model.lash - W / model.stiffness), 0.0)
+    k_t = model.stiffness_at(ctx.time)
+    deviation = np.where(open_valve, s - (D[0] - model.lash - W / k_t), 0.0)
     back_pressure = ratio * force
     separated = open_valve & ~contact
 
@@ -129,11 +156,13 @@ def elastic_effect(ctx) -> EffectOutput:
     events.sort(key=lambda e: e["time_s"])
 
     stats = {k: v for k, v in sol.stats.items() if k != "warnings"}
+    if model.stiffness_profile is not None:
+        stats["stiffness_min_N_m"], stats["stiffness_max_N_m"] = model.stiffness_profile.bounds()
     summary = {
         "elastic_method": method,
         "elastic_natural_period_s": model.natural_period(),
         "elastic_steps_per_natural_period": model.natural_period() / (period / n),
-        "lift_off_compression_m": (model.seated_resistance + model.friction) / model.stiffness,
+        "lift_off_compression_m": (model.seated_resistance + model.friction) / _stiffness_at_lift_off(model, events),
         "max_deviation_m": float(np.abs(deviation).max()),
         "peak_linkage_force_N": float(force.max()),
         "peak_camshaft_back_pressure_N": float(back_pressure.max()),
@@ -159,3 +188,11 @@ def elastic_effect(ctx) -> EffectOutput:
     if phase is not None:
         columns["valve_phase"] = phase.astype(float)
     return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
+
+
+def _stiffness_at_lift_off(model: LinkageModel, events) -> float:
+    """k where the valve lifts (the first lift-off; the constant k, or k(t) there)."""
+    if model.stiffness_profile is None:
+        return model.stiffness
+    lift_offs = [e["time_s"] for e in events if e["kind"] == "lift-off"]
+    return float(model.stiffness_at(np.array(lift_offs[:1] or [0.0]))[0])

@@ -10,6 +10,11 @@ pull, after a clearance (lash). Resistance W = preload + rate*s + friction*sign(
 S(t) = ratio * L(omega t) is the drive (roller path referred to the valve). M1 (Schenker's mass
 without the spring's share) is used while the linkage is compressed, M otherwise.
 
+A lever whose ratio changes with its position (the rolling lever) has a valve-referred stiffness
+that changes along the cycle: k(t) from a StiffnessProfile. The contact equation keeps its form
+with k(t) in place of k; the force is k(t) (S - lash - s) + c (S' - s'). Only the solvers in
+VARYING_STIFFNESS accept it: the exact solver's closed forms need constant coefficients.
+
 Every solver has the signature
     solve(model: LinkageModel, drive: Drive, t: np.ndarray, **options) -> DynamicsSolution
 and is listed in SOLVERS; `solve()` below dispatches on the method name.
@@ -30,6 +35,9 @@ SOLVERS: dict[str, str] = {
     "scipy": "explorer.dynamics.reference:solve",
 }
 
+# solvers that accept a LinkageModel with a stiffness_profile (k changing with the position)
+VARYING_STIFFNESS = ("scipy", "schenker1902")
+
 EVENT_KINDS = ("lift-off", "separation", "re-contact", "seat")
 # DynamicsSolution.phase codes: on the seat, moving with the linkage loaded, moving with the linkage
 # unloaded (separated), held above the seat by friction at v = 0
@@ -48,6 +56,15 @@ class LinkageModel:
     friction: float = 0.0  # N, Coulomb, opposes valve motion
     closing_load: float = 0.0  # N, sum of constant loads (+ closes the valve)
     restitution: float = 0.0  # seat impact, 0 <= e < 1
+    # k(t) when the stiffness changes along the cycle (then `stiffness` is its largest value, which
+    # sets the shortest natural period: the solvers' step bounds and stability limits)
+    stiffness_profile: Any = None
+
+    def stiffness_at(self, t) -> np.ndarray:
+        """k at the times t (N/m): the profile's, or the constant stiffness."""
+        if self.stiffness_profile is None:
+            return np.full(np.shape(t), self.stiffness)
+        return self.stiffness_profile(t)[0]
 
     @property
     def seated_resistance(self) -> float:
@@ -100,6 +117,34 @@ class Drive:
 
 
 @dataclass(frozen=True)
+class StiffnessProfile:
+    """Valve-referred stiffness along the cycle: `function(theta) -> (k, dk/dtheta)` (N/m, N/m/rad,
+    analytic), periodic in the cam angle theta = omega t; optionally in series with a constant
+    stiffness of the rest of the chain (valve spindle, valve lever)."""
+
+    function: Any
+    omega: float  # rad/s
+    series: float = math.inf  # N/m
+
+    def __call__(self, t) -> np.ndarray:
+        """(2, N): k and dk/dt at the times t."""
+        t = np.asarray(t, dtype=float)
+        k, dk = (np.asarray(x, dtype=float) for x in self.function(self.omega * t))
+        dk = self.omega * dk
+        if math.isfinite(self.series):
+            total = 1.0 / (1.0 / k + 1.0 / self.series)
+            dk = dk * (total / k) ** 2
+            k = total
+        return np.stack([k, dk])
+
+    def bounds(self, samples: int = 4097) -> tuple[float, float]:
+        """Smallest and largest k over a revolution (sampled; for step bounds and reports)."""
+        t = np.linspace(0.0, 2.0 * math.pi / self.omega, samples)
+        k = self(t)[0]
+        return float(k.min()), float(k.max())
+
+
+@dataclass(frozen=True)
 class DynamicsSolution:
     t: np.ndarray  # s, the requested output times
     s: np.ndarray  # m, valve lift
@@ -115,5 +160,8 @@ class DynamicsSolution:
 
 
 def solve(model: LinkageModel, drive: Drive, t: np.ndarray, method: str = "exact", **options) -> DynamicsSolution:
+    if model.stiffness_profile is not None and method not in VARYING_STIFFNESS:
+        raise ValueError(f"method {method!r} needs a constant linkage stiffness; for a stiffness that changes "
+                         f"along the cycle use {' or '.join(map(repr, VARYING_STIFFNESS))}")
     module, _, name = SOLVERS[method].partition(":")
     return getattr(importlib.import_module(module), name)(model, drive, np.asarray(t, dtype=float), **options)

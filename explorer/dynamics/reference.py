@@ -38,23 +38,24 @@ def static_resistance(model: LinkageModel, s):
     return model.preload + model.spring_rate * s + model.closing_load
 
 
-def linkage_force(model: LinkageModel, S, Sd, s, v):
-    """Compressive linkage force k*(S - lash - s) + c*(S' - v), unclipped (negative = would pull)."""
-    return model.stiffness * (S - model.lash - s) + model.damping * (Sd - v)
+def linkage_force(model: LinkageModel, S, Sd, s, v, k=None):
+    """Compressive linkage force k*(S - lash - s) + c*(S' - v), unclipped (negative = would pull).
+    k: the stiffness at that instant when it changes along the cycle (default: the model's)."""
+    return (model.stiffness if k is None else k) * (S - model.lash - s) + model.damping * (Sd - v)
 
 
-def contact_acceleration(model: LinkageModel, S, Sd, s, v, d):
-    return (linkage_force(model, S, Sd, s, v) - static_resistance(model, s) - model.friction * d) / model.oscillating_mass
+def contact_acceleration(model: LinkageModel, S, Sd, s, v, d, k=None):
+    return (linkage_force(model, S, Sd, s, v, k) - static_resistance(model, s) - model.friction * d) / model.oscillating_mass
 
 
 def flight_acceleration(model: LinkageModel, s, d):
     return -(static_resistance(model, s) + model.friction * d) / model.mass
 
 
-def rest_net_force(model: LinkageModel, S, Sd, s_rest):
+def rest_net_force(model: LinkageModel, S, Sd, s_rest, k=None):
     """Net force on a valve held at rest at s_rest, friction excluded: linkage (if touching) - W."""
     x = S - model.lash - s_rest
-    push = np.where(x >= 0.0, np.maximum(0.0, model.stiffness * x + model.damping * Sd), 0.0)
+    push = np.where(x >= 0.0, np.maximum(0.0, (model.stiffness if k is None else k) * x + model.damping * Sd), 0.0)
     return push - static_resistance(model, s_rest)
 
 
@@ -75,6 +76,27 @@ class _DriveCache:
         return self.S, self.Sd
 
 
+class _VaryingCache(_DriveCache):
+    """The same, with the linkage stiffness k(t) and dk/dt of the instant (a lever whose ratio
+    changes); a class of its own so that the constant-stiffness path pays nothing for it."""
+
+    def __init__(self, drive: Drive, profile):
+        super().__init__(drive)
+        self.profile = profile
+        self.k = self.kd = 0.0
+
+    def __call__(self, t: float):
+        if t != self.t:
+            super().__call__(t)
+            k = self.profile(np.array([t]))
+            self.k, self.kd = float(k[0, 0]), float(k[1, 0])
+        return self.S, self.Sd
+
+    def stiffness(self, t: float) -> float:
+        self(t)
+        return self.k
+
+
 def _phase_functions(model: LinkageModel, cache: _DriveCache, phase: str, d: float, friction_events: bool, band: float,
                      watchers: bool = True):
     """RHS, Jacobian, terminal event functions and their watchers of one moving phase.
@@ -93,7 +115,32 @@ def _phase_functions(model: LinkageModel, cache: _DriveCache, phase: str, d: flo
     rate, m1, m = model.spring_rate, model.oscillating_mass, model.mass
     w0 = model.preload + model.closing_load + model.friction * d
 
-    if phase == CONTACT:
+    if phase == CONTACT and model.stiffness_profile is not None:  # k = k(t), cache.k
+
+        def rhs(t, y):
+            S, Sd = cache(t)
+            return [y[1], (cache.k * (S - lash - y[0]) + c * (Sd - y[1]) - w0 - rate * y[0]) / m1]
+
+        def jacobian_of(t, y):
+            cache(t)
+            return np.array([[0.0, 1.0], [-(cache.k + rate) / m1, -c / m1]])
+
+        def separation(t, y):
+            S, Sd = cache(t)
+            return cache.k * (S - lash - y[0]) + c * (Sd - y[1]) + cache.k * band
+
+        separation.terminal, separation.direction = True, -1.0
+
+        def separation_slope(t, y):
+            S, Sd = cache(t)
+            x = S - lash - y[0]
+            a = (cache.k * x + c * (Sd - y[1]) - w0 - rate * y[0]) / m1
+            return cache.kd * x + cache.k * (Sd - y[1]) + c * (cache.Sdd - a)
+
+        events = [separation]
+        names = ["separation"]
+        slopes = [separation_slope]
+    elif phase == CONTACT:
 
         def rhs(t, y):
             S, Sd = cache(t)
@@ -124,17 +171,43 @@ def _phase_functions(model: LinkageModel, cache: _DriveCache, phase: str, d: flo
 
         jacobian = np.array([[0.0, 1.0], [-rate / m, 0.0]])
 
-        def recontact(t, y):
-            return cache(t)[0] - lash - y[0] - band
+        if c > 0.0:
+            # with damping the linkage lets go while still compressed (k x + c (S' - v) = 0 at
+            # x > 0), so the gap alone may never cross zero again: contact resumes where the
+            # linkage would push, min(x, x + (c/k)(S' - v)) rising through 0 (in metres)
+            varying = model.stiffness_profile is not None
+
+            def recontact(t, y):
+                S, Sd = cache(t)
+                x = S - lash - y[0]
+                return min(x, x + c / (cache.k if varying else k) * (Sd - y[1])) - band
+
+            def recontact_slope(t, y):
+                S, Sd = cache(t)
+                if Sd - y[1] >= 0.0:  # the gap is the smaller
+                    return Sd - y[1]
+                kk = cache.k if varying else k
+                a = -(w0 + rate * y[0]) / m
+                slope = Sd - y[1] + c / kk * (cache.Sdd - a)
+                return slope - c * cache.kd / (kk * kk) * (Sd - y[1]) if varying else slope
+        else:
+
+            def recontact(t, y):
+                return cache(t)[0] - lash - y[0] - band
+
+            def recontact_slope(t, y):
+                return cache(t)[1] - y[1]
 
         recontact.terminal, recontact.direction = True, 1.0
-
-        def recontact_slope(t, y):
-            return cache(t)[1] - y[1]
 
         events = [recontact]
         names = ["re-contact"]
         slopes = [recontact_slope]
+
+    if phase != CONTACT or model.stiffness_profile is None:
+
+        def jacobian_of(t, y):
+            return jacobian
 
     def seat(t, y):
         return y[0] + band
@@ -159,11 +232,11 @@ def _phase_functions(model: LinkageModel, cache: _DriveCache, phase: str, d: flo
         names.append("velocity-zero")
     watch = {}
     if not watchers:
-        return rhs, (lambda t, y: jacobian), events, names, watch
+        return rhs, jacobian_of, events, names, watch
     for i, slope in enumerate(slopes):
         slope.terminal, slope.direction = False, -events[i].direction  # extremum on the far side
         watch[len(events) + i] = i
-    return rhs, (lambda t, y: jacobian), events + slopes, names, watch
+    return rhs, jacobian_of, events + slopes, names, watch
 
 
 def _missed_crossing(sol, functions, watch: dict, t_seg: float):
@@ -199,13 +272,13 @@ def rebound_rest_speed(model: LinkageModel, rest_height: float) -> float:
     return math.sqrt(2.0 * deceleration * rest_height) if deceleration > 0.0 else 0.0
 
 
-def initial_phase(model: LinkageModel, S: float, Sd: float, s: float, v: float) -> tuple[str, float]:
+def initial_phase(model: LinkageModel, S: float, Sd: float, s: float, v: float, k=None) -> tuple[str, float]:
     """Phase and friction direction of a valve given at (s, v) with the drive at (S, S')."""
-    touching = S - model.lash - s >= 0.0 and linkage_force(model, S, Sd, s, v) > 0.0
+    touching = S - model.lash - s >= 0.0 and linkage_force(model, S, Sd, s, v, k) > 0.0
     phase = CONTACT if touching else FLIGHT
     if v != 0.0:
         return phase, math.copysign(1.0, v)
-    net = (linkage_force(model, S, Sd, s, v) if touching else 0.0) - static_resistance(model, s)
+    net = (linkage_force(model, S, Sd, s, v, k) if touching else 0.0) - static_resistance(model, s)
     if abs(net) <= model.friction or (s <= 0.0 and net <= model.friction):
         return REST, 0.0
     return phase, (1.0 if net > 0.0 else -1.0)
@@ -222,9 +295,11 @@ def _release(model: LinkageModel, drive: Drive, s_rest: float, t0: float, t1: fl
     mu = model.friction
     can_fall = s_rest > 0.0
 
+    varying = model.stiffness_profile is not None
+
     def margin(tt):
         D = drive(tt)
-        net = rest_net_force(model, D[0], D[1], s_rest)
+        net = rest_net_force(model, D[0], D[1], s_rest, model.stiffness_at(tt) if varying else None)
         up = net - mu
         return up, (-net - mu) if can_fall else np.full_like(up, -np.inf)
 
@@ -287,6 +362,7 @@ def solve(
     initial_state: tuple[float, float] | None = None,
     rest_height: float = 1e-12,
     watch_extrema: bool = True,
+    tabulate: int | None = None,
 ) -> DynamicsSolution:
     """Integrate the model over the output times t (sorted); the valve starts at rest on its seat
     at t[0] unless initial_state = (s, v) is given.
@@ -297,6 +373,10 @@ def solve(
     time (Zeno); a rebound that would rise less than this (m) ends the bouncing.
     watch_extrema: also watch the extrema of the event functions, which catches an event crossed
     twice inside one step (a short flight); False is plain solve_ivp event detection.
+    tabulate: evaluate the drive (and k(t)) once at this many nodes per output step and use
+    Hermite tables between them (explorer.dynamics.tabulated) instead of one analytic evaluation
+    per instant; default: 4 when the stiffness changes along the cycle (a gear's k(t) costs a
+    millisecond an instant), else off.
     """
     if scipy_method not in METHODS:
         raise ValueError(f"unknown scipy method {scipy_method!r}; known: {', '.join(METHODS)}")
@@ -309,7 +389,20 @@ def solve(
     max_step = max_step_fraction * period
     probe = min(period / 4.0, float(np.min(np.diff(t))) if n > 1 else period / 4.0) or period / 4.0
     breaks = drive.breakpoints(float(t[0]), t_end)
-    cache = _DriveCache(drive)
+    varying = model.stiffness_profile is not None
+    if tabulate is None:
+        tabulate = 4 if varying else 0
+    if tabulate:
+        from .tabulated import TabulatedDrive
+
+        spacing = min(float(np.min(np.diff(t))) if n > 1 else max_step, max_step) / tabulate
+        cache = TabulatedDrive(drive, model.stiffness_profile, float(t[0]), t_end, spacing)
+    else:
+        cache = _VaryingCache(drive, model.stiffness_profile) if varying else _DriveCache(drive)
+
+    def k_now(tt: float):
+        """k at one instant (None: the model's constant)."""
+        return cache.stiffness(tt) if varying else None
     # event hysteresis: far above the rounding of lift differences, far below any accuracy asked for
     scale = float(np.abs(drive(np.linspace(t[0], t_end, 257))[0]).max()) + abs(model.lash) + 1e-3
     band = 64 * np.finfo(float).eps * scale
@@ -331,7 +424,8 @@ def solve(
             tt = t[filled:j]
             D = drive(tt)
             x = D[0] - model.lash - s_rest
-            force = np.where(x >= 0.0, np.maximum(0.0, model.stiffness * x + model.damping * D[1]), 0.0)
+            k = model.stiffness_at(tt) if varying else model.stiffness
+            force = np.where(x >= 0.0, np.maximum(0.0, k * x + model.damping * D[1]), 0.0)
             out["s"][filled:j] = s_rest
             out["f"][filled:j] = force
             in_contact[filled:j] = force > 0.0
@@ -343,7 +437,7 @@ def solve(
         phase, s, v, d = REST, 0.0, 0.0, 0.0
     else:
         s, v = (float(x) for x in initial_state)
-        phase, d = initial_phase(model, *cache(tcur), s, v)
+        phase, d = initial_phase(model, *cache(tcur), s, v, k_now(tcur))
 
     same_time_events = 0
     while tcur < t_end or filled < n:
@@ -359,7 +453,7 @@ def solve(
                 events.append({"kind": "lift-off", "time_s": released, "velocity_m_s": 0.0})
             tcur, v, d = released, 0.0, float(direction)
             S0, Sd0 = cache(tcur)
-            touching = S0 - model.lash - s >= 0.0 and linkage_force(model, S0, Sd0, s, 0.0) > 0.0
+            touching = S0 - model.lash - s >= 0.0 and linkage_force(model, S0, Sd0, s, 0.0, k_now(tcur)) > 0.0
             phase = CONTACT if touching else FLIGHT
             continue
 
@@ -398,12 +492,13 @@ def solve(
             D = drive(tt)
             out["s"][filled:j], out["v"][filled:j] = y[0], y[1]
             if phase == CONTACT:
-                a = contact_acceleration(model, D[0], D[1], y[0], y[1], d)
-                force = np.maximum(0.0, linkage_force(model, D[0], D[1], y[0], y[1]))
+                k, dk = model.stiffness_profile(tt) if varying else (model.stiffness, 0.0)
+                a = contact_acceleration(model, D[0], D[1], y[0], y[1], d, k)
+                force = np.maximum(0.0, linkage_force(model, D[0], D[1], y[0], y[1], k))
                 out["f"][filled:j] = force
                 in_contact[filled:j] = force > 0.0
                 # d/dt of the contact equation: the jerk in closed form from the state
-                out["j"][filled:j] = (model.stiffness * (D[1] - y[1]) + model.damping * (D[2] - a)
+                out["j"][filled:j] = (dk * (D[0] - model.lash - y[0]) + k * (D[1] - y[1]) + model.damping * (D[2] - a)
                                       - model.spring_rate * y[1]) / model.oscillating_mass
             else:
                 a = flight_acceleration(model, y[0], d)
@@ -420,13 +515,14 @@ def solve(
         if not fired:
             continue
         S0, Sd0 = cache(tcur)
+        k0 = k_now(tcur)
         if s <= SEAT_TOLERANCE and v < 0.0 and "seat" not in fired:
             # the valve reaches the seat in the same instant as another event (zero lash on the
             # base circle: gap and lift close together); the seat, being rigid, decides
             fired = ["seat"]
         if "seat" in fired:
             if s < 0.0:  # the event fired a hair below the seat: the speed at s = 0, by energy
-                a_here = contact_acceleration(model, S0, Sd0, s, v, d) if phase == CONTACT else flight_acceleration(model, s, d)
+                a_here = contact_acceleration(model, S0, Sd0, s, v, d, k0) if phase == CONTACT else flight_acceleration(model, s, d)
                 v = -math.sqrt(max(v * v - 2.0 * a_here * s, 0.0))
             s = 0.0
             events.append({"kind": "seat", "time_s": tcur, "velocity_m_s": v})
@@ -435,7 +531,7 @@ def solve(
                 phase, v = REST, 0.0
             else:
                 d = 1.0
-                phase = CONTACT if S0 - model.lash >= 0.0 and linkage_force(model, S0, Sd0, 0.0, v) > 0.0 else FLIGHT
+                phase = CONTACT if S0 - model.lash >= 0.0 and linkage_force(model, S0, Sd0, 0.0, v, k0) > 0.0 else FLIGHT
         elif "separation" in fired:
             events.append({"kind": "separation", "time_s": tcur, "velocity_m_s": v})
             phase = FLIGHT
@@ -444,7 +540,7 @@ def solve(
             phase = CONTACT
         elif "velocity-zero" in fired:
             v = 0.0
-            net = (linkage_force(model, S0, Sd0, s, 0.0) if phase == CONTACT else 0.0) - static_resistance(model, s)
+            net = (linkage_force(model, S0, Sd0, s, 0.0, k0) if phase == CONTACT else 0.0) - static_resistance(model, s)
             if abs(net) <= model.friction:
                 phase = REST  # stuck: friction holds the valve
             else:

@@ -116,7 +116,10 @@ def solve(
 
     D = drive(tt)
     S_all, Sd_all = D[0].tolist(), D[1].tolist()
-    k, c, lash = model.stiffness, model.damping, model.lash
+    # k at every node (a stiffness that changes along the cycle: the value at the step's end, where
+    # the scheme evaluates the force)
+    K_all = model.stiffness_at(tt).tolist() if model.stiffness_profile is not None else [model.stiffness] * len(tt)
+    c, lash = model.damping, model.lash
     rate, mu = model.spring_rate, model.friction
     m1, m = model.oscillating_mass, model.mass
     w_const = model.preload + model.closing_load
@@ -125,14 +128,14 @@ def solve(
     seat_deceleration = (model.seated_resistance + model.friction) / model.mass
     newmark, paper = variant == "newmark", masses == "paper"
 
-    def acc(phase: str, S: float, Sd: float, s: float, v: float, d: float) -> float:
+    def acc(phase: str, S: float, Sd: float, s: float, v: float, d: float, k: float) -> float:
         resistance = w_const + rate * s + mu * d
         if phase == FLIGHT:
             return -resistance / m
         force = k * (S - lash - s) + c * (Sd - v)
         return (force - resistance) / (m if paper and force <= resistance else m1)
 
-    def push_on_held(S: float, Sd: float, s: float) -> float:
+    def push_on_held(S: float, Sd: float, s: float, k: float) -> float:
         x = S - lash - s
         return max(0.0, k * x + c * Sd) if x >= 0.0 else 0.0
 
@@ -146,15 +149,15 @@ def solve(
         phase, s, v, d = REST, 0.0, 0.0, 0.0
     else:
         s, v = (float(x) for x in initial_state)
-        phase, d = initial_phase(model, S_all[0], Sd_all[0], s, v)
-    p = 0.0 if phase == REST else acc(phase, S_all[0], Sd_all[0], s, v, d)
+        phase, d = initial_phase(model, S_all[0], Sd_all[0], s, v, K_all[0])
+    p = 0.0 if phase == REST else acc(phase, S_all[0], Sd_all[0], s, v, d, K_all[0])
 
     def record(i: int) -> None:
-        S, Sd = S_all[i], Sd_all[i]
+        S, Sd, k = S_all[i], Sd_all[i], K_all[i]
         if phase == CONTACT:
             force = max(0.0, k * (S - lash - s) + c * (Sd - v))
         elif phase == REST:
-            force = push_on_held(S, Sd, s)
+            force = push_on_held(S, Sd, s, k)
         else:
             force = 0.0
         s_out[i], v_out[i], a_out[i], f_out[i], contact_out[i] = s, v, p, force, force > 0.0
@@ -162,15 +165,15 @@ def solve(
 
     record(0)
     for i in range(1, n_steps):
-        t2, S2, Sd2 = tt[i], S_all[i], Sd_all[i]
+        t2, S2, Sd2, k = tt[i], S_all[i], Sd_all[i], K_all[i]
         if phase == REST:
-            net = push_on_held(S2, Sd2, s) - (w_const + rate * s)
+            net = push_on_held(S2, Sd2, s, k) - (w_const + rate * s)
             if net > mu or (s > 0.0 and net < -mu):
                 d = 1.0 if net > 0.0 else -1.0
                 if s == 0.0:
                     events.append({"kind": "lift-off", "time_s": float(t2), "velocity_m_s": 0.0})
-                phase = CONTACT if push_on_held(S2, Sd2, s) > 0.0 else FLIGHT
-                v, p = 0.0, acc(phase, S2, Sd2, s, 0.0, d)
+                phase = CONTACT if push_on_held(S2, Sd2, s, k) > 0.0 else FLIGHT
+                v, p = 0.0, acc(phase, S2, Sd2, s, 0.0, d, k)
             record(i)
             continue
 
@@ -182,7 +185,7 @@ def solve(
                 p2 = -(w_const + rate * a_part + mu * d) / (m + rate * h * h / 6.0)
             else:
                 mass = m1  # the paper rule judged at the step start, so p2 stays linear
-                if paper and k * (S_all[i - 1] - lash - s) + c * (Sd_all[i - 1] - v) <= w_const + rate * s + mu * d:
+                if paper and K_all[i - 1] * (S_all[i - 1] - lash - s) + c * (Sd_all[i - 1] - v) <= w_const + rate * s + mu * d:
                     mass = m
                 rhs0 = k * (S2 - lash) + c * Sd2 - w_const - mu * d
                 p2 = (rhs0 - (k + rate) * a_part - c * b_part) / (mass + (k + rate) * h * h / 6.0 + c * h / 2.0)
@@ -190,9 +193,9 @@ def solve(
             v2 = b_part + 0.5 * h * p2
         else:
             s_pred = s + v * h + 0.5 * p * h * h
-            p_pred = acc(phase, S2, Sd2, s_pred, v + p * h, d)
+            p_pred = acc(phase, S2, Sd2, s_pred, v + p * h, d, k)
             s2 = s_pred + h * h / 6.0 * (p_pred - p)
-            p2 = acc(phase, S2, Sd2, s2, v + 0.5 * h * (p + p_pred), d)
+            p2 = acc(phase, S2, Sd2, s2, v + 0.5 * h * (p + p_pred), d, k)
             v2 = v + 0.5 * h * (p + p2)
 
         # events, seen at the end of the step only
@@ -220,7 +223,7 @@ def solve(
                 record(i)
                 continue
             d = 1.0 if (v2 > 0.0 or (v2 == 0.0 and net > 0.0)) else -1.0
-        s, v, p = s2, v2, acc(phase, S2, Sd2, s2, v2, d)
+        s, v, p = s2, v2, acc(phase, S2, Sd2, s2, v2, d, k)
         record(i)
 
     keep = slice(None, None, substeps)

@@ -128,27 +128,9 @@ def make_gear(spec, source):
         gear.check()
         return gear
     if kind == "rocking-cam":
-        from .rocking import RockingContour, build_rocking_gear
-
-        drive = make_eccentric(spec.part("eccentric"), file)
-        rc, lever = spec.part("rocking_cam"), spec.part("lever")
-        r = follower.roller_radius
-        contour = RockingContour(dwell_radius=rc["dwell_radius"] + r, rise=rc["rise"], lift_start=rc["lift_start"],
-                                 flank=rc["flank"], law=rc["law"], sense=1 if rc["opens"] == "ccw" else -1)
-        cam_pivot = drive.pivot
-
-        def make_valve(psi0):
-            rx = lever["pivot"][0] + lever["arm"] * math.cos(psi0)
-            ry = lever["pivot"][1] + lever["arm"] * math.sin(psi0)
-            climb = (rx - cam_pivot[0]) * -math.sin(psi0) + (ry - cam_pivot[1]) * math.cos(psi0)
-            return make_valve_drive(spec.part("valve"), pivot=lever["pivot"], lever_arm=lever["arm"], rest=psi0,
-                                    lifting=float(np.sign(climb)), file=file)
-
-        gear = build_rocking_gear(drive=drive, cam_pivot=cam_pivot, contour=contour, roller_radius=r,
-                                  lever_pivot=lever["pivot"], lever_arm=lever["arm"],
-                                  roller_branch=side_sign(lever["roller_side"]), make_valve=make_valve, file=file)
-        check_rocking_contour(gear)
-        return gear
+        if "target" in spec.parts and spec.part("target")["use"] == "fitted":
+            return rocking_target(spec, source)[2]
+        return make_rocking_gear(spec, source)
     if kind == "rolling-lever":
         from .rolling import RollingLaw, RollingLeverGear
 
@@ -174,6 +156,54 @@ def make_gear(spec, source):
     if kind == "trip":
         return make_trip_lift(spec, source)
     raise ValueError(kind)
+
+
+def make_rocking_gear(spec, source, lift_start=None, rise=None):
+    """The rocking-cam gear of a spec, with the contour as written or with its flank start and
+    rise replaced (the fitted contour of [gear.target])."""
+    from .rocking import RockingContour, build_rocking_gear
+
+    file = spec.file
+    follower = _get(source, "follower")
+    drive = make_eccentric(spec.part("eccentric"), file)
+    rc, lever = spec.part("rocking_cam"), spec.part("lever")
+    r = follower.roller_radius
+    contour = RockingContour(dwell_radius=rc["dwell_radius"] + r, rise=rc["rise"] if rise is None else rise,
+                             lift_start=rc["lift_start"] if lift_start is None else lift_start,
+                             flank=rc["flank"], law=rc["law"], sense=1 if rc["opens"] == "ccw" else -1)
+    cam_pivot = drive.pivot
+
+    def make_valve(psi0):
+        rx = lever["pivot"][0] + lever["arm"] * math.cos(psi0)
+        ry = lever["pivot"][1] + lever["arm"] * math.sin(psi0)
+        climb = (rx - cam_pivot[0]) * -math.sin(psi0) + (ry - cam_pivot[1]) * math.cos(psi0)
+        return make_valve_drive(spec.part("valve"), pivot=lever["pivot"], lever_arm=lever["arm"], rest=psi0,
+                                lifting=float(np.sign(climb)), file=file)
+
+    gear = build_rocking_gear(drive=drive, cam_pivot=cam_pivot, contour=contour, roller_radius=r,
+                              lever_pivot=lever["pivot"], lever_arm=lever["arm"],
+                              roller_branch=side_sign(lever["roller_side"]), make_valve=make_valve, file=file)
+    check_rocking_contour(gear)
+    return gear
+
+
+def rocking_target(spec, source):
+    """(given gear, ContourFit, fitted gear) for a rocking-cam spec with [gear.target]: the flank
+    start and rise that give the wanted valve lift (after the scene's lash) and open angle. The
+    fitted gear passes the same checks as a written contour; its failures name gear.target."""
+    from .rocking import fit_target
+
+    target = spec.part("target")
+    valve = _get(source, "valve")
+    lash = valve.lash if valve is not None else 0.0
+    given = make_rocking_gear(spec, source)
+    fit = fit_target(given, target["lift"], target["open_angle"], lash)
+    try:
+        fitted = make_rocking_gear(spec, source, lift_start=fit.lift_start, rise=fit.rise)
+    except InputError as exc:
+        raise InputError(spec.file, "gear.target", f"the fitted contour (lift_start "
+                         f"{math.degrees(fit.lift_start):.4g} deg, rise {fit.rise * 1e3:.4g} mm) fails: {exc.reason}") from None
+    return given, fit, fitted
 
 
 def check_rocking_contour(gear, n: int = 721) -> None:

@@ -3,7 +3,8 @@
 pivoted-roller and rocking-cam: lever angle and valve ratio; pivoted-roller also the cam's size
 and seed 004's instant-centre check of the lever's velocity.
 rocking-cam also: the swing, equal eccentric arcs against unequal swings, and the opening/closing
-symmetry about the eccentric's dead centre (why Schenker's 2R/M asymmetry is out of reach).
+symmetry about the eccentric's dead centre (why Schenker's 2R/M asymmetry is out of reach); with
+[gear.target] the contour fitted to a wanted lift and open angle against the written one.
 rolling-lever: lever angles, rolling ratio, pick-up and release, valve-referred stiffness.
 trip: latch lift, buffer force and pressure, the closing (apex, cushion, seat), the latch's
 pick-up impact, Trinks' closing-force rule, and the same valve closed by each buffer.
@@ -97,7 +98,19 @@ def _rocking(ctx, lift):
         "max_lever_ratio": float(d["ratio"].max()),
         "symmetry": sym,
     }
-    return columns, summary, [], []
+    warnings = []
+    if "target" in ctx.scene.gear.parts:
+        # [gear.target]: the fitted flank next to the written one; which of the two is simulated
+        # is `use` (build.make_gear), so `gear` here is the fitted one when use = "fitted"
+        from .build import rocking_target
+        from .rocking import target_report
+
+        spec = ctx.scene.gear
+        given, fit, fitted = rocking_target(spec, ctx.scene)
+        lash = ctx.scene.valve.lash if ctx.scene.valve is not None else 0.0
+        summary["target"], warnings = target_report(given, fit, fitted, spec.part("target"), spec.part("rocking_cam"),
+                                                    lash, ctx.theta)
+    return columns, summary, [], warnings
 
 
 def symmetry_report(scene, lift) -> dict:
@@ -169,11 +182,9 @@ def _rolling(ctx, lift):
             # Schenker: most of the elasticity sits in the rolling lever
             summary["share_of_compliance_in_lever"] = float(k["total"][i_max] / k["lever"][i_max])
         link = ctx.scene.linkage
-        if link is not None and abs(link.stiffness / summary["valve_referred_stiffness_at_max_lift_N_m"] - 1.0) > 0.1:
-            warnings.append(
-                f"[linkage] stiffness {link.stiffness:.4g} N/m differs from the rolling gear's valve-referred "
-                f"stiffness at full lift {summary['valve_referred_stiffness_at_max_lift_N_m']:.4g} N/m"
-            )
+        if link is not None:  # the elastic effect's k(t): the gear's in series with the rest of the chain
+            chain = 1.0 / (1.0 / total[contact] + 1.0 / link.stiffness)
+            summary["linkage_stiffness_in_contact_N_m"] = [float(chain.min()), float(chain.max())]
     marks = lift.breakpoints()
     omega = ctx.omega
     picks = []
@@ -206,15 +217,13 @@ def _trip(ctx, lift):
     omega = ctx.omega
     columns = lift.columns(ctx.theta)
     sol = lift.closing
-    # while the latch carries the valve it transmits the rigid-train force (forces.rigid_train_forces)
-    from ..forces import TrainLoads, rigid_train_forces
+    # while the latch carries the valve it transmits the rigid-train force (the forces effect's, one function)
+    from ..forces import TrainLoads
+    from .trip_effects import latch_force
 
-    c = ctx.columns
-    phi = np.mod(ctx.theta - lift.start, TWO_PI)
-    carried = (phi >= lift.phi_pick) & (phi < lift.phi_trip)
-    rigid = rigid_train_forces(c["rigid_valve_lift_m"], c["rigid_valve_velocity_m_s"], c["rigid_valve_accel_m_s2"],
-                               TrainLoads.from_scene(scene), 1.0)
-    columns["latch_force_N"] = np.where(carried, rigid["contact_force_N"], 0.0)
+    latch = latch_force(lift, ctx.theta, TrainLoads.from_scene(scene), omega)
+    carried = latch["carried"]
+    columns["latch_force_N"] = latch["force"]
     s_trip = float(lift.latch.derivatives(np.array([lift.trip_angle]))[0, 0] - lift.overtravel)
     v_trip = float(omega * lift.latch.derivatives(np.array([lift.trip_angle]))[1, 0])
     ups, _ = lash_crossings(lift.latch, 1.0, lift.overtravel)

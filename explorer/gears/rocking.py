@@ -25,6 +25,9 @@ centre, so s, v and the acceleration are mirror images (p1 = p2): Schenker's bes
 p2 - p1 = 2R/M, cannot be had. For a real rod the two shaft angles with the same chi are mirror
 images about the line O -> B(chi) (B the rod pin), so opening and closing differ in timing by
 2 [angle(B(chi_open)) - angle(B(chi_dead))]: fixed by the linkage, not by the contour.
+
+Inverse problem ([gear.target], `explorer fit`): the flank start w_s and rise H that give a
+wanted valve lift and open angle, the flank's length and law kept (fit_target, see there).
 """
 
 from __future__ import annotations
@@ -43,6 +46,7 @@ from .jet import Jet
 from .linkage import circle_intersection, polar, polar_curvature, wrap
 
 TWO_PI = 2.0 * math.pi
+_EPS = 4.0 * np.finfo(float).eps  # brentq's smallest relative tolerance
 
 
 @dataclass(frozen=True)
@@ -236,6 +240,87 @@ class RockingCamGear:
             counter_radius=r, roller_diameter=2.0 * r,
         )
 
+    # -- the motion as a function of the swing (the fit's domain) ----------------------------------
+    def closed_dead_centre(self) -> float:
+        """Shaft angle (rad, [0, 2 pi)) where the swing reaches its closed end."""
+        centres = self.drive.dead_centres()
+        far = [abs(wrap(c - self.dead_centre)) for c in centres]
+        return centres[0] if far[0] > far[1] else centres[1]
+
+    def total_swing(self) -> float:
+        """Omega: the swing from the closed end to the open end, rad."""
+        return float(self.swing_values(np.array([self.dead_centre]))[0])
+
+    def swing_values(self, theta) -> np.ndarray:
+        """w(theta) as plain values (wrapped: the rocking angle may pass +-pi)."""
+        chi = self.drive.angle(np.atleast_1d(np.asarray(theta, dtype=float)))
+        return self.contour.sense * wrap(chi - self.closed_end)
+
+    def shaft_angles_at_swing(self, w: float) -> tuple[float, float]:
+        """The two shaft angles at which the swing is w (0 <= w <= Omega): rising towards the
+        dead centre (opening) and falling after it (closing); the four-bar's swing is monotone
+        between its dead centres, so each is one bracketed root."""
+        td = self.dead_centre
+        lead = float(np.mod(td - self.closed_dead_centre(), TWO_PI))
+        omega = self.total_swing()
+
+        def g(th):
+            return float(self.swing_values(np.array([th]))[0]) - w
+
+        if w <= 0.0:
+            return td - lead, td - lead + TWO_PI
+        if w >= omega:
+            return td, td
+        opening = brentq(g, td - lead, td, xtol=1e-15, rtol=_EPS)
+        closing = brentq(g, td, td - lead + TWO_PI, xtol=1e-15, rtol=_EPS)
+        return opening, closing
+
+    def open_angle_at_swing(self, w: float) -> float:
+        """Shaft angle over which the swing exceeds w (2 pi at w = 0, 0 at w = Omega)."""
+        opening, closing = self.shaft_angles_at_swing(w)
+        return closing - opening
+
+    def top_arc_swing(self) -> float:
+        """Swing at which the roller reaches the top arc. On an arc concentric to C the contact
+        sits where the roller stands, so the flank's end arrives not at w_s + W (measured with
+        the roller at rest) but later or earlier by the angle, about C, between the rest roller
+        and the roller on the top arc (radius rho0 + H); infinite when the roller lever cannot
+        reach the top arc (the roller then never leaves the flank)."""
+        c = self.contour
+        rest = self.rest_position()
+        x, y, q = circle_intersection(self.lever_pivot, self.lever_arm, self.cam_pivot, c.dwell_radius + c.rise,
+                                      self.roller_branch)
+        if x is None or q < 1e-6:
+            return math.inf
+        top = (float(x), float(y))
+        turn = math.atan2(top[1] - self.cam_pivot[1], top[0] - self.cam_pivot[0]) - math.atan2(
+            rest[1] - self.cam_pivot[1], rest[0] - self.cam_pivot[0])
+        return c.lift_start + c.flank + c.sense * float(wrap(turn))
+
+    def full_lift_dwell(self) -> float:
+        """Shaft angle with the roller on the top arc (0 when the swing ends on the flank)."""
+        w_top = self.top_arc_swing()
+        return self.open_angle_at_swing(w_top) if w_top < self.total_swing() else 0.0
+
+    def lift_at_swing(self, w) -> np.ndarray:
+        """Valve-referred lift (lash included) at swing w: the contact solved at the rocking angle
+        chi = chi_closed + sense w, without the eccentric. Values only (the fit's measure)."""
+        w = np.atleast_1d(np.asarray(w, dtype=float))
+        chi = self.closed_end + self.contour.sense * w
+        rest = self.rest_position()
+        guess = math.atan2(rest[1] - self.cam_pivot[1], rest[0] - self.cam_pivot[0]) - chi
+        phi, ok = J.newton(lambda p: self._residual(p, chi), guess, step_limit=0.05, order=1)
+        far = np.abs(wrap(phi - guess)) > self.contour.flank + 0.5
+        if not np.all(ok) or np.any(far):
+            bad = int(np.argmax(~ok | far))
+            raise InputError(self.file, "gear.rocking_cam",
+                             f"the roller loses the rocking cam at a swing of {math.degrees(w[bad]):.3f} deg "
+                             "(contour rise too large for the roller lever)")
+        rho = self.contour.radius(phi).c[0]
+        rx, ry = polar(self.cam_pivot, rho, phi + chi)
+        psi = np.arctan2(ry - self.lever_pivot[1], rx - self.lever_pivot[0])
+        return np.asarray(self.valve.travel(psi), dtype=float)
+
     def rod_pin_angle(self, chi: np.ndarray) -> np.ndarray:
         """Direction of O -> B for rocking angle chi (B the rod pin on the rocking lever)."""
         arm = self.drive.arm
@@ -284,49 +369,252 @@ def swing_increments(gear, theta_start: float, theta_end: float, n: int) -> tupl
     return theta, np.diff(chi)
 
 
+# --------------------------------------------------------------------------------------------
+# Choosing the contour for a wanted valve lift and open angle ("given a target, help choose it")
+# --------------------------------------------------------------------------------------------
+#
+# The lift depends on the swing alone, s = F(w), and F rises monotonically over the flank (every
+# law in explorer.laws is monotone, and raising the pitch curve pushes the roller out). So the
+# valve is open exactly while the swing exceeds w_o, the swing at which F reaches the lash, and
+#   open angle = theta_close(w_o) - theta_open(w_o)
+# is the four-bar's business alone: the wanted open angle fixes w_o by one bracketed root on the
+# drive. Two conditions on the contour remain, both at fixed rocking angles (no eccentric):
+#   F(Omega; w_s, H) = lift + lash      (the open end of the swing, at the dead centre)
+#   F(w_o;   w_s, H) = lash
+# F increases with H at every swing and decreases as the flank starts later, so nested Brent
+# solves find H(w_s) from the first and then w_s from the second; with no lash the second reads
+# w_s = w_o. The flank's length W, its law and the dwell radius are kept: they are the designer's
+# choices of shape, the fit places and scales the flank.
+
+KEY_LIFT = "gear.target.lift"
+KEY_OPEN = "gear.target.open_angle"
+
+
+@dataclass(frozen=True)
+class ContourFit:
+    """Flank start w_s and rise H for the wanted lift and open angle (flank length and law kept),
+    and what a flank of this length can reach at that lift."""
+
+    lift_start: float  # w_s, rad
+    rise: float  # H, m (pitch curve and contour alike)
+    open_swing: float  # w_o, rad: the swing at which the valve leaves and regains its seat
+    full_lift_dwell: float  # rad of shaft angle with the roller on the top arc (0: the swing ends on the flank)
+    max_open_angle: float  # rad: the flank starting at the closed end, the longest opening reachable
+    full_flank_open_angle: float | None  # rad: the roller reaching the top arc just at the open end of
+    # the swing; shorter openings are reachable but the swing then ends on the flank (no dwell at
+    # full lift); None when even a flank starting at the closed end never brings the top arc
+
+
+def valve_opening(gear: RockingCamGear, lash: float = 0.0) -> tuple[float, float]:
+    """(largest valve lift s = L - lash, shaft angle over which the valve is open) of a gear's
+    contour, measured at fixed rocking angles: the lift at the open end of the swing and the
+    swing at which the lift reaches the lash."""
+    omega = gear.total_swing()
+    top = float(gear.lift_at_swing([omega])[0]) - lash
+    if top <= 0.0:
+        return 0.0, 0.0  # the lash is never taken up
+    if lash <= 0.0:
+        w_open = gear.contour.lift_start
+    else:
+        w_open = brentq(lambda w: float(gear.lift_at_swing([w])[0]) - lash, 0.0, omega, xtol=1e-15, rtol=_EPS)
+    return top, gear.open_angle_at_swing(w_open)
+
+
+def fit_target(gear: RockingCamGear, target_lift: float, target_open_angle: float, lash: float = 0.0) -> ContourFit:
+    """Flank start and rise for the wanted valve lift (after `lash`) and open angle; InputError
+    naming gear.target.* when no flank of this length and law reaches them."""
+    try:
+        return _fit_target(gear, target_lift, target_open_angle, lash)
+    except InputError as exc:
+        if exc.key.startswith("gear.target"):
+            raise
+        # a trial contour the roller lever cannot follow between the checked swings: still the target's fault
+        raise InputError(gear.file, "gear.target",
+                         f"no contour of this flank reaches the target: {exc.reason}") from None
+
+
+def _fit_target(gear, target_lift, target_open_angle, lash) -> ContourFit:
+    file = gear.file
+    omega = gear.total_swing()
+    flank = gear.contour.flank
+    top = target_lift + lash
+    if not 0.0 < target_open_angle < TWO_PI:
+        raise InputError(file, KEY_OPEN, "must lie between 0 and 360 deg")
+    if not target_lift > 0.0:
+        raise InputError(file, KEY_LIFT, "must be greater than zero")
+
+    swings = np.linspace(0.0, omega, 49)  # the roller must follow all along, not only at the open end
+
+    def trial(ws, h):
+        return replace(gear, contour=replace(gear.contour, lift_start=ws, rise=h))
+
+    def lift(ws, h, w):
+        return trial(ws, h).lift_at_swing(w)
+
+    def rise_for(ws):
+        """H giving the wanted lift at the open end for a flank starting at ws; None when the
+        roller lever cannot follow (it loses the rocking cam first)."""
+        if ws >= omega:
+            return None
+
+        def excess(h):  # None where the roller loses the cam anywhere on the swing (rises beyond a limit)
+            try:
+                return float(lift(ws, h, swings)[-1]) - top
+            except InputError:
+                return None
+
+        h_lo, h_hi = 0.0, gear.contour.rise
+        for _ in range(60):  # double until past the target; past the roller's limit, bisect towards it
+            e = excess(h_hi)
+            if e is not None and e > 0.0:
+                break
+            if e is not None:
+                h_lo, h_hi = h_hi, 2.0 * h_hi
+                continue
+            lost = h_hi
+            while lost - h_lo > 1e-12 * lost:
+                mid = 0.5 * (h_lo + lost)
+                e = excess(mid)
+                if e is None:
+                    lost = mid
+                elif e > 0.0:
+                    break
+                else:
+                    h_lo = mid
+            else:
+                return None
+            h_hi = mid
+            break
+        else:
+            return None
+
+        def finite_excess(h):  # between a rise the roller follows and a larger one it follows too
+            e = excess(h)
+            return math.inf if e is None else e
+
+        return brentq(finite_excess, h_lo, h_hi, xtol=1e-15, rtol=_EPS)
+
+    def seat_swing(ws, h):
+        """The swing at which the lift reaches the lash for this flank."""
+        if lash <= 0.0:
+            return ws
+        return brentq(lambda w: float(lift(ws, h, [w])[0]) - lash, ws, omega, xtol=1e-15, rtol=_EPS)
+
+    h0 = rise_for(0.0)
+    if h0 is None:
+        raise InputError(file, KEY_LIFT, f"{target_lift * 1e3:.4g} mm is out of reach: the roller lever cannot follow "
+                         "a flank that high (the roller would lose the rocking cam)")
+    max_open = gear.open_angle_at_swing(seat_swing(0.0, h0))
+    full_open = None
+    # with the top arc reached the lift depends on the rise alone (h0); the top arc's swing moves
+    # with the flank's start, so the flank that reaches it just at the open end starts at
+    late = omega - trial(0.0, h0).top_arc_swing()
+    if late >= 0.0:
+        full_open = gear.open_angle_at_swing(seat_swing(late, h0))
+    if target_open_angle > max_open:
+        raise InputError(file, KEY_OPEN, f"{math.degrees(target_open_angle):.4g} deg is longer than a "
+                         f"{math.degrees(flank):.4g} deg flank can keep the valve open at this lift (at most "
+                         f"{math.degrees(max_open):.4g} deg, the flank starting at the closed end): shorten "
+                         "gear.rocking_cam.flank")
+    # the linkage alone: the swing at which the valve must leave its seat
+    w_o = brentq(lambda w: gear.open_angle_at_swing(w) - target_open_angle, 0.0, omega, xtol=1e-15, rtol=_EPS)
+    if lash <= 0.0:
+        ws = w_o
+    else:
+        def excess(ws):
+            h = rise_for(ws)
+            # a flank the roller lever cannot follow counts as one that opens too late
+            return -lash if h is None else float(lift(ws, h, [w_o])[0]) - lash
+
+        ws = brentq(excess, 0.0, w_o, xtol=1e-15, rtol=_EPS) if excess(0.0) > 0.0 else 0.0
+    h = rise_for(ws)
+    if h is not None:
+        got = lift(ws, h, [w_o, omega])
+    if h is None or abs(got[0] - lash) > 1e-9 * top or abs(got[1] - top) > 1e-9 * top:
+        raise InputError(file, KEY_OPEN, f"{math.degrees(target_open_angle):.4g} deg is too short for "
+                         f"{target_lift * 1e3:.4g} mm of lift: the flank would have to rise more steeply than "
+                         "the roller lever can follow; lengthen open_angle or lower the lift")
+    return ContourFit(lift_start=float(ws), rise=float(h), open_swing=float(w_o),
+                      full_lift_dwell=trial(ws, h).full_lift_dwell(), max_open_angle=float(max_open),
+                      full_flank_open_angle=full_open)
+
+
 def fit_contour(gear: RockingCamGear, target_lift: float, target_open_angle: float, lash: float = 0.0,
                 make_gear=None) -> RockingCamGear:
-    """Choose the flank's rise H and start w_s so that the valve lifts `target_lift` (after
-    `lash`) and stays open for `target_open_angle` of shaft rotation. Two equations, two
-    unknowns: Newton on (w_s, H) with a difference Jacobian (a design aid, not a derivative of a
-    lift curve); each evaluation is an exact analysis of the trial contour: the lift at the
-    eccentric's dead centre (the open end of the swing) and the opening and closing angles found
-    by Brent's method on the analytic lift."""
+    """The gear with its flank placed and scaled (fit_target) so that the valve lifts
+    `target_lift` after `lash` and stays open for `target_open_angle` of shaft rotation;
+    `make_gear(contour)` rebuilds the gear (default: the same linkage, new contour)."""
+    fit = fit_target(gear, target_lift, target_open_angle, lash)
     make_gear = make_gear or (lambda c: replace(gear, contour=c))
+    return make_gear(replace(gear.contour, lift_start=fit.lift_start, rise=fit.rise))
 
-    def measure(ws, h):
-        trial = make_gear(replace(gear.contour, lift_start=ws, rise=h))
-        td = trial.dead_centre
 
-        def f(th):
-            return float(trial.lift_jet(np.array([th])).c[0][0]) - lash
+def max_pressure_angle(gear: RockingCamGear, theta) -> float:
+    """Largest |pressure angle| at the roller over the shaft angles theta, rad."""
+    return float(np.max(np.abs(gear.contact_details(theta)["pressure_angle"])))
 
-        top = f(td)
-        if top <= 0.0:
-            return top, 0.0
-        # the valve is open on an interval around the dead centre: bracket each end
-        span = np.linspace(0.0, math.pi, 181)
-        vals_open = trial.lift_jet(td - span).c[0] - lash
-        vals_close = trial.lift_jet(td + span).c[0] - lash
-        i = int(np.argmax(vals_open <= 0.0))
-        j = int(np.argmax(vals_close <= 0.0))
-        a = brentq(lambda u: f(td - u), span[i - 1], span[i], xtol=1e-14)
-        b = brentq(lambda u: f(td + u), span[j - 1], span[j], xtol=1e-14)
-        return top, a + b
 
-    x = np.array([gear.contour.lift_start, gear.contour.rise], dtype=float)
-    target = np.array([target_lift, target_open_angle])
-    for _ in range(40):
-        f = np.array(measure(*x)) - target
-        if abs(f[0]) < 1e-10 * target_lift and abs(f[1]) < 1e-9:
-            break
-        jac = np.empty((2, 2))
-        for k, h in enumerate((1e-6, 1e-7)):
-            xp = x.copy()
-            xp[k] += h
-            jac[:, k] = (np.array(measure(*xp)) - target - f) / h
-        step = np.linalg.solve(jac, f)
-        scale = min(1.0, 0.05 / max(abs(step[0]), 1e-300), 0.5 * x[1] / max(abs(step[1]), 1e-300))
-        x = x - scale * step
-        x[1] = max(x[1], 1e-6)
-    return make_gear(replace(gear.contour, lift_start=float(x[0]), rise=float(x[1])))
+def rocking_cam_toml(part, lift_start: float, rise: float) -> str:
+    """[gear.rocking_cam] in scene-file syntax with the flank start and rise replaced: the written
+    part's other keys as they are (SI values from the spec, printed in mm and deg). Ten significant
+    digits keep the pasted contour within ~1e-9 of the fitted one."""
+
+    def mm(x):
+        return f'"{x * 1e3:.10g} mm"'
+
+    def deg(x):
+        return f'"{math.degrees(x):.10g} deg"'
+
+    return "\n".join([
+        "[gear.rocking_cam]",
+        f"dwell_radius = {mm(part['dwell_radius'])}",
+        f"rise = {mm(rise)}",
+        f"lift_start = {deg(lift_start)}",
+        f"flank = {deg(part['flank'])}",
+        f'law = "{part["law"]}"',
+        f'opens = "{part["opens"]}"',
+    ]) + "\n"
+
+
+def target_report(given: RockingCamGear, fit: ContourFit, fitted: RockingCamGear, target, part, lash: float,
+                  theta) -> tuple[dict, list[str]]:
+    """Summary of [gear.target]: wanted, what the written contour achieves, the fitted contour and
+    what it achieves (re-measured on the rebuilt gear, not taken from the fit), the open angles a
+    flank of this length reaches at the wanted lift, and the fitted table in scene syntax."""
+
+    def contour(gear):
+        lift, open_angle = valve_opening(gear, lash)
+        c = gear.contour
+        return {
+            "lift_start_deg": math.degrees(c.lift_start),
+            "rise_m": c.rise,
+            "valve_lift_m": lift,
+            "open_angle_deg": math.degrees(open_angle),
+            "full_lift_dwell_deg": math.degrees(gear.full_lift_dwell()),
+            "max_pressure_angle_deg": math.degrees(max_pressure_angle(gear, theta)),
+        }
+
+    wanted = {"valve_lift_m": target["lift"], "open_angle_deg": math.degrees(target["open_angle"])}
+    if target["max_pressure_angle"] is not None:
+        wanted["max_pressure_angle_deg"] = math.degrees(target["max_pressure_angle"])
+    report = {
+        "use": target["use"],
+        "lash_m": lash,
+        "wanted": wanted,
+        "given": contour(given),
+        "fitted": contour(fitted),
+        "max_open_angle_deg": math.degrees(fit.max_open_angle),
+        "full_flank_open_angle_deg": None if fit.full_flank_open_angle is None
+        else math.degrees(fit.full_flank_open_angle),
+        "fitted_toml": rocking_cam_toml(part, fit.lift_start, fit.rise),
+    }
+    warnings = []
+    limit = target["max_pressure_angle"]
+    if limit is not None:
+        # the fitted contour is the proposal; the written one matters while it is the one simulated
+        for name in ("fitted", "given") if target["use"] == "given" else ("fitted",):
+            got = report[name]["max_pressure_angle_deg"]
+            if got > math.degrees(limit):
+                warnings.append(f"the {name} rocking-cam contour's pressure angle reaches {got:.3f} deg, more than "
+                                f"gear.target.max_pressure_angle {math.degrees(limit):.4g} deg")
+    return report, warnings

@@ -33,6 +33,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import InputError
+from . import jet as J
 from .jet import Jet
 
 TWO_PI = 2.0 * math.pi
@@ -129,33 +130,68 @@ class RollingLeverGear:
         chis = [float(self.drive.angle(np.array([c]))[0]) for c in self.drive.dead_centres()]
         return abs(chis[1] - chis[0]) - self.contact_swing
 
-    def stiffness(self, theta) -> dict:
-        """Valve-referred stiffness of the rolling lever and the eccentric rod along the cycle."""
+    def stiffness(self, theta, with_derivative: bool = False) -> dict:
+        """Valve-referred stiffness of the rolling lever and the eccentric rod along the cycle.
+
+        ds/dalpha = sense ds/dw is taken from jets in the rolling swing w (not as s'(theta) /
+        alpha'(theta), which is 0/0 at the eccentric's dead centres, i.e. at full lift). Before
+        pick-up (w < 0) the faces do not touch: the values are those at the meeting point.
+        with_derivative: also "d_lever", "d_rod", "d_total", the analytic d/dtheta (for the
+        elastic solvers' k(t) and the jerk)."""
         theta = np.asarray(theta, dtype=float)
-        w = self.rolling_swing(theta)
-        beta = self.valve_lever_angle(w)
-        s = self.valve.travel(beta)
-        alpha_rate = w.c[1] * self.sense  # d alpha / d theta
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ds_dalpha = s.c[1] / alpha_rate
-        # rod: d alpha / d l at fixed eccentric = 1 / (u_rod . dB/dalpha)
-        bx, by = self.drive.pin(theta)
-        ex, ey = self.drive.centre(theta)
+        swing = self.rolling_swing(theta)
+        touching = swing.c[0] > 0.0
+        w = np.where(touching, swing.c[0], 0.0)
+        w1 = np.where(touching, swing.c[1], 0.0)  # dw/dtheta (frozen before pick-up)
+        s_w = self.valve.travel(self.valve_lever_angle(Jet.variable(w)))
+        ds_dalpha = self.sense * s_w.c[1]
+        d_ds_dalpha = self.sense * s_w.c[2] * w1
+        # rod: d alpha / d l at fixed eccentric = 1 / q, q = u_rod . dB/dalpha (jets in theta; the
+        # lever angle frozen at the meeting point before pick-up, like w)
+        th = Jet.variable(theta)
+        bx, by = self.drive.pin(th)
+        ex, ey = self.drive.centre(th)
         ux, uy = bx - ex, by - ey
-        norm = np.hypot(ux, uy)
-        ux, uy = ux / norm, uy / norm
-        alpha = self.drive.angle(theta)
-        dbx, dby = -self.drive.arm * np.sin(alpha), self.drive.arm * np.cos(alpha)
-        ds_dl = ds_dalpha / (ux * dbx + uy * dby)
+        norm = J.hypot(ux, uy)
+        alpha = self.drive.angle(th)
+        q = (ux * (-self.drive.arm * J.sin(alpha)) + uy * (self.drive.arm * J.cos(alpha))) / norm
+        q0 = q.c[0]
+        q1 = q.c[1]
+        if not np.all(touching):  # the rod geometry at the meeting point (alpha where w = 0)
+            q0 = np.where(touching, q0, self._rod_projection_at_meeting())
+            q1 = np.where(touching, q1, 0.0)
+        ds_dl = ds_dalpha / q0
         out = {"ds_dalpha": ds_dalpha, "ds_drod": ds_dl}
-        with np.errstate(divide="ignore"):
+        parts = []
+        with np.errstate(divide="ignore", invalid="ignore"):
             if self.lever_stiffness is not None:
                 out["lever"] = self.lever_stiffness / ds_dalpha**2
+                out["d_lever"] = -2.0 * self.lever_stiffness * d_ds_dalpha / ds_dalpha**3
+                parts.append("lever")
             if self.rod_stiffness is not None:
-                out["rod"] = self.rod_stiffness / ds_dl**2
-        if "lever" in out and "rod" in out:
-            out["total"] = 1.0 / (1.0 / out["lever"] + 1.0 / out["rod"])
+                out["rod"] = self.rod_stiffness * q0**2 / ds_dalpha**2
+                out["d_rod"] = 2.0 * self.rod_stiffness * q0 * (q1 * ds_dalpha - q0 * d_ds_dalpha) / ds_dalpha**3
+                parts.append("rod")
+            if parts:  # in series: 1/k = sum 1/k_i, k' = k^2 sum k_i' / k_i^2
+                total = 1.0 / sum(1.0 / out[p] for p in parts)
+                out["total"] = total
+                out["d_total"] = total**2 * sum(out[f"d_{p}"] / out[p] ** 2 for p in parts)
+        if not with_derivative:
+            for key in [k for k in out if k.startswith("d_")]:
+                del out[key]
         return out
+
+    def _rod_projection_at_meeting(self) -> float:
+        """u_rod . dB/dalpha where the faces meet (rolling swing 0), on the opening side."""
+        marks = self.contact_angles()
+        rate = self.rolling_swing(np.asarray(marks, dtype=float)).c[1]
+        pick = float(marks[int(np.argmax(rate))])  # the pick-up: the swing grows there
+        bx, by = self.drive.pin(np.array([pick]))
+        ex, ey = self.drive.centre(np.array([pick]))
+        alpha = float(self.drive.angle(np.array([pick]))[0])
+        ux, uy = float(bx[0] - ex[0]), float(by[0] - ey[0])
+        norm = math.hypot(ux, uy)
+        return self.drive.arm * (-ux * math.sin(alpha) + uy * math.cos(alpha)) / norm
 
     def contact_geometry(self, theta):
         """explorer.contact's view of the rolling faces. The contact P lies on A-B at rho from A; the
@@ -236,3 +272,18 @@ class RollingLeverLift:
 
     def breakpoints(self) -> np.ndarray:
         return np.array(sorted(self.marks))
+
+    @property
+    def linkage_stiffness(self):
+        """theta -> (k, dk/dtheta): the rolling lever's and the eccentric rod's elasticity referred
+        to the valve (N/m), which changes with the ratio along the lift -- or None when the scene
+        gives neither lever_stiffness nor rod_stiffness. The elastic effect puts it in series with
+        [linkage] stiffness (the rest of the chain)."""
+        if self.gear.lever_stiffness is None and self.gear.rod_stiffness is None:
+            return None
+
+        def of(theta):
+            k = self.gear.stiffness(theta, with_derivative=True)
+            return k["total"], k["d_total"]
+
+        return of

@@ -11,6 +11,10 @@ rocking-cam      eccentric-driven rocking cam on a roller lever; [lift] law = "g
                  [gear.rocking_cam] dwell_radius, rise, lift_start, flank, law, opens
                  [gear.lever] (pivot, arm, roller_side seen from the pivot towards the cam pivot)
                  [gear.valve]; follower.roller_radius
+                 [gear.target] (optional) lift, open_angle, max_pressure_angle, use = "given" |
+                     "fitted": the flank (lift_start, rise) that gives the wanted valve lift and
+                     open angle; reported by the 'gear' effect and `explorer fit`, simulated
+                     only with use = "fitted"
 rolling-lever    eccentric rolling lever ("Waelzhebel"); [lift] law = "gear".
                  [gear.eccentric] (the rolling lever is the eccentric's lever)
                  [gear.rolling_lever] valve_lever_pivot, contact_radius, growth, contact_swing,
@@ -19,7 +23,11 @@ rolling-lever    eccentric rolling lever ("Waelzhebel"); [lift] law = "gear".
                      valve-lever pivot -> rolling-lever pivot)
 trip             latch lifts the valve, releases it at the trip angle; [lift] is the latch's
                  valve-referred lift law, valve.lash its over-travel before it catches the valve.
-                 [gear.trip] angle, buffer ("none" | "air" | "oil"), valve_weight, closing_time
+                 [gear.trip] angle, buffer ("none" | "air" | "oil"), valve_weight, closing_time,
+                     latch_friction (mu of the latch face on the catch, default 0.15), latch_width and
+                     latch_depth (the latch face's bearing area; depth = its engagement, the
+                     distance the trip pulls it out); forces, contact and elastic analyse the
+                     latched phase (explorer.gears.trip_effects)
                  [gear.air_dashpot] diameter, stroke, clearance, orifice_diameter,
                      discharge_coefficient, polytropic_exponent, ambient_pressure, ambient_temperature
                  [gear.oil_dashpot] diameter, stroke, orifice_diameter, discharge_coefficient,
@@ -130,6 +138,25 @@ def _rocking_cam(t: Table) -> dict:
     return out
 
 
+TARGET_USES = ("given", "fitted")
+
+
+def _target(t: Table) -> dict:
+    t.reject_unknown(("lift", "open_angle", "max_pressure_angle", "use"))
+    out = {
+        "lift": t.quantity("lift", "length", positive=True),  # the valve's own lift, after the lash
+        "open_angle": t.quantity("open_angle", "angle", positive=True),  # shaft angle, valve off its seat
+        "max_pressure_angle": t.quantity("max_pressure_angle", "angle", positive=True)
+        if t.has("max_pressure_angle") else None,
+        "use": t.string("use", "given", choices=TARGET_USES),
+    }
+    if out["open_angle"] >= 2.0 * math.pi:
+        raise t.error("open_angle", "must be less than 360 deg (the valve must close once per revolution)")
+    if out["max_pressure_angle"] is not None and out["max_pressure_angle"] >= 0.5 * math.pi:
+        raise t.error("max_pressure_angle", "must be less than 90 deg")
+    return out
+
+
 def _rolling_lever(t: Table) -> dict:
     t.reject_unknown(("valve_lever_pivot", "contact_radius", "growth", "contact_swing", "opens",
                       "lever_stiffness", "rod_stiffness"))
@@ -144,16 +171,28 @@ def _rolling_lever(t: Table) -> dict:
     }
 
 
+# Latch face on the spindle's catch: hardened steel on hardened steel, oiled (boundary
+# lubrication, mu about 0.1 to 0.2); the release starts from rest, so the upper half of that range.
+LATCH_FRICTION = 0.15
+
+
 def _trip(t: Table) -> dict:
-    t.reject_unknown(("angle", "buffer", "valve_weight", "closing_time"))
+    t.reject_unknown(("angle", "buffer", "valve_weight", "closing_time", "latch_friction", "latch_width",
+                      "latch_depth"))
     angle = t.quantity("angle", "angle")
     if not 0.0 <= angle < 2.0 * math.pi:
         raise t.error("angle", "must lie in [0 deg, 360 deg)")
+    if t.has("latch_width") != t.has("latch_depth"):
+        missing = "latch_depth" if t.has("latch_width") else "latch_width"
+        raise t.error(missing, "the latch's bearing area needs both latch_width and latch_depth")
     return {
         "angle": angle,
         "buffer": t.string("buffer", "none", choices=BUFFERS),
         "valve_weight": t.quantity("valve_weight", "force", positive=True) if t.has("valve_weight") else None,
         "closing_time": t.quantity("closing_time", "time", positive=True) if t.has("closing_time") else None,
+        "latch_friction": t.number("latch_friction", LATCH_FRICTION, minimum=0.0),
+        "latch_width": t.quantity("latch_width", "length", positive=True) if t.has("latch_width") else None,
+        "latch_depth": t.quantity("latch_depth", "length", positive=True) if t.has("latch_depth") else None,
     }
 
 
@@ -188,12 +227,13 @@ def _oil(t: Table) -> dict:
 
 PARTS = {
     "pivoted-roller": {"lever": _lever, "valve": _valve},
-    "rocking-cam": {"eccentric": _eccentric, "rocking_cam": _rocking_cam, "lever": _lever, "valve": _valve},
+    "rocking-cam": {"eccentric": _eccentric, "rocking_cam": _rocking_cam, "lever": _lever, "valve": _valve,
+                    "target": _target},
     "rolling-lever": {"eccentric": _eccentric, "rolling_lever": _rolling_lever,
                       "valve": lambda t: _valve(t, rolling=True)},
     "trip": {"trip": _trip, "air_dashpot": _air, "oil_dashpot": _oil},
 }
-OPTIONAL_PARTS = {"air_dashpot", "oil_dashpot"}
+OPTIONAL_PARTS = {"air_dashpot", "oil_dashpot", "target"}
 
 
 def parse_gear_section(table: Table | None, fields: dict) -> GearSpec | None:
@@ -223,6 +263,10 @@ def parse_gear_section(table: Table | None, fields: dict) -> GearSpec | None:
     from .build import make_gear
 
     make_gear(spec, fields)  # builds and checks the geometry over the whole cycle
+    if "target" in spec.parts and spec.part("target")["use"] == "given":
+        from .build import rocking_target
+
+        rocking_target(spec, fields)  # a target out of reach fails here, not later in the 'gear' effect
     return spec
 
 
@@ -240,14 +284,18 @@ def _check_scene(spec: GearSpec, fields: dict) -> None:
         raise InputError(file, "lift.law", "a pivoted roller lever synthesises its cam from a lift law, not from [cam]")
     if kind in ("pivoted-roller", "rocking-cam") and follower.roller_radius <= 0.0:
         raise InputError(file, "follower.roller_radius", f"the {kind} gear needs a roller (roller_radius > 0)")
+    if kind == "rolling-lever" and "elastic" in effects:
+        rl = spec.part("rolling_lever")
+        from ..dynamics.model import VARYING_STIFFNESS
+
+        if (rl["lever_stiffness"] is not None or rl["rod_stiffness"] is not None) \
+                and fields["solver"].method not in VARYING_STIFFNESS:
+            raise InputError(file, "solver.method", f"method \"{fields['solver'].method}\" needs a constant linkage "
+                             "stiffness, but the rolling lever's (lever_stiffness, rod_stiffness) changes with its ratio "
+                             "along the lift: use method = " + " or ".join(f'"{m}"' for m in VARYING_STIFFNESS))
     if kind == "trip":
         if lift.law not in LAWS:
             raise InputError(file, "lift.law", f"the trip gear's latch follows one of the laws: {', '.join(LAWS)}")
-        for effect in ("forces", "elastic"):
-            if effect in effects:
-                raise InputError(file, "effects", f"effect '{effect}' assumes a linkage that drives the valve all the way "
-                                 "(its float speed scales the accelerations with the speed squared); a trip gear releases "
-                                 "the valve - the 'gear' effect reports the latch force, the free closing and the buffer")
         if fields.get("valve") is None or fields.get("spring") is None:
             raise InputError(file, "valve" if fields.get("valve") is None else "spring",
                              "missing section: the trip gear's closing needs [valve] mass and [spring]")
