@@ -722,3 +722,175 @@ def spring_axial_scale(scene, result, magnification: float = 1.0, lay: Layout | 
     per-step vertices for viewers that can only scale a node; the wire's section flattens a little)."""
     lay = lay or layout(scene, result)
     return spring_length(lay, displayed_valve_lift(result, magnification)) / lay.spring_rest_length
+
+
+# ---------------------------------------------------------------------------------------------
+# Framing: the box the parts sweep over a revolution, and a camera that sees all of it
+
+
+def _part_vertices(mesh) -> np.ndarray:
+    """(V, 3) float vertices of a trimesh, a (vertices, faces) pair or a bare vertex array."""
+    if hasattr(mesh, "vertices"):
+        return np.asarray(mesh.vertices, dtype=float)
+    if isinstance(mesh, tuple):
+        return np.asarray(mesh[0], dtype=float)
+    return np.asarray(mesh, dtype=float)
+
+
+def _hull_2d(points: np.ndarray) -> np.ndarray:
+    """Vertices of the convex hull of (V, 2) points (all of them when the hull is degenerate):
+    the extremes of a rotated set are those of its rotated hull, and the hull is much smaller."""
+    if len(points) <= 16:
+        return points
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return points[ConvexHull(points).vertices]
+    except (QhullError, ValueError):
+        return points
+
+
+def _rotation_matrices(wxyz: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) rotation matrices of (N, 4) quaternions w, x, y, z (normalised here)."""
+    q = np.asarray(wxyz, dtype=float)
+    q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    w, x, y, z = q.T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], axis=1)
+
+
+def _swept_extents(vertices: np.ndarray, wxyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-rotation (N, 3) lows and highs of the rotated vertices (before the translation)."""
+    q = np.asarray(wxyz, dtype=float)
+    q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    if np.all(q[:, 1] == 0.0) and np.all(q[:, 3] == 0.0):
+        # a turn about y (every part of these gears): y is unchanged, and x-z is a plane rotation
+        # of the part's outline, so its hull in x-z decides the extremes
+        hull = _hull_2d(vertices[:, [0, 2]])
+        angle = 2.0 * np.arctan2(q[:, 2], q[:, 0])
+        c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
+        x = c * hull[None, :, 0] + s * hull[None, :, 1]
+        z = -s * hull[None, :, 0] + c * hull[None, :, 1]
+        n = len(q)
+        lo = np.column_stack([x.min(axis=1), np.full(n, vertices[:, 1].min()), z.min(axis=1)])
+        hi = np.column_stack([x.max(axis=1), np.full(n, vertices[:, 1].max()), z.max(axis=1)])
+        return lo, hi
+    lo, hi = np.empty((len(q), 3)), np.empty((len(q), 3))
+    rotations = _rotation_matrices(q)
+    chunk = max(1, 2_000_000 // max(len(vertices), 1))
+    for start in range(0, len(q), chunk):
+        world = np.einsum("nij,vj->nvi", rotations[start:start + chunk], vertices)
+        lo[start:start + chunk], hi[start:start + chunk] = world.min(axis=1), world.max(axis=1)
+    return lo, hi
+
+
+def motion_bounds(parts, poses) -> tuple[np.ndarray, np.ndarray]:
+    """World box (lo, hi) holding every part at every step of `poses`: the union over the
+    revolution, not one instant (the valve opens, levers swing, a tripped latch swings aside).
+
+    `parts`: name -> trimesh, (vertices, faces) or vertices, in the part's own frame; `poses`:
+    name -> (positions (N, 3), wxyz (N, 4)) as from `part_poses` (a part without a pose is
+    already in the world frame). Exact, not sampled: each distinct rotation of a part is applied
+    to its vertices (to its x-z hull for turns about y). The spring is drawn at its rest length
+    and only shortens as the valve opens (its bottom stays put), so its rest mesh bounds it."""
+    lows, highs = [], []
+    for name, mesh in parts.items():
+        vertices = _part_vertices(mesh)
+        if vertices.size == 0:
+            continue
+        if name not in poses:
+            lows.append(vertices.min(axis=0))
+            highs.append(vertices.max(axis=0))
+            continue
+        positions = np.asarray(poses[name][0], dtype=float)
+        wxyz = np.asarray(poses[name][1], dtype=float)
+        rotations, inverse = np.unique(wxyz, axis=0, return_inverse=True)
+        lo, hi = _swept_extents(vertices, rotations)
+        inverse = np.asarray(inverse).reshape(-1)
+        lows.append((lo[inverse] + positions).min(axis=0))
+        highs.append((hi[inverse] + positions).max(axis=0))
+    if not lows:
+        raise ValueError("no vertices to bound")
+    return np.min(lows, axis=0), np.max(highs, axis=0)
+
+
+# The gear works in the x-z plane: look at it from the front (along +y), a little from the
+# right and from above, so that the parts' thickness shows.
+VIEW_DIRECTION = (0.2, -1.0, 0.3)  # from the target towards the camera
+VIEW_UP = (0.0, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    """A perspective camera: where it is, what it looks at, its up vector and vertical field of
+    view (rad), for a picture of width/height `aspect`."""
+
+    position: tuple[float, float, float]
+    look_at: tuple[float, float, float]
+    up: tuple[float, float, float]
+    fov: float
+    aspect: float
+
+
+def camera_axes(position, look_at, up) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit right, up and forward vectors of a camera at `position` looking at `look_at`."""
+    forward = np.asarray(look_at, dtype=float) - np.asarray(position, dtype=float)
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, np.asarray(up, dtype=float))
+    right /= np.linalg.norm(right)
+    return right, np.cross(right, forward), forward
+
+
+def frame_bounds(lo, hi, fov: float = math.radians(45.0), aspect: float = 1.0, direction=VIEW_DIRECTION,
+                 up=VIEW_UP, margin: float = 0.05) -> CameraFrame:
+    """The nearest camera looking along -`direction` whose picture (vertical field of view
+    `fov`, width/height `aspect`) holds the whole box lo..hi, `margin` of the half-width and
+    half-height to spare on the tightest side, with the box's picture centred.
+
+    With the camera's axes fixed (right, up, forward) and corners k at (x_k, y_k, d_k) along
+    them, a camera at (p_r, p_u, p_f) sees corner k when |x_k - p_r| <= t_h (d_k - p_f), and
+    likewise upwards, t = tan(half angle). Linear constraints: the largest p_f they allow
+    sideways is (A + B) / 2 with A = min(d_k - x_k / t_h), B = min(d_k + x_k / t_h) (the two
+    side planes then both touch a corner), and the camera takes the smaller of the sideways and
+    upward limits. At that depth it is placed sideways and upwards where the extreme corners
+    project symmetrically (max u = -min u, a monotone root), which also minimises the largest
+    |u|, so every corner stays in view."""
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    centre = 0.5 * (lo + hi)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    direction = np.asarray(direction, dtype=float)
+    direction = direction / np.linalg.norm(direction)
+    right, upward, forward = camera_axes(centre + direction, centre, up)
+    x, y, d = corners @ right, corners @ upward, corners @ forward
+    tan_v = math.tan(0.5 * fov) * (1.0 - margin)
+    tan_h = math.tan(0.5 * fov) * aspect * (1.0 - margin)
+
+    def reach(c, t):
+        return 0.5 * (float(np.min(d - c / t)) + float(np.min(d + c / t)))
+
+    # a box without depth seen edge-on would put the camera on it: keep a near distance
+    near = 1e-3 * max(float(np.linalg.norm(hi - lo)), 1e-6)
+    p_f = min(reach(x, tan_h), reach(y, tan_v), float(d.min()) - near)
+    depth = d - p_f
+
+    def symmetric(c):
+        """p with max((c - p) / depth) = -min((c - p) / depth), by bisection (decreasing in p)."""
+        a, b = float(c.min()), float(c.max())
+        for _ in range(200):
+            m = 0.5 * (a + b)
+            u = (c - m) / depth
+            if u.max() + u.min() > 0.0:
+                a = m
+            else:
+                b = m
+            if b - a <= 1e-15 * max(1.0, abs(m)):
+                break
+        return 0.5 * (a + b)
+
+    position = symmetric(x) * right + symmetric(y) * upward + p_f * forward
+    look_at = position + (float(centre @ forward) - p_f) * forward
+    return CameraFrame(position=tuple(map(float, position)), look_at=tuple(map(float, look_at)),
+                       up=tuple(map(float, np.asarray(up, dtype=float))), fov=float(fov), aspect=float(aspect))

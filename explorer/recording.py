@@ -314,8 +314,16 @@ def summary_markdown(result, label: str) -> str:
 # layout
 
 
-def parts_bounds(parts: Mapping, poses: Mapping, step: int = 0) -> tuple[np.ndarray, np.ndarray] | None:
-    """World bounding box (lo, hi) of the parts posed at `step`."""
+def parts_bounds(parts: Mapping, poses: Mapping, step: int | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+    """World bounding box (lo, hi) of the parts over the whole revolution (explorer.meshes.
+    motion_bounds: the moving parts' sweep, which the 3D camera must see), or posed at `step`."""
+    if step is None:
+        from .meshes import motion_bounds
+
+        try:
+            return motion_bounds(parts, poses)
+        except ValueError:  # no vertices at all
+            return None
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
     for name, mesh in parts.items():
         v = np.asarray(mesh.vertices, dtype=float)
@@ -337,15 +345,22 @@ def quaternion_matrix(wxyz) -> np.ndarray:
     ])
 
 
+# rerun's 3D eye has a fixed vertical field of view (Eye::DEFAULT_FOV_Y in re_view_spatial,
+# 55 degrees) that a blueprint cannot set; the 3D view of the default layout is about as wide as
+# tall or wider, so framing for a square view keeps the gear whole.
+RERUN_FOV_Y = math.radians(55.0)
+RERUN_VIEW_ASPECT = 1.0
+
+
 def eye_for(bounds) -> dict:
-    """A camera in front of the gear (it works in the x-z plane, so look along +y), slightly
-    from above and the side, far enough to see all of it."""
+    """The camera the browser explorer uses (explorer.meshes.frame_bounds: in front of the gear,
+    which works in the x-z plane, a little from above and the side), as near as it can be while
+    seeing the whole box at rerun's field of view."""
+    from .meshes import frame_bounds
+
     lo, hi = (np.asarray(b, dtype=float) for b in bounds)
-    centre = 0.5 * (lo + hi)
-    radius = 0.5 * float(np.linalg.norm(hi - lo))
-    direction = np.array([0.25, -1.0, 0.3])
-    position = centre + 2.0 * radius * direction / np.linalg.norm(direction)
-    return {"position": position.tolist(), "look_target": centre.tolist(), "eye_up": [0.0, 0.0, 1.0]}
+    frame = frame_bounds(lo, hi, fov=RERUN_FOV_Y, aspect=RERUN_VIEW_ASPECT)
+    return {"position": list(frame.position), "look_target": list(frame.look_at), "eye_up": list(frame.up)}
 
 
 def blueprint(paths: Iterable[str], bounds=None):

@@ -2,12 +2,14 @@
 Playwright loads the page, connects, shows the parts where the server put them, follows a slider
 moved with the mouse, and renders a non-blank picture.
 
-Set EXPLORER_UPDATE_SCREENSHOT=1 to copy the picture to docs/screenshot.png (the README's)."""
+Set EXPLORER_UPDATE_SCREENSHOT=1 to copy the pictures to docs/screenshot.png and docs/gears (the
+README's)."""
 
 from __future__ import annotations
 
 import os
 import shutil
+import time
 from pathlib import Path
 
 import numpy as np
@@ -56,6 +58,35 @@ def _server_positions(app, names):
             for name in names}
 
 
+def _framed(app):
+    """True once every page reports the camera the viewer aimed for its canvas' shape."""
+    from explorer.viewer.app import CAMERA_FOV
+
+    clients = app.server.get_clients()
+    if not clients:
+        return False
+    for client_id, client in clients.items():
+        frame, camera = app.client_cameras.get(client_id), client.camera
+        try:
+            aspect, position, look_at, fov = camera.aspect, camera.position, camera.look_at, camera.fov
+        except (AssertionError, ZeroDivisionError):
+            return False
+        if frame is None or abs(frame.aspect - aspect) > 0.01 * aspect or abs(fov - CAMERA_FOV) > 1e-6:
+            return False
+        reach = float(np.linalg.norm(np.subtract(frame.position, frame.look_at)))
+        if not (np.allclose(position, frame.position, atol=1e-4 * reach)
+                and np.allclose(look_at, frame.look_at, atol=1e-4 * reach)):
+            return False
+    return True
+
+
+def _wait_framed(app):
+    deadline = time.monotonic() + WAIT_S
+    while not _framed(app):
+        assert time.monotonic() < deadline, "the page never showed the framed camera"
+        time.sleep(0.05)
+
+
 def _wait_in_step(page, app, names):
     """Wait until the page shows the server's current positions of `names`; return them."""
     assert app.wait_applied(WAIT_S)
@@ -99,6 +130,9 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                     "() => window.__viserMutable?.nodeRefFromName?.['/gear/valve'] !== undefined", timeout=WAIT_MS
                 )
                 page.get_by_text("Connected").first.wait_for(timeout=WAIT_MS)
+                # the page shows the camera framed for its canvas (re-framed when the side
+                # panels docked and changed the canvas' shape after the page's first report)
+                _wait_framed(app)
                 # the page holds the poses the server computed
                 parts = ("valve", "roller", "adjuster", "follower")
                 expected = _wait_in_step(page, app, parts)
@@ -199,3 +233,95 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
     if os.environ.get("EXPLORER_UPDATE_SCREENSHOT"):
         (ROOT / "docs").mkdir(exist_ok=True)
         shutil.copyfile(shot, ROOT / "docs" / "screenshot.png")
+
+
+# the gears' pictures in docs/gears: scene, where in the revolution, file name
+GEAR_PICTURES = (
+    ("pivoted_roller_lever.toml", "opening", "pivoted_roller_lever_mid.png"),
+    ("rocking_cam.toml", "full", "rocking_cam_max.png"),
+    ("rolling_lever.toml", "full", "rolling_lever_max.png"),
+    ("trip_gear_dashpot.toml", "opening", "trip_gear_dashpot_mid.png"),
+)
+
+
+def _angle(result, where):
+    """Cam angle of full lift, or of half lift on the way up."""
+    s, theta = np.asarray(result.columns["valve_lift_m"]), np.asarray(result.columns["cam_angle_deg"])
+    peak = int(np.argmax(s))
+    if where == "full":
+        return float(theta[peak])
+    rising = np.nonzero((np.arange(len(s)) < peak) & (s >= 0.5 * s.max()))[0]
+    return float(theta[rising[0] if rising.size else peak])
+
+
+def test_each_gear_is_framed_whole_in_the_page(tmp_path):
+    """A page 1000 x 700 with the plots folded away, swapped through the seeds' other gears:
+    each time the page shows the camera framed for its canvas, and in the picture nothing of
+    the gear touches the canvas' edges (the trip gear's dashpot used to be cut off) while it
+    spans most of the canvas one way (the rocking cam's valve group used to be a speck in a
+    loose view). Set EXPLORER_UPDATE_SCREENSHOT=1 to copy the pages to docs/gears."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    import viser
+
+    from explorer.viewer.app import ExplorerApp
+
+    first = ROOT / "assets" / "scenes" / GEAR_PICTURES[0][0]
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    app = ExplorerApp(server, str(first), playing=False)
+    pictures = []
+    try:
+        assert app.wait_applied(WAIT_S)
+        with sync_api.sync_playwright() as pw:
+            context = pw.chromium.launch_persistent_context(
+                str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=ARGS,
+                viewport={"width": 1000, "height": 700}, timeout=WAIT_MS,
+            )
+            context.set_default_timeout(WAIT_MS)
+            context.set_default_navigation_timeout(WAIT_MS)
+            try:
+                page = context.new_page()
+                page.goto(f"http://127.0.0.1:{server.get_port()}/")
+                page.get_by_text("Connected").first.wait_for(timeout=WAIT_MS)
+                page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
+                canvas = page.locator("canvas").first
+                narrow = canvas.bounding_box()["width"]
+                page.get_by_role("button", name="Collapse panel area").first.click()  # the plots
+                page.wait_for_function("(w) => document.querySelector('canvas').getBoundingClientRect().width > w + 100",
+                                       arg=narrow, timeout=WAIT_MS)
+                for name, where, picture in GEAR_PICTURES:
+                    if app.scene.value != name:
+                        app.scene.value = name
+                        assert app.wait_applied(WAIT_S)
+                    assert app.error_text == ""
+                    app.angle.value = round(_angle(app.current.result, where), 1)
+                    _wait_in_step(page, app, [n for n in app.current.meshes if n != "spring"])
+                    _wait_framed(app)
+                    page.mouse.move(995, 695)
+                    assert page.evaluate(TWO_FRAMES)
+                    shot = tmp_path / picture
+                    canvas.screenshot(path=str(tmp_path / f"canvas_{picture}"), timeout=WAIT_MS)
+                    page.screenshot(path=str(shot), timeout=WAIT_MS)
+                    pictures.append((shot, tmp_path / f"canvas_{picture}"))
+            finally:
+                context.close()
+    finally:
+        app.stop()
+        server.stop()
+    assert app.loop_errors == 0 and app.worker.internal_errors == 0
+
+    import matplotlib.image
+
+    for shot, canvas_shot in pictures:
+        image = matplotlib.image.imread(str(canvas_shot))[..., :3]
+        h, w = image.shape[:2]
+        assert w > 500 and h > 600  # the plots panel folded: a wide canvas
+        # background: the white scene and the side panels' grey shadows (light and neutral); the
+        # parts are coloured or darker
+        gear = (image.min(axis=2) < 0.9) | (np.ptp(image, axis=2) > 0.04)
+        ring = np.concatenate([gear[:3].ravel(), gear[-3:].ravel(), gear[:, :3].ravel(), gear[:, -3:].ravel()])
+        assert not ring.any(), shot.name  # nothing cut off
+        rows, cols = np.nonzero(gear.any(axis=1))[0], np.nonzero(gear.any(axis=0))[0]
+        assert max((rows[-1] - rows[0]) / h, (cols[-1] - cols[0]) / w) > 0.6, shot.name
+        if os.environ.get("EXPLORER_UPDATE_SCREENSHOT"):
+            (ROOT / "docs" / "gears").mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(shot, ROOT / "docs" / "gears" / shot.name)

@@ -123,3 +123,61 @@ def test_dashpot_piston_stays_inside_its_cylinder(built):
         rod = world(parts["dashpot_piston"], poses["dashpot_piston"], i)
         assert rod[:, 2].max() <= hi + 1e-9, i
         assert rod[:, 2].max() >= lo + 0.4 * float(lift.latch.height) - 1e-9, i  # piston head in the bore
+
+
+def _box(points):
+    return points.min(axis=0), points.max(axis=0)
+
+
+def _apart(a, b, tol=1e-9):
+    """True when two axis-aligned boxes share no volume (they may touch)."""
+    (alo, ahi), (blo, bhi) = a, b
+    return bool(np.any(alo >= bhi - tol) or np.any(blo >= ahi - tol))
+
+
+def test_trip_latch_rod_rides_on_its_cam(built):
+    """The latch no longer floats: its rod's roller stays on the latch cam all revolution, one
+    roller radius from the turning cam's surface (nearest contour vertex: the polygon's
+    sampling error, ~ spacing^2 / 8 r, stays below 2e-5 m), and rod and latch move together."""
+    scene, result, lift, lay, parts, poses = built["trip_gear_dashpot"]
+    roller = np.asarray(parts["roller"].vertices)
+    r = np.hypot(roller[:, 0], roller[:, 2]).max()  # the rim polygon's vertices lie on the radius
+    for i in range(0, 360, 11):
+        cam = world(parts["cam"], poses["cam"], i)
+        centre = poses["roller"][0][i]
+        assert np.hypot(cam[:, 0] - centre[0], cam[:, 2] - centre[2]).min() == pytest.approx(r, abs=2e-5), i
+        np.testing.assert_allclose(poses["rod"][0][i], centre, atol=1e-15)
+    # the latch follows the latch law: its height changes by exactly the latch lift
+    latch = np.asarray(lift.latch.derivatives(np.radians(result.columns["cam_angle_deg"]))[0])
+    z = poses["latch"][0][:, 2]
+    np.testing.assert_allclose(z[0] - z, latch - latch[0], atol=1e-12)
+
+
+def test_trip_latch_carries_the_catch_then_slides_clear_of_every_part(built):
+    """Over the revolution: while the valve is off its seat before the trip, the latch face lies
+    on the catch collar (same height to 1e-12 m) over the collar's rim; at no step does the
+    latch share volume with the collar, the valve (retainer, stem) or the dashpot, nor do its
+    rod, roller and cam enter the dashpot (bounding boxes of the posed meshes: the parts are
+    box-like or apart by more than their rounding)."""
+    scene, result, lift, lay, parts, poses = built["trip_gear_dashpot"]
+    s = np.asarray(result.columns["valve_lift_m"])
+    theta = np.radians(result.columns["cam_angle_deg"])
+    before_trip = np.mod(theta - lift.start, 2 * math.pi) < lift.phi_trip
+    dashpot = _box(world(parts["dashpot"], poses["dashpot"], 0))
+    carried = 0
+    for i in range(360):
+        latch = _box(world(parts["latch"], poses["latch"], i))
+        collar = _box(world(parts["catch"], poses["catch"], i))
+        valve = world(parts["valve"], poses["valve"], i)
+        assert _apart(latch, collar), i
+        radial = np.hypot(valve[:, 0] - lay.valve_x, valve[:, 1])
+        assert _apart(latch, _box(valve[radial <= 1.01 * lay.stem_radius])), i  # the stem
+        assert _apart(latch, _box(valve[(radial > 1.5 * lay.stem_radius) & (valve[:, 2] > lay.spring_seat_z)])), i  # retainer
+        assert _apart(latch, dashpot), i
+        for name in ("rod", "roller", "cam"):
+            assert _apart(_box(world(parts[name], poses[name], i)), dashpot), (name, i)
+        if s[i] > 1e-9 and before_trip[i]:
+            carried += 1
+            assert latch[0][2] == pytest.approx(collar[1][2], abs=1e-12), i
+            assert latch[0][0] < collar[1][0] - 1e-4, i  # over the rim, not beside it
+    assert carried > 10

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -208,6 +209,94 @@ def test_scene_swap_removes_the_parts_the_new_gear_lacks():
         app.stop()
         server.stop()
     assert app.loop_errors == 0 and app.worker.internal_errors == 0
+
+
+def _in_view(points, position, look_at, up, fov, aspect):
+    """True when every point projects inside a perspective picture (look-at basis built here)."""
+    position, look_at, up = (np.asarray(a, dtype=float) for a in (position, look_at, up))
+    forward = (look_at - position) / np.linalg.norm(look_at - position)
+    right = np.cross(forward, up)
+    right /= np.linalg.norm(right)
+    rel = np.asarray(points, dtype=float) - position
+    depth = rel @ forward
+    tan_v = math.tan(0.5 * fov)
+    return bool(np.all(depth > 0.0) and np.all(np.abs(rel @ right) <= depth * tan_v * aspect * (1 + 1e-9))
+                and np.all(np.abs(rel @ np.cross(right, forward)) <= depth * tan_v * (1 + 1e-9)))
+
+
+def _posed_vertices(prepared, step):
+    import trimesh
+
+    out = []
+    for name, (vertices, _) in prepared.meshes.items():
+        position, wxyz = prepared.poses[name][0][step], prepared.poses[name][1][step]
+        transform = trimesh.transformations.quaternion_matrix(wxyz)
+        transform[:3, 3] = position
+        if name == "spring":  # redrawn at each step's length
+            vertices = meshes.spring_vertices(prepared.layout, prepared.spring_lengths[step], **model.SPRING_RESOLUTION)
+        out.append(trimesh.transform_points(vertices, transform))
+    return np.vstack(out)
+
+
+def test_camera_frames_the_whole_revolution_on_load_and_on_scene_swap(app):
+    """On load and after every scene swap the initial camera (a new page's view, and Reset
+    View) is meshes.frame_bounds of the box the parts sweep over the revolution, at the
+    viewer's lens, for a canvas taller than wide; every part at every 40th step is in its
+    picture; and it moves with the scene (the trip gear's dashpot used to be cut off, the
+    rocking cam's valve group a speck: the camera was aimed alike for every scene)."""
+    from explorer.viewer.app import ASSUMED_ASPECT, CAMERA_FOV
+
+    initial = app.server.initial_camera
+    positions = []
+    for label in (None, "trip_gear_dashpot.toml", "rocking_cam.toml", DEMO.name):
+        if label is not None:
+            app.scene.value = label
+            assert app.wait_applied(60) and app.error_text == ""
+            assert Path(app.current.request.path).name == label
+        prepared = app.current
+        lo, hi = meshes.motion_bounds(prepared.meshes, prepared.poses)
+        np.testing.assert_array_equal(prepared.bounds[0], lo)
+        np.testing.assert_array_equal(prepared.bounds[1], hi)
+        frame = meshes.frame_bounds(lo, hi, fov=CAMERA_FOV, aspect=ASSUMED_ASPECT)
+        assert app.camera == frame
+        np.testing.assert_allclose(initial.position, frame.position, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(initial.look_at, frame.look_at, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(initial.up, (0.0, 0.0, 1.0))
+        assert initial.fov == pytest.approx(CAMERA_FOV)
+        n = len(prepared.result.columns["cam_angle_deg"])
+        for step in range(0, n, 40):
+            assert _in_view(_posed_vertices(prepared, step), initial.position, initial.look_at, initial.up,
+                            initial.fov, ASSUMED_ASPECT), (label, step)
+        positions.append(np.array(initial.position))
+    assert np.linalg.norm(positions[1] - positions[0]) > 1e-3 and np.linalg.norm(positions[2] - positions[1]) > 1e-3
+    np.testing.assert_allclose(positions[3], positions[0], atol=1e-12)  # back to where it started
+
+
+def test_a_page_whose_canvas_changes_shape_is_framed_again_until_moved(app):
+    """A page reports its camera after every change; when its canvas' shape changed (the side
+    panels dock after the first report, a window is resized) and the camera is still where the
+    viewer put it, the page is framed again; a camera someone moved is left alone."""
+    import types
+
+    frame = meshes.frame_bounds(*app.current.bounds, fov=0.8, aspect=0.75)
+    app.client_cameras[7] = frame
+
+    def report(aspect, position=frame.position, look_at=frame.look_at):
+        camera = types.SimpleNamespace(client=types.SimpleNamespace(client_id=7), aspect=aspect,
+                                       position=np.array(position), look_at=np.array(look_at))
+        with app._lock:
+            app._aim_pending.clear()
+        app._camera_reported(camera)
+        with app._lock:
+            return 7 in app._aim_pending
+
+    assert report(1.6)  # the canvas widened: frame again
+    assert not report(0.75)  # same shape: nothing to do
+    moved = np.add(frame.position, (0.0, 0.05, 0.0))
+    assert not report(1.6, position=moved)  # moved by hand: theirs
+    assert not report(1.6, look_at=np.add(frame.look_at, (0.01, 0.0, 0.0)))
+    app.client_cameras.pop(7)
+    assert not report(1.6)  # a page never aimed yet is aimed when it connects, not here
 
 
 def test_prepared_parts_after_a_swap_are_the_new_gears_own():

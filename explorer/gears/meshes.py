@@ -9,8 +9,10 @@ The valve, its spring and seat are explorer.meshes' parts, moved so that the val
 sits where the gear's valve pin is at rest (`gear_layout`); the valve travels along the gear's
 valve axis (drawn upright: the scenes open their valves downwards). Linkage parts follow the rigid
 kinematics; the valve follows the displayed (possibly elastic, magnified) lift. The trip gear
-keeps the stock valve (opening downwards): its latch pushes a catch on the spindle from above,
-swings aside at the trip, and a dashpot cylinder sits above the spindle.
+keeps the stock valve (opening downwards): a latch cam drives a rod whose latch pushes a catch
+collar on the spindle from above and slides off it at the trip; a dashpot sits above the
+spindle (see `_trip_geometry`). The eccentric gears are drawn at the scale of their linkage
+(`_drawing_scene`).
 """
 
 from __future__ import annotations
@@ -111,8 +113,8 @@ def gear_layout(scene, result=None, lift=None):
     valve pin (the trip gear keeps the stock position, its latch is drawn beside the spindle)."""
     from ..lift import build_lift
 
-    lay = M.layout(_stock_scene(scene), result)
     lift = lift if lift is not None else build_lift(scene)
+    lay = M.layout(_drawing_scene(scene, lift), result)
     pin = valve_pin_rest(lift)
     if pin is None:
         return lay
@@ -125,6 +127,28 @@ def _stock_scene(scene):
     """The scene as a translating-roller gear: explorer.meshes' own parts and sizes, without its
     dispatch back to this module."""
     return scene.with_changes(follower=replace(scene.follower, type="translating-roller"))
+
+
+# explorer.meshes proportions its drawing (valve, spring, bar thickness) from the cam's base
+# circle and roller. The eccentric-driven gears have no rotating cam: their follower section keeps
+# the defaults, and the valve group came out a few centimetres tall under a linkage of most of a
+# metre, a speck in the picture, its bars hairlines. They are drawn at the scale of the
+# eccentric's lever instead (DRAWING_SCALE of its arm: a 150 mm arm gives the valve group the
+# size a 90 mm cam would), which keeps the stock rules (valve about three times its lift across,
+# capped by the drawing's size) and so a valve that still fits its lift.
+DRAWING_SCALE = 0.6
+
+
+def _drawing_scene(scene, lift):
+    stock = _stock_scene(scene)
+    arm = getattr(getattr(getattr(lift, "gear", None), "drive", None), "arm", None)
+    if scene.follower.type not in ("rocking-cam", "rolling-lever") or not arm:
+        return stock
+    f = stock.follower
+    size = DRAWING_SCALE * float(arm)
+    if f.base_radius + f.roller_radius >= size:
+        return stock
+    return stock.with_changes(follower=replace(f, base_radius=size - f.roller_radius))
 
 
 def _valve_group(scene, result, lay):
@@ -373,45 +397,130 @@ def _rolling_poses(scene, lift, lay, theta):
     return poses
 
 
-def _trip_parts(scene, lift, lay):
+def _trip_part_setting(scene, key):
+    """[gear.trip] `key` when the scene's gear section has it (latch_width, latch_depth)."""
+    try:
+        return scene.gear.part("trip").get(key)
+    except (AttributeError, KeyError, TypeError):
+        return None
+
+
+def _trip_geometry(scene, lift, lay) -> dict:
+    """Where the trip gear's parts sit (world x-z, metres), shared by its parts and poses.
+
+    The valve spindle (the stock valve, opening downwards) carries a catch collar under the
+    dashpot. The latch is a plate that reaches the catch from the right: it rests `overtravel`
+    above the collar, then pushes it down with the latch lift X - s_o; at the trip it slides out
+    to the right by its engagement and passes the collar. It slides in a guide at the foot of
+    the latch rod, which runs up beside the dashpot to a roller under the latch cam: a cam for
+    the scene's latch law (valve-referred: the drawing has the ratio 1), turned upside down so
+    that its lift pushes the roller, rod and latch down. The cam sits above the dashpot, the rod
+    and roller clear of its side."""
+    from ..geometry.translating import translating_profile
+
     w, half = _sizes(lay)
-    stroke = float(lift.latch.height)
-    hook = 0.6 * lay.valve_radius
-    # the latch pushes the catch from above (the stock valve opens downwards): hook face at z = 0
-    latch = _concat([
-        extrude_contour(np.array([[-hook, 0.0], [hook, 0.0], [hook, 0.6 * half], [-hook, 0.6 * half]]), 0.5 * w),
-        _bar_between((hook, 0.3 * half), (hook, 2.5 * stroke + 4.0 * half), 0.5 * half, 0.5 * w),
-    ])
-    # the catch (collar on the spindle) and the dashpot piston move with the valve
-    collar = extrude_contour(np.array([[-hook, 0.0], [hook, 0.0], [hook, 0.5 * half], [-hook, 0.5 * half]]), 0.5 * w)
-    bore = 1.1 * lay.valve_radius
-    top = lay.stem_top_rest + 2.0 * stroke + 6.0 * half
-    cylinder = trimesh.creation.annulus(r_min=bore, r_max=1.25 * bore, height=3.0 * stroke, sections=48)
-    # the piston (top of the rod, 0.4 stroke thick) runs from z = top down by the lift, at most the
-    # latch stroke: the bore spans top - 1.2 stroke .. top + 1.8 stroke so it never leaves it
+    rv, rs = lay.valve_radius, lay.stem_radius
+    latch = lift.latch
+    stroke = float(latch.height)
+    depth = _trip_part_setting(scene, "latch_depth") or 0.3 * rv
+    face = _trip_part_setting(scene, "latch_width") or 0.5 * w
+    catch_r = rs + depth  # the collar: the latch bears on its rim, `depth` wide
+    plate = max(0.12 * rv, half)  # thickness of latch plate and collar
+    gap = 0.15 * rv
+    # collar underside at rest: high enough on the spindle that the tripped latch, at the bottom
+    # of its stroke beside the closed valve, stays `gap` above the spring retainer
+    catch_z = max(lay.stem_top_rest + 2.0 * half,
+                  lay.stem_top_rest - lay.retainer_drop + gap + stroke - plate - lift.overtravel)
+    latch_rest = catch_z + plate + lift.overtravel  # latch face with X = 0
+    bore = 1.1 * rv
+    outer = 1.25 * bore
+    # piston at rest: the bore (top - 1.2 stroke .. top + 1.8 stroke) starts `gap` above the latch
+    top = latch_rest + plate + gap + 1.2 * stroke
+    dashpot_top = top + 1.8 * stroke
+    roller = 0.3 * stroke
+    base = 1.0 * stroke  # a cam about as large as the lift: moderate pressure angles for the usual laws
+    rod_x = lay.valve_x + outer + gap + roller
+    theta = np.linspace(0.0, TWO_PI, 720, endpoint=False)
+    theta = np.unique(np.concatenate([theta, np.mod(np.asarray(latch.breakpoints(), dtype=float), TWO_PI)]))
+    contour = translating_profile(latch, theta, base, roller, 0.0).contour
+    reach = float(np.max(np.hypot(contour[:, 0], contour[:, 1])))
+    prime = base + roller
+    # the cam's swept disc clears the dashpot's top by `gap`
+    cam_z = max(dashpot_top + gap + reach, latch_rest + 2.0 * prime)
+    return dict(
+        w=w, half=half, stroke=stroke, depth=depth, face=face, catch_r=catch_r, plate=plate, bore=bore,
+        outer=outer, top=top, catch_z=catch_z, latch_rest=latch_rest, roller=roller, base=base, rod_x=rod_x,
+        contour=contour, cam=(rod_x, cam_z), rod_length=cam_z - prime - latch_rest, slide=depth + gap,
+    )
+
+
+def _trip_parts(scene, lift, lay):
+    g = _trip_geometry(scene, lift, lay)
+    w, half, plate, stroke = g["w"], g["half"], g["plate"], g["stroke"]
+    rs = lay.stem_radius
+    reach_x = g["rod_x"] - lay.valve_x
+    # latch: local origin on the valve axis at its face (underside); it starts over the stem's
+    # surface, so it never meets the spindle, and ends beyond the rod's guide by the slide
+    latch = extrude_contour(np.array([[rs, 0.0], [reach_x + g["slide"] + 0.5 * g["roller"], 0.0],
+                                      [reach_x + g["slide"] + 0.5 * g["roller"], plate], [rs, plate]]), g["face"])
+    collar = trimesh.creation.cylinder(radius=g["catch_r"], height=plate, sections=48)
+    collar.apply_translation([0.0, 0.0, 0.5 * plate])
+    # latch rod: local origin at the roller's centre; the guide at its foot embraces the latch
+    rod_half = 0.3 * g["roller"]
+    length = g["rod_length"]
+    guide = extrude_contour(np.array([[-2.5 * rod_half, -length - 0.8 * plate], [2.5 * rod_half, -length - 0.8 * plate],
+                                      [2.5 * rod_half, -length + 1.8 * plate], [-2.5 * rod_half, -length + 1.8 * plate]]),
+                            1.3 * g["face"])
+    fork = [_pin(0.0, 0.0, 0.3 * g["roller"], 1.6 * lay.roller_width)]
+    bar = _bar_between((0.0, -length), (0.0, 0.0), rod_half, 0.5 * w)
+    bar.apply_translation([0.0, 0.0, -length])  # _bar_between draws in the frame of its first point
+    rod = _concat([bar, guide, *fork])
+    cam = extrude_contour(g["contour"], 0.8 * w)
+    shaft = 0.3 * g["base"]
+    camshaft = _concat([_disc(shaft, 3.0 * w), _pin(0.0, shaft, 0.3 * shaft, 3.0 * w)])
+    # dashpot: the piston (top of the rod, 0.4 stroke thick) runs from z = top down by the lift,
+    # at most the latch stroke: the bore spans top - 1.2 stroke .. top + 1.8 stroke
+    bore = g["bore"]
+    top = g["top"]
+    cylinder = trimesh.creation.annulus(r_min=bore, r_max=g["outer"], height=3.0 * stroke, sections=48)
     cylinder.apply_translation([lay.valve_x, 0.0, top + 0.3 * stroke])
     piston = trimesh.creation.cylinder(radius=0.98 * bore, height=0.4 * stroke, sections=48)
-    rod = trimesh.creation.cylinder(radius=lay.stem_radius, height=top - lay.stem_top_rest, sections=16)
-    rod.apply_translation([0.0, 0.0, 0.5 * (top - lay.stem_top_rest)])
+    piston_rod = trimesh.creation.cylinder(radius=rs, height=top - lay.stem_top_rest, sections=16)
+    piston_rod.apply_translation([0.0, 0.0, 0.5 * (top - lay.stem_top_rest)])
     piston.apply_translation([0.0, 0.0, top - lay.stem_top_rest + 0.2 * stroke])
-    return {"latch": latch, "catch": collar, "dashpot": cylinder, "dashpot_piston": _concat([rod, piston])}
+    return {"latch": latch, "catch": collar, "dashpot": cylinder, "dashpot_piston": _concat([piston_rod, piston]),
+            "rod": rod, "roller": _roller(lay, g["roller"]), "cam": cam, "camshaft": camshaft}
 
 
 def _trip_poses(scene, lift, lay, theta):
+    g = _trip_geometry(scene, lift, lay)
     n = theta.size
     latch = np.asarray(lift.latch.derivatives(theta)[0])
     s = np.maximum(np.asarray(lift.derivatives(theta)[0]) - lift.overtravel, 0.0)
     phi = np.mod(theta - lift.start, TWO_PI)
-    # tripped: from the release until the latch is back below its catching height
+    # tripped: from the release until the latch is back above its catching height
     tripped = (phi >= lift.phi_trip) & (latch > lift.overtravel - 1e-12)
-    w, half = _sizes(lay)
-    side = np.where(tripped, 1.5 * lay.valve_radius, 0.0)
-    catch_z = lay.stem_top_rest + 2.0 * half
-    # the hook's face meets the catch's top after the over-travel, then both move by X - s_o
-    latch_z = catch_z + 0.5 * half + (lift.overtravel - latch)
+    # the latch face meets the collar after the over-travel, then both move by X - s_o
+    latch_z = g["latch_rest"] - latch
+    cx, cz = g["cam"]
+    # the cam is drawn upside down (turned by pi): its lift points down, onto the roller
+    spin = _trip_roller_spin(scene, lift, g, theta)
     return {
-        "latch": (np.column_stack([lay.valve_x + side, np.zeros(n), latch_z]), _ident(n)),
-        "catch": (np.column_stack([np.full(n, lay.valve_x), np.zeros(n), catch_z - s]), _ident(n)),
+        "latch": (np.column_stack([lay.valve_x + np.where(tripped, g["slide"], 0.0), np.zeros(n), latch_z]), _ident(n)),
+        "catch": (np.column_stack([np.full(n, lay.valve_x), np.zeros(n), g["catch_z"] - s]), _ident(n)),
         "dashpot": (_world(n, 0.0, 0.0), _ident(n)),
         "dashpot_piston": (np.column_stack([np.full(n, lay.valve_x), np.zeros(n), lay.stem_top_rest - s]), _ident(n)),
+        "rod": (np.column_stack([np.full(n, g["rod_x"]), np.zeros(n), latch_z + g["rod_length"]]), _ident(n)),
+        "roller": (np.column_stack([np.full(n, g["rod_x"]), np.zeros(n), latch_z + g["rod_length"]]), quat_about_y(-spin)),
+        "cam": (_world(n, cx, cz), quat_about_y(-(theta + math.pi))),
+        "camshaft": (_world(n, cx, cz), quat_about_y(-(theta + math.pi))),
     }
+
+
+def _trip_roller_spin(scene, lift, g, theta):
+    """The latch roller rolling on its cam: explorer.meshes.roller_spin for a translating roller
+    of the drawing's base circle and radius (turning the whole cam and follower by pi changes
+    neither the spin's sense nor its rate)."""
+    follower = replace(scene.follower, type="translating-roller", base_radius=g["base"], roller_radius=g["roller"],
+                       offset=0.0)
+    return M.roller_spin(scene.with_changes(follower=follower), lift.latch, np.asarray(theta, dtype=float))

@@ -51,23 +51,17 @@ def _color(name: str) -> tuple[int, int, int]:
         return (150, 150, 155)
 
 
-def scene_bounds(prepared: Prepared) -> tuple[np.ndarray, np.ndarray]:
-    """World bounding box of every part at the first step (for aiming the camera)."""
-    lows, highs = [], []
-    for name, (vertices, _) in prepared.meshes.items():
-        lo, hi = vertices.min(axis=0), vertices.max(axis=0)
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-        pos, quat = prepared.poses[name]
-        w, x, y, z = quat[0]
-        r = np.array([
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ])
-        world = corners @ r.T + pos[0]
-        lows.append(world.min(axis=0))
-        highs.append(world.max(axis=0))
-    return np.min(lows, axis=0), np.max(highs, axis=0)
+# The camera: a narrower lens than three.js' 75 degrees (less distortion of a machine drawing),
+# and until a page reports its canvas, a canvas a little taller than wide, as the 3D view between
+# the two side panels of a laptop-sized window is.
+CAMERA_FOV = math.radians(45.0)
+ASSUMED_ASPECT = 0.75
+
+
+def camera_frame(prepared: Prepared, aspect: float = ASSUMED_ASPECT) -> meshes.CameraFrame:
+    """The camera that sees every part over the whole revolution, in a canvas of `aspect`."""
+    lo, hi = prepared.bounds
+    return meshes.frame_bounds(lo, hi, fov=CAMERA_FOV, aspect=aspect)
 
 
 class ExplorerApp:
@@ -133,8 +127,15 @@ class ExplorerApp:
         self._cursor_index = -1
         self._plot_handles: list[Any] = []
         self._plot_signature: list[tuple] = []
+        self.camera: meshes.CameraFrame | None = None  # the initial camera (new pages, Reset View)
+        self.client_cameras: dict[int, meshes.CameraFrame] = {}  # what each page was last aimed at
+        self._aim_pending: set[int] = set()  # pages that connected since the last frame
 
         self._build_gui()
+        # a page counts as connected once it has reported its camera, so its canvas' shape is
+        # known: the loop frames the gear for it
+        server.on_client_connect(self._client_connected)
+        server.on_client_disconnect(self._client_disconnected)
         self.worker = ComputeWorker(on_ready=self._on_ready, on_error=self._on_error, on_result=on_result).start()
         self._submit(refresh=True)
         self._thread = threading.Thread(target=self._loop, name="explorer-loop", daemon=True)
@@ -302,6 +303,37 @@ class ExplorerApp:
             )
         self.worker.submit(request)
 
+    def _client_connected(self, client) -> None:
+        client.camera.on_update(self._camera_reported)
+        with self._lock:
+            self._aim_pending.add(client.client_id)
+
+    def _camera_reported(self, camera) -> None:
+        """A page reports its camera after every change. Its canvas often changes shape after
+        the first report (the side panels dock) and whenever the window is resized: frame the
+        gear again for the new shape, as long as the camera is still where it was put (a
+        camera someone has moved is theirs)."""
+        client_id = camera.client.client_id
+        frame = self.client_cameras.get(client_id)
+        if frame is None:
+            return
+        try:
+            aspect = camera.aspect
+            position, look_at = np.asarray(camera.position), np.asarray(camera.look_at)
+        except (AssertionError, ZeroDivisionError):
+            return
+        reach = float(np.linalg.norm(np.subtract(frame.position, frame.look_at)))
+        untouched = np.allclose(position, frame.position, atol=1e-4 * reach) and \
+            np.allclose(look_at, frame.look_at, atol=1e-4 * reach)
+        if untouched and math.isfinite(aspect) and abs(aspect - frame.aspect) > 0.01 * frame.aspect:
+            with self._lock:
+                self._aim_pending.add(client_id)
+
+    def _client_disconnected(self, client) -> None:
+        with self._lock:
+            self._aim_pending.discard(client.client_id)
+        self.client_cameras.pop(client.client_id, None)
+
     def _on_ready(self, prepared: Prepared) -> None:
         with self._lock:
             if self._incoming is None or prepared.request.serial > self._incoming.request.serial:
@@ -350,6 +382,9 @@ class ExplorerApp:
             choose_speed = incoming is not None and not self._speed_chosen
             if choose_speed:
                 self._speed_chosen = True
+            aim: set[int] = set()
+            if prepared is not None:
+                aim, self._aim_pending = self._aim_pending, set()
         with self.server.atomic():
             if incoming is not None:
                 self._apply(incoming, refresh, choose_speed)
@@ -365,6 +400,10 @@ class ExplorerApp:
             if self.current is not None:
                 self._pose(angle, force=incoming is not None)
                 self._sync_controls(angle, playing, scrub)
+                clients = self.server.get_clients() if aim else {}
+                for client_id in aim:
+                    if client_id in clients:
+                        self._aim_client(clients[client_id], self.current)
         self.server.flush()
         self.frames += 1
 
@@ -459,16 +498,32 @@ class ExplorerApp:
                 handle.value = name in prepared.scene.effects
 
     def _aim_camera(self, prepared: Prepared) -> None:
-        lo, hi = scene_bounds(prepared)
-        centre = 0.5 * (lo + hi)
-        size = float(np.linalg.norm(hi - lo))
-        position = centre + size * np.array([0.1, -0.72, 0.18])
-        self.server.initial_camera.position = tuple(position)
-        self.server.initial_camera.look_at = tuple(centre)
-        self.server.initial_camera.up = (0.0, 0.0, 1.0)
+        """Frame the new scene: the initial camera (new pages, "Reset View") and every page's
+        own camera, each for its canvas' shape."""
+        frame = camera_frame(prepared)
+        initial = self.server.initial_camera
+        initial.fov = frame.fov
+        initial.up = frame.up
+        initial.position = frame.position
+        initial.look_at = frame.look_at
+        self.camera = frame
         for client in self.server.get_clients().values():
-            client.camera.position = tuple(position)
-            client.camera.look_at = tuple(centre)
+            self._aim_client(client, prepared)
+
+    def _aim_client(self, client, prepared: Prepared) -> None:
+        camera = client.camera
+        try:
+            aspect = camera.aspect
+        except (AssertionError, ZeroDivisionError):
+            # no camera report yet (viser counts a page as connected only after one): it
+            # starts from the initial camera, and connecting brings it here (`_client_connected`)
+            return
+        frame = camera_frame(prepared, aspect if math.isfinite(aspect) and aspect > 0.0 else ASSUMED_ASPECT)
+        camera.fov = frame.fov
+        camera.up_direction = frame.up
+        camera.position = frame.position  # moves look_at along; set it after (viser's rule)
+        camera.look_at = frame.look_at
+        self.client_cameras[client.client_id] = frame
 
     def _pose(self, angle: float, force: bool = False) -> None:
         prepared = self.current

@@ -7,6 +7,7 @@ Nothing here imports viser, so it is testable and reusable (the benchmark drives
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import threading
@@ -245,6 +246,14 @@ class Prepared:
     new_result: bool  # False when only the magnification changed since the worker's previous bundle
     seconds: float = 0.0  # wall time of the preparation
 
+    @functools.cached_property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World box (lo, hi) of every part over the whole revolution, where the camera looks
+        (explorer.meshes.motion_bounds; tens of milliseconds, so computed once, when asked)."""
+        from .. import meshes
+
+        return meshes.motion_bounds(self.meshes, self.poses)
+
 
 def _request_label(request: Request) -> str:
     name = Path(request.path).name
@@ -305,11 +314,14 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
         values = scene_values(scene)
     poses = meshes.part_poses(scene, result, magnification=request.magnification, lay=lay, lift=lift)
     lengths = meshes.spring_length(lay, meshes.displayed_valve_lift(result, request.magnification))
-    return Prepared(
+    prepared = Prepared(
         request=request, scene=scene, result=result, layout=lay, lift=lift, meshes=parts, poses=poses,
         spring_lengths=np.asarray(lengths, dtype=float), plots=plots, readout=readout,
         label=_request_label(request), values=values, new_result=not same, seconds=time.perf_counter() - started,
     )
+    if previous is None or Path(previous.request.path) != Path(request.path):
+        prepared.bounds  # another scene file: the viewer aims its camera at it, here off the GUI's loop
+    return prepared
 
 
 # ---------------------------------------------------------------------------------------------
