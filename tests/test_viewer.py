@@ -775,3 +775,23 @@ def test_serve_warns_when_listening_beyond_this_machine():
         assert "warning: listening on 0.0.0.0: anyone who can reach this machine can open the explorer" in err
     finally:
         _kill(proc)
+
+
+def test_decimate_ignores_nan_in_a_bucket_and_keeps_all_nan_buckets_as_gaps():
+    """Columns are NaN where they do not apply (the trip gear's spring requirement while the valve
+    closes freely): a bucket's min and max are those of its numbers; a bucket of NaN only stays
+    NaN (nothing to draw there) rather than taking a number from a neighbour."""
+    x = np.arange(3600.0)
+    y = np.sin(x / 300.0)
+    y[1000:1003] = np.nan  # inside one bucket (10 samples a bucket at 720 points)
+    y[2000:2100] = np.nan  # whole buckets
+    xs, (ys,) = model.decimate(x, [y], 720)
+    buckets = np.arange(0, 3600, 10)
+    for b in (100, 205):  # bucket 100 holds 1000..1009, bucket 205 holds 2050..2059
+        seg = y[buckets[b]:buckets[b] + 10]
+        pair = ys[2 * b:2 * b + 2]
+        if np.isnan(seg).all():
+            assert np.isnan(pair).all()
+        else:
+            assert sorted(pair) == [np.nanmin(seg), np.nanmax(seg)]
+    assert np.isfinite(ys[:2 * 200]).all()

@@ -112,10 +112,13 @@ def decimate(x: np.ndarray, ys: list[np.ndarray], points: int = DISPLAY_POINTS) 
     xs[0::2], xs[1::2] = x[starts], x[ends - 1]
     out = []
     for y in ys:
-        lo = np.minimum.reduceat(y, starts)
-        hi = np.maximum.reduceat(y, starts)
-        i_lo = _argreduce(y, starts, ends, np.argmin)
-        i_hi = _argreduce(y, starts, ends, np.argmax)
+        # NaN marks where a column does not apply (e.g. the trip gear's spring requirement while
+        # the valve closes freely): a bucket's extremes ignore it, an all-NaN bucket stays NaN
+        gaps = np.isnan(y)
+        lo = np.fmin.reduceat(y, starts)
+        hi = np.fmax.reduceat(y, starts)
+        i_lo = _argreduce(np.where(gaps, np.inf, y) if gaps.any() else y, starts, ends, np.argmin)
+        i_hi = _argreduce(np.where(gaps, -np.inf, y) if gaps.any() else y, starts, ends, np.argmax)
         first_is_lo = i_lo <= i_hi
         z = np.empty(2 * buckets)
         z[0::2] = np.where(first_is_lo, lo, hi)
