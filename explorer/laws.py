@@ -23,10 +23,20 @@ TWO_PI = 2.0 * math.pi
 def _polynomial(coefficients: tuple[float, ...]):
     """f(u) = sum c_k u^k, with exact derivatives."""
     p0 = np.polynomial.Polynomial(coefficients)
-    ps = (p0, p0.deriv(1), p0.deriv(2), p0.deriv(3))
+    rows = [tuple(float(c) for c in p0.deriv(k).coef) for k in range(4)]
 
     def evaluate(u: np.ndarray) -> np.ndarray:
-        return np.stack([p(u) for p in ps])
+        # Horner for each derivative into one array (numpy's polyval, without its per-call
+        # domain mapping and stacking: the elastic solver evaluates the drive every revolution)
+        u = np.asarray(u, dtype=float)
+        x = u.reshape(-1)
+        out = np.empty((4, x.size))
+        for row, c in zip(out, rows):
+            row[...] = c[-1]
+            for ck in c[-2::-1]:
+                row *= x
+                row += ck
+        return out.reshape((4,) + u.shape)
 
     return evaluate
 

@@ -40,32 +40,54 @@ class LawLift:
 
     def derivatives(self, theta) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
-        x = np.mod(theta - self.start, TWO_PI)  # angle since the rise began
-        out = np.zeros((4,) + x.shape)
+        x = _wrap(theta.reshape(-1) - self.start)  # angle since the rise began
+        out = np.zeros((4, x.size))
         h = self.height
         # Classify by the signs of successive differences, not by comparing x with sums such as
         # rise + dwell: (x - rise) - dwell and x < rise + dwell round differently, which left a
         # point on the dwell's end in no stretch at all (lift 0 there instead of h).
         x_top = x - self.rise
         x_ret = x_top - self.dwell
-        rising = x_top < 0.0
-        if np.any(rising):
+        rising = _selection(x_top < 0.0)
+        if rising is not None:
             f = normalised_law(self.rise_law)(x[rising] / self.rise)
-            for k in range(4):
-                out[k][rising] = h * f[k] / self.rise**k
+            f *= h
+            f /= np.array([self.rise**k for k in range(4)])[:, None]  # h f[k] / rise**k
+            out[:, rising] = f
         top = (x_top >= 0.0) & (x_ret < 0.0)
         out[0][top] = h
-        falling = (x_ret >= 0.0) & (x_ret < self.ret)
-        if np.any(falling):
+        falling = _selection((x_ret >= 0.0) & (x_ret < self.ret))
+        if falling is not None:
             g = normalised_law(self.return_law)(x_ret[falling] / self.ret)
-            out[0][falling] = h * (1.0 - g[0])
-            for k in range(1, 4):
-                out[k][falling] = -h * g[k] / self.ret**k
-        return out
+            out[0, falling] = h * (1.0 - g[0])
+            g = g[1:]
+            g *= -h
+            g /= np.array([self.ret**k for k in range(1, 4)])[:, None]  # -h g[k] / ret**k
+            out[1:, falling] = g
+        return out.reshape((4,) + theta.shape)
 
     def breakpoints(self) -> np.ndarray:
-        marks = np.cumsum([0.0, self.rise, self.dwell, self.ret]) + self.start
-        return np.unique(np.mod(marks, TWO_PI))
+        top = self.rise + self.dwell  # the running sums of np.cumsum, in plain Python (4 values)
+        marks = [x + self.start for x in (0.0, self.rise, top, top + self.ret)]
+        return np.array(sorted({x % TWO_PI for x in marks}))  # (float % is np.mod)
+
+
+def _wrap(x: np.ndarray) -> np.ndarray:
+    """np.mod(x, 2 pi) from fmod and one correction (np.mod also computes the quotient and costs
+    three times as much; the drive is evaluated at every node of every revolution)."""
+    x = np.fmod(x, TWO_PI)
+    np.add(x, TWO_PI, out=x, where=x < 0.0)
+    return x
+
+
+def _selection(mask: np.ndarray):
+    """The points where mask holds: a slice when they are one run (sorted angles), else their
+    indices; None when there are none."""
+    idx = mask.nonzero()[0]
+    if idx.size == 0:
+        return None
+    first, last = int(idx[0]), int(idx[-1])
+    return slice(first, last + 1) if last - first + 1 == idx.size else idx
 
 
 def build_lift(scene) -> LiftCurve:

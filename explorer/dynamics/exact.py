@@ -26,10 +26,15 @@ few vector operations on slices, whatever its length (no Python loop over steps,
 cumulative sum). The module needs numpy only (fast to import).
 
 Cost (issue 4's speed target): a solve is a fixed part -- the drive at the nodes, the step
-polynomials, the modal sums -- plus, per phase, one window of vector operations (states, event
-values, bounds) and two single steps in plain Python (the phase's first partial step, where the
+polynomials, per phase kind the modal powers and the sums of the drive's forcing as far as its
+phases reach -- plus, per phase, one window of vector operations (states, event values, bounds:
+~20 numpy calls) and two single steps in plain Python (the phase's first partial step, where the
 event that began it sits on its zero, and the step where the next event lies). Everything at the
-scale of one step is plain-float Python: numpy's overhead on tiny arrays would dominate.
+scale of one step is plain-float Python: numpy's overhead on tiny arrays would dominate. At the
+default 3600 steps per revolution the time is mostly that overhead, not arithmetic (a tenth of
+the steps saves only 10-25 %): ~0.9 ms for a revolution with 3 events, ~1.3 ms with 11, and
+0.25-0.35 ms more right after unrelated work has evicted the caches (benchmarks/bench_dynamics.py
+measures that way, alternating with scipy).
 
 Events are roots of the closed forms, per step:
   seated -> lift-off    linkage force k (S - lash) + c S' exceeds preload + closing + friction
@@ -189,6 +194,52 @@ def _tables_small(lin: _Linear, h: np.ndarray, n_terms: int) -> _Tables:
     return _assemble_tables(h, a, end, slope)
 
 
+def _drive_response(lin: _Linear, h: float, n_terms: int) -> np.ndarray:
+    """WP of the step tables for one step length (2, 6): end value and slope of the responses
+    R_k to the drive P = u^k from rest. The same recursion and sums as _tables_small (numpy's
+    pairwise sums), in plain Python: only these 6 of its 9 columns, for the forcing of a phase
+    kind over the whole grid."""
+    m, c, K, kc, cc = lin.m, lin.c, lin.K, lin.kc, lin.cc
+    h2 = h * h
+    ch, Kh2 = c * h, K * h2
+    ends, slopes = [], []
+    for k in range(6):
+        f = [0.0] * 6
+        f[k] += kc
+        if k >= 1:
+            f[k - 1] += cc * k / h
+        a = [0.0] * (n_terms + 1)
+        # (the terms before the forcing's first are zeros: the same sums without those steps)
+        for n in range(max(k - 1, 0), n_terms - 1):
+            rhs = -ch * (n + 1) * a[n + 1] - Kh2 * a[n]
+            if n < 6:
+                rhs = rhs + h2 * f[n]
+            a[n + 2] = rhs / (m * (n + 1) * (n + 2))
+        ends.append(_pairwise_sum(a))
+        slopes.append(_pairwise_sum([float(n) * x for n, x in enumerate(a)]) / h)
+    return np.array([ends, slopes])
+
+
+def _pairwise_sum(x: list) -> float:
+    """numpy's sum of a short contiguous array, operation for operation (its pairwise_sum with
+    eight partial sums; up to 128 terms), so plain-Python table values equal the numpy ones."""
+    n = len(x)
+    if n < 8:
+        res = 0.0
+        for v in x:
+            res += v
+        return res
+    r = x[:8]
+    i = 8
+    while i < n - n % 8:
+        r = [rj + xj for rj, xj in zip(r, x[i:i + 8])]
+        i += 8
+    res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+    for v in x[i:]:
+        res += v
+    return res
+
+
 def _expand(lin: _Linear, P, h: float, s: float, v: float, Fc: float, n_terms: int) -> list:
     """Scaled Taylor coefficients of s over one step from (s, v), P the step's drive polynomial
     (a list of floats). Plain Python: one step at a time, no numpy overhead."""
@@ -272,22 +323,24 @@ _BOUND_WEIGHTS = np.array([[n, n * (n - 1), n * (n - 1) * (n - 2)] for n in rang
 
 
 def _shift_list(P, u0: float) -> list:
-    """Coefficients in w of P(u0 + (1 - u0) w) for w in [0, 1] (the rest of a step; lists)."""
-    P = [float(x) for x in P]
+    """Coefficients in w of P(u0 + (1 - u0) w) for w in [0, 1] (the rest of a step; lists).
+    The m-th: (1 - u0)^m sum_n C(n, m) P[n] u0^(n-m), by Horner in u0 (written out)."""
+    p0, p1, p2, p3, p4, p5 = P.tolist() if isinstance(P, np.ndarray) else (float(x) for x in P)
     if u0 == 0.0:
-        return P
-    lam = 1.0 - u0
-    out, scale = [], 1.0
-    for m in range(6):
-        acc = 0.0
-        for n in range(5, m - 1, -1):  # Horner in u0 over sum_n C(n, m) P[n] u0^(n-m)
-            acc = acc * u0 + _BINOM_LIST[m][n] * P[n]
-        out.append(acc * scale)
-        scale *= lam
-    return out
-
-
-_BINOM_LIST = [[float(math.comb(n, m)) for n in range(6)] for m in range(6)]
+        return [p0, p1, p2, p3, p4, p5]
+    u = u0
+    l1 = 1.0 - u0
+    l2 = l1 * l1
+    l3 = l2 * l1
+    l4 = l3 * l1
+    return [
+        ((((p5 * u + p4) * u + p3) * u + p2) * u + p1) * u + p0,
+        ((((5.0 * p5 * u + 4.0 * p4) * u + 3.0 * p3) * u + 2.0 * p2) * u + p1) * l1,
+        (((10.0 * p5 * u + 6.0 * p4) * u + 3.0 * p3) * u + p2) * l2,
+        ((10.0 * p5 * u + 4.0 * p4) * u + p3) * l3,
+        (5.0 * p5 * u + p4) * l4,
+        p5 * (l4 * l1),
+    ]
 
 
 def _deriv_list(c, h: float) -> list:
@@ -362,9 +415,12 @@ def _excluded_steps(e: np.ndarray) -> np.ndarray:
     return _excluded(e[0], e[1], e.sum(axis=0), n @ e, B2, 1.0)
 
 
-def _excluded1(e) -> bool:
-    """_excluded_steps for one step, e a list of floats (plain Python: no numpy overhead)."""
-    Ea, Eb = e[0], sum(e)
+def _excluded1(e, Eb: float | None = None) -> bool:
+    """_excluded_steps for one step, e a list of floats (plain Python: no numpy overhead).
+    Eb: sum(e), when known."""
+    Ea = e[0]
+    if Eb is None:
+        Eb = sum(e)
     B2 = 2.0 * e[2]
     for n in range(3, len(e)):
         en = e[n]
@@ -488,6 +544,22 @@ def _illinois(f, lo: float, hi: float, flo: float, fhi: float, xtol: float) -> f
     return hi
 
 
+def _positive_at(lists, comb: str, w: float) -> bool:
+    """The combined function is > 0 at w beyond doubt (by far more than the rounding of its
+    terms): the detail search would return w itself (its first sample), at a fraction of the
+    cost."""
+    vals = []
+    for e in lists:
+        val = mag = 0.0
+        for en in reversed(e):
+            val = val * w + en
+            mag = mag * w + abs(en)
+        if not abs(val) > 1e-12 * mag:
+            return False
+        vals.append(val)
+    return (min(vals) if comb == "min" else max(vals)) > 0.0
+
+
 def _start_clearance(e) -> float:
     """For e with e[0] = 0 (a function starting on its zero): the largest w0 in [0, 1] such that
     e < 0 on (0, w0] is certain, from e(w) <= w^k (e_k + sum_{n>k} max(e_n, 0) w^(n-k)) with e_k
@@ -601,32 +673,46 @@ def _coefficients(comp, P, dP, a, da, n_rows):
     return e
 
 
-def _term_scale(comp, P, dP, s0, v0) -> float:
-    aP, bP, const, l0, l1 = comp
-    scale = abs(aP * P[0]) + abs(const) if aP else abs(const)
-    if bP:
-        scale += abs(bP * dP[0])
-    if l0:
-        scale += abs(l0 * s0)
-    if l1:
-        scale += abs(l1 * v0)
-    return scale
-
-
-def _snap_zero_start(Es, comps, comb, P, dP, s0, v0) -> bool:
-    """At a phase start, event functions that sit on their zero up to rounding (the event that
-    began the phase put them there) are set exactly to zero, so that their sign right after the
-    start comes from their derivatives, not from the rounding of the event location.
-    Returns True when the combined function starts on its zero."""
-    any_zero = False
-    for e, cp in zip(Es, comps):
-        if abs(e[0]) <= ZERO_START * _term_scale(cp, P, dP, s0, v0):
+def _start_coeffs(comps, comb, P, dP, a, da, s0, v0):
+    """_coeff_list of each component of an event at a phase start (state s0, v0; a, da None at
+    rest), with the components that sit on their zero up to rounding (the event that began the
+    phase put them there: |e(0)| below ZERO_START of the size of its terms) set exactly to zero,
+    so that their sign right after the start comes from their derivatives, not from the
+    rounding of the event location. Returns (coefficient lists, the combined function starts
+    on its zero)."""
+    Es, any_zero = [], False
+    for aP, bP, const, l0, l1 in comps:
+        if a is not None and (l0 or l1):
+            if not l1:
+                e = [l0 * x for x in a]
+            elif not l0:
+                e = [l1 * y for y in da]
+            else:
+                e = [l0 * x + l1 * y for x, y in zip(a, da)]
+        else:
+            e = [0.0] * (len(a) if a is not None else 6)
+        if bP:
+            for n in range(6):
+                e[n] += aP * P[n] + bP * dP[n]
+        elif aP:
+            for n in range(6):
+                e[n] += aP * P[n]
+        e[0] += const
+        scale = abs(aP * P[0]) + abs(const) if aP else abs(const)  # the size of its terms
+        if bP:
+            scale += abs(bP * dP[0])
+        if l0:
+            scale += abs(l0 * s0)
+        if l1:
+            scale += abs(l1 * v0)
+        if abs(e[0]) <= ZERO_START * scale:
             e[0] = 0.0
             any_zero = True
+        Es.append(e)
     if len(Es) == 1:
-        return any_zero
+        return Es, any_zero
     starts = [e[0] for e in Es]
-    return any_zero and (min(starts) if comb == "min" else max(starts)) == 0.0
+    return Es, any_zero and (min(starts) if comb == "min" else max(starts)) == 0.0
 
 
 def _horner(c, x: float) -> float:
@@ -638,7 +724,7 @@ def _horner(c, x: float) -> float:
 
 class _Solver:
     def __init__(self, model: LinkageModel, drive, t: np.ndarray, initial_state, zeno_height: float,
-                 max_events: int, chunk: int):
+                 max_events: int, chunk: int, hmin: float):
         self.model = model
         self.k, self.c, self.lash = model.stiffness, model.damping, model.lash
         self.rate, self.R = model.spring_rate, model.friction
@@ -653,8 +739,8 @@ class _Solver:
             FLIGHT: _Linear(self.M, 0.0, self.rate, 0.0, 0.0),
         }
         rho = max(lin.rho for lin in self.lins.values())
-        self._build_grid(drive, t, rho)
-        h_max = float(self.h.max()) if self.h.size else 0.0
+        self._build_grid(drive, t, rho, hmin)
+        h_max = self.h_max
         self.n_terms = _n_terms(rho * h_max)
         self._tabs: dict = {}  # step tables per phase kind, built on first use
         self.props: dict = {}
@@ -662,10 +748,12 @@ class _Solver:
         self._static_cache: dict = {}
         self._last_length: dict = {}  # steps of the last moving phase of each kind
         nn = self.nodes.size
-        self.out_s = np.full(nn, np.nan)
-        self.out_v = np.full(nn, np.nan)
-        self.out_sigma = np.ones(nn)  # friction sign of moving nodes
-        self.out_phase = np.full(nn, -1, dtype=np.int8)
+        out = np.empty((3, nn))
+        out[:2] = np.nan
+        out[2] = 1.0
+        self.out_s, self.out_v, self.out_sigma = out  # (sigma: friction sign of moving nodes)
+        self.out_phase = np.empty(nn, dtype=np.int8)
+        self.out_phase[:] = -1
         self.events: list[dict] = []
         self.stats = {
             "method": "exact", "nodes": int(nn), "steps": int(nn - 1), "taylor_terms": self.n_terms,
@@ -676,61 +764,83 @@ class _Solver:
         self.initial_state = initial_state
 
     # ---------------------------------------------------------------- grid and drive data
-    def _build_grid(self, drive, t: np.ndarray, rho: float) -> None:
+    def _build_grid(self, drive, t: np.ndarray, rho: float, hmin: float) -> None:
         t0, t1 = float(t[0]), float(t[-1])
-        hmin = float(np.min(np.diff(t)))
         tol = 1e-9 * hmin
-        nodes, is_out, brk = t.copy(), np.ones(t.size, bool), np.zeros(t.size, bool)
-        bps = np.asarray(drive.breakpoints(t0, t1), dtype=float).ravel()
-        bps = bps[(bps >= t0) & (bps <= t1)]
-        if bps.size:
-            idx = np.clip(np.searchsorted(t, bps), 1, t.size - 1)
-            near_l = bps - t[idx - 1] <= tol
-            near_r = (t[idx] - bps <= tol) & ~near_l
-            brk[idx[near_l] - 1] = True
-            brk[idx[near_r]] = True
-            new = np.unique(bps[~(near_l | near_r)])
-            if new.size:
-                new = new[np.diff(new, prepend=-np.inf) > tol]
-                nodes = np.concatenate([nodes, new])
-                is_out = np.concatenate([is_out, np.zeros(new.size, bool)])
-                brk = np.concatenate([brk, np.ones(new.size, bool)])
-                order = np.argsort(nodes, kind="stable")
-                nodes, is_out, brk = nodes[order], is_out[order], brk[order]
+        n = t.size
+        # drive breakpoints: a node within tol of one becomes a breakpoint node, the others are
+        # inserted as nodes (a few per revolution: plain Python, then one insertion)
+        brk_set, new = set(), []
+        bps = [b for b in np.asarray(drive.breakpoints(t0, t1), dtype=float).ravel().tolist() if t0 <= b <= t1]
+        if bps:
+            for b, i in zip(bps, t.searchsorted(bps).tolist()):
+                i = min(max(i, 1), n - 1)
+                if b - float(t[i - 1]) <= tol:
+                    brk_set.add(i - 1)
+                elif float(t[i]) - b <= tol:
+                    brk_set.add(i)
+                else:
+                    new.append(b)
+        inserted: list[int] = []  # final indices of the inserted nodes
+        if new:
+            new = sorted(set(new))
+            new = [b for k, b in enumerate(new) if k == 0 or b - new[k - 1] > tol]
+            pos = t.searchsorted(new).tolist()  # insertion points (no node within tol)
+            inserted = [p + k for k, p in enumerate(pos)]
+            nodes = np.empty(n + len(new))
+            prev = 0
+            for k, (p, b) in enumerate(zip(pos, new)):
+                nodes[prev + k:p + k] = t[prev:p]
+                nodes[p + k] = b
+                prev = p
+            nodes[prev + len(new):] = t[prev:]
+            brk = sorted({i + sum(1 for p in pos if p <= i) for i in brk_set} | set(inserted))
+        else:
+            nodes = t.copy()
+            brk = sorted(brk_set)
+        is_out = np.empty(nodes.size, bool)
+        is_out[:] = True
+        is_out[inserted] = False
+        h = nodes[1:] - nodes[:-1]
+        h_max = float(_MAX(h))
         # split steps longer than MAX_RHO_H / rho (stiff linkages)
-        h = np.diff(nodes)
-        parts = np.maximum(1, np.ceil(rho * h / MAX_RHO_H)).astype(np.int64)
-        if np.any(parts > 1):
+        if rho * h_max / MAX_RHO_H > 1.0:
+            brk_mask = np.zeros(nodes.size, bool)
+            brk_mask[brk] = True
+            parts = np.maximum(1, np.ceil(rho * h / MAX_RHO_H)).astype(np.int64)
             starts = np.repeat(nodes[:-1], parts)
             frac = np.arange(parts.sum()) - np.repeat(np.cumsum(parts) - parts, parts)
             inner = starts + np.repeat(h / parts, parts) * frac
             keep = frac > 0
             nodes = np.concatenate([nodes, inner[keep]])
             is_out = np.concatenate([is_out, np.zeros(int(keep.sum()), bool)])
-            brk = np.concatenate([brk, np.zeros(int(keep.sum()), bool)])
+            brk_mask = np.concatenate([brk_mask, np.zeros(int(keep.sum()), bool)])
             order = np.argsort(nodes, kind="stable")
-            nodes, is_out, brk = nodes[order], is_out[order], brk[order]
+            nodes, is_out, brk_mask = nodes[order], is_out[order], brk_mask[order]
+            brk = brk_mask.nonzero()[0].tolist()
+            h = nodes[1:] - nodes[:-1]
+            h_max = float(_MAX(h))
         self.nodes, self.is_out = nodes, is_out
-        h = np.diff(nodes)
         self.h = h
+        nn = nodes.size
         # one-sided drive data at breakpoint nodes: evaluated a hair inside and moved back by Taylor
-        bi = np.nonzero(brk)[0]
-        nb = bi.size
+        nb = len(brk)
         if nb:
-            hl = np.where(bi > 0, np.concatenate([[np.inf], h])[bi], np.inf)
-            hr = np.where(bi < nodes.size - 1, np.concatenate([h, [np.inf]])[bi], np.inf)
-            d = 1e-7 * np.minimum(hl, hr)
-            D = np.asarray(drive(np.concatenate([nodes, nodes[bi] + d, nodes[bi] - d])), dtype=float)
-            nn = nodes.size
-            right, left = D[:, :nn], D[:, :nn].copy()
+            hl = [float(h[i - 1]) if i > 0 else math.inf for i in brk]
+            hr = [float(h[i]) if i < nn - 1 else math.inf for i in brk]
+            d = [1e-7 * min(a, b) for a, b in zip(hl, hr)]
+            tb = nodes[brk]
+            dd = np.array(d)
+            D = np.asarray(drive(np.concatenate([nodes, tb + dd, tb - dd])), dtype=float)
+            right = D[:3, :nn]
+            left = right.copy()
             if nb <= 32:  # a few breakpoints: plain Python (numpy's overhead on tiny arrays)
                 Dr, Dl = D[:, nn:nn + nb].T.tolist(), D[:, nn + nb:].T.tolist()
-                for i, di, r, l in zip(bi.tolist(), d.tolist(), Dr, Dl):
-                    right[:, i] = _taylor_shift1(r, -di)
-                    left[:, i] = _taylor_shift1(l, di)
+                right[:, brk] = np.array([_taylor_shift1(r, -di)[:3] for di, r in zip(d, Dr)]).T
+                left[:, brk] = np.array([_taylor_shift1(l, di)[:3] for di, l in zip(d, Dl)]).T
             else:
-                right[:, bi] = _taylor_shift(D[:, nn:nn + nb], -d)
-                left[:, bi] = _taylor_shift(D[:, nn + nb:], d)
+                right[:, brk] = _taylor_shift(D[:, nn:nn + nb], -dd)[:3]
+                left[:, brk] = _taylor_shift(D[:, nn + nb:], dd)[:3]
         else:
             right = left = np.asarray(drive(nodes), dtype=float)
         P = self.P = _hermite5(h, right[:, :-1], left[:, 1:])  # (6, steps)
@@ -739,7 +849,7 @@ class _Solver:
         # S, S', S'' of the step polynomials, so node values match the step expansions
         inv = 1.0 / h
         inv2 = inv * inv
-        Dn = self.Dn = np.empty((3, nodes.size))
+        Dn = self.Dn = np.empty((3, nn))
         Dn[0, :-1] = P[0]
         np.multiply(P[1], inv, out=Dn[1, :-1])
         np.multiply(P[2], 2.0 * inv2, out=Dn[2, :-1])
@@ -751,27 +861,54 @@ class _Solver:
         Sb = self.Sb = _BOUND_WEIGHTS @ np.abs(P)
         Sb[0] *= inv
         Sb[1] *= inv2
-        Sb[2] *= inv2 * inv
-        # steps of (nearly) equal length share their tables: equal up to 1e-11 relative or up to
-        # the rounding of the node times (a few ulp of t: a uniform grid of 10^5 steps differs
-        # by ~1e-10 relative from step to step). The tables take a group's mean length: a time
-        # warp of the drive by at most those roundings (~1e-18 s), no error of the state.
-        tol = max(1e-11 * float(h.max()), 8.0 * EPS * max(abs(float(nodes[0])), abs(float(nodes[-1]))))
-        self.h_max = float(h.max())
-        self.uniform = float(h.min()) >= self.h_max - tol
+        inv2 *= inv
+        Sb[2] *= inv2
+        self._group_steps(h, h_max)
+
+    def _group_steps(self, h: np.ndarray, h_max: float) -> None:
+        """Steps of (nearly) equal length share their tables: equal up to 1e-11 relative or up to
+        the rounding of the node times (a few ulp of t: a uniform grid of 10^5 steps differs by
+        ~1e-10 relative from step to step). The sorted lengths are chained while consecutive
+        ones differ by at most tol; the tables take a group's mean length (summed in sorted
+        order): a time warp of the drive by at most those roundings (~1e-18 s), no error of
+        the state. Sets h_unique (group lengths), hidx (group of each step), base_col (the
+        most common group), odd (the steps of the other groups) and uniform (one group)."""
+        nodes = self.nodes
+        tol = max(1e-11 * h_max, 8.0 * EPS * max(abs(float(nodes[0])), abs(float(nodes[-1]))))
+        self.h_max = h_max
+        self.uniform = float(np.minimum.reduce(h)) >= h_max - tol
+        # the scan bounds a window's longest step by the grid's when the most common steps are
+        # the longest (a uniform grid with drive breakpoints inserted): the same bound then
+        self.window_h_is_max = self.uniform
         if self.uniform:
-            self.h_unique = np.array([h.mean()])
+            self.h_unique = np.array([np.add.reduce(h) / h.size])  # (h.mean())
             self.hidx = np.zeros(h.size, dtype=np.int64)
             self.base_col = 0
+            self.odd = np.zeros(0, dtype=np.int64)
             return
-        order = np.argsort(h, kind="stable")
-        hs = h[order]
-        new = np.concatenate([[True], np.diff(hs) > tol])
-        group = np.cumsum(new) - 1
-        self.h_unique = np.bincount(group, weights=hs) / np.bincount(group)
-        self.hidx = np.empty(h.size, dtype=np.int64)
-        self.hidx[order] = group
-        self.base_col = int(np.argmax(np.bincount(group)))  # the most common step length
+        hs = h.copy()
+        hs.sort()  # (equal lengths are equal floats: no need of a stable argsort)
+        starts = (hs[1:] - hs[:-1] > tol).nonzero()[0] + 1
+        bounds = [0] + starts.tolist() + [h.size]
+        means = []
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            if b - a > 32:
+                total = float(hs[a:b].cumsum()[-1])  # sequential, as a running sum
+            else:
+                total = 0.0
+                for x in hs[a:b].tolist():
+                    total += x
+            means.append(total / (b - a))
+        self.h_unique = np.array(means)
+        counts = [b - a for a, b in zip(bounds[:-1], bounds[1:])]
+        base = self.base_col = max(range(len(counts)), key=counts.__getitem__)  # the most common length
+        self.window_h_is_max = base == len(counts) - 1
+        # the steps outside the base group's range, and their groups (searched among the few)
+        lo, hi = float(hs[bounds[base]]), float(hs[bounds[base + 1] - 1])
+        odd = self.odd = ((h < lo) | (h > hi)).nonzero()[0]
+        self.hidx = np.empty(h.size, dtype=np.intp)
+        self.hidx[:] = base
+        self.hidx[odd] = hs[starts].searchsorted(h[odd], side="right")  # group starts at or below
 
     @property
     def dP(self) -> np.ndarray:
@@ -784,7 +921,7 @@ class _Solver:
     def time(self, j: int, u: float) -> float:
         if j >= self.h.size:
             return float(self.nodes[-1])
-        return float(self.nodes[j] + u * self.h[j])
+        return float(self.nodes[j]) + u * float(self.h[j])
 
     # ---------------------------------------------------------------- event functions
     def _moving_events(self, kind: int, sigma: float) -> list[_Event]:
@@ -832,11 +969,11 @@ class _Solver:
                     elif const:
                         Ed.append((r, const))
                 lin = self.lins[kind]
-                Fd = np.zeros(D0.size)
+                Fd = np.empty(D0.size)
                 _lincomb_into(Fd, ((lin.kc, D0), (lin.cc, D1)), 0.0)
             Cs = np.array([[l0, l1] for _, _, _, l0, l1 in rows])
             simple = all(comb == "one" for _, comb in groups)
-            absrows = np.abs(np.array([[aP, bP, l0, l1] for aP, bP, _, l0, l1 in rows]))  # for sag bounds
+            absrows = [(abs(aP), abs(bP), abs(l0), abs(l1)) for aP, bP, _, l0, l1 in rows]  # for sag bounds
             hit = self._setups[key] = (events, rows, groups, Ed, Cs, Fd, simple, absrows)
         return hit
 
@@ -879,20 +1016,23 @@ class _Solver:
                 w_lo = max(clear) if ev.comb == "min" else min(clear)
                 if w_lo >= 1.0:
                     continue
+            e = lists[0]
             if len(lists) == 1:
-                if _excluded1(lists[0]) if w_lo == 0.0 else _excluded_range(lists[0], w_lo, 1.0):
+                e_lo, e_hi = (e[0] if w_lo == 0.0 else _horner(e, w_lo)), sum(e)
+                # (a sign change from one end to the other needs no exclusion test)
+                if not e_lo <= 0.0 < e_hi and (
+                        _excluded1(e, e_hi) if w_lo == 0.0 else _excluded_range(e, w_lo, 1.0)):
                     continue
             else:
                 ex = [_excluded1(e) if w_lo == 0.0 else _excluded_range(e, w_lo, 1.0) for e in lists]
                 if (any(ex) if ev.comb == "min" else all(ex)):
                     continue
-            e = lists[0]
-            if ev.comb == "one":
-                e_lo, e_hi = _horner(e, w_lo), sum(e)
             if (ev.comb == "one" and e_lo <= 0.0 < e_hi
                     and _rising_range(e, w_lo, 1.0)):  # one simple crossing: polish it directly
                 self.stats["newton_roots"] = self.stats.get("newton_roots", 0) + 1
                 w = _root_rising(e, w_lo, 1.0, max(0.5 * math.ulp(abs(t_abs)) / h_loc, 1e-300), e_lo, e_hi)
+            elif _positive_at(lists, ev.comb, w_lo):  # already > 0 where the search would begin
+                w = w_lo
             else:
                 w = self._first_root(Es, ev.comb, w_lo, t_abs, h_loc)
             if w is None:
@@ -1028,7 +1168,7 @@ class _Solver:
                 _lincomb_into(E, ((aP, D0), (bP, D1)), const)
                 sag = abs(aP) * self.Sb[1] + abs(bP) * self.Sb[2] if bP else abs(aP) * self.Sb[1]
                 np.less_equal(np.maximum(E[:-1], E[1:]) + h2 * sag, 0.0, out=ex[r])
-            cand = np.flatnonzero(~_combine_cleared(ex, groups))
+            cand = (~_combine_cleared(ex, groups)).nonzero()[0]
             hit = self._static_cache[s_star] = (events, groups, ex, cand)
         return hit
 
@@ -1044,11 +1184,11 @@ class _Solver:
         # first (possibly partial) step
         P = _shift_list(self.PT[j], u0)
         h_loc = (1.0 - u0) * float(self.h[j])
-        dP = _deriv_list(P, h_loc)
+        dP = _deriv_list(P, h_loc) if self.c else None  # (S' enters the events with damping only)
         sets, zeros = [], []
         for ev in events:
-            Es = [_coeff_list(cp, P, dP, None, None) for cp in ev.comps]
-            zeros.append(_snap_zero_start(Es, ev.comps, ev.comb, P, dP, s_star, 0.0))
+            Es, zero = _start_coeffs(ev.comps, ev.comb, P, dP, None, None, s_star, 0.0)
+            zeros.append(zero)
             sets.append(Es)
         best = self._earliest(events, sets, zeros, self.time(j, u0), h_loc)
         if u0 == 0.0:
@@ -1058,11 +1198,11 @@ class _Solver:
         j += 1
         # the steps not cleared by the bound, in order, searched one by one (converted a few at
         # a time: the list can hold every step of the lift)
-        k0 = int(np.searchsorted(cand, j))
+        k0 = int(cand.searchsorted(j))
         for i in itertools.chain.from_iterable(cand[k:k + 16].tolist() for k in range(k0, cand.size, 16)):
             h_i = float(self.h[i])
             P = self.PT[i].tolist()
-            dP = _deriv_list(P, h_i)
+            dP = _deriv_list(P, h_i) if self.c else None
             check, col = [], []
             for ev, (rr, comb) in zip(events, groups):
                 if not _combine_cleared1(ex[rr, i].tolist(), comb):
@@ -1083,28 +1223,41 @@ class _Solver:
             tab = self._tabs[kind] = _tables(self.lins[kind], self.h_unique, self.n_terms)
         return tab
 
-    def _forcing(self, kind: int) -> np.ndarray:
-        """(2, steps): s and v at the end of every step from rest under the drive's forcing
-        kc S + cc S' alone. Steps of the most common length by their table (one matrix product);
-        the few others (ends at inserted breakpoints, Python) by their own expansion, so that no
-        table is built for them."""
+    def _forcing(self, kind: int):
+        """G(a, b) -> (2, b - a): s and v at the end of the steps a..b-1 from rest under the
+        drive's forcing kc S + cc S' alone. Steps of the most common length by their table (one
+        matrix product for the whole grid); the few others (ends at inserted breakpoints) by
+        their own expansion, in Python when first asked for, so that no table is built for them."""
         lin = self.lins[kind]
-        odd = np.flatnonzero(self.hidx != self.base_col) if self.h_unique.size > 1 else None
-        if odd is not None and odd.size > 64:  # a non-uniform grid: every table, vectorised
+        odd = self.odd
+        if odd.size > 64:  # a non-uniform grid: every table, vectorised
             WP = self.tab(kind).WP
             G = WP[:, :, self.base_col] @ self.P
             G[:, odd] = np.einsum("knm,nm->km", WP[:, :, self.hidx[odd]], self.P[:, odd])
-            return G
-        hb = self.h_unique[self.base_col:self.base_col + 1]
-        WP = (self._tabs[kind] if kind in self._tabs else _tables(lin, hb, self.n_terms)).WP
-        G = WP[:, :, self.base_col if kind in self._tabs else 0] @ self.P
-        if odd is not None:
-            N = self.n_terms
-            for m, hu in zip(odd.tolist(), self.h_unique[self.hidx[odd]].tolist()):
-                a = _expand(lin, self.PT[m].tolist(), hu, 0.0, 0.0, 0.0, N)
-                G[0, m] = sum(a)
-                G[1, m] = sum([k * x for k, x in enumerate(a)]) / hu
-        return G
+            return lambda a, b: G[:, a:b]
+        hb = float(self.h_unique[self.base_col])
+        if kind in self._tabs:
+            WP = self._tabs[kind].WP[:, :, self.base_col]
+        else:
+            WP = _drive_response(lin, hb, self.n_terms)
+        G = WP @ self.P
+        if not odd.size:
+            return lambda a, b: G[:, a:b]
+        pending = set(odd.tolist())  # odd steps not expanded yet
+        N = self.n_terms
+
+        def forcing(a: int, b: int) -> np.ndarray:
+            if pending:
+                for m in odd[odd.searchsorted(a):odd.searchsorted(b)].tolist():
+                    if m in pending:
+                        pending.discard(m)
+                        hu = float(self.h_unique[self.hidx[m]])
+                        e = _expand(lin, self.PT[m].tolist(), hu, 0.0, 0.0, 0.0, N)
+                        G[0, m] = sum(e)
+                        G[1, m] = sum([k * x for k, x in enumerate(e)]) / hu
+            return G[:, a:b]
+
+        return forcing
 
     def _prop(self, kind: int) -> Propagator:
         """The closed-form propagator of a phase kind over the whole grid (built on first use)."""
@@ -1121,7 +1274,7 @@ class _Solver:
                 return tab.Phi[:, :, cols].tolist(), tab.g1[:, cols].tolist()
 
             prop = self.props[kind] = Propagator(lin.m, lin.c, lin.K, self.nodes, G, phi_of_step, self.hidx,
-                                                 self.h_unique)
+                                                 self.h_unique, self.base_col)
         return prop
 
     def _run_moving(self, kind: int, j: int, u0: float, s: float, v: float, sigma: float, release: bool = False):
@@ -1150,11 +1303,11 @@ class _Solver:
             if sigma * f0 < 0.0 and abs(f0) <= 1e-12 * terms:
                 a = _expand(lin, P, h_loc, s, v, Fc + f0, N)
         da = _deriv_list(a, h_loc)
-        dP = _deriv_list(P, h_loc)
+        dP = _deriv_list(P, h_loc) if self.c else None  # (S' enters the events with damping only)
         sets, zeros = [], []
         for ev in events:
-            Es = [_coeff_list(cp, P, dP, a, da) for cp in ev.comps]
-            zeros.append(_snap_zero_start(Es, ev.comps, ev.comb, P, dP, s, v))
+            Es, zero = _start_coeffs(ev.comps, ev.comb, P, dP, a, da, s, v)
+            zeros.append(zero)
             sets.append(Es)
         best = self._earliest(events, sets, zeros, self.time(j, u0), h_loc)
         if u0 == 0.0:
@@ -1211,13 +1364,17 @@ class _Solver:
             last = first + 1 if hit[first] else L
         n = last
         m, c, K = lin.m, lin.c, lin.K
-        H = self.h_max if self.uniform else float(_MAX(self.h[j:j + n]))
+        H = self.h_max if self.window_h_is_max else float(_MAX(self.h[j:j + n]))
         q = H * (c + K * H) / m
         if q < 0.5:
             S1b, S2b, S3b = _MAX(self.Sb[:, j:j + n], axis=1).tolist()
             Sw, Vw = S[:n], V[:n]
             Vn = float(_MAX(np.abs(Vw)))
-            A = Fd[j:j + n] - Fc - K * Sw
+            if lin.kc or lin.cc:
+                A = Fd[j:j + n] - Fc - K * Sw
+            else:  # no drive forcing (flight): -A m = Fc + K s (the same magnitudes)
+                A = K * Sw
+                A += Fc
             if c:
                 A -= c * Vw
             An = float(_MAX(np.abs(A))) / m
@@ -1225,25 +1382,44 @@ class _Solver:
             Ahat = (An + H * (F1 + K * Vn) / m) / (1.0 - q)
             Jhat = (F1 + c * Ahat + K * (Vn + H * Ahat)) / m
             H8 = H * H / 8.0
-            sag = absrows @ np.array([H8 * S2b, H8 * S3b, H8 * Ahat, H8 * Jhat])
-            ex = np.maximum(E[:, :n], E[:, 1:n + 1]) + sag[:, None] <= 0.0
-            cand = np.flatnonzero(~_combine_cleared(ex, groups))
+            xs = (H8 * S2b, H8 * S3b, H8 * Ahat, H8 * Jhat)
+            sag = np.array([a0 * xs[0] + a1 * xs[1] + a2 * xs[2] + a3 * xs[3] for a0, a1, a2, a3 in absrows])
+            Mx = np.maximum(E[:, :n], E[:, 1:n + 1])
+            Mx += sag[:, None]
+            if simple:  # a step is cleared when every row's bound is <= 0
+                cand = (_MAX(Mx, axis=0) > 0.0).nonzero()[0] if len(rows) > 1 else (Mx[0] > 0.0).nonzero()[0]
+            else:
+                cand = (~_combine_cleared(Mx <= 0.0, groups)).nonzero()[0]
             if cand.size > 1:
                 # the window's maxima are loose where a function starts near its zero (a phase
-                # begun by an event): the same bound with each step's own left-node values
+                # begun by an event): the same bound with each step's own left-node values (a
+                # few steps: plain Python)
                 steps = j + cand
-                Vi = np.abs(V[cand])
-                F1i = lin.kc * self.Sb[0, steps] + lin.cc * self.Sb[1, steps] if lin.kc else 0.0
-                Ai = (np.abs(A[cand]) / m + H * (F1i + K * Vi) / m) / (1.0 - q)
-                Ji = (F1i + c * Ai + K * (Vi + H * Ai)) / m
-                S2i, S3i = self.Sb[1, steps], self.Sb[2, steps]
-                sag_i = H8 * (absrows @ np.array([S2i, S3i, Ai, Ji]))
-                ex_i = np.maximum(E[:, cand], E[:, cand + 1]) + sag_i <= 0.0
-                keep = ~_combine_cleared(ex_i, groups)
-                ex[:, cand] = ex_i
-                cand = cand[keep]
+                Vc, Ac = np.abs(V[cand]).tolist(), np.abs(A[cand]).tolist()
+                S1c, S2c, S3c = self.Sb[:, steps].tolist()
+                Ea, Eb = E[:, cand].tolist(), E[:, cand + 1].tolist()
+                kc, cc, q1 = lin.kc, lin.cc, 1.0 - q
+                keep, flags = [], {}
+                for t, i in enumerate(cand.tolist()):
+                    Vi = Vc[t]
+                    F1i = kc * S1c[t] + cc * S2c[t] if kc else 0.0
+                    Ai = (Ac[t] / m + H * (F1i + K * Vi) / m) / q1
+                    Ji = (F1i + c * Ai + K * (Vi + H * Ai)) / m
+                    x0, x1, x2, x3 = S2c[t], S3c[t], Ai, Ji
+                    col = [(Ea[r][t] if Ea[r][t] > Eb[r][t] else Eb[r][t])
+                           + H8 * (a0 * x0 + a1 * x1 + a2 * x2 + a3 * x3) <= 0.0
+                           for r, (a0, a1, a2, a3) in enumerate(absrows)]
+                    cleared = all(col) if simple else all(
+                        col[rr[0]] if len(rr) == 1 else _combine_cleared1([col[r] for r in rr], cb)
+                        for rr, cb in groups)
+                    if not cleared:
+                        keep.append(i)
+                        flags[i] = col
+                cand = np.array(keep, dtype=np.intp)
+            else:
+                flags = None
         else:
-            ex = None
+            Mx = flags = None
             cand = np.arange(n)
         if 0 < cand.size <= 4:  # the usual case near an event: expand those steps in Python
             N = self.n_terms
@@ -1251,13 +1427,13 @@ class _Solver:
                 h_i = float(self.h[j + i])
                 P = self.PT[j + i].tolist()
                 a = _expand(lin, P, h_i, float(S[i]), float(V[i]), Fc, N)
-                da, dP = _deriv_list(a, h_i), _deriv_list(P, h_i)
-                if ex is None:
+                da, dP = _deriv_list(a, h_i), (_deriv_list(P, h_i) if self.c else None)
+                if Mx is None:
                     check = events
                     col = [[_coeff_list(cp, P, dP, a, da) for cp in ev.comps] for ev in events]
                 else:  # only the events the window bound did not clear in this step
                     check, col = [], []
-                    exi = ex[:, i].tolist()
+                    exi = flags[i] if flags else [x <= 0.0 for x in Mx[:, i].tolist()]
                     for ev, (rr, comb) in zip(events, groups):
                         cleared = exi[rr[0]] if len(rr) == 1 else _combine_cleared1([exi[r] for r in rr], comb)
                         if not cleared:
@@ -1351,6 +1527,11 @@ class _Solver:
                     j, u = j + 1, 0.0
                 S, S1 = self._drive_at(j, u)
                 touching = S - self.lash - s >= 0.0 and self.k * (S - self.lash - s) + self.c * S1 > 0.0
+                if which == "up" and phase == SEATED and not touching and self.c * S1 > 0.0 and self.W0 + self.R > 0.0:
+                    # only the linkage can lift a seated valve, so it touches. With damping it can lift
+                    # the valve the instant its gap closes (the dashpot's c S' alone beats the preload),
+                    # and the gap recomputed there may round to a hair below zero: that is contact
+                    touching = True
                 if which == "up":
                     sigma = 1.0
                     if phase == SEATED:
@@ -1392,7 +1573,6 @@ class _Solver:
         return kind, (1.0 if net > 0.0 else -1.0)
 
     def _handle(self, which: str, phase: int, j: int, u: float, s: float, v: float, sigma: float):
-        S, S1 = self._drive_at(j, u)
         m_phase = self.M1 if phase == CONTACT else self.M
         if which == "separation":
             self._event("separation", j, u, v)
@@ -1402,6 +1582,7 @@ class _Solver:
             self._event("re-contact", j, u, v)
             self.stats["mass_switch_energy_J"] -= 0.5 * (self.M - self.M1) * v * v
             return CONTACT, s, v, sigma, j, u
+        S, S1 = self._drive_at(j, u)  # (the mass switches above need no drive)
         if which == "velocity-zero":
             self.stats["velocity_reversals"] += 1
             force = self.k * (S - self.lash - s) + self.c * S1 if phase == CONTACT else 0.0
@@ -1436,35 +1617,51 @@ class _Solver:
         s, v, phase = self.out_s, self.out_v, self.out_phase
         D0, D1, D2 = self.Dn
         # acceleration and jerk from the phase ODEs (exact: the closed form's derivatives), with
-        # each node's coefficients looked up by its phase code (at rest: a = jerk = 0)
-        table = np.zeros((7, 4))
+        # each node's coefficients looked up by its phase code (at rest: a = jerk = 0); computed
+        # in place in the looked-up rows (the formulas' order of operations kept)
+        table = np.zeros((8, 4))
         table[1] = 1.0  # m
+        table[7] = 1.0  # linkage force kept (0 in flight)
         for code, lin in self.lins.items():
-            table[:, code] = (1.0, lin.m, lin.c, lin.K, lin.kc, lin.cc, lin.kc * self.lash + self.W0)
-        moving, m, c, K, kc, cc, Fc = table[:, phase]
+            table[:7, code] = (1.0, lin.m, lin.c, lin.K, lin.kc, lin.cc, lin.kc * self.lash + self.W0)
+        table[7, FLIGHT] = 0.0
+        moving, m, c, K, kc, cc, Fc, keep = table.take(phase, axis=1)
         if self.R:
             Fc += self.R * self.out_sigma
+        acc = kc * D0  # (kc D0 + cc D1 - Fc - c v - K s) / m * moving
         if self.c:
-            acc = (kc * D0 + cc * D1 - Fc - c * v - K * s) / m * moving
-            jerk = (kc * D1 + cc * D2 - c * acc - K * v) / m * moving
-        else:  # the same without the (zero) damping terms
-            acc = (kc * D0 - Fc - K * s) / m * moving
-            jerk = (kc * D1 - K * v) / m * moving
+            acc += cc * D1
+            acc -= Fc
+            acc -= np.multiply(c, v, out=Fc)
+        else:
+            acc -= Fc
+        acc -= np.multiply(K, s, out=Fc)
+        acc /= m
+        acc *= moving
+        jerk = np.multiply(kc, D1, out=kc)  # (kc D1 + cc D2 - c a - K v) / m * moving
+        if self.c:
+            jerk += np.multiply(cc, D2, out=cc)
+            jerk -= np.multiply(c, acc, out=c)
+        jerk -= np.multiply(K, v, out=K)
+        jerk /= m
+        jerk *= moving
         # linkage force: in contact the stretched linkage; at rest the static force; in flight 0
-        x = D0 - self.lash - s
-        kx = self.k * x
+        x = D0 - self.lash
+        x -= s
         if self.c:
+            kx = self.k * x
             contact_force = np.maximum(0.0, kx + self.c * (D1 - v))
             rest_force = np.where(x >= 0.0, np.maximum(0.0, kx + self.c * D1), 0.0)
             force = np.where(phase == CONTACT, contact_force, np.where(moving > 0.0, 0.0, rest_force))
         else:  # undamped: contact and rest alike max(0, k x) (k x < 0 exactly where x < 0)
-            force = np.maximum(kx, 0.0)
-            force[phase == FLIGHT] = 0.0
+            x *= self.k
+            force = np.maximum(x, 0.0, out=x)
+            force *= keep
         self.stats["events"] = len(self.events)
         if inverse is None and self.is_out.all():  # the output times are the nodes
             pick = slice(None)
         else:
-            out = np.flatnonzero(self.is_out)
+            out = self.is_out.nonzero()[0]
             pick = out if inverse is None else out[inverse]
         force = force[pick]
         return DynamicsSolution(
@@ -1492,10 +1689,11 @@ def solve(
       the last phase of its kind, growing 8x while no event is found).
     """
     t_req = np.asarray(t, dtype=float).ravel()
-    steps = np.diff(t_req)
-    if t_req.size == 0 or np.any(steps < 0.0) or not np.all(np.isfinite(t_req)):
+    steps = t_req[1:] - t_req[:-1]
+    hmin = float(np.minimum.reduce(steps)) if steps.size else 0.0
+    if t_req.size == 0 or hmin < 0.0 or not np.isfinite(t_req).all():
         raise ValueError("output times must be a non-empty, sorted array of finite numbers")
-    if t_req.size > 1 and steps.min() > 0.0:  # strictly increasing: the nodes themselves
+    if t_req.size > 1 and hmin > 0.0:  # strictly increasing: the nodes themselves
         t_nodes, inverse = t_req, None
     else:
         t_nodes, inverse = np.unique(t_req, return_inverse=True)
@@ -1503,6 +1701,7 @@ def solve(
         if t_nodes.size == 1:  # one instant: the state itself
             t_nodes = np.array([t_nodes[0], t_nodes[0] + 1e-9])
             inverse = np.zeros(t_req.size, dtype=np.int64)
-    solver = _Solver(model, drive, t_nodes, initial_state, zeno_height, max_events, chunk)
+        hmin = float(np.minimum.reduce(t_nodes[1:] - t_nodes[:-1]))
+    solver = _Solver(model, drive, t_nodes, initial_state, zeno_height, max_events, chunk, hmin)
     solver.run()
     return solver.solution(t_req, inverse)

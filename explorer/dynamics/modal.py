@@ -10,9 +10,10 @@ eps, no drift with n), and the recurrence is solved by
     z_n = z_p + U_n ((z_j - z_p) D_j + Q_n - Q_j),   D = 1/U,   Q_n = sum_{m<n} D_{m+1} w_m,
 where z_p is the particular (static) state of the constant load -Fc and w_m the modal part of the
 drive's forcing over step m (from exact.py's step tables). U and the sums Q depend only on the
-phase kind, not on where a phase starts or on Fc: they are computed once per solve, for the whole
-grid, and a phase is then a few vector operations on slices (no per-phase cumulative sums, no
-Python loop over steps).
+phase kind, not on where a phase starts or on Fc: they are computed once per solve (U for the
+whole grid; Q, when the forcing is given as a function of the steps, as far as the phases reach,
+with the same values), and a phase is then a few vector operations on slices (no per-phase
+cumulative sums, no Python loop over steps).
 
 Rounding: Q_n - Q_j carries an absolute error of a few eps times the modal responses summed from
 j to n, as a step-by-step recurrence does; the powers U are exact to a few eps relative (no
@@ -103,7 +104,7 @@ def _lattice(mu, h: float, n: int, mu_lo=0.0) -> np.ndarray:
 LATTICE_MIN = 64  # a step length this frequent gets lattice powers (others: a cumulative product)
 
 
-def step_powers(mu, hidx: np.ndarray, h_unique: np.ndarray, mu_lo=0.0) -> np.ndarray:
+def step_powers(mu, hidx: np.ndarray, h_unique: np.ndarray, mu_lo=0.0, base: int | None = None) -> np.ndarray:
     """U_n = prod_{m<n} exp(mu h_m) at the nodes n = 0..len(hidx) of a run of steps, h_m =
     h_unique[hidx[m]] (the step lengths of exact.py's step tables, so that U agrees with the
     tables' forcing: mixing in the nodes' own differences, which differ from the tables' by
@@ -112,8 +113,27 @@ def step_powers(mu, hidx: np.ndarray, h_unique: np.ndarray, mu_lo=0.0) -> np.nda
     Each U_n is accurate to a few eps relative, whatever n: the propagation of a phase from
     node j to n is U_n / U_j, and both errors enter. Every frequent step length contributes
     lattice powers (the count of its steps before n is exact); the rare ones (steps ending at
-    inserted drive breakpoints) a cumulative product, whose error grows with their number."""
+    inserted drive breakpoints) a cumulative product, whose error grows with their number.
+    base: the most common column of hidx, when known (the usual grid: that length and fewer
+    than LATTICE_MIN others, whose product is then applied run by run between them)."""
     n = hidx.size
+    if base is not None:
+        odd = (hidx != base).nonzero()[0]
+        if odd.size == 0:
+            return _lattice(mu, float(h_unique[base]), n + 1, mu_lo)
+        if odd.size < LATTICE_MIN <= n - odd.size:
+            # the same products as below: U_n = lattice[n - k] * C[k], k the rare steps before n
+            lattice = _lattice(mu, float(h_unique[base]), n - odd.size + 1, mu_lo)
+            C = np.empty(odd.size + 1, dtype=lattice.dtype)
+            C[0] = 1.0
+            np.exp(mu * h_unique[hidx[odd]]).cumprod(out=C[1:])
+            U = np.empty(n + 1, dtype=lattice.dtype)
+            a = 0
+            for k, (m, ck) in enumerate(zip(odd.tolist(), C.tolist())):
+                np.multiply(lattice[a - k:m + 1 - k], ck, out=U[a:m + 1])  # nodes a..m: k rare steps before
+                a = m + 1
+            np.multiply(lattice[a - odd.size:], C[-1], out=U[a:])
+            return U
     counts = np.bincount(hidx, minlength=h_unique.size)
     U = None
     rest = np.ones(n, dtype=bool)
@@ -146,29 +166,99 @@ def _prefix_sum(x: np.ndarray) -> np.ndarray:
     """Cumulative sum in two levels (within blocks of PREFIX_BLOCK, then of the block totals):
     the rounding accumulates over ~PREFIX_BLOCK + n / PREFIX_BLOCK additions instead of n (a
     sequential cumulative sum over 10^4 steps of a stiff linkage costs ~1e-14 relative)."""
-    n = x.size
+    out = np.empty(_prefix_size(x.size) + 1, dtype=x.dtype)
+    out[1:x.size + 1] = x
+    return _prefix_sum_into(out, x.size)[1:]
+
+
+def _prefix_size(n: int) -> int:
+    """Length of the buffer _prefix_sum_into works in for n terms (whole blocks)."""
+    return n if n <= 4 * PREFIX_BLOCK else -(-n // PREFIX_BLOCK) * PREFIX_BLOCK
+
+
+def _prefix_sum_into(buf: np.ndarray, n: int) -> np.ndarray:
+    """[0, x_0, x_0 + x_1, ...] in place: buf = [0, x_0, ..., x_(n-1), (unused up to 1 +
+    _prefix_size(n))]; returns buf[:n + 1] (the sums of _prefix_sum, with the leading 0)."""
     B = PREFIX_BLOCK
+    buf[0] = 0.0
     if n <= 4 * B:
-        return np.cumsum(x)
-    nb = -(-n // B)
-    pad = np.zeros(nb * B, dtype=x.dtype)
-    pad[:n] = x
-    M = pad.reshape(nb, B)
-    np.cumsum(M, axis=1, out=M)
-    M[1:] += np.cumsum(M[:-1, -1])[:, None]
-    return pad[:n]
+        buf[1:n + 1].cumsum(out=buf[1:n + 1])
+        return buf[:n + 1]
+    pad = buf[1:]
+    pad[n:] = 0.0
+    M = pad.reshape(-1, B)
+    M.cumsum(axis=1, out=M)
+    M[1:] += M[:-1, -1].cumsum()[:, None]
+    return buf[:n + 1]
+
+
+LAZY_CHUNK = 16 * PREFIX_BLOCK  # nodes of the first part of a lazily summed Q
+
+
+class _LazyPrefix:
+    """Q = [0, cumsum(D[1:] w)] of one complex mode over one block, summed as far as the phases
+    reach: the first LAZY_CHUNK nodes (or up to the first phase's window), then, if a phase
+    goes further, the rest (a phase kind often covers a part of the grid only). The chunks are
+    whole blocks of _prefix_sum_into and the block offsets are carried from chunk to chunk in
+    the same order of additions: the values are those of the sum over the whole block."""
+
+    def __init__(self, U: np.ndarray, unit: bool, weights, b0: int, k: int):
+        self.U, self.unit, self.weights, self.b0, self.k = U, unit, weights, b0, k
+        self.buf = np.empty(_prefix_size(k) + 1, dtype=U.dtype)
+        self.buf[0] = 0.0
+        self.ready = 0  # terms summed (Q valid at the nodes 0..ready)
+        self.carry = 0.0  # offset of the next block (the block totals so far, summed in order)
+
+    def upto(self, n: int) -> np.ndarray:
+        """The buffer, with Q valid at the nodes 0..n (at least)."""
+        if n > self.ready:
+            self._extend(n)
+        return self.buf
+
+    def _extend(self, n: int) -> None:
+        B, k, r, buf = PREFIX_BLOCK, self.k, self.ready, self.buf
+        two_level = k > 4 * B
+        # the first chunk, then all the rest (a kind that comes back usually covers much of the grid)
+        r2 = k if not two_level or r else min(k, -(-max(n, LAZY_CHUNK) // B) * B)
+        terms = buf[1 + r:1 + r2]
+        if self.unit:
+            np.conjugate(self.U[1 + r:1 + r2], out=terms)
+        else:
+            np.divide(1.0, self.U[1 + r:1 + r2], out=terms)
+        terms *= self.weights(self.b0 + r, self.b0 + r2)
+        if not two_level:
+            terms.cumsum(out=terms)
+        else:
+            end = r2 if r2 < k else buf.size - 1
+            buf[1 + r2:1 + end] = 0.0
+            M = buf[1 + r:1 + end].reshape(-1, B)
+            M.cumsum(axis=1, out=M)
+            # offsets: o_(b+1) = o_b + T_b, the running sum of the block totals T (in order)
+            offsets = np.empty(M.shape[0], dtype=buf.dtype)
+            offsets[0] = self.carry
+            offsets[1:] = M[:-1, -1]
+            last = M[-1, -1]
+            offsets.cumsum(out=offsets)
+            self.carry = offsets[-1] + last
+            if r == 0:
+                M[1:] += offsets[1:, None]
+            else:
+                M += offsets[:, None]
+        self.ready = r2
 
 
 class Propagator:
     """Node states of one phase kind (m, c, K) on the grid `nodes` with the drive's per-step
     forcing G (2, steps) in (s, v) (the response over each step from zero state) and the step
-    transition matrices Phi (2, 2, steps) (used only by the critical-damping loop).
+    transition matrices Phi (2, 2, steps) (used only by the critical-damping loop). G may also
+    be a function G(a, b) -> (2, b - a) of the steps a..b-1: then an underdamped kind sums the
+    drive's forcing only as far as its phases reach (the same values, chunk by chunk).
 
     states(j, L, s, v, Fc) -> (2, L + 1) array of s and v at the nodes j..j+L (s, v given at j):
     a few vector operations, however long the run (the critical-damping loop excepted)."""
 
     def __init__(self, m: float, c: float, K: float, nodes: np.ndarray, G, Phi_of_step,
-                 hidx: np.ndarray, h_unique: np.ndarray):
+                 hidx: np.ndarray, h_unique: np.ndarray, base: int | None = None):
         self.m, self.c, self.K = m, c, K
         self.nodes = nodes
         alpha = 0.5 * c / m
@@ -178,6 +268,9 @@ class Propagator:
         if K == 0.0 and c == 0.0 and G is None:
             self.mode = "parabola"
             return
+        lazy = callable(G)
+        if lazy and not disc > 0.0:  # (sums over the whole grid at once, as from an array)
+            G, lazy = G(0, hidx.size), False
         if scale == 0.0 or abs(disc) <= 1e-8 * scale:
             # (nearly) critical damping: a Jordan block, no modal form -- or no dynamics at all
             self.mode = "loop"
@@ -197,7 +290,6 @@ class Propagator:
             d_hi, d_lo = -d_hi, -d_lo
         b2, b2e = _two_prod(beta, beta)
         beta_lo = ((d_hi - b2) - b2e + d_lo) / (2.0 * beta)
-        tau = nodes - nodes[0]
         if disc > 0.0:
             self.mode = "complex"
             mus = [complex(-alpha, -beta)]
@@ -210,17 +302,23 @@ class Propagator:
         rate = max(-mu.real if isinstance(mu, complex) else abs(mu) for mu in mus)
         # modal forcing of the drive: w = g0 + i (alpha g0 + g1) / beta (complex) or
         # g0 +- (alpha g0 + g1) / beta (real)
-        if G is not None:
-            g0, g1 = G
-            w2 = (alpha * g0 + g1) / beta if alpha else g1 / beta
-            ws = [g0 + 1j * w2] if self.mode == "complex" else [g0 + w2, g0 - w2]
+        if lazy:
+            ws = [lambda a, b: self._weights(G(a, b))]
+        elif G is not None:
+            if self.mode == "complex":
+                ws = [self._weights(G)]
+            else:
+                g0, g1 = G
+                w2 = (alpha * g0 + g1) / beta if alpha else g1 / beta
+                ws = [g0 + w2, g0 - w2]
         else:
             ws = [None] * len(mus)
         # blocks of nodes [b_k, b_{k+1}] over which |Re mu| tau stays below BLOCK_RATE
         n = nodes.size
-        if rate * tau[-1] <= BLOCK_RATE:
+        if rate * (nodes[-1] - nodes[0]) <= BLOCK_RATE:
             cuts = [0, n - 1]
         else:
+            tau = nodes - nodes[0]
             marks = np.floor(tau * (rate / BLOCK_RATE)).astype(np.int64)
             starts = np.nonzero(np.diff(marks))[0] + 1
             cuts = [0] + starts.tolist() + [n - 1]
@@ -238,15 +336,34 @@ class Propagator:
             blocks = []
             unit = alpha == 0.0 and isinstance(mu, complex)
             for b0, b1 in zip(cuts[:-1], cuts[1:]):
-                U = step_powers(mu, hidx[b0:b1], h_unique, mu_lo)
-                if w is not None:
-                    Q = np.empty(b1 - b0 + 1, dtype=U.dtype)
-                    Q[0] = 0.0
-                    Q[1:] = _prefix_sum((np.conj(U[1:]) if unit else 1.0 / U[1:]) * w[b0:b1])
+                U = step_powers(mu, hidx[b0:b1], h_unique, mu_lo, base)
+                if lazy:
+                    Q = _LazyPrefix(U, unit, w, b0, b1 - b0)
+                elif w is not None:  # Q = [0, cumsum(D[1:] w)], computed in its own buffer
+                    k = b1 - b0
+                    buf = np.empty(_prefix_size(k) + 1, dtype=U.dtype)
+                    terms = buf[1:k + 1]
+                    if unit:
+                        np.conjugate(U[1:], out=terms)
+                    else:
+                        np.divide(1.0, U[1:], out=terms)
+                    terms *= w[b0:b1]
+                    Q = _prefix_sum_into(buf, k)
                 else:
                     Q = None
                 blocks.append((U, Q, unit))
             self.modes.append(blocks)
+
+    def _weights(self, G: np.ndarray) -> np.ndarray:
+        """The modal forcing w = g0 + i (alpha g0 + g1) / beta of the complex mode."""
+        g0, g1 = G
+        w = np.empty(g0.size, dtype=complex)  # without temporaries
+        w.real = g0
+        if self.alpha:
+            w.imag = (self.alpha * g0 + g1) / self.beta
+        else:
+            np.divide(g1, self.beta, out=w.imag)
+        return w
 
     def states(self, j: int, L: int, s: float, v: float, Fc: float) -> np.ndarray:
         """(2, L + 1): s and v at the nodes j..j+L of a phase at (s, v) at node j under the
@@ -292,10 +409,14 @@ class Propagator:
         if len(cuts) == 2:
             U, Q, unit = blocks[0]
             e = j + L + 1
-            zD = z * U[j].conjugate() if unit else z / U[j]
+            # (the product in plain Python: the same arithmetic, less overhead; a quotient
+            # differs between numpy and Python)
+            zD = z * U[j].item().conjugate() if unit else z / U[j]
             if Q is None:
                 return U[j:e] * zD
-            return U[j:e] * ((zD - Q[j]) + Q[j:e])
+            if not isinstance(Q, np.ndarray):
+                Q = Q.upto(e - 1)
+            return U[j:e] * ((zD - Q[j].item()) + Q[j:e])
         out = np.empty(L + 1, dtype=blocks[0][0].dtype)
         k = int(self.block_of_node[j])
         n, end = j, j + L
@@ -307,6 +428,8 @@ class Propagator:
             if Q is None:
                 seg = U[lj:le + 1] * zD
             else:
+                if not isinstance(Q, np.ndarray):
+                    Q = Q.upto(le)
                 seg = U[lj:le + 1] * ((zD - Q[lj]) + Q[lj:le + 1])
             out[n - j:n - j + le - lj + 1] = seg
             n = b0 + le

@@ -262,8 +262,8 @@ class ArcLift:
 
     def active_arc(self, theta) -> np.ndarray:
         """Index of the arc the roller touches at cam angle theta (the later arc at a junction)."""
-        x = np.mod(np.asarray(theta, dtype=float), TWO_PI)
-        i = np.searchsorted(self.sorted_angles, x, side="right") - 1  # -1 wraps to the last
+        x = _wrap(np.asarray(theta, dtype=float))
+        i = self.sorted_angles.searchsorted(x, side="right") - 1  # -1 wraps to the last
         return self.order[i]
 
     def arc_candidate(self, k: int, theta: np.ndarray, rows: int = 4) -> np.ndarray:
@@ -273,12 +273,11 @@ class ArcLift:
     def derivatives(self, theta) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
         flat = theta.reshape(-1)
-        # Each angle gets its active arc's parameters, then one jet evaluation serves all arcs:
-        # the same arithmetic as roller_height_on_arc, without a pass per arc (the elastic solver
-        # evaluates this drive every revolution, so the per-arc loop was its largest cost).
-        x, y, rho, sign = self._arc_parameters[:, self.active_arc(flat)]
-        out = _roller_height(x, y, rho, sign, flat, self.offset, 4)
-        out[0] -= self.y0
+        # Each angle gets its active arc's parameters, then one evaluation serves all arcs: the
+        # same arithmetic as roller_height_on_arc (written out in _roller_height4), without a pass
+        # per arc (the elastic solver evaluates this drive every revolution).
+        x, y, rho, sign = self._arc_parameters.take(self.active_arc(flat), axis=1)  # (faster than [:, i])
+        out = _roller_height4(x, y, rho, sign, flat, self.offset, self.y0)
         return out.reshape((4,) + theta.shape)
 
     @cached_property
@@ -318,6 +317,76 @@ def _roller_height(x, y, rho, sign, theta, offset: float, rows: int) -> np.ndarr
     radicand = -jets.mul(u, u)
     radicand[0] = radicand[0] + rho * rho
     return cy + sign * jets.sqrt(radicand)
+
+
+def _roller_height4(x, y, rho, sign, theta, offset: float, y0: float) -> np.ndarray:
+    """_roller_height for four rows, minus y0, written out: the same operations in the same order
+    (bit-identical), on rows instead of jets. The elastic solver evaluates the drive at every node
+    of every revolution, and the jet version spent most of its time on (4, N) temporaries.
+
+    With A = c_x, B = c_y (the centre turned by theta) the rows of the centre are c_x: A, -B, -A, B
+    and c_y: B, A, -B, -A; u = e - c_x: e - A, B, A, -B; the radicand f = rho^2 - u^2 (Leibniz)
+    and g = sqrt(f) follow jets.mul and jets.sqrt term by term."""
+    c, s = np.cos(theta), np.sin(theta)
+    A = x * c
+    A -= y * s
+    B = x * s
+    B += y * c
+    u0 = offset - A
+    p = u0 * B
+    q = u0 * A
+    # radicand rows: -(u u)^(n), (u u)^(n) = sum_k C(n, k) u_k u_(n-k) accumulated as in jets.mul
+    f0 = rho * rho
+    f0 -= u0 * u0
+    f1 = -2.0 * p  # -(u0 B + B u0)
+    f2 = 2.0 * B
+    f2 *= B
+    f2 += q
+    f2 += q
+    np.negative(f2, out=f2)  # -((u0 A + 2 B B) + A u0)
+    f3 = 3.0 * B
+    f3 *= A
+    f3 -= p
+    t3 = 3.0 * A
+    t3 *= B
+    f3 += t3
+    f3 -= p
+    np.negative(f3, out=f3)  # -((((-B) u0 + 3 B A) + 3 A B) + (-B) u0)
+    # g = sqrt(f): g1 = f1 / 2g0, g2 = (f2 - 2 g1 g1) / 2g0, g3 = (f3 - (3 g1 g2 + 3 g2 g1)) / 2g0
+    g0 = np.sqrt(f0)
+    twice = 2.0 * g0
+    g1 = f1 / twice
+    g2 = 2.0 * g1
+    g2 *= g1
+    np.subtract(f2, g2, out=g2)
+    g2 /= twice
+    g3 = 3.0 * g1
+    g3 *= g2
+    t3 = np.multiply(3.0, g2, out=t3)
+    t3 *= g1
+    g3 += t3
+    np.subtract(f3, g3, out=g3)
+    g3 /= twice
+    out = np.empty((4,) + theta.shape)
+    o0, o1, o2, o3 = out
+    np.multiply(sign, g0, out=o0)
+    o0 += B
+    o0 -= y0
+    np.multiply(sign, g1, out=o1)
+    o1 += A
+    np.multiply(sign, g2, out=o2)
+    np.subtract(o2, B, out=o2)  # -B + sign g2
+    np.multiply(sign, g3, out=o3)
+    np.subtract(o3, A, out=o3)
+    return out
+
+
+def _wrap(theta: np.ndarray) -> np.ndarray:
+    """np.mod(theta, 2 pi) for the comparisons of active_arc (fmod and one correction: np.mod
+    also computes the quotient and costs three times as much)."""
+    x = np.fmod(theta, TWO_PI)
+    np.add(x, TWO_PI, out=x, where=x < 0.0)
+    return x
 
 
 def make_arc_lift(contour: ArcContour, roller_radius: float, offset: float, base_radius: float) -> ArcLift:
