@@ -1,6 +1,7 @@
 """Benchmark of the elastic dynamics: one revolution with contact loss at default settings.
 
     .venv/bin/python benchmarks/bench_dynamics.py [--repeat 9] [--scene PATH --set KEY=VALUE ...]
+    .venv/bin/python benchmarks/bench_dynamics.py --rpm-sweep 120 240 400 600 [--scene PATH]
 
 Baseline: scipy solve_ivp DOP853 at rtol 1e-10 (atol 1e-13 m), with event functions (plain
 sign-change detection) and the step bounded by Tn/4 (explorer.dynamics.reference). Measured against it in the same process,
@@ -57,16 +58,50 @@ def measure(scene, repeat: int) -> list[tuple[str, float, float]]:
     return [(name, med, errors[name]) for name, med in medians.items()]
 
 
+def rpm_sweep(path: Path, overrides: list[str], rpms: list[float], repeat: int) -> None:
+    """The speed ratio against the camshaft speed on one scene: the baseline's cost follows the
+    natural periods per revolution (its step is bounded by Tn/4 and must resolve them), the exact
+    solver's mostly its fixed cost and the phases between events."""
+    from explorer.bench import model_and_drive
+    from explorer.dynamics.model import solve
+    from explorer.scene import load_scene
+
+    rows = []
+    for rpm in rpms:
+        scene = load_scene(path, [*overrides, f"drive.rpm={rpm:g}"])
+        model, drive = model_and_drive(scene)
+        n = scene.solver.steps_per_revolution
+        t = np.arange(n) * (2.0 * math.pi / drive.omega / n)
+        runs = {
+            "scipy": lambda: solve(model, drive, t, method="scipy", rtol=1e-10, atol=1e-13, watch_extrema=False),
+            "exact": lambda: solve(model, drive, t, method="exact"),
+        }
+        events = solve(model, drive, t, method="exact").events
+        med = median_times(runs, repeat, warmup=1, clock=time.process_time)
+        periods = 2.0 * math.pi / drive.omega / model.natural_period()
+        separations = sum(e["kind"] == "separation" for e in events)
+        rows.append((f"{rpm:g}", f"{periods:.0f}", f"{len(events)}", f"{separations}", f"{1e3 * med['scipy']:.2f}",
+                     f"{1e3 * med['exact']:.2f}", f"{med['scipy'] / med['exact']:.1f}x"))
+    print(f"\n{path.name}: speed ratio against rpm ({repeat} alternating runs each, median CPU)")
+    print_table(["rpm", "Tn per rev", "events", "separations", "scipy ms", "exact ms", "ratio"], rows, indent="  ")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeat", type=int, default=9)
     parser.add_argument("--scene", help="one scene file instead of the default cases")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
+    parser.add_argument("--rpm-sweep", nargs="+", type=float, metavar="RPM",
+                        help="the ratio at these camshaft speeds on --scene (default: Schenker's Fig. 2)")
     args = parser.parse_args()
 
     from explorer.scene import load_scene
 
     scenes = ROOT / "assets" / "scenes"
+    if args.rpm_sweep:
+        rpm_sweep(Path(args.scene) if args.scene else scenes / "schenker1902_fig2.toml", args.overrides,
+                  args.rpm_sweep, args.repeat)
+        return
     cases = [(Path(args.scene), args.overrides)] if args.scene else [(scenes / name, sets) for name, sets in CASES]
     for path, overrides in cases:
         if not path.exists():
