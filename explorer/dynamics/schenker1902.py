@@ -212,7 +212,9 @@ def solve(
         elif phase == CONTACT and k * (S2 - lash - s2) + c * (Sd2 - v2) < 0.0:
             events.append({"kind": "separation", "time_s": float(t2), "velocity_m_s": v2})
             phase = FLIGHT
-        elif phase == FLIGHT and S2 - lash - s2 > 0.0:
+        elif phase == FLIGHT and S2 - lash - s2 > 0.0 and k * (S2 - lash - s2) + c * (Sd2 - v2) > 0.0:
+            # with damping the linkage lets go while still compressed: contact resumes only where
+            # it would push again, not where the (already positive) gap is
             events.append({"kind": "re-contact", "time_s": float(t2), "velocity_m_s": v2})
             phase = CONTACT
         if mu > 0.0 and v2 * d <= 0.0:  # velocity reversed in this step: friction flips or holds
