@@ -230,7 +230,7 @@ def make_buffer(spec, which: str):
         return AirDashpot(area=cylinder_area(part["diameter"]), stroke=part["stroke"], clearance=part["clearance"],
                           orifice_area=cylinder_area(part["orifice_diameter"]), discharge=part["discharge_coefficient"],
                           exponent=part["polytropic_exponent"], ambient_pressure=part["ambient_pressure"],
-                          ambient_temperature=part["ambient_temperature"])
+                          ambient_temperature=part["ambient_temperature"], inlet=part["inlet"])
     return OilDashpot(area=cylinder_area(part["diameter"]), stroke=part["stroke"],
                       orifice_area=cylinder_area(part["orifice_diameter"]), discharge=part["discharge_coefficient"],
                       density=part["oil_density"])

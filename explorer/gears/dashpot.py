@@ -6,10 +6,19 @@ models follow from first principles instead:
 
 Air: a piston of area A on the valve spindle closes a pocket when the valve is within `stroke`
 of its seat. The trapped air, volume V = A (s + clearance), is compressed polytropically
-(p / rho^n constant for the gas that stays) and leaks through an orifice of area a_o (isentropic
-nozzle flow, choked below the critical pressure ratio; reverse flow from ambient when the pocket
-is below ambient). Mass balance: V drho/dt = -rho A ds/dt - mdot_out. Force on the valve
-(upwards, resisting closure): (p - p_a) A. The cushion is elastic: it can throw the valve back.
+(p / rho^n constant for the gas that stays) and escapes through an orifice of area a_o
+(isentropic nozzle flow, choked below the critical pressure ratio). Mass balance:
+V drho/dt = -rho A ds/dt - mdot_out. Force on the valve (upwards, resisting closure): (p - p_a) A.
+The cushion is elastic: it can throw the valve back. How air gets back in is the `inlet`:
+  "check-valve"  (the usual buffer design, the default) the pocket refills through a non-return
+                 valve, so it never pulls on the valve: the pressure never falls below ambient.
+                 While the pocket expands at ambient pressure the inflow is free and the density
+                 stays the ambient density; force max(p - p_a, 0) A. The orifice only throttles
+                 the escaping air.
+  "orifice"      the orifice is the only passage, both ways: below ambient air flows back in
+                 through it (the same nozzle law from ambient), so an expanding pocket sucks:
+                 lifting the valve off its seat pulls it down, and a rebound inside the pocket
+                 is braked by suction.
 
 Oil: incompressible oil displaced by the piston leaves through an orifice: flow Q = A |v|,
 pressure drop (rho_oil / 2) (Q / (C_d a_o))^2, force c v^2 with c = rho_oil A^3 / (2 C_d^2 a_o^2),
@@ -29,6 +38,7 @@ import numpy as np
 STANDARD_PRESSURE = 101_325.0  # Pa
 STANDARD_TEMPERATURE = 293.15  # K
 AIR_GAS_CONSTANT = 287.05  # J/(kg K)
+INLETS = ("check-valve", "orifice")
 
 
 @dataclass(frozen=True)
@@ -43,9 +53,18 @@ class AirDashpot:
     ambient_temperature: float = STANDARD_TEMPERATURE
     gamma: float = 1.4  # ratio of specific heats, for the orifice flow
     gas_constant: float = AIR_GAS_CONSTANT
+    inlet: str = "check-valve"  # how air gets back in (module docstring): "check-valve" | "orifice"
 
     kind = "air"
     has_state = True
+
+    def __post_init__(self) -> None:
+        if self.inlet not in INLETS:
+            raise ValueError(f"AirDashpot.inlet must be one of {INLETS}, not {self.inlet!r}")
+
+    @property
+    def check_valve(self) -> bool:
+        return self.inlet == "check-valve"
 
     @property
     def ambient_density(self) -> float:
@@ -57,16 +76,30 @@ class AirDashpot:
     def volume(self, s):
         return self.area * (s + self.clearance)
 
-    def force(self, s, v, rho):
-        """Upward force on the valve, N."""
+    def gauge_force(self, rho):
+        """(p - p_a) A, N: the closed pocket's force, continued smoothly below ambient (the
+        integrator's right-hand side inside a closed stretch, which ends where a check valve opens)."""
         return (self.pressure(rho) - self.ambient_pressure) * self.area
+
+    def force(self, s, v, rho):
+        """Upward force on the valve, N: (p - p_a) A; never a pull with a check valve."""
+        f = self.gauge_force(rho)
+        if self.check_valve:
+            f = np.maximum(f, 0.0)
+            return float(f) if np.ndim(f) == 0 else f
+        return f
 
     def force_partials(self, s, v, rho):
         """(dF/ds, dF/dv, dF/drho) at fixed other state."""
-        return 0.0, 0.0, self.area * self.exponent * self.pressure(rho) / rho
+        d_rho = self.area * self.exponent * self.pressure(rho) / rho
+        if self.check_valve:
+            d_rho = np.where(self.pressure(rho) >= self.ambient_pressure, d_rho, 0.0)
+            d_rho = float(d_rho) if np.ndim(d_rho) == 0 else d_rho
+        return 0.0, 0.0, d_rho
 
     def mass_outflow(self, rho):
-        """Mass flow out of the pocket through the orifice (negative: inflow), kg/s."""
+        """Mass flow out of the pocket through the orifice (negative: inflow), kg/s. With a check
+        valve the orifice only lets air out: the refill below ambient is density_rate's."""
         if np.ndim(rho) == 0:  # the ODE's right-hand side: plain floats, no array overhead
             return self._mass_outflow_scalar(float(rho))
         rho = np.asarray(rho, dtype=float)
@@ -75,7 +108,8 @@ class AirDashpot:
         temperature = p / (rho * self.gas_constant)
         area = self.orifice_area * self.discharge
         out = nozzle_flow(p, temperature, pa, area, self.gamma, self.gas_constant)
-        back = nozzle_flow(pa, self.ambient_temperature, p, area, self.gamma, self.gas_constant)
+        back = 0.0 if self.check_valve else nozzle_flow(pa, self.ambient_temperature, p, area, self.gamma,
+                                                        self.gas_constant)
         flow = np.where(p >= pa, out, -back)
         return float(flow) if flow.ndim == 0 else flow
 
@@ -85,10 +119,25 @@ class AirDashpot:
         area = self.orifice_area * self.discharge
         if p >= pa:
             return _nozzle_scalar(p, p / (rho * self.gas_constant), pa, area, self.gamma, self.gas_constant)
+        if self.check_valve:
+            return 0.0
         return -_nozzle_scalar(pa, self.ambient_temperature, p, area, self.gamma, self.gas_constant)
 
-    def density_rate(self, s, v, rho):
+    def pocket_density_rate(self, s, v, rho):
+        """drho/dt of the closed pocket, the check valve shut: (-rho A v - mdot_out) / V. For a check
+        valve this continues smoothly below ambient (no orifice flow there), so that the opening of
+        the check valve is a clean sign change of rho - rho_a for the integrator's event."""
         return (-rho * self.area * v - self.mass_outflow(rho)) / self.volume(s)
+
+    def density_rate(self, s, v, rho):
+        """drho/dt of the pocket, kg/(m^3 s). With a check valve the pocket at (or below) ambient
+        that expands refills freely: the density is held at the ambient density (rate 0)."""
+        rate = self.pocket_density_rate(s, v, rho)
+        if self.check_valve:
+            held = (np.asarray(rho) <= self.ambient_density) & (np.asarray(rate) < 0.0)
+            rate = np.where(held, 0.0, rate)
+            return float(rate) if np.ndim(rate) == 0 else rate
+        return rate
 
     def sealed_work(self, travel: float) -> float:
         """Work done on a sealed pocket (no leak) compressed from the entry over `travel`, J:

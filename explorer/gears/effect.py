@@ -210,7 +210,7 @@ def _rolling(ctx, lift):
 def _trip(ctx, lift):
     from ..kinematics import lash_crossings
     from .build import closing_model, make_buffer
-    from .trip import compare_buffers, peak_buffer_force
+    from .trip import compare_buffers, latched_buffer, peak_buffer_force
 
     scene, spec = ctx.scene, ctx.scene.gear
     trip = spec.part("trip")
@@ -219,11 +219,13 @@ def _trip(ctx, lift):
     sol = lift.closing
     # while the latch carries the valve it transmits the rigid-train force (the forces effect's, one function)
     from ..forces import TrainLoads
-    from .trip_effects import latch_force
+    from .trip_effects import carried_pieces, latch_force, latch_force_extremes
 
-    latch = latch_force(lift, ctx.theta, TrainLoads.from_scene(scene), omega)
-    carried = latch["carried"]
+    loads = TrainLoads.from_scene(scene)
+    latch = latch_force(lift, ctx.theta, loads, omega)
     columns["latch_force_N"] = latch["force"]
+    n_grid = max(4096, scene.solver.steps_per_revolution)
+    extremes = latch_force_extremes(lift, loads, omega, carried_pieces(lift, n_grid), n_grid)
     s_trip = float(lift.latch.derivatives(np.array([lift.trip_angle]))[0, 0] - lift.overtravel)
     v_trip = float(omega * lift.latch.derivatives(np.array([lift.trip_angle]))[1, 0])
     ups, _ = lash_crossings(lift.latch, 1.0, lift.overtravel)
@@ -236,12 +238,20 @@ def _trip(ctx, lift):
             continue
         th = lift.theta_of(lift.phi_trip + omega * e["t"])
         events.append({"kind": e["kind"], "time_s": th / omega, "cam_angle_deg": math.degrees(th), "lift_m": float(e["s"])})
+    if lift.latched is not None:  # the buffer opening, closing or venting while the latch carries the valve
+        for e in lift.latched.events:
+            th = lift.theta_of(e["phi"])
+            events.append({"kind": e["kind"], "time_s": th / omega, "cam_angle_deg": math.degrees(th), "latched": True})
     buffers = {"none": None}
+    densities = {}
     for name in ("air", "oil"):
         if f"{name}_dashpot" in spec.parts:
             buffers[name] = make_buffer(spec, name)
+            if name == "air":  # the pocket as the latched phase leaves it at the trip
+                densities[name] = latched_buffer(buffers[name], lift.latch, lift.overtravel, lift.start, omega,
+                                                 lift.phi_pick, lift.phi_trip).density_at_trip
     t_max = (TWO_PI - lift.phi_trip) / omega
-    table = compare_buffers(closing_model(spec, scene), buffers, s_trip, v_trip, t_max)
+    table = compare_buffers(closing_model(spec, scene), buffers, s_trip, v_trip, t_max, densities)
     summary = {
         "trip_angle_deg": math.degrees(lift.trip_angle),
         "lift_at_trip_m": s_trip,
@@ -252,8 +262,9 @@ def _trip(ctx, lift):
         "seat_cam_angle_deg": math.degrees(lift.theta_of(lift.phi_seat)),
         "buffer": trip["buffer"],
         "max_buffer_force_N": peak_buffer_force(sol),
-        "max_latch_force_N": float(columns["latch_force_N"].max()),
-        "min_latch_force_N": float(columns["latch_force_N"][carried].min()) if carried.any() else None,
+        # refined on the analytic law (the forces effect's, one function)
+        "max_latch_force_N": extremes["max"],
+        "min_latch_force_N": extremes["min"],
         "rebounds": sum(1 for e in sol.events if e["kind"] == "rebound"),
         # the latch meets the resting valve with its own velocity after the over-travel (Schenker)
         "latch_overtravel_m": lift.overtravel,

@@ -24,12 +24,15 @@ rolling-lever    eccentric rolling lever ("Waelzhebel"); [lift] law = "gear".
 trip             latch lifts the valve, releases it at the trip angle; [lift] is the latch's
                  valve-referred lift law, valve.lash its over-travel before it catches the valve.
                  [gear.trip] angle, buffer ("none" | "air" | "oil"), valve_weight, closing_time,
-                     latch_friction (mu of the latch face on the catch, default 0.15), latch_width and
+                     latch_friction (mu of the latch face on the catch, 0...1, default 0.15), latch_width and
                      latch_depth (the latch face's bearing area; depth = its engagement, the
                      distance the trip pulls it out); forces, contact and elastic analyse the
                      latched phase (explorer.gears.trip_effects)
                  [gear.air_dashpot] diameter, stroke, clearance, orifice_diameter,
-                     discharge_coefficient, polytropic_exponent, ambient_pressure, ambient_temperature
+                     discharge_coefficient, polytropic_exponent, ambient_pressure, ambient_temperature,
+                     inlet ("check-valve", default: the pocket refills through a non-return valve
+                     and never pulls on the valve | "orifice": air returns through the orifice, an
+                     expanding pocket sucks; explorer.gears.dashpot)
                  [gear.oil_dashpot] diameter, stroke, orifice_diameter, discharge_coefficient,
                      oil_density (kg/m^3, plain number)
 
@@ -190,15 +193,17 @@ def _trip(t: Table) -> dict:
         "buffer": t.string("buffer", "none", choices=BUFFERS),
         "valve_weight": t.quantity("valve_weight", "force", positive=True) if t.has("valve_weight") else None,
         "closing_time": t.quantity("closing_time", "time", positive=True) if t.has("closing_time") else None,
-        "latch_friction": t.number("latch_friction", LATCH_FRICTION, minimum=0.0),
+        "latch_friction": t.number("latch_friction", LATCH_FRICTION, minimum=0.0, maximum=1.0),
         "latch_width": t.quantity("latch_width", "length", positive=True) if t.has("latch_width") else None,
         "latch_depth": t.quantity("latch_depth", "length", positive=True) if t.has("latch_depth") else None,
     }
 
 
 def _air(t: Table) -> dict:
+    from .dashpot import INLETS
+
     t.reject_unknown(("diameter", "stroke", "clearance", "orifice_diameter", "discharge_coefficient",
-                      "polytropic_exponent", "ambient_pressure", "ambient_temperature"))
+                      "polytropic_exponent", "ambient_pressure", "ambient_temperature", "inlet"))
     return {
         "diameter": t.quantity("diameter", "length", positive=True),
         "stroke": t.quantity("stroke", "length", positive=True),
@@ -208,6 +213,7 @@ def _air(t: Table) -> dict:
         "polytropic_exponent": t.number("polytropic_exponent", 1.4, minimum=1.0, maximum=1.67),
         "ambient_pressure": t.quantity("ambient_pressure", "pressure", 101_325.0, positive=True),
         "ambient_temperature": t.number("ambient_temperature", 293.15, minimum=1.0),
+        "inlet": t.string("inlet", "check-valve", choices=INLETS),
     }
 
 

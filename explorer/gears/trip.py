@@ -11,8 +11,14 @@ friction R, the buffer force of an air or oil dashpot near the seat). It first c
 (it was moving with the latch), stops, falls and seats. Closed forms exist for the free parts
 (constant force: t = sqrt(2 h / p); spring: a cosine); with a buffer the motion is integrated
 with scipy's DOP853 in segments split at every event (apex or reversal, where friction changes
-sign; entry into the cushion; the seat), each event located to machine precision, with dense
-output for the lift curve.
+sign; entry into the cushion; the seat; a check valve opening as the expanding air pocket falls
+to ambient, after which the pocket vents at ambient density until the valve turns down again),
+each event located to machine precision, with dense output for the lift curve.
+
+The buffer already acts while the latch carries the valve (LatchedBuffer, along the rigid latch
+motion from the pick-up): an orifice-fed air pocket sucks as the latch lifts the valve off its
+seat, a pocket or oil cushion the latch lowers the valve into pushes back. The free closing
+starts with the pocket density the latched phase leaves at the trip.
 
 Trinks' rule (seed 003): for closing from rest over h in time t, p = 2 h / t^2 and the spring
 force P_f = (p/g - 1) G_v + W_s (G_v valve weight, W_s stuffing-box friction); it lives in
@@ -54,17 +60,19 @@ class ClosingModel:
     def closing_force(self, s):
         return self.preload + self.rate * s + self.closing
 
-    def buffer_force(self, s, v, rho, engaged):
-        if self.buffer is None or not engaged:
-            return 0.0
-        return self.buffer.force(s, v, rho)
-
-    def rhs(self, t, y, direction, engaged):
+    def rhs(self, t, y, direction, engaged, vented=False):
+        """Equation of motion in one segment. A closed air pocket uses the smooth continuations
+        gauge_force and pocket_density_rate (its segment ends where a check valve opens); a vented
+        one (check valve open, pocket expanding at ambient) exerts nothing and keeps its density."""
         s, v = y[0], y[1]
-        rho = y[2] if len(y) > 2 else None
-        a = (-self.closing_force(s) - self.friction * direction + self.buffer_force(s, v, rho, engaged)) / self.mass
+        fb, drho = 0.0, 0.0
+        if self.buffer is not None and engaged and not vented:
+            if self.buffer.has_state:
+                fb, drho = self.buffer.gauge_force(y[2]), self.buffer.pocket_density_rate(s, v, y[2])
+            else:
+                fb = self.buffer.force(s, v)
+        a = (-self.closing_force(s) - self.friction * direction + fb) / self.mass
         if len(y) > 2:
-            drho = self.buffer.density_rate(s, v, rho) if engaged else 0.0
             return [v, a, drho]
         return [v, a]
 
@@ -77,6 +85,7 @@ class Segment:
     engaged: bool  # buffer acting
     sol: Any  # dense output (OdeSolution) or None for a stuck segment
     y0: tuple
+    vented: bool = False  # check-valve air pocket expanding at ambient: no force, density held
 
 
 @dataclass(frozen=True)
@@ -118,7 +127,7 @@ class ClosingSolution:
             dfv = np.zeros(tt.shape)
             dfr = np.zeros(tt.shape)
             drho = np.zeros(tt.shape)
-            if m.buffer is not None and seg.engaged:
+            if m.buffer is not None and seg.engaged and not seg.vented:
                 fb = fb + m.buffer.force(s, v, rho)
                 _, dfv_k, dfr_k = m.buffer.force_partials(s, v, rho)
                 dfv, dfr = dfv + dfv_k, dfr + dfr_k
@@ -135,17 +144,21 @@ class ClosingSolution:
         return out
 
 
-def simulate_closing(model: ClosingModel, s0: float, v0: float, t_max: float, *, rtol: float = 1e-11,
-                     atol: float = 1e-14) -> ClosingSolution:
+def simulate_closing(model: ClosingModel, s0: float, v0: float, t_max: float, *, density: float | None = None,
+                     rtol: float = 1e-11, atol: float = 1e-14) -> ClosingSolution:
     """Free motion of the released valve from lift s0 (> 0) and velocity v0 until it seats, hangs
     or t_max passes. Segments are split at every event so each is smooth; events are located by
-    solve_ivp's root finder on the dense output (to ~machine precision)."""
+    solve_ivp's root finder on the dense output (to ~machine precision). density: the air
+    pocket's density at the start when the valve is released inside the cushion (the latched
+    phase's, LatchedBuffer.density_at_trip); default ambient."""
     buffer = model.buffer
     has_state = buffer is not None and buffer.has_state
     stroke = buffer.stroke if buffer is not None else -1.0
     rho_a = buffer.ambient_density if has_state else None
+    check_valve = has_state and buffer.check_valve
     engaged = buffer is not None and s0 < stroke
-    y = [s0, v0] + ([rho_a] if has_state else [])
+    rho0 = density if (engaged and density is not None and math.isfinite(density)) else rho_a
+    y = [s0, v0] + ([rho0] if has_state else [])
     t = 0.0
     direction = int(np.sign(v0))
     segments: list[Segment] = []
@@ -201,9 +214,13 @@ def simulate_closing(model: ClosingModel, s0: float, v0: float, t_max: float, *,
                 return ClosingSolution(model, tuple(segments), tuple(events), False, math.nan, 0.0, True, apex)
 
         d, eng = direction, engaged
+        # a check valve is open while the pocket expands at (or below) ambient: density held
+        vent = bool(check_valve and eng and d > 0 and y[2] <= rho_a)
+        if vent:
+            y[2] = rho_a
 
-        def rhs(tt, yy, d=d, eng=eng):
-            return model.rhs(tt, yy, d, eng)
+        def rhs(tt, yy, d=d, eng=eng, vent=vent):
+            return model.rhs(tt, yy, d, eng, vent)
 
         def stop(tt, yy):  # velocity reverses
             return yy[1]
@@ -222,10 +239,16 @@ def simulate_closing(model: ClosingModel, s0: float, v0: float, t_max: float, *,
             cushion.terminal = True
             cushion.direction = -1 if not eng else 1
             evs.append(cushion)
+        if check_valve and eng and not vent and d > 0:
+            def refill(tt, yy):  # the expanding pocket falls to ambient: the check valve opens
+                return yy[2] - rho_a
+
+            refill.terminal, refill.direction = True, -1
+            evs.append(refill)
         sol = solve_ivp(rhs, (t, t_max), y, method="DOP853", rtol=rtol, atol=atol, events=evs, dense_output=True,
                         max_step=max_step)
         t_end = float(sol.t[-1])
-        segments.append(Segment(t, t_end, d, eng, sol.sol, tuple(y)))
+        segments.append(Segment(t, t_end, d, eng, sol.sol, tuple(y), vent))
         y = list(sol.y[:, -1])
         t = t_end
         if sol.status != 1:
@@ -242,6 +265,9 @@ def simulate_closing(model: ClosingModel, s0: float, v0: float, t_max: float, *,
             # moving up it is an apex; moving down, only the cushion can stop it short of the seat
             events.append({"kind": "apex" if d > 0 else "rebound", "t": t, "s": y[0]})
             direction = 0
+        elif kind == 3:
+            y[2] = rho_a
+            events.append({"kind": "dashpot-refill", "t": t, "s": y[0], "v": y[1]})
         elif kind == 2:
             if not eng:
                 events.append({"kind": "dashpot-entry", "t": t, "s": y[0], "v": y[1]})
@@ -265,14 +291,17 @@ def peak_buffer_force(sol: ClosingSolution, samples: int = 2001) -> float:
     return peak
 
 
-def compare_buffers(model: ClosingModel, buffers: dict, s0: float, v0: float, t_max: float) -> list[dict]:
+def compare_buffers(model: ClosingModel, buffers: dict, s0: float, v0: float, t_max: float,
+                    densities: dict | None = None) -> list[dict]:
     """Close the same valve with each buffer (None = no buffer): seating velocity, closing time,
-    largest buffer force and the number of rebounds, one row per buffer."""
+    largest buffer force and the number of rebounds, one row per buffer. densities: an air
+    buffer's pocket density at the release (by name; default ambient)."""
     from dataclasses import replace
 
     rows = []
     for name, buffer in buffers.items():
-        sol = simulate_closing(replace(model, buffer=buffer), s0, v0, t_max)
+        rho0 = (densities or {}).get(name)
+        sol = simulate_closing(replace(model, buffer=buffer), s0, v0, t_max, density=rho0)
         peak = peak_buffer_force(sol) if buffer is not None else 0.0
         rows.append({
             "buffer": name,
@@ -283,6 +312,163 @@ def compare_buffers(model: ClosingModel, buffers: dict, s0: float, v0: float, t_
             "rebounds": sum(1 for e in sol.events if e["kind"] == "rebound"),
         })
     return rows
+
+
+# --------------------------------------------------------------------------------------------
+# The buffer while the latch carries the valve
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class BufferPiece:
+    phi0: float  # rad since the latch's start
+    phi1: float
+    mode: str  # "open" (valve above the stroke), "closed" (pocket shut / oil displaced), "vented"
+    sol: Any  # air, closed: dense output in phi of [rho, work against the pocket]; else None
+    density: float  # air: density at phi0 (the whole piece when vented); nan otherwise
+
+
+@dataclass(frozen=True)
+class LatchedBuffer:
+    """The buffer along the rigid latch motion from the pick-up to the trip, s = X(theta) - s_o.
+
+    The valve sat on its seat before the pick-up long enough for the pocket to settle to ambient
+    (the orifice empties a seated pocket in milliseconds). From the pick-up the latch moves the
+    valve, so the pocket density obeys drho/dt = density_rate(s, v, rho) with the latch's s(t),
+    v(t): integrated with DOP853 (in the cam angle) on pieces split where the pocket opens or
+    closes (s = stroke), where the latch turns and at the latch law's breakpoints, and where a
+    check valve opens (event rho = rho_a). With a check valve the lift vents (no force); with
+    "orifice" the lift sucks: B = (p - p_a) A < 0 pulls the valve down until the pocket opens at
+    s = stroke (where the force drops to 0). An oil buffer acts only if the latch lowers the
+    valve into its stroke: B = c v^2. B is the upward force on the valve; the latch carries -B."""
+
+    buffer: Any
+    latch: Any
+    overtravel: float
+    start: float
+    omega: float
+    phi_pick: float
+    phi_trip: float
+    pieces: tuple[BufferPiece, ...]
+    events: tuple[dict, ...]  # kind ("dashpot-exit", "dashpot-entry", "dashpot-refill"), phi
+    density_at_trip: float  # air pocket closed at the trip: its density; nan otherwise
+    work: float  # J, the latch's work against the buffer over the window, integral of -B ds
+
+    def cuts(self) -> np.ndarray:
+        """Cam angles (rad, mod 2 pi) where the buffer force may jump or kink."""
+        return np.mod(np.array([p.phi0 for p in self.pieces[1:]]) + self.start, TWO_PI)
+
+    def state(self, theta) -> dict:
+        """B (upward force on the valve, N), density (nan where no air pocket is closed) and the
+        air pocket's gauge pressure at cam angles theta; 0 / nan outside the carried window. An instant
+        on a piece boundary belongs to the piece that starts there."""
+        theta = np.asarray(theta, dtype=float)
+        phi = np.mod(theta - self.start, TWO_PI)
+        force = np.zeros(theta.shape)
+        density = np.full(theta.shape, np.nan)
+        pressure = np.zeros(theta.shape)
+        starts = np.array([p.phi0 for p in self.pieces])
+        on = (phi >= self.phi_pick) & (phi < self.phi_trip)
+        index = np.clip(np.searchsorted(starts, phi, side="right") - 1, 0, len(self.pieces) - 1)
+        buffer, so, w = self.buffer, self.overtravel, self.omega
+        for i, piece in enumerate(self.pieces):
+            mask = on & (index == i)
+            if not np.any(mask) or piece.mode == "open":
+                continue
+            if piece.mode == "vented":
+                density[mask] = piece.density
+                continue
+            d = self.latch.derivatives(theta[mask])
+            s, v = d[0] - so, w * d[1]
+            if buffer.has_state:
+                rho = piece.sol(np.clip(phi[mask], piece.phi0, piece.phi1))[0]
+                density[mask] = rho
+                force[mask] = buffer.force(s, v, rho)
+                pressure[mask] = force[mask] / buffer.area
+            else:  # oil: the force only (the cycle's pressure column is the air pocket's)
+                force[mask] = buffer.force(s, v)
+        return {"force": force, "density": density, "gauge_pressure": pressure}
+
+
+def latched_buffer(buffer, latch, overtravel: float, start: float, omega: float, phi_pick: float,
+                   phi_trip: float, n_grid: int = 4096, rtol: float = 1e-11) -> LatchedBuffer:
+    """The buffer's state and force along the rigid latch motion over the carried window."""
+    from ..forces import velocity_zeros
+    from ..kinematics import lash_crossings
+
+    so, w = overtravel, omega
+    ups, downs = lash_crossings(latch, 1.0, so + buffer.stroke, n_grid)
+    inner = np.concatenate([ups, downs, np.asarray(latch.breakpoints(), dtype=float), velocity_zeros(latch, n_grid)])
+    inner = np.mod(inner - start, TWO_PI)
+    inner = np.unique(inner[(inner > phi_pick + 1e-12) & (inner < phi_trip - 1e-12)])
+    cuts = list(np.concatenate([[phi_pick], inner, [phi_trip]]))
+    air = buffer.has_state
+    rho_a = buffer.ambient_density if air else math.nan
+    rho = rho_a  # settled while the valve sat
+    was_open = False
+    pieces: list[BufferPiece] = []
+    events: list[dict] = []
+    work = 0.0
+
+    def lift_at(phi):
+        d = latch.derivatives(np.array([start + phi]))[:, 0]
+        return float(d[0] - so), float(d[1])
+
+    k = 0
+    while k < len(cuts) - 1:
+        a, b = float(cuts[k]), float(cuts[k + 1])
+        s_mid, x1_mid = lift_at(0.5 * (a + b))
+        if s_mid >= buffer.stroke:
+            if not was_open and pieces:
+                events.append({"kind": "dashpot-exit", "phi": a})
+            pieces.append(BufferPiece(a, b, "open", None, math.nan))
+            was_open, k = True, k + 1
+            continue
+        if was_open:
+            events.append({"kind": "dashpot-entry", "phi": a})
+            rho = rho_a  # the pocket closes with ambient air
+        was_open = False
+        if not air:  # oil: algebraic force, c v^2 while the latch lowers the valve; work by Gauss-Legendre
+            x, wts = np.polynomial.legendre.leggauss(32)
+            ph = 0.5 * (b - a) * x + 0.5 * (a + b)
+            d = latch.derivatives(start + ph)
+            work -= 0.5 * (b - a) * float(np.sum(wts * buffer.force(d[0] - so, w * d[1]) * d[1]))
+            pieces.append(BufferPiece(a, b, "closed", None, math.nan))
+            k += 1
+            continue
+        if buffer.check_valve and x1_mid >= 0.0 and rho <= rho_a:
+            pieces.append(BufferPiece(a, b, "vented", None, rho_a))
+            rho, k = rho_a, k + 1
+            continue
+
+        def rhs(phi, y):
+            d = latch.derivatives(np.array([start + phi]))[:, 0]
+            s, x1 = d[0] - so, d[1]
+            return [buffer.pocket_density_rate(s, w * x1, y[0]) / w, -buffer.gauge_force(y[0]) * x1]
+
+        evs = []
+        if buffer.check_valve and x1_mid > 0.0:
+            def refill(phi, y):
+                return y[0] - rho_a
+
+            refill.terminal, refill.direction = True, -1
+            evs.append(refill)
+        sol = solve_ivp(rhs, (a, b), [rho, 0.0], method="DOP853", rtol=rtol, atol=[1e-14, 1e-16],
+                        events=evs or None, dense_output=True)
+        end = float(sol.t[-1])
+        pieces.append(BufferPiece(a, end, "closed", sol.sol, rho))
+        rho, work = float(sol.y[0, -1]), work + float(sol.y[1, -1])
+        if sol.status == 1:  # the check valve opened: the rest of the piece vents
+            events.append({"kind": "dashpot-refill", "phi": end})
+            rho = rho_a
+            cuts[k] = end
+            continue
+        k += 1
+    s_trip = lift_at(phi_trip)[0]
+    rho_trip = rho if (air and s_trip < buffer.stroke) else math.nan
+    return LatchedBuffer(buffer=buffer, latch=latch, overtravel=so, start=start, omega=w, phi_pick=phi_pick,
+                         phi_trip=phi_trip, pieces=tuple(pieces), events=tuple(events), density_at_trip=rho_trip,
+                         work=work)
 
 
 # --------------------------------------------------------------------------------------------
@@ -308,6 +494,7 @@ class TripLift:
     join_lift: float
     seat_slope: float  # dL/dphi at the seat
     marks: tuple[float, ...] = field(default=())
+    latched: LatchedBuffer | None = None  # the buffer while the latch carries the valve (None: no buffer)
 
     def _phi(self, theta):
         return np.mod(np.asarray(theta, dtype=float) - self.start, TWO_PI)
@@ -355,12 +542,16 @@ class TripLift:
         return float(np.mod(phi + self.start, TWO_PI))
 
     def columns(self, theta) -> dict:
-        """Latch lift, buffer force and cushion pressure along the cycle (zero outside the closing)."""
+        """Latch lift, buffer force (upward on the valve) and cushion gauge pressure along the
+        cycle: while the latch carries the valve (LatchedBuffer) and while it closes; 0 elsewhere."""
         theta = np.asarray(theta, dtype=float)
         phi = self._phi(theta)
         latch = self.latch.derivatives(theta)[0]
         force = np.zeros(theta.shape)
         pressure = np.zeros(theta.shape)
+        if self.latched is not None:
+            st = self.latched.state(theta)
+            force, pressure = st["force"], st["gauge_pressure"]
         free = (phi >= self.phi_trip) & (phi < self.phi_seat)
         buffer = self.closing.model.buffer
         if np.any(free):
@@ -392,7 +583,10 @@ def build_trip_lift(latch, overtravel: float, trip_angle: float, omega: float, m
     x = latch.derivatives(np.array([trip_angle]))[:, 0]
     s0, v0 = float(x[0] - overtravel), float(omega * x[1])
     t_max = (TWO_PI - phi_trip) / omega
-    sol = simulate_closing(model, s0, v0, t_max)
+    latched = None
+    if model.buffer is not None:
+        latched = latched_buffer(model.buffer, latch, overtravel, start, omega, phi_pick, phi_trip)
+    sol = simulate_closing(model, s0, v0, t_max, density=latched.density_at_trip if latched is not None else None)
     if sol.hang:
         raise InputError(file, "spring.preload", "the tripped valve hangs open: spring and closing loads do not overcome the friction")
     if not sol.seated:
@@ -419,5 +613,6 @@ def build_trip_lift(latch, overtravel: float, trip_angle: float, omega: float, m
         latch=latch, overtravel=overtravel, trip_angle=trip_angle, omega=omega, closing=sol, start=start,
         phi_pick=phi_pick, phi_trip=phi_trip, phi_seat=phi_seat, phi_flat=phi_flat, phi_join=phi_join, join_lift=join_lift,
         seat_slope=sol.seat_velocity / omega, marks=tuple(float(np.mod(m + start, TWO_PI)) for m in marks),
+        latched=latched,
     )
     return lift
