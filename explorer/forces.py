@@ -363,33 +363,42 @@ def side_extremes(lift, loads: TrainLoads, omega: float, ratio: float, lash: flo
     return out
 
 
-def contact_loss_crossings(lift, loads: TrainLoads, omega: float, ratio: float, lash: float, pieces: Pieces,
-                           n_grid: int = 4096) -> list[float]:
-    """Cam angles where the rigid contact force falls to zero or below inside the open stretches:
-    sign changes polished by Brent's method, plus piece starts (breakpoints, lash take-up) where the
-    force is already <= 0 although it was positive (or the valve seated) just before."""
+def falling_zeros(pieces: Pieces, force_of, n_grid: int = 4096) -> tuple[list[float], np.ndarray, np.ndarray]:
+    """Where force_of(theta, direction) (vectorised) falls from > 0 to <= 0 inside the open
+    pieces: sign changes on a grid polished by Brent's method. Also each piece's first and last
+    grid value (NaN for pieces that are not open), for the callers' rules at piece starts."""
     from scipy.optimize import brentq
 
     n = pieces.start.size
     first = np.full(n, np.nan)
     last = np.full(n, np.nan)
-    out = []
+    roots = []
     for i in np.nonzero(pieces.is_open)[0]:
         a, b = pieces.start[i], pieces.end[i]
         eps = _INSIDE * max(1.0, b - a)
         th = np.linspace(a + eps, b - eps, max(9, int(math.ceil(n_grid * (b - a) / TWO_PI))))
         direction = float(pieces.direction[i])
-
-        def f_vec(t, direction=direction):
-            t = np.atleast_1d(t)
-            a_coef, g_part, _ = load_parts(lift.derivatives(np.mod(t, TWO_PI)), direction, loads, ratio, lash)
-            return omega**2 * a_coef + g_part
-
-        f = f_vec(th)
+        f = force_of(th, direction)
         first[i], last[i] = f[0], f[-1]
         for j in np.nonzero((f[:-1] > 0.0) & (f[1:] <= 0.0))[0]:
-            root = brentq(lambda t: float(f_vec(t)[0]), th[j], th[j + 1], xtol=1e-14, maxiter=200)
-            out.append(float(np.mod(root, TWO_PI)))
+            root = brentq(lambda t: float(force_of(np.atleast_1d(t), direction)[0]), th[j], th[j + 1],
+                          xtol=1e-14, maxiter=200)
+            roots.append(float(np.mod(root, TWO_PI)))
+    return roots, first, last
+
+
+def contact_loss_crossings(lift, loads: TrainLoads, omega: float, ratio: float, lash: float, pieces: Pieces,
+                           n_grid: int = 4096) -> list[float]:
+    """Cam angles where the rigid contact force falls to zero or below inside the open stretches:
+    sign changes polished by Brent's method, plus piece starts (breakpoints, lash take-up) where the
+    force is already <= 0 although it was positive (or the valve seated) just before."""
+
+    def force_of(t, direction):
+        a_coef, g_part, _ = load_parts(lift.derivatives(np.mod(t, TWO_PI)), direction, loads, ratio, lash)
+        return omega**2 * a_coef + g_part
+
+    out, first, last = falling_zeros(pieces, force_of, n_grid)
+    n = pieces.start.size
     for i in np.nonzero(pieces.is_open)[0]:
         prev = (i - 1) % n
         before_ok = (not pieces.is_open[prev]) or last[prev] > 0.0

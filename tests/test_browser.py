@@ -7,6 +7,7 @@ README's)."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import time
@@ -95,18 +96,32 @@ def _wait_in_step(page, app, names):
     return expected
 
 
+@contextlib.contextmanager
+def _running_explorer(scene):
+    """A viser server on a free local port with the explorer on `scene`; stopped afterwards, and
+    the explorer's loop and worker must have met no error meanwhile."""
+    import viser
+
+    from explorer.viewer.app import ExplorerApp
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    app = ExplorerApp(server, str(scene), playing=False)
+    try:
+        yield server, app
+    finally:
+        app.stop()
+        server.stop()
+    assert app.loop_errors == 0 and app.worker.internal_errors == 0
+
+
 def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
     sync_api = pytest.importorskip("playwright.sync_api")
-    import viser
 
     from explorer import meshes
     from explorer.scenes import default_scene
-    from explorer.viewer.app import ExplorerApp
     from explorer.viewer.model import step_index
 
-    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
-    app = ExplorerApp(server, str(default_scene()), playing=False)
-    try:
+    with _running_explorer(default_scene()) as (server, app):
         assert app.wait_applied(WAIT_S)
         assert not app.playback.playing
         # start in mid-lift, where lever, spring and valve are visibly displaced
@@ -214,10 +229,6 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                 page.screenshot(path=str(shot), timeout=WAIT_MS)
             finally:
                 context.close()
-    finally:
-        app.stop()
-        server.stop()
-    assert app.loop_errors == 0 and app.worker.internal_errors == 0
 
     import matplotlib.image
 
@@ -261,15 +272,10 @@ def test_each_gear_is_framed_whole_in_the_page(tmp_path):
     spans most of the canvas one way (the rocking cam's valve group used to be a speck in a
     loose view). Set EXPLORER_UPDATE_SCREENSHOT=1 to copy the pages to docs/gears."""
     sync_api = pytest.importorskip("playwright.sync_api")
-    import viser
-
-    from explorer.viewer.app import ExplorerApp
 
     first = ROOT / "assets" / "scenes" / GEAR_PICTURES[0][0]
-    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
-    app = ExplorerApp(server, str(first), playing=False)
     pictures = []
-    try:
+    with _running_explorer(first) as (server, app):
         assert app.wait_applied(WAIT_S)
         with sync_api.sync_playwright() as pw:
             context = pw.chromium.launch_persistent_context(
@@ -304,10 +310,6 @@ def test_each_gear_is_framed_whole_in_the_page(tmp_path):
                     pictures.append((shot, tmp_path / f"canvas_{picture}"))
             finally:
                 context.close()
-    finally:
-        app.stop()
-        server.stop()
-    assert app.loop_errors == 0 and app.worker.internal_errors == 0
 
     import matplotlib.image
 

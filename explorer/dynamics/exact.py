@@ -681,23 +681,9 @@ def _start_coeffs(comps, comb, P, dP, a, da, s0, v0):
     rounding of the event location. Returns (coefficient lists, the combined function starts
     on its zero)."""
     Es, any_zero = [], False
-    for aP, bP, const, l0, l1 in comps:
-        if a is not None and (l0 or l1):
-            if not l1:
-                e = [l0 * x for x in a]
-            elif not l0:
-                e = [l1 * y for y in da]
-            else:
-                e = [l0 * x + l1 * y for x, y in zip(a, da)]
-        else:
-            e = [0.0] * (len(a) if a is not None else 6)
-        if bP:
-            for n in range(6):
-                e[n] += aP * P[n] + bP * dP[n]
-        elif aP:
-            for n in range(6):
-                e[n] += aP * P[n]
-        e[0] += const
+    for comp in comps:
+        aP, bP, const, l0, l1 = comp
+        e = _coeff_list(comp, P, dP, a, da)
         scale = abs(aP * P[0]) + abs(const) if aP else abs(const)  # the size of its terms
         if bP:
             scale += abs(bP * dP[0])

@@ -217,28 +217,19 @@ def loss_crossings(lift, loads, omega: float, pieces, n_grid: int = 4096) -> lis
     """Cam angles where the latch force (buffer included) falls to zero or below in the carried
     window: sign changes polished by Brent's method, and a piece start where it is already <= 0
     although it was positive just before (or the valve was seated: the pick-up)."""
-    from scipy.optimize import brentq
+    from ..forces import falling_zeros
 
     drive = _LatchAndBuffer(lift)
-    out = []
-    last = None
+
+    def force_of(t, direction):
+        return _force(lift, drive.derivatives(np.mod(t, TWO_PI)), direction, loads, omega)[0]
+
+    out, first, last = falling_zeros(pieces, force_of, n_grid)
+    before = None
     for i in np.nonzero(pieces.is_open)[0]:
-        a, b = pieces.start[i], pieces.end[i]
-        eps = _INSIDE * max(1.0, b - a)
-        th = np.linspace(a + eps, b - eps, max(9, int(math.ceil(n_grid * (b - a) / TWO_PI))))
-        direction = float(pieces.direction[i])
-
-        def f_vec(t, direction=direction):
-            t = np.atleast_1d(t)
-            return _force(lift, drive.derivatives(np.mod(t, TWO_PI)), direction, loads, omega)[0]
-
-        f = f_vec(th)
-        if f[0] <= 0.0 and (last is None or last > 0.0):
-            out.append(float(np.mod(a, TWO_PI)))
-        for j in np.nonzero((f[:-1] > 0.0) & (f[1:] <= 0.0))[0]:
-            root = brentq(lambda t: float(f_vec(t)[0]), th[j], th[j + 1], xtol=1e-14, maxiter=200)
-            out.append(float(np.mod(root, TWO_PI)))
-        last = f[-1]
+        if first[i] <= 0.0 and (before is None or before > 0.0):
+            out.append(float(np.mod(pieces.start[i], TWO_PI)))
+        before = last[i]
     return sorted(out)
 
 
