@@ -255,10 +255,12 @@ def minimise_on_pieces(
 ZOOM_POINTS = 33  # samples per zoom: the bracket shrinks 16-fold per lift evaluation
 
 
-def _zoom_minimum(lift, fun, direction: float, lo: float, hi: float, xatol: float = 1e-13) -> tuple[float, float]:
+def _zoom_minimum(lift, fun, direction: float, lo: float, hi: float, xatol: float = 1e-10) -> tuple[float, float]:
     """(value, theta) of the minimum of fun in [lo, hi] (the grid neighbours of a grid minimum):
     sampled at ZOOM_POINTS angles at once, the bracket narrowed to the best sample's neighbours,
-    until it is shorter than xatol (about 9 rounds from a 4096-point grid). One vectorised lift
+    until it is shorter than xatol (7 rounds from a 4096-point grid; the value is then within
+    f'' xatol^2 / 2 of a smooth minimum, |f'| xatol of one at a kink: far below anything measured
+    for 1e-10 rad). One vectorised lift
     evaluation a round instead of Brent's one per point: a gear's lift (jets through a linkage,
     a Newton solve for the cam contact) costs nearly the same for 33 angles as for one."""
     best_value, best_theta = math.inf, lo
