@@ -405,6 +405,16 @@ def _trip_part_setting(scene, key):
         return None
 
 
+def _dashpot_bore(scene, default: float) -> float:
+    """Bore radius of the scene's active dashpot ([gear.air_dashpot] or [gear.oil_dashpot]
+    diameter), or `default` for a gear without a buffer."""
+    try:
+        buffer = scene.gear.part("trip")["buffer"]
+        return 0.5 * float(scene.gear.part(f"{buffer}_dashpot")["diameter"]) if buffer != "none" else default
+    except (AttributeError, KeyError, TypeError):
+        return default
+
+
 def _trip_geometry(scene, lift, lay) -> dict:
     """Where the trip gear's parts sit (world x-z, metres), shared by its parts and poses.
 
@@ -432,7 +442,7 @@ def _trip_geometry(scene, lift, lay) -> dict:
     catch_z = max(lay.stem_top_rest + 2.0 * half,
                   lay.stem_top_rest - lay.retainer_drop + gap + stroke - plate - lift.overtravel)
     latch_rest = catch_z + plate + lift.overtravel  # latch face with X = 0
-    bore = 1.1 * rv
+    bore = _dashpot_bore(scene, 1.1 * rv)  # the scene's dashpot
     outer = 1.25 * bore
     # piston at rest: the bore (top - 1.2 stroke .. top + 1.8 stroke) starts `gap` above the latch
     top = latch_rest + plate + gap + 1.2 * stroke
