@@ -183,16 +183,23 @@ def test_trip_latch_carries_the_catch_then_slides_clear_of_every_part(built):
     assert carried > 10
 
 
-@pytest.mark.parametrize("buffer, radius", [("air", 0.0375), ("oil", 0.015)])
-def test_trip_dashpot_is_drawn_with_the_scenes_bore(buffer, radius):
-    """The drawn dashpot's bore is the active buffer's [gear.*_dashpot] diameter (75 mm air, 30 mm
-    oil in the scene), its piston just inside it."""
+def _trip_with_buffer(buffer):
+    """(scene, result, lift, lay, parts, poses) of the trip gear scene with the given buffer."""
     scene = load_scene(SCENES / "trip_gear_dashpot.toml",
                        ["solver.steps_per_revolution=360", 'effects=["kinematics", "lash"]', f'gear.trip.buffer="{buffer}"'])
     result = simulate(scene)
     lift = build_lift(scene)
     lay = meshes.layout(scene, result)
     parts = meshes.build_parts(scene, result, lay=lay, lift=lift)
+    poses = meshes.part_poses(scene, result, magnification=0.0, lay=lay, lift=lift)
+    return scene, result, lift, lay, parts, poses
+
+
+@pytest.mark.parametrize("buffer, radius", [("air", 0.0375), ("oil", 0.015)])
+def test_trip_dashpot_is_drawn_with_the_scenes_bore(buffer, radius):
+    """The drawn dashpot's bore is the active buffer's [gear.*_dashpot] diameter (75 mm air, 30 mm
+    oil in the scene), its piston just inside it."""
+    scene, result, lift, lay, parts, poses = _trip_with_buffer(buffer)
     cylinder = np.asarray(parts["dashpot"].vertices)
     r = np.hypot(cylinder[:, 0] - lay.valve_x, cylinder[:, 1])
     assert r.min() == pytest.approx(radius, rel=1e-9)
@@ -204,13 +211,6 @@ def test_trip_dashpot_is_drawn_with_the_scenes_bore(buffer, radius):
 def test_trip_parts_clear_each_other_with_every_buffer(buffer):
     """The dashpot is drawn at the active buffer's bore, which moves the latch rod: the latch
     checks above hold with the oil dashpot (30 mm) and with no buffer as well."""
-    scene = load_scene(SCENES / "trip_gear_dashpot.toml",
-                       ["solver.steps_per_revolution=360", 'effects=["kinematics", "lash"]', f'gear.trip.buffer="{buffer}"'])
-    result = simulate(scene)
-    lift = build_lift(scene)
-    lay = meshes.layout(scene, result)
-    parts = meshes.build_parts(scene, result, lay=lay, lift=lift)
-    poses = meshes.part_poses(scene, result, magnification=0.0, lay=lay, lift=lift)
-    built = {"trip_gear_dashpot": (scene, result, lift, lay, parts, poses)}
+    built = {"trip_gear_dashpot": _trip_with_buffer(buffer)}
     test_trip_latch_rod_rides_on_its_cam(built)
     test_trip_latch_carries_the_catch_then_slides_clear_of_every_part(built)
