@@ -35,7 +35,7 @@ EFFECT_DEPENDENCIES: dict[str, tuple[str, ...]] = {
 
 SPECIAL_LAWS = ("table", "acceleration", "contour", "gear")  # "gear": the gear's geometry makes the lift
 FOLLOWER_TYPES = ("translating-roller", *GEAR_TYPES)
-SOLVER_METHODS = ("exact", "schenker1902", "scipy")
+SOLVER_METHODS = ("exact", "schenker1902", "scipy", "taylor")
 MIN_STEPS = 36
 # Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
 # w^3 L''' must not overflow) and catch unit slips such as "10 m" for "10 mm".

@@ -73,7 +73,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .modal import Propagator
-from .model import PHASE_CODES, DynamicsSolution, LinkageModel
+from .model import PHASE_CODES, DynamicsSolution, LinkageModel, phase_of_state, release_from_rest
 
 SEATED, CONTACT, FLIGHT, STUCK = (PHASE_CODES[k] for k in ("seated", "contact", "flight", "stuck"))
 EPS = float(np.finfo(float).eps)
@@ -1512,20 +1512,10 @@ class _Solver:
                 if j < self.h.size and u >= 1.0:
                     j, u = j + 1, 0.0
                 S, S1 = self._drive_at(j, u)
-                touching = S - self.lash - s >= 0.0 and self.k * (S - self.lash - s) + self.c * S1 > 0.0
-                if which == "up" and phase == SEATED and not touching and self.c * S1 > 0.0 and self.W0 + self.R > 0.0:
-                    # only the linkage can lift a seated valve, so it touches. With damping it can lift
-                    # the valve the instant its gap closes (the dashpot's c S' alone beats the preload),
-                    # and the gap recomputed there may round to a hair below zero: that is contact
-                    touching = True
-                if which == "up":
-                    sigma = 1.0
-                    if phase == SEATED:
-                        self._event("lift-off", j, u, 0.0)
-                else:
-                    sigma = -1.0
+                phase, sigma, lifts = release_from_rest(which, phase, S, S1, self.k, self.c, self.lash, s, self.W0, self.R)
+                if lifts:
+                    self._event("lift-off", j, u, 0.0)
                 v = 0.0
-                phase = CONTACT if touching else FLIGHT
                 release = True
             else:
                 res = self._run_moving(phase, j, u, s, v, sigma, release)
@@ -1545,18 +1535,7 @@ class _Solver:
     def _phase_at(self, j: int, u: float, s: float, v: float):
         """Phase and friction sign of a valve given at (s, v)."""
         S, S1 = self._drive_at(j, u)
-        x = S - self.lash - s
-        force = self.k * x + self.c * (S1 - v)
-        touching = x >= 0.0 and force > 0.0
-        kind = CONTACT if touching else FLIGHT
-        if v != 0.0:
-            return kind, math.copysign(1.0, v)
-        net = (force if touching else 0.0) - self.W0 - self.rate * s
-        if s <= 0.0 and net <= self.R:
-            return SEATED, 1.0
-        if abs(net) <= self.R:
-            return STUCK, 1.0
-        return kind, (1.0 if net > 0.0 else -1.0)
+        return phase_of_state(S, S1, self.k, self.c, self.lash, s, v, self.W0, self.rate, self.R)
 
     def _handle(self, which: str, phase: int, j: int, u: float, s: float, v: float, sigma: float):
         m_phase = self.M1 if phase == CONTACT else self.M

@@ -20,7 +20,7 @@ rolling-lever    eccentric rolling lever ("Waelzhebel"); [lift] law = "gear".
                  [gear.rolling_lever] valve_lever_pivot, contact_radius, growth, contact_swing,
                      opens, lever_stiffness, rod_stiffness (optional; with either, the elastic
                      effect's stiffness is theirs referred to the valve, k(t), in series with
-                     [linkage] stiffness, and needs solver.method "scipy" or "schenker1902")
+                     [linkage] stiffness, and needs solver.method "taylor", "scipy" or "schenker1902")
                  [gear.valve] type = "rocker" on the valve lever (angle from the direction
                      valve-lever pivot -> rolling-lever pivot)
 trip             latch lifts the valve, releases it at the trip angle; [lift] is the latch's
