@@ -225,20 +225,21 @@ def test_scene_refuses_exact_with_rolling_stiffness():
 
 
 def test_bench_measures_the_solvers_that_take_k_of_t(rolling, tmp_path):
-    """`explorer bench` on the rolling lever: no exact rows and no speed ratio (no exact solver for
-    k(t)), schenker1902 and scipy against the scipy rtol 1e-12 reference, which is cross-checked
-    against schenker1902 at the finest grid (its O(h^2) error bounds the check); the 1902 scheme
-    converges with the steps."""
+    """`explorer bench` on the rolling lever: taylor takes the exact solver's place (rows, the
+    cross-check against the scipy reference, the speed ratio), each measured against the other
+    kind of method; the 1902 scheme converges with the steps."""
     from explorer.bench import run_bench
 
     scene, _ = rolling
     rep = run_bench(scene, quick=True, repeats=1, differentiation=False)
-    assert rep.ratio is None and rep.check_method == "schenker1902"
-    assert {r.method for r in rep.runs} == {"schenker1902", "scipy"}
+    assert rep.check_method == "taylor" and rep.ratio is not None and rep.ratio.method == "taylor"
+    assert {r.method for r in rep.runs} == {"taylor", "schenker1902", "scipy"}
+    assert rep.reference_check_m < 1e-12  # taylor and scipy rtol 1e-12, independent methods
+    taylor = [r for r in rep.runs if r.method == "taylor"]
+    assert all(r.max_error_m < 1e-12 and r.events == len(rep.reference_events) for r in taylor)
     sch = sorted((r for r in rep.runs if r.method == "schenker1902"), key=lambda r: r.steps)
     assert sch[-1].max_error_m < sch[0].max_error_m / 10.0
-    assert rep.reference_check_m == pytest.approx(sch[-1].max_error_m, rel=1e-9)  # the same run, both ways
-    assert "exact skipped" in rep.table() and "not measured" in rep.table()
+    assert "exact replaced by taylor" in rep.table() and "taylor" in rep.ratio.text()
 
 
 def test_damped_varying_stiffness_scipy_and_schenker1902_agree(rolling):
