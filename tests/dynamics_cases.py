@@ -92,6 +92,24 @@ def revolution(drive, n):
 SCHENKER = LinkageModel(mass=2.9 * KGF, oscillating_mass=2.6 * KGF, stiffness=1.8e6 * KGF, preload=385.0 * KGF)
 
 
+def cycloidal_groups(r: float, spring: float, lash: float, zeta: float = 0.0, mu: float = 0.0, e: float = 0.0,
+                     m1: float = 1.0):
+    """The property tests' case, set by nondimensional groups: a cycloidal rise and return (70 deg
+    each) of h = 10 mm at 3000 rpm driving M = 0.1 kg. r: natural period over rise time; spring:
+    preload over M times the law's peak deceleration; lash over h; zeta: damping ratio (of k and
+    M); mu: friction over preload; e: restitution; m1: M1 over M. Returns (model, drive, h)."""
+    rpm, rise, h, M = 3000.0, math.radians(70), 0.01, 0.1
+    omega = rpm * math.pi / 30
+    t_rise = rise / omega
+    k = M * (2 * math.pi / (r * t_rise)) ** 2
+    W0 = spring * M * 2 * math.pi * h / t_rise**2  # times the cycloidal peak acceleration
+    model = LinkageModel(mass=M, oscillating_mass=m1 * M, stiffness=k, damping=2 * zeta * math.sqrt(k * M),
+                         lash=lash * h, preload=W0, friction=mu * W0, restitution=e)
+    lift = LawLift(height=h * (1 + lash), start=0.3, rise=rise, dwell=0.2, ret=rise, rise_law="cycloidal",
+                   return_law="cycloidal")
+    return model, Drive(lift, 1.0, omega), h
+
+
 def schenker_drive(rpm: float) -> Drive:
     """Schenker's 20.6 mm of roller lift on a harmonic cam, 80 deg up and 80 deg down."""
     lift = LawLift(height=0.0206, start=0.2, rise=1.4, dwell=0.0, ret=1.4, rise_law="harmonic", return_law="harmonic")

@@ -26,6 +26,7 @@ from explorer.dynamics.model import VARYING_STIFFNESS, Drive, StiffnessProfile, 
 from explorer.lift import build_lift
 from explorer.scene import load_scene
 
+from dynamics_cases import cycloidal_groups
 from test_dynamics_varying import A, M1, PRELOAD, RATE, W_S, _manufactured
 
 SCENES = Path(__file__).resolve().parents[1] / "assets" / "scenes"
@@ -187,21 +188,11 @@ def test_random_stiffness_profiles_agree_with_scipy(r, spring, lash, zeta, mu, a
     """k(t) = k0 (1 + amp sin(n theta + phase)) over nondimensional groups: taylor and scipy
     (independent methods) agree to 1e-8 of the lift. (Hunting by hand: 400 such draws, largest
     difference 2e-12 m; 400 constant-k draws with restitution against exact, none off.)"""
-    from explorer.dynamics.model import LinkageModel
-    from explorer.lift import LawLift
-
-    rpm, rise, h, M = 3000.0, math.radians(70), 0.01, 0.1
-    omega = rpm * math.pi / 30
-    t_rise = rise / omega
-    k0 = M * (2 * math.pi / (r * t_rise)) ** 2
-    W0 = spring * M * 2 * math.pi * h / t_rise**2
+    model, drive, h = cycloidal_groups(r, spring, lash, zeta=zeta, mu=mu)
+    k0, omega = model.stiffness, drive.omega
     profile = StiffnessProfile(lambda th: (k0 * (1 + amp * np.sin(harmonic * th + phase)),
                                            k0 * amp * harmonic * np.cos(harmonic * th + phase)), omega)
-    model = LinkageModel(mass=M, oscillating_mass=M, stiffness=profile.bounds()[1], damping=2 * zeta * math.sqrt(k0 * M),
-                         lash=lash * h, preload=W0, friction=mu * W0, stiffness_profile=profile)
-    lift = LawLift(height=h * (1 + lash), start=0.3, rise=rise, dwell=0.2, ret=rise, rise_law="cycloidal",
-                   return_law="cycloidal")
-    drive = Drive(lift, 1.0, omega)
+    model = replace(model, stiffness=profile.bounds()[1], stiffness_profile=profile)
     t = np.linspace(0.0, 2.0 * math.pi / omega, 721)[:-1]
     sol = solve(model, drive, t, method="taylor")
     ref = solve(model, drive, t, method="scipy", rtol=1e-11, atol=1e-14)

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
 from explorer.lift import LawLift
-from dynamics_cases import REF, BumpLift, ConstantLift, revolution
+from dynamics_cases import REF, BumpLift, ConstantLift, cycloidal_groups, revolution
 
 
 def automotive(k=2e6, lash=0.3e-3, rpm=3000.0, preload=250.0, rate=25e3, friction=0.0, e=0.0, damping=0.0,
@@ -317,17 +317,7 @@ def test_energy_balance_over_a_revolution():
     mu=st.floats(0.0, 0.2),  # friction over W0
 )
 def test_nondimensional_groups(r, spring, lash, e, zeta, mu):
-    rpm, rise, h, M = 3000.0, math.radians(70), 0.01, 0.1
-    omega = rpm * math.pi / 30
-    t_rise = rise / omega
-    k = M * (2 * math.pi / (r * t_rise)) ** 2
-    a_max = 2 * math.pi * h / t_rise**2  # cycloidal peak acceleration
-    W0 = spring * M * a_max
-    model = LinkageModel(mass=M, oscillating_mass=M, stiffness=k, damping=2 * zeta * math.sqrt(k * M),
-                         lash=lash * h, preload=W0, friction=mu * W0, restitution=e)
-    lift = LawLift(height=h * (1 + lash), start=0.3, rise=rise, dwell=0.2, ret=rise, rise_law="cycloidal",
-                   return_law="cycloidal")
-    drive = Drive(lift, 1.0, omega)
+    model, drive, h = cycloidal_groups(r, spring, lash, zeta=zeta, mu=mu, e=e)
     sol = solve(model, drive, revolution(drive, 720))
     check_sane(model, drive, sol)
     assert len(sol.events) < 2000
@@ -376,16 +366,7 @@ def test_heavy_and_over_damping_agree_with_the_reference(r, spring, lash, zeta, 
     The exact solver and the scipy reference (independent methods) must agree on the motion to
     1e-8 of the lift. (800 random draws of these groups, e = 0 ... 0.95, were run while hunting the
     'events repeat' loop; none failed.)"""
-    rpm, rise, h, M = 3000.0, math.radians(70), 0.01, 0.1
-    omega = rpm * math.pi / 30
-    t_rise = rise / omega
-    k = M * (2 * math.pi / (r * t_rise)) ** 2
-    W0 = spring * M * 2 * math.pi * h / t_rise**2
-    model = LinkageModel(mass=M, oscillating_mass=m1 * M, stiffness=k, damping=2 * zeta * math.sqrt(k * M),
-                         lash=lash * h, preload=W0, friction=mu * W0)
-    lift = LawLift(height=h * (1 + lash), start=0.3, rise=rise, dwell=0.2, ret=rise, rise_law="cycloidal",
-                   return_law="cycloidal")
-    drive = Drive(lift, 1.0, omega)
+    model, drive, h = cycloidal_groups(r, spring, lash, zeta=zeta, mu=mu, m1=m1)
     t = revolution(drive, 720)
     sol = solve(model, drive, t)
     check_sane(model, drive, sol)

@@ -25,6 +25,7 @@ from __future__ import annotations
 import importlib
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -172,9 +173,14 @@ class StiffnessProfile:
             k = total
         return np.stack([k, dk])
 
-    def bounds(self, samples: int = 4097) -> tuple[float, float]:
+    def bounds(self) -> tuple[float, float]:
         """Smallest and largest k over a revolution (sampled; for step bounds and reports)."""
-        t = np.linspace(0.0, 2.0 * math.pi / self.omega, samples)
+        return self._bounds
+
+    @cached_property
+    def _bounds(self) -> tuple[float, float]:
+        # a gear's k(t) costs milliseconds at 4097 angles; the model, the solver and the report ask
+        t = np.linspace(0.0, 2.0 * math.pi / self.omega, 4097)
         k = self(t)[0]
         return float(k.min()), float(k.max())
 

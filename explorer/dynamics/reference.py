@@ -24,7 +24,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel
+from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel, phase_of_state
 
 REST, CONTACT, FLIGHT = "rest", "contact", "flight"
 IMPLICIT_METHODS = ("Radau", "BDF", "LSODA")
@@ -273,15 +273,13 @@ def rebound_rest_speed(model: LinkageModel, rest_height: float) -> float:
 
 
 def initial_phase(model: LinkageModel, S: float, Sd: float, s: float, v: float, k=None) -> tuple[str, float]:
-    """Phase and friction direction of a valve given at (s, v) with the drive at (S, S')."""
-    touching = S - model.lash - s >= 0.0 and linkage_force(model, S, Sd, s, v, k) > 0.0
-    phase = CONTACT if touching else FLIGHT
-    if v != 0.0:
-        return phase, math.copysign(1.0, v)
-    net = (linkage_force(model, S, Sd, s, v, k) if touching else 0.0) - static_resistance(model, s)
-    if abs(net) <= model.friction or (s <= 0.0 and net <= model.friction):
+    """Phase and friction direction of a valve given at (s, v) with the drive at (S, S') (seated
+    and stuck are both REST here, with direction 0)."""
+    code, direction = phase_of_state(S, Sd, model.stiffness if k is None else k, model.damping, model.lash, s, v,
+                                     model.seated_resistance, model.spring_rate, model.friction)
+    if code in (PHASE_CODES["seated"], PHASE_CODES["stuck"]):
         return REST, 0.0
-    return phase, (1.0 if net > 0.0 else -1.0)
+    return (CONTACT if code == PHASE_CODES["contact"] else FLIGHT), direction
 
 
 def _release(model: LinkageModel, drive: Drive, s_rest: float, t0: float, t1: float, probe: float):

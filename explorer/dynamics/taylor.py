@@ -181,7 +181,7 @@ class _Solver:
         self.rate, self.R = model.spring_rate, model.friction
         self.M, self.M1 = model.mass, model.oscillating_mass
         self.e = model.restitution
-        self.W0 = model.preload + model.closing_load
+        self.W0 = model.seated_resistance
         self.zeno_height = zeno_height
         self.max_events = max_events
         self.initial_state = initial_state
