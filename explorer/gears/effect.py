@@ -210,7 +210,7 @@ def _rolling(ctx, lift):
 def _trip(ctx, lift):
     from ..kinematics import lash_crossings
     from .build import closing_model, make_buffer
-    from .trip import compare_buffers, latched_buffer, peak_buffer_force
+    from .trip import compare_buffers, peak_buffer_force
 
     scene, spec = ctx.scene, ctx.scene.gear
     trip = spec.part("trip")
@@ -248,8 +248,7 @@ def _trip(ctx, lift):
         if f"{name}_dashpot" in spec.parts:
             buffers[name] = make_buffer(spec, name)
             if name == "air":  # the pocket as the latched phase leaves it at the trip
-                densities[name] = latched_buffer(buffers[name], lift.latch, lift.overtravel, lift.start, omega,
-                                                 lift.phi_pick, lift.phi_trip).density_at_trip
+                densities[name] = lift.density_at_trip(buffers[name])
     t_max = (TWO_PI - lift.phi_trip) / omega
     table = compare_buffers(closing_model(spec, scene), buffers, s_trip, v_trip, t_max, densities)
     summary = {

@@ -98,7 +98,7 @@ def trip_buffers_figure(scene, path) -> Path:
 
     from ..lift import build_lift
     from .build import make_buffer
-    from .trip import latched_buffer, simulate_closing
+    from .trip import simulate_closing
 
     lift = build_lift(scene)
     spec = scene.gear
@@ -111,8 +111,7 @@ def trip_buffers_figure(scene, path) -> Path:
         buffer = make_buffer(spec, name)
         density = None
         if name == "air":  # the pocket as the latched phase leaves it at the trip (as the gear effect)
-            density = latched_buffer(buffer, lift.latch, lift.overtravel, lift.start, scene.omega,
-                                     lift.phi_pick, lift.phi_trip).density_at_trip
+            density = lift.density_at_trip(buffer)
         sol = simulate_closing(replace(lift.closing.model, buffer=buffer), s0, v0, 1.0, density=density)
         t = np.linspace(0.0, sol.seat_time, 800)
         ax.plot(1e3 * t, 1e3 * sol.state(t)["s"],

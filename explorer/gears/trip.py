@@ -499,6 +499,14 @@ class TripLift:
     def _phi(self, theta):
         return np.mod(np.asarray(theta, dtype=float) - self.start, TWO_PI)
 
+    def density_at_trip(self, buffer) -> float:
+        """The pocket density an air `buffer` has at the trip after the latched lift: the scene's own
+        buffer's was integrated when the lift was built; another's (a comparison) is integrated now."""
+        if self.latched is not None and buffer == self.closing.model.buffer:
+            return self.latched.density_at_trip
+        return latched_buffer(buffer, self.latch, self.overtravel, self.start, self.omega, self.phi_pick,
+                              self.phi_trip).density_at_trip
+
     def derivatives(self, theta) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
         flat = theta.reshape(-1)
