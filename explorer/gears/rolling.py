@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -158,7 +159,7 @@ class RollingLeverGear:
         q0 = q.c[0]
         q1 = q.c[1]
         if not np.all(touching):  # the rod geometry at the meeting point (alpha where w = 0)
-            q0 = np.where(touching, q0, self._rod_projection_at_meeting())
+            q0 = np.where(touching, q0, self._rod_projection_at_meeting)
             q1 = np.where(touching, q1, 0.0)
         ds_dl = ds_dalpha / q0
         out = {"ds_dalpha": ds_dalpha, "ds_drod": ds_dl}
@@ -181,8 +182,10 @@ class RollingLeverGear:
                 del out[key]
         return out
 
+    @cached_property
     def _rod_projection_at_meeting(self) -> float:
-        """u_rod . dB/dalpha where the faces meet (rolling swing 0), on the opening side."""
+        """u_rod . dB/dalpha where the faces meet (rolling swing 0), on the opening side (a constant
+        of the geometry, found by root-finding: computed once, not at every k(t) evaluation)."""
         marks = self.contact_angles()
         rate = self.rolling_swing(np.asarray(marks, dtype=float)).c[1]
         pick = float(marks[int(np.argmax(rate))])  # the pick-up: the swing grows there
