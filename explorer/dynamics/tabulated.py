@@ -20,27 +20,8 @@ import math
 
 import numpy as np
 
+from .exact import _hermite5, _taylor_shift
 from .model import Drive, StiffnessProfile
-
-
-def _one_sided(values: np.ndarray, offset: float) -> np.ndarray:
-    """Taylor shift by -offset of (value, d1, d2, d3) columns evaluated at t + offset."""
-    d0, d1, d2, d3 = values
-    o = offset
-    return np.array([d0 - o * d1 + o * o / 2.0 * d2 - o**3 / 6.0 * d3, d1 - o * d2 + o * o / 2.0 * d3, d2 - o * d3])
-
-
-def _quintic(h: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(6, n) coefficients in u = tau/h of the quintic through (S, S', S'') = a at u = 0, b at u = 1."""
-    y0, y1, y2 = a[0], a[1] * h, a[2] * h * h / 2.0
-    z0, z1, z2 = b[0], b[1] * h, b[2] * h * h
-    r0 = z0 - y0 - y1 - y2
-    r1 = z1 - y1 - 2.0 * y2
-    r2 = z2 - 2.0 * y2
-    c3 = 10.0 * r0 - 4.0 * r1 + 0.5 * r2
-    c4 = -15.0 * r0 + 7.0 * r1 - r2
-    c5 = 6.0 * r0 - 3.0 * r1 + 0.5 * r2
-    return np.array([y0, y1, y2, c3, c4, c5])
 
 
 def _cubic(h: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -73,11 +54,11 @@ class TabulatedDrive:
         K = profile(nodes) if profile is not None else None
         if inner.any():
             at = nodes[inner]
-            right[:, inner] = _one_sided(np.asarray(drive(at + delta), dtype=float), delta)
-            left[:, inner] = _one_sided(np.asarray(drive(at - delta), dtype=float), -delta)
+            right[:, inner] = _taylor_shift(np.asarray(drive(at + delta), dtype=float), -delta)[:3]
+            left[:, inner] = _taylor_shift(np.asarray(drive(at - delta), dtype=float), delta)[:3]
         self.nodes = nodes.tolist()
         self.h = h.tolist()
-        self._S = _quintic(h, right[:, :-1], left[:, 1:]).T.tolist()
+        self._S = _hermite5(h, right[:, :-1], left[:, 1:]).T.tolist()
         self._K = None
         if profile is not None:
             k_right, k_left = K.copy(), K.copy()

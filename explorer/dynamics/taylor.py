@@ -33,8 +33,8 @@ import math
 
 import numpy as np
 
+from .exact import _hermite5, _taylor_shift
 from .model import PHASE_CODES, DynamicsSolution, LinkageModel, phase_of_state, release_from_rest
-from .tabulated import _one_sided, _quintic
 
 SEATED, CONTACT, FLIGHT, STUCK = (PHASE_CODES[k] for k in ("seated", "contact", "flight", "stuck"))
 EPS = float(np.finfo(float).eps)
@@ -236,14 +236,14 @@ class _Solver:
             at = nodes[inner]
             i = np.nonzero(inner)[0]
             delta = 1e-7 * np.minimum(h[i - 1], h[i])
-            right[:, inner] = _one_sided(np.asarray(drive(at + delta), dtype=float), delta)
-            left[:, inner] = _one_sided(np.asarray(drive(at - delta), dtype=float), -delta)
+            right[:, inner] = _taylor_shift(np.asarray(drive(at + delta), dtype=float), -delta)[:3]
+            left[:, inner] = _taylor_shift(np.asarray(drive(at - delta), dtype=float), delta)[:3]
             if profile is not None:
                 for out, sign in ((k_right, 1.0), (k_left, -1.0)):
                     kk = profile(at + sign * delta)
                     out[0, inner] = kk[0] - sign * delta * kk[1]
                     out[1, inner] = kk[1]
-        P = _quintic(h, right[:, :-1], left[:, 1:])
+        P = _hermite5(h, right[:, :-1], left[:, 1:])
         # k: the quintic through k, k' at both ends and at the midpoint (the profile is smooth
         # inside a step): error ~3e-6 h^6 k^(6), against h^4 k^(4) / 384 of the cubic through the
         # ends only, which would dominate the solution's error (tests: the manufactured solution)
