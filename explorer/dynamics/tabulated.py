@@ -24,6 +24,26 @@ from .exact import _hermite5, _taylor_shift
 from .model import Drive, StiffnessProfile
 
 
+def node_values(drive: Drive, profile: StiffnessProfile | None, nodes: np.ndarray, inner: np.ndarray, delta):
+    """Drive rows S, S', S'' and (with a profile) k, k' at the nodes, as (right, left, k_right,
+    k_left): the values a step starting and a step ending there sees. They differ only at the
+    breakpoint nodes `inner`, where each side is taken `delta` inside and moved back by Taylor."""
+    D = np.asarray(drive(nodes), dtype=float)
+    right, left = D[:3].copy(), D[:3].copy()
+    K = profile(nodes) if profile is not None else None
+    k_right, k_left = (K, K.copy()) if K is not None else (None, None)
+    if inner.any():
+        at = nodes[inner]
+        right[:, inner] = _taylor_shift(np.asarray(drive(at + delta), dtype=float), -delta)[:3]
+        left[:, inner] = _taylor_shift(np.asarray(drive(at - delta), dtype=float), delta)[:3]
+        if profile is not None:
+            for out, sign in ((k_right, 1.0), (k_left, -1.0)):
+                kk = profile(at + sign * delta)
+                out[0, inner] = kk[0] - sign * delta * kk[1]
+                out[1, inner] = kk[1]
+    return right, left, k_right, k_left
+
+
 def _cubic(h: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(4, n) coefficients in u of the cubic through (k, k') = a at u = 0, b at u = 1."""
     y0, y1 = a[0], a[1] * h
@@ -48,26 +68,12 @@ class TabulatedDrive:
         h = np.diff(nodes)
         delta = 1e-7 * float(h.min())
         inner = np.isin(nodes, bps)
-        # right-hand values (for the step that starts at a node) and left-hand values (ends)
-        D = np.asarray(drive(nodes), dtype=float)
-        right, left = D[:3].copy(), D[:3].copy()
-        K = profile(nodes) if profile is not None else None
-        if inner.any():
-            at = nodes[inner]
-            right[:, inner] = _taylor_shift(np.asarray(drive(at + delta), dtype=float), -delta)[:3]
-            left[:, inner] = _taylor_shift(np.asarray(drive(at - delta), dtype=float), delta)[:3]
+        right, left, k_right, k_left = node_values(drive, profile, nodes, inner, delta)
         self.nodes = nodes.tolist()
         self.h = h.tolist()
         self._S = _hermite5(h, right[:, :-1], left[:, 1:]).T.tolist()
         self._K = None
         if profile is not None:
-            k_right, k_left = K.copy(), K.copy()
-            if inner.any():
-                at = nodes[inner]
-                for out, sign in ((k_right, 1.0), (k_left, -1.0)):
-                    kk = profile(at + sign * delta)
-                    out[0, inner] = kk[0] - sign * delta * kk[1]
-                    out[1, inner] = kk[1]
             self._K = _cubic(h, k_right[:, :-1], k_left[:, 1:]).T.tolist()
         self.t = math.nan
         self.S0 = self.Sd = self.Sdd = 0.0

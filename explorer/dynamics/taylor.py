@@ -33,8 +33,9 @@ import math
 
 import numpy as np
 
-from .exact import _hermite5, _taylor_shift
+from .exact import _hermite5
 from .model import PHASE_CODES, DynamicsSolution, LinkageModel, phase_of_state, release_from_rest
+from .tabulated import node_values
 
 SEATED, CONTACT, FLIGHT, STUCK = (PHASE_CODES[k] for k in ("seated", "contact", "flight", "stuck"))
 EPS = float(np.finfo(float).eps)
@@ -227,27 +228,17 @@ class _Solver:
             h = np.diff(nodes)
         self.out_index = np.searchsorted(nodes, t)
         inner = np.isin(nodes, brk) & (nodes > t0) & (nodes < t1)
-        D = np.asarray(drive(nodes), dtype=float)
-        right, left = D[:3].copy(), D[:3].copy()
-        K = profile(nodes) if profile is not None else np.stack([np.full(nodes.size, self.model.stiffness),
-                                                                  np.zeros(nodes.size)])
-        k_right, k_left = K.copy(), K.copy()
-        if inner.any():
-            at = nodes[inner]
-            i = np.nonzero(inner)[0]
-            delta = 1e-7 * np.minimum(h[i - 1], h[i])
-            right[:, inner] = _taylor_shift(np.asarray(drive(at + delta), dtype=float), -delta)[:3]
-            left[:, inner] = _taylor_shift(np.asarray(drive(at - delta), dtype=float), delta)[:3]
-            if profile is not None:
-                for out, sign in ((k_right, 1.0), (k_left, -1.0)):
-                    kk = profile(at + sign * delta)
-                    out[0, inner] = kk[0] - sign * delta * kk[1]
-                    out[1, inner] = kk[1]
+        i = np.nonzero(inner)[0]
+        delta = 1e-7 * np.minimum(h[i - 1], h[i]) if i.size else 0.0
+        right, left, k_right, k_left = node_values(drive, profile, nodes, inner, delta)
+        if profile is None:  # a constant stiffness: k' = 0
+            k_right = np.stack([np.full(nodes.size, self.model.stiffness), np.zeros(nodes.size)])
+            k_left = k_right
         P = _hermite5(h, right[:, :-1], left[:, 1:])
         # k: the quintic through k, k' at both ends and at the midpoint (the profile is smooth
         # inside a step): error ~3e-6 h^6 k^(6), against h^4 k^(4) / 384 of the cubic through the
         # ends only, which would dominate the solution's error (tests: the manufactured solution)
-        Km = K[:, :-1] if profile is None else profile(nodes[:-1] + 0.5 * h)
+        Km = k_right[:, :-1] if profile is None else profile(nodes[:-1] + 0.5 * h)
         rhs = np.stack([k_right[0, :-1], k_right[1, :-1] * h, Km[0], Km[1] * h, k_left[0, 1:], k_left[1, 1:] * h])
         Kc = _K_INVERSE @ rhs
         self.nodes, self.h = nodes.tolist(), h.tolist()
