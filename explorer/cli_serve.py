@@ -3,14 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import ipaddress
-import signal
 import sys
-import threading
-import time
 
 from .errors import InputError
+from .processes import Supervisor
 
 HELP = """\
 Open the 3D explorer in the browser: the cam turns, the roller, lever, spring and valve move
@@ -18,8 +15,11 @@ as computed, with plots of s, v, p and forces over the revolution and a read-out
 peaks and warnings. Change the scene, the lift law, speed, lash, stiffness, spring and the
 effects in the side panel; every change is recomputed at once.
 
-Binds 127.0.0.1 (this machine only) unless --host says otherwise. Ctrl-C (or SIGTERM) stops it
-cleanly: the --rerun stream is flushed and the --rerun-save file completed.
+Binds 127.0.0.1 (this machine only) unless --host says otherwise. Ctrl-C (or SIGTERM, SIGHUP)
+stops it cleanly: the --rerun stream is flushed and the --rerun-save file completed. A stop that
+takes longer than 20 s (EXPLORER_SHUTDOWN_TIMEOUT) on a very busy machine, or a second Ctrl-C,
+ends it at once; the recordings finished so far then stay beside the --rerun-save file, one
+complete .rrd each.
 """
 
 
@@ -49,27 +49,6 @@ def _is_loopback(host: str) -> bool:
         return False
 
 
-@contextlib.contextmanager
-def _sigterm_as_ctrl_c():
-    """SIGTERM (kill, systemd, a container stopping) stops the server like Ctrl-C, so the
-    `finally` below closes the live stream (the default action ends the process on the spot and
-    a --rerun-save file is never merged). A second SIGTERM during that clean-up ends it at once."""
-    if threading.current_thread() is not threading.main_thread():
-        yield  # signal handlers belong to the main thread; whoever runs us there handles them
-        return
-    previous = signal.getsignal(signal.SIGTERM)
-
-    def handler(signum, frame):
-        signal.signal(signal.SIGTERM, previous)
-        raise KeyboardInterrupt
-
-    signal.signal(signal.SIGTERM, handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
 def run(args) -> int:
     from .cli_simulate import scene_from_args
 
@@ -89,7 +68,7 @@ def run(args) -> int:
 
     from .viewer.app import ExplorerApp
 
-    with _sigterm_as_ctrl_c():
+    with Supervisor("explorer serve") as supervisor:
         stream = server = app = None
         try:
             if args.rerun or args.rerun_save:
@@ -98,12 +77,15 @@ def run(args) -> int:
             on_result = (lambda prepared: stream.log(prepared.result, prepared.label)) if stream is not None else None
             app = ExplorerApp(server, scene.source, args.overrides, playing=not args.paused, on_result=on_result)
             shown_host = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
-            print(f"Valve-Gear Explorer: http://{shown_host}:{server.get_port()}  (Ctrl-C stops)", flush=True)
-            while True:
-                time.sleep(0.5)
-        except KeyboardInterrupt:
+            if not supervisor.stopping.is_set():
+                print(f"Valve-Gear Explorer: http://{shown_host}:{server.get_port()}  (Ctrl-C stops)", flush=True)
+            while not supervisor.stopping.wait(0.5):
+                pass
+            print("stopping", file=sys.stderr)
+        except KeyboardInterrupt:  # a Ctrl-C that came before the handlers were in place
             print("stopping", file=sys.stderr)
         finally:
+            # in this order: no new results, no clients, then the stream completes its file
             if app is not None:
                 app.stop()
             if server is not None:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import signal
 import socket
 import subprocess
 import sys
@@ -13,6 +12,7 @@ import urllib.parse
 from pathlib import Path
 
 from .errors import InputError
+from .processes import Supervisor
 
 HELP = """\
 Open a rerun recording (.rrd, e.g. from `explorer record`) in rerun's web viewer, served from
@@ -79,16 +79,16 @@ def _check_source(source: str) -> str:
     return str(path)
 
 
-def _wait_listening(port: int, proc: subprocess.Popen, timeout: float) -> bool:
+def _wait_listening(port: int, proc: subprocess.Popen, timeout: float, stopping) -> bool:
     deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+    while time.monotonic() < deadline and not stopping.is_set():
         if proc.poll() is not None:
             return False
         with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
             s.settimeout(0.2)
             if s.connect_ex((HOST, port)) == 0:
                 return True
-        time.sleep(0.1)
+        stopping.wait(0.1)
     return False
 
 
@@ -110,63 +110,28 @@ def run(args) -> int:
     except RuntimeError as exc:  # the rerun-sdk install lacks its CLI: not the user's input
         print(f"error: {exc}", file=sys.stderr)
         return 1
-    cmd = [*executable, source, "--web-viewer", "--bind", HOST, "--web-viewer-port", str(web_port)]
+    # --serve-web, not --web-viewer: the latter also opens a browser on this machine, a process
+    # outside our control (on a headless machine a browser that spins, left running after us)
+    cmd = [*executable, source, "--serve-web", "--bind", HOST, "--web-viewer-port", str(web_port)]
     if _is_url(source):
         data_url = source  # the browser connects to that stream itself; no data server of ours
     else:
         cmd += ["--port", str(grpc_port)]  # the file is served to the browser from here
         data_url = f"rerun+http://{HOST}:{grpc_port}/proxy"
     env = {**os.environ, "RUST_LOG": os.environ.get("RUST_LOG", "warn")}
-    # own process group: Ctrl-C reaches us, and we stop the viewer ourselves, in order
-    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, env=env, start_new_session=True,
-                            preexec_fn=_default_sigint if os.name == "posix" else None)
-    previous = _terminate_as_interrupt()
-    try:
-        if not _wait_listening(web_port, proc, STARTUP_TIMEOUT_S):
+    with Supervisor("explorer view") as supervisor:
+        # its own process group, dying with us; Ctrl-C reaches us and we end its whole group
+        proc = supervisor.spawn(cmd, stdin=subprocess.DEVNULL, env=env)
+        if not _wait_listening(web_port, proc, STARTUP_TIMEOUT_S, supervisor.stopping):
+            if supervisor.stopping.is_set():
+                print("stopping", file=sys.stderr)
+                return 0
             code = proc.poll()
             print(f"error: the rerun viewer did not start (exit status {code})", file=sys.stderr)
             return 1
         print(f"rerun web viewer: {viewer_url(web_port, data_url)}  (Ctrl-C stops)", flush=True)
-        while proc.poll() is None:
-            time.sleep(0.25)
-        return 0 if proc.returncode == 0 else 1
-    except KeyboardInterrupt:
+        while not supervisor.stopping.wait(0.25):
+            if proc.poll() is not None:
+                return 0 if proc.returncode == 0 else 1
         print("stopping", file=sys.stderr)
         return 0
-    finally:
-        _stop(proc)
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
-
-
-def _default_sigint() -> None:
-    """In the viewer process: Ctrl-C stops it, even when we were started with SIGINT ignored
-    (as a shell's background job is), so that `_stop` can end it gently."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
-def _terminate_as_interrupt():
-    """Let SIGTERM stop us like Ctrl-C, so the viewer process is never left behind."""
-    def handler(signum, frame):
-        raise KeyboardInterrupt
-
-    try:
-        return signal.signal(signal.SIGTERM, handler)
-    except ValueError:  # not the main thread (e.g. called from a test thread): leave it
-        return None
-
-
-def _stop(proc: subprocess.Popen) -> None:
-    if proc.poll() is not None:
-        return
-    for sig, wait in ((signal.SIGINT, 5.0), (signal.SIGTERM, 5.0)):
-        try:
-            proc.send_signal(sig)
-            proc.wait(timeout=wait)
-            return
-        except subprocess.TimeoutExpired:
-            continue
-        except ProcessLookupError:
-            return
-    proc.kill()
-    proc.wait()

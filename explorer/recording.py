@@ -68,7 +68,10 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
+from .processes import run_child
+
 APP_ID = "valve-gear-explorer"
+MERGE_TIMEOUT_S = 600.0  # `rerun rrd merge` of a long live session; it is killed past this
 TIMELINE_TIME = "time"
 TIMELINE_STEP = "step"
 TIMELINE_ANGLE = "cam_angle_mdeg"
@@ -550,8 +553,9 @@ def rerun_executable() -> list[str]:
 def merge_rrd(pieces: Sequence[Path], out: Path) -> None:
     """Merge several .rrd files (one recording each) into one file holding all of them."""
     cmd = [*rerun_executable(), "rrd", "merge", "-o", str(out), *map(str, pieces)]
-    proc = subprocess.run(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                          text=True, env={**os.environ, "RUST_LOG": "warn"})
+    # its own group, dying with us, ended as a group on a stop signal or a timeout
+    proc = run_child(cmd, timeout=MERGE_TIMEOUT_S, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                     stderr=subprocess.PIPE, text=True, env={**os.environ, "RUST_LOG": "warn"})
     if proc.returncode != 0:
         tail = "\n".join(proc.stderr.strip().splitlines()[-5:])
         raise RuntimeError(f"rerun rrd merge failed (exit {proc.returncode}): {tail}")

@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import run_cli
+from conftest import process_timeout, run_cli
 from explorer.bench import ProgressBar, chart_png, model_and_drive, run_bench
 from explorer.dynamics import schenker1902
 from explorer.dynamics.model import solve
@@ -130,7 +130,7 @@ def test_command_writes_table_csv_and_charts(tmp_path, scenes_dir):
     out = tmp_path / "bench"
     scene = tmp_path / "float.toml"
     scene.write_text(FLOAT_SCENE)
-    proc = run_cli("bench", scene, "--quick", "--repeats", "1", "--output-dir", out, timeout=300)
+    proc = run_cli("bench", scene, "--quick", "--repeats", "1", "--output-dir", out, timeout=process_timeout(2.5))
     assert proc.returncode == 0, proc.stderr
     assert "max error m" in proc.stdout and "faster" in proc.stdout
     assert "] 0/" in proc.stderr and "done" in proc.stderr  # the progress bar
@@ -172,6 +172,7 @@ def test_run_all_lists_the_benchmarks_and_refuses_unknown_names():
     from pathlib import Path
 
     script = Path(__file__).resolve().parents[1] / "benchmarks" / "run_all.py"
-    done = subprocess.run([sys.executable, str(script), "--only", "no_such_bench"], capture_output=True, text=True)
+    done = subprocess.run([sys.executable, str(script), "--only", "no_such_bench"], capture_output=True, text=True,
+                          timeout=process_timeout())
     assert done.returncode == 2
     assert "dynamics" in done.stderr and "core" in done.stderr and "no_such_bench" in done.stderr

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, process_timeout
 
 CHROMIUM = Path("/usr/bin/chromium")
 ARGS = [
@@ -34,7 +34,7 @@ pytestmark = [
 # CI runs the whole suite on 2 cores with software WebGL: every wait is generous and waits for a
 # concrete state of the page, never for a fixed time. The server starts paused, so its animation
 # loop sends nothing unless asked and cannot starve the browser.
-WAIT_S = 120.0
+WAIT_S = process_timeout()
 WAIT_MS = int(1000 * WAIT_S)
 
 NODE_POSITION = (

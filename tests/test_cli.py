@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from explorer import cli
-from conftest import ROOT, SCENES, run_cli
+from conftest import ROOT, SCENES, process_timeout, run_cli
 
 DEMO = SCENES / "cycloidal_demo.toml"
 REQUIRED_COLUMNS = ["cam_angle_deg", "time_s", "follower_lift_m", "valve_lift_m", "valve_velocity_m_s",
@@ -175,7 +175,7 @@ assert result.columns["valve_lift_m"].size == 3600
 heavy = [m for m in sys.modules if m.startswith(("explorer.dynamics", "viser", "rerun", "matplotlib", "trimesh"))]
 print(",".join(heavy))
 """
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=process_timeout())
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == ""
 

@@ -18,6 +18,7 @@ from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
 from explorer.effects import simulate
 from explorer.lift import build_lift
 from explorer.scene import loads_scene
+from conftest import process_timeout
 from dynamics_cases import float_valve_scene
 
 SCENE = float_valve_scene("elastic test", ["elastic"], """[loads.closing]
@@ -150,5 +151,5 @@ def test_a_kinematics_only_scene_never_loads_a_dynamics_solver(tmp_path):
         "loaded = [m for m in sys.modules if m.startswith('explorer.dynamics')]\n"
         "assert not loaded, loaded\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=process_timeout())
     assert out.returncode == 0, out.stderr

@@ -18,7 +18,7 @@ from explorer import InputError, load_scene, loads_scene, simulate
 from explorer.lift import LawLift, build_lift
 from explorer.lift_acceleration import AccelerationLift, AccelerationOptions
 
-from conftest import SCENES
+from conftest import SCENES, process_timeout
 
 DEMO = SCENES / "acceleration_demo.toml"
 # symmetric about 50 deg with zero acceleration area on each half: closes exactly
@@ -227,6 +227,6 @@ def test_loading_needs_no_scipy():
     import sys
 
     code = f"import sys, explorer; explorer.load_scene({str(DEMO)!r}); print('scipy' in sys.modules)"
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=process_timeout())
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "False"

@@ -23,6 +23,7 @@ from explorer.cli import main
 from explorer.effects import simulate
 from explorer.recording import entity_path, series_layout
 from explorer.recording_read import read_blueprint_views, read_rrd
+from conftest import process_timeout
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "assets" / "scenes"
@@ -299,14 +300,14 @@ def _record_and_kill(tmp_path: Path, out: Path, delay: float) -> int:
            "--set", "solver.steps_per_revolution=100000", "--sweep", "drive.rpm=1000,2000,3000", "-o", str(out)]
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        deadline = time.monotonic() + 120
+        deadline = time.monotonic() + process_timeout()
         while time.monotonic() < deadline and proc.poll() is None:
             if any(p.name.startswith(f".{out.name}.") for p in tmp_path.iterdir()):
                 break
             time.sleep(0.002)
         time.sleep(delay)
         proc.send_signal(signal.SIGKILL)
-        return proc.wait(timeout=30)
+        return proc.wait(timeout=process_timeout(0.25))
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -24,6 +24,8 @@ from explorer.errors import InputError
 from explorer.recording import rerun_executable, series_layout
 from explorer.recording_live import LiveStream, add_live_arguments, open_live_stream
 from explorer.recording_read import read_blueprint_views, read_rrd
+from explorer.processes import spawn, stop_group
+from conftest import process_timeout
 
 ROOT = Path(__file__).resolve().parent.parent
 CYCLOIDAL = ROOT / "assets" / "scenes" / "cycloidal_demo.toml"
@@ -125,19 +127,19 @@ def test_grpc_server_on_localhost_reaches_a_rerun_viewer(tmp_path):
         assert [c.laddr.ip for c in listening] == ["127.0.0.1"]  # not every interface
         stream.log(result, "live run")
         assert stream.flush(60)
-        receiver = subprocess.Popen(
+        receiver = spawn(
             [*rerun_executable(), "--save", str(received), "--bind", "127.0.0.1", "--port", str(viewer_port),
              stream.url],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         # the server keeps what was logged before the viewer came: wait until it has all arrived
-        deadline, names = time.monotonic() + 60, []
+        deadline, names = time.monotonic() + process_timeout(0.5), []
         while time.monotonic() < deadline:
             time.sleep(0.5)
             if received.exists() and received.stat().st_size > 100_000:
                 break
         time.sleep(1.0)
         receiver.send_signal(signal.SIGINT)  # rerun finishes the file on Ctrl-C
-        receiver.wait(timeout=30)
+        receiver.wait(timeout=process_timeout(0.5))
         runs = {r.name: r for r in read_rrd(received)}
         assert "#1 live run" in runs
         assert_same_series(runs["#1 live run"], result)
@@ -145,12 +147,11 @@ def test_grpc_server_on_localhost_reaches_a_rerun_viewer(tmp_path):
         index = runs["explorer live session"].temporal["/session"]["TextLog:text"]
         assert list(index) == ["#1 live run | 900 rpm | 2 events"]
     finally:
-        if receiver is not None and receiver.poll() is None:
-            receiver.kill()
-            receiver.wait()
+        if receiver is not None:
+            stop_group(receiver, grace=1.0)
         started = time.monotonic()
         stream.close()
-        assert time.monotonic() - started < 30
+        assert time.monotonic() - started < process_timeout(0.5)
 
 
 EXIT_SCRIPT = textwrap.dedent("""
@@ -174,10 +175,10 @@ def test_process_exits_without_close_and_without_hanging(tmp_path, save):
     if save:
         cmd.append(str(out))
     started = time.monotonic()
-    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=90)
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=process_timeout())
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "logged" in proc.stdout
-    assert time.monotonic() - started < 60
+    assert time.monotonic() - started < process_timeout(0.75)
     if save:  # the atexit close merged the file
         assert [r.name for r in read_rrd(out)] == ["#1 exit test"]
 

@@ -15,7 +15,7 @@ from explorer import load_scene, loads_scene
 from explorer import units
 from explorer.scenes import builtin_scenes
 
-from conftest import ROOT, SCENES
+from conftest import ROOT, SCENES, process_timeout
 
 G0 = 9.80665  # exact by definition of kgf
 
@@ -121,7 +121,7 @@ def test_fast_path_declines_what_it_does_not_know():
 def test_loading_the_demo_needs_no_pint():
     """The fast path covers the shipped demo: a fresh process loads it without building pint."""
     code = f"import sys; from explorer import load_scene; load_scene({str(DEMO)!r}); print('pint' in sys.modules)"
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=process_timeout())
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "False"
 

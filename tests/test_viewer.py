@@ -4,6 +4,7 @@ computed independently by `simulate` + `meshes.part_poses`."""
 
 from __future__ import annotations
 
+import contextlib
 import math
 import signal
 import subprocess
@@ -20,7 +21,8 @@ from explorer.effects import simulate
 from explorer.lift import build_lift
 from explorer.viewer import model
 
-from conftest import ROOT, SCENES, run_cli
+from conftest import ROOT, SCENES, kill_tree, process_timeout, run_cli
+from explorer.processes import spawn, stop_group
 
 viser = pytest.importorskip("viser")
 
@@ -76,10 +78,10 @@ def test_scrubbing_places_every_part_at_the_computed_motion(app):
     assert not app.playback.playing  # scrubbing pauses
 
 
-def _frames_pass(app, count=3, timeout=60):
+def _frames_pass(app, count=3, timeout=None):
     """Wait until the loop has applied `count` more frames (no fixed sleeps: CI may be slow)."""
     target = app.frames + count
-    deadline = time.monotonic() + timeout
+    deadline = time.monotonic() + (process_timeout(0.5) if timeout is None else timeout)
     while app.frames < target and time.monotonic() < deadline:
         time.sleep(0.005)
     return app.frames >= target
@@ -90,7 +92,7 @@ def test_animation_moves_the_slider_without_feeding_back(app):
     app.speed.value = "1/10"
     app.play.value = True
     seen = set()
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + process_timeout(0.5)
     while len(seen) <= 3 and time.monotonic() < deadline:
         seen.add(app.angle.value)
         time.sleep(0.01)
@@ -117,7 +119,7 @@ def test_a_value_whose_callback_is_still_pending_is_not_overwritten(app):
     import types
 
     app._stop.set()  # the test plays the loop: frames come only when it calls tick()
-    app._thread.join(timeout=30)
+    app._thread.join(timeout=process_timeout(0.25))
     app.tick(0.0)
     assert app.angle.value == 0.0 and app.play.value is False
     # the slider: a value arrives, frames pass, then its callback runs
@@ -432,7 +434,7 @@ def test_plots_follow_a_new_result_that_arrives_with_a_magnification_change(app)
     magnification differs from its previous one). The plots and read-outs must still be the new
     result's (they were stale: old series with new data, drawn wrong in the page)."""
     app._stop.set()  # the test plays the loop: frames come only when it calls tick()
-    app._thread.join(timeout=30)
+    app._thread.join(timeout=process_timeout(0.25))
     app.effects["elastic"].value = True
     assert app.worker.wait_idle(60)
     app.magnification.value = 10.0
@@ -500,10 +502,10 @@ def test_serve_prints_the_url_and_stops_cleanly_on_ctrl_c():
         assert url.startswith("http://127.0.0.1:")
         import urllib.request
 
-        with urllib.request.urlopen(url, timeout=60) as response:
+        with urllib.request.urlopen(url, timeout=process_timeout(0.5)) as response:
             assert response.status == 200 and b"<html" in response.read().lower()
         proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=120)
+        out, err = proc.communicate(timeout=process_timeout(0.5))
         assert proc.returncode == 0, err
         assert "Traceback" not in err
         assert "warning" not in err  # this machine only: nothing to warn about
@@ -565,9 +567,9 @@ def test_serve_records_to_rerun_and_finishes_the_file_when_stopped(tmp_path, sto
     proc, _, _ = _start_serve(DEMO, "--rerun-save", target)
     try:
         # the first result has reached the stream once its writer opened a piece beside the target
-        assert _wait_for(lambda: list(tmp_path.glob(".live.rrd.*.parts/*.rrd")), 120)
+        assert _wait_for(lambda: list(tmp_path.glob(".live.rrd.*.parts/*.rrd")), process_timeout())
         proc.send_signal(stop_signal)
-        _, err = proc.communicate(timeout=120)
+        _, err = proc.communicate(timeout=process_timeout(0.5))
         assert proc.returncode == 0, err
         assert "Traceback" not in err and "stopping" in err
         runs = read_rrd(target)
@@ -610,19 +612,21 @@ def _wait_for(condition, timeout):
 
 
 def _kill(proc):
+    """End `proc` and everything it started, however the test went."""
     if proc.poll() is None:
-        proc.kill()
-        proc.communicate()
+        kill_tree(proc.pid)
+    with contextlib.suppress(Exception):
+        proc.communicate(timeout=process_timeout(0.1))
 
 
-def _start_serve(*args, timeout=120):
+def _start_serve(*args, timeout=None):
     """`explorer serve SCENE --port 0 --paused ...`; returns (process, the URL it printed).
     Paused, so the animation loop costs nothing while the test waits."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "explorer", "serve", *map(str, args), "--port", "0", "--paused"],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
-    deadline = time.monotonic() + timeout
+    deadline = time.monotonic() + (process_timeout() if timeout is None else timeout)
     lines = []
     while time.monotonic() < deadline:
         line = proc.stdout.readline()
@@ -652,7 +656,7 @@ class _Browser:
         import msgspec
 
         self.ws = connect(url.replace("http://", "ws://"), subprotocols=[f"viser-v{viser.__version__}"],
-                          max_size=None, open_timeout=60)
+                          max_size=None, open_timeout=process_timeout(0.5))
         # a page announces its camera first; viser hands GUI changes to callbacks only from a
         # client it knows, which it does from then on
         self.ws.send(msgspec.msgpack.encode({
@@ -662,11 +666,11 @@ class _Browser:
         }))
         self.uuids = {}  # GUI label -> uuid
 
-    def uuid_of(self, label, timeout=120):
+    def uuid_of(self, label, timeout=None):
         import msgspec
         import zstandard
 
-        deadline = time.monotonic() + timeout
+        deadline = time.monotonic() + (process_timeout() if timeout is None else timeout)
         while label not in self.uuids and time.monotonic() < deadline:
             try:
                 raw = self.ws.recv(timeout=1.0)
@@ -725,9 +729,9 @@ def test_serve_streams_every_change_live_to_rerun_on_localhost(tmp_path):
         listening = _listening(proc.pid)
         assert {a.ip for a in listening if a.port == port} == {"127.0.0.1"}  # not every interface
         assert {a.ip for a in listening if a.port == viser_port} == {"127.0.0.1"}
-        receiver = subprocess.Popen(
+        receiver = spawn(
             [*rerun_executable(), "--save", str(received), "--bind", "127.0.0.1", "--port", str(viewer_port),
-             rerun_url], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+             rerun_url], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
         def names():
             try:
@@ -736,30 +740,29 @@ def test_serve_streams_every_change_live_to_rerun_on_localhost(tmp_path):
                 return []
 
         # the first run must be out before the change, or the explorer rightly computes only the newer
-        assert _wait_for(lambda: "#1 cycloidal_demo.toml" in names(), 120), names()
+        assert _wait_for(lambda: "#1 cycloidal_demo.toml" in names(), process_timeout()), names()
         browser = _Browser(url)
         browser.set("Camshaft rpm", 1234.0)
         second = "#2 cycloidal_demo.toml  drive.rpm=1234.0"
-        assert _wait_for(lambda: second in names(), 120), names()
+        assert _wait_for(lambda: second in names(), process_timeout()), names()
         browser.close()
         receiver.send_signal(signal.SIGINT)  # rerun finishes its file on Ctrl-C
-        receiver.wait(timeout=60)
+        receiver.wait(timeout=process_timeout(0.5))
         runs = {run.name: run for run in read_rrd(received)}
         _assert_same_series(runs["#1 cycloidal_demo.toml"], simulate(load_scene(DEMO)))
         _assert_same_series(runs[second], simulate(load_scene(DEMO, ["drive.rpm=1234.0"])))
 
         started = time.monotonic()
         proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=120)
+        _, err = proc.communicate(timeout=process_timeout(0.5))
         assert proc.returncode == 0, err
         assert "Traceback" not in err and "warning" not in err
-        assert time.monotonic() - started < 60  # a generous bound on "exits cleanly", not a benchmark
+        assert time.monotonic() - started < process_timeout(0.5)  # a bound on "exits cleanly", not a benchmark
     finally:
         if browser is not None:
             browser.close()
-        if receiver is not None and receiver.poll() is None:
-            receiver.kill()
-            receiver.wait()
+        if receiver is not None:
+            stop_group(receiver, grace=1.0)
         _kill(proc)
 
 
@@ -770,7 +773,7 @@ def test_serve_warns_when_listening_beyond_this_machine():
         assert url == f"http://127.0.0.1:{port}"  # the address to open on this machine
         assert {a.ip for a in _listening(proc.pid) if a.port == port} == {"0.0.0.0"}
         proc.send_signal(signal.SIGINT)  # stopped at once: the port is open only for a moment
-        _, err = proc.communicate(timeout=120)
+        _, err = proc.communicate(timeout=process_timeout(0.5))
         assert proc.returncode == 0, err
         assert "warning: listening on 0.0.0.0: anyone who can reach this machine can open the explorer" in err
     finally:
