@@ -191,6 +191,18 @@ def pytest_sessionfinish(session, exitstatus):
         session.exitstatus = pytest.ExitCode.TESTS_FAILED
 
 
+def still_running(pids, timeout: float) -> list[int]:
+    """The pids of `pids` still running (not counting zombies) after waiting up to `timeout` s."""
+    procs = []
+    for pid in pids:
+        try:
+            procs.append(psutil.Process(pid))
+        except psutil.NoSuchProcess:
+            pass
+    _, alive = psutil.wait_procs(procs, timeout=timeout)
+    return [p.pid for p in alive if not _is_zombie(p.pid)]
+
+
 @contextlib.contextmanager
 def started(cmd, **kwargs):
     """`subprocess.Popen(cmd, **kwargs)` whose whole process tree is killed when the block ends,

@@ -14,19 +14,8 @@ from pathlib import Path
 import psutil
 import pytest
 
-from conftest import ROOT, process_timeout, started
+from conftest import ROOT, process_timeout, started, still_running
 from explorer.processes import Supervisor, run_child, spawn, stop_group
-
-
-def _gone(pids, timeout) -> list[int]:
-    procs = []
-    for pid in pids:
-        try:
-            procs.append(psutil.Process(pid))
-        except psutil.NoSuchProcess:
-            pass
-    _, alive = psutil.wait_procs(procs, timeout=timeout)
-    return [p.pid for p in alive if p.status() != psutil.STATUS_ZOMBIE]
 
 
 # A child that ignores SIGINT and SIGTERM and has a helper of its own in its group; it prints
@@ -47,7 +36,7 @@ def test_stop_group_ends_a_child_that_ignores_signals_and_its_helpers():
         stop_group(proc, grace=0.5)
         assert proc.returncode == -signal.SIGKILL  # it took the last step of the escalation
         assert time.monotonic() - started_at < process_timeout(0.25)
-        assert _gone([child, helper], process_timeout(0.1)) == []
+        assert still_running([child, helper], process_timeout(0.1)) == []
     finally:
         proc.stdout.close()
 
@@ -65,7 +54,7 @@ def test_a_spawned_child_dies_with_the_thread_that_started_it():
         child = int(parent.stdout.readline())
         parent.kill()
         parent.wait(timeout=process_timeout(0.25))
-        assert _gone([child], process_timeout(0.25)) == []
+        assert still_running([child], process_timeout(0.25)) == []
 
 
 def test_run_child_ends_the_group_on_a_timeout():
@@ -95,7 +84,7 @@ def test_the_watchdog_ends_a_shutdown_that_hangs(stop):
         _, err = proc.communicate(timeout=process_timeout(0.5))
         assert proc.returncode == 1
         assert "warning: hang test: clean shutdown took longer than 1 s: stopping now" in err
-        assert _gone([child], process_timeout(0.1)) == []
+        assert still_running([child], process_timeout(0.1)) == []
 
 
 def test_a_second_signal_ends_the_process_at_once():
@@ -107,7 +96,7 @@ def test_a_second_signal_ends_the_process_at_once():
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=process_timeout(0.5))
         assert proc.returncode == 1 and "SIGINT again: stopping now" in err
-        assert _gone([child], process_timeout(0.1)) == []
+        assert still_running([child], process_timeout(0.1)) == []
 
 
 def test_supervisor_in_a_test_thread_installs_no_handlers_and_never_exits_the_process():
@@ -161,4 +150,4 @@ def test_the_suite_fails_a_test_that_leaves_a_process_running(tmp_path):
     assert "2 passed, 1 error" in out, out
     assert "the test left processes running" in out and "sleep 1000" in out and "sleep 1001" in out, out
     pids = [int((tmp_path / name).read_text()) for name in ("daemon", "orphan")]
-    assert _gone(pids, process_timeout(0.1)) == []
+    assert still_running(pids, process_timeout(0.1)) == []

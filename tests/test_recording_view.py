@@ -16,7 +16,7 @@ from pathlib import Path
 import psutil
 import pytest
 
-from conftest import process_timeout, started
+from conftest import process_timeout, started, still_running
 from explorer.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -111,17 +111,6 @@ def _stubborn(tmp_path):
     return {**os.environ, "RERUN_CLI_PATH": str(script)}, pids
 
 
-def _wait_gone(pids, timeout):
-    procs = []
-    for pid in pids:
-        try:
-            procs.append(psutil.Process(pid))
-        except psutil.NoSuchProcess:
-            pass
-    gone, alive = psutil.wait_procs(procs, timeout=timeout)
-    return [p.pid for p in alive if p.status() != psutil.STATUS_ZOMBIE]
-
-
 @pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM])
 def test_view_ends_a_viewer_that_ignores_signals_and_everything_it_started(recording, tmp_path, stop):
     """The escalation (SIGINT, SIGTERM to the whole group, then SIGKILL) ends even a viewer that
@@ -132,7 +121,7 @@ def test_view_ends_a_viewer_that_ignores_signals_and_everything_it_started(recor
         viewer, helper = map(int, pids.read_text().split())
         proc.send_signal(stop)
         assert proc.wait(timeout=process_timeout(0.5)) == 0
-        assert _wait_gone([viewer, helper], process_timeout(0.25)) == []
+        assert still_running([viewer, helper], process_timeout(0.25)) == []
 
 
 def test_a_killed_view_takes_its_viewer_and_its_helpers_along(recording, tmp_path):
@@ -144,7 +133,7 @@ def test_a_killed_view_takes_its_viewer_and_its_helpers_along(recording, tmp_pat
         viewer, helper = map(int, pids.read_text().split())
         proc.kill()
         proc.wait(timeout=process_timeout(0.25))
-        assert _wait_gone([viewer, helper], process_timeout(0.25)) == []
+        assert still_running([viewer, helper], process_timeout(0.25)) == []
 
 
 def test_a_second_ctrl_c_ends_view_at_once(recording, tmp_path):
@@ -156,7 +145,7 @@ def test_a_second_ctrl_c_ends_view_at_once(recording, tmp_path):
         time.sleep(0.3)
         proc.send_signal(signal.SIGINT)
         assert proc.wait(timeout=process_timeout(0.5)) in (0, 1)
-        assert _wait_gone([viewer, helper], process_timeout(0.25)) == []
+        assert still_running([viewer, helper], process_timeout(0.25)) == []
 
 
 def test_view_bad_input(tmp_path, capsys, recording):
