@@ -365,48 +365,80 @@ def side_extremes(lift, loads: TrainLoads, omega: float, ratio: float, lash: flo
     return out
 
 
-def falling_zeros(pieces: Pieces, force_of, n_grid: int = 4096) -> tuple[list[float], np.ndarray, np.ndarray]:
-    """Where force_of(theta, direction) (vectorised) falls from > 0 to <= 0 inside the open
-    pieces: sign changes on a grid polished by Brent's method. Also each piece's first and last
-    grid value (NaN for pieces that are not open), for the callers' rules at piece starts."""
+def loss_intervals(pieces: Pieces, force_of, n_grid: int = 4096) -> list[tuple[float, float]]:
+    """Where the force force_of(theta, direction) (vectorised) is <= 0 on the open pieces, as
+    (loss, regain) pairs of cam angles in [0, 2 pi), in the order of the revolution (a stretch that
+    runs through 0 has loss > regain). One definition for every report of contact loss:
+
+    - loss: the force falls from > 0 to <= 0 inside a piece (a grid sign change polished by
+      Brent's method), or a piece starts with it <= 0 although it was > 0 at the end of the piece
+      before or the valve was seated (a jump at a breakpoint, the lash take-up);
+    - regain: it rises back above 0 inside a piece, at a piece start, or at the end of the open
+      stretch (the valve seats and its seat holds it).
+    """
     from scipy.optimize import brentq
 
     n = pieces.start.size
-    first = np.full(n, np.nan)
-    last = np.full(n, np.nan)
-    roots = []
+    if n == 0:
+        return []
+    first = np.zeros(n, dtype=bool)  # force <= 0 just after the piece's start (closed: never)
+    last = np.zeros(n, dtype=bool)  # ... just before its end
+    inside: list[list[tuple[float, bool]]] = [[] for _ in range(n)]  # (angle, is_loss)
     for i in np.nonzero(pieces.is_open)[0]:
         a, b = pieces.start[i], pieces.end[i]
         eps = _INSIDE * max(1.0, b - a)
         th = np.linspace(a + eps, b - eps, max(9, int(math.ceil(n_grid * (b - a) / TWO_PI))))
         direction = float(pieces.direction[i])
         f = force_of(th, direction)
-        first[i], last[i] = f[0], f[-1]
-        for j in np.nonzero((f[:-1] > 0.0) & (f[1:] <= 0.0))[0]:
+        first[i], last[i] = f[0] <= 0.0, f[-1] <= 0.0
+        negative = f <= 0.0
+        for j in np.nonzero(negative[:-1] != negative[1:])[0]:
             root = brentq(lambda t: float(force_of(np.atleast_1d(t), direction)[0]), th[j], th[j + 1],
                           xtol=1e-14, maxiter=200)
-            roots.append(float(np.mod(root, TWO_PI)))
-    return roots, first, last
+            inside[i].append((float(root), bool(negative[j + 1])))
+    transitions: list[tuple[float, bool]] = []
+    for i in range(n):
+        if first[i] != last[(i - 1) % n]:
+            transitions.append((float(pieces.start[i]), bool(first[i])))
+        transitions.extend(inside[i])
+    if not transitions:
+        return []
+    # pair each loss with the regain after it, wrapping around the revolution
+    k = next((j for j, (_, loss) in enumerate(transitions) if loss), None)
+    if k is None:
+        return []
+    ordered = transitions[k:] + transitions[:k]
+    out = []
+    for (t0, loss0), (t1, loss1) in zip(ordered[0::2], ordered[1::2]):
+        if loss0 and not loss1:  # they alternate by construction
+            out.append((float(np.mod(t0, TWO_PI)), float(np.mod(t1, TWO_PI))))
+    return out
 
 
-def contact_loss_crossings(lift, loads: TrainLoads, omega: float, ratio: float, lash: float, pieces: Pieces,
-                           n_grid: int = 4096) -> list[float]:
-    """Cam angles where the rigid contact force falls to zero or below inside the open stretches:
-    sign changes polished by Brent's method, plus piece starts (breakpoints, lash take-up) where the
-    force is already <= 0 although it was positive (or the valve seated) just before."""
+def contact_loss_intervals(lift, loads: TrainLoads, omega: float, ratio: float, lash: float, pieces: Pieces,
+                           n_grid: int = 4096) -> list[tuple[float, float]]:
+    """Where the rigid contact force is <= 0 at speed omega: (loss, regain) cam angles, rad."""
 
     def force_of(t, direction):
         a_coef, g_part, _ = load_parts(lift.derivatives(np.mod(t, TWO_PI)), direction, loads, ratio, lash)
         return omega**2 * a_coef + g_part
 
-    out, first, last = falling_zeros(pieces, force_of, n_grid)
-    n = pieces.start.size
-    for i in np.nonzero(pieces.is_open)[0]:
-        prev = (i - 1) % n
-        before_ok = (not pieces.is_open[prev]) or last[prev] > 0.0
-        if first[i] <= 0.0 and before_ok and not (n == 1 and last[i] <= 0.0):
-            out.append(float(np.mod(pieces.start[i], TWO_PI)))
-    return sorted(out)
+    return loss_intervals(pieces, force_of, n_grid)
+
+
+def loss_report(intervals, omega: float, min_force: float, min_theta: float) -> tuple[list[dict], str]:
+    """The events (a loss and its regain, paired) and the phrase the warnings use, from one list."""
+    events, stretches = [], []
+    for loss, regain in intervals:
+        events.append({"kind": "rigid-contact-loss", "time_s": loss / omega, "cam_angle_deg": math.degrees(loss)})
+        events.append({"kind": "rigid-contact-regain", "time_s": regain / omega,
+                       "cam_angle_deg": math.degrees(regain)})
+        stretches.append(f"{math.degrees(loss):.2f} to {math.degrees(regain):.2f} deg")
+    phrase = ""
+    if stretches:
+        phrase = (f"the rigid contact force is at or below zero from cam angle {', and from '.join(stretches)} "
+                  f"(least {min_force:.4g} N at {math.degrees(min_theta):.2f} deg)")
+    return events, phrase
 
 
 # --- the effect ---------------------------------------------------------------------------------
@@ -463,15 +495,18 @@ def forces_effect(ctx) -> EffectOutput:
             f"valve float at any speed: the spring and closing loads do not hold the valve on the cam "
             f"even at standstill (cam angle {math.degrees(jump.theta):.2f} deg)"
         )
-    elif summary["valve_floats"]:
+    intervals = contact_loss_intervals(ctx.lift, loads, w, ratio, lash, pieces, n_grid) if f_min < 0.0 else []
+    summary["contact_loss_cam_angles_deg"] = [[math.degrees(a), math.degrees(b)] for a, b in intervals]
+    loss_events, phrase = loss_report(intervals, w, f_min, f_theta)
+    events.extend(loss_events)
+    if not jump.static_loss and summary["valve_floats"]:
+        # one set of angles, those of this speed; the float speed's own angle is named as such
         warnings.append(
-            f"valve float: {scene.drive.rpm:.6g} rpm is at or above the float (jump) speed "
-            f"{jump.rpm:.6g} rpm; the rigid contact force first reaches zero at cam angle "
-            f"{math.degrees(jump.theta):.2f} deg (min {f_min:.4g} N at {math.degrees(f_theta):.2f} deg)"
+            f"valve float: {scene.drive.rpm:.6g} rpm is at or above the float (jump) speed {jump.rpm:.6g} rpm "
+            f"(at which contact is first lost, at cam angle {math.degrees(jump.theta):.2f} deg); at "
+            f"{scene.drive.rpm:.6g} rpm " + (phrase or f"the least rigid contact force is {f_min:.4g} N at cam angle "
+                                                     f"{math.degrees(f_theta):.2f} deg")
         )
-    if f_min < 0.0:
-        for th in contact_loss_crossings(ctx.lift, loads, w, ratio, lash, pieces, n_grid):
-            events.append({"kind": "rigid-contact-loss", "time_s": th / w, "cam_angle_deg": math.degrees(th)})
     seat_force = loads.preload + loads.closing
     if seat_force < 0.0:
         warnings.append(

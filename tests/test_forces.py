@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import run_cli
+from conftest import SCENES, run_cli
 from explorer.effects import simulate
 from explorer.errors import InputError
 from explorer.forces import (
@@ -373,3 +373,58 @@ def test_schenker_fig2_forces_against_the_paper(scenes_dir):
     assert jump.rpm < 240
     # rate 0: the float speed is where M |p2| (w/w0)^2 reaches P0 - R + D at the p2 point
     assert jump.rpm == pytest.approx(240 * math.sqrt((260 - 15 + 66) / (2.9 * abs(p2))), rel=1e-9)
+
+
+# --- contact loss: one definition, loss and regain paired ----------------------------------------
+
+
+def test_loss_intervals_pair_losses_with_regains_on_synthetic_pieces():
+    """Closed forms: cos(t) - 1/2 on an open half revolution is <= 0 from pi/3 to its end, where
+    the valve seats (the regain); sin(t - 0.3) on a revolution that is open throughout is <= 0
+    from pi + 0.3 through 0 to 0.3 (the stretch wraps). A jump at a piece start is a loss there."""
+    from explorer.forces import Pieces, loss_intervals
+
+    def pieces(starts, ends, is_open):
+        return Pieces(np.array(starts), np.array(ends), np.array(is_open), np.ones(len(starts)))
+
+    half = pieces([0.0, math.pi], [math.pi, 2 * math.pi], [True, False])
+    (loss, regain), = loss_intervals(half, lambda t, d: np.cos(t) - 0.5)
+    assert loss == pytest.approx(math.pi / 3, abs=1e-13) and regain == math.pi
+
+    whole = pieces([0.0], [2 * math.pi], [True])
+    (loss, regain), = loss_intervals(whole, lambda t, d: np.sin(t - 0.3))
+    assert loss == pytest.approx(math.pi + 0.3, abs=1e-13) and regain == pytest.approx(0.3, abs=1e-13)
+
+    # positive on the first piece, negative from the second's start (a breakpoint) until 3 pi/2
+    two = pieces([0.0, 1.0], [1.0, 2 * math.pi], [True, True])
+    (loss, regain), = loss_intervals(two, lambda t, d: np.where(t < 1.0, 1.0, t - 1.5 * math.pi))
+    assert loss == 1.0 and regain == pytest.approx(1.5 * math.pi, abs=1e-13)
+
+    assert loss_intervals(whole, lambda t, d: 1.0 + 0.0 * t) == []
+    assert loss_intervals(whole, lambda t, d: -1.0 + 0.0 * t) == []  # never in contact: no stretch to pair
+
+
+def test_float_scene_reports_one_set_of_angles_everywhere():
+    """valve_float_demo at its 4000 rpm: the summary's stretches, the paired events and the warning
+    hold the same angles, those of this speed; every sampled contact force inside a stretch is
+    <= 0 and every one outside it (valve open) > 0 (the columns are an independent computation)."""
+    result = simulate(load_scene(SCENES / "valve_float_demo.toml"))
+    s, c = result.summary, result.columns
+    stretches = s["contact_loss_cam_angles_deg"]
+    assert len(stretches) == 2
+    kinds = [(e["kind"], e["cam_angle_deg"]) for e in s["events"] if e["kind"].startswith("rigid-contact")]
+    assert kinds == [(k, a) for pair in stretches for k, a in zip(("rigid-contact-loss", "rigid-contact-regain"), pair)]
+    (warning,) = [w for w in s["warnings"] if w.startswith("valve float")]
+    for loss, regain in stretches:
+        assert f"from cam angle {loss:.2f} to {regain:.2f} deg" in warning or f"from {loss:.2f} to {regain:.2f} deg" in warning
+    assert f"contact is first lost, at cam angle {s['jump_cam_angle_deg']:.2f} deg" in warning  # named as the float speed's
+    theta, force = c["cam_angle_deg"], c["contact_force_N"]
+    is_open = c["rigid_valve_lift_m"] > 0.0
+    inside = np.zeros_like(is_open)
+    for loss, regain in stretches:
+        inside |= (theta > loss) & (theta < regain)
+    near = np.zeros_like(is_open)  # samples within a step of a root can round either way
+    for angle in np.ravel(stretches):
+        near |= np.abs(theta - angle) < 0.2
+    assert np.all(force[inside & ~near] <= 0.0)
+    assert np.all(force[is_open & ~inside & ~near] > 0.0)

@@ -213,24 +213,18 @@ def buffer_extremes(lift, pieces, n_grid: int = 4096) -> dict:
             "max": b_max, "max_theta": th_max if b_max > 0.0 else None}
 
 
-def loss_crossings(lift, loads, omega: float, pieces, n_grid: int = 4096) -> list[float]:
-    """Cam angles where the latch force (buffer included) falls to zero or below in the carried
-    window: sign changes polished by Brent's method, and a piece start where it is already <= 0
-    although it was positive just before (or the valve was seated: the pick-up)."""
-    from ..forces import falling_zeros
+def loss_intervals(lift, loads, omega: float, pieces, n_grid: int = 4096) -> list[tuple[float, float]]:
+    """Where the latch force (buffer included) is <= 0 in the carried window: (loss, regain) cam
+    angles, by the one definition of explorer.forces.loss_intervals (the pick-up counts as the
+    valve having been seated, the trip as its end)."""
+    from ..forces import loss_intervals as intervals_of
 
     drive = _LatchAndBuffer(lift)
 
     def force_of(t, direction):
         return _force(lift, drive.derivatives(np.mod(t, TWO_PI)), direction, loads, omega)[0]
 
-    out, first, last = falling_zeros(pieces, force_of, n_grid)
-    before = None
-    for i in np.nonzero(pieces.is_open)[0]:
-        if first[i] <= 0.0 and (before is None or before > 0.0):
-            out.append(float(np.mod(pieces.start[i], TWO_PI)))
-        before = last[i]
-    return sorted(out)
+    return intervals_of(pieces, force_of, n_grid)
 
 
 # --------------------------------------------------------------------------------------------
@@ -239,7 +233,7 @@ def loss_crossings(lift, loads, omega: float, pieces, n_grid: int = 4096) -> lis
 
 
 def trip_forces_effect(ctx) -> EffectOutput:
-    from ..forces import TrainLoads, float_speed
+    from ..forces import TrainLoads, float_speed, loss_report
 
     scene, w = ctx.scene, ctx.omega
     lift = trip_lift_of(ctx)
@@ -343,9 +337,9 @@ def trip_forces_effect(ctx) -> EffectOutput:
             f"the latch throws the valve off before the trip: its deceleration needs more than spring and loads "
             f"supply, the rigid latch force falls to {f_min:.4g} N at cam angle {math.degrees(th_min):.2f} deg"
             + (f" (throw-off speed {jump.rpm:.6g} rpm)" if math.isfinite(jump.omega) else ""))
-    if f_min < 0.0:
-        for th in loss_crossings(lift, loads, w, pieces, n_grid):
-            events.append({"kind": "rigid-contact-loss", "time_s": th / w, "cam_angle_deg": math.degrees(th)})
+    intervals = loss_intervals(lift, loads, w, pieces, n_grid) if f_min < 0.0 else []
+    summary["contact_loss_cam_angles_deg"] = [[math.degrees(a), math.degrees(b)] for a, b in intervals]
+    events.extend(loss_report(intervals, w, f_min, th_min)[0])
     return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
 
 
