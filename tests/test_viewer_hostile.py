@@ -1,0 +1,250 @@
+"""The browser explorer against a hostile page (issue 17, item 1): cross-site websocket
+handshakes are refused, and no value a page sends can hang or exhaust the server. Server side,
+no browser: raw handshakes with websockets' client, values set through the GUI handles."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import socket
+import subprocess
+import sys
+import textwrap
+import urllib.request
+
+import psutil
+import pytest
+
+from conftest import ROOT, SCENES
+
+DEMO = SCENES / "cycloidal_demo.toml"
+WAIT_S = 120.0  # generous: 2 shared cores; every wait ends on a state, not on a clock
+SLOW_LASH = "10**10**10 mm"  # a big-integer power: minutes of one C call holding the GIL
+
+
+@contextlib.contextmanager
+def running_app(**kwargs):
+    import viser
+
+    from explorer.viewer.app import ExplorerApp
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    app = None
+    try:
+        app = ExplorerApp(server, str(DEMO), playing=False, **kwargs)
+        assert app.wait_applied(WAIT_S)
+        yield server, app
+    finally:
+        if app is not None:
+            app.stop()
+        server.stop()
+
+
+def _handshake(port: int, origin: str | None, upgrade: str = "websocket") -> int:
+    """Status code of a raw websocket upgrade request to the server."""
+    lines = [
+        "GET / HTTP/1.1", f"Host: 127.0.0.1:{port}", f"Upgrade: {upgrade}", "Connection: Upgrade",
+        "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==", "Sec-WebSocket-Version: 13",
+    ]
+    if origin is not None:
+        lines.append(f"Origin: {origin}")
+    with socket.create_connection(("127.0.0.1", port), timeout=WAIT_S) as sock:
+        sock.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
+        status_line = sock.makefile("rb").readline().decode()
+    return int(status_line.split()[1])
+
+
+def _connect(port: int, origin: str | None):
+    import viser
+    from websockets.sync.client import connect
+
+    return connect(f"ws://127.0.0.1:{port}", origin=origin, subprotocols=[f"viser-v{viser.__version__}"],
+                   open_timeout=WAIT_S)
+
+
+def _http_get(port: int) -> int:
+    with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=WAIT_S) as response:
+        return response.status
+
+
+# ------------------------------------------------------------------------------------- Origin
+
+
+def test_origin_rules():
+    from explorer.viewer.origin import origin_allowed
+
+    local = ("127.0.0.1", 8080)
+    assert origin_allowed(None, local)  # not a browser
+    for ok in ("http://127.0.0.1:8080", "http://localhost:8080", "http://[::1]:8080", "http://LOCALHOST:8080"):
+        assert origin_allowed(ok, local), ok
+    for bad in ("http://evil.example", "http://evil.example:8080", "http://127.0.0.1:8081", "http://127.0.0.1",
+                "null", "", "file://", "http://127.0.0.1:8080.evil.example", "http://127.0.0.2:8080",
+                "http://localhost:99999", "ws://127.0.0.1:8080", "http://127.0.0.1:8080/x"):
+        assert not origin_allowed(bad, local), bad
+    # listening on an interface address (--host 192.168.1.5, or all interfaces reached through it)
+    lan = ("::ffff:192.168.1.5", 8080, 0, 0)
+    assert origin_allowed("http://192.168.1.5:8080", lan)
+    assert not origin_allowed("http://192.168.1.6:8080", lan)
+    # --host given as a name
+    assert not origin_allowed("http://box.lan:8080", lan)
+    assert origin_allowed("http://box.lan:8080", lan, extra_hosts=("box.lan",))
+
+
+def test_cross_origin_handshakes_are_refused_own_origin_accepted():
+    from websockets.exceptions import InvalidStatus
+
+    from explorer.viewer import origin
+
+    with running_app() as (server, app):
+        port = server.get_port()
+        refused = origin.refused
+        for evil in ("http://evil.example", f"http://evil.example:{port}", f"http://127.0.0.1:{port + 1}", "null"):
+            assert _handshake(port, evil) == 403, evil
+            # viser checks the Upgrade header case-sensitively; a browser could not send this
+            # one, a script could
+            assert _handshake(port, evil, upgrade="WebSocket") == 403, evil
+            with pytest.raises(InvalidStatus) as caught:
+                _connect(port, evil)
+            assert caught.value.response.status_code == 403
+        assert origin.refused >= refused + 12
+        for good in (f"http://127.0.0.1:{port}", f"http://localhost:{port}", None):
+            assert _handshake(port, good) == 101, good
+            with _connect(port, good) as ws:
+                assert ws.recv(timeout=WAIT_S)  # viser talks to it
+        assert _http_get(port) == 200  # the page itself is still served
+
+
+# ------------------------------------------------------------------------------------- budget
+
+
+def test_a_slow_value_is_abandoned_and_the_server_stays_responsive():
+    """The lash that froze the server: whether the unit parser refuses it (an error) or it runs
+    into the time limit, the server answers meanwhile and later changes apply."""
+    from explorer.viewer.model import time_limit_message
+
+    with running_app(time_limit=3.0) as (server, app):
+        port = server.get_port()
+        first_pid = app.worker.process_id
+        assert first_pid is not None and psutil.pid_exists(first_pid)
+        app.fields["valve.lash"].value = SLOW_LASH
+        assert _http_get(port) == 200  # while the computation runs (or has been refused)
+        with _connect(port, None) as ws:
+            assert ws.recv(timeout=WAIT_S)
+        assert app.wait_applied(WAIT_S)
+        text = app.error_text
+        assert text == time_limit_message(3.0, True) or text.startswith("error:"), text
+        assert 'role="alert"' in app.status.content  # the page shows it
+        if app.worker.abandoned:
+            assert not psutil.pid_exists(first_pid)  # killed and reaped, not left running
+        # the previous result is still what is shown, and the next change applies
+        assert app.current is not None and not any(SLOW_LASH in o for o in app.current.request.overrides)
+        app.fields["valve.lash"].value = "0.31 mm"
+        assert app.wait_applied(WAIT_S)
+        assert app.error_text == ""
+        assert any("0.31 mm" in o for o in app.current.request.overrides)
+        assert app.current.scene.valve.lash == pytest.approx(0.31e-3)
+        assert app.loop_errors == 0 and app.worker.internal_errors == 0
+
+
+def test_values_out_of_bounds_are_refused_before_any_computation():
+    from explorer.viewer.app import MAX_GUI_STEPS, MAX_TEXT_LENGTH
+
+    with running_app() as (server, app):
+        steps = app.fields["solver.steps_per_revolution"]
+        assert steps.max == MAX_GUI_STEPS  # the page's widget bounds it too
+        cases = [
+            (steps, 10_000_000, "at most"),
+            (app.fields["drive.rpm"], float("inf"), "finite"),
+            (app.fields["drive.rpm"], float("nan"), "finite"),
+            (app.fields["valve.lash"], "1" * (MAX_TEXT_LENGTH + 1) + " mm", "longer than"),
+            (app.fields["lift.law"], "no such law", "not one of"),
+        ]
+        for handle, value, words in cases:
+            submitted = app.worker.submitted
+            handle.value = value
+            assert app.wait_applied(WAIT_S)
+            assert app.worker.submitted == submitted, value  # nothing was computed for it
+            assert words in app.error_text, (value, app.error_text)
+        # values that are not the page's to choose are ignored
+        shown = app.current
+        submitted = app.worker.submitted
+        app.scene.value = "/etc/passwd"
+        app.magnification.value = float("nan")
+        app.angle.value = float("inf")
+        assert app.wait_applied(WAIT_S)
+        assert app.worker.submitted == submitted and app.current is shown
+        assert app.loop_errors == 0 and app.worker.internal_errors == 0
+        # and a good value still applies
+        steps.value = 7200
+        assert app.wait_applied(WAIT_S)
+        assert app.error_text == "" and app.current.scene.solver.steps_per_revolution == 7200
+
+
+def test_memory_budget_stops_a_huge_computation():
+    """A child with a small address-space limit: the huge request fails inside it, the message
+    says so, and the worker goes on."""
+    from explorer.viewer.model import ComputeWorker, Request, memory_limit_message
+
+    ready, errors = [], []
+    worker = ComputeWorker(on_ready=ready.append, on_error=lambda r, m: errors.append(m), time_limit=None,
+                           memory_limit=1 << 30).start()
+    # about 1.5 GB at a million steps (the explorer's own bound is 100 000; the scene files' far more)
+    try:
+        worker.submit(Request(str(DEMO), serial=1))
+        assert worker.wait_idle(WAIT_S) and len(ready) == 1, errors
+        worker.submit(Request(str(DEMO), ("solver.steps_per_revolution=1000000",), serial=2))
+        assert worker.wait_idle(WAIT_S)
+        assert errors == [memory_limit_message(1 << 30, True)]
+        worker.submit(Request(str(DEMO), ('valve.lash="0.4 mm"',), serial=3))
+        assert worker.wait_idle(WAIT_S) and len(ready) == 2 and ready[-1].request.serial == 3
+    finally:
+        worker.stop()
+    assert worker.internal_errors == 0
+
+
+# ------------------------------------------------------------------------------------- no process left
+
+
+def test_the_worker_process_ends_with_the_app():
+    me = psutil.Process()
+    before = {p.pid for p in me.children(recursive=True)}
+    with running_app() as (server, app):
+        pid = app.worker.process_id
+        child = psutil.Process(pid)
+        assert pid not in before and child.ppid() == os.getpid()
+        assert os.getsid(pid) == pid  # its own session: Ctrl-C in a terminal is the server's
+    assert not psutil.pid_exists(pid)
+    assert {p.pid for p in me.children(recursive=True)} <= before
+
+
+def test_the_worker_process_dies_with_a_killed_server(tmp_path):
+    """SIGKILL leaves no `finally` to run: the child's death signal must end it. The child is
+    stopped first, so that only the signal can end it (a running child would also leave when its
+    pipe closes)."""
+    script = textwrap.dedent(f"""
+        import sys, time
+        sys.path.insert(0, {str(ROOT)!r})
+        from explorer.viewer.worker import ComputeProcess
+        p = ComputeProcess()
+        p.start()
+        print(p.pid, flush=True)
+        time.sleep(3600)
+    """)
+    server = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    pid = None
+    try:
+        pid = int(server.stdout.readline())
+        child = psutil.Process(pid)
+        assert child.ppid() == server.pid
+        child.suspend()
+        server.send_signal(signal.SIGKILL)
+        server.wait()
+        gone, alive = psutil.wait_procs([child], timeout=WAIT_S)
+        assert not alive, "the computing child outlived its server"
+    finally:
+        server.kill()
+        server.wait()
+        if pid is not None:
+            with contextlib.suppress(psutil.NoSuchProcess):
+                psutil.Process(pid).kill()
