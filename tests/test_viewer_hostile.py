@@ -12,6 +12,7 @@ import subprocess
 import sys
 import textwrap
 import urllib.request
+from pathlib import Path
 
 import psutil
 import pytest
@@ -20,7 +21,11 @@ from conftest import ROOT, SCENES
 
 DEMO = SCENES / "cycloidal_demo.toml"
 WAIT_S = 120.0  # generous: 2 shared cores; every wait ends on a state, not on a clock
+WAIT_MS = int(1000 * WAIT_S)
 SLOW_LASH = "10**10**10 mm"  # a big-integer power: minutes of one C call holding the GIL
+CHROMIUM = Path("/usr/bin/chromium")
+BROWSER_ARGS = ["--no-sandbox", "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--no-first-run"]
 
 
 @contextlib.contextmanager
@@ -248,3 +253,63 @@ def test_the_worker_process_dies_with_a_killed_server(tmp_path):
         if pid is not None:
             with contextlib.suppress(psutil.NoSuchProcess):
                 psutil.Process(pid).kill()
+
+
+# ------------------------------------------------------------------------------------- a real browser
+
+
+@pytest.mark.browser
+@pytest.mark.skipif(not CHROMIUM.exists(), reason="needs Debian's chromium at /usr/bin/chromium")
+def test_a_page_on_another_site_cannot_connect_the_explorers_own_page_can(tmp_path):
+    """Headless Chromium opens a page of http://evil.example (resolved to a local server) whose
+    script opens a websocket to the explorer, as the issue's attack did: refused. The same script
+    in the explorer's own page connects, so the refusal is the Origin check's doing."""
+    import http.server
+    import threading
+
+    sync_api = pytest.importorskip("playwright.sync_api")
+    import viser
+
+    from explorer.viewer import origin
+
+    class Page(http.server.BaseHTTPRequestHandler):
+        def do_GET(self):
+            body = b"<html><body>a page on another site</body></html>"
+            self.send_response(200)
+            self.send_header("Content-Type", "text/html")
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+        def log_message(self, *args):
+            pass
+
+    evil = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Page)
+    threading.Thread(target=evil.serve_forever, daemon=True).start()
+    open_socket = """([url, protocol]) => new Promise(resolve => {
+        const ws = new WebSocket(url, [protocol]);
+        ws.onopen = () => { ws.close(); resolve("open"); };
+        ws.onerror = () => resolve("refused");
+    })"""
+    try:
+        with running_app() as (server, app), sync_api.sync_playwright() as pw:
+            port = server.get_port()
+            ws_url = f"ws://127.0.0.1:{port}"
+            browser = pw.chromium.launch(
+                executable_path=str(CHROMIUM), headless=True, timeout=WAIT_MS,
+                args=BROWSER_ARGS + ["--host-resolver-rules=MAP evil.example 127.0.0.1"])
+            try:
+                page = browser.new_page()
+                page.set_default_timeout(WAIT_MS)
+                page.goto(f"http://evil.example:{evil.server_address[1]}/", timeout=WAIT_MS)
+                refused = origin.refused
+                assert page.evaluate(open_socket, [ws_url, f"viser-v{viser.__version__}"]) == "refused"
+                assert origin.refused == refused + 1
+                page.goto(f"http://127.0.0.1:{port}/", timeout=WAIT_MS)
+                assert page.evaluate(open_socket, [ws_url, f"viser-v{viser.__version__}"]) == "open"
+                assert origin.refused == refused + 1
+            finally:
+                browser.close()
+    finally:
+        evil.shutdown()
+        evil.server_close()
