@@ -313,3 +313,12 @@ def test_a_page_on_another_site_cannot_connect_the_explorers_own_page_can(tmp_pa
     finally:
         evil.shutdown()
         evil.server_close()
+
+
+def test_help_and_readme_state_the_time_limit():
+    from explorer.cli_serve import HELP
+    from explorer.viewer.model import COMPUTE_TIME_LIMIT_S
+
+    stated = f"{COMPUTE_TIME_LIMIT_S:g} s"
+    assert stated in " ".join(HELP.split())
+    assert f"may take **{stated}**" in (ROOT / "README.md").read_text()

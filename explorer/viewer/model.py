@@ -1,6 +1,7 @@
 """What the browser explorer shows, computed without any viewer: a request (scene file, GUI
 overrides, magnification) becomes a `Prepared` bundle of meshes, per-step poses, plot data and
-read-outs. `ComputeWorker` does this off the GUI threads, newest request wins.
+read-outs. `ComputeWorker` does this off the GUI threads, newest request wins, in a child process
+with a time and memory budget (explorer.viewer.worker).
 
 Nothing here imports viser, so it is testable and reusable (the benchmark drives it directly).
 """
