@@ -159,9 +159,10 @@ def main(argv=None) -> int:
     def child_change():
         k[0] += 1
         started = time.perf_counter()
-        kind, prepared = child.call(Request(path, (f'valve.lash="{lashes[k[0] % 2]}"',)), 60.0)
+        kind, payload = child.call(Request(path, (f'valve.lash="{lashes[k[0] % 2]}"',)), 60.0)
         if kind != "ok":
-            raise RuntimeError(prepared)
+            raise RuntimeError(payload)
+        prepared, _ = payload
         overheads.append(time.perf_counter() - started - prepared.seconds)
 
     try:

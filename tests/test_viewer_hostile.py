@@ -187,6 +187,21 @@ def test_values_out_of_bounds_are_refused_before_any_computation():
         assert app.error_text == "" and app.current.scene.solver.steps_per_revolution == 7200
 
 
+def test_a_magnification_change_keeps_the_shown_result_across_the_process():
+    """The child reuses its simulation when only the magnification changes; the bundle it sends
+    back is linked to the objects already shown, so plots and meshes are not redrawn."""
+    with running_app() as (server, app):
+        shown = app.current
+        app.magnification.value = 7.0
+        assert app.wait_applied(WAIT_S)
+        assert app.current is not shown and app.current.request.magnification == 7.0
+        assert app.current.result is shown.result and app.current.meshes is shown.meshes
+        assert not app.current.new_result
+        app.fields["drive.rpm"].value = 1500.0
+        assert app.wait_applied(WAIT_S)
+        assert app.current.new_result and app.current.result is not shown.result
+
+
 def test_memory_budget_stops_a_huge_computation():
     """A child with a small address-space limit: the huge request fails inside it, the message
     says so, and the worker goes on."""

@@ -451,10 +451,16 @@ class ComputeWorker:
             self.on_error(request, time_limit_message(self.time_limit, self._last is not None))
             return
         except WorkerDied as exc:
-            if self._stop:
-                return
+            if not self._stop:
+                self.internal_errors += 1
+                self.on_error(request, f"internal error: {exc}")
+            return
+        except Exception as exc:  # a bug must not end this thread: show it, start a fresh child
             self.internal_errors += 1
-            self.on_error(request, f"internal error: {exc}")
+            traceback.print_exc()
+            self._process.kill()
+            self._process.reap()  # the child's previous result is no longer the one held here
+            self.on_error(request, f"internal error: {type(exc).__name__}: {exc}")
             return
         if kind == "input":
             self.on_error(request, payload)
@@ -465,7 +471,7 @@ class ComputeWorker:
             self.internal_errors += 1
             self.on_error(request, payload)
         else:
-            prepared = self._relink(payload)
+            prepared = self._relink(*payload)
             self._last = prepared
             self.computed += 1
             self.on_ready(prepared)
@@ -475,13 +481,13 @@ class ComputeWorker:
                 except Exception:
                     traceback.print_exc()
 
-    def _relink(self, prepared: Prepared) -> Prepared:
+    def _relink(self, prepared: Prepared, reused: int | None) -> Prepared:
         """A bundle that reused the previous simulation (only the magnification changed) shares
         the previous bundle's objects again, as it did in the child: the viewer tells what to
-        redraw by identity, and a pickled copy would redraw the plots and every mesh."""
+        redraw by identity, and a pickled copy would redraw the plots and every mesh. `reused`
+        is the serial of the bundle the child reused; only that one may be linked to."""
         last = self._last
-        if prepared.new_result or last is None or \
-                (last.request.path, last.request.overrides) != (prepared.request.path, prepared.request.overrides):
+        if reused is None or last is None or last.request.serial != reused:
             return prepared
         import dataclasses
 

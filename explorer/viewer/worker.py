@@ -90,7 +90,8 @@ class ComputeProcess:
             proc = subprocess.Popen(
                 [sys.executable, "-c", CHILD_MAIN, str(to_child_r), str(from_child_w),
                  str(os.getpid()), str(int(self.memory_bytes))],
-                pass_fds=(to_child_r, from_child_w), stdin=subprocess.DEVNULL, env=env,
+                # stdout is the server's (it prints its URL there); tracebacks go to stderr
+                pass_fds=(to_child_r, from_child_w), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, env=env,
                 start_new_session=True,
             )
         except BaseException:
@@ -125,8 +126,9 @@ class ComputeProcess:
             return self._proc is not None and self._proc.poll() is None
 
     def call(self, request, time_limit: float | None):
-        """("ok", Prepared) | ("input", message) | ("internal", message); raises
-        TimeLimitExceeded (the child is killed and reaped) or WorkerDied."""
+        """("ok", (Prepared, serial of the previous request it reused or None)) | ("input",
+        message) | ("internal", message) | ("memory", ""); raises TimeLimitExceeded (the child
+        is killed and reaped) or WorkerDied."""
         if not self.alive():
             self.reap()
             self.start()
@@ -257,8 +259,9 @@ def main(argv: list[str]) -> int:
             traceback.print_exc()
             reply = ("internal", f"internal error: {type(exc).__name__}: {exc}")
         else:
+            reused = None if prepared.new_result else last.request.serial
             last = prepared
-            reply = ("ok", prepared)
+            reply = ("ok", (prepared, reused))
         try:
             pipe.send(reply)
         except MemoryError:
