@@ -4,9 +4,9 @@ Threading (the pattern of viser's examples): GUI callbacks run on viser's thread
 at once, so they only *record* what was asked (under a lock) and hand recomputations to the
 ComputeWorker (newest request wins), which runs each in a child process that is killed past its
 time limit (explorer.viewer.worker), so no value a page sends can stall the server. Websocket
-handshakes from other sites are refused (explorer.viewer.origin). One loop thread owns every scene and GUI update: it takes
-the recorded requests, advances the playback clock and applies one frame under
-`server.atomic()`. When the loop itself assigns a GUI value (the scrub slider following the
+handshakes from other sites are refused (explorer.viewer.origin). One loop thread owns every
+scene and GUI update: it takes the recorded requests, advances the playback clock and applies
+one frame under `server.atomic()`. When the loop itself assigns a GUI value (the scrub slider following the
 animation, fields refreshed after a scene swap), the `on_update` that viser fires synchronously
 is recognised by a thread-local flag and ignored, so nothing feeds back.
 """
