@@ -28,10 +28,10 @@ from pathlib import Path
 from types import MappingProxyType
 
 READY = "ready"
-START_TIMEOUT_S = 120.0
+START_TIMEOUT_S = 120.0  # the child imports numpy, scipy, pint, trimesh: seconds on a busy machine
 # not `-m explorer.viewer.worker`: the module would run as __main__, and what it pickles (the
 # mapping-proxy rebuilder) would name __main__, which the server cannot find
-CHILD_MAIN = "import sys; from explorer.viewer.worker import main; sys.exit(main(sys.argv[1:]))"  # the child imports numpy, scipy, pint, trimesh: seconds on a busy machine
+CHILD_MAIN = "import sys; from explorer.viewer.worker import main; sys.exit(main(sys.argv[1:]))"
 
 
 class TimeLimitExceeded(Exception):
