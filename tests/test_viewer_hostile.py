@@ -383,3 +383,33 @@ def test_help_and_readme_state_the_time_limit():
     stated = f"{COMPUTE_TIME_LIMIT_S:g} s"
     assert stated in " ".join(HELP.split())
     assert f"may take **{stated}**" in (ROOT / "README.md").read_text()
+
+
+def test_the_issues_attack_over_the_websocket_leaves_explorer_serve_responsive_and_stoppable():
+    """What froze the server in the issue, sent as a page's script sends it (no foreign Origin:
+    that is refused now): the slow lash, then ten million steps. The server keeps answering
+    HTTP, and Ctrl-C stops it at once, with its compute process, even mid-computation."""
+    from test_viewer import _Browser, _kill, _start_serve
+
+    proc, url, _ = _start_serve(DEMO)
+    browser = None
+    try:
+        port = int(url.rstrip("/").rsplit(":", 1)[1])
+        worker = _worker_of(proc.pid)
+        browser = _Browser(url)
+        browser.set("Lash [mm]", SLOW_LASH)
+        assert _http_get(port) == 200
+        browser.set("Steps / revolution", 10_000_000)
+        assert _http_get(port) == 200
+        with _connect(port, f"http://127.0.0.1:{port}") as ws:  # a new page still connects
+            assert ws.recv(timeout=WAIT_S)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=WAIT_S)
+        assert proc.returncode == 0, err
+        assert "Traceback" not in err, err
+        assert _ends(worker.pid)
+    finally:
+        if browser is not None:
+            with contextlib.suppress(Exception):
+                browser.close()
+        _kill(proc)
