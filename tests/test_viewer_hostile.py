@@ -413,3 +413,20 @@ def test_the_issues_attack_over_the_websocket_leaves_explorer_serve_responsive_a
             with contextlib.suppress(Exception):
                 browser.close()
         _kill(proc)
+
+
+def test_a_newer_change_does_not_wait_for_a_slow_computation():
+    """With no time limit at all, a change made while the slow lash is computing still applies:
+    the slow computation is abandoned for it. (Once the unit parser refuses that lash, the
+    computation is not slow and this holds trivially.)"""
+    with running_app(time_limit=None) as (server, app):
+        app.fields["valve.lash"].value = SLOW_LASH
+        deadline = time.monotonic() + WAIT_S
+        while app.worker.waiting():  # until the worker has taken it (and is computing it)
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        app.fields["valve.lash"].value = "0.32 mm"
+        assert app.wait_applied(WAIT_S)
+        assert app.error_text == ""
+        assert app.current.scene.valve.lash == pytest.approx(0.32e-3)
+        assert app.worker.abandoned == 0 and app.worker.internal_errors == 0

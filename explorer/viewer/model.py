@@ -337,6 +337,9 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
 # rather than minutes: the explorer is for trying changes, and the slowest built-in scene takes
 # about 1 s on a loaded 2-core machine.
 COMPUTE_TIME_LIMIT_S = 10.0
+# A computation running longer than this is abandoned as soon as a newer request waits (newest
+# wins): starting a fresh child costs about half a second, less than waiting out a slow one.
+SUPERSEDE_AFTER_S = 1.0
 MEMORY_LIMIT_BYTES = 4 << 30  # address space of the child (its libraries alone reserve ~1.5 GB)
 
 
@@ -357,7 +360,8 @@ class ComputeWorker:
 
     The thread hands each request to a child process and waits at most `time_limit` seconds for
     it (None: no limit); past that the child is killed, `on_error` gets the time-limit message,
-    and the next request starts a fresh child."""
+    and the next request starts a fresh child. A computation past SUPERSEDE_AFTER_S is killed
+    as soon as a newer request waits."""
 
     on_ready: Callable[[Prepared], None]
     on_error: Callable[[Request, str], None]
@@ -375,6 +379,7 @@ class ComputeWorker:
     submitted: int = 0
     internal_errors: int = 0  # exceptions other than InputError (should stay 0)
     abandoned: int = 0  # computations stopped at the time or memory limit
+    superseded: int = 0  # slow computations stopped for a newer request
 
     def start(self) -> "ComputeWorker":
         from .worker import ComputeProcess
@@ -394,6 +399,11 @@ class ComputeWorker:
             self._pending = request
             self.submitted += 1
             self._cond.notify_all()
+
+    def waiting(self) -> bool:
+        """Whether a request waits that the thread has not taken yet."""
+        with self._cond:
+            return self._pending is not None
 
     def idle(self) -> bool:
         with self._cond:
@@ -442,10 +452,20 @@ class ComputeWorker:
             self._process.reap()
 
     def _compute(self, request: Request) -> None:
-        from .worker import TimeLimitExceeded, WorkerDied
+        from .worker import Superseded, TimeLimitExceeded, WorkerDied
+
+        started = time.monotonic()
+
+        def superseded() -> bool:
+            # read without the lock: a stale answer only delays the check by one poll
+            return self._stop or (self._pending is not None and time.monotonic() - started > SUPERSEDE_AFTER_S)
 
         try:
-            kind, payload = self._process.call(request, self.time_limit)
+            kind, payload = self._process.call(request, self.time_limit, superseded)
+        except Superseded:
+            if not self._stop:
+                self.superseded += 1  # the newer request is next; no message for this one
+            return
         except TimeLimitExceeded:
             self.abandoned += 1
             self.on_error(request, time_limit_message(self.time_limit, self._last is not None))

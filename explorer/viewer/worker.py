@@ -23,11 +23,14 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 from multiprocessing.connection import Connection
 from pathlib import Path
 from types import MappingProxyType
+from typing import Callable
 
 READY = "ready"
+SUPERSEDED_POLL_S = 0.05  # how often a running computation asks whether a newer request waits
 START_TIMEOUT_S = 120.0  # the child imports numpy, scipy, pint, trimesh: seconds on a busy machine
 # not `-m explorer.viewer.worker`: the module would run as __main__, and what it pickles (the
 # mapping-proxy rebuilder) would name __main__, which the server cannot find
@@ -39,6 +42,10 @@ class TimeLimitExceeded(Exception):
 
 
 class WorkerDied(Exception):
+    pass
+
+
+class Superseded(Exception):
     pass
 
 
@@ -125,10 +132,11 @@ class ComputeProcess:
         with self._lock:
             return self._proc is not None and self._proc.poll() is None
 
-    def call(self, request, time_limit: float | None):
+    def call(self, request, time_limit: float | None, superseded: Callable[[], bool] | None = None):
         """("ok", (Prepared, serial of the previous request it reused or None)) | ("input",
-        message) | ("internal", message) | ("memory", ""); raises TimeLimitExceeded (the child
-        is killed and reaped) or WorkerDied."""
+        message) | ("internal", message) | ("memory", ""); raises TimeLimitExceeded or, when
+        `superseded()` turns true meanwhile, Superseded (the child is killed and reaped), or
+        WorkerDied."""
         if not self.alive():
             self.reap()
             self.start()
@@ -138,10 +146,21 @@ class ComputeProcess:
         except (OSError, EOFError):
             self.reap()
             raise WorkerDied("the computation process ended") from None
-        if not conn.poll(time_limit):
-            self.kill()
-            self.reap()
-            raise TimeLimitExceeded()
+        deadline = None if time_limit is None else time.monotonic() + time_limit
+        while True:
+            wait = None if deadline is None else max(0.0, deadline - time.monotonic())
+            if superseded is not None:
+                wait = SUPERSEDED_POLL_S if wait is None else min(wait, SUPERSEDED_POLL_S)
+            if conn.poll(wait):
+                break
+            if deadline is not None and time.monotonic() >= deadline:
+                self.kill()
+                self.reap()
+                raise TimeLimitExceeded()
+            if superseded is not None and superseded():
+                self.kill()
+                self.reap()
+                raise Superseded()
         try:
             kind, payload = conn.recv()
         except (EOFError, OSError):
