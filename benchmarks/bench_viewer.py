@@ -4,6 +4,8 @@
 
 Rows (default scene unless --scene):
   - prepare: a parameter change recomputed (scene load, effects, cam mesh, poses, plots);
+  - compute process: the same, sent to the child process the explorer computes in (so that a
+    computation past its time limit can be killed), and what that adds: pickling and the pipe;
   - server: a GUI parameter change (the lash, as a callback would set it) until the new pose of
     the adjusting screw (the lash gap, cam on its base circle) is on the server, ready to go out;
   - browser: the lash typed into the page of headless Chromium until the screw moved in the
@@ -147,6 +149,29 @@ def main(argv=None) -> int:
         previous = prepare(Request(path, (f'valve.lash="{lashes[k[0] % 2]}"',)), previous)
 
     rows.append(("prepare: parameter change recomputed", median_time(prepare_change, args.repeat), 0.1, "s"))
+
+    # -- the same change through the explorer's compute process (its time limit's price) -------
+    from explorer.viewer.worker import ComputeProcess
+
+    child = ComputeProcess()
+    overheads = []
+
+    def child_change():
+        k[0] += 1
+        started = time.perf_counter()
+        kind, payload = child.call(Request(path, (f'valve.lash="{lashes[k[0] % 2]}"',)), 60.0)
+        if kind != "ok":
+            raise RuntimeError(payload)
+        prepared, _ = payload
+        overheads.append(time.perf_counter() - started - prepared.seconds)
+
+    try:
+        child.start()
+        rows.append(("compute process: the same change through the child", median_time(child_change, args.repeat), 0.1, "s"))
+        rows.append(("  of which pickling and the pipe (added per change)", statistics.median(overheads[2:]), 0.1, "s"))
+    finally:
+        child.shutdown()
+        child.reap()
 
     # -- server ------------------------------------------------------------------------------
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)

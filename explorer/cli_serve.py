@@ -13,7 +13,9 @@ HELP = """\
 Open the 3D explorer in the browser: the cam turns, the roller, lever, spring and valve move
 as computed, with plots of s, v, p and forces over the revolution and a read-out of events,
 peaks and warnings. Change the scene, the lift law, speed, lash, stiffness, spring and the
-effects in the side panel; every change is recomputed at once.
+effects in the side panel; every change is recomputed at once, in a child process that may take
+10 s: a longer computation is stopped and the page says so, keeping the previous result. Pages
+of other sites cannot connect (websocket handshakes with a foreign Origin get 403).
 
 Binds 127.0.0.1 (this machine only) unless --host says otherwise. Ctrl-C (or SIGTERM, SIGHUP)
 stops it cleanly: the --rerun stream is flushed and the --rerun-save file completed. A stop that

@@ -2,9 +2,11 @@
 
 Threading (the pattern of viser's examples): GUI callbacks run on viser's thread pool, several
 at once, so they only *record* what was asked (under a lock) and hand recomputations to the
-ComputeWorker (newest request wins). One loop thread owns every scene and GUI update: it takes
-the recorded requests, advances the playback clock and applies one frame under
-`server.atomic()`. When the loop itself assigns a GUI value (the scrub slider following the
+ComputeWorker (newest request wins), which runs each in a child process that is killed past its
+time limit (explorer.viewer.worker), so no value a page sends can stall the server. Websocket
+handshakes from other sites are refused (explorer.viewer.origin). One loop thread owns every
+scene and GUI update: it takes the recorded requests, advances the playback clock and applies
+one frame under `server.atomic()`. When the loop itself assigns a GUI value (the scrub slider following the
 animation, fields refreshed after a scene swap), the `on_update` that viser fires synchronously
 is recognised by a thread-local flag and ignored, so nothing feeds back.
 """
@@ -23,7 +25,9 @@ import numpy as np
 from .. import meshes
 from ..laws import LAWS
 from ..scene import EFFECT_DEPENDENCIES, SPECIAL_LAWS
+from . import origin
 from .model import (
+    COMPUTE_TIME_LIMIT_S,
     PARAMETERS,
     SPEEDS,
     SPRING_RESOLUTION,
@@ -36,8 +40,20 @@ from .model import (
     step_index,
 )
 
+# The caller creates the viser server before the app (`explorer serve`, the tests), after
+# importing this module: the Origin check must be in place by then. ExplorerApp refuses a server
+# started without it.
+origin.install()
+
 GEAR = "/gear"  # scene-tree root of the moving parts; nodes are /gear/<part>
 PLOT_CURSOR_HZ = 8.0  # the plots' angle cursor is redrawn at most this often
+
+# Bounds on what a page may ask for. The page's widgets enforce them too, but any page (or script)
+# on the websocket can send any value, so the callbacks check again. 100 000 steps per revolution
+# (28 times the default) take about 1 s and 100 MB; the scene reader's own maxima are far larger.
+MAX_GUI_STEPS = 100_000
+MAX_TEXT_LENGTH = 100
+MAGNIFICATION_RANGE = (1.0, 50.0)
 
 
 def part_node(name: str) -> str:
@@ -77,9 +93,19 @@ class ExplorerApp:
         fps: float = 60.0,
         on_result: Callable[[Prepared], None] | None = None,
         scenes: list[Path] | None = None,
+        time_limit: float | None = COMPUTE_TIME_LIMIT_S,
     ):
         from ..scenes import builtin_scenes
 
+        port = server.get_port()
+        if not origin.guarded(port):
+            raise RuntimeError(
+                "the viser server was started before explorer.viewer.app was imported, without the "
+                "Origin check: any web page could drive it. Import explorer.viewer.app first.")
+        host = server.get_host()
+        if host not in ("0.0.0.0", "::", ""):
+            origin.allow(port, host)  # the address the user gave (a name the browser will use)
+        self._port = port
         self.server = server
         self.fps = fps
         self._lock = threading.Lock()
@@ -136,7 +162,8 @@ class ExplorerApp:
         # known: the loop frames the gear for it
         server.on_client_connect(self._client_connected)
         server.on_client_disconnect(self._client_disconnected)
-        self.worker = ComputeWorker(on_ready=self._on_ready, on_error=self._on_error, on_result=on_result).start()
+        self.worker = ComputeWorker(on_ready=self._on_ready, on_error=self._on_error, on_result=on_result,
+                                    time_limit=time_limit).start()
         self._submit(refresh=True)
         self._thread = threading.Thread(target=self._loop, name="explorer-loop", daemon=True)
         self._thread.start()
@@ -157,7 +184,8 @@ class ExplorerApp:
                                           hint="playback speed relative to the real camshaft speed")
             self.angle = gui.add_slider("Cam angle [°]", min=0.0, max=360.0, step=0.1, initial_value=0.0,
                                         hint="scrub: pauses the animation at this angle")
-            self.magnification = gui.add_slider("Magnification", min=1.0, max=50.0, step=1.0, initial_value=1.0,
+            self.magnification = gui.add_slider("Magnification", min=MAGNIFICATION_RANGE[0], max=MAGNIFICATION_RANGE[1],
+                                                step=1.0, initial_value=1.0,
                                                 hint="enlarges the lash gap and the valve's deviation from rigid motion")
 
         with gui.add_folder("Scene"):
@@ -170,7 +198,7 @@ class ExplorerApp:
                 elif kind == "number":
                     handle = gui.add_number(label, 1.0, step=1.0)
                 elif kind == "integer":
-                    handle = gui.add_number(label, 3600, step=1)
+                    handle = gui.add_number(label, 3600, min=1, max=MAX_GUI_STEPS, step=1)
                 else:
                     handle = gui.add_text(f"{label} [{unit}]", "", hint=f"a quantity with units, e.g. '1.5 {unit}'")
                 handle.on_update(self._field_callback(key))
@@ -229,16 +257,46 @@ class ExplorerApp:
             if self._is_echo():
                 return
             value = event.target.value
-            kind = PARAMETERS[key][1]
-            if kind == "integer":
-                value = int(value) if float(value).is_integer() else float(value)
-            elif kind == "number":
-                value = float(value)
+            label, kind, _ = PARAMETERS[key]
+            try:
+                value = self._checked(kind, value, event.target)
+            except ValueError as exc:
+                self._reject(f"error: {label}: {exc}")
+                return
             with self._lock:
                 self._user[key] = override(key, value)
             self._submit()
 
         return callback
+
+    @staticmethod
+    def _checked(kind: str, value, handle):
+        """The value a field may pass on to a recomputation; ValueError when out of bounds."""
+        if kind in ("integer", "number"):
+            try:
+                number = float(value)
+            except (TypeError, ValueError, OverflowError):
+                raise ValueError(f"not a number: {str(value)[:MAX_TEXT_LENGTH]!r}") from None
+            if not math.isfinite(number):
+                raise ValueError(f"not a finite number: {value!r}")
+            if kind == "number":
+                return number
+            if number > MAX_GUI_STEPS:
+                raise ValueError(f"at most {MAX_GUI_STEPS} in the explorer, got {number:.6g}")
+            return int(number) if number.is_integer() else number
+        text = str(value)
+        if len(text) > MAX_TEXT_LENGTH:
+            raise ValueError(f"longer than {MAX_TEXT_LENGTH} characters")
+        if kind == "choice" and text not in handle.options:
+            raise ValueError(f"not one of the choices: {text!r}")
+        return text
+
+    def _reject(self, message: str) -> None:
+        """Show why a value from the page was not used; like a computation's error, it counts as
+        the newest request handled."""
+        with self._lock:
+            self._serial += 1
+            self._error = (self._serial, message)
 
     def _effects_changed(self, event) -> None:
         if self._is_echo():
@@ -251,6 +309,8 @@ class ExplorerApp:
     def _scene_changed(self, event) -> None:
         if self._is_echo():
             return
+        if event.target.value not in self.scene_paths:
+            return  # not one of the offered scenes: nothing a page may load
         with self._lock:
             self._scene_label = event.target.value
             self._base_overrides = ()
@@ -266,8 +326,11 @@ class ExplorerApp:
     def _magnification_changed(self, event) -> None:
         if self._is_echo():
             return
+        value = float(event.target.value)
+        if not math.isfinite(value):
+            return
         with self._lock:
-            self._magnification = float(event.target.value)
+            self._magnification = min(max(value, MAGNIFICATION_RANGE[0]), MAGNIFICATION_RANGE[1])
         self._submit()
 
     def _play_changed(self, event) -> None:
@@ -279,15 +342,21 @@ class ExplorerApp:
     def _speed_changed(self, event) -> None:
         if self._is_echo():
             return
+        speed = dict(SPEEDS).get(event.target.value)
+        if speed is None:
+            return
         with self._lock:
-            self.playback.speed = dict(SPEEDS)[event.target.value]
+            self.playback.speed = speed
             self._speed_chosen = True
 
     def _angle_changed(self, event) -> None:
         if self._is_echo():
             return  # the loop moving the slider along with the animation
+        angle = float(event.target.value)
+        if not math.isfinite(angle):
+            return
         with self._lock:
-            self._scrub = float(event.target.value)
+            self._scrub = angle
             self._pause_requested = True
 
     def _submit(self, refresh: bool = False) -> None:
@@ -343,7 +412,9 @@ class ExplorerApp:
 
     def _on_error(self, request: Request, message: str) -> None:
         with self._lock:
-            self._error = (request.serial, message)
+            # a value the callbacks rejected may be newer than the computation failing now
+            if self._error is None or request.serial > self._error[0]:
+                self._error = (request.serial, message)
 
     # ------------------------------------------------------------------ the loop
 
@@ -611,4 +682,5 @@ class ExplorerApp:
     def stop(self) -> None:
         self._stop.set()
         self._thread.join(timeout=5.0)
-        self.worker.stop()
+        self.worker.stop()  # ends the computing child process too
+        origin.forget(self._port)
