@@ -9,19 +9,21 @@ orphans or rerun's own shutdown() do not release them. In a helper process they 
 explorer's thread count and memory stay flat however many recordings it makes, and the helper
 never holds more than RECYCLE_AFTER recordings' worth.
 
-The helper is started with "spawn" (a fork would copy rerun's and viser's threads' locks), ignores
-Ctrl-C (the explorer finishes what it writes, then closes it) and exits when its pipe closes, so
-it never outlives the explorer. rerun's own log lines are off in it unless RUST_LOG says
+The helper is a fresh interpreter (a fork would copy the locks of rerun's and viser's threads),
+in its own session so that Ctrl-C reaches only the explorer, which finishes what it writes and
+then closes it; it exits when its pipe closes, so it never outlives the explorer. rerun's own log lines are off in it unless RUST_LOG says
 otherwise: a failed write is reported by the explorer in one line (the file has no footer).
 """
 
 from __future__ import annotations
 
 import atexit
-import multiprocessing
 import os
 import signal
+import subprocess
+import sys
 import threading
+from pathlib import Path
 from types import SimpleNamespace
 from typing import Mapping
 
@@ -89,8 +91,6 @@ def _execute(job: dict) -> None:
 
 
 def _serve(conn) -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    os.environ.setdefault("RUST_LOG", "off")
     while True:
         try:
             job = conn.recv()
@@ -105,8 +105,24 @@ def _serve(conn) -> None:
             conn.send(f"{type(exc).__name__}: {exc}")
 
 
-# ---------------------------------------------------------------------------------------------
-# the explorer's side
+def main() -> None:
+    """The helper's entry point: jobs arrive on stdin, replies leave on the descriptor that was
+    stdout, which from here on is stderr's, so nothing printed can corrupt a reply."""
+    from multiprocessing.connection import Connection
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    os.environ.setdefault("RUST_LOG", "off")
+    replies = os.dup(1)
+    os.dup2(2, 1)
+    _serve_pair(Connection(os.dup(0), writable=False), Connection(replies, readable=False))
+
+
+def _serve_pair(inbox, outbox) -> None:
+    class Pair:
+        recv = staticmethod(inbox.recv)
+        send = staticmethod(outbox.send)
+
+    _serve(Pair)
 
 
 class RecordingWorker:
@@ -117,47 +133,59 @@ class RecordingWorker:
         self.recycle_after = recycle_after
         self._lock = threading.Lock()
         self._proc = None
-        self._conn = None
+        self._send = self._recv = None
         self._jobs = 0
 
     def _start(self) -> None:
-        ctx = multiprocessing.get_context("spawn")
-        parent, child = ctx.Pipe()
-        proc = ctx.Process(target=_serve, args=(child,), name="explorer-rerun-writer", daemon=True)
-        proc.start()
-        child.close()
-        self._proc, self._conn, self._jobs = proc, parent, 0
+        from multiprocessing.connection import Connection
+
+        # A plain interpreter, not multiprocessing's spawn: that re-runs the caller's main script
+        # in the child, which breaks any script without an `if __name__ == "__main__"` guard.
+        env = dict(os.environ)
+        package_root = str(Path(__file__).resolve().parent.parent)
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
+        proc = subprocess.Popen([sys.executable, "-c", "from explorer.recording_worker import main; main()"],
+                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env, close_fds=True,
+                                start_new_session=True)  # Ctrl-C in the terminal is the explorer's to handle
+        self._proc = proc
+        self._send = Connection(os.dup(proc.stdin.fileno()), readable=False)
+        self._recv = Connection(os.dup(proc.stdout.fileno()), writable=False)
+        proc.stdin.close()
+        proc.stdout.close()
+        self._jobs = 0
 
     def _stop(self) -> None:
-        proc, conn = self._proc, self._conn
-        self._proc = self._conn = None
+        proc = self._proc
+        self._proc = None
         if proc is None:
             return
         try:
-            conn.send(None)
+            self._send.send(None)
         except OSError:
             pass
-        proc.join(STOP_TIMEOUT_S)
-        if proc.is_alive():
+        self._send.close()
+        self._recv.close()
+        try:
+            proc.wait(STOP_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
             proc.kill()
-            proc.join()
-        conn.close()
-        proc.close()
+            proc.wait()
 
     def run(self, job: dict, timeout: float = JOB_TIMEOUT_S) -> None:
         with self._lock:
             if self._proc is None:
                 self._start()
             try:
-                self._conn.send(job)
-                if not self._conn.poll(timeout):
+                self._send.send(job)
+                if not self._recv.poll(timeout):
                     raise TimeoutError(f"writing the recording took longer than {timeout:g} s")
-                reply = self._conn.recv()
+                reply = self._recv.recv()
             except (EOFError, OSError, TimeoutError) as exc:
-                code = self._proc.exitcode
-                self._proc.kill()
+                proc = self._proc
+                proc.kill()
                 self._stop()
-                raise RuntimeError(f"the rerun writer process failed ({exc or 'exit code ' + str(code)})") from None
+                why = str(exc) or f"exit status {proc.returncode}"
+                raise RuntimeError(f"the rerun writer process failed ({why})") from None
             self._jobs += 1
             if self._jobs >= self.recycle_after:
                 self._stop()
