@@ -85,10 +85,10 @@ def plan_runs(scene_paths: list[str], overrides: list[str], sweeps: list[str]):
     parsed = [parse_sweep(s) for s in sweeps]
     count = len(scene_paths) * math.prod(len(values) for _, values in parsed)
     if count > MAX_RUNS:
-        sizes = " x ".join(str(len(v)) for _, v in parsed) or "1"
-        scenes = f"{len(scene_paths)} scenes x " if len(scene_paths) > 1 else ""
-        raise InputError("--sweep", " ".join(sweeps) or "SCENE",
-                         f"{scenes}{sizes} = {count} recordings; at most {MAX_RUNS} per file")
+        factors = ([f"{len(scene_paths)} scenes"] if len(scene_paths) > 1 else []) + [str(len(v)) for _, v in parsed]
+        product = " x ".join(factors) + " = " if len(factors) > 1 else ""
+        raise InputError("--sweep", ", ".join(key for key, _ in parsed) or "SCENE",
+                         f"{product}{count} recordings; at most {MAX_RUNS} per file")
     combos = list(itertools.product(*[[(key, v) for v in values] for key, values in parsed])) or [()]
     plans = []
     for path in scene_paths:

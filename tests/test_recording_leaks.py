@@ -148,7 +148,7 @@ def test_sweep_over_the_cap_is_refused_before_any_work(tmp_path, capsys, monkeyp
     assert cli.main(args) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("error: --sweep: ")
-    assert f"= {count} recordings; at most {MAX_RUNS} per file" in err
+    assert f"{count} recordings; at most {MAX_RUNS} per file" in err
     assert list(tmp_path.iterdir()) == []
 
 
