@@ -29,8 +29,10 @@ solver takes its place everywhere, up to 36 000 steps.
 def register(sub) -> None:
     from .cli_simulate import add_scene_arguments
 
+    from .outputs import HELP as OUTPUT_HELP
+
     p = sub.add_parser("bench", help="accuracy versus time of the dynamics solvers (table, CSV, chart)",
-                       description=HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--output-dir", default=".", metavar="DIR", help="where the CSV, PNG and text files go (default: .)")
     p.add_argument("--quick", action="store_true", help="few resolutions (90, 900, 3600 steps; rtol 1e-4, 1e-8): seconds, for tests")

@@ -100,7 +100,8 @@ def _kind(mode: int) -> str:
 def _probe_directory(out: Output, directory: Path) -> None:
     """Create and remove an empty file where the temporary will go: the only test that sees a
     read-only mount, an immutable directory or an exhausted inode table, also as root."""
-    probe = directory / f".{out.target.name}.{uuid.uuid4().hex[:12]}.probe"
+    # not named after the target: the `.NAME.*` temporaries mean a write under way
+    probe = directory / f".explorer-probe.{uuid.uuid4().hex[:12]}"
     try:
         fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     except OSError as exc:

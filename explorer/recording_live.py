@@ -19,8 +19,10 @@ logging take a fraction of a second that the explorer's compute thread should no
 a recording is being written, a newer result replaces one still waiting (newest wins, as in the
 explorer's own worker), so the stream never falls behind. `flush()` waits for the writer.
 
-Exit never hangs: every recording is flushed with a timeout and disconnected before the next
-starts; `close()` (also registered with atexit, before rerun's own shutdown hook runs) drains
+The recordings are logged in the helper process of explorer.recording_worker (rerun keeps every
+stream made in a process, with its threads, until that process ends; a long session would grow
+with every change). Exit never hangs: every recording is flushed with a timeout and disconnected
+before the next starts; `close()` (also registered with atexit, before rerun's own shutdown hook runs) drains
 the writer, then disconnects the server stream.
 """
 
