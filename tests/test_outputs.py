@@ -334,3 +334,36 @@ def test_streamed_csv_is_byte_identical(tmp_path, scene):
 
     write_output(out, result.csv_chunks(333))
     assert out.read_text() == expected
+
+
+def test_simulate_writes_the_csv_in_pieces(tmp_path, monkeypatch):
+    """The command never builds the whole text (gigabytes at the largest step counts)."""
+    from explorer.result import Result
+
+    monkeypatch.setattr(Result, "csv_text", lambda self: pytest.fail("the whole CSV was built"))
+    pieces = []
+    real = Result.csv_chunks
+
+    def counted(self, *args, **kwargs):
+        for piece in real(self, *args, **kwargs):
+            pieces.append(len(piece))
+            yield piece
+
+    monkeypatch.setattr(Result, "csv_chunks", counted)
+    out = tmp_path / "out.csv"
+    assert cli.main(["simulate", str(DEMO), "--set", "solver.steps_per_revolution=50000", "-o", str(out)]) == 0
+    assert len(pieces) == 1 + 3  # the header, then 20 000 + 20 000 + 10 000 rows
+    assert out.stat().st_size == sum(pieces)
+
+
+def test_the_documented_step_maximum_holds(tmp_path, capsys):
+    """README and the scene loader agree on the largest steps_per_revolution, and one more is a
+    one-line error before any work (the maximum itself is measured in the README, not here)."""
+    from explorer.scene import MAX_STEPS
+
+    readme = (ROOT / "README.md").read_text()
+    assert f"36 ... {MAX_STEPS:,}".replace(",", " ") in readme
+    out = tmp_path / "out.csv"
+    assert cli.main(["simulate", str(DEMO), "--set", f"solver.steps_per_revolution={MAX_STEPS + 1}", "-o", str(out)]) == 2
+    one_error_line(capsys.readouterr().err, "steps_per_revolution", f"at most {MAX_STEPS}")
+    assert not out.exists()
