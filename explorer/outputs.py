@@ -12,7 +12,8 @@ rules decides what a path the user named may become.
   rename. A rename would put a regular file where the device or pipe was; writing through is what
   `cmd -o /dev/stdout | next` means. Such targets are opened for appending, so `>> log` keeps its
   log, and a FIFO blocks until someone reads it, as it does for any writer.
-- Directories, block devices, sockets: refused before any work.
+- Directories, block devices, sockets: refused before any work; so is a file that its mode makes
+  read-only for this user, as the shell's `>` would (root may write anything, here as there).
 
 `check_output` applies these rules before anything is computed, including a real probe that the
 directory accepts a new file (as root, or on a read-only file system, the permission bits say
@@ -43,8 +44,8 @@ HELP = """\
 Output files appear only when complete: a temporary file beside the target, renamed over it (a
 new file gets 0666 less the umask, a replaced file keeps its mode; a symlink is followed and its
 target written). /dev/stdout, /dev/null, terminals and FIFOs are written directly, no temporary.
-Directories, block devices and sockets are refused, as is a directory that takes no new file,
-before any work (exit status 2).
+Directories, block devices, sockets, read-only files and directories that take no new file are
+refused before any work (exit status 2).
 """
 
 
@@ -139,6 +140,9 @@ def check_output(path: str | os.PathLike, option: str, suffix: str | None = None
     if st is not None and not stat.S_ISREG(st.st_mode):
         raise InputError(name, option, f"is {_kind(st.st_mode)}; only regular files, character devices "
                          "and FIFOs are written")
+    if st is not None and not os.access(name, os.W_OK):
+        # as the shell's `>` would: the rename could replace it, but its mode says keep it
+        raise InputError(name, option, f"is read-only (mode {stat.S_IMODE(st.st_mode):04o})")
     target = Path(os.path.realpath(name))
     out = Output(name, option, target, direct=False)
     directory = target.parent

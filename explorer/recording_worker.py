@@ -90,19 +90,19 @@ def _execute(job: dict) -> None:
         rec.disconnect()  # closes a file with its footer
 
 
-def _serve(conn) -> None:
+def _serve(inbox, outbox) -> None:
     while True:
         try:
-            job = conn.recv()
+            job = inbox.recv()
         except (EOFError, OSError):  # the explorer has gone
             return
         if job is None:
             return
         try:
             _execute(job)
-            conn.send(None)
+            outbox.send(None)
         except Exception as exc:  # noqa: BLE001 - reported by the explorer, the helper goes on
-            conn.send(f"{type(exc).__name__}: {exc}")
+            outbox.send(f"{type(exc).__name__}: {exc}")
 
 
 def main() -> None:
@@ -114,15 +114,7 @@ def main() -> None:
     os.environ.setdefault("RUST_LOG", "off")
     replies = os.dup(1)
     os.dup2(2, 1)
-    _serve_pair(Connection(os.dup(0), writable=False), Connection(replies, readable=False))
-
-
-def _serve_pair(inbox, outbox) -> None:
-    class Pair:
-        recv = staticmethod(inbox.recv)
-        send = staticmethod(outbox.send)
-
-    _serve(Pair)
+    _serve(Connection(os.dup(0), writable=False), Connection(replies, readable=False))
 
 
 class RecordingWorker:
@@ -180,12 +172,16 @@ class RecordingWorker:
                 if not self._recv.poll(timeout):
                     raise TimeoutError(f"writing the recording took longer than {timeout:g} s")
                 reply = self._recv.recv()
-            except (EOFError, OSError, TimeoutError) as exc:
+            except (EOFError, OSError) as exc:  # it died, or hangs (TimeoutError)
                 proc = self._proc
                 proc.kill()
                 self._stop()
                 why = str(exc) or f"exit status {proc.returncode}"
                 raise RuntimeError(f"the rerun writer process failed ({why})") from None
+            except BaseException:  # Ctrl-C while it works: its reply must not answer the next job
+                self._proc.kill()
+                self._stop()
+                raise
             self._jobs += 1
             if self._jobs >= self.recycle_after:
                 self._stop()
