@@ -106,6 +106,23 @@ def test_a_replaced_file_keeps_its_mode(tmp_path, mode):
     assert out.read_bytes() == reference_csv(tmp_path)
 
 
+@pytest.mark.parametrize("sweep", [[], ["--sweep", "drive.rpm=600,1200"]])
+def test_recordings_follow_the_same_mode_rules(tmp_path, sweep):
+    """One recording is written by rerun into the reserved temporary, several are merged into it:
+    either way a new .rrd gets the umask's mode and a replaced one keeps its own."""
+    new, old = tmp_path / "new.rrd", tmp_path / "old.rrd"
+    old.write_bytes(b"old")
+    old.chmod(0o444 if IS_ROOT else 0o640)
+    args = ["record", str(DEMO), "--no-parts", *FAST, *sweep]
+    with umask(0o077):
+        assert cli.main([*args, "-o", str(new)]) == 0
+        assert cli.main([*args, "-o", str(old)]) == 0
+    assert stat.S_IMODE(new.stat().st_mode) == 0o600
+    assert stat.S_IMODE(old.stat().st_mode) == (0o444 if IS_ROOT else 0o640)
+    assert old.read_bytes() != b"old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["new.rrd", "old.rrd"]
+
+
 def test_symlink_is_followed_and_stays_a_link(tmp_path):
     target = tmp_path / "data" / "real.csv"
     target.parent.mkdir()
