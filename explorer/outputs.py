@@ -7,8 +7,8 @@ rules decides what a path the user named may become.
   umask); a file that is replaced keeps its mode (and, where permitted, its owner and group).
 - A symbolic link: followed. Its target is written as above and the link stays a link; a link
   that points nowhere yet creates its target, as the shell's `>` does.
-- /dev/stdout, /dev/stderr, /dev/fd/N, a terminal, /dev/null, a FIFO (character devices, FIFOs and
-  the process's own file descriptors): written directly, in order, with no temporary and no
+- `-`, /dev/stdout, /dev/stderr, /dev/fd/N, a terminal, /dev/null, a FIFO (character devices,
+  FIFOs and the process's own file descriptors): written directly, in order, with no temporary and no
   rename. A rename would put a regular file where the device or pipe was; writing through is what
   `cmd -o /dev/stdout | next` means. Such targets are opened for appending, so `>> log` keeps its
   log, and a FIFO blocks until someone reads it, as it does for any writer.
@@ -43,7 +43,8 @@ _MAX_LINK_HOPS = 40  # the kernel's own limit on symlinks in one lookup
 HELP = """\
 Output files appear only when complete: a temporary file beside the target, renamed over it (a
 new file gets 0666 less the umask, a replaced file keeps its mode; a symlink is followed and its
-target written). /dev/stdout, /dev/null, terminals and FIFOs are written directly, no temporary.
+target written). `-` (stdout), /dev/stdout, /dev/null, terminals and FIFOs are written directly,
+no temporary.
 Directories, block devices, sockets, read-only files and directories that take no new file are
 refused before any work (exit status 2).
 """
@@ -68,7 +69,7 @@ class Output:
         if not self.direct:
             return False
         try:
-            a, b = os.stat(self.name), os.fstat(1)
+            a, b = os.stat(self.target), os.fstat(1)
         except OSError:
             return False
         return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
@@ -117,9 +118,10 @@ def check_output(path: str | os.PathLike, option: str, suffix: str | None = None
     name = os.fspath(path)
     if not name:
         raise InputError("<command line>", option, "empty file name")
-    if _through_fd_link(name):
-        out = Output(name, option, Path(name), direct=True)
-        if not os.access(name, os.W_OK):
+    if name == "-" or _through_fd_link(name):
+        where = "/dev/stdout" if name == "-" else name  # "-": standard output, as for most tools
+        out = Output(name, option, Path(where), direct=True)
+        if not os.access(where, os.W_OK):
             raise out.error("is not writable (is that file descriptor open?)")
         return out
     try:
@@ -201,7 +203,7 @@ def open_output(out: Output, binary: bool = False) -> Iterator[IO]:
     mode = "wb" if binary else "w"
     text_args = {} if binary else {"encoding": "utf-8", "newline": ""}
     if out.direct:
-        fd = os.open(out.name, os.O_WRONLY | os.O_APPEND | getattr(os, "O_CLOEXEC", 0))
+        fd = os.open(out.target, os.O_WRONLY | os.O_APPEND | getattr(os, "O_CLOEXEC", 0))
         with os.fdopen(fd, mode, **text_args) as handle:
             yield handle
         return
@@ -243,7 +245,7 @@ def output_path(out: Output, work_dir: Path | None = None) -> Iterator[Path]:
     if out.direct:
         scratch = Path(tempfile.mkdtemp(prefix=".explorer-out.", dir=work_dir))
         try:
-            tmp = scratch / (Path(out.name).name or "out")
+            tmp = scratch / "out"
             yield tmp
             with open(tmp, "rb") as src, open_output(out, binary=True) as dst:
                 shutil.copyfileobj(src, dst, 1 << 20)

@@ -200,11 +200,13 @@ def test_fifo_is_written_through_and_stays_a_fifo(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe", "reference"]
 
 
-def test_dev_stdout_streams_the_csv_and_reports_on_stderr(tmp_path):
-    proc = explorer("simulate", DEMO, *FAST, "-o", "/dev/stdout")
+@pytest.mark.parametrize("name", ["/dev/stdout", "-"])
+def test_dev_stdout_streams_the_csv_and_reports_on_stderr(tmp_path, name):
+    proc = explorer("simulate", DEMO, *FAST, "-o", name)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout == reference_csv(tmp_path)
     assert b"360 steps" in proc.stderr
+    assert not (ROOT / "-").exists()
 
 
 def test_dev_stdout_appending_to_a_file_is_not_replaced(tmp_path):
