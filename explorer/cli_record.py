@@ -9,9 +9,9 @@ import sys
 
 from .errors import InputError
 
-# Each recording costs ~0.1-0.3 s and its share of the file (~1 MB at 3600 steps with the parts);
-# a thousand is a quarter of an hour and a gigabyte. Sweeps wider than that are a typo (-sweep
-# 1,2,...,3000) or a job for `explorer simulate` in a loop.
+# Each recording costs ~0.1-0.3 s and ~1-4 MB of the file at 3600 steps with the parts: a thousand
+# is minutes and gigabytes, and a viewer that shows them side by side. Wider sweeps are a typo
+# (--sweep 1,2,...,3000; 50 x 50 x 50) or a job for `explorer simulate` in a loop.
 MAX_RUNS = 1000
 
 HELP = """\
@@ -25,8 +25,8 @@ Timelines: time (s), step (index), cam_angle_mdeg (cam angle in millidegrees). E
 /torque/..., /stress/..., /angles/..., /parts/<part>, /events, /summary
 (full mapping: `python -c "import explorer.recording as r; help(r)"`).
 
-The file appears only when complete (written to a temporary name, then renamed); -o /dev/stdout
-or a FIFO gets the finished file's bytes (`explorer record SCENE -o /dev/stdout | rerun -`).
+The file appears only when complete (written to a temporary name, then renamed); -o - (stdout),
+/dev/stdout or a FIFO gets the finished file's bytes (`explorer record SCENE -o - > run.rrd`).
 Runs are simulated and written one at a time. At most {max_runs} recordings per file (scenes times
 the combinations of the --sweep values), checked before any work.
 """
@@ -45,7 +45,8 @@ def register(sub) -> None:
     from .outputs import HELP as OUTPUT_HELP
 
     p = sub.add_parser("record", help="simulations to a rerun .rrd file (series, 3D motion, events)",
-                       description=HELP.format(max_runs=MAX_RUNS) + "\n" + OUTPUT_HELP, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=HELP.format(max_runs=MAX_RUNS) + "\n" + OUTPUT_HELP, epilog=EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scenes", nargs="*", metavar="SCENE",
                    help="scene files (TOML); default: the built-in default scene")
     p.add_argument("-o", "--output", required=True, metavar="OUT.rrd", help="the rerun file to write")
