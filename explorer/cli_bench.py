@@ -29,8 +29,10 @@ solver takes its place everywhere, up to 36 000 steps.
 def register(sub) -> None:
     from .cli_simulate import add_scene_arguments
 
+    from .outputs import HELP as OUTPUT_HELP
+
     p = sub.add_parser("bench", help="accuracy versus time of the dynamics solvers (table, CSV, chart)",
-                       description=HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--output-dir", default=".", metavar="DIR", help="where the CSV, PNG and text files go (default: .)")
     p.add_argument("--quick", action="store_true", help="few resolutions (90, 900, 3600 steps; rtol 1e-4, 1e-8): seconds, for tests")
@@ -47,7 +49,7 @@ def _slug(name: str) -> str:
 def run(args) -> int:
     from .bench import ProgressBar, chart_png, differentiation_png, run_bench
     from .cli_simulate import scene_from_args
-    from .result import write_atomic
+    from .outputs import check_output, write_output
 
     if args.repeats < 1:
         raise InputError("<command line>", "--repeats", f"must be at least 1, got {args.repeats}")
@@ -61,22 +63,28 @@ def run(args) -> int:
         out_dir.mkdir()
 
     stem = Path(scene.source).stem if scene.source != "<memory>" else _slug(scene.name)
+    base = out_dir / f"bench_{stem}"
+    names = [".csv", ".txt", ".png"]
+    if not args.no_differentiation:
+        names += ["_differentiation.csv", "_differentiation.png"]
+    # every file checked before the minutes of timing, so that a directory that takes no file
+    # costs one line, not a run
+    outs = {name: check_output(f"{base}{name}", "--output-dir") for name in names}
     report = run_bench(scene, quick=args.quick, repeats=args.repeats, progress=ProgressBar(sys.stderr),
                        differentiation=not args.no_differentiation)
     table = report.table()
     sys.stdout.write(table)
-    base = out_dir / f"bench_{stem}"
-    write_atomic(f"{base}.csv", report.csv_text())
-    write_atomic(f"{base}.txt", table)
-    write_atomic(f"{base}.png", chart_png(report))
+    write_output(outs[".csv"], report.csv_text())
+    write_output(outs[".txt"], table)
+    write_output(outs[".png"], chart_png(report))
     written = [f"{base}.csv", f"{base}.png", f"{base}.txt"]
     if report.differentiation is not None:
         study = report.differentiation
         cols = study.columns()
         lines = [",".join(cols)]
         lines += [",".join(repr(float(cols[k][i])) for k in cols) for i in range(len(study.rows))]
-        write_atomic(f"{base}_differentiation.csv", "\n".join(lines) + "\n")
-        write_atomic(f"{base}_differentiation.png", differentiation_png(study))
+        write_output(outs["_differentiation.csv"], "\n".join(lines) + "\n")
+        write_output(outs["_differentiation.png"], differentiation_png(study))
         written += [f"{base}_differentiation.csv", f"{base}_differentiation.png"]
     print("wrote " + ", ".join(written))
     return 0

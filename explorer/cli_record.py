@@ -4,9 +4,15 @@ from __future__ import annotations
 
 import argparse
 import itertools
+import math
 import sys
 
 from .errors import InputError
+
+# Each recording costs ~0.1-0.3 s and ~1-4 MB of the file at 3600 steps with the parts: a thousand
+# is minutes and gigabytes, and a viewer that shows them side by side. Wider sweeps are a typo
+# (--sweep 1,2,...,3000; 50 x 50 x 50) or a job for `explorer simulate` in a loop.
+MAX_RUNS = 1000
 
 HELP = """\
 Record one revolution of each scene into a rerun file (.rrd): the series s, v, p, jerk, forces and
@@ -19,7 +25,10 @@ Timelines: time (s), step (index), cam_angle_mdeg (cam angle in millidegrees). E
 /torque/..., /stress/..., /angles/..., /parts/<part>, /events, /summary
 (full mapping: `python -c "import explorer.recording as r; help(r)"`).
 
-The file appears only when complete (written to a temporary name, then renamed).
+The file appears only when complete (written to a temporary name, then renamed); -o - (stdout),
+/dev/stdout or a FIFO gets the finished file's bytes (`explorer record SCENE -o - > run.rrd`).
+Runs are simulated and written one at a time. At most {max_runs} recordings per file (scenes times
+the combinations of the --sweep values), checked before any work.
 """
 
 EPILOG = """\
@@ -33,8 +42,11 @@ examples:
 
 
 def register(sub) -> None:
+    from .outputs import HELP as OUTPUT_HELP
+
     p = sub.add_parser("record", help="simulations to a rerun .rrd file (series, 3D motion, events)",
-                       description=HELP, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=HELP.format(max_runs=MAX_RUNS) + "\n" + OUTPUT_HELP, epilog=EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scenes", nargs="*", metavar="SCENE",
                    help="scene files (TOML); default: the built-in default scene")
     p.add_argument("-o", "--output", required=True, metavar="OUT.rrd", help="the rerun file to write")
@@ -72,6 +84,12 @@ def plan_runs(scene_paths: list[str], overrides: list[str], sweeps: list[str]):
 
     scene_paths = scene_paths or [str(default_scene())]
     parsed = [parse_sweep(s) for s in sweeps]
+    count = len(scene_paths) * math.prod(len(values) for _, values in parsed)
+    if count > MAX_RUNS:
+        factors = ([f"{len(scene_paths)} scenes"] if len(scene_paths) > 1 else []) + [str(len(v)) for _, v in parsed]
+        product = " x ".join(factors) + " = " if len(factors) > 1 else ""
+        raise InputError("--sweep", ", ".join(key for key, _ in parsed) or "SCENE",
+                         f"{product}{count} recordings; at most {MAX_RUNS} per file")
     combos = list(itertools.product(*[[(key, v) for v in values] for key, values in parsed])) or [()]
     plans = []
     for path in scene_paths:
@@ -106,27 +124,32 @@ def _with_parts_or_warn(label: str, result):
 
 def run(args) -> int:
     from .effects import simulate
-
-    from .recording import check_rrd_path
+    from .recording import Run, check_rrd_path, write_recordings
 
     out = check_rrd_path(args.output, "--output")
     plans = plan_runs(args.scenes, args.overrides, args.sweep)  # every input error before any work
-    from .recording import Run, write_recordings
+    done = []  # (label, steps, events, warnings): all that is kept of a run once it is written
 
-    runs = []
-    for label, scene in plans:
-        result = simulate(scene)
-        runs.append(Run(label=label, result=result) if args.no_parts else _with_parts_or_warn(label, result))
+    def runs():
+        for label, scene in plans:
+            result = simulate(scene)
+            yield Run(label=label, result=result) if args.no_parts else _with_parts_or_warn(label, result)
+
+    def written(r) -> None:
+        s = r.result.summary
+        done.append((r.label, len(r.result.columns["time_s"]), len(s.get("events", [])), len(s.get("warnings", []))))
+
     try:
-        write_recordings(out, runs)
+        write_recordings(out, runs(), on_run=written)
     except (OSError, RuntimeError) as exc:  # disk full, rerun CLI missing: not the user's input
-        print(f"error: {out}: --output: writing failed: {exc}", file=sys.stderr)
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+        print(f"error: {out.name}: --output: writing failed: {reason}", file=sys.stderr)
         return 1
-    steps = sum(len(r.result.columns["time_s"]) for r in runs)
-    print(f"{out}: {len(runs)} recording{'s' if len(runs) != 1 else ''}, {steps} steps")
-    for r in runs:
-        n_events = len(r.result.summary.get("events", []))
-        n_warn = len(r.result.summary.get("warnings", []))
-        print(f"  {r.label}: {len(r.result.columns['time_s'])} steps, {n_events} events, {n_warn} warnings")
-    print(f"view it with: explorer view {out}")
+    report = sys.stderr if out.is_stdout() else sys.stdout  # stdout may be the file itself
+    steps = sum(d[1] for d in done)
+    print(f"{out.name}: {len(done)} recording{'s' if len(done) != 1 else ''}, {steps} steps", file=report)
+    for label, n, n_events, n_warn in done:
+        print(f"  {label}: {n} steps, {n_events} events, {n_warn} warnings", file=report)
+    if not out.direct:
+        print(f"view it with: explorer view {out.name}", file=report)
     return 0

@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
-from pathlib import Path
 
 from .errors import InputError
 
@@ -15,7 +13,8 @@ Simulate one revolution of a scene: every effect the scene lists, nothing else.
 Writes one CSV row per step (cam_angle_deg, time_s, follower_lift_m, valve_lift_m,
 valve_velocity_m_s, valve_accel_m_s2, valve_jerk_m_s3 and one column per further quantity the
 effects compute; SI units in the names) and a JSON summary (peaks, impact velocities, events,
-each effect with its compute time). Without -o/--summary it prints the summary.
+each effect with its compute time). Without -o/--summary it prints the summary; with an
+output on /dev/stdout, the brief report goes to stderr.
 """
 
 
@@ -38,7 +37,9 @@ def scene_from_args(args):
 
 
 def register(sub) -> None:
-    p = sub.add_parser("simulate", help="one revolution to CSV + JSON summary", description=HELP,
+    from .outputs import HELP as OUTPUT_HELP
+
+    p = sub.add_parser("simulate", help="one revolution to CSV + JSON summary", description=HELP + "\n" + OUTPUT_HELP,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("-o", "--output", metavar="OUT.csv", help="write the per-step columns here")
@@ -46,52 +47,42 @@ def register(sub) -> None:
     p.set_defaults(run=run)
 
 
-def _check_writable(path: str, option: str) -> None:
-    """Refuse an output path that cannot be written before any work, so that a bad --summary
-    does not leave the CSV written and the summary missing."""
-    target = Path(path)
-    parent = target.resolve().parent
-    if target.is_dir():
-        raise InputError(path, option, "is a directory, not a file name")
-    if not parent.is_dir():
-        raise InputError(path, option, f"directory {parent} does not exist")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(path, option, f"directory {parent} is not writable")
-
-
-def _write(path: str, option: str, text: str) -> None:
-    from .result import write_atomic
+def _write(out, pieces) -> None:
+    from .outputs import write_output
 
     try:
-        write_atomic(path, text)
-    except OSError as exc:  # full disk, a race with the checks above: still one line
-        raise InputError(path, option, f"cannot write: {exc.strerror or exc}") from None
+        write_output(out, pieces)
+    except OSError as exc:  # full disk, a race with the checks: still one line, nothing left behind
+        raise InputError(out.name, out.option, f"cannot write: {exc.strerror or exc}") from None
 
 
 def run(args) -> int:
     from .effects import simulate
+    from .outputs import check_output
 
     scene = scene_from_args(args)
-    for path, option in ((args.output, "--output"), (args.summary, "--summary")):
-        if path:
-            _check_writable(path, option)
+    # both outputs before any work, so that a bad --summary does not leave the CSV written
+    # and the summary missing
+    csv_out = check_output(args.output, "--output") if args.output else None
+    json_out = check_output(args.summary, "--summary") if args.summary else None
     result = simulate(scene)
-    if args.output:
-        _write(args.output, "--output", result.csv_text())
-    if args.summary:
-        _write(args.summary, "--summary", result.json_text())
-    if not args.output and not args.summary:
+    if csv_out is not None:
+        _write(csv_out, result.csv_chunks())  # in pieces: the largest step counts are gigabytes of text
+    if json_out is not None:
+        _write(json_out, result.json_text())
+    if csv_out is None and json_out is None:
         sys.stdout.write(result.json_text())
     else:
-        _print_brief(result)
+        to_stdout = any(o is not None and o.is_stdout() for o in (csv_out, json_out))
+        _print_brief(result, sys.stderr if to_stdout else sys.stdout)
     return 0
 
 
-def _print_brief(result) -> None:
+def _print_brief(result, stream) -> None:
     s = result.summary
     parts = [f"{s['scene']}: {s['steps_per_revolution']} steps at {s['rpm']:g} rpm"]
     for name, info in s["effects"].items():
         parts.append(f"  {name:<11s} {1e3 * info['compute_time_s']:9.3f} ms")
     for w in s.get("warnings", []):
         parts.append(f"  warning: {w}")
-    print("\n".join(parts))
+    print("\n".join(parts), file=stream)

@@ -771,12 +771,20 @@ def _swept_extents(vertices: np.ndarray, wxyz: np.ndarray) -> tuple[np.ndarray, 
         # of the part's outline, so its hull in x-z decides the extremes
         hull = _hull_2d(vertices[:, [0, 2]])
         angle = 2.0 * np.arctan2(q[:, 2], q[:, 0])
-        c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
-        x = c * hull[None, :, 0] + s * hull[None, :, 1]
-        z = -s * hull[None, :, 0] + c * hull[None, :, 1]
         n = len(q)
-        lo = np.column_stack([x.min(axis=1), np.full(n, vertices[:, 1].min()), z.min(axis=1)])
-        hi = np.column_stack([x.max(axis=1), np.full(n, vertices[:, 1].max()), z.max(axis=1)])
+        lo = np.column_stack([np.empty(n), np.full(n, vertices[:, 1].min()), np.empty(n)])
+        hi = np.column_stack([np.empty(n), np.full(n, vertices[:, 1].max()), np.empty(n)])
+        # in blocks: (rotations x hull points) at a million steps was gigabytes. cos and sin are
+        # taken whole: numpy's vector loops may round a block's last elements differently
+        cos, sin = np.cos(angle)[:, None], np.sin(angle)[:, None]
+        chunk = max(1, 2_000_000 // max(len(hull), 1))
+        for start in range(0, n, chunk):
+            block = slice(start, start + chunk)
+            c, s = cos[block], sin[block]
+            x = c * hull[None, :, 0] + s * hull[None, :, 1]
+            z = -s * hull[None, :, 0] + c * hull[None, :, 1]
+            lo[block, 0], hi[block, 0] = x.min(axis=1), x.max(axis=1)
+            lo[block, 2], hi[block, 2] = z.min(axis=1), z.max(axis=1)
         return lo, hi
     lo, hi = np.empty((len(q), 3)), np.empty((len(q), 3))
     rotations = _rotation_matrices(q)

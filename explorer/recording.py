@@ -46,15 +46,20 @@ Other entities:
 The default blueprint puts the 3D view (over the event log) beside time-series views of lift s,
 velocity v, acceleration p and the forces (with tabs for jerk, torque, stress, angles, follower).
 
-Files are written to a hidden temporary name beside the target and renamed when complete (and
-only if rerun's footer is there), so an interrupted run never leaves a truncated file under the
-target name; a killed run may leave its hidden `.NAME.*.part(s)` temporaries behind. Several recordings are
-each written to their own temporary file and merged into one with `rerun rrd merge` (the CLI that
-ships in the rerun-sdk wheel): the Python SDK writes one recording per file sink.
+Files are written by the rules of explorer.outputs: to a hidden temporary name beside the
+target, renamed when complete (and only if rerun's footer is there), so an interrupted run never
+leaves a truncated file under the target name (a killed run may leave its hidden `.NAME.*.part(s)`
+temporaries behind); a device or pipe (`-o /dev/stdout`) gets the finished file's bytes. Several
+recordings are each written to their own temporary file, one after the other (a sweep holds one
+run in memory at a time), and merged into one with `rerun rrd merge` (the CLI that ships in the
+rerun-sdk wheel) together with the layout for all of them: the Python SDK writes one recording per
+file sink. The logging itself runs in a helper process (explorer.recording_worker): rerun keeps
+every stream made in a process, with its threads, until that process exits.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import shutil
@@ -449,6 +454,9 @@ def new_recording(label: str):
 
 
 def _write_one(path: Path, run: Run, layout) -> None:
+    """One run into its own file in this process. Every rerun stream made here stays in memory
+    with its threads until the process exits (see explorer.recording_worker): the commands write
+    through the helper process instead."""
     import rerun as rr
 
     rec = new_recording(run.label)
@@ -460,62 +468,80 @@ def _write_one(path: Path, run: Run, layout) -> None:
         rec.disconnect()  # closes the file with its footer
 
 
-def write_recordings(path: str | os.PathLike, runs: Sequence[Run]) -> None:
-    """Write the runs as separate recordings into one .rrd file, atomically (temp + rename)."""
-    if not runs:
-        raise ValueError("no runs to record")
-    path = Path(path)
-    paths: list[str] = []
-    for run in runs:
-        paths += recording_paths(run.result, (run.parts or {}).keys())
-    boxes = [parts_bounds(run.parts, run.poses or {}) for run in runs if run.parts]
+def union_bounds(boxes):
     boxes = [b for b in boxes if b is not None]
-    bounds = (np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)) if boxes else None
-    layout = blueprint(paths, bounds)
-    parent = path.parent if str(path.parent) else Path(".")
-    tmp = temporary_name(path)
-    work_dir: Path | None = None
-    try:
-        if len(runs) == 1:
-            _write_one(tmp, runs[0], layout)
+    if not boxes:
+        return None
+    return np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
+
+
+def write_recordings(path, runs: Iterable[Run], on_run=None) -> None:
+    """Write the runs as separate recordings into one .rrd file that appears only when complete
+    (explorer.outputs: temporary file and rename; written through for a device or pipe).
+
+    `runs` may be a generator: each run is logged (in the helper process of
+    explorer.recording_worker) and dropped before the next is made, so a long sweep needs the
+    memory of one run. `on_run(run)` is called after each is written. A single run is one file
+    with its layout as default blueprint; several are one file each, without, merged with
+    `rerun rrd merge` together with the layout for all of them, written last."""
+    from .outputs import as_output, output_path
+    from .recording_worker import write_file
+
+    out = as_output(path, "output")
+    it = iter(runs)
+    first = next(it, None)
+    if first is None:
+        raise ValueError("no runs to record")
+    second = next(it, None)
+    with output_path(out) as tmp:
+        if second is None:
+            paths = recording_paths(first.result, (first.parts or {}).keys())
+            bounds = parts_bounds(first.parts, first.poses or {}) if first.parts else None
+            write_file(tmp, first, (paths, bounds))
+            if on_run is not None:
+                on_run(first)
         else:
-            work_dir = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".parts", dir=parent))
-            pieces = []
-            for i, run in enumerate(runs):
-                piece = work_dir / f"{i:04d}.rrd"
-                _write_one(piece, run, layout)
-                pieces.append(piece)
-            merge_rrd(pieces, tmp)
+            _write_merged(out, tmp, itertools.chain([first, second], it), on_run)
         check_complete(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+
+
+def _write_merged(out, tmp: Path, runs: Iterable[Run], on_run) -> None:
+    from .recording_worker import write_blueprint, write_file
+
+    parent = None if out.direct else out.target.parent  # a device's temporaries go to the system's
+    work_dir = Path(tempfile.mkdtemp(prefix=f".{Path(out.name).name}.", suffix=".parts", dir=parent))
+    try:
+        pieces: list[Path] = []
+        paths: list[str] = []
+        boxes = []
+        for run in runs:
+            paths += recording_paths(run.result, (run.parts or {}).keys())
+            if run.parts:
+                boxes.append(parts_bounds(run.parts, run.poses or {}))
+            piece = work_dir / f"{len(pieces):05d}.rrd"
+            write_file(piece, run, None)
+            pieces.append(piece)
+            if on_run is not None:
+                on_run(run)
+            del run  # the next run is made only now: one in memory at a time
+        layout = work_dir / "layout.rbl"
+        write_blueprint(layout, (list(dict.fromkeys(paths)), union_bounds(boxes)))
+        merge_rrd([*pieces, layout], tmp)
     finally:
-        if work_dir is not None:
-            shutil.rmtree(work_dir, ignore_errors=True)
+        shutil.rmtree(work_dir, ignore_errors=True)
 
 
-def check_rrd_path(path: str, option: str) -> Path:
+def check_rrd_path(path: str, option: str):
     """An output .rrd path the user named (`option` names the flag in the error), checked before
-    any work: the right suffix, not a directory, in a directory that exists."""
-    from .errors import InputError
+    any work by the rules of explorer.outputs (a .rrd name, a directory that takes a new file;
+    /dev/stdout or a FIFO need no suffix): an explorer.outputs.Output."""
+    from .outputs import check_output
 
-    out = Path(path)
-    if out.suffix.lower() != ".rrd":
-        raise InputError(path, option, "the rerun file must end in .rrd")
-    if out.is_dir():
-        raise InputError(path, option, "is a directory")
-    parent = out.resolve().parent
-    if not parent.is_dir():
-        raise InputError(path, option, f"directory {parent} does not exist")
-    return out
+    return check_output(path, option, suffix=".rrd")
 
 
 def temporary_name(path: Path, directory: Path | None = None) -> Path:
-    """A hidden, unique name beside `path` (or in `directory`) for writing before the rename.
-    Not created here: the writer creates it with the usual permissions (mkstemp would make it
-    private to the user)."""
+    """A hidden, unique name beside `path` (or in `directory`)."""
     directory = directory if directory is not None else (path.parent if str(path.parent) else Path("."))
     return directory / f".{path.name}.{uuid.uuid4().hex[:12]}.part"
 

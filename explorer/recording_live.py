@@ -19,15 +19,16 @@ logging take a fraction of a second that the explorer's compute thread should no
 a recording is being written, a newer result replaces one still waiting (newest wins, as in the
 explorer's own worker), so the stream never falls behind. `flush()` waits for the writer.
 
-Exit never hangs: every recording is flushed with a timeout and disconnected before the next
-starts; `close()` (also registered with atexit, before rerun's own shutdown hook runs) drains
+The recordings are logged in the helper process of explorer.recording_worker (rerun keeps every
+stream made in a process, with its threads, until that process ends; a long session would grow
+with every change). Exit never hangs: every recording is flushed with a timeout and disconnected
+before the next starts; `close()` (also registered with atexit, before rerun's own shutdown hook runs) drains
 the writer, then disconnects the server stream.
 """
 
 from __future__ import annotations
 
 import atexit
-import os
 import shutil
 import socket
 import sys
@@ -73,7 +74,8 @@ def open_live_stream(args) -> "LiveStream":
     return stream
 
 
-def check_save_path(path: str) -> Path:
+def check_save_path(path: str):
+    """The --rerun-save path, checked by the rules of explorer.outputs (an Output)."""
     from .recording import check_rrd_path
 
     return check_rrd_path(path, "--rerun-save")
@@ -105,8 +107,11 @@ class LiveStream:
     """Recordings of successive results to a gRPC server on 127.0.0.1 and/or a file."""
 
     def __init__(self, *, serve: bool = False, port: int = DEFAULT_PORT, save_path=None, parts: bool = True):
+        from .outputs import as_output
+
         self.url: str | None = None
-        self.save_path: Path | None = Path(save_path) if save_path else None
+        self._save_output = as_output(save_path, "--rerun-save") if save_path else None
+        self.save_path: Path | None = Path(self._save_output.name) if save_path else None
         self.parts = parts
         self.labels: list[str] = []  # recordings written so far, in order
         self.errors: list[str] = []
@@ -136,8 +141,10 @@ class LiveStream:
             # the host shows in the viewer as a recording of its own: make it the session's index
             self._host.send_recording_name("explorer live session")
             self.url = f"rerun+http://{BIND_IP}:{port}/proxy"
-        if self.save_path is not None:
-            parent = self.save_path.parent if str(self.save_path.parent) else Path(".")
+        if self._save_output is not None:
+            # beside the target, so that they survive a crash where the user looks; a device's
+            # or pipe's in the system's temporary directory
+            parent = None if self._save_output.direct else self._save_output.target.parent
             self._pieces_dir = Path(tempfile.mkdtemp(prefix=f".{self.save_path.name}.", suffix=".parts", dir=parent))
         self._thread = threading.Thread(target=self._run, name="rerun-live", daemon=True)
         self._thread.start()
@@ -222,8 +229,8 @@ class LiveStream:
     def _write(self, name: str, result) -> None:
         import rerun as rr
 
-        from .recording import (Run, blueprint, log_result, new_recording, parts_bounds, recording_paths,
-                                with_parts)
+        from .recording import Run, parts_bounds, recording_paths, with_parts
+        from .recording_worker import send
 
         run = with_parts(name, result) if self.parts else Run(name, result)
         seen = len(self._paths)
@@ -232,26 +239,20 @@ class LiveStream:
                 self._paths.append(path)
         if self._bounds is None and run.parts:
             self._bounds = parts_bounds(run.parts, run.poses or {})
-        layout = blueprint(self._paths, self._bounds)
         sinks = []
         if self.url is not None:
-            sinks.append(rr.GrpcSink(self.url))
+            sinks.append(("grpc", self.url))
         piece = None
         if self._pieces_dir is not None:
             piece = self._pieces_dir / f"{len(self._pieces):05d}.rrd"
-            sinks.append(rr.FileSink(str(piece)))
-        rec = new_recording(name)
-        rec.set_sinks(*sinks)
-        try:
-            # Sent explicitly, not as the sinks' default: a viewer that is already showing the
-            # session keeps its own layout otherwise. It is made active only when it changes
-            # (first recording, new kinds of series), so a user's rearrangement survives a
-            # parameter change.
-            rec.send_blueprint(layout, make_active=len(self._paths) != seen, make_default=True)
-            log_result(rec, result, name, run.parts, run.poses, run.scales, run.colors)
-            rec.flush(timeout_sec=FLUSH_TIMEOUT_S)
-        finally:
-            rec.disconnect()
+            sinks.append(("file", str(piece)))
+        # Logged in the helper process (explorer.recording_worker): a stream made here would stay,
+        # with its threads, for the rest of the session. The blueprint is sent explicitly, not as
+        # the sinks' default: a viewer that is already showing the session keeps its own layout
+        # otherwise. It is made active only when it changes (first recording, new kinds of
+        # series), so a user's rearrangement survives a parameter change.
+        send(sinks, run, (list(self._paths), self._bounds), make_active=len(self._paths) != seen,
+             flush_timeout=FLUSH_TIMEOUT_S)
         if piece is not None:
             self._pieces.append(piece)
         if self._host is not None:
@@ -259,16 +260,15 @@ class LiveStream:
             self._host.log("/session", rr.TextLog(session_line(name, result)))
 
     def _finish_file(self) -> None:
-        from .recording import check_complete, merge_rrd, temporary_name
+        from .outputs import output_path
+        from .recording import check_complete, merge_rrd
 
-        target = self.save_path
         pieces_dir, self._pieces_dir = self._pieces_dir, None
         if self._pieces:
-            tmp = temporary_name(target, pieces_dir)
-            if len(self._pieces) == 1:
-                shutil.copyfile(self._pieces[0], tmp)
-            else:
-                merge_rrd(self._pieces, tmp)  # on failure the pieces stay, each a complete .rrd
-            check_complete(tmp)
-            os.replace(tmp, target)
+            with output_path(self._save_output) as tmp:
+                if len(self._pieces) == 1:
+                    shutil.copyfile(self._pieces[0], tmp)
+                else:
+                    merge_rrd(self._pieces, tmp)  # on failure the pieces stay, each a complete .rrd
+                check_complete(tmp)
         shutil.rmtree(pieces_dir, ignore_errors=True)

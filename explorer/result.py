@@ -5,14 +5,13 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass, field
-from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any, Iterator, Mapping
 
 import numpy as np
 
+CSV_CHUNK_ROWS = 20_000  # ~ 5 MB of text per piece at 30 columns
 
 @dataclass(frozen=True)
 class EffectOutput:
@@ -44,11 +43,19 @@ class Result:
         return list(self.summary.get("events", []))
 
     def csv_text(self) -> str:
+        return "".join(self.csv_chunks())
+
+    def csv_chunks(self, rows: int = CSV_CHUNK_ROWS) -> Iterator[str]:
+        """The CSV text in pieces of `rows` rows (the header first): at the largest step counts
+        the whole text is gigabytes, a piece a few megabytes. Every value is repr() of the
+        float64, which reads back exactly."""
         names = list(self.columns)
-        table = np.column_stack([np.asarray(self.columns[n], dtype=float) for n in names])
-        lines = [",".join(names)]
-        lines.extend(",".join(repr(float(x)) for x in row) for row in table)
-        return "\n".join(lines) + "\n"
+        arrays = [np.asarray(self.columns[n], dtype=float) for n in names]
+        yield ",".join(names) + "\n"
+        n = len(arrays[0]) if arrays else 0
+        for lo in range(0, n, rows):
+            block = np.column_stack([a[lo:lo + rows] for a in arrays]).tolist()
+            yield "".join([",".join(map(repr, row)) + "\n" for row in block])
 
     def json_text(self) -> str:
         return json.dumps(_jsonable(dict(self.summary)), indent=2, allow_nan=False) + "\n"
@@ -72,17 +79,8 @@ def _jsonable(value):
 
 
 def write_atomic(path: str | os.PathLike, text: str | bytes) -> None:
-    """Write to a temporary file beside the target, then rename: never a half-written target."""
-    path = Path(path)
-    mode = "wb" if isinstance(text, bytes) else "w"
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, mode) as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
+    """Write `text` to `path` by the rules of explorer.outputs (temporary file and rename for a
+    regular file, the umask or the replaced file's mode; devices and pipes written through)."""
+    from .outputs import write_output
+
+    write_output(path, text)

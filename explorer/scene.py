@@ -43,7 +43,7 @@ MAX_RPM = 100_000.0
 MAX_LIFT = 1.0  # m
 MIN_EVENT_ANGLE = math.radians(0.1)  # rise and return of the analytic laws
 MAX_RATIO = 100.0
-MAX_STEPS = 10_000_000
+MAX_STEPS = 1_000_000  # at this count simulate (elastic) needs ~20 s and 0.7 GB, record ~50 s and 2 GB; 10x that took 4 min and 5.6 GB
 
 # Optional sections parsed by the module that owns them: section -> "module:function".
 # The function takes (Table, partial scene fields dict) and returns a frozen object.

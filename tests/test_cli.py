@@ -194,15 +194,19 @@ def test_output_path_that_is_a_directory(tmp_path, capsys, option):
     assert not other.exists()
 
 
-def test_write_failure_is_one_line(tmp_path, capsys, monkeypatch):
-    """A write that fails after the checks (disk full, a race) still ends in one line, exit 2."""
-    from explorer import result as result_module
+def test_write_failure_is_one_line(tmp_path):
+    """A write that fails after the checks (here: the file-size limit, as a full disk would) still
+    ends in one line, exit 2, and leaves neither the file nor its temporary."""
+    import resource
+    import signal
 
-    def full_disk(path, text):
-        raise OSError(28, "No space left on device", str(path))
+    def small_files():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # EFBIG instead of a killed process
+        resource.setrlimit(resource.RLIMIT_FSIZE, (100_000, 100_000))
 
-    monkeypatch.setattr(result_module, "write_atomic", full_disk)
     out = tmp_path / "out.csv"
-    assert cli.main(["simulate", str(DEMO), "-o", str(out)]) == 2
-    lines = capsys.readouterr().err.splitlines()
-    assert lines == [f"error: {out}: --output: cannot write: No space left on device"]
+    proc = subprocess.run([sys.executable, "-m", "explorer", "simulate", str(DEMO), "-o", str(out)],
+                          preexec_fn=small_files, capture_output=True, text=True, cwd=ROOT, timeout=300)
+    assert proc.returncode == 2
+    assert proc.stderr.splitlines() == [f"error: {out}: --output: cannot write: File too large"]
+    assert list(tmp_path.iterdir()) == []

@@ -349,18 +349,18 @@ def test_parts_that_cannot_be_built_leave_a_warning_and_the_series(tmp_path, cap
 
 def test_an_incomplete_file_is_never_renamed_into_place(tmp_path, monkeypatch, capsys):
     """rerun's file sink only logs write errors: the footer check stops a broken file."""
-    import explorer.recording as recording
+    import explorer.recording_worker as worker
 
     out = tmp_path / "run.rrd"
     out.write_bytes(b"previous content")
-    real_write = recording._write_one
+    real_write = worker.write_file
 
     def truncating_write(path, run, layout):
         real_write(path, run, layout)
         data = Path(path).read_bytes()
         Path(path).write_bytes(data[: len(data) // 2])  # as if the disk filled up
 
-    monkeypatch.setattr(recording, "_write_one", truncating_write)
+    monkeypatch.setattr(worker, "write_file", truncating_write)
     code = main(["record", str(CYCLOIDAL), "--no-parts", "--set", "solver.steps_per_revolution=72", "-o", str(out)])
     assert code == 1 and "incomplete (no rrd footer)" in capsys.readouterr().err
     assert out.read_bytes() == b"previous content"

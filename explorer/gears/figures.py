@@ -68,7 +68,7 @@ def rocking_cam_figure(scene, path) -> Path:
             ax.set_xticklabels([])
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=110)
+    _save_png(fig, path)
     plt.close(fig)
     return path
 
@@ -122,9 +122,20 @@ def trip_buffers_figure(scene, path) -> Path:
     ax.legend(fontsize=8)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=110)
+    _save_png(fig, path)
     plt.close(fig)
     return path
+
+
+def _save_png(fig, path: Path) -> None:
+    """By explorer.outputs' rules (temporary and rename, mode kept), like every other output."""
+    import io
+
+    from ..outputs import write_output
+
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    write_output(path, buffer.getvalue())
 
 
 def main(argv=None) -> int:
@@ -144,7 +155,9 @@ def main(argv=None) -> int:
     print(rocking_cam_figure(rocking, out / "rocking_cam_swings.png"))
     print(trip_buffers_figure(trip, out / "trip_buffers.png"))
     table = buffer_table_markdown(buffer_rows(trip))
-    (out / "trip_buffers.md").write_text(table)
+    from ..outputs import write_output
+
+    write_output(out / "trip_buffers.md", table)
     print(table, end="")
     return 0
 

@@ -1,0 +1,226 @@
+"""Rerun recordings are logged in a helper process, replaced after every RECYCLE_AFTER recordings.
+
+Why a process: rerun-sdk never frees a RecordingStream made from Python (rerun issue #2116, open
+in 0.41). `disconnect()` closes its sinks, but the stream's batcher and forwarding threads (two for
+the recording, two for the blueprint that goes with it) and what they hold stay until the process
+exits: 4 threads and about 1.6 MB for every recording, so a 3000-run sweep died with "Failed to
+spawn thread" and `serve --rerun-save` grew with every change. Deleting the stream, disconnecting
+orphans or rerun's own shutdown() do not release them. In a helper process they end with it: the
+explorer's thread count and memory stay flat however many recordings it makes, and the helper
+never holds more than RECYCLE_AFTER recordings' worth.
+
+The helper is a fresh interpreter (a fork would copy the locks of rerun's and viser's threads),
+in its own session so that Ctrl-C reaches only the explorer, which finishes what it writes and
+then closes it; it exits when its pipe closes, so it never outlives the explorer. rerun's own log lines are off in it unless RUST_LOG says
+otherwise: a failed write is reported by the explorer in one line (the file has no footer).
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import signal
+import subprocess
+import sys
+import threading
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Mapping
+
+RECYCLE_AFTER = 32  # recordings per helper process: at most ~130 threads and ~50 MB of rerun's leftovers
+JOB_TIMEOUT_S = 600.0  # one recording; the live stream's flush has its own, shorter timeout
+STOP_TIMEOUT_S = 10.0
+
+
+def _plain(value):
+    """Summaries hold read-only mappings (MappingProxyType), which do not pickle."""
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def portable_run(run):
+    """The run with a result the helper process can receive: columns, summary, the scene's name
+    and source (all that explorer.recording.log_result reads of it)."""
+    from .recording import Run
+
+    result = run.result
+    scene = getattr(result, "scene", None)
+    light = SimpleNamespace(
+        scene=SimpleNamespace(name=str(getattr(scene, "name", "")), source=str(getattr(scene, "source", ""))),
+        columns={k: v for k, v in result.columns.items()},
+        summary=_plain(result.summary),
+    )
+    return Run(label=run.label, result=light, parts=run.parts, poses=run.poses, scales=run.scales,
+               colors=run.colors)
+
+
+# ---------------------------------------------------------------------------------------------
+# the helper process
+
+
+def _execute(job: dict) -> None:
+    import rerun as rr
+
+    from .recording import APP_ID, blueprint, log_result, new_recording
+
+    layout = blueprint(*job["layout"]) if job.get("layout") is not None else None
+    if job["kind"] == "blueprint":
+        layout.save(APP_ID, job["path"])
+        return
+    sinks = [rr.FileSink(where) if kind == "file" else rr.GrpcSink(where) for kind, where in job["sinks"]]
+    run = job["run"]
+    rec = new_recording(run.label)
+    if layout is not None and job.get("default_blueprint"):
+        rec.set_sinks(*sinks, default_blueprint=layout)
+    else:
+        rec.set_sinks(*sinks)
+    try:
+        if layout is not None and job.get("send_blueprint"):
+            rec.send_blueprint(layout, make_active=job.get("make_active", True), make_default=True)
+        log_result(rec, run.result, run.label, run.parts, run.poses, run.scales, run.colors)
+        timeout = job.get("flush_timeout")
+        if timeout is None:
+            rec.flush()
+        else:
+            rec.flush(timeout_sec=timeout)
+    finally:
+        rec.disconnect()  # closes a file with its footer
+
+
+def _serve(inbox, outbox) -> None:
+    while True:
+        try:
+            job = inbox.recv()
+        except (EOFError, OSError):  # the explorer has gone
+            return
+        if job is None:
+            return
+        try:
+            _execute(job)
+            outbox.send(None)
+        except Exception as exc:  # noqa: BLE001 - reported by the explorer, the helper goes on
+            outbox.send(f"{type(exc).__name__}: {exc}")
+
+
+def main() -> None:
+    """The helper's entry point: jobs arrive on stdin, replies leave on the descriptor that was
+    stdout, which from here on is stderr's, so nothing printed can corrupt a reply."""
+    from multiprocessing.connection import Connection
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    os.environ.setdefault("RUST_LOG", "off")
+    replies = os.dup(1)
+    os.dup2(2, 1)
+    _serve(Connection(os.dup(0), writable=False), Connection(replies, readable=False))
+
+
+class RecordingWorker:
+    """One helper process at a time, started when needed and replaced every `recycle_after` jobs.
+    `run(job)` is synchronous and thread-safe (jobs are serialised)."""
+
+    def __init__(self, recycle_after: int = RECYCLE_AFTER):
+        self.recycle_after = recycle_after
+        self._lock = threading.Lock()
+        self._proc = None
+        self._send = self._recv = None
+        self._jobs = 0
+
+    def _start(self) -> None:
+        from multiprocessing.connection import Connection
+
+        # A plain interpreter, not multiprocessing's spawn: that re-runs the caller's main script
+        # in the child, which breaks any script without an `if __name__ == "__main__"` guard.
+        env = dict(os.environ)
+        package_root = str(Path(__file__).resolve().parent.parent)
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
+        proc = subprocess.Popen([sys.executable, "-c", "from explorer.recording_worker import main; main()"],
+                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env, close_fds=True,
+                                start_new_session=True)  # Ctrl-C in the terminal is the explorer's to handle
+        self._proc = proc
+        self._send = Connection(os.dup(proc.stdin.fileno()), readable=False)
+        self._recv = Connection(os.dup(proc.stdout.fileno()), writable=False)
+        proc.stdin.close()
+        proc.stdout.close()
+        self._jobs = 0
+
+    def _stop(self) -> None:
+        proc = self._proc
+        self._proc = None
+        if proc is None:
+            return
+        try:
+            self._send.send(None)
+        except OSError:
+            pass
+        self._send.close()
+        self._recv.close()
+        try:
+            proc.wait(STOP_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+    def run(self, job: dict, timeout: float = JOB_TIMEOUT_S) -> None:
+        with self._lock:
+            if self._proc is None:
+                self._start()
+            try:
+                self._send.send(job)
+                if not self._recv.poll(timeout):
+                    raise TimeoutError(f"writing the recording took longer than {timeout:g} s")
+                reply = self._recv.recv()
+            except (EOFError, OSError) as exc:  # it died, or hangs (TimeoutError)
+                proc = self._proc
+                proc.kill()
+                self._stop()
+                why = str(exc) or f"exit status {proc.returncode}"
+                raise RuntimeError(f"the rerun writer process failed ({why})") from None
+            except BaseException:  # Ctrl-C while it works: its reply must not answer the next job
+                self._proc.kill()
+                self._stop()
+                raise
+            self._jobs += 1
+            if self._jobs >= self.recycle_after:
+                self._stop()
+            if reply is not None:
+                raise RuntimeError(reply)
+
+    def close(self) -> None:
+        with self._lock:
+            self._stop()
+
+
+_shared: RecordingWorker | None = None
+_shared_lock = threading.Lock()
+
+
+def shared_worker() -> RecordingWorker:
+    """The process's helper (the spawn costs ~0.5 s, paid once per RECYCLE_AFTER recordings)."""
+    global _shared
+    with _shared_lock:
+        if _shared is None:
+            _shared = RecordingWorker()
+            atexit.register(_shared.close)
+        return _shared
+
+
+def write_file(path, run, layout: tuple | None) -> None:
+    """One run as one recording into the .rrd file `path`, with `layout` = (paths, bounds) of
+    explorer.recording.blueprint as its default blueprint (None: no blueprint)."""
+    shared_worker().run({"kind": "record", "sinks": [("file", str(path))], "run": portable_run(run),
+                         "layout": layout, "default_blueprint": layout is not None})
+
+
+def write_blueprint(path, layout: tuple) -> None:
+    """Only the blueprint, for the application id of every recording (merged in last)."""
+    shared_worker().run({"kind": "blueprint", "path": str(path), "layout": layout})
+
+
+def send(sinks: list[tuple[str, str]], run, layout: tuple, make_active: bool, flush_timeout: float) -> None:
+    """One recording to `sinks` [("file", path) | ("grpc", url)], its blueprint sent explicitly."""
+    shared_worker().run({"kind": "record", "sinks": sinks, "run": portable_run(run), "layout": layout,
+                         "send_blueprint": True, "make_active": make_active, "flush_timeout": flush_timeout},
+                        timeout=JOB_TIMEOUT_S + flush_timeout)
