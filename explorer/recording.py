@@ -485,7 +485,7 @@ def write_recordings(path, runs: Iterable[Run], on_run=None) -> None:
     with its layout as default blueprint; several are one file each, without, merged with
     `rerun rrd merge` together with the layout for all of them, written last."""
     from .outputs import as_output, output_path
-    from .recording_worker import write_file
+    from .recording_worker import RecordingWorker, write_file
 
     out = as_output(path, "output")
     it = iter(runs)
@@ -493,19 +493,19 @@ def write_recordings(path, runs: Iterable[Run], on_run=None) -> None:
     if first is None:
         raise ValueError("no runs to record")
     second = next(it, None)
-    with output_path(out) as tmp:
+    with output_path(out) as tmp, RecordingWorker() as worker:
         if second is None:
             paths = recording_paths(first.result, (first.parts or {}).keys())
             bounds = parts_bounds(first.parts, first.poses or {}) if first.parts else None
-            write_file(tmp, first, (paths, bounds))
+            write_file(worker, tmp, first, (paths, bounds))
             if on_run is not None:
                 on_run(first)
         else:
-            _write_merged(out, tmp, itertools.chain([first, second], it), on_run)
+            _write_merged(worker, out, tmp, itertools.chain([first, second], it), on_run)
         check_complete(tmp)
 
 
-def _write_merged(out, tmp: Path, runs: Iterable[Run], on_run) -> None:
+def _write_merged(worker, out, tmp: Path, runs: Iterable[Run], on_run) -> None:
     from .recording_worker import write_blueprint, write_file
 
     parent = None if out.direct else out.target.parent  # a device's temporaries go to the system's
@@ -519,13 +519,13 @@ def _write_merged(out, tmp: Path, runs: Iterable[Run], on_run) -> None:
             if run.parts:
                 boxes.append(parts_bounds(run.parts, run.poses or {}))
             piece = work_dir / f"{len(pieces):05d}.rrd"
-            write_file(piece, run, None)
+            write_file(worker, piece, run, None)
             pieces.append(piece)
             if on_run is not None:
                 on_run(run)
             del run  # the next run is made only now: one in memory at a time
         layout = work_dir / "layout.rbl"
-        write_blueprint(layout, (list(dict.fromkeys(paths)), union_bounds(boxes)))
+        write_blueprint(worker, layout, (list(dict.fromkeys(paths)), union_bounds(boxes)))
         merge_rrd([*pieces, layout], tmp)
     finally:
         shutil.rmtree(work_dir, ignore_errors=True)

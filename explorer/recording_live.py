@@ -146,6 +146,9 @@ class LiveStream:
             # or pipe's in the system's temporary directory
             parent = None if self._save_output.direct else self._save_output.target.parent
             self._pieces_dir = Path(tempfile.mkdtemp(prefix=f".{self.save_path.name}.", suffix=".parts", dir=parent))
+        from .recording_worker import RecordingWorker
+
+        self._worker = RecordingWorker()  # started by the writer thread at its first recording
         self._thread = threading.Thread(target=self._run, name="rerun-live", daemon=True)
         self._thread.start()
         atexit.register(self.close)
@@ -184,6 +187,7 @@ class LiveStream:
         except Exception:
             pass
         self._thread.join()
+        self._worker.close()  # the helper ends with the session it wrote for
         if self._host is not None:
             try:
                 self._host.flush(timeout_sec=FLUSH_TIMEOUT_S)
@@ -251,7 +255,7 @@ class LiveStream:
         # the sinks' default: a viewer that is already showing the session keeps its own layout
         # otherwise. It is made active only when it changes (first recording, new kinds of
         # series), so a user's rearrangement survives a parameter change.
-        send(sinks, run, (list(self._paths), self._bounds), make_active=len(self._paths) != seen,
+        send(self._worker, sinks, run, (list(self._paths), self._bounds), make_active=len(self._paths) != seen,
              flush_timeout=FLUSH_TIMEOUT_S)
         if piece is not None:
             self._pieces.append(piece)

@@ -17,7 +17,6 @@ otherwise: a failed write is reported by the explorer in one line (the file has 
 
 from __future__ import annotations
 
-import atexit
 import os
 import signal
 import subprocess
@@ -26,6 +25,8 @@ import threading
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Mapping
+
+from .processes import spawn
 
 RECYCLE_AFTER = 32  # recordings per helper process: at most ~130 threads and ~50 MB of rerun's leftovers
 JOB_TIMEOUT_S = 600.0  # one recording; the live stream's flush has its own, shorter timeout
@@ -119,7 +120,9 @@ def main() -> None:
 
 class RecordingWorker:
     """One helper process at a time, started when needed and replaced every `recycle_after` jobs.
-    `run(job)` is synchronous and thread-safe (jobs are serialised)."""
+    `run(job)` is synchronous and thread-safe (jobs are serialised). Whoever writes recordings owns
+    one for as long as it writes (`with RecordingWorker() as worker:`, a LiveStream for its
+    session): no helper outlives the work it was started for."""
 
     def __init__(self, recycle_after: int = RECYCLE_AFTER):
         self.recycle_after = recycle_after
@@ -136,9 +139,10 @@ class RecordingWorker:
         env = dict(os.environ)
         package_root = str(Path(__file__).resolve().parent.parent)
         env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
-        proc = subprocess.Popen([sys.executable, "-c", "from explorer.recording_worker import main; main()"],
-                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env, close_fds=True,
-                                start_new_session=True)  # Ctrl-C in the terminal is the explorer's to handle
+        # own session (Ctrl-C in the terminal is the explorer's to handle), dies with the thread that
+        # started it (and exits when its pipe closes)
+        proc = spawn([sys.executable, "-c", "from explorer.recording_worker import main; main()"],
+                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
         self._proc = proc
         self._send = Connection(os.dup(proc.stdin.fileno()), readable=False)
         self._recv = Connection(os.dup(proc.stdout.fileno()), writable=False)
@@ -192,35 +196,28 @@ class RecordingWorker:
         with self._lock:
             self._stop()
 
+    def __enter__(self) -> "RecordingWorker":
+        return self
 
-_shared: RecordingWorker | None = None
-_shared_lock = threading.Lock()
-
-
-def shared_worker() -> RecordingWorker:
-    """The process's helper (the spawn costs ~0.5 s, paid once per RECYCLE_AFTER recordings)."""
-    global _shared
-    with _shared_lock:
-        if _shared is None:
-            _shared = RecordingWorker()
-            atexit.register(_shared.close)
-        return _shared
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
-def write_file(path, run, layout: tuple | None) -> None:
+def write_file(worker: RecordingWorker, path, run, layout: tuple | None) -> None:
     """One run as one recording into the .rrd file `path`, with `layout` = (paths, bounds) of
     explorer.recording.blueprint as its default blueprint (None: no blueprint)."""
-    shared_worker().run({"kind": "record", "sinks": [("file", str(path))], "run": portable_run(run),
+    worker.run({"kind": "record", "sinks": [("file", str(path))], "run": portable_run(run),
                          "layout": layout, "default_blueprint": layout is not None})
 
 
-def write_blueprint(path, layout: tuple) -> None:
+def write_blueprint(worker: RecordingWorker, path, layout: tuple) -> None:
     """Only the blueprint, for the application id of every recording (merged in last)."""
-    shared_worker().run({"kind": "blueprint", "path": str(path), "layout": layout})
+    worker.run({"kind": "blueprint", "path": str(path), "layout": layout})
 
 
-def send(sinks: list[tuple[str, str]], run, layout: tuple, make_active: bool, flush_timeout: float) -> None:
+def send(worker: RecordingWorker, sinks: list[tuple[str, str]], run, layout: tuple, make_active: bool,
+         flush_timeout: float) -> None:
     """One recording to `sinks` [("file", path) | ("grpc", url)], its blueprint sent explicitly."""
-    shared_worker().run({"kind": "record", "sinks": sinks, "run": portable_run(run), "layout": layout,
+    worker.run({"kind": "record", "sinks": sinks, "run": portable_run(run), "layout": layout,
                          "send_blueprint": True, "make_active": make_active, "flush_timeout": flush_timeout},
                         timeout=JOB_TIMEOUT_S + flush_timeout)

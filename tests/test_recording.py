@@ -355,8 +355,8 @@ def test_an_incomplete_file_is_never_renamed_into_place(tmp_path, monkeypatch, c
     out.write_bytes(b"previous content")
     real_write = worker.write_file
 
-    def truncating_write(path, run, layout):
-        real_write(path, run, layout)
+    def truncating_write(worker_, path, run, layout):
+        real_write(worker_, path, run, layout)
         data = Path(path).read_bytes()
         Path(path).write_bytes(data[: len(data) // 2])  # as if the disk filled up
 
