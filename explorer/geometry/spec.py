@@ -151,12 +151,11 @@ _SPLIT = re.compile(r"[,;\s]+")
 
 
 def _read_points_file(path: Path, file: str, key: str) -> np.ndarray:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(file, key, f"point file {str(path)!r} not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(file, key, f"cannot read point file {str(path)!r}: {exc}") from None
+    if not path.exists():
+        raise InputError(file, key, f"point file {str(path)!r} not found")
+    from ..files import read_text
+
+    text = read_text(path, file=file, key=key, prefix=f"point file {path.name}: ")
     rows = []
     for number, line in enumerate(text.splitlines(), start=1):
         line = line.split("#", 1)[0].strip()
@@ -168,7 +167,7 @@ def _read_points_file(path: Path, file: str, key: str) -> np.ndarray:
         except ValueError:
             if not rows:  # a header line
                 continue
-            raise InputError(file, key, f"{path.name} line {number}: expected two numbers x, y, got {line!r}") from None
+            raise InputError(file, key, f"{path.name} line {number}: expected two numbers x, y") from None
         if len(values) != 2:
             raise InputError(file, key, f"{path.name} line {number}: expected two numbers x, y, got {len(values)}")
         rows.append(values)
