@@ -28,7 +28,7 @@ RANGES: dict[str, tuple[float, float]] = {
     "damping": (1e-6, 1e8),  # N*s/m
     "pressure": (1e-3, 1e13),  # Pa: moduli of diamond are ~1.2e12 Pa
     "time": (1e-9, 1e4),  # s
-    "angle": (1e-9, 10.0 * _TURN),  # rad: ten turns
+    "angle": (math.radians(1e-9), 10.0 * _TURN),  # rad: a nanodegree to ten turns
     "speed": (1e-3 * _RPM, 1e5 * _RPM),  # rad/s: 0.001 rpm (a revolution in 17 hours) to 100 000 rpm
     "area": (1e-18, 100.0),  # m**2
     "velocity": (1e-9, 1e4),  # m/s
@@ -73,7 +73,7 @@ def check_range(number: float, dimension: str, *, file: str, key: str, shown, ze
     span = f"between {lo * factor:.6g} {unit} and {hi * factor:.6g} {unit}"
     if zero_allowed:
         span = f"0 or {span}"
-    raise InputError(file, key, f"must be {span}{' in size' if number < 0.0 or zero_allowed else ''}, got {_short(shown)}")
+    raise InputError(file, key, f"must be {span}{' in size' if number < 0.0 else ''}, got {_short(shown)}")
 
 
 def _short(value) -> str:

@@ -11,7 +11,7 @@ from typing import Any, Iterable, Mapping
 
 from .errors import InputError
 from .ranges import check_range
-from .units import plain_number, to_si
+from .units import check_magnitude, plain_number, to_si
 
 
 @dataclass(frozen=True)
@@ -92,13 +92,14 @@ class Table:
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self.error(name, f"expected a plain number, got {value!r}")
-        number = plain_number(value, file=self.file, key=self.key(name), subnormal=False)
+        number = plain_number(value, file=self.file, key=self.key(name))
         if integer and not number.is_integer():
             raise self.error(name, f"expected a whole number, got {value!r}")
         if minimum is not None and (number < minimum or (open_minimum and number == minimum)):
             raise self.error(name, f"must be {'greater than' if open_minimum else 'at least'} {minimum:g}, got {value!r}")
         if maximum is not None and (number > maximum or (open_maximum and number == maximum)):
             raise self.error(name, f"must be {'less than' if open_maximum else 'at most'} {maximum:g}, got {value!r}")
+        check_magnitude(number, value, file=self.file, key=self.key(name))
         return int(number) if integer else number
 
     def string(self, name: str, default: Any = ..., *, choices: Iterable[str] | None = None) -> str:

@@ -70,34 +70,36 @@ def to_si(value, dimension: str, *, file: str, key: str) -> float:
     return _pint_to_si(value, text, dimension, file=file, key=key)
 
 
-# Largest and smallest non-zero magnitude a number in a scene may have. Far outside any
-# physical range below (explorer.ranges), they only keep the arithmetic of the checks finite
-# and exact: 1e-320 is subnormal, 10**400 does not fit a float.
+# Largest and smallest non-zero magnitude of a plain number (a ratio, a coefficient) beyond its
+# own limits: 1e-320 is subnormal, 10**400 does not fit a float. Quantities with a unit have
+# the narrower ranges of explorer.ranges.
 MAX_MAGNITUDE = 1e300
 MIN_MAGNITUDE = 1e-300
 MAX_NUMBER_CHARS = 50  # a hand-written number longer than this is a paste error or an attack
 
 
-def plain_number(value, *, file: str, key: str, subnormal: bool = True) -> float:
-    """A TOML int or float as a float in the representable range, or InputError. Tiny values
-    pass when `subnormal` (the key's own range then says what is allowed, with the range)."""
+def plain_number(value, *, file: str, key: str) -> float:
+    """A TOML int or float as a finite float, or InputError (the key's range is checked by the
+    caller, which states it)."""
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**300:
         # float() of a 400-digit int raises OverflowError
         raise InputError(file, key, f"number out of range: at most {MAX_MAGNITUDE:g} in size, got {len(str(abs(value)))} digits")
     number = float(value)
-    _check_magnitude(number, value, file=file, key=key, subnormal=subnormal)
+    if not math.isfinite(number):
+        raise InputError(file, key, f"value must be finite, got {short_repr(value)}")
     return number
 
 
-def _check_magnitude(number: float, shown, *, file: str, key: str, subnormal: bool = True) -> None:
-    if not math.isfinite(number):
-        raise InputError(file, key, f"value must be finite, got {_short(shown)}")
-    if abs(number) > MAX_MAGNITUDE or (not subnormal and 0.0 < abs(number) < MIN_MAGNITUDE):
+def check_magnitude(number: float, shown, *, file: str, key: str) -> float:
+    """`number` unless it is beyond MAX_MAGNITUDE or subnormal-small: for plain numbers without
+    a physical range of their own."""
+    if abs(number) > MAX_MAGNITUDE or 0.0 < abs(number) < MIN_MAGNITUDE:
         raise InputError(file, key, f"number out of range: 0 or between {MIN_MAGNITUDE:g} and {MAX_MAGNITUDE:g} "
-                         f"in size, got {_short(shown)}")
+                         f"in size, got {short_repr(shown)}")
+    return number
 
 
-def _short(value) -> str:
+def short_repr(value) -> str:
     """repr of a value for a message, cut so that a hostile value cannot flood the terminal."""
     text = repr(value)
     return text if len(text) <= 60 else text[:40] + "..." + f" ({len(text)} characters)"
@@ -121,19 +123,20 @@ def parse_quantity(text: str, *, file: str, key: str) -> tuple[float, str]:
     """(magnitude, canonical unit expression, "" for none) of "number [unit]", or InputError."""
     match = _QUANTITY.fullmatch(text)
     if match is not None and match.group("unit").lstrip().startswith(("**", "^")):
-        raise InputError(file, key, f"cannot read {_short(text)} as a quantity: numbers are not raised to powers "
+        raise InputError(file, key, f"cannot read {short_repr(text)} as a quantity: numbers are not raised to powers "
                          "(write the number out, such as 1e10)")
     if match is None:
         if _NON_FINITE.fullmatch(text):
-            raise InputError(file, key, f"value must be finite, got {_short(text)}")
-        raise InputError(file, key, f"cannot read {_short(text)} as a quantity: expected a number and a unit, such as '10 mm'")
+            raise InputError(file, key, f"value must be finite, got {short_repr(text)}")
+        raise InputError(file, key, f"cannot read {short_repr(text)} as a quantity: expected a number and a unit, such as '10 mm'")
     number_text = match.group("number")
     if len(number_text) > MAX_NUMBER_CHARS:
         raise InputError(file, key, f"number too long: at most {MAX_NUMBER_CHARS} characters, got {len(number_text)}")
     number = float(number_text)
-    _check_magnitude(number, text, file=file, key=key)
+    if not math.isfinite(number):
+        raise InputError(file, key, f"value must be finite, got {short_repr(text)}")
     if number == 0.0 and re.search(r"[1-9]", number_text.split("e")[0].split("E")[0]):
-        raise InputError(file, key, f"number out of range: {_short(text)} is too small to be told from 0")
+        raise InputError(file, key, f"number out of range: {short_repr(text)} is too small to be told from 0")
     unit = match.group("unit").strip()
     if unit.startswith("/"):  # "3000/min": per minute
         unit = "1" + unit
@@ -146,7 +149,7 @@ def _parse_unit(unit: str, text: str, *, file: str, key: str) -> str:
         return ""
 
     def bad(reason: str) -> InputError:
-        return InputError(file, key, f"cannot read {_short(text)} as a quantity: {reason}")
+        return InputError(file, key, f"cannot read {short_repr(text)} as a quantity: {reason}")
 
     if len(unit) > MAX_UNIT_CHARS:
         raise bad(f"unit longer than {MAX_UNIT_CHARS} characters")
@@ -236,15 +239,15 @@ def _pint_to_si(value, text: str, dimension: str, *, file: str, key: str) -> flo
     try:
         units = ureg.parse_units(unit)
     except Exception as exc:  # pint raises many types for unknown names
-        raise InputError(file, key, f"cannot read {_short(value)} as a quantity: unknown unit {unit!r} "
+        raise InputError(file, key, f"cannot read {short_repr(value)} as a quantity: unknown unit {unit!r} "
                          f"({type(exc).__name__})") from None
     quantity = ureg.Quantity(number, units)
     try:
         if dimension == "speed":
             if quantity.check("[]"):
-                raise InputError(file, key, f"{_short(value)} has no unit of rotational speed (use rpm or rad/s)")
+                raise InputError(file, key, f"{short_repr(value)} has no unit of rotational speed (use rpm or rad/s)")
             if not quantity.check("1/[time]"):
-                raise InputError(file, key, f"{_short(value)} is not a rotational speed (dimension {quantity.dimensionality}; use rpm or rad/s)")
+                raise InputError(file, key, f"{short_repr(value)} is not a rotational speed (dimension {quantity.dimensionality}; use rpm or rad/s)")
             converted = quantity.to("rad/s").magnitude
             if "radian" not in str(ureg.get_root_units(quantity.units)[1]):
                 # "3000 1/min", "50 Hz": a rate without an angle counts revolutions (pint would
@@ -253,23 +256,23 @@ def _pint_to_si(value, text: str, dimension: str, *, file: str, key: str) -> flo
         elif dimension == "angle":
             # pint counts radians as dimensionless, so "50 percent" would pass as 50 % of a radian
             if str(ureg.get_root_units(quantity.units)[1]) != "radian":
-                raise InputError(file, key, f"{_short(value)} is not an angle (use deg or rad, or a bare number of degrees)")
+                raise InputError(file, key, f"{short_repr(value)} is not an angle (use deg or rad, or a bare number of degrees)")
             converted = quantity.to("rad").magnitude
         elif dimension == "dimensionless":
             converted = quantity.to("dimensionless").magnitude
         else:
             if not quantity.check(dim):
                 raise InputError(
-                    file, key, f"{_short(value)} is not a {dimension} (dimension {quantity.dimensionality}, expected {dim})"
+                    file, key, f"{short_repr(value)} is not a {dimension} (dimension {quantity.dimensionality}, expected {dim})"
                 )
             converted = quantity.to(si_unit).magnitude
     except InputError:
         raise
     except Exception as exc:
-        raise InputError(file, key, f"{_short(value)} cannot be expressed as a {dimension} ({type(exc).__name__})") from None
+        raise InputError(file, key, f"{short_repr(value)} cannot be expressed as a {dimension} ({type(exc).__name__})") from None
     converted = float(converted)
     if not math.isfinite(converted):
-        raise InputError(file, key, f"value must be finite, got {_short(value)}")
+        raise InputError(file, key, f"value must be finite, got {short_repr(value)}")
     return converted
 
 
