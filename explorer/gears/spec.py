@@ -95,10 +95,22 @@ def _required_table(t: Table, name: str, gear_type: str) -> Table:
     return sub
 
 
+# A pivot closer than this to the shaft centre makes the lever's geometry degenerate (no
+# triangle to close): refused at load with the key, not found as a division by zero later.
+MIN_PIVOT_DISTANCE = 1e-4  # m
+
+
+def _pivot(t: Table, name: str) -> tuple[float, float]:
+    point = _point(t, name)
+    if math.hypot(*point) < MIN_PIVOT_DISTANCE:
+        raise t.error(name, f"must be at least {MIN_PIVOT_DISTANCE * 1e3:g} mm from the shaft centre, got {t.raw(name)!r}")
+    return point
+
+
 def _lever(t: Table) -> dict:
     t.reject_unknown(("pivot", "arm", "roller_side"))
     return {
-        "pivot": _point(t, "pivot"),
+        "pivot": _pivot(t, "pivot"),
         "arm": t.quantity("arm", "length", positive=True),
         "roller_side": t.string("roller_side", "left", choices=SIDES),
     }
@@ -130,7 +142,7 @@ def _eccentric(t: Table) -> dict:
         "radius": t.quantity("radius", "length", positive=True),
         "phase": t.quantity("phase", "angle", 0.0),
         "rod": t.quantity("rod", "length", positive=True),
-        "lever_pivot": _point(t, "lever_pivot"),
+        "lever_pivot": _pivot(t, "lever_pivot"),
         "lever_arm": t.quantity("lever_arm", "length", positive=True),
         "pin_side": t.string("pin_side", "left", choices=SIDES),
     }
@@ -212,7 +224,7 @@ def _air(t: Table) -> dict:
 
     t.reject_unknown(("diameter", "stroke", "clearance", "orifice_diameter", "discharge_coefficient",
                       "polytropic_exponent", "ambient_pressure", "ambient_temperature", "inlet"))
-    return {
+    out = {
         "diameter": t.quantity("diameter", "length", positive=True),
         "stroke": t.quantity("stroke", "length", positive=True),
         "clearance": t.quantity("clearance", "length", positive=True),
@@ -224,6 +236,9 @@ def _air(t: Table) -> dict:
                                         maximum=AMBIENT_TEMPERATURE[1]),
         "inlet": t.string("inlet", "check-valve", choices=INLETS),
     }
+    if out["orifice_diameter"] >= out["diameter"]:  # the flow area would exceed the bore: p - p0 / 0
+        raise t.error("orifice_diameter", "the orifice must be smaller than the dashpot piston")
+    return out
 
 
 def _oil(t: Table) -> dict:
