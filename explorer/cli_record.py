@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import itertools
+import math
 import sys
 
 from .errors import InputError
@@ -50,6 +51,9 @@ def register(sub) -> None:
     p.set_defaults(run=run)
 
 
+MAX_RUNS = 1000  # recordings per command (scenes x sweep values)
+
+
 def parse_sweep(text: str) -> tuple[str, list[str]]:
     """'drive.rpm=100,200' -> ('drive.rpm', ['100', '200'])."""
     if "=" not in text:
@@ -72,6 +76,9 @@ def plan_runs(scene_paths: list[str], overrides: list[str], sweeps: list[str]):
 
     scene_paths = scene_paths or [str(default_scene())]
     parsed = [parse_sweep(s) for s in sweeps]
+    count = len(scene_paths) * math.prod(len(values) for _, values in parsed)
+    if count > MAX_RUNS:  # each run is a scene load and a simulation: a hostile product never ends
+        raise InputError("--sweep", parsed[0][0] if parsed else "-", f"{count} runs requested, at most {MAX_RUNS}")
     combos = list(itertools.product(*[[(key, v) for v in values] for key, values in parsed])) or [()]
     plans = []
     for path in scene_paths:

@@ -40,7 +40,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..reader import Table
-from ..units import to_si
+from ..units import plain_number, to_si
 from .arcs import Arc, ArcContour, ContourError, build_arc_contour
 
 BASE_RADIUS_TOLERANCE = 1e-6  # m: follower.base_radius must match the contour this closely
@@ -192,7 +192,10 @@ def _parse_points(table: Table, rotation: float, fields: dict) -> CamSpec:
         )
         if not ok:
             raise InputError(file, key, f"expected a list of [x, y] number pairs in {unit_text}")
-        pts = np.array(raw, dtype=float).reshape(-1, 2)
+        try:  # a 400-digit int does not fit a float
+            pts = np.array([[plain_number(v, file=file, key=key) for v in p] for p in raw], dtype=float).reshape(-1, 2)
+        except InputError as exc:
+            raise InputError(file, key, exc.reason) from None
         source = "inline"
     else:
         key = table.key("file")
