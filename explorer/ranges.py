@@ -4,8 +4,9 @@ A value outside its range is no valve gear (10**308 kg, a spring of 1e-320 N/m) 
 ends as an overflow, a division by zero or a grid of petabytes deep inside a solver. So each
 quantity is checked at load, and the message states the range. The ranges are per dimension,
 wide enough for any engine from a model to a ship's, with a few keys narrower (KEY_RANGES).
-Zero is allowed where the parser allows it (a lash of 0, no damping); a non-zero value must be
-at least the lower bound in size: subnormal numbers are no measurement.
+The lower bound is for keys that must be positive (a mass, a stiffness, a diameter: divisors,
+where a subnormal 1e-320 ended in a division by zero); where zero is allowed (a lash, a damping,
+an offset) a tiny value is as good as none, and only the upper bound applies.
 """
 
 from __future__ import annotations
@@ -60,19 +61,23 @@ def range_for(dimension: str, key: str) -> tuple[float, float] | None:
 
 
 def check_range(number: float, dimension: str, *, file: str, key: str, shown, zero_allowed: bool = True) -> float:
-    """`number` (SI) if its size is within the range of its dimension (or 0 where allowed), else
-    InputError with the range in the quantity's usual unit."""
+    """`number` (SI) if its size is within the range of its dimension, else InputError with the
+    range in the quantity's usual unit. Where zero is allowed (a lash, a damping), the lower
+    bound does not apply: a tiny value is as good as none (and divides nothing)."""
     bounds = range_for(dimension, key)
     if bounds is None:
         return number
     lo, hi = bounds
     size = abs(number)
-    if lo <= size <= hi or (size == 0.0 and zero_allowed):
-        return number
     unit, factor = SHOWN_UNITS[dimension]
-    span = f"between {lo * factor:.6g} {unit} and {hi * factor:.6g} {unit}"
     if zero_allowed:
-        span = f"0 or {span}"
+        if size <= hi:
+            return number
+        span = f"between 0 and {hi * factor:.6g} {unit}"
+    else:
+        if lo <= size <= hi:
+            return number
+        span = f"between {lo * factor:.6g} {unit} and {hi * factor:.6g} {unit}"
     raise InputError(file, key, f"must be {span}{' in size' if number < 0.0 else ''}, got {_short(shown)}")
 
 
