@@ -6,19 +6,22 @@ quantity is checked at load, and the message states the range. The ranges are pe
 wide enough for any engine from a model to a ship's, with a few keys narrower (KEY_RANGES).
 The lower bound is for keys that must be positive (a mass, a stiffness, a diameter: divisors,
 where a subnormal 1e-320 ended in a division by zero); where zero is allowed (a lash, a damping,
-an offset) a tiny value is as good as none, and only the upper bound applies.
+an offset) a tiny value is as good as none, and only the upper bound applies, save that
+subnormal numbers are refused (a spring rate of 1e-320 N/m hung the elastic solver, 1e-307 does not).
 """
 
 from __future__ import annotations
 
 import fnmatch
 import math
+import sys
 
 from .errors import InputError
 
 _TURN = 2.0 * math.pi
 _RPM = _TURN / 60.0  # rad/s per rev/min
 
+SUBNORMAL = sys.float_info.min  # 2.2e-308: below it a float loses precision, and 1 / x overflows
 # dimension -> (smallest non-zero size, largest size) in SI, and the unit the message uses
 # with its factor from SI
 RANGES: dict[str, tuple[float, float]] = {
@@ -63,7 +66,7 @@ def range_for(dimension: str, key: str) -> tuple[float, float] | None:
 def check_range(number: float, dimension: str, *, file: str, key: str, shown, zero_allowed: bool = True) -> float:
     """`number` (SI) if its size is within the range of its dimension, else InputError with the
     range in the quantity's usual unit. Where zero is allowed (a lash, a damping), the lower
-    bound does not apply: a tiny value is as good as none (and divides nothing)."""
+    bound does not apply: a tiny value is as good as none, but not a subnormal one."""
     bounds = range_for(dimension, key)
     if bounds is None:
         return number
@@ -71,9 +74,9 @@ def check_range(number: float, dimension: str, *, file: str, key: str, shown, ze
     size = abs(number)
     unit, factor = SHOWN_UNITS[dimension]
     if zero_allowed:
-        if size <= hi:
+        if size <= hi and not 0.0 < size < SUBNORMAL:
             return number
-        span = f"between 0 and {hi * factor:.6g} {unit}"
+        span = f"0 or between {SUBNORMAL * factor:.6g} {unit} and {hi * factor:.6g} {unit}"
     else:
         if lo <= size <= hi:
             return number
