@@ -6,8 +6,8 @@ quantity is checked at load, and the message states the range. The ranges are pe
 wide enough for any engine from a model to a ship's, with a few keys narrower (KEY_RANGES).
 The lower bound is for keys that must be positive (a mass, a stiffness, a diameter: divisors,
 where a subnormal 1e-320 ended in a division by zero); where zero is allowed (a lash, a damping,
-an offset) a tiny value is as good as none, and only the upper bound applies, save that
-subnormal numbers are refused (a spring rate of 1e-320 N/m hung the elastic solver, 1e-307 does not).
+an offset) a tiny value is as good as none, only the upper bound applies, and a subnormal value
+(below 2.2e-308 in SI) is taken as 0.
 """
 
 from __future__ import annotations
@@ -66,7 +66,7 @@ def range_for(dimension: str, key: str) -> tuple[float, float] | None:
 def check_range(number: float, dimension: str, *, file: str, key: str, shown, zero_allowed: bool = True) -> float:
     """`number` (SI) if its size is within the range of its dimension, else InputError with the
     range in the quantity's usual unit. Where zero is allowed (a lash, a damping), the lower
-    bound does not apply: a tiny value is as good as none, but not a subnormal one."""
+    bound does not apply: a tiny value is as good as none, and a subnormal one is taken as 0."""
     bounds = range_for(dimension, key)
     if bounds is None:
         return number
@@ -74,9 +74,13 @@ def check_range(number: float, dimension: str, *, file: str, key: str, shown, ze
     size = abs(number)
     unit, factor = SHOWN_UNITS[dimension]
     if zero_allowed:
-        if size <= hi and not 0.0 < size < SUBNORMAL:
+        if size < SUBNORMAL:
+            # below the smallest normal float a value is 0 to any measurement, but its arithmetic
+            # is not: a spring rate of 1e-320 N/m hung the elastic solver (1e-307 does not)
+            return 0.0
+        if size <= hi:
             return number
-        span = f"0 or between {SUBNORMAL * factor:.6g} {unit} and {hi * factor:.6g} {unit}"
+        span = f"between 0 and {hi * factor:.6g} {unit}"
     else:
         if lo <= size <= hi:
             return number
