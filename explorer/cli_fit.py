@@ -70,9 +70,11 @@ def _follower_type(path: str, overrides: list[str]):
 
     from .scene import apply_overrides
 
+    from .files import MAX_SCENE_FILE_BYTES, read_regular
+
     try:
-        with open(path, "rb") as handle:
-            data = apply_overrides(tomllib.load(handle), overrides, path)
+        text = read_regular(path, file=path, key="-", limit=MAX_SCENE_FILE_BYTES).decode("utf-8")
+        data = apply_overrides(tomllib.loads(text), overrides, path)
         return data["follower"]["type"]
     except Exception:  # noqa: BLE001 - any failure here is load_scene's to report, with its key
         return None

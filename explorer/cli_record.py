@@ -62,6 +62,7 @@ def register(sub) -> None:
     p.set_defaults(run=run)
 
 
+
 def parse_sweep(text: str) -> tuple[str, list[str]]:
     """'drive.rpm=100,200' -> ('drive.rpm', ['100', '200'])."""
     if "=" not in text:

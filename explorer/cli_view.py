@@ -69,6 +69,9 @@ def _check_source(source: str) -> str:
         raise InputError(source, "-", "file not found")
     if path.is_dir():
         raise InputError(source, "-", "is a directory, not a .rrd file")
+    from .files import check_regular
+
+    check_regular(path, file=source, key="-")  # a FIFO would block the open below
     try:
         with open(path, "rb") as handle:
             magic = handle.read(4)

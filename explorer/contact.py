@@ -59,6 +59,7 @@ import numpy as np
 
 from .errors import InputError
 from .result import EffectOutput
+from .ranges import FRICTION_COEFFICIENT
 from .units import AT
 
 STEEL_E = 210e9  # Pa
@@ -114,7 +115,7 @@ def parse_contact_section(table, fields) -> ContactSpec:
     if table.has("friction_angle") and table.has("friction_coefficient"):
         raise table.error("friction_coefficient", "give friction_angle or friction_coefficient, not both")
     if table.has("friction_coefficient"):
-        mu = table.number("friction_coefficient", minimum=0.0)
+        mu = table.number("friction_coefficient", minimum=FRICTION_COEFFICIENT[0], maximum=FRICTION_COEFFICIENT[1])
         rho = math.atan(mu)
     else:
         rho = table.quantity("friction_angle", "angle", 0.0)

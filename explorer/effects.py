@@ -16,6 +16,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
+from .errors import InputError
 from .result import EffectOutput, Result
 from .scene import EFFECT_DEPENDENCIES, Scene
 
@@ -70,6 +71,15 @@ def effect_function(name: str) -> Callable[[Context], EffectOutput]:
     return getattr(importlib.import_module(module), attr)
 
 
+# Results are checked behind the valid ranges: NaN (inf - inf, 0 / 0: an overflow inside an
+# effect) is refused except in the columns that mark with NaN where they are not defined (no
+# contact, valve not carried); infinity is a result for forces (a self-locking cam needs an
+# infinite push), never for the motion.
+NAN_WHERE_UNDEFINED = frozenset({"valve_referred_stiffness_N_m", "required_spring_force_N", "spring_margin_N"})
+MOTION_PREFIXES = ("cam_angle", "time_", "follower_", "valve_lift", "valve_velocity", "valve_accel", "valve_jerk",
+                   "rigid_valve_")
+
+
 def simulate(scene: Scene, lift=None) -> Result:
     """Run the scene's effects over one revolution; `lift` may pass a prebuilt lift curve."""
     from .lift import build_lift
@@ -103,6 +113,11 @@ def simulate(scene: Scene, lift=None) -> Result:
             values = np.asarray(values, dtype=float)
             if values.shape != theta.shape:
                 raise RuntimeError(f"effect {name} returned column {column} of shape {values.shape}")
+            if column not in NAN_WHERE_UNDEFINED and np.any(np.isnan(values)) \
+                    or column.startswith(MOTION_PREFIXES) and np.any(np.isinf(values)):
+                # behind the valid ranges of the scene: an overflow must not end as a file of NaN
+                raise InputError(scene.source, name, f"the {name} effect's results are not finite ({column}): "
+                                 "the scene's values are beyond what the model can compute")
             columns[column] = values
         summary.update(out.summary)
         events.extend(dict(e, effect=name) for e in out.events)

@@ -35,7 +35,7 @@ import numpy as np
 
 from .errors import InputError
 from .reader import Table
-from .units import to_si
+from .units import plain_number, short_repr, to_si
 
 TWO_PI = 2.0 * math.pi
 INTERPOLATIONS = ("linear", "step")
@@ -131,10 +131,12 @@ def _read_points(table: Table, angle_scale: float, value_scale: float) -> tuple[
             and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in pair)
         )
         if not ok:
-            raise table.error("points", f"point {i + 1}: expected [angle, acceleration] as two plain numbers, got {pair!r}")
-        if not all(math.isfinite(float(v)) for v in pair):
-            raise table.error("points", f"point {i + 1}: values must be finite, got {pair!r}")
-        rows.append((float(pair[0]), float(pair[1])))
+            raise table.error("points", f"point {i + 1}: expected [angle, acceleration] as two plain numbers, got {short_repr(pair)}")
+        try:  # float() of a 400-digit int raises OverflowError
+            values = [plain_number(v, file=table.file, key=table.key("points")) for v in pair]
+        except InputError as exc:
+            raise table.error("points", f"point {i + 1}: {exc.reason}") from None
+        rows.append((values[0], values[1]))
     data = np.array(rows)
     if data[0, 0] != 0.0:
         raise table.error("points", f"the first point must be at angle 0 (the event starts at lift.start), got {data[0, 0]:g}")

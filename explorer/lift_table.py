@@ -34,6 +34,7 @@ import numpy as np
 
 from .errors import InputError
 from .reader import Table
+from .files import read_text
 from .units import to_si
 
 TWO_PI = 2.0 * math.pi
@@ -102,16 +103,9 @@ def read_lift_csv(path, angle_scale: float, lift_scale: float, *, file: str, key
     def fail(reason: str) -> InputError:
         return InputError(file, key, f"{shown}: {reason}")
 
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise fail(f"file not found ({path})") from None
-    except IsADirectoryError:
-        raise fail("is a directory, not a CSV file") from None
-    except UnicodeDecodeError:
-        raise fail("not a UTF-8 text file") from None
-    except OSError as exc:
-        raise fail(f"cannot read: {exc.strerror}") from None
+    if not Path(path).exists():
+        raise fail(f"file not found ({path})")
+    text = read_text(path, file=file, key=key, prefix=f"{shown}: ")
     rows: list[tuple[float, float]] = []
     header_allowed = True
     for number, line in enumerate(text.splitlines(), start=1):
@@ -125,12 +119,13 @@ def read_lift_csv(path, angle_scale: float, lift_scale: float, *, file: str, key
             if header_allowed:  # one header line such as "angle_deg,lift_mm"
                 header_allowed = False
                 continue
-            raise fail(f"line {number}: cannot read {line!r} as two numbers (angle, lift)") from None
+            # the line itself is not shown: the file may be one the user should not see (/etc/shadow)
+            raise fail(f"line {number}: cannot read it as two numbers (angle, lift)") from None
         header_allowed = False
         if len(values) != 2:
             raise fail(f"line {number}: expected 2 columns (angle, lift), got {len(values)}")
         if not all(math.isfinite(v) for v in values):
-            raise fail(f"line {number}: values must be finite numbers, got {line!r}")
+            raise fail(f"line {number}: values must be finite numbers")
         rows.append((values[0], values[1]))
         if len(rows) > MAX_ROWS:
             raise fail(f"more than {MAX_ROWS} rows")

@@ -6,12 +6,12 @@ bad input always ends in the same one-line InputError.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any, Iterable, Mapping
 
 from .errors import InputError
-from .units import to_si
+from .ranges import check_range
+from .units import check_magnitude, plain_number, to_si
 
 
 @dataclass(frozen=True)
@@ -74,7 +74,7 @@ class Table:
             raise self.error(name, f"must be at least {minimum:g} (SI), got {value!r}")
         if maximum is not None and number > maximum:
             raise self.error(name, f"must be at most {maximum:g} (SI), got {value!r}")
-        return number
+        return check_range(number, dimension, file=self.file, key=self.key(name), shown=value, zero_allowed=not positive)
 
     def number(
         self,
@@ -92,15 +92,14 @@ class Table:
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self.error(name, f"expected a plain number, got {value!r}")
-        if integer and (not float(value).is_integer()):
+        number = plain_number(value, file=self.file, key=self.key(name))
+        if integer and not number.is_integer():
             raise self.error(name, f"expected a whole number, got {value!r}")
-        number = float(value)
-        if not math.isfinite(number):
-            raise self.error(name, f"value must be finite, got {value!r}")
         if minimum is not None and (number < minimum or (open_minimum and number == minimum)):
             raise self.error(name, f"must be {'greater than' if open_minimum else 'at least'} {minimum:g}, got {value!r}")
         if maximum is not None and (number > maximum or (open_maximum and number == maximum)):
             raise self.error(name, f"must be {'less than' if open_maximum else 'at most'} {maximum:g}, got {value!r}")
+        check_magnitude(number, value, file=self.file, key=self.key(name))
         return int(number) if integer else number
 
     def string(self, name: str, default: Any = ..., *, choices: Iterable[str] | None = None) -> str:

@@ -179,30 +179,48 @@ TOP_KEYS = (
 
 def load_scene(path: str | os.PathLike, overrides: list[str] | tuple[str, ...] = ()) -> Scene:
     """Read and validate a scene file; `overrides` are "section.key=value" strings (TOML values)."""
+    from .files import MAX_SCENE_FILE_BYTES, read_regular
+
     file = str(path)
+    data = read_regular(path, file=file, key="-", limit=MAX_SCENE_FILE_BYTES)
     try:
-        with open(path, "rb") as handle:
-            data = tomllib.load(handle)
-    except FileNotFoundError:
-        raise InputError(file, "-", "file not found") from None
-    except IsADirectoryError:
-        raise InputError(file, "-", "is a directory, not a scene file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(file, "-", f"malformed TOML: {exc}") from None
+        text = data.decode("utf-8")
     except UnicodeDecodeError:
         raise InputError(file, "-", "not a UTF-8 text file") from None
-    except OSError as exc:
-        raise InputError(file, "-", f"cannot read: {exc.strerror}") from None
-    data = apply_overrides(data, overrides, file)
-    return scene_from_dict(data, file)
+    return loads_scene(text, file, overrides)
+
+
+# tomllib and copy.deepcopy recurse once per level of nesting: a few thousand nested arrays or
+# tables end in RecursionError. No scene nests deeper than a few levels.
+MAX_NESTING = 32
 
 
 def loads_scene(text: str, source: str = "<memory>", overrides=()) -> Scene:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise InputError(source, "-", f"malformed TOML: {exc}") from None
+        raise InputError(source, "-", f"malformed TOML: {_first_line(str(exc))}") from None
+    except RecursionError:
+        raise InputError(source, "-", f"malformed TOML: nested too deeply (at most {MAX_NESTING} levels)") from None
+    _check_nesting(data, source, "-")
     return scene_from_dict(apply_overrides(data, overrides, source), source)
+
+
+def _first_line(text: str) -> str:
+    return text.splitlines()[0] if text else text
+
+
+def _check_nesting(value, file: str, key: str) -> None:
+    """InputError if arrays/tables nest deeper than MAX_NESTING (iterative: no recursion)."""
+    stack = [(value, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if depth > MAX_NESTING:
+            raise InputError(file, key, f"nested too deeply (at most {MAX_NESTING} levels of arrays and tables)")
+        if isinstance(node, dict):
+            stack.extend((v, depth + 1) for v in node.values())
+        elif isinstance(node, list):
+            stack.extend((v, depth + 1) for v in node)
 
 
 def apply_overrides(data: dict, overrides, file: str) -> dict:
@@ -220,10 +238,18 @@ def apply_overrides(data: dict, overrides, file: str) -> dict:
         parts = dotted.split(".")
         if not dotted or any(not p for p in parts):
             raise InputError(file, dotted or item, "override key must be dotted, such as lift.height")
+        if len(parts) > MAX_NESTING:
+            raise InputError(file, dotted[:60], f"override key nested too deeply (at most {MAX_NESTING} levels)")
         try:
             value = tomllib.loads(f"v = {text}")["v"]
         except tomllib.TOMLDecodeError:
             value = text.strip()
+        except RecursionError:
+            raise InputError(file, dotted, f"value nested too deeply (at most {MAX_NESTING} levels)") from None
+        _check_nesting(value, file, dotted)
+        if isinstance(value, str) and value == text.strip() and "=" in value:
+            # "drive.rpm=5=6": a second "=" is a typo, not part of a quantity or a name
+            raise InputError(file, dotted, "more than one '=' in the override; write section.key=value")
         node = data
         for part in parts[:-1]:
             child = node.setdefault(part, {})

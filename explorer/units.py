@@ -56,19 +56,167 @@ def to_si(value, dimension: str, *, file: str, key: str) -> float:
     if isinstance(value, bool):
         raise InputError(file, key, f"expected a {dimension} such as '10 {bare_unit or '1'}', got a boolean")
     if isinstance(value, (int, float)):
-        number = float(value)
-        if not math.isfinite(number):
-            raise InputError(file, key, f"value must be finite, got {value!r}")
+        number = plain_number(value, file=file, key=key)
         return _bare_to_si(number, dimension)
     if not isinstance(value, str):
         raise InputError(file, key, f"expected a number or a string with units, got {type(value).__name__}")
     text = value.strip()
     if not text:
         raise InputError(file, key, "empty value")
+    parse_quantity(text, file=file, key=key)  # the grammar first: the fast path must not accept more
     fast = _fast_to_si(text, dimension)
     if fast is not None:
         return fast
     return _pint_to_si(value, text, dimension, file=file, key=key)
+
+
+# Largest and smallest non-zero magnitude of a plain number (a ratio, a coefficient) beyond its
+# own limits: 1e-320 is subnormal, 10**400 does not fit a float. Quantities with a unit have
+# the narrower ranges of explorer.ranges.
+MAX_MAGNITUDE = 1e300
+MIN_MAGNITUDE = 1e-300
+MAX_NUMBER_CHARS = 50  # a hand-written number longer than this is a paste error or an attack
+
+
+def plain_number(value, *, file: str, key: str) -> float:
+    """A TOML int or float as a finite float, or InputError (the key's range is checked by the
+    caller, which states it)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**300:
+        # float() of a 400-digit int raises OverflowError
+        raise InputError(file, key, f"number out of range: at most {MAX_MAGNITUDE:g} in size, got {len(str(abs(value)))} digits")
+    number = float(value)
+    if not math.isfinite(number):
+        raise InputError(file, key, f"value must be finite, got {short_repr(value)}")
+    return number
+
+
+def check_magnitude(number: float, shown, *, file: str, key: str) -> float:
+    """`number` unless it is beyond MAX_MAGNITUDE or subnormal-small: for plain numbers without
+    a physical range of their own."""
+    if abs(number) > MAX_MAGNITUDE or 0.0 < abs(number) < MIN_MAGNITUDE:
+        raise InputError(file, key, f"number out of range: 0 or between {MIN_MAGNITUDE:g} and {MAX_MAGNITUDE:g} "
+                         f"in size, got {short_repr(shown)}")
+    return number
+
+
+def short_repr(value) -> str:
+    """repr of a value for a message, cut so that a hostile value cannot flood the terminal."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:40] + "..." + f" ({len(text)} characters)"
+
+
+# The quantity grammar: a decimal number, then a unit expression of unit names, "*", "/", small
+# integer powers ("**n" or "^n") and parentheses. Nothing is evaluated: pint's own parser would
+# compute "10**10**10 mm" (for ever), multiply numbers inside the unit ("5=6" is 30) and accept
+# "(-8)**(1/3)" (complex), so only the validated unit part ever reaches pint's registry.
+_QUANTITY = re.compile(
+    r"(?P<number>[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]{1,4})?)\s*(?P<unit>.*)", re.DOTALL
+)
+_NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)\b.*", re.IGNORECASE | re.DOTALL)
+_UNIT_TOKEN = re.compile(r"\s*(?:(?P<name>[A-Za-z_µμΩ]+)|(?P<power>\*\*|\^)\s*(?P<exp>[+-]?[0-9]+)|(?P<op>[*/()])|(?P<one>1(?=\s*/)))")
+MAX_UNIT_POWER = 4
+MAX_UNIT_DEPTH = 3
+MAX_UNIT_CHARS = 60
+
+
+def parse_quantity(text: str, *, file: str, key: str) -> tuple[float, str]:
+    """(magnitude, canonical unit expression, "" for none) of "number [unit]", or InputError."""
+    match = _QUANTITY.fullmatch(text)
+    if match is not None and match.group("unit").lstrip().startswith(("**", "^")):
+        raise InputError(file, key, f"cannot read {short_repr(text)} as a quantity: numbers are not raised to powers "
+                         "(write the number out, such as 1e10)")
+    if match is None:
+        if _NON_FINITE.fullmatch(text):
+            raise InputError(file, key, f"value must be finite, got {short_repr(text)}")
+        raise InputError(file, key, f"cannot read {short_repr(text)} as a quantity: expected a number and a unit, such as '10 mm'")
+    number_text = match.group("number")
+    if len(number_text) > MAX_NUMBER_CHARS:
+        raise InputError(file, key, f"number too long: at most {MAX_NUMBER_CHARS} characters, got {len(number_text)}")
+    number = float(number_text)
+    if not math.isfinite(number):
+        raise InputError(file, key, f"value must be finite, got {short_repr(text)}")
+    if number == 0.0 and re.search(r"[1-9]", number_text.split("e")[0].split("E")[0]):
+        raise InputError(file, key, f"number out of range: {short_repr(text)} is too small to be told from 0")
+    unit = match.group("unit").strip()
+    if unit.startswith("/"):  # "3000/min": per minute
+        unit = "1" + unit
+    return number, _parse_unit(unit, text, file=file, key=key)
+
+
+def _parse_unit(unit: str, text: str, *, file: str, key: str) -> str:
+    """Validate a unit expression and write it canonically (powers as **n), or InputError."""
+    if not unit:
+        return ""
+
+    def bad(reason: str) -> InputError:
+        return InputError(file, key, f"cannot read {short_repr(text)} as a quantity: {reason}")
+
+    if len(unit) > MAX_UNIT_CHARS:
+        raise bad(f"unit longer than {MAX_UNIT_CHARS} characters")
+    tokens: list[tuple[str, str]] = []
+    pos = 0
+    while pos < len(unit):
+        m = _UNIT_TOKEN.match(unit, pos)
+        if m is None or m.end() == pos:
+            raise bad(f"unexpected {unit[pos:].strip()[:10]!r} in the unit (a unit is names with *, / and powers **n)")
+        kind = next(k for k in ("name", "power", "op", "one") if m.group(k) is not None)
+        if kind == "name" and tokens and tokens[-1][0] == "name":
+            # pint reads "m m" as m**2 and "k N" as nonsense: juxtaposition is not a product here
+            raise bad("a space inside the unit; write products with '*'")
+        if kind == "power":
+            exponent = int(m.group("exp"))
+            if not (exponent and abs(exponent) <= MAX_UNIT_POWER):
+                raise bad(f"unit powers must be whole numbers from -{MAX_UNIT_POWER} to {MAX_UNIT_POWER} (not 0)")
+            tokens.append(("power", str(exponent)))
+        else:
+            tokens.append((kind, m.group(kind)))
+        pos = m.end()
+    # recursive descent over: expr := factor (("*" | "/") factor)* ; factor := (name | "(" expr ")") power?
+    i = 0
+
+    def factor(depth: int) -> str:
+        nonlocal i
+        if i >= len(tokens):
+            raise bad("the unit ends after an operator")
+        kind, tok = tokens[i]
+        if kind == "name":
+            i += 1
+            out = tok
+        elif tok == "(":
+            if depth >= MAX_UNIT_DEPTH:
+                raise bad(f"more than {MAX_UNIT_DEPTH} levels of parentheses")
+            i += 1
+            out = "(" + expr(depth + 1) + ")"
+            if i >= len(tokens) or tokens[i][1] != ")":
+                raise bad("unbalanced parentheses")
+            i += 1
+        else:
+            raise bad(f"unexpected {tok!r} in the unit")
+        if i < len(tokens) and tokens[i][0] == "power":
+            out += f"**{tokens[i][1]}"
+            i += 1
+        return out
+
+    def expr(depth: int) -> str:
+        nonlocal i
+        if depth == 0 and tokens and tokens[0][0] == "one":  # "1/min": a rate
+            i = 1
+            if i >= len(tokens) or tokens[i][1] != "/":
+                raise bad("a number inside the unit")
+            i += 1
+            out = "1/" + factor(depth)
+        else:
+            out = factor(depth)
+        while i < len(tokens) and tokens[i][1] in "*/" and tokens[i][0] == "op":
+            op = tokens[i][1]
+            i += 1
+            out += op + factor(depth)
+        return out
+
+    canonical = expr(0)
+    if i != len(tokens):
+        raise bad(f"unexpected {tokens[i][1]!r} in the unit")
+    return canonical
 
 
 def _bare_to_si(number: float, dimension: str) -> float:
@@ -81,46 +229,51 @@ def _bare_to_si(number: float, dimension: str) -> float:
 
 
 def _pint_to_si(value, text: str, dimension: str, *, file: str, key: str) -> float:
-    """The general path: any unit expression pint understands (slow the first time: registry)."""
+    """The general path: the unit expression, validated by the grammar, looked up in pint's
+    registry (slow the first time: the registry is built); the number never goes to pint."""
     dim, bare_unit, si_unit = DIMENSIONS[dimension]
+    number, unit = parse_quantity(text, file=file, key=key)
+    if not unit:
+        return _bare_to_si(number, dimension)
     ureg = registry()
     try:
-        quantity = ureg.Quantity(text)
-    except Exception as exc:  # pint raises many types for bad text
-        raise InputError(file, key, f"cannot read {value!r} as a quantity ({type(exc).__name__})") from None
-    if not isinstance(quantity, ureg.Quantity):
-        quantity = ureg.Quantity(float(quantity), bare_unit or "")
-    if quantity.unitless and dimension not in ("angle", "dimensionless"):
-        quantity = ureg.Quantity(quantity.magnitude, bare_unit)
-    if dimension == "angle" and quantity.unitless:
-        quantity = ureg.Quantity(quantity.magnitude, "deg")
+        units = ureg.parse_units(unit)
+    except Exception as exc:  # pint raises many types for unknown names
+        raise InputError(file, key, f"cannot read {short_repr(value)} as a quantity: unknown unit {unit!r} "
+                         f"({type(exc).__name__})") from None
+    quantity = ureg.Quantity(number, units)
     try:
         if dimension == "speed":
             if quantity.check("[]"):
-                raise InputError(file, key, f"{value!r} has no unit of rotational speed (use rpm or rad/s)")
+                raise InputError(file, key, f"{short_repr(value)} has no unit of rotational speed (use rpm or rad/s)")
             if not quantity.check("1/[time]"):
-                raise InputError(file, key, f"{value!r} is not a rotational speed (dimension {quantity.dimensionality}; use rpm or rad/s)")
-            number = quantity.to("rad/s").magnitude
+                raise InputError(file, key, f"{short_repr(value)} is not a rotational speed (dimension {quantity.dimensionality}; use rpm or rad/s)")
+            converted = quantity.to("rad/s").magnitude
             if "radian" not in str(ureg.get_root_units(quantity.units)[1]):
                 # "3000 1/min", "50 Hz": a rate without an angle counts revolutions (pint would
                 # take it as rad/s, 2 pi too slow)
-                number *= 2.0 * math.pi
-        elif dimension in ("angle", "dimensionless"):
-            number = quantity.to(si_unit or "dimensionless").magnitude
+                converted *= 2.0 * math.pi
+        elif dimension == "angle":
+            # pint counts radians as dimensionless, so "50 percent" would pass as 50 % of a radian
+            if str(ureg.get_root_units(quantity.units)[1]) != "radian":
+                raise InputError(file, key, f"{short_repr(value)} is not an angle (use deg or rad, or a bare number of degrees)")
+            converted = quantity.to("rad").magnitude
+        elif dimension == "dimensionless":
+            converted = quantity.to("dimensionless").magnitude
         else:
             if not quantity.check(dim):
                 raise InputError(
-                    file, key, f"{value!r} is not a {dimension} (dimension {quantity.dimensionality}, expected {dim})"
+                    file, key, f"{short_repr(value)} is not a {dimension} (dimension {quantity.dimensionality}, expected {dim})"
                 )
-            number = quantity.to(si_unit).magnitude
+            converted = quantity.to(si_unit).magnitude
     except InputError:
         raise
     except Exception as exc:
-        raise InputError(file, key, f"{value!r} cannot be expressed as a {dimension} ({type(exc).__name__})") from None
-    number = float(number)
-    if not math.isfinite(number):
-        raise InputError(file, key, f"value must be finite, got {value!r}")
-    return number
+        raise InputError(file, key, f"{short_repr(value)} cannot be expressed as a {dimension} ({type(exc).__name__})") from None
+    converted = float(converted)
+    if not math.isfinite(converted):
+        raise InputError(file, key, f"value must be finite, got {short_repr(value)}")
+    return converted
 
 
 # Fast path for "number unit" strings with the common units of scene files: a fresh process

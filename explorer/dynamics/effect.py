@@ -32,6 +32,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..errors import InputError
 from ..result import EffectOutput
 from .model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, StiffnessProfile, solve
 
@@ -43,8 +44,39 @@ def _solver_options(scene) -> dict:
     return {}
 
 
-def _solve(model, drive, t, method: str, options: dict) -> tuple:
+# The exact and taylor solvers split every output step into pieces of at most 0.5 / rho (rho the
+# fastest rate of the linkage), scipy takes steps of that order: a slow revolution of a stiff,
+# light linkage spans millions of natural periods (rpm = 1e-9 asked for 3.5 PiB of nodes), and a
+# feather-light valve bounces through as many events (a 0.1 g valve on the rolling lever: 180 000
+# steps, 26 s). The shipped scenes need a few thousand; the output grid itself is the scene's
+# choice (solver.steps_per_revolution) and is not counted.
+MAX_SOLVER_NODES = 100_000
+SUBDIVIDING_METHODS = ("exact", "taylor", "scipy")
+
+
+def fastest_rate(model) -> float:
+    """rho (1/s): the linkage's fastest rate in contact (overdamped: the fast real root) or flight."""
+    alpha = 0.5 * model.damping / model.oscillating_mass
+    w2 = (model.stiffness + model.spring_rate) / model.oscillating_mass
+    rho = alpha + math.sqrt(alpha * alpha - w2) if alpha * alpha > w2 else math.sqrt(w2)
+    return max(rho, math.sqrt(model.spring_rate / model.mass))
+
+
+def check_resolution(model, t, method: str, file: str) -> None:
+    """InputError (naming drive.rpm) when resolving the linkage's vibration over the times t
+    would take more than MAX_SOLVER_NODES steps."""
+    if method not in SUBDIVIDING_METHODS or len(t) < 2:
+        return
+    nodes = fastest_rate(model) * float(t[-1] - t[0]) / 0.5
+    if not nodes <= MAX_SOLVER_NODES:  # also NaN
+        raise InputError(file, "drive.rpm", f"resolving the linkage's vibration over this revolution needs about "
+                         f"{nodes:.3g} solver steps (at most {MAX_SOLVER_NODES:g}): raise drive.rpm, or change the "
+                         f"linkage (softer, less damped) or the valve (heavier)")
+
+
+def _solve(model, drive, t, method: str, options: dict, file: str = "<memory>") -> tuple:
     """Solve; the 1902 scheme beyond its stability limit is run anyway, with a warning."""
+    check_resolution(model, t, method, file)
     warnings: list[str] = []
     try:
         return solve(model, drive, t, method=method, **options), warnings
@@ -109,7 +141,7 @@ def elastic_effect(ctx) -> EffectOutput:
     t_run = np.concatenate([ctx.time[i0:], ctx.time[:i0] + period])
     t_run = np.append(t_run, ctx.time[i0] + period)
     method = scene.solver.method
-    sol, warnings = _solve(model, drive, t_run, method, _solver_options(scene))
+    sol, warnings = _solve(model, drive, t_run, method, _solver_options(scene), scene.source)
     warnings.extend(sol.stats.get("warnings", []))
 
     back = (np.arange(n) + i0) % n  # output index of each run sample

@@ -250,7 +250,7 @@ def _trip(ctx, lift):
             if name == "air":  # the pocket as the latched phase leaves it at the trip
                 densities[name] = lift.density_at_trip(buffers[name])
     t_max = (TWO_PI - lift.phi_trip) / omega
-    table = compare_buffers(closing_model(spec, scene), buffers, s_trip, v_trip, t_max, densities)
+    table = compare_buffers(closing_model(spec, scene), buffers, s_trip, v_trip, t_max, densities, scene.source)
     summary = {
         "trip_angle_deg": math.degrees(lift.trip_angle),
         "lift_at_trip_m": s_trip,

@@ -38,6 +38,9 @@ def circle_intersection(p1, r1: float, p2, r2: float, branch: int):
     dx = p2[0] - p1[0]
     dy = p2[1] - p1[1]
     d2 = dx * dx + dy * dy
+    d2v = J.value(d2)
+    if np.any(np.asarray(d2v) <= 0.0):  # concentric circles (a pivot on the shaft centre): no closure
+        return None, None, np.where(np.asarray(d2v) <= 0.0, -1.0, 0.0) if np.ndim(d2v) else -1.0
     a = (r1 * r1 - r2 * r2 + d2) / (2.0 * d2)
     q = r1 * r1 / d2 - a * a
     qv = J.value(q)

@@ -53,6 +53,7 @@ from typing import Any, Mapping
 
 from ..errors import InputError
 from ..laws import LAWS
+from ..ranges import AMBIENT_TEMPERATURE, OIL_DENSITY
 from ..reader import Table
 from . import GEAR_TYPES
 
@@ -77,9 +78,14 @@ def _point(t: Table, name: str, default=...) -> tuple[float, float]:
         return default
     if not isinstance(raw, list) or len(raw) != 2:
         raise t.error(name, 'expected a point [x, y], such as ["-120 mm", "70 mm"]')
+    from ..ranges import check_range
     from ..units import to_si
 
-    return tuple(to_si(v, "length", file=t.file, key=f"{t.key(name)}[{i}]") for i, v in enumerate(raw))
+    return tuple(
+        check_range(to_si(v, "length", file=t.file, key=f"{t.key(name)}[{i}]"), "length", file=t.file,
+                    key=f"{t.key(name)}[{i}]", shown=v)
+        for i, v in enumerate(raw)
+    )
 
 
 def _required_table(t: Table, name: str, gear_type: str) -> Table:
@@ -89,10 +95,22 @@ def _required_table(t: Table, name: str, gear_type: str) -> Table:
     return sub
 
 
+# A pivot closer than this to the shaft centre makes the lever's geometry degenerate (no
+# triangle to close): refused at load with the key, not found as a division by zero later.
+MIN_PIVOT_DISTANCE = 1e-4  # m
+
+
+def _pivot(t: Table, name: str) -> tuple[float, float]:
+    point = _point(t, name)
+    if math.hypot(*point) < MIN_PIVOT_DISTANCE:
+        raise t.error(name, f"must be at least {MIN_PIVOT_DISTANCE * 1e3:g} mm from the shaft centre, got {t.raw(name)!r}")
+    return point
+
+
 def _lever(t: Table) -> dict:
     t.reject_unknown(("pivot", "arm", "roller_side"))
     return {
-        "pivot": _point(t, "pivot"),
+        "pivot": _pivot(t, "pivot"),
         "arm": t.quantity("arm", "length", positive=True),
         "roller_side": t.string("roller_side", "left", choices=SIDES),
     }
@@ -124,7 +142,7 @@ def _eccentric(t: Table) -> dict:
         "radius": t.quantity("radius", "length", positive=True),
         "phase": t.quantity("phase", "angle", 0.0),
         "rod": t.quantity("rod", "length", positive=True),
-        "lever_pivot": _point(t, "lever_pivot"),
+        "lever_pivot": _pivot(t, "lever_pivot"),
         "lever_arm": t.quantity("lever_arm", "length", positive=True),
         "pin_side": t.string("pin_side", "left", choices=SIDES),
     }
@@ -206,7 +224,7 @@ def _air(t: Table) -> dict:
 
     t.reject_unknown(("diameter", "stroke", "clearance", "orifice_diameter", "discharge_coefficient",
                       "polytropic_exponent", "ambient_pressure", "ambient_temperature", "inlet"))
-    return {
+    out = {
         "diameter": t.quantity("diameter", "length", positive=True),
         "stroke": t.quantity("stroke", "length", positive=True),
         "clearance": t.quantity("clearance", "length", positive=True),
@@ -214,9 +232,13 @@ def _air(t: Table) -> dict:
         "discharge_coefficient": t.number("discharge_coefficient", 0.62, minimum=0.0, maximum=1.0, open_minimum=True),
         "polytropic_exponent": t.number("polytropic_exponent", 1.4, minimum=1.0, maximum=1.67),
         "ambient_pressure": t.quantity("ambient_pressure", "pressure", 101_325.0, positive=True),
-        "ambient_temperature": t.number("ambient_temperature", 293.15, minimum=1.0),
+        "ambient_temperature": t.number("ambient_temperature", 293.15, minimum=AMBIENT_TEMPERATURE[0],
+                                        maximum=AMBIENT_TEMPERATURE[1]),
         "inlet": t.string("inlet", "check-valve", choices=INLETS),
     }
+    if out["orifice_diameter"] >= out["diameter"]:  # the flow area would exceed the bore: p - p0 / 0
+        raise t.error("orifice_diameter", "the orifice must be smaller than the dashpot piston")
+    return out
 
 
 def _oil(t: Table) -> dict:
@@ -226,7 +248,7 @@ def _oil(t: Table) -> dict:
         "stroke": t.quantity("stroke", "length", positive=True),
         "orifice_diameter": t.quantity("orifice_diameter", "length", positive=True),
         "discharge_coefficient": t.number("discharge_coefficient", 0.62, minimum=0.0, maximum=1.0, open_minimum=True),
-        "oil_density": t.number("oil_density", 880.0, minimum=1.0),
+        "oil_density": t.number("oil_density", 880.0, minimum=OIL_DENSITY[0], maximum=OIL_DENSITY[1]),
     }
     if out["orifice_diameter"] >= out["diameter"]:
         raise t.error("orifice_diameter", "the orifice must be smaller than the dashpot piston")

@@ -46,6 +46,8 @@ from .dashpot import AirDashpot, OilDashpot
 
 TWO_PI = 2.0 * math.pi
 MAX_SEGMENTS = 400
+MAX_CLOSING_STEPS = 2_000_000  # the shipped trip scene takes a few thousand
+MAX_CLOSING_EVALUATIONS = 300_000
 
 
 @dataclass(frozen=True)
@@ -145,7 +147,7 @@ class ClosingSolution:
 
 
 def simulate_closing(model: ClosingModel, s0: float, v0: float, t_max: float, *, density: float | None = None,
-                     rtol: float = 1e-11, atol: float = 1e-14) -> ClosingSolution:
+                     rtol: float = 1e-11, atol: float = 1e-14, file: str = "<memory>") -> ClosingSolution:
     """Free motion of the released valve from lift s0 (> 0) and velocity v0 until it seats, hangs
     or t_max passes. Segments are split at every event so each is smooth; events are located by
     solve_ivp's root finder on the dense output (to ~machine precision). density: the air
@@ -174,6 +176,22 @@ def simulate_closing(model: ClosingModel, s0: float, v0: float, t_max: float, *,
         k_air = buffer.exponent * buffer.ambient_pressure * buffer.area / (buffer.stroke + buffer.clearance)
         scales.append(2.0 * math.pi * math.sqrt(model.mass / k_air))
     max_step = min(scales) / 40.0
+    steps = t_max / max_step
+    if not steps <= MAX_CLOSING_STEPS:  # a feather-light valve on a stiff spring: millions of steps (a hang)
+        raise InputError(file, "valve.mass", f"the released valve's closing needs about {steps:.3g} solver steps "
+                         f"(at most {MAX_CLOSING_STEPS:g}): a heavier valve, a softer spring or cushion, or a higher speed")
+
+    # The step bound above misses stiffness (a feather-light valve on an air cushion): the
+    # explicit integrator then creeps for ever. A budget of right-hand-side evaluations over the
+    # whole closing ends that in one line (the shipped scene takes ~8000, its variants < 100 000).
+    evaluations = [0]
+
+    def spend():
+        evaluations[0] += 1
+        if evaluations[0] > MAX_CLOSING_EVALUATIONS:
+            raise InputError(file, "valve.mass", f"the released valve's closing did not finish within "
+                             f"{MAX_CLOSING_EVALUATIONS:g} solver evaluations: the valve is too light for its spring "
+                             f"and cushion (a heavier valve, a softer spring or cushion)")
 
     def static_force(yy, eng):
         s, rho = yy[0], (yy[2] if len(yy) > 2 else None)
@@ -192,6 +210,7 @@ def simulate_closing(model: ClosingModel, s0: float, v0: float, t_max: float, *,
                 # the valve slips once that exceeds the friction (else it hangs for good)
                 # stuck on the cushion while air leaks: wait until the pressure lets it slide
                 def stuck_rhs(tt, yy):
+                    spend()
                     return [0.0, 0.0, buffer.density_rate(yy[0], 0.0, yy[2])]
 
                 def slip(tt, yy):
@@ -220,6 +239,7 @@ def simulate_closing(model: ClosingModel, s0: float, v0: float, t_max: float, *,
             y[2] = rho_a
 
         def rhs(tt, yy, d=d, eng=eng, vent=vent):
+            spend()
             return model.rhs(tt, yy, d, eng, vent)
 
         def stop(tt, yy):  # velocity reverses
@@ -292,7 +312,7 @@ def peak_buffer_force(sol: ClosingSolution, samples: int = 2001) -> float:
 
 
 def compare_buffers(model: ClosingModel, buffers: dict, s0: float, v0: float, t_max: float,
-                    densities: dict | None = None) -> list[dict]:
+                    densities: dict | None = None, file: str = "<memory>") -> list[dict]:
     """Close the same valve with each buffer (None = no buffer): seating velocity, closing time,
     largest buffer force and the number of rebounds, one row per buffer. densities: an air
     buffer's pocket density at the release (by name; default ambient)."""
@@ -301,7 +321,7 @@ def compare_buffers(model: ClosingModel, buffers: dict, s0: float, v0: float, t_
     rows = []
     for name, buffer in buffers.items():
         rho0 = (densities or {}).get(name)
-        sol = simulate_closing(replace(model, buffer=buffer), s0, v0, t_max, density=rho0)
+        sol = simulate_closing(replace(model, buffer=buffer), s0, v0, t_max, density=rho0, file=file)
         peak = peak_buffer_force(sol) if buffer is not None else 0.0
         rows.append({
             "buffer": name,
@@ -594,7 +614,8 @@ def build_trip_lift(latch, overtravel: float, trip_angle: float, omega: float, m
     latched = None
     if model.buffer is not None:
         latched = latched_buffer(model.buffer, latch, overtravel, start, omega, phi_pick, phi_trip)
-    sol = simulate_closing(model, s0, v0, t_max, density=latched.density_at_trip if latched is not None else None)
+    sol = simulate_closing(model, s0, v0, t_max, density=latched.density_at_trip if latched is not None else None,
+                           file=file)
     if sol.hang:
         raise InputError(file, "spring.preload", "the tripped valve hangs open: spring and closing loads do not overcome the friction")
     if not sol.seated:

@@ -425,7 +425,7 @@ def elastic_trip_motion(scene, lift, theta, method: str = "exact", options: dict
     t_before = t0 + phi[before] / w
     t_trip = t0 + lift.phi_trip / w
     nodes = np.unique(np.concatenate([[t0], t_before, [t_trip]]))
-    sol, warnings = _solve(model, drive, nodes, method, dict(options or {}))
+    sol, warnings = _solve(model, drive, nodes, method, dict(options or {}), scene.source)
     warnings = list(warnings) + list(sol.stats.get("warnings", []))
     jerk_nodes = np.asarray(sol.jerk if sol.jerk is not None else elastic_jerk(model, drive(nodes), sol), dtype=float)
     if sol.phase is not None:
@@ -474,7 +474,7 @@ def elastic_trip_motion(scene, lift, theta, method: str = "exact", options: dict
         latched = getattr(lift, "latched", None)
         # the pocket as the rigid latched phase left it (the elastic valve is microns off that path)
         closing = simulate_closing(lift.closing.model, s_e, v_e, t_max,
-                                   density=latched.density_at_trip if latched is not None else None)
+                                   density=latched.density_at_trip if latched is not None else None, file=scene.source)
         t_free = (phi[after] - lift.phi_trip) / w
         st = closing.state(t_free)
         shut = closing.seated & (t_free >= closing.seat_time) if closing.seated else np.zeros(t_free.shape, bool)

@@ -40,7 +40,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..reader import Table
-from ..units import to_si
+from ..units import plain_number, to_si
 from .arcs import Arc, ArcContour, ContourError, build_arc_contour
 
 BASE_RADIUS_TOLERANCE = 1e-6  # m: follower.base_radius must match the contour this closely
@@ -151,12 +151,11 @@ _SPLIT = re.compile(r"[,;\s]+")
 
 
 def _read_points_file(path: Path, file: str, key: str) -> np.ndarray:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(file, key, f"point file {str(path)!r} not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(file, key, f"cannot read point file {str(path)!r}: {exc}") from None
+    if not path.exists():
+        raise InputError(file, key, f"point file {str(path)!r} not found")
+    from ..files import read_text
+
+    text = read_text(path, file=file, key=key, prefix=f"point file {path.name}: ")
     rows = []
     for number, line in enumerate(text.splitlines(), start=1):
         line = line.split("#", 1)[0].strip()
@@ -168,7 +167,7 @@ def _read_points_file(path: Path, file: str, key: str) -> np.ndarray:
         except ValueError:
             if not rows:  # a header line
                 continue
-            raise InputError(file, key, f"{path.name} line {number}: expected two numbers x, y, got {line!r}") from None
+            raise InputError(file, key, f"{path.name} line {number}: expected two numbers x, y") from None
         if len(values) != 2:
             raise InputError(file, key, f"{path.name} line {number}: expected two numbers x, y, got {len(values)}")
         rows.append(values)
@@ -193,7 +192,10 @@ def _parse_points(table: Table, rotation: float, fields: dict) -> CamSpec:
         )
         if not ok:
             raise InputError(file, key, f"expected a list of [x, y] number pairs in {unit_text}")
-        pts = np.array(raw, dtype=float).reshape(-1, 2)
+        try:  # a 400-digit int does not fit a float
+            pts = np.array([[plain_number(v, file=file, key=key) for v in p] for p in raw], dtype=float).reshape(-1, 2)
+        except InputError as exc:
+            raise InputError(file, key, exc.reason) from None
         source = "inline"
     else:
         key = table.key("file")

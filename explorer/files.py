@@ -1,0 +1,83 @@
+"""Reading a file a user names (a scene, a lift table, a contour): regular files only, bounded.
+
+A FIFO would block `open` for ever, /dev/zero or /dev/urandom would be read until memory runs
+out, so the file is checked with stat before it is opened, opened non-blocking (it could be
+swapped for a FIFO between the two calls) and checked again on the open descriptor, and never
+more than the limit is read. The errors name the file and the problem, never its content.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+
+from .errors import InputError
+
+MAX_DATA_FILE_BYTES = 50 * 1024 * 1024  # a lift table or a contour: 50 MB is millions of rows
+MAX_SCENE_FILE_BYTES = 10 * 1024 * 1024  # a scene is a page of TOML
+
+
+def _kind(mode: int) -> str:
+    if stat.S_ISDIR(mode):
+        return "a directory"
+    if stat.S_ISFIFO(mode):
+        return "a FIFO"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a plain file"
+
+
+def check_regular(path, *, file: str, key: str, prefix: str = "", limit: int | None = None) -> os.stat_result:
+    """stat of `path` if it is a regular file (within `limit` bytes), else InputError."""
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        raise InputError(file, key, f"{prefix}file not found") from None
+    except OSError as exc:
+        raise InputError(file, key, f"{prefix}cannot read: {exc.strerror or type(exc).__name__}") from None
+    _check_stat(info, file=file, key=key, prefix=prefix, limit=limit)
+    return info
+
+
+def _check_stat(info: os.stat_result, *, file: str, key: str, prefix: str, limit: int | None) -> None:
+    if not stat.S_ISREG(info.st_mode):
+        raise InputError(file, key, f"{prefix}not a regular file ({_kind(info.st_mode)})")
+    if limit is not None and info.st_size > limit:
+        raise InputError(file, key, f"{prefix}file too large: {info.st_size} bytes, at most {limit} "
+                         f"({limit // (1024 * 1024)} MB)")
+
+
+def read_regular(path, *, file: str, key: str, prefix: str = "", limit: int = MAX_DATA_FILE_BYTES) -> bytes:
+    """The bytes of a regular file of at most `limit` bytes, or InputError (never blocks)."""
+    check_regular(path, file=file, key=key, prefix=prefix, limit=limit)
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    except OSError as exc:
+        raise InputError(file, key, f"{prefix}cannot read: {exc.strerror or type(exc).__name__}") from None
+    try:
+        _check_stat(os.fstat(fd), file=file, key=key, prefix=prefix, limit=limit)
+        chunks, size = [], 0
+        while True:  # a file that grows while it is read still stops at the limit
+            chunk = os.read(fd, min(1 << 20, limit + 1 - size))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+            if size > limit:
+                raise InputError(file, key, f"{prefix}file too large: more than {limit} bytes")
+        return b"".join(chunks)
+    except OSError as exc:
+        raise InputError(file, key, f"{prefix}cannot read: {exc.strerror or type(exc).__name__}") from None
+    finally:
+        os.close(fd)
+
+
+def read_text(path, *, file: str, key: str, prefix: str = "", limit: int = MAX_DATA_FILE_BYTES) -> str:
+    """read_regular decoded as UTF-8, or InputError."""
+    data = read_regular(path, file=file, key=key, prefix=prefix, limit=limit)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise InputError(file, key, f"{prefix}not a UTF-8 text file") from None
