@@ -301,6 +301,37 @@ def test_a_page_whose_canvas_changes_shape_is_framed_again_until_moved(app):
     assert not report(1.6)  # a page never aimed yet is aimed when it connects, not here
 
 
+def test_a_late_report_of_an_earlier_camera_is_not_a_hand_move(app):
+    """On a loaded machine the page's report can cross the viewer's newest aim on the wire: it
+    still shows the initial camera or an earlier aim, with the canvas' new shape. That is not the
+    user moving the camera: the page is framed again (it used to be left unframed for good)."""
+    import types
+
+    older = meshes.frame_bounds(*app.current.bounds, fov=0.8, aspect=0.75)
+    newest = meshes.frame_bounds(*app.current.bounds, fov=0.8, aspect=0.9)
+    client = types.SimpleNamespace(client_id=8)
+    # what _aim_client records when it aims the page anew: the newest aim, and those before it
+    app._earlier_aims[8] = (older,)
+    app.client_cameras[8] = newest
+
+    def report(aspect, camera):
+        reported = types.SimpleNamespace(client=client, aspect=aspect, position=np.array(camera.position),
+                                         look_at=np.array(camera.look_at))
+        with app._lock:
+            app._aim_pending.clear()
+        app._camera_reported(reported)
+        with app._lock:
+            return 8 in app._aim_pending
+
+    assert report(1.6, older)  # the earlier aim, new shape: framed again
+    assert report(1.6, app.camera)  # the initial camera (the page had not applied any aim yet)
+    assert not report(0.9, older)  # the newest aim's shape: nothing to do
+    moved = types.SimpleNamespace(position=np.add(older.position, (0.0, 0.05, 0.0)), look_at=older.look_at)
+    assert not report(1.6, moved)  # moved by hand: theirs
+    app.client_cameras.pop(8)
+    app._earlier_aims.pop(8)
+
+
 def test_prepared_parts_after_a_swap_are_the_new_gears_own():
     """The worker reuses the previous meshes when the layout is unchanged; never across kinds
     of gear, whose parts differ."""

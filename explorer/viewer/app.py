@@ -74,6 +74,12 @@ CAMERA_FOV = math.radians(45.0)
 ASSUMED_ASPECT = 0.75
 
 
+def _same_camera(position, look_at, frame) -> bool:
+    reach = float(np.linalg.norm(np.subtract(frame.position, frame.look_at)))
+    return bool(np.allclose(position, frame.position, atol=1e-4 * reach)
+                and np.allclose(look_at, frame.look_at, atol=1e-4 * reach))
+
+
 def camera_frame(prepared: Prepared, aspect: float = ASSUMED_ASPECT) -> meshes.CameraFrame:
     """The camera that sees every part over the whole revolution, in a canvas of `aspect`."""
     lo, hi = prepared.bounds
@@ -155,6 +161,7 @@ class ExplorerApp:
         self._plot_signature: list[tuple] = []
         self.camera: meshes.CameraFrame | None = None  # the initial camera (new pages, Reset View)
         self.client_cameras: dict[int, meshes.CameraFrame] = {}  # what each page was last aimed at
+        self._earlier_aims: dict[int, tuple] = {}  # and the aims before that, newest last
         self._aim_pending: set[int] = set()  # pages that connected since the last frame
 
         self._build_gui()
@@ -391,17 +398,23 @@ class ExplorerApp:
             position, look_at = np.asarray(camera.position), np.asarray(camera.look_at)
         except (AssertionError, ZeroDivisionError):
             return
-        reach = float(np.linalg.norm(np.subtract(frame.position, frame.look_at)))
-        untouched = np.allclose(position, frame.position, atol=1e-4 * reach) and \
-            np.allclose(look_at, frame.look_at, atol=1e-4 * reach)
+        # Untouched: the page shows a camera we put there, the last aim or one before it (the
+        # initial camera, an earlier aim): on a loaded machine a page's report can cross our newest
+        # aim on the wire, and such a late report is not the user moving the camera.
+        untouched = any(_same_camera(position, look_at, placed) for placed in (frame, *self._placed_cameras(client_id)))
         if untouched and math.isfinite(aspect) and abs(aspect - frame.aspect) > 0.01 * frame.aspect:
             with self._lock:
                 self._aim_pending.add(client_id)
+
+    def _placed_cameras(self, client_id: int) -> tuple:
+        earlier = self._earlier_aims.get(client_id, ())
+        return (*earlier, self.camera) if self.camera is not None else tuple(earlier)
 
     def _client_disconnected(self, client) -> None:
         with self._lock:
             self._aim_pending.discard(client.client_id)
         self.client_cameras.pop(client.client_id, None)
+        self._earlier_aims.pop(client.client_id, None)
 
     def _on_ready(self, prepared: Prepared) -> None:
         with self._lock:
@@ -594,6 +607,9 @@ class ExplorerApp:
         camera.up_direction = frame.up
         camera.position = frame.position  # moves look_at along; set it after (viser's rule)
         camera.look_at = frame.look_at
+        previous = self.client_cameras.get(client.client_id)
+        if previous is not None:  # the last few aims: a late report may still show one of them
+            self._earlier_aims[client.client_id] = (*self._earlier_aims.get(client.client_id, ())[-3:], previous)
         self.client_cameras[client.client_id] = frame
 
     def _pose(self, angle: float, force: bool = False) -> None:
