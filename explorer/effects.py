@@ -16,11 +16,13 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
+from .gears.registry import effect_variant
 from .result import EffectOutput, Result
 from .scene import EFFECT_DEPENDENCIES, Scene
 
 # effect -> "module:function"; imported only when the effect runs, so a kinematics-only scene
-# never even imports a dynamics solver.
+# never even imports a dynamics solver. A gear's own variant of an effect is an entry of its
+# line in explorer.gears.registry (effects), which replaces the generic function here.
 EFFECT_FUNCTIONS: dict[str, str] = {
     "kinematics": "explorer.kinematics:kinematics_effect",
     "lash": "explorer.kinematics:lash_effect",
@@ -65,8 +67,11 @@ def resolve(effects) -> list[str]:
     return order
 
 
-def effect_function(name: str) -> Callable[[Context], EffectOutput]:
-    module, _, attr = EFFECT_FUNCTIONS[name].partition(":")
+def effect_function(name: str, follower_type: str | None = None) -> Callable[[Context], EffectOutput]:
+    """The function of effect `name`: the gear's variant for that follower type when its
+    registry entry has one, else the generic effect."""
+    target = (effect_variant(follower_type, name) if follower_type is not None else None) or EFFECT_FUNCTIONS[name]
+    module, _, attr = target.partition(":")
     return getattr(importlib.import_module(module), attr)
 
 
@@ -93,7 +98,7 @@ def simulate(scene: Scene, lift=None) -> Result:
     warnings: list[str] = []
     for name in resolve(scene.effects):
         ctx = Context(scene, theta, t_time, lift_curve, MappingProxyType(columns), MappingProxyType(summary))
-        function = effect_function(name)  # import outside the timing: cost of the effect, not of Python
+        function = effect_function(name, scene.follower.type)  # import outside the timing: cost of the effect, not of Python
         started = time.perf_counter()
         out = function(ctx)
         seconds = time.perf_counter() - started
