@@ -32,6 +32,14 @@ EFFECT_FUNCTIONS: dict[str, str] = {
     "gear": "explorer.gears.effect:gear_effect",
 }
 
+# effect -> ((scene section, "module:function"), ...): the owner of an optional section adds a
+# block to the generic effect's summary when the scene has that section, function(scene, lift)
+# -> (block, warnings), stored as summary[section] after the effect's own entries (a gear's
+# variant of the effect gets none).
+SECTION_SUMMARIES: dict[str, tuple[tuple[str, str], ...]] = {
+    "forces": (("spring_design", "explorer.springs:spring_design_summary"),),
+}
+
 
 @dataclass(frozen=True)
 class Context:
@@ -67,12 +75,34 @@ def resolve(effects) -> list[str]:
     return order
 
 
-def effect_function(name: str, follower_type: str | None = None) -> Callable[[Context], EffectOutput]:
-    """The function of effect `name`: the gear's variant for that follower type when its
-    registry entry has one, else the generic effect."""
-    target = (effect_variant(follower_type, name) if follower_type is not None else None) or EFFECT_FUNCTIONS[name]
+def _resolve(target: str):
     module, _, attr = target.partition(":")
     return getattr(importlib.import_module(module), attr)
+
+
+def effect_function(name: str, follower_type: str | None = None) -> Callable[[Context], EffectOutput]:
+    """The function of effect `name`: the gear's variant for that follower type when its
+    registry entry has one, else the generic effect (with the sections' summary blocks)."""
+    variant = effect_variant(follower_type, name) if follower_type is not None else None
+    if variant is not None:
+        return _resolve(variant)
+    function = _resolve(EFFECT_FUNCTIONS[name])
+    sections = SECTION_SUMMARIES.get(name)
+    return function if not sections else _with_sections(function, sections)
+
+
+def _with_sections(function, sections):
+    def run(ctx: Context) -> EffectOutput:
+        out = function(ctx)
+        for section, target in sections:
+            if getattr(ctx.scene, section, None) is None:
+                continue
+            block, extra_warnings = _resolve(target)(ctx.scene, ctx.lift)
+            out = EffectOutput(columns=out.columns, summary={**out.summary, section: block}, events=out.events,
+                               warnings=tuple(out.warnings) + tuple(extra_warnings))
+        return out
+
+    return run
 
 
 def simulate(scene: Scene, lift=None) -> Result:

@@ -510,11 +510,5 @@ def forces_effect(ctx) -> EffectOutput:
             f"valve lifts off its seat: opening loads exceed the preload by {-seat_force:.4g} N "
             f"(closing loads {loads.closing:.4g} N, preload {loads.preload:.4g} N)"
         )
-
-    if getattr(scene, "spring_design", None) is not None:
-        from .springs import spring_design_summary
-
-        extra, extra_warnings = spring_design_summary(scene, ctx.lift)
-        summary["spring_design"] = extra
-        warnings.extend(extra_warnings)
+    # [spring_design] adds its block to this summary through the pipeline (effects.SECTION_SUMMARIES)
     return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
