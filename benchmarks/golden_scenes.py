@@ -24,7 +24,7 @@ TIMING_KEYS = ("compute_time_s",)
 
 def _strip_timings(value):
     if isinstance(value, dict):
-        return {k: _strip_timings(v) for k, v in value.items() if k not in TIMING_KEYS and not k.endswith("_time_s_wall")}
+        return {k: _strip_timings(v) for k, v in value.items() if k not in TIMING_KEYS}
     if isinstance(value, list):
         return [_strip_timings(v) for v in value]
     return value

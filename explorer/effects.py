@@ -128,7 +128,8 @@ def simulate(scene: Scene, lift=None) -> Result:
     warnings: list[str] = []
     for name in resolve(scene.effects):
         ctx = Context(scene, theta, t_time, lift_curve, MappingProxyType(columns), MappingProxyType(summary))
-        function = effect_function(name, scene.follower.type)  # import outside the timing: cost of the effect, not of Python
+        # import outside the timing: cost of the effect, not of Python
+        function = effect_function(name, scene.follower.type)
         started = time.perf_counter()
         out = function(ctx)
         seconds = time.perf_counter() - started
