@@ -62,7 +62,7 @@ def run(args) -> int:
               file=sys.stderr)
     if args.rerun or args.rerun_save:
         try:
-            from .recording import open_live_stream
+            from .recording_live import open_live_stream
         except ImportError as exc:
             raise InputError("--rerun", "--rerun", f"rerun streaming is not available ({exc})") from None
 

@@ -34,9 +34,10 @@ engines; and the width rule b = P/(k D) with the roller diameter D, k = 10 (inta
 are, by the Hertz allowable (the width at which the peak stress equals it).
 
 The trip gear has no cam surface: its latch lifts the valve spindle directly and lets go. Its
-contact statics are the latch face's (explorer.gears.trip_effects): the latch force at the
-release, the friction the trip must overcome to pull the latch out, the face's bearing pressure;
-their keys are in [gear.trip] (latch_friction, latch_width, latch_depth), not in [contact].
+contact statics are the latch face's (explorer.gears.trip_effects, its variant of this effect in
+the gear registry): the latch force at the release, the friction the trip must overcome to pull
+the latch out, the face's bearing pressure; their keys are in [gear.trip] (latch_friction,
+latch_width, latch_depth), not in [contact].
 
 Scene section [contact] (all optional):
     friction_angle        rho of the follower guide (default 0 deg), or
@@ -58,6 +59,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
+from .gears.registry import effect_variant, gear
 from .result import EffectOutput
 from .ranges import FRICTION_COEFFICIENT
 from .units import AT
@@ -88,7 +90,7 @@ CONTACT_TYPES = ROLLER_TYPES + ("rolling-lever",)  # + two faces rolling on each
 
 def check_follower(follower, file: str) -> None:
     """The follower types the contact statics cover; a roller where the width rule needs one."""
-    if follower.type == "trip":  # the latch statics (explorer.gears.trip_effects): no roller needed
+    if effect_variant(follower.type, "contact") is not None:  # the gear's own statics (the trip gear's latch)
         return
     if follower.type not in CONTACT_TYPES:
         raise InputError(file, "follower.type", f"effect 'contact' does not model follower type {follower.type!r}")
@@ -105,9 +107,9 @@ def parse_contact_section(table, fields) -> ContactSpec:
         check_follower(follower, file)
     if table is None:
         return ContactSpec()
-    if follower is not None and follower.type == "trip":
-        raise InputError(file, "contact", "the trip gear has no cam and roller: its latch keys are latch_friction, "
-                         "latch_width and latch_depth in [gear.trip]")
+    entry = gear(follower.type) if follower is not None else None
+    if entry is not None and "contact" in entry.rejected:  # the trip gear: no cam and roller
+        raise InputError(file, "contact", entry.rejected["contact"])
     table.reject_unknown((
         "friction_angle", "friction_coefficient", "youngs_modulus", "poisson_ratio", "roller_youngs_modulus",
         "roller_poisson_ratio", "width", "valve", "width_rule_k", "engine", "allowable_stress",
@@ -261,9 +263,9 @@ def gear_geometry(ctx) -> ContactGeometry:
     """The gear's own contact geometry (explorer.gears: pivoted.py, rocking.py, rolling.py)."""
     lift = ctx.lift
     if not hasattr(lift, "gear"):
-        from .gears.build import build_gear_lift
+        from .lift import build_lift
 
-        lift = build_gear_lift(ctx.scene)
+        lift = build_lift(ctx.scene)
     return lift.gear.contact_geometry(ctx.theta)
 
 
@@ -310,10 +312,6 @@ def hertz_width(normal, geometry: ContactGeometry, spec: ContactSpec, e_star: fl
 
 
 def contact_effect(ctx) -> EffectOutput:
-    if ctx.scene.follower.type == "trip":  # a latch on the spindle, no cam surface
-        from .gears.trip_effects import trip_contact_effect
-
-        return trip_contact_effect(ctx)
     scene = ctx.scene
     spec: ContactSpec = scene.contact if scene.contact is not None else ContactSpec()
     geometry = contact_geometry(ctx)

@@ -17,11 +17,13 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from .errors import InputError
+from .gears.registry import effect_variant
 from .result import EffectOutput, Result
 from .scene import EFFECT_DEPENDENCIES, Scene
 
 # effect -> "module:function"; imported only when the effect runs, so a kinematics-only scene
-# never even imports a dynamics solver.
+# never even imports a dynamics solver. A gear's own variant of an effect is an entry of its
+# line in explorer.gears.registry (effects), which replaces the generic function here.
 EFFECT_FUNCTIONS: dict[str, str] = {
     "kinematics": "explorer.kinematics:kinematics_effect",
     "lash": "explorer.kinematics:lash_effect",
@@ -29,6 +31,14 @@ EFFECT_FUNCTIONS: dict[str, str] = {
     "contact": "explorer.contact:contact_effect",
     "elastic": "explorer.dynamics.effect:elastic_effect",
     "gear": "explorer.gears.effect:gear_effect",
+}
+
+# effect -> ((scene section, "module:function"), ...): the owner of an optional section adds a
+# block to the generic effect's summary when the scene has that section, function(scene, lift)
+# -> (block, warnings), stored as summary[section] after the effect's own entries (a gear's
+# variant of the effect gets none).
+SECTION_SUMMARIES: dict[str, tuple[tuple[str, str], ...]] = {
+    "forces": (("spring_design", "explorer.springs:spring_design_summary"),),
 }
 
 
@@ -66,8 +76,8 @@ def resolve(effects) -> list[str]:
     return order
 
 
-def effect_function(name: str) -> Callable[[Context], EffectOutput]:
-    module, _, attr = EFFECT_FUNCTIONS[name].partition(":")
+def _resolve(target: str):
+    module, _, attr = target.partition(":")
     return getattr(importlib.import_module(module), attr)
 
 
@@ -78,6 +88,31 @@ def effect_function(name: str) -> Callable[[Context], EffectOutput]:
 NAN_WHERE_UNDEFINED = frozenset({"valve_referred_stiffness_N_m", "required_spring_force_N", "spring_margin_N"})
 MOTION_PREFIXES = ("cam_angle", "time_", "follower_", "valve_lift", "valve_velocity", "valve_accel", "valve_jerk",
                    "rigid_valve_")
+
+
+def effect_function(name: str, follower_type: str | None = None) -> Callable[[Context], EffectOutput]:
+    """The function of effect `name`: the gear's variant for that follower type when its
+    registry entry has one, else the generic effect (with the sections' summary blocks)."""
+    variant = effect_variant(follower_type, name) if follower_type is not None else None
+    if variant is not None:
+        return _resolve(variant)
+    function = _resolve(EFFECT_FUNCTIONS[name])
+    sections = SECTION_SUMMARIES.get(name)
+    return function if not sections else _with_sections(function, sections)
+
+
+def _with_sections(function, sections):
+    def run(ctx: Context) -> EffectOutput:
+        out = function(ctx)
+        for section, target in sections:
+            if getattr(ctx.scene, section, None) is None:
+                continue
+            block, extra_warnings = _resolve(target)(ctx.scene, ctx.lift)
+            out = EffectOutput(columns=out.columns, summary={**out.summary, section: block}, events=out.events,
+                               warnings=tuple(out.warnings) + tuple(extra_warnings))
+        return out
+
+    return run
 
 
 def simulate(scene: Scene, lift=None) -> Result:
@@ -103,7 +138,8 @@ def simulate(scene: Scene, lift=None) -> Result:
     warnings: list[str] = []
     for name in resolve(scene.effects):
         ctx = Context(scene, theta, t_time, lift_curve, MappingProxyType(columns), MappingProxyType(summary))
-        function = effect_function(name)  # import outside the timing: cost of the effect, not of Python
+        # import outside the timing: cost of the effect, not of Python
+        function = effect_function(name, scene.follower.type)
         started = time.perf_counter()
         out = function(ctx)
         seconds = time.perf_counter() - started

@@ -25,7 +25,8 @@ they load the linkage (act to close the valve) for the loads. Friction at rest t
 the valve is about to move (sign of the acceleration): its one-sided limit right after the instant.
 
 The trip gear's latch drives the valve only from the pick-up to the trip; its forces are those
-of that window (explorer.gears.trip_effects), not of the free closing after it.
+of that window (explorer.gears.trip_effects, its variant of this effect in the gear registry),
+not of the free closing after it.
 """
 
 from __future__ import annotations
@@ -445,10 +446,6 @@ def loss_report(intervals, omega: float, min_force: float, min_theta: float) -> 
 
 
 def forces_effect(ctx) -> EffectOutput:
-    if ctx.scene.follower.type == "trip":  # the latch drives only from the pick-up to the trip
-        from .gears.trip_effects import trip_forces_effect
-
-        return trip_forces_effect(ctx)
     scene, w = ctx.scene, ctx.omega
     loads = TrainLoads.from_scene(scene)
     ratio = scene.follower.ratio
@@ -513,11 +510,5 @@ def forces_effect(ctx) -> EffectOutput:
             f"valve lifts off its seat: opening loads exceed the preload by {-seat_force:.4g} N "
             f"(closing loads {loads.closing:.4g} N, preload {loads.preload:.4g} N)"
         )
-
-    if getattr(scene, "spring_design", None) is not None:
-        from .springs import spring_design_summary
-
-        extra, extra_warnings = spring_design_summary(scene, ctx.lift)
-        summary["spring_design"] = extra
-        warnings.extend(extra_warnings)
+    # [spring_design] adds its block to this summary through the pipeline (effects.SECTION_SUMMARIES)
     return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))

@@ -8,16 +8,25 @@ v = w L', a = w^2 L'', j = w^3 L'''.
 
 from __future__ import annotations
 
+import importlib
 import math
 from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
-from .gears import GEAR_TYPES
+from .gears.registry import lift_builder
 from .laws import law as normalised_law
 
 TWO_PI = 2.0 * math.pi
+
+# lift.law -> "module:function" building the lift curve of a scene with that law (imported when
+# used); the gears' builders are in explorer.gears.registry, the closed-form laws are LawLift.
+LIFT_BUILDERS: dict[str, str] = {
+    "table": "explorer.lift_table:build_table_lift",
+    "acceleration": "explorer.lift_acceleration:build_acceleration_lift",
+    "contour": "explorer.geometry.lift_from_contour:build_contour_lift",
+}
 
 
 class LiftCurve(Protocol):
@@ -91,24 +100,15 @@ def _selection(mask: np.ndarray):
 
 
 def build_lift(scene) -> LiftCurve:
-    """The lift curve a validated scene describes (dispatch on lift.law)."""
+    """The lift curve a validated scene describes: the one place that assembles it, from the gear
+    registry (a gear follower) or LIFT_BUILDERS (dispatch on lift.law), else a LawLift."""
     spec = scene.lift
-    if scene.follower.type in GEAR_TYPES:
-        from .gears.build import build_gear_lift
-
-        return build_gear_lift(scene)
-    if spec.law in ("table",):
-        from .lift_table import build_table_lift
-
-        return build_table_lift(scene)
-    if spec.law == "acceleration":
-        from .lift_acceleration import build_acceleration_lift
-
-        return build_acceleration_lift(scene)
-    if spec.law == "contour":
-        from .geometry.lift_from_contour import build_contour_lift
-
-        return build_contour_lift(scene)
+    gear_lift = lift_builder(scene.follower.type)
+    if gear_lift is not None:
+        return gear_lift(scene)
+    if spec.law in LIFT_BUILDERS:
+        module, _, attr = LIFT_BUILDERS[spec.law].partition(":")
+        return getattr(importlib.import_module(module), attr)(scene)
     return LawLift(
         height=spec.height,
         start=spec.start,

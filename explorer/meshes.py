@@ -31,14 +31,14 @@ adjusting screw slides in the lever to show the magnified gap. With m = 1 every 
 from __future__ import annotations
 
 import math
-import pkgutil
 import importlib
 from dataclasses import dataclass
 
 import numpy as np
 import trimesh
 
-from .gears import GEAR_PART_COLORS, GEAR_TYPES
+from .gears import GEAR_PART_COLORS
+from .gears.registry import meshes_module
 
 # Display colours (RGB 0-255), shared by the viewers so parts look the same everywhere.
 PART_COLORS: dict[str, tuple[int, int, int]] = {
@@ -132,10 +132,9 @@ def layout(scene, result=None) -> Layout:
     angles, valve diameter about three times its lift, a spring that never goes solid. Speed,
     lash, masses and springs do not enter, so editing them never moves the seat or the frame;
     the lash is taken up by the adjusting screw, which stands `lash` above the lever's line."""
-    if scene.follower.type in GEAR_TYPES:
-        from .gears.meshes import gear_layout
-
-        return gear_layout(scene, result)
+    gear_meshes = meshes_module(scene.follower.type)  # a gear lays out its own parts
+    if gear_meshes is not None:
+        return gear_meshes.gear_layout(scene, result)
     f = scene.follower
     rb, rr, e, ratio = f.base_radius, f.roller_radius, f.offset, f.ratio
     h = _max_follower_lift(scene, result)
@@ -179,19 +178,21 @@ def layout(scene, result=None) -> Layout:
 # Cam contour and the cam disc
 
 
+# "module:function" of the geometry package's exact contour of a scene with a [cam] section
+# (contour/arc cams): (scene, lift, n) -> (N, 2) array or an object with .contour. Imported
+# when used; the first entry serves.
+CONTOUR_FUNCTIONS: tuple[str, ...] = ("explorer.geometry.contour:cam_contour",)
+
+
 def _external_contour(scene, lift, n: int):
-    """The geometry package's exact contour for contour/arc cams, when a module offers one."""
+    """The geometry package's exact contour for contour/arc cams (CONTOUR_FUNCTIONS)."""
     if getattr(scene, "cam", None) is None:
         return None
-    from . import geometry
-
-    for info in pkgutil.iter_modules(geometry.__path__):
-        module = importlib.import_module(f"{geometry.__name__}.{info.name}")
-        function = getattr(module, "cam_contour", None)
-        if callable(function):
-            out = function(scene, lift, n)
-            out = getattr(out, "contour", out)
-            return np.asarray(out, dtype=float)
+    for target in CONTOUR_FUNCTIONS:
+        module, _, attr = target.partition(":")
+        out = getattr(importlib.import_module(module), attr)(scene, lift, n)
+        out = getattr(out, "contour", out)
+        return np.asarray(out, dtype=float)
     return None
 
 
@@ -565,10 +566,9 @@ def build_parts(scene, result=None, lay: Layout | None = None, lift=None, contou
     cam and camshaft: origin on the shaft axis; roller and follower: origin at the roller centre;
     lever: origin at the pivot; adjuster: ball centre; valve: stem top; spring: its bottom
     (at rest length); static parts (follower_guide, lever_pivot, seat): world frame."""
-    if scene.follower.type in GEAR_TYPES:
-        from .gears.meshes import gear_parts
-
-        return gear_parts(scene, result, lay=lay, lift=lift, only=only)
+    gear_meshes = meshes_module(scene.follower.type)
+    if gear_meshes is not None:
+        return gear_meshes.gear_parts(scene, result, lay=lay, lift=lift, only=only)
     lay = lay or layout(scene, result)
     builders = {
         "cam": lambda: extrude_contour(cam_contour(scene, lift, contour_samples), lay.cam_width),
@@ -655,10 +655,9 @@ def part_poses(scene, result, magnification: float = 1.0, lay: Layout | None = N
     displayed_valve_lift(result, magnification))`."""
     from .lift import build_lift
 
-    if scene.follower.type in GEAR_TYPES:
-        from .gears.meshes import gear_poses
-
-        poses = gear_poses(scene, result, magnification=magnification, lay=lay, lift=lift)
+    gear_meshes = meshes_module(scene.follower.type)
+    if gear_meshes is not None:
+        poses = gear_meshes.gear_poses(scene, result, magnification=magnification, lay=lay, lift=lift)
         if "roller" in poses:
             poses["roller"] = (poses["roller"][0], _looped_roller_rotation(poses["roller"][1]))
         return poses

@@ -585,10 +585,3 @@ def merge_rrd(pieces: Sequence[Path], out: Path) -> None:
     if proc.returncode != 0:
         tail = "\n".join(proc.stderr.strip().splitlines()[-5:])
         raise RuntimeError(f"rerun rrd merge failed (exit {proc.returncode}): {tail}")
-
-
-def open_live_stream(args):
-    """The live rerun stream of `explorer serve --rerun / --rerun-save PATH` (see recording_live)."""
-    from .recording_live import open_live_stream as _open
-
-    return _open(args)

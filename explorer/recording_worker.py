@@ -9,7 +9,7 @@ orphans or rerun's own shutdown() do not release them. In a helper process they 
 explorer's thread count and memory stay flat however many recordings it makes, and the helper
 never holds more than RECYCLE_AFTER recordings' worth.
 
-The helper is a fresh interpreter (a fork would copy the locks of rerun's and viser's threads),
+The helper (explorer.recording_job) is a fresh interpreter (a fork would copy the locks of rerun's and viser's threads),
 in its own session so that Ctrl-C reaches only the explorer, which finishes what it writes and
 then closes it; it exits when its pipe closes, so it never outlives the explorer. rerun's own log lines are off in it unless RUST_LOG says
 otherwise: a failed write is reported by the explorer in one line (the file has no footer).
@@ -18,10 +18,10 @@ otherwise: a failed write is reported by the explorer in one line (the file has 
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 import sys
 import threading
+from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Mapping
@@ -31,6 +31,9 @@ from .processes import spawn
 RECYCLE_AFTER = 32  # recordings per helper process: at most ~130 threads and ~50 MB of rerun's leftovers
 JOB_TIMEOUT_S = 600.0  # one recording; the live stream's flush has its own, shorter timeout
 STOP_TIMEOUT_S = 10.0
+# The helper's side (it logs with explorer.recording, which imports this module for the
+# explorer's side): a separate module, so that neither side imports the other back.
+HELPER_MAIN = "from explorer.recording_job import main; main()"
 
 
 def _plain(value):
@@ -45,8 +48,6 @@ def _plain(value):
 def portable_run(run):
     """The run with a result the helper process can receive: columns, summary, the scene's name
     and source (all that explorer.recording.log_result reads of it)."""
-    from .recording import Run
-
     result = run.result
     scene = getattr(result, "scene", None)
     light = SimpleNamespace(
@@ -54,68 +55,7 @@ def portable_run(run):
         columns={k: v for k, v in result.columns.items()},
         summary=_plain(result.summary),
     )
-    return Run(label=run.label, result=light, parts=run.parts, poses=run.poses, scales=run.scales,
-               colors=run.colors)
-
-
-# ---------------------------------------------------------------------------------------------
-# the helper process
-
-
-def _execute(job: dict) -> None:
-    import rerun as rr
-
-    from .recording import APP_ID, blueprint, log_result, new_recording
-
-    layout = blueprint(*job["layout"]) if job.get("layout") is not None else None
-    if job["kind"] == "blueprint":
-        layout.save(APP_ID, job["path"])
-        return
-    sinks = [rr.FileSink(where) if kind == "file" else rr.GrpcSink(where) for kind, where in job["sinks"]]
-    run = job["run"]
-    rec = new_recording(run.label)
-    if layout is not None and job.get("default_blueprint"):
-        rec.set_sinks(*sinks, default_blueprint=layout)
-    else:
-        rec.set_sinks(*sinks)
-    try:
-        if layout is not None and job.get("send_blueprint"):
-            rec.send_blueprint(layout, make_active=job.get("make_active", True), make_default=True)
-        log_result(rec, run.result, run.label, run.parts, run.poses, run.scales, run.colors)
-        timeout = job.get("flush_timeout")
-        if timeout is None:
-            rec.flush()
-        else:
-            rec.flush(timeout_sec=timeout)
-    finally:
-        rec.disconnect()  # closes a file with its footer
-
-
-def _serve(inbox, outbox) -> None:
-    while True:
-        try:
-            job = inbox.recv()
-        except (EOFError, OSError):  # the explorer has gone
-            return
-        if job is None:
-            return
-        try:
-            _execute(job)
-            outbox.send(None)
-        except Exception as exc:  # noqa: BLE001 - reported by the explorer, the helper goes on
-            outbox.send(f"{type(exc).__name__}: {exc}")
-
-
-def main() -> None:
-    """The helper's entry point: jobs arrive on stdin, replies leave on the descriptor that was
-    stdout, which from here on is stderr's, so nothing printed can corrupt a reply."""
-    from multiprocessing.connection import Connection
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    os.environ.setdefault("RUST_LOG", "off")
-    replies = os.dup(1)
-    os.dup2(2, 1)
-    _serve(Connection(os.dup(0), writable=False), Connection(replies, readable=False))
+    return replace(run, result=light)
 
 
 class RecordingWorker:
@@ -141,7 +81,7 @@ class RecordingWorker:
         env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
         # own session (Ctrl-C in the terminal is the explorer's to handle), dies with the thread that
         # started it (and exits when its pipe closes)
-        proc = spawn([sys.executable, "-c", "from explorer.recording_worker import main; main()"],
+        proc = spawn([sys.executable, "-c", HELPER_MAIN],
                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
         self._proc = proc
         self._send = Connection(os.dup(proc.stdin.fileno()), readable=False)

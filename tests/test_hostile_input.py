@@ -386,9 +386,9 @@ def test_non_finite_results_are_refused(monkeypatch):
 
     real = effects.effect_function
 
-    def overflowing(name):
+    def overflowing(name, follower_type=None):
         if name != "lash":
-            return real(name)
+            return real(name, follower_type)
         return lambda ctx: EffectOutput(columns={"valve_lift_m": np.full(ctx.theta.shape, np.nan)}, summary={},
                                         events=(), warnings=())
 

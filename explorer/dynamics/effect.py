@@ -87,6 +87,18 @@ def _solve(model, drive, t, method: str, options: dict, file: str = "<memory>") 
         return solve(model, drive, t, method=method, allow_unstable=True, **options), warnings
 
 
+def solver_options(scene) -> dict:
+    """The scene's solver options as keywords of solve() (public: the gears' own elastic runs)."""
+    return _solver_options(scene)
+
+
+def solve_reporting(model, drive, t, method: str, options: dict, file: str = "<memory>") -> tuple:
+    """(solution, warnings): solve(), the 1902 scheme beyond its stability limit run anyway with a
+    warning, a resolution beyond the step budget refused naming `file` (public: the gears' own
+    elastic runs)."""
+    return _solve(model, drive, t, method, options, file)
+
+
 def elastic_jerk(model: LinkageModel, drive_values: np.ndarray, sol) -> np.ndarray:
     """Jerk from the phase ODEs (for solvers that do not return one)."""
     if sol.jerk is not None:
@@ -123,10 +135,6 @@ def linkage_model(scene, lift, omega: float) -> LinkageModel:
 
 
 def elastic_effect(ctx) -> EffectOutput:
-    if ctx.scene.follower.type == "trip":  # the latch drives until the trip, then the valve closes freely
-        from ..gears.trip_effects import trip_elastic_effect
-
-        return trip_elastic_effect(ctx)
     scene = ctx.scene
     omega = ctx.omega
     model = linkage_model(scene, ctx.lift, omega)

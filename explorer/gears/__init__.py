@@ -6,10 +6,13 @@ curve (derivatives(theta) -> [L, L', L'', L'''], breakpoints()) with analytic de
 kinematics, lash, forces and elastic effects work on it unchanged; the 'gear' effect adds what
 is particular to each gear (lever angles and ratios, pressure angle, buffer forces ...).
 
-This package file stays light: scene.py imports GEAR_TYPES while validating follower.type.
+This package file stays light: scene.py imports GEAR_TYPES while validating follower.type. The
+gears themselves are listed in explorer.gears.registry (what the generic code asks of each).
 """
 
-GEAR_TYPES = ("pivoted-roller", "rocking-cam", "rolling-lever", "trip")
+from .registry import GEARS
+
+GEAR_TYPES = tuple(GEARS)  # ("pivoted-roller", "rocking-cam", "rolling-lever", "trip")
 
 # Colours (RGB 0-255) of the 3D parts these gears add to explorer.meshes.
 GEAR_PART_COLORS: dict[str, tuple[int, int, int]] = {

@@ -2,8 +2,8 @@
 
 `make_gear(spec, source)` works on the partial scene fields while the scene is being read (so
 that bad geometry fails at load time) and on a finished Scene (when the pipeline builds the
-lift curve, possibly after `with_changes`). `build_gear_lift(scene)` is what lift.build_lift
-dispatches to for the gear follower types.
+lift curve, possibly after `with_changes`). `build_gear_lift(scene)` is the lift builder of
+the gears' entries in explorer.gears.registry, which lift.build_lift consults.
 """
 
 from __future__ import annotations

@@ -410,7 +410,7 @@ def elastic_trip_motion(scene, lift, theta, method: str = "exact", options: dict
     """Elastic valve motion of a trip gear at the cam angles theta (any order): the linkage model
     driven by the latch from its lowest point (valve at rest on the seat) to the trip instant, then
     the free closing from the elastic state there."""
-    from ..dynamics.effect import _solve, elastic_jerk
+    from ..dynamics.effect import elastic_jerk, solve_reporting
     from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel
     from .trip import simulate_closing
 
@@ -425,7 +425,7 @@ def elastic_trip_motion(scene, lift, theta, method: str = "exact", options: dict
     t_before = t0 + phi[before] / w
     t_trip = t0 + lift.phi_trip / w
     nodes = np.unique(np.concatenate([[t0], t_before, [t_trip]]))
-    sol, warnings = _solve(model, drive, nodes, method, dict(options or {}), scene.source)
+    sol, warnings = solve_reporting(model, drive, nodes, method, dict(options or {}), scene.source)
     warnings = list(warnings) + list(sol.stats.get("warnings", []))
     jerk_nodes = np.asarray(sol.jerk if sol.jerk is not None else elastic_jerk(model, drive(nodes), sol), dtype=float)
     if sol.phase is not None:
@@ -506,14 +506,14 @@ def elastic_trip_motion(scene, lift, theta, method: str = "exact", options: dict
 
 
 def trip_elastic_effect(ctx) -> EffectOutput:
-    from ..dynamics.effect import _solver_options
+    from ..dynamics.effect import solver_options
     from ..dynamics.model import EVENT_KINDS, LinkageModel
     from ..forces import TrainLoads
 
     scene, w = ctx.scene, ctx.omega
     lift = trip_lift_of(ctx)
     method = scene.solver.method
-    motion = elastic_trip_motion(scene, lift, ctx.theta, method, _solver_options(scene))
+    motion = elastic_trip_motion(scene, lift, ctx.theta, method, solver_options(scene))
     c = motion.columns
     model = LinkageModel.from_scene(scene)
     n = ctx.theta.size

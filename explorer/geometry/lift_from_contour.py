@@ -14,12 +14,14 @@ import numpy as np
 
 from ..errors import InputError
 from .arcs import ContourError, make_arc_lift
-from .spec import BASE_RADIUS_TOLERANCE, CamSpec
+
+BASE_RADIUS_TOLERANCE = 1e-6  # m: follower.base_radius must match the contour this closely
 
 
-def contour_lift(spec: CamSpec, follower, file: str):
-    """The LiftCurve of a translating roller follower over the contour; InputError when the
-    follower cannot run on it (undercut, base circle mismatch, offset too large)."""
+def contour_lift(spec, follower, file: str):
+    """The LiftCurve of a translating roller follower over the contour (spec: a CamSpec of
+    explorer.geometry.spec, which calls this while it reads [cam]); InputError when the follower
+    cannot run on it (undercut, base circle mismatch, offset too large)."""
     if follower.type != "translating-roller":
         raise InputError(file, "follower.type", f"a [cam] contour is analysed for translating-roller followers only, not {follower.type!r}")
     if abs(follower.base_radius - spec.min_radius) > BASE_RADIUS_TOLERANCE:

@@ -43,7 +43,6 @@ from ..reader import Table
 from ..units import plain_number, to_si
 from .arcs import Arc, ArcContour, ContourError, build_arc_contour
 
-BASE_RADIUS_TOLERANCE = 1e-6  # m: follower.base_radius must match the contour this closely
 # Arcs below a micron or centres beyond 10 m are no valve-gear cam; they also push the tangency
 # arithmetic into subnormal or overflowing floats, so they are refused at load time.
 MIN_ARC_RADIUS = 1e-6  # m
