@@ -17,6 +17,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
 
+from . import solvers as solver_registry
 from .errors import InputError
 from .gears import GEAR_TYPES
 from .laws import LAWS
@@ -35,7 +36,7 @@ EFFECT_DEPENDENCIES: dict[str, tuple[str, ...]] = {
 
 SPECIAL_LAWS = ("table", "acceleration", "contour", "gear")  # "gear": the gear's geometry makes the lift
 FOLLOWER_TYPES = ("translating-roller", *GEAR_TYPES)
-SOLVER_METHODS = ("exact", "schenker1902", "scipy", "taylor")
+SOLVER_METHODS = solver_registry.names()  # [solver] method: one per registry entry
 MIN_STEPS = 36
 # Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
 # w^3 L''' must not overflow) and catch unit slips such as "10 m" for "10 mm".
@@ -410,7 +411,7 @@ def _parse_solver(t: Table) -> Solver:
     return Solver(
         method=t.string("method", "exact", choices=SOLVER_METHODS),
         steps_per_revolution=int(steps),
-        scipy_method=t.string("scipy_method", "DOP853", choices=("RK45", "DOP853", "Radau", "LSODA", "BDF", "RK23")),
+        scipy_method=t.string("scipy_method", "DOP853", choices=solver_registry.SCIPY_METHODS),
         rtol=t.number("rtol", 1e-10, minimum=1e-14, maximum=1e-1),
         atol=t.number("atol", 1e-13, minimum=1e-20, maximum=1e-1),
     )

@@ -18,7 +18,7 @@ analytic drive: M1 j = k (S' - v) + c (S'' - a) - rate v in contact, M j = -rate
 Stiffness that changes along the cycle: a lift curve may carry its own elasticity
 (`linkage_stiffness`: theta -> (k, dk/dtheta), the rolling lever's, which follows the changing
 ratio). It is then put in series with [linkage] stiffness (the rest of the chain) as k(t), and
-only the solvers that accept k(t) can run it (model.VARYING_STIFFNESS; the scene loader says so).
+only the solvers that accept k(t) can run it (explorer/solvers.py, varying_stiffness; the scene loader says so).
 
 Periodic start: the solvers start with the valve at rest on its seat, so the revolution is
 solved from the angle where the drive is lowest (the valve surely rests there) and the arrays
@@ -33,26 +33,28 @@ from dataclasses import replace
 import numpy as np
 
 from ..result import EffectOutput
+from .. import solvers as registry
 from .model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, StiffnessProfile, solve
 
 
 def _solver_options(scene) -> dict:
+    """The [solver] fields the scene's solver takes as options (registry: scene_options)."""
     solver = scene.solver
-    if solver.method == "scipy":
-        return {"scipy_method": solver.scipy_method, "rtol": solver.rtol, "atol": solver.atol}
-    return {}
+    return {name: getattr(solver, name) for name in registry.solver(solver.method).scene_options}
 
 
 def _solve(model, drive, t, method: str, options: dict) -> tuple:
-    """Solve; the 1902 scheme beyond its stability limit is run anyway, with a warning."""
+    """Solve; a fixed-step scheme beyond its stability limit (the 1902 scheme) is run anyway, with
+    a warning."""
     warnings: list[str] = []
+    info = registry.solver(method)
     try:
         return solve(model, drive, t, method=method, **options), warnings
     except ValueError as exc:
-        if method != "schenker1902" or type(exc).__name__ != "StabilityError":
+        if info.stability_error is None or not isinstance(exc, info.stability_error):
             raise
         warnings.append(f"{exc} The results below are those of the unstable scheme.")
-        return solve(model, drive, t, method=method, allow_unstable=True, **options), warnings
+        return solve(model, drive, t, method=method, **info.unstable_options(), **options), warnings
 
 
 def elastic_jerk(model: LinkageModel, drive_values: np.ndarray, sol) -> np.ndarray:

@@ -17,12 +17,12 @@ VARYING_STIFFNESS accept it: the exact solver's closed forms need constant coeff
 
 Every solver has the signature
     solve(model: LinkageModel, drive: Drive, t: np.ndarray, **options) -> DynamicsSolution
-and is listed in SOLVERS; `solve()` below dispatches on the method name.
+and is listed, with what it accepts, in explorer/solvers.py; `solve()` below dispatches on the
+method name.
 """
 
 from __future__ import annotations
 
-import importlib
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -30,15 +30,10 @@ from typing import Any
 
 import numpy as np
 
-SOLVERS: dict[str, str] = {
-    "exact": "explorer.dynamics.exact:solve",
-    "schenker1902": "explorer.dynamics.schenker1902:solve",
-    "scipy": "explorer.dynamics.reference:solve",
-    "taylor": "explorer.dynamics.taylor:solve",
-}
+from .. import solvers as registry
 
 # solvers that accept a LinkageModel with a stiffness_profile (k changing with the position)
-VARYING_STIFFNESS = ("scipy", "schenker1902", "taylor")
+VARYING_STIFFNESS = registry.varying_stiffness()
 
 EVENT_KINDS = ("lift-off", "separation", "re-contact", "seat")
 # DynamicsSolution.phase codes: on the seat, moving with the linkage loaded, moving with the linkage
@@ -201,8 +196,12 @@ class DynamicsSolution:
 
 
 def solve(model: LinkageModel, drive: Drive, t: np.ndarray, method: str = "exact", **options) -> DynamicsSolution:
-    if model.stiffness_profile is not None and method not in VARYING_STIFFNESS:
+    """Solve with the registry's solver `method` (ValueError: unknown method, or k(t) given to a
+    solver that needs a constant stiffness; explorer.solvers.UnknownOptionError, a TypeError: an option
+    the solver does not have)."""
+    info = registry.solver(method)
+    if model.stiffness_profile is not None and not info.varying_stiffness:
         raise ValueError(f"method {method!r} needs a constant linkage stiffness; for a stiffness that changes "
                          f"along the cycle use {' or '.join(map(repr, VARYING_STIFFNESS))}")
-    module, _, name = SOLVERS[method].partition(":")
-    return getattr(importlib.import_module(module), name)(model, drive, np.asarray(t, dtype=float), **options)
+    info.check_options(options)
+    return info.function()(model, drive, np.asarray(t, dtype=float), **options)
