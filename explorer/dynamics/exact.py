@@ -73,9 +73,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .modal import Propagator
-from .model import PHASE_CODES, DynamicsSolution, LinkageModel, phase_of_state, release_from_rest
+from .model import DynamicsSolution, LinkageModel
+from .phases import (AFTER_CROSSING, CONTACT, FLIGHT, SEATED, STUCK, phase_of_state, release_from_rest, rest_force,
+                     seat_rebound, velocity_zero)
+from .series import hermite5, horner, taylor_shift, taylor_shift1
 
-SEATED, CONTACT, FLIGHT, STUCK = (PHASE_CODES[k] for k in ("seated", "contact", "flight", "stuck"))
 EPS = float(np.finfo(float).eps)
 MAX_RHO_H = 0.5  # longest step times the fastest rate: short, well-conditioned series; cheap chunk bounds
 MAX_DEPTH = 6  # refinement levels of the event search (8 sub-intervals each: 4e-6 of a step)
@@ -284,41 +286,6 @@ def _n_terms(x: float) -> int:
     return n
 
 
-def _taylor_shift(D: np.ndarray, d) -> np.ndarray:
-    """Drive derivatives (4, n) at x moved to x + d by their Taylor polynomial (d ~ 1e-7 h)."""
-    S, S1, S2, S3 = D
-    return np.stack([
-        S + d * (S1 + d * (S2 / 2 + d * S3 / 6)),
-        S1 + d * (S2 + d * S3 / 2),
-        S2 + d * S3,
-        S3,
-    ])
-
-
-def _taylor_shift1(D, d: float) -> list:
-    """_taylor_shift for one point (lists)."""
-    S, S1, S2, S3 = D
-    return [S + d * (S1 + d * (S2 / 2 + d * S3 / 6)), S1 + d * (S2 + d * S3 / 2), S2 + d * S3, S3]
-
-
-def _hermite5(h: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """Scaled coefficients (6, n) in u = tau/h of the quintic with S, S', S'' given at both ends."""
-    out = np.empty((6, h.size))
-    c0, c1, c2 = out[0], out[1], out[2]
-    c0[...] = start[0]
-    np.multiply(h, start[1], out=c1)
-    hh = h * h
-    np.multiply(hh, start[2], out=c2)
-    c2 *= 0.5
-    d = np.empty((3, h.size))
-    np.subtract(end[0], c0 + c1 + c2, out=d[0])
-    np.subtract(h * end[1], c1 + 2.0 * c2, out=d[1])
-    np.subtract(hh * end[2], 2.0 * c2, out=d[2])
-    np.matmul(_HERMITE_HIGH, d, out=out[3:])
-    return out
-
-
-_HERMITE_HIGH = np.array([[10.0, -4.0, 0.5], [-15.0, 7.0, -1.0], [6.0, -3.0, 0.5]])
 _BOUND_WEIGHTS = np.array([[n, n * (n - 1), n * (n - 1) * (n - 2)] for n in range(6)], dtype=float).T
 
 
@@ -573,7 +540,7 @@ def _start_clearance(e) -> float:
     tail = [max(en, 0.0) for en in e[k + 1:]]
 
     def phi(w):
-        return e[k] + w * _horner(tail, w) if tail else e[k]
+        return e[k] + w * horner(tail, w) if tail else e[k]
 
     if phi(1.0) < 0.0:
         return 1.0
@@ -701,13 +668,6 @@ def _start_coeffs(comps, comb, P, dP, a, da, s0, v0):
     return Es, any_zero and (min(starts) if comb == "min" else max(starts)) == 0.0
 
 
-def _horner(c, x: float) -> float:
-    acc = 0.0
-    for ck in reversed(c):
-        acc = acc * x + ck
-    return acc
-
-
 class _Solver:
     def __init__(self, model: LinkageModel, drive, t: np.ndarray, initial_state, zeno_height: float,
                  max_events: int, chunk: int, hmin: float):
@@ -822,14 +782,14 @@ class _Solver:
             left = right.copy()
             if nb <= 32:  # a few breakpoints: plain Python (numpy's overhead on tiny arrays)
                 Dr, Dl = D[:, nn:nn + nb].T.tolist(), D[:, nn + nb:].T.tolist()
-                right[:, brk] = np.array([_taylor_shift1(r, -di)[:3] for di, r in zip(d, Dr)]).T
-                left[:, brk] = np.array([_taylor_shift1(l, di)[:3] for di, l in zip(d, Dl)]).T
+                right[:, brk] = np.array([taylor_shift1(r, -di)[:3] for di, r in zip(d, Dr)]).T
+                left[:, brk] = np.array([taylor_shift1(l, di)[:3] for di, l in zip(d, Dl)]).T
             else:
-                right[:, brk] = _taylor_shift(D[:, nn:nn + nb], -dd)[:3]
-                left[:, brk] = _taylor_shift(D[:, nn + nb:], dd)[:3]
+                right[:, brk] = taylor_shift(D[:, nn:nn + nb], -dd)[:3]
+                left[:, brk] = taylor_shift(D[:, nn + nb:], dd)[:3]
         else:
             right = left = np.asarray(drive(nodes), dtype=float)
-        P = self.P = _hermite5(h, right[:, :-1], left[:, 1:])  # (6, steps)
+        P = self.P = hermite5(h, right[:, :-1], left[:, 1:])  # (6, steps)
         self.PT = P.T  # rows: one step's polynomial
         # drive at the nodes as the following step sees it (the last node: the end of its step):
         # S, S', S'' of the step polynomials, so node values match the step expansions
@@ -1004,7 +964,7 @@ class _Solver:
                     continue
             e = lists[0]
             if len(lists) == 1:
-                e_lo, e_hi = (e[0] if w_lo == 0.0 else _horner(e, w_lo)), sum(e)
+                e_lo, e_hi = (e[0] if w_lo == 0.0 else horner(e, w_lo)), sum(e)
                 # (a sign change from one end to the other needs no exclusion test)
                 if not e_lo <= 0.0 < e_hi and (
                         _excluded1(e, e_hi) if w_lo == 0.0 else _excluded_range(e, w_lo, 1.0)):
@@ -1088,15 +1048,15 @@ class _Solver:
             c0 = cs[0]
 
             def f(x):
-                return _horner(c0, x)
+                return horner(c0, x)
         elif comb == "min":
 
             def f(x):
-                return min(_horner(c, x) for c in cs)
+                return min(horner(c, x) for c in cs)
         else:
 
             def f(x):
-                return max(_horner(c, x) for c in cs)
+                return max(horner(c, x) for c in cs)
         flo = f(lo)
         if flo > 0.0:
             return lo
@@ -1300,7 +1260,7 @@ class _Solver:
             self._record_moving(kind, j, [s], [v], sigma)
         if best is not None:
             w = best[1]
-            return best[0], j, u0 + w * (1.0 - u0), _horner(a, w), _horner(da, w)
+            return best[0], j, u0 + w * (1.0 - u0), horner(a, w), horner(da, w)
         s, v = math.fsum(a), math.fsum(da)
         j += 1
         prop = self._prop(kind)
@@ -1428,7 +1388,7 @@ class _Solver:
                 best = self._earliest(check, col, [False] * len(check), self.time(j + i, 0.0), h_i)
                 if best is not None:
                     w = best[1]
-                    return (best[0], i, w, _horner(a, w), _horner(da, w)), i
+                    return (best[0], i, w, horner(a, w), horner(da, w)), i
         elif cand.size:
             tab = self.tab(kind)
             N = self.n_terms
@@ -1454,7 +1414,7 @@ class _Solver:
                 best = self._earliest(events, col, [False] * len(events), self.time(j + i, 0.0), float(hc[i_c]))
                 if best is not None:
                     w = best[1]
-                    return (best[0], i, w, _horner(a[:, i_c], w), _horner(da[:, i_c], w)), i
+                    return (best[0], i, w, horner(a[:, i_c], w), horner(da[:, i_c], w)), i
         return None, n
 
     # ---------------------------------------------------------------- helpers at an instant
@@ -1463,11 +1423,7 @@ class _Solver:
         if j >= self.h.size:
             return float(self.Dn[0, -1]), float(self.Dn[1, -1])
         P = self.PT[j].tolist()
-        return _horner(P, u), _horner(_deriv_list(P, float(self.h[j])), u)
-
-    def _static_force(self, S: float, S1: float, s: float) -> float:
-        x = S - self.lash - s
-        return max(0.0, self.k * x + self.c * S1) if x >= 0.0 else 0.0
+        return horner(P, u), horner(_deriv_list(P, float(self.h[j])), u)
 
     def _advance(self, j: int, u: float, dt: float, s_star: float):
         """Position dt later; nodes passed on the way are recorded seated at s_star."""
@@ -1538,43 +1494,36 @@ class _Solver:
         return phase_of_state(S, S1, self.k, self.c, self.lash, s, v, self.W0, self.rate, self.R)
 
     def _handle(self, which: str, phase: int, j: int, u: float, s: float, v: float, sigma: float):
+        """The phase after the event `which` (the rules: phases.py), with this solver's bookkeeping."""
         m_phase = self.M1 if phase == CONTACT else self.M
-        if which == "separation":
-            self._event("separation", j, u, v)
-            self.stats["mass_switch_energy_J"] += 0.5 * (self.M - self.M1) * v * v
-            return FLIGHT, s, v, sigma, j, u
-        if which == "re-contact":
-            self._event("re-contact", j, u, v)
-            self.stats["mass_switch_energy_J"] -= 0.5 * (self.M - self.M1) * v * v
-            return CONTACT, s, v, sigma, j, u
+        if which in AFTER_CROSSING:
+            self._event(which, j, u, v)
+            switch = 0.5 * (self.M - self.M1) * v * v
+            self.stats["mass_switch_energy_J"] += switch if which == "separation" else -switch
+            return AFTER_CROSSING[which], s, v, sigma, j, u
         S, S1 = self._drive_at(j, u)  # (the mass switches above need no drive)
         if which == "velocity-zero":
             self.stats["velocity_reversals"] += 1
-            force = self.k * (S - self.lash - s) + self.c * S1 if phase == CONTACT else 0.0
-            net = force - self.W0 - self.rate * s
-            if abs(net) <= self.R:
+            phase, sign = velocity_zero(phase, S, S1, self.k, self.c, self.lash, s, self.W0, self.rate, self.R)
+            if sign is None:
                 self.stats["sticks"] += 1
-                return (STUCK if s > 0.0 else SEATED), s, 0.0, sigma, j, u
-            return phase, s, 0.0, (1.0 if net > 0.0 else -1.0), j, u
+                return phase, s, 0.0, sigma, j, u
+            return phase, s, 0.0, sign, j, u
         # seat impact
         impact = min(v, 0.0)
         self._event("seat", j, u, impact)
         self.stats["impact_energy_loss_J"] += 0.5 * m_phase * (1.0 - self.e * self.e) * impact * impact
-        rebound = -self.e * impact
-        if rebound <= 0.0:
+        if -self.e * impact <= 0.0:
             return SEATED, 0.0, 0.0, 1.0, j, u
-        force = self._static_force(S, S1, 0.0)
-        m_rest = self.M1 if force > 0.0 else self.M
-        decel = (self.W0 + self.R - force) / m_rest
-        if decel > 0.0 and rebound * rebound <= 2.0 * decel * self.zeno_height:
-            # the rest of the chatter: bounces of durations 2 v e^n / decel, summed
-            dt = 2.0 * rebound / (decel * (1.0 - self.e))
+        force = rest_force(S, S1, self.k, self.c, self.lash, 0.0)
+        kind, rebound, m_rest, dt = seat_rebound(impact, self.e, force, self.M, self.M1, self.W0, self.R,
+                                                 self.zeno_height)
+        if dt is not None:  # the rest of the chatter, summed
             self.stats["zeno"] += 1
             self.stats["impact_energy_loss_J"] += 0.5 * m_rest * rebound * rebound
             self.events[-1]["zeno_accumulation_s"] = self.time(j, u) + dt
             j, u = self._advance(j, u, dt, 0.0)
             return SEATED, 0.0, 0.0, 1.0, j, u
-        kind = CONTACT if force > 0.0 else FLIGHT
         return kind, 0.0, rebound, 1.0, j, u
 
     def solution(self, t_req: np.ndarray, inverse) -> DynamicsSolution:
