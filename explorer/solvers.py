@@ -5,10 +5,10 @@ Adding a solver: write its module (a `solve(model, drive, t, **options) -> Dynam
 add one line to SOLVERS below. Every solver in the table runs the solver contract test
 (tests/test_solver_contract.py).
 
-The module imports nothing heavy (no numpy, no scipy) and lives outside explorer.dynamics:
-`import explorer` reads it through scene.py, and a scene without the elastic effect loads no
-module of explorer.dynamics (tests/test_elastic_effect.py). A solver's module is imported when
-it first runs.
+The module imports nothing heavy (no numpy, no scipy) and lives outside explorer.dynamics: the
+scene loader reads it when it parses a [solver] table (`import explorer` does not load it), and
+a scene without the elastic effect loads no module of explorer.dynamics
+(tests/test_elastic_effect.py). A solver's module is imported when it first runs.
 """
 
 from __future__ import annotations

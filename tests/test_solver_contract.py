@@ -149,12 +149,16 @@ def test_unknown_method_refused():
 
 
 def test_registry_is_import_light():
-    """explorer.solvers imports no scipy and no solver module (it is read by `import explorer`)."""
+    """explorer.solvers imports no scipy and no solver module (the scene loader reads it), and
+`import explorer` does not load it at all."""
     import subprocess
     import sys
 
     code = ("import sys, explorer.solvers\n"
             "bad = [m for m in sys.modules if m == 'scipy' or m.startswith('explorer.dynamics')]\n"
             "assert not bad, bad\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    code = "import sys, explorer\nassert 'explorer.solvers' not in sys.modules\n"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stderr
