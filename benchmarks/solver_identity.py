@@ -29,7 +29,6 @@ METHODS = ("exact", "schenker1902", "scipy", "taylor")
 
 def cases():
     for path in sorted((ROOT / "assets" / "scenes").glob("*.toml")):
-        text = path.read_text()
         base = load_scene(path)
         variants = []
         if "elastic" in base.effects:
@@ -37,7 +36,6 @@ def cases():
         else:
             effects = list(base.effects) + ["elastic"]
             variants.append(("with-elastic", ["effects=" + json.dumps(effects)]))
-        del text
         for tag, overrides in variants:
             for method in METHODS:
                 yield f"{path.stem}.{tag}.{method}", path, overrides + [f'solver.method="{method}"']
