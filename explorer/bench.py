@@ -37,6 +37,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from . import solvers as solver_registry
 from .errors import InputError
 
 STEPS = (90, 360, 900, 3600, 9000, 36_000, 90_000, 360_000)
@@ -265,7 +266,7 @@ def run_bench(
     notes: list[str] = []
     # warm-up: the first call of each solver pays for imports and caches, not for the method
     for method in (fast, "schenker1902", "scipy"):
-        options = {"allow_unstable": True} if method == "schenker1902" else {}
+        options = solver_registry.solver(method).unstable_options()
         solve(model, drive, grid(360), method=method, **options)
 
     for n in steps:

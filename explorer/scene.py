@@ -35,7 +35,6 @@ EFFECT_DEPENDENCIES: dict[str, tuple[str, ...]] = {
 
 SPECIAL_LAWS = ("table", "acceleration", "contour", "gear")  # "gear": the gear's geometry makes the lift
 FOLLOWER_TYPES = ("translating-roller", *GEAR_TYPES)
-SOLVER_METHODS = ("exact", "schenker1902", "scipy", "taylor")
 MIN_STEPS = 36
 # Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
 # w^3 L''' must not overflow) and catch unit slips such as "10 m" for "10 mm".
@@ -426,7 +425,19 @@ def _parse_linkage(t: Table | None) -> Linkage | None:
     )
 
 
+def __getattr__(name: str):
+    """SOLVER_METHODS, the [solver] method choices (one per entry of explorer/solvers.py), read
+    from the registry when asked: `import explorer` does not load it."""
+    if name == "SOLVER_METHODS":
+        from .solvers import names
+
+        return names()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 def _parse_solver(t: Table) -> Solver:
+    from . import solvers as solver_registry  # (the registry: on the first [solver] table)
+
     t.reject_unknown(("method", "steps_per_revolution", "scipy_method", "rtol", "atol"))
     steps = t.number("steps_per_revolution", 3600, integer=True)
     if steps < MIN_STEPS:
@@ -434,9 +445,9 @@ def _parse_solver(t: Table) -> Solver:
     if steps > MAX_STEPS:
         raise t.error("steps_per_revolution", f"too many steps: {steps:.6g} (at most {MAX_STEPS})")
     return Solver(
-        method=t.string("method", "exact", choices=SOLVER_METHODS),
+        method=t.string("method", "exact", choices=solver_registry.names()),
         steps_per_revolution=int(steps),
-        scipy_method=t.string("scipy_method", "DOP853", choices=("RK45", "DOP853", "Radau", "LSODA", "BDF", "RK23")),
+        scipy_method=t.string("scipy_method", "DOP853", choices=solver_registry.SCIPY_METHODS),
         rtol=t.number("rtol", 1e-10, minimum=1e-14, maximum=1e-1),
         atol=t.number("atol", 1e-13, minimum=1e-20, maximum=1e-1),
     )

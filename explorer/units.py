@@ -50,6 +50,13 @@ def registry():
 
 def to_si(value, dimension: str, *, file: str, key: str) -> float:
     """Convert a scene value (number or string with units) to an SI float, or raise InputError."""
+    number = _to_si(value, dimension, file=file, key=key)
+    if not math.isfinite(number):  # a finite number whose conversion overflows (1e308 rpm -> rad/s)
+        raise InputError(file, key, f"{str(value)[:40]!r} is too large to express in SI units")
+    return number
+
+
+def _to_si(value, dimension: str, *, file: str, key: str) -> float:
     if dimension not in DIMENSIONS:
         raise KeyError(dimension)
     dim, bare_unit, si_unit = DIMENSIONS[dimension]

@@ -18,7 +18,7 @@ analytic drive: M1 j = k (S' - v) + c (S'' - a) - rate v in contact, M j = -rate
 Stiffness that changes along the cycle: a lift curve may carry its own elasticity
 (`linkage_stiffness`: theta -> (k, dk/dtheta), the rolling lever's, which follows the changing
 ratio). It is then put in series with [linkage] stiffness (the rest of the chain) as k(t), and
-only the solvers that accept k(t) can run it (model.VARYING_STIFFNESS; the scene loader says so).
+only the solvers that accept k(t) can run it (explorer/solvers.py, varying_stiffness; the scene loader says so).
 
 Periodic start: the solvers start with the valve at rest on its seat, so the revolution is
 solved from the angle where the drive is lowest (the valve surely rests there) and the arrays
@@ -34,14 +34,14 @@ import numpy as np
 
 from ..errors import InputError
 from ..result import EffectOutput
+from .. import solvers as registry
 from .model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, StiffnessProfile, solve
 
 
 def _solver_options(scene) -> dict:
+    """The [solver] fields the scene's solver takes as options (registry: scene_options)."""
     solver = scene.solver
-    if solver.method == "scipy":
-        return {"scipy_method": solver.scipy_method, "rtol": solver.rtol, "atol": solver.atol}
-    return {}
+    return {name: getattr(solver, name) for name in registry.solver(solver.method).scene_options}
 
 
 # The exact and taylor solvers split every output step into pieces of at most 0.5 / rho (rho the
@@ -51,7 +51,6 @@ def _solver_options(scene) -> dict:
 # steps, 26 s). The shipped scenes need a few thousand; the output grid itself is the scene's
 # choice (solver.steps_per_revolution) and is not counted.
 MAX_SOLVER_NODES = 100_000
-SUBDIVIDING_METHODS = ("exact", "taylor", "scipy")
 
 
 def fastest_rate(model) -> float:
@@ -65,7 +64,7 @@ def fastest_rate(model) -> float:
 def check_resolution(model, t, method: str, file: str) -> None:
     """InputError (naming drive.rpm) when resolving the linkage's vibration over the times t
     would take more than MAX_SOLVER_NODES steps."""
-    if method not in SUBDIVIDING_METHODS or len(t) < 2:
+    if registry.solver(method).fixed_step or len(t) < 2:  # a fixed-step scheme takes only the output grid
         return
     nodes = fastest_rate(model) * float(t[-1] - t[0]) / 0.5
     if not nodes <= MAX_SOLVER_NODES:  # also NaN
@@ -75,16 +74,18 @@ def check_resolution(model, t, method: str, file: str) -> None:
 
 
 def _solve(model, drive, t, method: str, options: dict, file: str = "<memory>") -> tuple:
-    """Solve; the 1902 scheme beyond its stability limit is run anyway, with a warning."""
+    """Solve; a fixed-step scheme beyond its stability limit (the 1902 scheme) is run anyway, with
+    a warning."""
     check_resolution(model, t, method, file)
     warnings: list[str] = []
+    info = registry.solver(method)
     try:
         return solve(model, drive, t, method=method, **options), warnings
     except ValueError as exc:
-        if method != "schenker1902" or type(exc).__name__ != "StabilityError":
+        if info.stability_error is None or not isinstance(exc, info.stability_error):
             raise
         warnings.append(f"{exc} The results below are those of the unstable scheme.")
-        return solve(model, drive, t, method=method, allow_unstable=True, **options), warnings
+        return solve(model, drive, t, method=method, **info.unstable_options(), **options), warnings
 
 
 def solver_options(scene) -> dict:

@@ -1,5 +1,10 @@
 """`exact` solver (the default): piecewise-exact stepping of the elastic valve linkage.
 
+Its parts: exact_steps.py (a phase's ODE over a step: Taylor tables, forcing, one step's
+expansion), exact_events.py (event functions, bounds, root polish), modal.py (the propagator
+over many steps), phases.py (what happens at an event, shared with taylor), series.py (Hermite
+and Taylor helpers); this module: the grid, the solver loop and the output.
+
 Each moving phase is a linear ODE with constant coefficients,
     m s'' + c s' + K s = kc (S(t) - lash) + cc S'(t) - F0,
   contact: m = M1, c = damping, K = k + rate, kc = k, cc = c, F0 = preload + closing + R sign(v)
@@ -68,644 +73,26 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
+from .exact_events import (BOUND_WEIGHTS, Event, coeff_list, coefficients, combine, combine_cleared, combine_cleared1,
+                           combine_excluded, combine_hits, deriv, deriv_list, excluded, excluded1, excluded_range,
+                           excluded_steps, illinois, lincomb_into, positive_at, rising_range, root_rising, shift_list,
+                           start_clearance, start_coeffs)
+from .exact_steps import LinearPhase, StepTables, drive_response, expand_step, step_tables, taylor_terms
 from .modal import Propagator
-from .model import PHASE_CODES, DynamicsSolution, LinkageModel, phase_of_state, release_from_rest
+from .model import DynamicsSolution, LinkageModel
+from .phases import (AFTER_CROSSING, CONTACT, FLIGHT, SEATED, STUCK, phase_of_state, release_from_rest, rest_force,
+                     seat_rebound, velocity_zero)
+from .series import hermite5, horner, taylor_shift, taylor_shift1
 
-SEATED, CONTACT, FLIGHT, STUCK = (PHASE_CODES[k] for k in ("seated", "contact", "flight", "stuck"))
 EPS = float(np.finfo(float).eps)
 MAX_RHO_H = 0.5  # longest step times the fastest rate: short, well-conditioned series; cheap chunk bounds
 MAX_DEPTH = 6  # refinement levels of the event search (8 sub-intervals each: 4e-6 of a step)
 SUBDIVISIONS = 8
-ZERO_START = 1e-11  # |e(0)| below this fraction of its terms' size: the function starts on its zero
 MAX_SAME_TIME = 60  # events at one instant before the phase logic is declared looping
-
-
-@dataclass(frozen=True)
-class _Linear:
-    """m s'' + c s' + K s = kc (P - lash) + cc P' - Fc: the ODE of one moving phase."""
-
-    m: float
-    c: float
-    K: float
-    kc: float
-    cc: float
-
-    @property
-    def rho(self) -> float:
-        """Spectral radius of the phase's state matrix: its fastest rate (1/s)."""
-        alpha = 0.5 * self.c / self.m
-        w2 = self.K / self.m
-        if alpha * alpha > w2:
-            return alpha + math.sqrt(alpha * alpha - w2)
-        return math.sqrt(w2)
-
-
-@dataclass(frozen=True)
-class _Tables:
-    """Scaled Taylor coefficients of the unit responses over steps of lengths h (one column each).
-
-    A: s0 = 1; B: v0 = 1; C1: unit constant forcing; R[:, k]: forcing from P = u^k (zero initial
-    state). Phi, g1, WP are their values and slopes at the step end (u = 1)."""
-
-    h: np.ndarray  # (U,)
-    A: np.ndarray  # (N+1, U)
-    B: np.ndarray
-    C1: np.ndarray
-    R: np.ndarray  # (N+1, 6, U)
-    Phi: np.ndarray  # (2, 2, U)
-    g1: np.ndarray  # (2, U)
-    WP: np.ndarray  # (2, 6, U)
-
-
-def _tables(lin: _Linear, h: np.ndarray, n_terms: int) -> _Tables:
-    h = np.asarray(h, dtype=float)
-    if h.size <= 2:
-        return _tables_small(lin, h, n_terms)
-    U = h.size
-    a = np.zeros((n_terms + 1, 9, U))
-    a[0, 0] = 1.0
-    a[1, 1] = h
-    f = np.zeros((6, 9, U))
-    f[0, 2] = 1.0
-    for k in range(6):
-        f[k, 3 + k] += lin.kc
-        if k >= 1:
-            f[k - 1, 3 + k] += lin.cc * k / h
-    h2 = h * h
-    ch, Kh2 = lin.c * h, lin.K * h2
-    for n in range(n_terms - 1):
-        rhs = -ch * (n + 1) * a[n + 1] - Kh2 * a[n]
-        if n < 6:
-            rhs = rhs + h2 * f[n]
-        a[n + 2] = rhs / (lin.m * (n + 1) * (n + 2))
-    n_idx = np.arange(n_terms + 1, dtype=float)[:, None, None]
-    end = a.sum(axis=0)  # (9, U)
-    slope = (n_idx * a).sum(axis=0) / h  # d/dtau
-    return _assemble_tables(h, a, end, slope)
-
-
-def _assemble_tables(h, a, end, slope) -> _Tables:
-    Phi = np.array([[end[0], end[1]], [slope[0], slope[1]]])
-    return _Tables(
-        h=h, A=a[:, 0], B=a[:, 1], C1=a[:, 2], R=a[:, 3:9], Phi=Phi,
-        g1=np.array([end[2], slope[2]]), WP=np.array([end[3:9], slope[3:9]]),
-    )
-
-
-def _tables_small(lin: _Linear, h: np.ndarray, n_terms: int) -> _Tables:
-    """_tables for one or two step lengths in plain Python (the numpy version's cost is the
-    overhead of its ~60 calls on tiny arrays). The same recursion in the same order."""
-    m, c, K, kc, cc = lin.m, lin.c, lin.K, lin.kc, lin.cc
-    cols = []
-    for hu in h.tolist():
-        h2 = hu * hu
-        ch, Kh2 = c * hu, K * h2
-        # forcing rows f[n] of the 9 unit responses: A (s0 = 1), B (v0 = 1), C1 (constant),
-        # R_k (drive u^k: kc u^k + cc k u^(k-1) / h)
-        basis = []
-        for b in range(9):
-            a = [0.0] * (n_terms + 1)
-            f = [0.0] * 6
-            if b == 0:
-                a[0] = 1.0
-            elif b == 1:
-                a[1] = hu
-            elif b == 2:
-                f[0] = 1.0
-            else:
-                k = b - 3
-                f[k] += kc
-                if k >= 1:
-                    f[k - 1] += cc * k / hu
-            for n in range(n_terms - 1):
-                rhs = -ch * (n + 1) * a[n + 1] - Kh2 * a[n]
-                if n < 6:
-                    rhs = rhs + h2 * f[n]
-                a[n + 2] = rhs / (m * (n + 1) * (n + 2))
-            basis.append(a)
-        cols.append(basis)
-    a = np.array(cols).transpose(2, 1, 0)  # (n_terms + 1, 9, U)
-    end = a.sum(axis=0)
-    slope = (np.arange(n_terms + 1, dtype=float)[:, None, None] * a).sum(axis=0) / h
-    return _assemble_tables(h, a, end, slope)
-
-
-def _drive_response(lin: _Linear, h: float, n_terms: int) -> np.ndarray:
-    """WP of the step tables for one step length (2, 6): end value and slope of the responses
-    R_k to the drive P = u^k from rest. The same recursion and sums as _tables_small (numpy's
-    pairwise sums), in plain Python: only these 6 of its 9 columns, for the forcing of a phase
-    kind over the whole grid."""
-    m, c, K, kc, cc = lin.m, lin.c, lin.K, lin.kc, lin.cc
-    h2 = h * h
-    ch, Kh2 = c * h, K * h2
-    ends, slopes = [], []
-    for k in range(6):
-        f = [0.0] * 6
-        f[k] += kc
-        if k >= 1:
-            f[k - 1] += cc * k / h
-        a = [0.0] * (n_terms + 1)
-        # (the terms before the forcing's first are zeros: the same sums without those steps)
-        for n in range(max(k - 1, 0), n_terms - 1):
-            rhs = -ch * (n + 1) * a[n + 1] - Kh2 * a[n]
-            if n < 6:
-                rhs = rhs + h2 * f[n]
-            a[n + 2] = rhs / (m * (n + 1) * (n + 2))
-        ends.append(_pairwise_sum(a))
-        slopes.append(_pairwise_sum([float(n) * x for n, x in enumerate(a)]) / h)
-    return np.array([ends, slopes])
-
-
-def _pairwise_sum(x: list) -> float:
-    """numpy's sum of a short contiguous array, operation for operation (its pairwise_sum with
-    eight partial sums; up to 128 terms), so plain-Python table values equal the numpy ones."""
-    n = len(x)
-    if n < 8:
-        res = 0.0
-        for v in x:
-            res += v
-        return res
-    r = x[:8]
-    i = 8
-    while i < n - n % 8:
-        r = [rj + xj for rj, xj in zip(r, x[i:i + 8])]
-        i += 8
-    res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
-    for v in x[i:]:
-        res += v
-    return res
-
-
-def _expand(lin: _Linear, P, h: float, s: float, v: float, Fc: float, n_terms: int) -> list:
-    """Scaled Taylor coefficients of s over one step from (s, v), P the step's drive polynomial
-    (a list of floats). Plain Python: one step at a time, no numpy overhead."""
-    m, c, K, kc, cc = lin.m, lin.c, lin.K, lin.kc, lin.cc
-    h2m = h * h / m
-    beta = K * h2m
-    if cc:
-        ch = cc / h
-        f = [(kc * P[n] + ch * (n + 1) * P[n + 1]) * h2m for n in range(5)] + [kc * P[5] * h2m]
-    else:
-        f = [kc * x * h2m for x in P]
-    f[0] -= Fc * h2m
-    f.extend(_ZEROS[:n_terms - 7])
-    a = [s, v * h] + _ZEROS[:n_terms - 1]
-    a0, a1 = s, v * h
-    if c:
-        alpha = c * h / m
-        for n in range(n_terms - 1):
-            a0, a1 = a1, (f[n] - alpha * (n + 1) * a1 - beta * a0) * _INV_PAIR[n]
-            a[n + 2] = a1
-    else:
-        for n in range(n_terms - 1):
-            a0, a1 = a1, (f[n] - beta * a0) * _INV_PAIR[n]
-            a[n + 2] = a1
-    return a
-
-
-_INV_PAIR = tuple(1.0 / ((n + 1) * (n + 2)) for n in range(64))
-_ZEROS = [0.0] * 64
 _MAX = np.maximum.reduce  # the ufunc itself: ndarray.max adds a Python layer per call
-
-
-def _n_terms(x: float) -> int:
-    """Taylor terms for a relative truncation error below 1e-19 at rho*h = x (<= MAX_RHO_H)."""
-    n, term = 1, x
-    bound = math.exp(x)
-    while n < 9 or term * bound > 1e-19:
-        n += 1
-        term *= x / n
-        if n > 60:
-            break
-    return n
-
-
-def _taylor_shift(D: np.ndarray, d) -> np.ndarray:
-    """Drive derivatives (4, n) at x moved to x + d by their Taylor polynomial (d ~ 1e-7 h)."""
-    S, S1, S2, S3 = D
-    return np.stack([
-        S + d * (S1 + d * (S2 / 2 + d * S3 / 6)),
-        S1 + d * (S2 + d * S3 / 2),
-        S2 + d * S3,
-        S3,
-    ])
-
-
-def _taylor_shift1(D, d: float) -> list:
-    """_taylor_shift for one point (lists)."""
-    S, S1, S2, S3 = D
-    return [S + d * (S1 + d * (S2 / 2 + d * S3 / 6)), S1 + d * (S2 + d * S3 / 2), S2 + d * S3, S3]
-
-
-def _hermite5(h: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """Scaled coefficients (6, n) in u = tau/h of the quintic with S, S', S'' given at both ends."""
-    out = np.empty((6, h.size))
-    c0, c1, c2 = out[0], out[1], out[2]
-    c0[...] = start[0]
-    np.multiply(h, start[1], out=c1)
-    hh = h * h
-    np.multiply(hh, start[2], out=c2)
-    c2 *= 0.5
-    d = np.empty((3, h.size))
-    np.subtract(end[0], c0 + c1 + c2, out=d[0])
-    np.subtract(h * end[1], c1 + 2.0 * c2, out=d[1])
-    np.subtract(hh * end[2], 2.0 * c2, out=d[2])
-    np.matmul(_HERMITE_HIGH, d, out=out[3:])
-    return out
-
-
-_HERMITE_HIGH = np.array([[10.0, -4.0, 0.5], [-15.0, 7.0, -1.0], [6.0, -3.0, 0.5]])
-_BOUND_WEIGHTS = np.array([[n, n * (n - 1), n * (n - 1) * (n - 2)] for n in range(6)], dtype=float).T
-
-
-def _shift_list(P, u0: float) -> list:
-    """Coefficients in w of P(u0 + (1 - u0) w) for w in [0, 1] (the rest of a step; lists).
-    The m-th: (1 - u0)^m sum_n C(n, m) P[n] u0^(n-m), by Horner in u0 (written out)."""
-    p0, p1, p2, p3, p4, p5 = P.tolist() if isinstance(P, np.ndarray) else (float(x) for x in P)
-    if u0 == 0.0:
-        return [p0, p1, p2, p3, p4, p5]
-    u = u0
-    l1 = 1.0 - u0
-    l2 = l1 * l1
-    l3 = l2 * l1
-    l4 = l3 * l1
-    return [
-        ((((p5 * u + p4) * u + p3) * u + p2) * u + p1) * u + p0,
-        ((((5.0 * p5 * u + 4.0 * p4) * u + 3.0 * p3) * u + 2.0 * p2) * u + p1) * l1,
-        (((10.0 * p5 * u + 6.0 * p4) * u + 3.0 * p3) * u + p2) * l2,
-        ((10.0 * p5 * u + 4.0 * p4) * u + p3) * l3,
-        (5.0 * p5 * u + p4) * l4,
-        p5 * (l4 * l1),
-    ]
-
-
-def _deriv_list(c, h: float) -> list:
-    """_deriv on a list."""
-    inv = 1.0 / h
-    return [k * x * inv for k, x in enumerate(c) if k] + [0.0]
-
-
-def _coeff_list(comp, P, dP, a, da) -> list:
-    """_coefficients for one step on lists (a, da None at rest)."""
-    aP, bP, const, l0, l1 = comp
-    if a is not None and (l0 or l1):
-        if not l1:
-            e = [l0 * x for x in a]
-        elif not l0:
-            e = [l1 * y for y in da]
-        else:
-            e = [l0 * x + l1 * y for x, y in zip(a, da)]
-    else:
-        e = [0.0] * (len(a) if a is not None else 6)
-    if bP:
-        for n in range(6):
-            e[n] += aP * P[n] + bP * dP[n]
-    elif aP:
-        for n in range(6):
-            e[n] += aP * P[n]
-    e[0] += const
-    return e
-
-
-def _deriv(c: np.ndarray, h) -> np.ndarray:
-    """Scaled coefficients of d/dtau of sum c[n] u^n (same length, last row 0)."""
-    out = np.zeros_like(c)
-    n = np.arange(1, c.shape[0], dtype=float)
-    out[:-1] = (n.reshape((-1,) + (1,) * (c.ndim - 1)) * c[1:]) / h
-    return out
-
-
-def _qmax(d, B, D):
-    """max over x in [0, D] of d x + B x^2 / 2 (arrays)."""
-    val = np.maximum(d * D + 0.5 * B * D * D, 0.0)
-    neg = B < 0.0
-    if np.any(neg):
-        xs = np.divide(-d, B, out=np.full(np.shape(d), np.inf), where=neg)
-        inner = (xs > 0.0) & (xs < D)
-        if np.any(inner):
-            val = np.where(inner, np.maximum(val, -0.5 * d * xs), val)
-    return val
-
-
-def _excluded(Ea, Da, Eb, Db, B2, D):
-    """True where e <= 0 on [a, b] is certain, from the end values Ea, Eb, the slopes Da, Db and
-    an upper bound B2 of e'' on the interval (D = b - a; all in the same variable).
-
-    Three upper bounds of max e: the chord plus the sag B2 D^2/8, and the Taylor parabolas from
-    either end (their maximum over the interval taken exactly)."""
-    D = np.broadcast_to(D, np.shape(Ea))
-    out = np.maximum(Ea, Eb) + np.maximum(B2, 0.0) * D * D / 8.0 <= 0.0
-    rest = np.nonzero(~out)[0]
-    if rest.size:
-        Ea, Da, Eb, Db, B2, D = (np.asarray(x)[rest] for x in (Ea, Da, Eb, Db, B2, D))
-        u2 = Ea + _qmax(Da, B2, D)
-        u3 = Eb + _qmax(-Db, B2, D)
-        out[rest] = np.minimum(u2, u3) <= 0.0
-    return out
-
-
-def _excluded_steps(e: np.ndarray) -> np.ndarray:
-    """_excluded for whole steps, e (n, L) the scaled coefficients of one event function."""
-    n = np.arange(e.shape[0], dtype=float)
-    B2 = 2.0 * e[2] + (n[3:] * (n[3:] - 1.0)) @ np.maximum(e[3:], 0.0)
-    return _excluded(e[0], e[1], e.sum(axis=0), n @ e, B2, 1.0)
-
-
-def _excluded1(e, Eb: float | None = None) -> bool:
-    """_excluded_steps for one step, e a list of floats (plain Python: no numpy overhead).
-    Eb: sum(e), when known."""
-    Ea = e[0]
-    if Eb is None:
-        Eb = sum(e)
-    B2 = 2.0 * e[2]
-    for n in range(3, len(e)):
-        en = e[n]
-        if en > 0.0:
-            B2 += _PAIR[n] * en
-    if (Ea if Ea > Eb else Eb) + (0.125 * B2 if B2 > 0.0 else 0.0) <= 0.0:
-        return True
-    Db = sum([n * en for n, en in enumerate(e)])
-    return min(Ea + _qmax1(e[1], B2), Eb + _qmax1(-Db, B2)) <= 0.0
-
-
-_PAIR = tuple(n * (n - 1.0) for n in range(64))
-
-
-def _qmax1(d: float, B: float, D: float = 1.0) -> float:
-    """max over x in [0, D] of d x + B x^2 / 2."""
-    val = max(d * D + 0.5 * B * D * D, 0.0)
-    if B < 0.0 and 0.0 < -d / B < D:
-        val = max(val, -0.5 * d * d / B)
-    return val
-
-
-def _excluded_range(e, lo: float, hi: float) -> bool:
-    """_excluded on [lo, hi] for one coefficient list e (plain Python)."""
-    Ea = Da = Eb = Db = 0.0
-    B2 = 0.0
-    plo = phi = 1.0  # lo^(n-2), hi^(n-2)
-    for n, en in enumerate(e):
-        if n >= 2:
-            B2 += n * (n - 1.0) * max(en * plo, en * phi)
-            plo *= lo
-            phi *= hi
-    for en in reversed(e):
-        Ea = Ea * lo + en
-        Eb = Eb * hi + en
-    for n in range(len(e) - 1, 0, -1):
-        Da = Da * lo + n * e[n]
-        Db = Db * hi + n * e[n]
-    D = hi - lo
-    if max(Ea, Eb) + max(B2, 0.0) * D * D / 8.0 <= 0.0:
-        return True
-    return min(Ea + _qmax1(Da, B2, D), Eb + _qmax1(-Db, B2, D)) <= 0.0
-
-
-def _rising_range(e, lo: float, hi: float) -> bool:
-    """e' > 0 on [lo, hi], proven from e'(lo) and a signed lower bound of e'' (plain Python)."""
-    if lo == 0.0:  # (the usual case: a whole step) e'(0) = e[1]; lo^(n-2) = 0 beyond n = 2
-        B2lo = 2.0 * e[2]
-        phi = hi
-        for n in range(3, len(e)):
-            en = e[n] * phi
-            if en < 0.0:
-                B2lo += _PAIR[n] * en
-            phi *= hi
-        return e[1] + (B2lo if B2lo < 0.0 else 0.0) * hi > 0.0
-    d = 0.0
-    for n in range(len(e) - 1, 0, -1):
-        d = d * lo + n * e[n]
-    B2lo = 0.0
-    plo = phi = 1.0
-    for n in range(2, len(e)):
-        B2lo += n * (n - 1.0) * min(e[n] * plo, e[n] * phi)
-        plo *= lo
-        phi *= hi
-    return d + min(0.0, B2lo) * (hi - lo) > 0.0
-
-
-def _root_rising(e, lo: float, hi: float, xtol: float, flo: float | None = None,
-                 fhi: float | None = None) -> float:
-    """The root of e in [lo, hi] with e(lo) <= 0 < e(hi) and e' > 0 there: Newton steps kept
-    inside the bracket (bisection when they leave it), from the secant point of the bracket
-    (flo, fhi: e at its ends, when known), then the first point with e > 0."""
-    x = lo
-    if flo is not None and fhi is not None and fhi > flo:
-        x = lo - flo * (hi - lo) / (fhi - flo)
-        if not lo <= x < hi:
-            x = lo
-    rev = e[::-1]
-    for _ in range(100):
-        fx, dx = rev[0], 0.0
-        for ck in rev[1:]:  # value and slope in one Horner pass
-            dx = dx * x + fx
-            fx = fx * x + ck
-        if fx > 0.0:
-            hi = x
-        else:
-            lo = x
-        tol = xtol + 4.0 * EPS * hi
-        if hi - lo <= tol:
-            break
-        x_new = x - fx / dx if dx > 0.0 else 0.5 * (lo + hi)
-        if abs(x_new - x) < tol:  # Newton has converged from one side: step across the root
-            x_new += tol if fx <= 0.0 else -tol
-        if not lo < x_new < hi:
-            x_new = 0.5 * (lo + hi)
-        x = x_new
-    return hi
-
-
-def _illinois(f, lo: float, hi: float, flo: float, fhi: float, xtol: float) -> float:
-    """First point past the zero of f in [lo, hi] (f(lo) <= 0 < f(hi)): regula falsi with the
-    Illinois modification (superlinear), bisection when it stalls."""
-    side = 0
-    for _ in range(200):
-        if hi - lo <= xtol + 4.0 * EPS * abs(hi):
-            break
-        x = hi - fhi * (hi - lo) / (fhi - flo) if fhi != flo else 0.5 * (lo + hi)
-        if not lo < x < hi:
-            x = 0.5 * (lo + hi)
-        fx = f(x)
-        if fx > 0.0:
-            hi, fhi = x, fx
-            if side == 1:
-                flo *= 0.5
-            side = 1
-        else:
-            lo, flo = x, fx
-            if side == -1:
-                fhi *= 0.5
-            side = -1
-    return hi
-
-
-def _positive_at(lists, comb: str, w: float) -> bool:
-    """The combined function is > 0 at w beyond doubt (by far more than the rounding of its
-    terms): the detail search would return w itself (its first sample), at a fraction of the
-    cost."""
-    vals = []
-    for e in lists:
-        val = mag = 0.0
-        for en in reversed(e):
-            val = val * w + en
-            mag = mag * w + abs(en)
-        if not abs(val) > 1e-12 * mag:
-            return False
-        vals.append(val)
-    return (min(vals) if comb == "min" else max(vals)) > 0.0
-
-
-def _start_clearance(e) -> float:
-    """For e with e[0] = 0 (a function starting on its zero): the largest w0 in [0, 1] such that
-    e < 0 on (0, w0] is certain, from e(w) <= w^k (e_k + sum_{n>k} max(e_n, 0) w^(n-k)) with e_k
-    the first nonzero coefficient. 0 when e rises (e_k > 0); 1 when e < 0 on the whole step."""
-    # leading terms far below the rest are rounding left by the event that began the phase
-    # (they would decide the sign only for w below ~1e-9 of the step)
-    big = max(abs(en) for en in e)
-    k = next((n for n, en in enumerate(e) if abs(en) > 1e-9 * big), None)
-    if k is None or e[k] > 0.0:
-        return 0.0
-    tail = [max(en, 0.0) for en in e[k + 1:]]
-
-    def phi(w):
-        return e[k] + w * _horner(tail, w) if tail else e[k]
-
-    if phi(1.0) < 0.0:
-        return 1.0
-    lo, hi = 0.0, 1.0  # phi rises with w: bisect for its zero (coarse is enough)
-    for _ in range(12):
-        mid = 0.5 * (lo + hi)
-        if phi(mid) < 0.0:
-            lo = mid
-        else:
-            hi = mid
-    return lo
-
-
-def _combine(values, comb):
-    if comb == "min":
-        return np.min(values, axis=0)
-    if comb == "max":
-        return np.max(values, axis=0)
-    return values[0]
-
-
-def _combine_excluded(ex, comb):
-    if comb == "min":
-        return np.any(ex, axis=0)
-    if comb == "max":
-        return np.all(ex, axis=0)
-    return ex[0]
-
-
-def _combine_hits(up: np.ndarray, groups) -> np.ndarray:
-    """Steps whose end value of some event function is > 0 (rows combined per event)."""
-    if all(comb == "one" for _, comb in groups):
-        return up.any(axis=0) if up.shape[0] > 1 else up[0]
-    hit = np.zeros(up.shape[1], bool)
-    for rows, comb in groups:
-        if len(rows) == 1:
-            hit |= up[rows[0]]
-        else:
-            hit |= up[rows].all(axis=0) if comb == "min" else up[rows].any(axis=0)
-    return hit
-
-
-def _combine_cleared(ex: np.ndarray, groups) -> np.ndarray:
-    """Steps where every event is excluded, from the per-row exclusions ex (rows, steps)."""
-    if all(comb == "one" for _, comb in groups):
-        return ex.all(axis=0) if ex.shape[0] > 1 else ex[0]
-    cleared = np.ones(ex.shape[1], bool)
-    for rows, comb in groups:
-        cleared &= ex[rows[0]] if len(rows) == 1 else _combine_excluded(ex[rows], comb)
-    return cleared
-
-
-def _combine_cleared1(ex: list, comb: str) -> bool:
-    """_combine_excluded for one event in one step (ex: its rows' exclusions)."""
-    return any(ex) if comb == "min" else all(ex)
-
-
-def _lincomb_into(out: np.ndarray, terms, const: float) -> None:
-    """out = sum of coefficient * array over the terms whose coefficient is not 0, + const."""
-    started = False
-    for coef, arr in terms:
-        if coef:
-            if started:
-                out += coef * arr
-            else:
-                np.multiply(arr, coef, out=out)
-                started = True
-    if not started:
-        out[...] = 0.0
-    if const:
-        out += const
-
-
-@dataclass(frozen=True)
-class _Event:
-    """An event function: components e = aP P + bP P' + const + l0 s + l1 s', combined by min/max;
-    the event is the first instant where it becomes > 0."""
-
-    kind: str
-    comps: tuple  # of (aP, bP, const, l0, l1)
-    comb: str = "one"
-
-
-def _coefficients(comp, P, dP, a, da, n_rows):
-    """Scaled Taylor coefficients (n_rows, ...) of one event component over a step."""
-    aP, bP, const, l0, l1 = comp
-    if a is not None and (l0 or l1):
-        e = l0 * a if l0 else l1 * da
-        if l0 and l1:
-            e = e + l1 * da
-    else:
-        e = np.zeros((n_rows,) + P.shape[1:])
-    if aP or bP:
-        e[:6] += aP * P + bP * dP if bP else aP * P
-    if const:
-        e[0] += const
-    return e
-
-
-def _start_coeffs(comps, comb, P, dP, a, da, s0, v0):
-    """_coeff_list of each component of an event at a phase start (state s0, v0; a, da None at
-    rest), with the components that sit on their zero up to rounding (the event that began the
-    phase put them there: |e(0)| below ZERO_START of the size of its terms) set exactly to zero,
-    so that their sign right after the start comes from their derivatives, not from the
-    rounding of the event location. Returns (coefficient lists, the combined function starts
-    on its zero)."""
-    Es, any_zero = [], False
-    for comp in comps:
-        aP, bP, const, l0, l1 = comp
-        e = _coeff_list(comp, P, dP, a, da)
-        scale = abs(aP * P[0]) + abs(const) if aP else abs(const)  # the size of its terms
-        if bP:
-            scale += abs(bP * dP[0])
-        if l0:
-            scale += abs(l0 * s0)
-        if l1:
-            scale += abs(l1 * v0)
-        if abs(e[0]) <= ZERO_START * scale:
-            e[0] = 0.0
-            any_zero = True
-        Es.append(e)
-    if len(Es) == 1:
-        return Es, any_zero
-    starts = [e[0] for e in Es]
-    return Es, any_zero and (min(starts) if comb == "min" else max(starts)) == 0.0
-
-
-def _horner(c, x: float) -> float:
-    acc = 0.0
-    for ck in reversed(c):
-        acc = acc * x + ck
-    return acc
 
 
 class _Solver:
@@ -721,13 +108,13 @@ class _Solver:
         self.max_events = max_events
         self.chunk = chunk
         self.lins = {
-            CONTACT: _Linear(self.M1, self.c, self.k + self.rate, self.k, self.c),
-            FLIGHT: _Linear(self.M, 0.0, self.rate, 0.0, 0.0),
+            CONTACT: LinearPhase(self.M1, self.c, self.k + self.rate, self.k, self.c),
+            FLIGHT: LinearPhase(self.M, 0.0, self.rate, 0.0, 0.0),
         }
         rho = max(lin.rho for lin in self.lins.values())
         self._build_grid(drive, t, rho, hmin)
         h_max = self.h_max
-        self.n_terms = _n_terms(rho * h_max)
+        self.n_terms = taylor_terms(rho * h_max)
         self._tabs: dict = {}  # step tables per phase kind, built on first use
         self.props: dict = {}
         self._setups: dict = {}
@@ -822,14 +209,14 @@ class _Solver:
             left = right.copy()
             if nb <= 32:  # a few breakpoints: plain Python (numpy's overhead on tiny arrays)
                 Dr, Dl = D[:, nn:nn + nb].T.tolist(), D[:, nn + nb:].T.tolist()
-                right[:, brk] = np.array([_taylor_shift1(r, -di)[:3] for di, r in zip(d, Dr)]).T
-                left[:, brk] = np.array([_taylor_shift1(l, di)[:3] for di, l in zip(d, Dl)]).T
+                right[:, brk] = np.array([taylor_shift1(r, -di)[:3] for di, r in zip(d, Dr)]).T
+                left[:, brk] = np.array([taylor_shift1(l, di)[:3] for di, l in zip(d, Dl)]).T
             else:
-                right[:, brk] = _taylor_shift(D[:, nn:nn + nb], -dd)[:3]
-                left[:, brk] = _taylor_shift(D[:, nn + nb:], dd)[:3]
+                right[:, brk] = taylor_shift(D[:, nn:nn + nb], -dd)[:3]
+                left[:, brk] = taylor_shift(D[:, nn + nb:], dd)[:3]
         else:
             right = left = np.asarray(drive(nodes), dtype=float)
-        P = self.P = _hermite5(h, right[:, :-1], left[:, 1:])  # (6, steps)
+        P = self.P = hermite5(h, right[:, :-1], left[:, 1:])  # (6, steps)
         self.PT = P.T  # rows: one step's polynomial
         # drive at the nodes as the following step sees it (the last node: the end of its step):
         # S, S', S'' of the step polynomials, so node values match the step expansions
@@ -844,7 +231,7 @@ class _Solver:
         Dn[1, -1] = sum(k * c for k, c in enumerate(last)) * float(inv[-1])
         Dn[2, -1] = sum(k * (k - 1) * c for k, c in enumerate(last)) * float(inv2[-1])
         # per step: bounds of |S1|, |S2|, |S3| (derivatives) over the step (from the polynomial)
-        Sb = self.Sb = _BOUND_WEIGHTS @ np.abs(P)
+        Sb = self.Sb = BOUND_WEIGHTS @ np.abs(P)
         Sb[0] *= inv
         Sb[1] *= inv2
         inv2 *= inv
@@ -901,7 +288,7 @@ class _Solver:
         """Scaled coefficients of dS/dt per step (built on first use)."""
         dP = self.__dict__.get("_dP")
         if dP is None:
-            dP = self._dP = _deriv(self.P, self.h)
+            dP = self._dP = deriv(self.P, self.h)
         return dP
 
     def time(self, j: int, u: float) -> float:
@@ -910,19 +297,19 @@ class _Solver:
         return float(self.nodes[j]) + u * float(self.h[j])
 
     # ---------------------------------------------------------------- event functions
-    def _moving_events(self, kind: int, sigma: float) -> list[_Event]:
+    def _moving_events(self, kind: int, sigma: float) -> list[Event]:
         k, c, lash = self.k, self.c, self.lash
-        events = [_Event("seat", ((0.0, 0.0, 0.0, -1.0, 0.0),))]
+        events = [Event("seat", ((0.0, 0.0, 0.0, -1.0, 0.0),))]
         if kind == CONTACT:
-            events.append(_Event("separation", ((-k, -c, k * lash, k, c),)))
+            events.append(Event("separation", ((-k, -c, k * lash, k, c),)))
         else:
             gap = (k, 0.0, -k * lash, -k, 0.0)
             if c > 0.0:
-                events.append(_Event("re-contact", (gap, (k, c, -k * lash, -k, -c)), "min"))
+                events.append(Event("re-contact", (gap, (k, c, -k * lash, -k, -c)), "min"))
             else:
-                events.append(_Event("re-contact", (gap,)))
+                events.append(Event("re-contact", (gap,)))
         if self.R > 0.0:
-            events.append(_Event("velocity-zero", ((0.0, 0.0, 0.0, 0.0, -sigma),)))
+            events.append(Event("velocity-zero", ((0.0, 0.0, 0.0, 0.0, -sigma),)))
         return events
 
     def _moving_setup(self, kind: int, sigma: float):
@@ -950,34 +337,34 @@ class _Solver:
                 for r, (aP, bP, const, _, _) in enumerate(rows):
                     if aP or bP:
                         part = np.empty(D0.size)
-                        _lincomb_into(part, ((aP, D0), (bP, D1)), const)
+                        lincomb_into(part, ((aP, D0), (bP, D1)), const)
                         Ed.append((r, part))
                     elif const:
                         Ed.append((r, const))
                 lin = self.lins[kind]
                 Fd = np.empty(D0.size)
-                _lincomb_into(Fd, ((lin.kc, D0), (lin.cc, D1)), 0.0)
+                lincomb_into(Fd, ((lin.kc, D0), (lin.cc, D1)), 0.0)
             Cs = np.array([[l0, l1] for _, _, _, l0, l1 in rows])
             simple = all(comb == "one" for _, comb in groups)
             absrows = [(abs(aP), abs(bP), abs(l0), abs(l1)) for aP, bP, _, l0, l1 in rows]  # for sag bounds
             hit = self._setups[key] = (events, rows, groups, Ed, Cs, Fd, simple, absrows)
         return hit
 
-    def _static_events(self, s_star: float) -> list[_Event]:
+    def _static_events(self, s_star: float) -> list[Event]:
         k, c = self.k, self.c
         off = -k * (self.lash + s_star)
         thr_up = self.W0 + self.rate * s_star + self.R
         events = []
         if c > 0.0:
-            events.append(_Event("up", ((k, c, off - thr_up, 0.0, 0.0), (k, 0.0, off, 0.0, 0.0)), "min"))
+            events.append(Event("up", ((k, c, off - thr_up, 0.0, 0.0), (k, 0.0, off, 0.0, 0.0)), "min"))
         else:
-            events.append(_Event("up", ((k, 0.0, off - thr_up, 0.0, 0.0),)))
+            events.append(Event("up", ((k, 0.0, off - thr_up, 0.0, 0.0),)))
         thr_dn = self.W0 + self.rate * s_star - self.R
         if s_star > 0.0 and thr_dn > 0.0:
             if c > 0.0:
-                events.append(_Event("down", ((-k, -c, thr_dn - off, 0.0, 0.0), (-k, 0.0, -off, 0.0, 0.0)), "max"))
+                events.append(Event("down", ((-k, -c, thr_dn - off, 0.0, 0.0), (-k, 0.0, -off, 0.0, 0.0)), "max"))
             else:
-                events.append(_Event("down", ((-k, 0.0, thr_dn - off, 0.0, 0.0),)))
+                events.append(Event("down", ((-k, 0.0, thr_dn - off, 0.0, 0.0),)))
         return events
 
     # ---------------------------------------------------------------- root search in one step
@@ -992,32 +379,32 @@ class _Solver:
                 # starting on its zero: most often it leaves it downwards and the plain test for
                 # the whole step suffices; otherwise clear the start analytically, test the rest
                 if len(lists) == 1:
-                    if _excluded1(lists[0]):
+                    if excluded1(lists[0]):
                         continue
                 else:
-                    ex = [_excluded1(e) for e in lists]
+                    ex = [excluded1(e) for e in lists]
                     if (any(ex) if ev.comb == "min" else all(ex)):
                         continue
-                clear = [_start_clearance(e) if e[0] == 0.0 else 0.0 for e in lists]
+                clear = [start_clearance(e) if e[0] == 0.0 else 0.0 for e in lists]
                 w_lo = max(clear) if ev.comb == "min" else min(clear)
                 if w_lo >= 1.0:
                     continue
             e = lists[0]
             if len(lists) == 1:
-                e_lo, e_hi = (e[0] if w_lo == 0.0 else _horner(e, w_lo)), sum(e)
+                e_lo, e_hi = (e[0] if w_lo == 0.0 else horner(e, w_lo)), sum(e)
                 # (a sign change from one end to the other needs no exclusion test)
                 if not e_lo <= 0.0 < e_hi and (
-                        _excluded1(e, e_hi) if w_lo == 0.0 else _excluded_range(e, w_lo, 1.0)):
+                        excluded1(e, e_hi) if w_lo == 0.0 else excluded_range(e, w_lo, 1.0)):
                     continue
             else:
-                ex = [_excluded1(e) if w_lo == 0.0 else _excluded_range(e, w_lo, 1.0) for e in lists]
+                ex = [excluded1(e) if w_lo == 0.0 else excluded_range(e, w_lo, 1.0) for e in lists]
                 if (any(ex) if ev.comb == "min" else all(ex)):
                     continue
             if (ev.comb == "one" and e_lo <= 0.0 < e_hi
-                    and _rising_range(e, w_lo, 1.0)):  # one simple crossing: polish it directly
+                    and rising_range(e, w_lo, 1.0)):  # one simple crossing: polish it directly
                 self.stats["newton_roots"] = self.stats.get("newton_roots", 0) + 1
-                w = _root_rising(e, w_lo, 1.0, max(0.5 * math.ulp(abs(t_abs)) / h_loc, 1e-300), e_lo, e_hi)
-            elif _positive_at(lists, ev.comb, w_lo):  # already > 0 where the search would begin
+                w = root_rising(e, w_lo, 1.0, max(0.5 * math.ulp(abs(t_abs)) / h_loc, 1e-300), e_lo, e_hi)
+            elif positive_at(lists, ev.comb, w_lo):  # already > 0 where the search would begin
                 w = w_lo
             else:
                 w = self._first_root(Es, ev.comb, w_lo, t_abs, h_loc)
@@ -1044,16 +431,16 @@ class _Solver:
         n = np.arange(nr, dtype=float)
         vals = (powers @ E.T).T  # (nc, K)
         ders = (powers[:, :-1] @ (E[:, 1:] * n[1:]).T).T
-        cv = _combine(vals, comb)
+        cv = combine(vals, comb)
         w2 = E[:, 2:] * (n[2:] * (n[2:] - 1.0))  # (nc, nr-2)
         pa, pb = powers[:-1, :nr - 2], powers[1:, :nr - 2]
         D = pts[1:] - pts[:-1]
         ex = np.array([
-            _excluded(vals[c, :-1], ders[c, :-1], vals[c, 1:], ders[c, 1:],
+            excluded(vals[c, :-1], ders[c, :-1], vals[c, 1:], ders[c, 1:],
                       np.maximum(pa * w2[c], pb * w2[c]).sum(axis=1), D)
             for c in range(nc)
         ])
-        ex = _combine_excluded(ex, comb)
+        ex = combine_excluded(ex, comb)
         for i in np.nonzero(~ex)[0]:
             lo, hi = float(pts[i]), float(pts[i + 1])
             if cv[i] > 0.0:
@@ -1088,15 +475,15 @@ class _Solver:
             c0 = cs[0]
 
             def f(x):
-                return _horner(c0, x)
+                return horner(c0, x)
         elif comb == "min":
 
             def f(x):
-                return min(_horner(c, x) for c in cs)
+                return min(horner(c, x) for c in cs)
         else:
 
             def f(x):
-                return max(_horner(c, x) for c in cs)
+                return max(horner(c, x) for c in cs)
         flo = f(lo)
         if flo > 0.0:
             return lo
@@ -1110,7 +497,7 @@ class _Solver:
                 else:
                     lo = mid
             return hi
-        return _illinois(f, lo, hi, flo, f(hi), xtol)
+        return illinois(f, lo, hi, flo, f(hi), xtol)
 
     # ---------------------------------------------------------------- recording
     def _record_static(self, j0: int, j1: int, s_star: float, phase: int) -> None:
@@ -1151,10 +538,10 @@ class _Solver:
             ex = np.empty((len(rows), self.h.size), dtype=bool)
             E = np.empty(self.nodes.size)
             for r, (aP, bP, const, _, _) in enumerate(rows):
-                _lincomb_into(E, ((aP, D0), (bP, D1)), const)
+                lincomb_into(E, ((aP, D0), (bP, D1)), const)
                 sag = abs(aP) * self.Sb[1] + abs(bP) * self.Sb[2] if bP else abs(aP) * self.Sb[1]
                 np.less_equal(np.maximum(E[:-1], E[1:]) + h2 * sag, 0.0, out=ex[r])
-            cand = (~_combine_cleared(ex, groups)).nonzero()[0]
+            cand = (~combine_cleared(ex, groups)).nonzero()[0]
             hit = self._static_cache[s_star] = (events, groups, ex, cand)
         return hit
 
@@ -1168,12 +555,12 @@ class _Solver:
             return None
         events, groups, ex, cand = self._static_setup(s_star)
         # first (possibly partial) step
-        P = _shift_list(self.PT[j], u0)
+        P = shift_list(self.PT[j], u0)
         h_loc = (1.0 - u0) * float(self.h[j])
-        dP = _deriv_list(P, h_loc) if self.c else None  # (S' enters the events with damping only)
+        dP = deriv_list(P, h_loc) if self.c else None  # (S' enters the events with damping only)
         sets, zeros = [], []
         for ev in events:
-            Es, zero = _start_coeffs(ev.comps, ev.comb, P, dP, None, None, s_star, 0.0)
+            Es, zero = start_coeffs(ev.comps, ev.comb, P, dP, None, None, s_star, 0.0)
             zeros.append(zero)
             sets.append(Es)
         best = self._earliest(events, sets, zeros, self.time(j, u0), h_loc)
@@ -1188,12 +575,12 @@ class _Solver:
         for i in itertools.chain.from_iterable(cand[k:k + 16].tolist() for k in range(k0, cand.size, 16)):
             h_i = float(self.h[i])
             P = self.PT[i].tolist()
-            dP = _deriv_list(P, h_i) if self.c else None
+            dP = deriv_list(P, h_i) if self.c else None
             check, col = [], []
             for ev, (rr, comb) in zip(events, groups):
-                if not _combine_cleared1(ex[rr, i].tolist(), comb):
+                if not combine_cleared1(ex[rr, i].tolist(), comb):
                     check.append(ev)
-                    col.append([_coeff_list(cp, P, dP, None, None) for cp in ev.comps])
+                    col.append([coeff_list(cp, P, dP, None, None) for cp in ev.comps])
             best = self._earliest(check, col, [False] * len(check), self.time(i, 0.0), h_i)
             if best is not None:
                 self._record_static(j, i + (1 if best[1] > 0.0 else 0), s_star, phase)
@@ -1201,12 +588,12 @@ class _Solver:
         self._record_static(j, nsteps + 1, s_star, phase)
         return None
 
-    def tab(self, kind: int) -> _Tables:
+    def tab(self, kind: int) -> StepTables:
         """The step tables of a phase kind (built on first use: a flight needs none unless its
         events must be searched in many steps at once)."""
         tab = self._tabs.get(kind)
         if tab is None:
-            tab = self._tabs[kind] = _tables(self.lins[kind], self.h_unique, self.n_terms)
+            tab = self._tabs[kind] = step_tables(self.lins[kind], self.h_unique, self.n_terms)
         return tab
 
     def _forcing(self, kind: int):
@@ -1225,7 +612,7 @@ class _Solver:
         if kind in self._tabs:
             WP = self._tabs[kind].WP[:, :, self.base_col]
         else:
-            WP = _drive_response(lin, hb, self.n_terms)
+            WP = drive_response(lin, hb, self.n_terms)
         G = WP @ self.P
         if not odd.size:
             return lambda a, b: G[:, a:b]
@@ -1238,7 +625,7 @@ class _Solver:
                     if m in pending:
                         pending.discard(m)
                         hu = float(self.h_unique[self.hidx[m]])
-                        e = _expand(lin, self.PT[m].tolist(), hu, 0.0, 0.0, 0.0, N)
+                        e = expand_step(lin, self.PT[m].tolist(), hu, 0.0, 0.0, 0.0, N)
                         G[0, m] = sum(e)
                         G[1, m] = sum([k * x for k, x in enumerate(e)]) / hu
             return G[:, a:b]
@@ -1277,9 +664,9 @@ class _Solver:
             self._record_moving(kind, nsteps, [s], [v], sigma)
             return None
         # first (possibly partial) step: event functions may start on their zero here
-        P = _shift_list(self.PT[j], u0)
+        P = shift_list(self.PT[j], u0)
         h_loc = (1.0 - u0) * float(self.h[j])
-        a = _expand(lin, P, h_loc, s, v, Fc, N)
+        a = expand_step(lin, P, h_loc, s, v, Fc, N)
         if release:
             # the release instant was found where the net force just passed zero in the direction
             # sigma; recomputed here it may differ by rounding (~1e-16 of its terms) and start the
@@ -1287,12 +674,12 @@ class _Solver:
             f0 = 2.0 * lin.m * a[2] / (h_loc * h_loc)
             terms = abs(lin.kc * P[0]) + abs(lin.cc * P[1] / h_loc) + abs(Fc) + abs(lin.K * s)
             if sigma * f0 < 0.0 and abs(f0) <= 1e-12 * terms:
-                a = _expand(lin, P, h_loc, s, v, Fc + f0, N)
-        da = _deriv_list(a, h_loc)
-        dP = _deriv_list(P, h_loc) if self.c else None  # (S' enters the events with damping only)
+                a = expand_step(lin, P, h_loc, s, v, Fc + f0, N)
+        da = deriv_list(a, h_loc)
+        dP = deriv_list(P, h_loc) if self.c else None  # (S' enters the events with damping only)
         sets, zeros = [], []
         for ev in events:
-            Es, zero = _start_coeffs(ev.comps, ev.comb, P, dP, a, da, s, v)
+            Es, zero = start_coeffs(ev.comps, ev.comb, P, dP, a, da, s, v)
             zeros.append(zero)
             sets.append(Es)
         best = self._earliest(events, sets, zeros, self.time(j, u0), h_loc)
@@ -1300,7 +687,7 @@ class _Solver:
             self._record_moving(kind, j, [s], [v], sigma)
         if best is not None:
             w = best[1]
-            return best[0], j, u0 + w * (1.0 - u0), _horner(a, w), _horner(da, w)
+            return best[0], j, u0 + w * (1.0 - u0), horner(a, w), horner(da, w)
         s, v = math.fsum(a), math.fsum(da)
         j += 1
         prop = self._prop(kind)
@@ -1345,7 +732,7 @@ class _Solver:
             first = int((top > 0.0).argmax())
             last = first + 1 if top[first] > 0.0 else L
         else:
-            hit = _combine_hits(E[:, 1:] > 0.0, groups)
+            hit = combine_hits(E[:, 1:] > 0.0, groups)
             first = int(hit.argmax())
             last = first + 1 if hit[first] else L
         n = last
@@ -1375,7 +762,7 @@ class _Solver:
             if simple:  # a step is cleared when every row's bound is <= 0
                 cand = (_MAX(Mx, axis=0) > 0.0).nonzero()[0] if len(rows) > 1 else (Mx[0] > 0.0).nonzero()[0]
             else:
-                cand = (~_combine_cleared(Mx <= 0.0, groups)).nonzero()[0]
+                cand = (~combine_cleared(Mx <= 0.0, groups)).nonzero()[0]
             if cand.size > 1:
                 # the window's maxima are loose where a function starts near its zero (a phase
                 # begun by an event): the same bound with each step's own left-node values (a
@@ -1396,7 +783,7 @@ class _Solver:
                            + H8 * (a0 * x0 + a1 * x1 + a2 * x2 + a3 * x3) <= 0.0
                            for r, (a0, a1, a2, a3) in enumerate(absrows)]
                     cleared = all(col) if simple else all(
-                        col[rr[0]] if len(rr) == 1 else _combine_cleared1([col[r] for r in rr], cb)
+                        col[rr[0]] if len(rr) == 1 else combine_cleared1([col[r] for r in rr], cb)
                         for rr, cb in groups)
                     if not cleared:
                         keep.append(i)
@@ -1412,23 +799,23 @@ class _Solver:
             for i in cand.tolist():
                 h_i = float(self.h[j + i])
                 P = self.PT[j + i].tolist()
-                a = _expand(lin, P, h_i, float(S[i]), float(V[i]), Fc, N)
-                da, dP = _deriv_list(a, h_i), (_deriv_list(P, h_i) if self.c else None)
+                a = expand_step(lin, P, h_i, float(S[i]), float(V[i]), Fc, N)
+                da, dP = deriv_list(a, h_i), (deriv_list(P, h_i) if self.c else None)
                 if Mx is None:
                     check = events
-                    col = [[_coeff_list(cp, P, dP, a, da) for cp in ev.comps] for ev in events]
+                    col = [[coeff_list(cp, P, dP, a, da) for cp in ev.comps] for ev in events]
                 else:  # only the events the window bound did not clear in this step
                     check, col = [], []
                     exi = flags[i] if flags else [x <= 0.0 for x in Mx[:, i].tolist()]
                     for ev, (rr, comb) in zip(events, groups):
-                        cleared = exi[rr[0]] if len(rr) == 1 else _combine_cleared1([exi[r] for r in rr], comb)
+                        cleared = exi[rr[0]] if len(rr) == 1 else combine_cleared1([exi[r] for r in rr], comb)
                         if not cleared:
                             check.append(ev)
-                            col.append([_coeff_list(cp, P, dP, a, da) for cp in ev.comps])
+                            col.append([coeff_list(cp, P, dP, a, da) for cp in ev.comps])
                 best = self._earliest(check, col, [False] * len(check), self.time(j + i, 0.0), h_i)
                 if best is not None:
                     w = best[1]
-                    return (best[0], i, w, _horner(a, w), _horner(da, w)), i
+                    return (best[0], i, w, horner(a, w), horner(da, w)), i
         elif cand.size:
             tab = self.tab(kind)
             N = self.n_terms
@@ -1438,13 +825,13 @@ class _Solver:
             hc = self.h[steps]
             a = (tab.A[:, cols] * S[cand] + tab.B[:, cols] * V[cand]
                  + np.einsum("nku,ku->nu", tab.R[:, :, cols], P) - Fc * tab.C1[:, cols])
-            da = _deriv(a, hc)
+            da = deriv(a, hc)
             dP = self.dP[:, steps]
-            sets = [[_coefficients(cp, P, dP, a, da, N + 1) for cp in ev.comps] for ev in events]
+            sets = [[coefficients(cp, P, dP, a, da, N + 1) for cp in ev.comps] for ev in events]
             if cand.size > 32:  # many (stiff linkage): the exact per-step test vectorized first
                 still = np.zeros(cand.size, bool)
                 for ev, Es in zip(events, sets):
-                    still |= ~_combine_excluded(np.array([_excluded_steps(e) for e in Es]), ev.comb)
+                    still |= ~combine_excluded(np.array([excluded_steps(e) for e in Es]), ev.comb)
                 order = np.nonzero(still)[0]
             else:  # few: _earliest tests each step in plain Python
                 order = range(cand.size)
@@ -1454,7 +841,7 @@ class _Solver:
                 best = self._earliest(events, col, [False] * len(events), self.time(j + i, 0.0), float(hc[i_c]))
                 if best is not None:
                     w = best[1]
-                    return (best[0], i, w, _horner(a[:, i_c], w), _horner(da[:, i_c], w)), i
+                    return (best[0], i, w, horner(a[:, i_c], w), horner(da[:, i_c], w)), i
         return None, n
 
     # ---------------------------------------------------------------- helpers at an instant
@@ -1463,11 +850,7 @@ class _Solver:
         if j >= self.h.size:
             return float(self.Dn[0, -1]), float(self.Dn[1, -1])
         P = self.PT[j].tolist()
-        return _horner(P, u), _horner(_deriv_list(P, float(self.h[j])), u)
-
-    def _static_force(self, S: float, S1: float, s: float) -> float:
-        x = S - self.lash - s
-        return max(0.0, self.k * x + self.c * S1) if x >= 0.0 else 0.0
+        return horner(P, u), horner(deriv_list(P, float(self.h[j])), u)
 
     def _advance(self, j: int, u: float, dt: float, s_star: float):
         """Position dt later; nodes passed on the way are recorded seated at s_star."""
@@ -1538,43 +921,36 @@ class _Solver:
         return phase_of_state(S, S1, self.k, self.c, self.lash, s, v, self.W0, self.rate, self.R)
 
     def _handle(self, which: str, phase: int, j: int, u: float, s: float, v: float, sigma: float):
+        """The phase after the event `which` (the rules: phases.py), with this solver's bookkeeping."""
         m_phase = self.M1 if phase == CONTACT else self.M
-        if which == "separation":
-            self._event("separation", j, u, v)
-            self.stats["mass_switch_energy_J"] += 0.5 * (self.M - self.M1) * v * v
-            return FLIGHT, s, v, sigma, j, u
-        if which == "re-contact":
-            self._event("re-contact", j, u, v)
-            self.stats["mass_switch_energy_J"] -= 0.5 * (self.M - self.M1) * v * v
-            return CONTACT, s, v, sigma, j, u
+        if which in AFTER_CROSSING:
+            self._event(which, j, u, v)
+            switch = 0.5 * (self.M - self.M1) * v * v
+            self.stats["mass_switch_energy_J"] += switch if which == "separation" else -switch
+            return AFTER_CROSSING[which], s, v, sigma, j, u
         S, S1 = self._drive_at(j, u)  # (the mass switches above need no drive)
         if which == "velocity-zero":
             self.stats["velocity_reversals"] += 1
-            force = self.k * (S - self.lash - s) + self.c * S1 if phase == CONTACT else 0.0
-            net = force - self.W0 - self.rate * s
-            if abs(net) <= self.R:
+            phase, sign = velocity_zero(phase, S, S1, self.k, self.c, self.lash, s, self.W0, self.rate, self.R)
+            if sign is None:
                 self.stats["sticks"] += 1
-                return (STUCK if s > 0.0 else SEATED), s, 0.0, sigma, j, u
-            return phase, s, 0.0, (1.0 if net > 0.0 else -1.0), j, u
+                return phase, s, 0.0, sigma, j, u
+            return phase, s, 0.0, sign, j, u
         # seat impact
         impact = min(v, 0.0)
         self._event("seat", j, u, impact)
         self.stats["impact_energy_loss_J"] += 0.5 * m_phase * (1.0 - self.e * self.e) * impact * impact
-        rebound = -self.e * impact
-        if rebound <= 0.0:
+        if -self.e * impact <= 0.0:
             return SEATED, 0.0, 0.0, 1.0, j, u
-        force = self._static_force(S, S1, 0.0)
-        m_rest = self.M1 if force > 0.0 else self.M
-        decel = (self.W0 + self.R - force) / m_rest
-        if decel > 0.0 and rebound * rebound <= 2.0 * decel * self.zeno_height:
-            # the rest of the chatter: bounces of durations 2 v e^n / decel, summed
-            dt = 2.0 * rebound / (decel * (1.0 - self.e))
+        force = rest_force(S, S1, self.k, self.c, self.lash, 0.0)
+        kind, rebound, m_rest, dt = seat_rebound(impact, self.e, force, self.M, self.M1, self.W0, self.R,
+                                                 self.zeno_height)
+        if dt is not None:  # the rest of the chatter, summed
             self.stats["zeno"] += 1
             self.stats["impact_energy_loss_J"] += 0.5 * m_rest * rebound * rebound
             self.events[-1]["zeno_accumulation_s"] = self.time(j, u) + dt
             j, u = self._advance(j, u, dt, 0.0)
             return SEATED, 0.0, 0.0, 1.0, j, u
-        kind = CONTACT if force > 0.0 else FLIGHT
         return kind, 0.0, rebound, 1.0, j, u
 
     def solution(self, t_req: np.ndarray, inverse) -> DynamicsSolution:

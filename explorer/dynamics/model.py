@@ -17,12 +17,12 @@ VARYING_STIFFNESS accept it: the exact solver's closed forms need constant coeff
 
 Every solver has the signature
     solve(model: LinkageModel, drive: Drive, t: np.ndarray, **options) -> DynamicsSolution
-and is listed in SOLVERS; `solve()` below dispatches on the method name.
+and is listed, with what it accepts, in explorer/solvers.py; `solve()` below dispatches on the
+method name.
 """
 
 from __future__ import annotations
 
-import importlib
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -30,56 +30,13 @@ from typing import Any
 
 import numpy as np
 
-SOLVERS: dict[str, str] = {
-    "exact": "explorer.dynamics.exact:solve",
-    "schenker1902": "explorer.dynamics.schenker1902:solve",
-    "scipy": "explorer.dynamics.reference:solve",
-    "taylor": "explorer.dynamics.taylor:solve",
-}
+from .. import solvers as registry
+from .phases import PHASE_CODES, phase_of_state, release_from_rest  # noqa: F401 (re-exported)
 
 # solvers that accept a LinkageModel with a stiffness_profile (k changing with the position)
-VARYING_STIFFNESS = ("scipy", "schenker1902", "taylor")
+VARYING_STIFFNESS = registry.varying_stiffness()
 
 EVENT_KINDS = ("lift-off", "separation", "re-contact", "seat")
-# DynamicsSolution.phase codes: on the seat, moving with the linkage loaded, moving with the linkage
-# unloaded (separated), held above the seat by friction at v = 0
-PHASE_CODES = {"seated": 0, "contact": 1, "flight": 2, "stuck": 3}
-
-
-def phase_of_state(S: float, S1: float, k: float, c: float, lash: float, s: float, v: float, W0: float,
-                   rate: float, R: float) -> tuple[int, float]:
-    """PHASE_CODES phase and friction sign of a valve given at (s, v) with the drive at (S, S')
-    and the linkage stiffness k there (the exact and taylor solvers' start from initial_state)."""
-    x = S - lash - s
-    force = k * x + c * (S1 - v)
-    touching = x >= 0.0 and force > 0.0
-    kind = PHASE_CODES["contact"] if touching else PHASE_CODES["flight"]
-    if v != 0.0:
-        return kind, math.copysign(1.0, v)
-    net = (force if touching else 0.0) - W0 - rate * s
-    if s <= 0.0 and net <= R:
-        return PHASE_CODES["seated"], 1.0
-    if abs(net) <= R:
-        return PHASE_CODES["stuck"], 1.0
-    return kind, (1.0 if net > 0.0 else -1.0)
-
-
-def release_from_rest(which: str, resting: int, S: float, S1: float, k: float, c: float, lash: float, s: float,
-                      W0: float, R: float) -> tuple[int, float, bool]:
-    """A valve held at rest (PHASE_CODES seated or stuck) whose net force has just left the
-    friction band, `which` = "up" or "down": (the moving phase, friction sign, lift-off?)."""
-    x = S - lash - s
-    touching = x >= 0.0 and k * x + c * S1 > 0.0
-    seated = resting == PHASE_CODES["seated"]
-    if which == "up" and seated and not touching and c * S1 > 0.0 and W0 + R > 0.0:
-        # only the linkage can lift a seated valve, so it touches. With damping it can lift the
-        # valve the instant its gap closes (the dashpot's c S' alone beats the preload), and the
-        # gap recomputed there may round to a hair below zero: that is contact
-        touching = True
-    phase = PHASE_CODES["contact"] if touching else PHASE_CODES["flight"]
-    return phase, (1.0 if which == "up" else -1.0), which == "up" and seated
-
-
 @dataclass(frozen=True)
 class LinkageModel:
     mass: float  # M, kg: all moving masses referred to the valve
@@ -201,8 +158,12 @@ class DynamicsSolution:
 
 
 def solve(model: LinkageModel, drive: Drive, t: np.ndarray, method: str = "exact", **options) -> DynamicsSolution:
-    if model.stiffness_profile is not None and method not in VARYING_STIFFNESS:
+    """Solve with the registry's solver `method` (ValueError: unknown method, or k(t) given to a
+    solver that needs a constant stiffness; explorer.solvers.UnknownOptionError, a TypeError: an option
+    the solver does not have)."""
+    info = registry.solver(method)
+    if model.stiffness_profile is not None and not info.varying_stiffness:
         raise ValueError(f"method {method!r} needs a constant linkage stiffness; for a stiffness that changes "
                          f"along the cycle use {' or '.join(map(repr, VARYING_STIFFNESS))}")
-    module, _, name = SOLVERS[method].partition(":")
-    return getattr(importlib.import_module(module), name)(model, drive, np.asarray(t, dtype=float), **options)
+    info.check_options(options)
+    return info.function()(model, drive, np.asarray(t, dtype=float), **options)

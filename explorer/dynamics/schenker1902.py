@@ -27,6 +27,7 @@ import math
 
 import numpy as np
 
+from .. import solvers as registry
 from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel
 from .reference import CONTACT, FLIGHT, REST, initial_phase, rebound_rest_speed
 
@@ -34,8 +35,9 @@ VARIANTS = ("printed", "newmark")
 MASS_RULES = ("model", "paper")
 
 
-class StabilityError(ValueError):
-    """The step is too long for the scheme to be stable (the solution would grow without bound)."""
+# the step is too long for the scheme to be stable (the solution would grow without bound); the
+# registry's class, so that a caller can tell it from any other ValueError by its type
+StabilityError = registry.StabilityError
 
 
 def stability_limit(variant: str = "printed") -> float:

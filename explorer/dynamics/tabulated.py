@@ -20,8 +20,8 @@ import math
 
 import numpy as np
 
-from .exact import _hermite5, _taylor_shift
 from .model import Drive, StiffnessProfile
+from .series import hermite5, taylor_shift
 
 
 def node_values(drive: Drive, profile: StiffnessProfile | None, nodes: np.ndarray, inner: np.ndarray, delta):
@@ -34,8 +34,8 @@ def node_values(drive: Drive, profile: StiffnessProfile | None, nodes: np.ndarra
     k_right, k_left = (K, K.copy()) if K is not None else (None, None)
     if inner.any():
         at = nodes[inner]
-        right[:, inner] = _taylor_shift(np.asarray(drive(at + delta), dtype=float), -delta)[:3]
-        left[:, inner] = _taylor_shift(np.asarray(drive(at - delta), dtype=float), delta)[:3]
+        right[:, inner] = taylor_shift(np.asarray(drive(at + delta), dtype=float), -delta)[:3]
+        left[:, inner] = taylor_shift(np.asarray(drive(at - delta), dtype=float), delta)[:3]
         if profile is not None:
             for out, sign in ((k_right, 1.0), (k_left, -1.0)):
                 kk = profile(at + sign * delta)
@@ -71,7 +71,7 @@ class TabulatedDrive:
         right, left, k_right, k_left = node_values(drive, profile, nodes, inner, delta)
         self.nodes = nodes.tolist()
         self.h = h.tolist()
-        self._S = _hermite5(h, right[:, :-1], left[:, 1:]).T.tolist()
+        self._S = hermite5(h, right[:, :-1], left[:, 1:]).T.tolist()
         self._K = None
         if profile is not None:
             self._K = _cubic(h, k_right[:, :-1], k_left[:, 1:]).T.tolist()

@@ -33,11 +33,12 @@ import math
 
 import numpy as np
 
-from .exact import _hermite5
-from .model import PHASE_CODES, DynamicsSolution, LinkageModel, phase_of_state, release_from_rest
+from .model import DynamicsSolution, LinkageModel
+from .phases import (AFTER_CROSSING, CONTACT, FLIGHT, SEATED, STUCK, phase_of_state, release_from_rest, rest_force,
+                     seat_rebound, velocity_zero)
+from .series import hermite5, horner
 from .tabulated import node_values
 
-SEATED, CONTACT, FLIGHT, STUCK = (PHASE_CODES[k] for k in ("seated", "contact", "flight", "stuck"))
 EPS = float(np.finfo(float).eps)
 MAX_RHO_H = 0.5
 MAX_TERMS = 40
@@ -56,13 +57,6 @@ def _hermite_matrix() -> np.ndarray:
 
 
 _K_INVERSE = _hermite_matrix()
-
-
-def _horner(c, x: float) -> float:
-    acc = 0.0
-    for ck in reversed(c):
-        acc = acc * x + ck
-    return acc
 
 
 def _shift(c, u0: float, scale: float) -> list:
@@ -116,10 +110,10 @@ class _Event:
         self.curv = [_curv(p) for p in polys]
 
     def value(self, w: float) -> float:
-        return max(_horner(p, w) for p in self.polys)
+        return max(horner(p, w) for p in self.polys)
 
     def values(self, w: float) -> list:
-        return [_horner(p, w) for p in self.polys]
+        return [horner(p, w) for p in self.polys]
 
 
 def _first_negative(ev: _Event, w_hi: float = 1.0):
@@ -234,7 +228,7 @@ class _Solver:
         if profile is None:  # a constant stiffness: k' = 0
             k_right = np.stack([np.full(nodes.size, self.model.stiffness), np.zeros(nodes.size)])
             k_left = k_right
-        P = _hermite5(h, right[:, :-1], left[:, 1:])
+        P = hermite5(h, right[:, :-1], left[:, 1:])
         # k: the quintic through k, k' at both ends and at the midpoint (the profile is smooth
         # inside a step): error ~3e-6 h^6 k^(6), against h^4 k^(4) / 384 of the cubic through the
         # ends only, which would dominate the solution's error (tests: the manufactured solution)
@@ -375,7 +369,7 @@ class _Solver:
         if j >= len(self.h):
             return float(self.Dn[0, -1]), float(self.Dn[1, -1]), float(self.Kn[0, -1])
         P = self.P[j]
-        return _horner(P, u), _horner(_deriv(P), u) / self.h[j], _horner(self.K[j], u)
+        return horner(P, u), horner(_deriv(P), u) / self.h[j], horner(self.K[j], u)
 
     def _phase_at(self, s: float, v: float):
         S, S1, k = self._drive_at(0, 0.0)
@@ -401,7 +395,7 @@ class _Solver:
                     continue
                 w, which = hit
                 u = u0 + w * (1.0 - u0)
-                St, S1t, kt = _horner(S, w), _horner(Sd, w), _horner(k, w)
+                St, S1t, kt = horner(S, w), horner(Sd, w), horner(k, w)
                 phase, sigma, lifts = release_from_rest(which, phase, St, S1t, kt, self.c, self.lash, s, self.W0, self.R)
                 if lifts:
                     self._event("lift-off", j, u, 0.0)
@@ -419,8 +413,8 @@ class _Solver:
                     continue
                 w, which = hit
                 u = u0 + w * (1.0 - u0)
-                s, v = _horner(a, w), _horner(V, w)
-                St, S1t, kt = _horner(S, w), _horner(Sd, w), _horner(k, w)
+                s, v = horner(a, w), horner(V, w)
+                St, S1t, kt = horner(S, w), horner(Sd, w), horner(k, w)
                 phase, s, v, sigma, j, u = self._handle(which, phase, j, u, s, v, sigma, St, S1t, kt)
                 self.stats["phases"] += 1
             if len(self.events) > self.max_events:
@@ -441,20 +435,17 @@ class _Solver:
         return ev
 
     def _handle(self, which, phase, j, u, s, v, sigma, S, S1, k):
-        if which == "separation":
-            self._event("separation", j, u, v)
-            return FLIGHT, s, v, sigma, j, u
-        if which == "re-contact":
-            self._event("re-contact", j, u, v)
-            return CONTACT, s, v, sigma, j, u
+        """The phase after the event `which` (the rules: phases.py), with this solver's bookkeeping."""
+        if which in AFTER_CROSSING:
+            self._event(which, j, u, v)
+            return AFTER_CROSSING[which], s, v, sigma, j, u
         if which == "velocity-zero":
             self.stats["velocity_reversals"] += 1
-            force = k * (S - self.lash - s) + self.c * S1 if phase == CONTACT else 0.0
-            net = force - self.W0 - self.rate * s
-            if abs(net) <= self.R:
+            phase, sign = velocity_zero(phase, S, S1, k, self.c, self.lash, s, self.W0, self.rate, self.R)
+            if sign is None:
                 self.stats["sticks"] += 1
-                return (STUCK if s > 0.0 else SEATED), s, 0.0, sigma, j, u
-            return phase, s, 0.0, (1.0 if net > 0.0 else -1.0), j, u
+                return phase, s, 0.0, sigma, j, u
+            return phase, s, 0.0, sign, j, u
         # seat: the event fired a hair below; the speed at s = 0 by energy
         if s < 0.0:
             m = self.M1 if phase == CONTACT else self.M
@@ -465,16 +456,11 @@ class _Solver:
             v = -math.sqrt(max(v * v - 2.0 * acc * s, 0.0))
         impact = min(v, 0.0)
         ev = self._event("seat", j, u, impact)
-        rebound = -self.e * impact
-        if rebound <= 0.0:
+        if -self.e * impact <= 0.0:
             return SEATED, 0.0, 0.0, 1.0, j, u
-        x = S - self.lash
-        force = max(0.0, k * x + self.c * S1) if x >= 0.0 else 0.0
-        m_rest = self.M1 if force > 0.0 else self.M
-        decel = (self.W0 + self.R - force) / m_rest
-        if decel > 0.0 and rebound * rebound <= 2.0 * decel * self.zeno_height:
-            # the rest of the chatter: bounces of durations 2 v e^n / decel, summed
-            dt = 2.0 * rebound / (decel * (1.0 - self.e))
+        force = rest_force(S, S1, k, self.c, self.lash, 0.0)
+        kind, rebound, _, dt = seat_rebound(impact, self.e, force, self.M, self.M1, self.W0, self.R, self.zeno_height)
+        if dt is not None:  # the rest of the chatter, summed
             self.stats["zeno"] += 1
             ev["zeno_accumulation_s"] = self.time(j, u) + dt
             t_new = self.time(j, u) + dt
@@ -483,7 +469,7 @@ class _Solver:
                 self._record(j, SEATED, 0.0, 0.0, 1.0)
             u = 0.0 if j >= len(self.h) else max(0.0, min((t_new - self.nodes[j]) / self.h[j], 1.0 - 1e-16))
             return SEATED, 0.0, 0.0, 1.0, j, u
-        return (CONTACT if force > 0.0 else FLIGHT), 0.0, rebound, 1.0, j, u
+        return kind, 0.0, rebound, 1.0, j, u
 
     # ------------------------------------------------------------------ output
     def solution(self, t: np.ndarray) -> DynamicsSolution:
