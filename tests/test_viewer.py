@@ -880,3 +880,54 @@ def test_elastic_without_a_stiffness_asks_for_one_instead_of_failing(app):
     assert app.error_text == "" and "ready" in app.status.content
     assert "elastic" in app.current.scene.effects and app.effects["elastic"].value
     assert app.current.scene.linkage.stiffness == pytest.approx(3.0e6)
+
+
+# ------------------------------------------------------------------ plots (#13.2, #13.4)
+
+
+def test_every_plot_names_its_axes_and_keeps_overlapping_curves_apart():
+    from explorer.viewer.app import PLOT_X_LABEL, plot_options
+
+    result = simulate(load_scene(SCENES / "trip_gear_dashpot.toml"))
+    plots = model.build_plots(result)
+    assert [p.title for p in plots] == ["Valve lift s", "Velocity v", "Acceleration p", "Forces"]
+    assert [p.y_label for p in plots] == ["s [mm]", "v [m/s]", "p [m/s²]", "F [N]"]
+    for plot in plots:
+        options = plot_options(plot)
+        assert options["axes"][0]["label"] == PLOT_X_LABEL and options["axes"][1]["label"] == plot.y_label
+        assert options["padding"][0] > 0  # room above the top tick label
+        assert options["legend"]["live"]  # values under the cursor
+        styles = [(s.get("width"), tuple(s.get("dash", ()))) for s in options["series"][1:-1]]
+        assert len(set(styles)) == len(styles), plot.title  # no two curves drawn alike
+        # the first curve is solid and widest, so a dashed one on top of it leaves it visible
+        assert styles[0][1] == () and all(w < styles[0][0] for w, _ in styles[1:])
+    # identical curves say so in the legend (the trip gear's linkage force is the back-pressure)
+    forces = dict((label, values) for label, values, _ in plots[3].series)
+    twins = [label for label in forces if "(= " in label]
+    for label in twins:
+        other = label.split("(= ")[1].rstrip(")")
+        np.testing.assert_allclose(forces[label], forces[other])
+    assert model.plots_note(result) == ""
+
+
+def test_a_run_without_forces_has_no_empty_forces_plot_but_one_line_why():
+    result = simulate(load_scene(SCENES / "cycloidal_demo.toml", ['effects=["kinematics", "lash"]']))
+    plots = model.build_plots(result)
+    assert "Forces" not in [p.title for p in plots]
+    note = model.plots_note(result)
+    assert note.startswith("No forces plot") and "\n" not in note and "forces" in note
+
+
+@pytest.mark.parametrize("name, promised", [
+    ("schenker1902_fig2.toml", {"forces", "elastic"}),
+    ("valve_float_demo.toml", {"forces", "elastic"}),
+    ("elastic_float.toml", {"elastic"}),
+])
+def test_built_in_scenes_open_with_the_effects_their_name_promises(name, promised):
+    scene = load_scene(SCENES / name)
+    assert promised <= set(scene.effects)
+    result = simulate(scene)
+    titles = [p.title for p in model.build_plots(result)]
+    assert "Forces" in titles and model.plots_note(result) == ""
+    if name == "valve_float_demo.toml":  # the float is simulated, not only predicted
+        assert result.summary["elastic_event_counts"].get("separation", 0) > 0

@@ -69,6 +69,35 @@ def _user_overrides(overrides) -> dict[str, str]:
     return out
 
 
+PLOT_X_LABEL = "cam angle θ [°]"
+
+
+def plot_options(plot) -> dict:
+    """uPlot options of one plot (viser passes them to the page as they are, JSON only: no
+    JavaScript callbacks). Both axes are named with their unit; the series carry their dashes
+    (explorer.viewer.model.DASHES); the legend follows the pointer and shows the values under
+    it (a click on a legend entry hides or shows that curve); a curve near the pointer is
+    highlighted; the top padding keeps the highest tick label ("1,000") inside the plot."""
+    series = [{"label": PLOT_X_LABEL}]
+    for k, (label, _, colour) in enumerate(plot.series):
+        style = plot.styles[k] if k < len(plot.styles) else {"width": 1.5}
+        series.append({"label": label, "stroke": colour, **style})
+    # the cursor: a one-sample spike on its own 0..1 scale whose base lies below the visible
+    # range, so only a vertical line at the current angle shows
+    series.append({"label": "now", "stroke": "#111111", "width": 1.5, "scale": "cursor"})
+    return dict(
+        series=tuple(series), title=plot.title,
+        scales={"x": {"time": False, "auto": False, "range": [0, 360]},
+                "cursor": {"auto": False, "range": [0.02, 1.0]}},
+        axes=({"label": PLOT_X_LABEL, "size": 30, "labelSize": 16, "labelGap": 0},
+              {"label": plot.y_label, "size": 58, "labelSize": 16, "labelGap": 0}),
+        padding=(14, 18, 0, 0), aspect=2.0,
+        legend={"show": True, "live": True},
+        cursor={"focus": {"prox": 12}},
+        focus={"alpha": 0.35},
+    )
+
+
 def _same(a, b) -> bool:
     if isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(a, bool):
         return float(a) == float(b)
@@ -243,6 +272,8 @@ class ExplorerApp:
         # plots and read-outs in their own panel on the left, beside the 3D view
         self.side_panel = gui.add_panel()
         self._plots_tab = self.side_panel.add_tab("Plots")
+        with self._plots_tab:
+            self.plot_note = gui.add_markdown("", visible=False)
         self._readout_tab = self.side_panel.add_tab("Read-outs")
         with self._readout_tab:
             self.readout = gui.add_markdown("computing…")
@@ -779,6 +810,9 @@ class ExplorerApp:
     # ------------------------------------------------------------------ plots
 
     def _update_plots(self, prepared: Prepared) -> None:
+        if self.plot_note.content != prepared.plot_note:
+            self.plot_note.content = prepared.plot_note
+            self.plot_note.visible = bool(prepared.plot_note)
         signature = [(p.title, tuple(label for label, _, _ in p.series)) for p in prepared.plots]
         if signature != self._plot_signature:
             for handle in self._plot_handles:
@@ -786,18 +820,8 @@ class ExplorerApp:
             self._plot_handles = []
             with self._plots_tab:
                 for plot in prepared.plots:
-                    series = [{"label": "θ [°]"}]
-                    series += [{"label": label, "stroke": colour, "width": 1.5} for label, _, colour in plot.series]
-                    # the cursor: a one-sample spike on its own 0..1 scale whose base lies below the
-                    # visible range, so only a vertical line at the current angle shows
-                    series += [{"label": "now", "stroke": "#111111", "width": 1.5, "scale": "cursor"}]
                     self._plot_handles.append(self.server.gui.add_uplot(
-                        data=self._plot_data(plot, self.playback.angle_deg), series=tuple(series), title=plot.title,
-                        scales={"x": {"time": False, "auto": False, "range": [0, 360]},
-                                "cursor": {"auto": False, "range": [0.02, 1.0]}},
-                        axes=({"size": 28}, {"size": 62}), aspect=2.3,
-                        legend={"show": True, "live": False},
-                    ))
+                        data=self._plot_data(plot, self.playback.angle_deg), **plot_options(plot)))
             self._plot_signature = signature
         else:
             for handle, plot in zip(self._plot_handles, prepared.plots):
