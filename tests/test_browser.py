@@ -210,8 +210,12 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                 picture_angle = float(cols["cam_angle_deg"][int(np.argmax(gap))]) if gap.max() > 0 else start_angle
                 app.angle.value = round(picture_angle, 1)
                 _wait_in_step(page, app, parts)
-                # the page's plots are those of the result shown: titles and series (and the cursor)
-                plots = [[plot.title, [label for label, _, _ in plot.series] + ["now"]] for plot in app.current.plots]
+                # the page's plots are those of the result shown: titles and series (and the cursor);
+                # the live legend lists the x axis first (its value under the pointer)
+                from explorer.viewer.app import PLOT_X_LABEL
+
+                plots = [[plot.title, [PLOT_X_LABEL] + [label for label, _, _ in plot.series] + ["now"]]
+                         for plot in app.current.plots]
                 page.wait_for_function(
                     "(expected) => JSON.stringify([...document.querySelectorAll('.uplot')].map(u => ["
                     "u.querySelector('.u-title')?.textContent,"
