@@ -386,3 +386,40 @@ def test_typing_into_unit_fields_at_human_speed_uses_what_was_typed(tmp_path):
                     assert sum(1 for o in app.current.request.overrides if o.startswith(key + "=")) == 1
             finally:
                 context.close()
+
+
+def test_hovering_a_plot_shows_the_values_under_the_pointer(tmp_path):
+    """Issue #13.4: the legend follows the pointer. Hovering the lift plot at a cam angle shows
+    that angle and the valve lift there (the values the server computed) in its legend."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+    with _running_explorer(ROOT / "assets" / "scenes" / "cycloidal_demo.toml") as (server, app):
+        assert app.wait_applied(WAIT_S)
+        with sync_api.sync_playwright() as pw:
+            context = pw.chromium.launch_persistent_context(
+                str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=ARGS,
+                viewport={"width": 1280, "height": 800}, timeout=WAIT_MS,
+            )
+            context.set_default_timeout(WAIT_MS)
+            context.set_default_navigation_timeout(WAIT_MS)
+            try:
+                page = context.new_page()
+                page.goto(f"http://127.0.0.1:{server.get_port()}/")
+                page.get_by_text("Connected").first.wait_for(timeout=WAIT_MS)
+                page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
+                over = page.locator(".uplot .u-over").first
+                over.wait_for(timeout=WAIT_MS)
+                box = over.bounding_box()
+                page.mouse.move(box["x"] + 0.4 * box["width"], box["y"] + 0.5 * box["height"])
+                # the first plot's legend: angle, then valve s, as numbers (no "--")
+                values = page.wait_for_function(
+                    "() => { const v = [...document.querySelector('.uplot').querySelectorAll('.u-series .u-value')]"
+                    ".map(e => e.textContent); return v.length > 1 && v[0] !== '--' && v[1] !== '--' ? v : null; }",
+                    timeout=WAIT_MS).json_value()
+            finally:
+                context.close()
+        angle, lift_mm = float(values[0].replace(",", "")), float(values[1].replace(",", ""))
+        assert 0.0 <= angle <= 360.0
+        plot = app.current.plots[0]
+        i = int(np.argmin(np.abs(plot.x - angle)))
+        assert lift_mm == pytest.approx(plot.series[0][1][i], abs=0.02 + 0.01 * abs(plot.series[0][1][i]))
