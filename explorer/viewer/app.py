@@ -7,8 +7,14 @@ time limit (explorer.viewer.worker), so no value a page sends can stall the serv
 handshakes from other sites are refused (explorer.viewer.origin). One loop thread owns every
 scene and GUI update: it takes the recorded requests, advances the playback clock and applies
 one frame under `server.atomic()`. When the loop itself assigns a GUI value (the scrub slider following the
-animation, fields refreshed after a scene swap), the `on_update` that viser fires synchronously
+animation, fields set to the values a result used), the `on_update` that viser fires synchronously
 is recognised by a thread-local flag and ignored, so nothing feeds back.
+
+Fields: a page sends every keystroke of a text or number input. Those are recorded, not applied;
+the loop applies a field's newest value once its typing has paused for TYPING_PAUSE_S. After
+each result the loop sets every field to the value the result used, except a field the user is
+editing (typed text not applied yet, an edit newer than the result, or a value the loop did not
+put there and no request carried: a page's value whose callback is still on its way).
 """
 
 from __future__ import annotations
