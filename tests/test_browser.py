@@ -210,8 +210,12 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                 picture_angle = float(cols["cam_angle_deg"][int(np.argmax(gap))]) if gap.max() > 0 else start_angle
                 app.angle.value = round(picture_angle, 1)
                 _wait_in_step(page, app, parts)
-                # the page's plots are those of the result shown: titles and series (and the cursor)
-                plots = [[plot.title, [label for label, _, _ in plot.series] + ["now"]] for plot in app.current.plots]
+                # the page's plots are those of the result shown: titles and series (and the cursor);
+                # the live legend lists the x axis first (its value under the pointer)
+                from explorer.viewer.app import PLOT_X_LABEL
+
+                plots = [[plot.title, [PLOT_X_LABEL] + [label for label, _, _ in plot.series] + ["now"]]
+                         for plot in app.current.plots]
                 page.wait_for_function(
                     "(expected) => JSON.stringify([...document.querySelectorAll('.uplot')].map(u => ["
                     "u.querySelector('.u-title')?.textContent,"
@@ -327,3 +331,95 @@ def test_each_gear_is_framed_whole_in_the_page(tmp_path):
         if os.environ.get("EXPLORER_UPDATE_SCREENSHOT"):
             (ROOT / "docs" / "gears").mkdir(parents=True, exist_ok=True)
             shutil.copyfile(shot, ROOT / "docs" / "gears" / shot.name)
+
+
+def _wait_until(predicate, what):
+    deadline = time.monotonic() + WAIT_S
+    while not predicate():
+        assert time.monotonic() < deadline, what
+        time.sleep(0.05)
+
+
+def test_typing_into_unit_fields_at_human_speed_uses_what_was_typed(tmp_path):
+    """Issue #13.1 in a real page: typing '3000 N/mm', '400 N' and '0.5 mm' key by key at a
+    person's pace (120 ms a key) used to be computed per keystroke, with each result written
+    back into the field being typed in ('0.003 N/mm000 N/mm'). Now the field keeps what was
+    typed, the value is applied once the typing pauses, and the result uses it."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+    cases = (  # label on the page, text typed, (section, attribute), SI value
+        ("Linkage stiffness [N/mm]", "3000 N/mm", ("linkage", "stiffness"), 3.0e6),
+        ("Spring preload [N]", "400 N", ("spring", "preload"), 400.0),
+        ("Lash [mm]", "0.5 mm", ("valve", "lash"), 0.5e-3),
+    )
+    with _running_explorer(ROOT / "assets" / "scenes" / "cycloidal_demo.toml") as (server, app):
+        assert app.wait_applied(WAIT_S)
+        with sync_api.sync_playwright() as pw:
+            context = pw.chromium.launch_persistent_context(
+                str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=ARGS,
+                viewport={"width": 1280, "height": 800}, timeout=WAIT_MS,
+            )
+            context.set_default_timeout(WAIT_MS)
+            context.set_default_navigation_timeout(WAIT_MS)
+            try:
+                page = context.new_page()
+                page.goto(f"http://127.0.0.1:{server.get_port()}/")
+                page.get_by_text("Connected").first.wait_for(timeout=WAIT_MS)
+                page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
+                for label, text, (section, attribute), si in cases:
+                    # viser's text input does not carry its label's id: the input of the label's row
+                    field = page.locator("label", has_text=label).first.locator(
+                        "xpath=ancestor::div[contains(@class,'mantine-Flex-root')][1]//input")
+                    field.click()
+                    field.press("Control+a")
+                    field.press("Delete")
+                    page.keyboard.type(text, delay=120)
+                    # the page's field holds exactly what was typed, and the result uses it
+                    _wait_until(lambda: abs(getattr(getattr(app.current.scene, section), attribute) - si) <= 1e-9 * si,
+                                f"{label}: the result never used {text!r}")
+                    assert app.wait_applied(WAIT_S)
+                    assert app.error_text == "", app.error_text
+                    assert field.input_value() == text
+                    key = next(k for k, h in app.fields.items() if h.label == label)
+                    assert app.fields[key].value == text
+                    # one computation for the whole typing, not one per key
+                    assert sum(1 for o in app.current.request.overrides if o.startswith(key + "=")) == 1
+            finally:
+                context.close()
+
+
+def test_hovering_a_plot_shows_the_values_under_the_pointer(tmp_path):
+    """Issue #13.4: the legend follows the pointer. Hovering the lift plot at a cam angle shows
+    that angle and the valve lift there (the values the server computed) in its legend."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+    with _running_explorer(ROOT / "assets" / "scenes" / "cycloidal_demo.toml") as (server, app):
+        assert app.wait_applied(WAIT_S)
+        with sync_api.sync_playwright() as pw:
+            context = pw.chromium.launch_persistent_context(
+                str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=ARGS,
+                viewport={"width": 1280, "height": 800}, timeout=WAIT_MS,
+            )
+            context.set_default_timeout(WAIT_MS)
+            context.set_default_navigation_timeout(WAIT_MS)
+            try:
+                page = context.new_page()
+                page.goto(f"http://127.0.0.1:{server.get_port()}/")
+                page.get_by_text("Connected").first.wait_for(timeout=WAIT_MS)
+                page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
+                over = page.locator(".uplot .u-over").first
+                over.wait_for(timeout=WAIT_MS)
+                box = over.bounding_box()
+                page.mouse.move(box["x"] + 0.4 * box["width"], box["y"] + 0.5 * box["height"])
+                # the first plot's legend: angle, then valve s, as numbers (no "--")
+                values = page.wait_for_function(
+                    "() => { const v = [...document.querySelector('.uplot').querySelectorAll('.u-series .u-value')]"
+                    ".map(e => e.textContent); return v.length > 1 && v[0] !== '--' && v[1] !== '--' ? v : null; }",
+                    timeout=WAIT_MS).json_value()
+            finally:
+                context.close()
+        angle, lift_mm = float(values[0].replace(",", "")), float(values[1].replace(",", ""))
+        assert 0.0 <= angle <= 360.0
+        plot = app.current.plots[0]
+        i = int(np.argmin(np.abs(plot.x - angle)))
+        assert lift_mm == pytest.approx(plot.series[0][1][i], abs=0.02 + 0.01 * abs(plot.series[0][1][i]))

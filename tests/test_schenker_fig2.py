@@ -153,7 +153,7 @@ def test_masses_loads_and_linkage(scene):
     assert scene.linkage.stiffness == pytest.approx(1.8e6 * G0)
     assert scene.linkage.stiffness * 0.001 == pytest.approx(1800 * G0)  # 1 mm = 1800 kgf
     assert w0 / scene.linkage.stiffness == pytest.approx(0.000214, abs=5e-7)  # S0 = W/k
-    assert scene.effects == ("kinematics", "lash")
+    assert scene.effects == ("kinematics", "lash", "forces", "elastic")  # opens with what the README shows
 
 
 def test_simulation_and_cli(scene, tmp_path):

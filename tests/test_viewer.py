@@ -829,3 +829,136 @@ def test_decimate_ignores_nan_in_a_bucket_and_keeps_all_nan_buckets_as_gaps():
         else:
             assert sorted(pair) == [np.nanmin(seg), np.nanmax(seg)]
     assert np.isfinite(ys[:2 * 200]).all()
+
+
+# ------------------------------------------------------------------ typing into a field (#13.1)
+
+
+class _PageEvent:
+    """What viser hands a callback for a change made on a page (event.client is set)."""
+
+    def __init__(self, target):
+        self.target, self.client, self.client_id = target, object(), 1
+
+
+def _type_on_page(app, key, text, delay=0.12):
+    """Type `text` into a field as a page does: viser stores each new value in the handle, then
+    runs the callback; the loop keeps running meanwhile."""
+    handle = app.fields[key]
+    callback = handle._impl.update_cb[0]
+    typed = ""
+    for char in text:
+        typed += char
+        with app._programmatic():  # the value arriving from the page (no echo of ours)
+            handle.value = typed
+        callback(_PageEvent(handle))
+        time.sleep(delay)
+
+
+@pytest.mark.parametrize("key, text, si, attr", [
+    ("linkage.stiffness", "3000 N/mm", 3.0e6, ("linkage", "stiffness")),
+    ("spring.preload", "400 N", 400.0, ("spring", "preload")),
+    ("valve.lash", "0.5 mm", 0.5e-3, ("valve", "lash")),
+])
+def test_typing_at_human_pace_is_not_rewritten_and_applies_once_paused(app, key, text, si, attr):
+    """The issue's three cases: each keystroke used to be computed and its formatted value
+    written back into the field being typed in ('0.003 N/mm000 N/mm'). Now nothing is applied
+    while typing goes on, the field keeps what was typed, and the value used is the one typed."""
+    handle = app.fields[key]
+    with app._programmatic():
+        handle.value = ""
+    computed = app.worker.submitted
+    _type_on_page(app, key, text)
+    assert handle.value == text  # never rewritten under the typist
+    assert app.wait_applied(60)
+    assert app.error_text == ""
+    section, name = attr
+    assert getattr(getattr(app.current.scene, section), name) == pytest.approx(si)
+    assert handle.value == text  # shows the value the result was computed with
+    assert app.worker.submitted - computed == 1  # one computation for the whole typing
+
+
+def test_a_field_shows_the_value_used_after_a_scene_load_and_edits_go_on_after_an_error(app):
+    app.scene.value = "valve_float_demo.toml"
+    assert app.wait_applied(60)
+    assert app.fields["valve.lash"].value == app.current.values["valve.lash"]
+    # a bad value: an error naming the value still in use, and the next edit applies
+    _type_on_page(app, "valve.lash", "2 kg", delay=0.0)
+    assert app.wait_applied(60)
+    assert "Lash not applied" in app.error_text and app.current.values["valve.lash"] in app.error_text
+    _type_on_page(app, "spring.preload", "300 N", delay=0.0)
+    assert app.wait_applied(60)
+    assert app.error_text == ""
+    assert app.current.scene.spring.preload == pytest.approx(300.0)
+    # a field whose text was not used is set to the value used once nobody is editing it
+    app.reset.value = True
+    assert app.wait_applied(60)
+    for key, handle in app.fields.items():
+        used = app.current.values[key]
+        assert handle.value == ("" if used is None else used), key
+
+
+def test_elastic_without_a_stiffness_asks_for_one_instead_of_failing(app):
+    app.scene.value = "schenker1902_intake_valve.toml"  # a valve and a spring, no [linkage]
+    assert app.wait_applied(60)
+    assert not app.current.values["linkage.stiffness"]
+    app.effects["elastic"].value = True
+    assert app.wait_applied(60)
+    assert app.error_text == "" and "linkage stiffness" in app.status.content
+    assert 'role="alert"' not in app.status.content
+    app.fields["linkage.stiffness"].value = "3000 N/mm"
+    assert app.wait_applied(60)
+    assert app.error_text == "" and "ready" in app.status.content
+    assert "elastic" in app.current.scene.effects and app.effects["elastic"].value
+    assert app.current.scene.linkage.stiffness == pytest.approx(3.0e6)
+
+
+# ------------------------------------------------------------------ plots (#13.2, #13.4)
+
+
+def test_every_plot_names_its_axes_and_keeps_overlapping_curves_apart():
+    from explorer.viewer.app import PLOT_X_LABEL, plot_options
+
+    result = simulate(load_scene(SCENES / "trip_gear_dashpot.toml"))
+    plots = model.build_plots(result)
+    assert [p.title for p in plots] == ["Valve lift s", "Velocity v", "Acceleration p", "Forces"]
+    assert [p.y_label for p in plots] == ["s [mm]", "v [m/s]", "p [m/s²]", "F [N]"]
+    for plot in plots:
+        options = plot_options(plot)
+        assert options["axes"][0]["label"] == PLOT_X_LABEL and options["axes"][1]["label"] == plot.y_label
+        assert options["padding"][0] > 0  # room above the top tick label
+        assert options["legend"]["live"]  # values under the cursor
+        styles = [(s.get("width"), tuple(s.get("dash", ()))) for s in options["series"][1:-1]]
+        assert len(set(styles)) == len(styles), plot.title  # no two curves drawn alike
+        # the first curve is solid and widest, so a dashed one on top of it leaves it visible
+        assert styles[0][1] == () and all(w < styles[0][0] for w, _ in styles[1:])
+    # identical curves say so in the legend (the trip gear's linkage force is the back-pressure)
+    forces = dict((label, values) for label, values, _ in plots[3].series)
+    twins = [label for label in forces if "(= " in label]
+    for label in twins:
+        other = label.split("(= ")[1].rstrip(")")
+        np.testing.assert_allclose(forces[label], forces[other])
+    assert model.plots_note(result) == ""
+
+
+def test_a_run_without_forces_has_no_empty_forces_plot_but_one_line_why():
+    result = simulate(load_scene(SCENES / "cycloidal_demo.toml", ['effects=["kinematics", "lash"]']))
+    plots = model.build_plots(result)
+    assert "Forces" not in [p.title for p in plots]
+    note = model.plots_note(result)
+    assert note.startswith("No forces plot") and "\n" not in note and "forces" in note
+
+
+@pytest.mark.parametrize("name, promised", [
+    ("schenker1902_fig2.toml", {"forces", "elastic"}),
+    ("valve_float_demo.toml", {"forces", "elastic"}),
+    ("elastic_float.toml", {"elastic"}),
+])
+def test_built_in_scenes_open_with_the_effects_their_name_promises(name, promised):
+    scene = load_scene(SCENES / name)
+    assert promised <= set(scene.effects)
+    result = simulate(scene)
+    titles = [p.title for p in model.build_plots(result)]
+    assert "Forces" in titles and model.plots_note(result) == ""
+    if name == "valve_float_demo.toml":  # the float is simulated, not only predicted
+        assert result.summary["elastic_event_counts"].get("separation", 0) > 0

@@ -139,7 +139,8 @@ def test_a_slow_value_is_abandoned_and_the_server_stays_responsive():
             assert ws.recv(timeout=WAIT_S)
         assert app.wait_applied(WAIT_S)
         text = app.error_text
-        assert text == time_limit_message(3.0, True) or text.startswith("error:"), text
+        # (the message goes on to name the field not applied and the value in use)
+        assert text.startswith(time_limit_message(3.0, True)) or text.startswith("error:"), text
         assert 'role="alert"' in app.status.content  # the page shows it
         if app.worker.abandoned:
             assert not psutil.pid_exists(first_pid)  # killed and reaped, not left running

@@ -7,8 +7,14 @@ time limit (explorer.viewer.worker), so no value a page sends can stall the serv
 handshakes from other sites are refused (explorer.viewer.origin). One loop thread owns every
 scene and GUI update: it takes the recorded requests, advances the playback clock and applies
 one frame under `server.atomic()`. When the loop itself assigns a GUI value (the scrub slider following the
-animation, fields refreshed after a scene swap), the `on_update` that viser fires synchronously
+animation, fields set to the values a result used), the `on_update` that viser fires synchronously
 is recognised by a thread-local flag and ignored, so nothing feeds back.
+
+Fields: a page sends every keystroke of a text or number input. Those are recorded, not applied;
+the loop applies a field's newest value once its typing has paused for TYPING_PAUSE_S. After
+each result the loop sets every field to the value the result used, except a field the user is
+editing (typed text not applied yet, an edit newer than the result, or a value the loop did not
+put there and no request carried: a page's value whose callback is still on its way).
 """
 
 from __future__ import annotations
@@ -54,6 +60,54 @@ PLOT_CURSOR_HZ = 8.0  # the plots' angle cursor is redrawn at most this often
 MAX_GUI_STEPS = 100_000
 MAX_TEXT_LENGTH = 100
 MAGNIFICATION_RANGE = (1.0, 50.0)
+# A value typed into a field on the page is applied once the typing pauses this long (newest
+# wins), never per keystroke: viser sends every change of a text or number input.
+TYPING_PAUSE_S = 0.6
+
+
+def _user_overrides(overrides) -> dict[str, str]:
+    """key -> "key=value" for the overrides the GUI makes (parameters and effects)."""
+    out = {}
+    for text in overrides:
+        key = text.split("=", 1)[0]
+        if key in PARAMETERS or key == "effects":
+            out[key] = text
+    return out
+
+
+PLOT_X_LABEL = "cam angle θ [°]"
+
+
+def plot_options(plot) -> dict:
+    """uPlot options of one plot (viser passes them to the page as they are, JSON only: no
+    JavaScript callbacks). Both axes are named with their unit; the series carry their dashes
+    (explorer.viewer.model.DASHES); the legend follows the pointer and shows the values under
+    it (a click on a legend entry hides or shows that curve); a curve near the pointer is
+    highlighted; the top padding keeps the highest tick label ("1,000") inside the plot."""
+    series = [{"label": PLOT_X_LABEL}]
+    for k, (label, _, colour) in enumerate(plot.series):
+        style = plot.styles[k] if k < len(plot.styles) else {"width": 1.5}
+        series.append({"label": label, "stroke": colour, **style})
+    # the cursor: a one-sample spike on its own 0..1 scale whose base lies below the visible
+    # range, so only a vertical line at the current angle shows
+    series.append({"label": "now", "stroke": "#111111", "width": 1.5, "scale": "cursor"})
+    return dict(
+        series=tuple(series), title=plot.title,
+        scales={"x": {"time": False, "auto": False, "range": [0, 360]},
+                "cursor": {"auto": False, "range": [0.02, 1.0]}},
+        axes=({"label": PLOT_X_LABEL, "size": 30, "labelSize": 16, "labelGap": 0},
+              {"label": plot.y_label, "size": 58, "labelSize": 16, "labelGap": 0}),
+        padding=(14, 18, 0, 0), aspect=2.0,
+        legend={"show": True, "live": True},
+        cursor={"focus": {"prox": 12}},
+        focus={"alpha": 0.35},
+    )
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(a, bool):
+        return float(a) == float(b)
+    return a == b
 
 
 def part_node(name: str) -> str:
@@ -136,7 +190,16 @@ class ExplorerApp:
         self._user: dict[str, str] = {}  # parameter key -> override text
         self._magnification = 1.0
         self._serial = 0
-        self._refresh_serial = 0  # requests at or after this serial refresh the GUI fields
+        self._refresh_serial = 0  # the first result at or after this serial sets the scene choice
+        self._typed: dict[str, tuple[Any, float]] = {}  # key -> (value typed on a page, when): not applied yet
+        self._edit_serial: dict[str, int] = {}  # key -> serial of the request carrying the user's newest edit
+        self._edited: dict[int, tuple[str, ...]] = {}  # serial -> keys the user changed in that request
+        self._good_user: dict[str, str] = {}  # the user overrides of the result shown
+        self._note = ""  # a one-line remark in the status box that is no error
+        self._held_effects: list[str] | None = None  # effects ticked that wait for a linkage stiffness
+        self._field_shown: dict[str, Any] = {}  # key -> what the loop last put into that field
+        self._field_sent: dict[str, Any] = {}  # key -> the user's newest value sent for computing
+        self._status_shown = None
         self._scrub: float | None = None
         self._pause_requested = False
         self._incoming: Prepared | None = None
@@ -210,6 +273,7 @@ class ExplorerApp:
                     handle = gui.add_text(f"{label} [{unit}]", "", hint=f"a quantity with units, e.g. '1.5 {unit}'")
                 handle.on_update(self._field_callback(key))
                 self.fields[key] = handle
+                self._field_shown[key] = handle.value
             self.effects: dict[str, Any] = {}
             with gui.add_folder("Effects"):
                 for name in EFFECT_DEPENDENCIES:
@@ -221,6 +285,8 @@ class ExplorerApp:
         # plots and read-outs in their own panel on the left, beside the 3D view
         self.side_panel = gui.add_panel()
         self._plots_tab = self.side_panel.add_tab("Plots")
+        with self._plots_tab:
+            self.plot_note = gui.add_markdown("", visible=False)
         self._readout_tab = self.side_panel.add_tab("Read-outs")
         with self._readout_tab:
             self.readout = gui.add_markdown("computing…")
@@ -235,10 +301,14 @@ class ExplorerApp:
         self.reset.on_click(self._reset_clicked)
 
     @staticmethod
-    def _status_html(message: str) -> str:
+    def _status_html(message: str, note: str = "") -> str:
+        import html
+
+        if not message and note:
+            return ('<div role="status" style="color:#7a4f01;background:#fff4e0;border:1px solid #f0d19a;'
+                    'border-radius:4px;padding:4px 6px;font-size:0.85em">' f"{html.escape(note)}</div>")
         if not message:
             return '<div style="color:#2e7d32;font-size:0.85em">ready</div>'
-        import html
 
         return (
             '<div role="alert" style="color:#b71c1c;background:#fdecea;border:1px solid #f5c6cb;'
@@ -264,17 +334,53 @@ class ExplorerApp:
             if self._is_echo():
                 return
             value = event.target.value
-            label, kind, _ = PARAMETERS[key]
-            try:
-                value = self._checked(kind, value, event.target)
-            except ValueError as exc:
-                self._reject(f"error: {label}: {exc}")
+            if PARAMETERS[key][1] != "choice" and getattr(event, "client", None) is not None:
+                # typed on a page: every keystroke arrives here. Record it; the loop applies it
+                # once the typing pauses (newest wins), and never writes into this field meanwhile
+                with self._lock:
+                    self._typed[key] = (value, time.monotonic())
                 return
-            with self._lock:
-                self._user[key] = override(key, value)
-            self._submit()
+            self._apply_edit(key, value)
 
         return callback
+
+    def _apply_edit(self, key: str, value) -> None:
+        label, kind, _ = PARAMETERS[key]
+        try:
+            value = self._checked(kind, value, self.fields[key])
+        except ValueError as exc:
+            self._reject(f"error: {label}: {exc}; {self._in_use(key)}")
+            return
+        edited = (key,)
+        with self._lock:
+            self._typed.pop(key, None)
+            self._user[key] = override(key, value)
+            self._field_sent[key] = value
+            if key == "linkage.stiffness" and self._held_effects is not None:
+                # the stiffness the elastic effect waited for: apply both together
+                self._user["effects"] = override("effects", self._held_effects)
+                self._held_effects = None
+                self._note = ""
+                edited = (key, "effects")
+        self._submit(edited=edited)
+
+    def _apply_typed(self) -> None:
+        """Apply the values whose typing has paused (loop thread)."""
+        now = time.monotonic()
+        with self._lock:
+            due = [(key, value) for key, (value, when) in self._typed.items() if now - when >= TYPING_PAUSE_S]
+        for key, value in due:
+            with self._lock:
+                if self._typed.get(key, (None, None))[0] != value:
+                    continue  # typed on meanwhile
+                del self._typed[key]
+            self._apply_edit(key, value)
+
+    def _in_use(self, key: str) -> str:
+        """Which value the shown result uses for `key`, for an error message."""
+        current = self.current
+        value = None if current is None else current.values.get(key)
+        return "nothing computed yet" if current is None else f"the result shown uses {value if value not in (None, '') else 'none'}"
 
     @staticmethod
     def _checked(kind: str, value, handle):
@@ -310,8 +416,28 @@ class ExplorerApp:
             return
         chosen = [name for name, handle in self.effects.items() if handle.value]
         with self._lock:
+            if "elastic" in chosen and not self._has_stiffness():
+                # no error for a missing [linkage]: the effect waits for a stiffness typed in
+                self._held_effects = chosen
+                label, _, unit = PARAMETERS["linkage.stiffness"]
+                self._note = (f"elastic needs a linkage stiffness: type one into '{label} [{unit}]' "
+                              f"(e.g. 3000 {unit}); until then the result shown is without it")
+                return
+            self._held_effects = None
+            self._note = ""
             self._user["effects"] = override("effects", chosen or ["kinematics"])
-        self._submit()
+        self._submit(edited=("effects",))
+
+    def _has_stiffness(self) -> bool:
+        """Whether the next computation has a linkage stiffness (lock held)."""
+        if "linkage.stiffness" in self._user:
+            return True
+        current = self.current
+        return current is not None and bool(current.values.get("linkage.stiffness"))
+
+    def _held_elastic(self) -> bool:
+        with self._lock:
+            return self._held_effects is not None
 
     def _scene_changed(self, event) -> None:
         if self._is_echo():
@@ -322,12 +448,16 @@ class ExplorerApp:
             self._scene_label = event.target.value
             self._base_overrides = ()
             self._user.clear()
+            self._typed.clear()
+            self._held_effects, self._note = None, ""
             self._speed_chosen = False
         self._submit(refresh=True)
 
     def _reset_clicked(self, event) -> None:
         with self._lock:
             self._user.clear()
+            self._typed.clear()
+            self._held_effects, self._note = None, ""
         self._submit(refresh=True)
 
     def _magnification_changed(self, event) -> None:
@@ -366,11 +496,19 @@ class ExplorerApp:
             self._scrub = angle
             self._pause_requested = True
 
-    def _submit(self, refresh: bool = False) -> None:
+    def _submit(self, refresh: bool = False, edited: tuple[str, ...] = ()) -> None:
         with self._lock:
             self._serial += 1
             if refresh:
                 self._refresh_serial = self._serial
+                # every field shows what the new scene file holds
+                self._edit_serial = {}
+            for key in edited:
+                self._edit_serial[key] = self._serial
+            if edited:
+                self._edited[self._serial] = edited
+                for old in [s for s in self._edited if s < self._serial - 64]:
+                    del self._edited[old]
             request = Request(
                 path=self.scene_paths[self._scene_label],
                 overrides=self._base_overrides + tuple(self._user[k] for k in sorted(self._user)),
@@ -425,6 +563,20 @@ class ExplorerApp:
 
     def _on_error(self, request: Request, message: str) -> None:
         with self._lock:
+            # the values this request changed are not used: later edits go on from the values
+            # of the result shown, and the message says which value that is
+            edited = self._edited.pop(request.serial, ())
+            mine = _user_overrides(request.overrides)
+            for key in edited:
+                if self._user.get(key) == mine.get(key):
+                    if key in self._good_user:
+                        self._user[key] = self._good_user[key]
+                    else:
+                        self._user.pop(key, None)
+            if edited and self.current is not None:
+                names = [PARAMETERS[k][0] if k in PARAMETERS else k for k in edited]
+                used = "; ".join(self._in_use(k) for k in edited if k in PARAMETERS)
+                message = f"{message} — {', '.join(names)} not applied" + (f"; {used}" if used else "")
             # a value the callbacks rejected may be newer than the computation failing now
             if self._error is None or request.serial > self._error[0]:
                 self._error = (request.serial, message)
@@ -448,6 +600,7 @@ class ExplorerApp:
 
     def tick(self, dt: float) -> None:
         """Apply whatever was requested and advance the animation by dt seconds (one frame)."""
+        self._apply_typed()
         with self._lock:
             incoming, self._incoming = self._incoming, None
             error, self._error = self._error, None
@@ -463,6 +616,12 @@ class ExplorerApp:
             angle = self.playback.angle_deg
             playing = self.playback.playing
             refresh = incoming is not None and incoming.request.serial >= self._refresh_serial
+            if refresh:
+                self._refresh_serial = math.inf  # once per scene load or reset, not for every result
+            if incoming is not None:
+                self._good_user = _user_overrides(incoming.request.overrides)
+                for serial in [s for s in self._edited if s <= incoming.request.serial]:
+                    del self._edited[serial]
             choose_speed = incoming is not None and not self._speed_chosen
             if choose_speed:
                 self._speed_chosen = True
@@ -477,10 +636,13 @@ class ExplorerApp:
                 self.handled_serial = max(self.handled_serial, error[0])
             if error is not None and (incoming is None or error[0] > incoming.request.serial):
                 self.error_text = error[1]
-                self.status.content = self._status_html(self.error_text)
             elif incoming is not None and self.error_text:
                 self.error_text = ""
-                self.status.content = self._status_html("")
+            with self._lock:
+                note = self._note
+            if (self.error_text, note) != self._status_shown:
+                self.status.content = self._status_html(self.error_text, note)
+                self._status_shown = (self.error_text, note)
             if self.current is not None:
                 self._pose(angle, force=incoming is not None)
                 self._sync_controls(angle, playing, scrub)
@@ -552,8 +714,7 @@ class ExplorerApp:
             self.readout.content = prepared.readout
         if previous is None or Path(previous.request.path) != Path(prepared.request.path):
             self._aim_camera(prepared)
-        if refresh:
-            self._refresh_fields(prepared)
+        self._show_values(prepared, refresh)
         if choose_speed:
             label = default_speed(prepared.result.summary["revolution_time_s"])
             with self._lock:
@@ -561,25 +722,56 @@ class ExplorerApp:
             with self._programmatic():
                 self.speed.value = label
 
-    def _refresh_fields(self, prepared: Prepared) -> None:
+    def _show_values(self, prepared: Prepared, refresh: bool) -> None:
+        """Make every field show the value the result was computed with, except a field the user
+        is editing: one with typed text not applied yet, one whose newest edit is in a request
+        newer than this result, and one holding a value the loop did not put there and no
+        request has carried (viser stores a page's value before its callback runs)."""
         values = prepared.values
+        used = _user_overrides(prepared.request.overrides)
+        with self._lock:
+            typed = set(self._typed)
+            edit_serial = dict(self._edit_serial)
+        serial = prepared.request.serial
         with self._programmatic():
-            label = next((k for k, v in self.scene_paths.items() if Path(v) == Path(prepared.request.path)), None)
-            if label is not None and self.scene.value != label:
-                self.scene.value = label
+            if refresh:
+                label = next((k for k, v in self.scene_paths.items() if Path(v) == Path(prepared.request.path)), None)
+                if label is not None and self.scene.value != label:
+                    self.scene.value = label
             for key, handle in self.fields.items():
-                value = values.get(key)
+                if key in typed or edit_serial.get(key, -1) > serial:
+                    continue
                 kind = PARAMETERS[key][1]
+                value = values.get(key)
+                shown = handle.value
+                if key in used and used[key] == override(key, self._as_sent(kind, shown)):
+                    continue  # the text the user gave is the value used (maybe in other units)
+                if not (_same(shown, self._field_shown.get(key)) or _same(shown, self._field_sent.get(key))):
+                    continue  # a page's new value whose callback has not run yet: in flight
                 if kind == "quantity":
                     handle.value = value or ""
-                    handle.disabled = False
                 elif kind == "choice":
                     if value in handle.options:
                         handle.value = value
                 elif value is not None:
                     handle.value = value
-            for name, handle in self.effects.items():
-                handle.value = name in prepared.scene.effects
+                self._field_shown[key] = handle.value
+            if "effects" not in typed and edit_serial.get("effects", -1) <= serial and not self._held_elastic():
+                for name, handle in self.effects.items():
+                    handle.value = name in prepared.scene.effects
+
+    @staticmethod
+    def _as_sent(kind: str, value):
+        """A field's value as `_apply_edit` puts it into an override."""
+        if kind in ("integer", "number"):
+            try:
+                number = float(value)
+            except (TypeError, ValueError, OverflowError):
+                return value
+            if kind == "integer" and math.isfinite(number) and number.is_integer():
+                return int(number)
+            return number
+        return str(value)
 
     def _aim_camera(self, prepared: Prepared) -> None:
         """Frame the new scene: the initial camera (new pages, "Reset View") and every page's
@@ -640,6 +832,9 @@ class ExplorerApp:
     # ------------------------------------------------------------------ plots
 
     def _update_plots(self, prepared: Prepared) -> None:
+        if self.plot_note.content != prepared.plot_note:
+            self.plot_note.content = prepared.plot_note
+            self.plot_note.visible = bool(prepared.plot_note)
         signature = [(p.title, tuple(label for label, _, _ in p.series)) for p in prepared.plots]
         if signature != self._plot_signature:
             for handle in self._plot_handles:
@@ -647,18 +842,8 @@ class ExplorerApp:
             self._plot_handles = []
             with self._plots_tab:
                 for plot in prepared.plots:
-                    series = [{"label": "θ [°]"}]
-                    series += [{"label": label, "stroke": colour, "width": 1.5} for label, _, colour in plot.series]
-                    # the cursor: a one-sample spike on its own 0..1 scale whose base lies below the
-                    # visible range, so only a vertical line at the current angle shows
-                    series += [{"label": "now", "stroke": "#111111", "width": 1.5, "scale": "cursor"}]
                     self._plot_handles.append(self.server.gui.add_uplot(
-                        data=self._plot_data(plot, self.playback.angle_deg), series=tuple(series), title=plot.title,
-                        scales={"x": {"time": False, "auto": False, "range": [0, 360]},
-                                "cursor": {"auto": False, "range": [0.02, 1.0]}},
-                        axes=({"size": 28}, {"size": 62}), aspect=2.3,
-                        legend={"show": True, "live": False},
-                    ))
+                        data=self._plot_data(plot, self.playback.angle_deg), **plot_options(plot)))
             self._plot_signature = signature
         else:
             for handle, plot in zip(self._plot_handles, prepared.plots):
@@ -684,7 +869,8 @@ class ExplorerApp:
         while time.monotonic() < deadline:
             if self.worker.wait_idle(max(0.0, deadline - time.monotonic())):
                 with self._lock:
-                    pending = self._incoming is not None or self._error is not None or self._scrub is not None
+                    pending = self._incoming is not None or self._error is not None or self._scrub is not None \
+                        or bool(self._typed)
                     serial = self._serial
                 if not pending and self.handled_serial >= serial:
                     # one more frame so that pose updates after the last apply are out

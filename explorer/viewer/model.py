@@ -93,11 +93,19 @@ SPRING_RESOLUTION = {"segments_per_turn": 24, "wire_segments": 8}
 class Plot:
     title: str
     x: np.ndarray  # cam angle, deg (decimated)
-    series: tuple[tuple[str, np.ndarray, str], ...]  # (label, values, colour)
+    series: tuple[tuple[str, np.ndarray, str], ...]  # (label, values, colour), drawn in this order
+    y_label: str = ""  # the y axis' name with its unit
+    styles: tuple[dict, ...] = ()  # per series: uPlot line options (width, dash)
 
 
 SERIES_COLORS = ("#c0392b", "#2471a3", "#7d8a96", "#27ae60", "#8e44ad", "#d68910", "#17a589")
 DISPLAY_POINTS = 720
+X_LABEL = "cam angle θ [°]"
+# Curves that lie on each other stay apart: the first of a plot is drawn solid and widest, the
+# later ones on top of it thinner and dashed, each with its own dash, so where two coincide both
+# colours show in turn.
+DASHES = ((), (7, 4), (2, 3), (10, 3, 2, 3), (4, 4), (1, 5), (12, 6))
+WIDTHS = (3.0, 1.8, 1.8, 1.6, 1.6, 1.6, 1.6)
 
 
 def decimate(x: np.ndarray, ys: list[np.ndarray], points: int = DISPLAY_POINTS) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -134,17 +142,31 @@ def _argreduce(y, starts, ends, fn):
     return np.take_along_axis(idx, fn(y[idx], axis=1)[:, None], axis=1)[:, 0]
 
 
+def _same_curve(a: np.ndarray, b: np.ndarray) -> bool:
+    scale = max(float(np.nanmax(np.abs(a))) if np.isfinite(a).any() else 0.0, 1e-30)
+    return a.shape == b.shape and bool(np.all((np.isnan(a) & np.isnan(b)) | (np.abs(a - b) <= 1e-9 * scale)))
+
+
 def build_plots(result) -> list[Plot]:
-    """s, v, p and the forces over one revolution, from whatever columns the effects made."""
+    """s, v, p and the forces over one revolution, from whatever columns the effects made. A
+    plot without data (no force effect) is left out; `plots_note` says why in one line."""
     cols = result.columns
     x = np.asarray(cols["cam_angle_deg"], dtype=float)
     plots = []
 
-    def add(title, entries):
+    def add(title, y_label, entries):
         entries = [(label, np.asarray(values, dtype=float) * k) for label, values, k in entries if values is not None]
+        if not entries:
+            return
         xs, ys = decimate(x, [v for _, v in entries])
-        series = tuple((label, y, SERIES_COLORS[i % len(SERIES_COLORS)]) for i, ((label, _), y) in enumerate(zip(entries, ys)))
-        plots.append(Plot(title, xs, series))
+        labels = [label for label, _ in entries]
+        for i, (label, values) in enumerate(entries):  # a curve equal to an earlier one says so
+            twin = next((labels[j] for j in range(i) if _same_curve(entries[j][1], values)), None)
+            if twin is not None:
+                labels[i] = f"{label} (= {twin})"
+        series = tuple((label, y, SERIES_COLORS[i % len(SERIES_COLORS)]) for i, (label, y) in enumerate(zip(labels, ys)))
+        styles = tuple({"width": WIDTHS[i % len(WIDTHS)], "dash": list(DASHES[i % len(DASHES)])} for i in range(len(series)))
+        plots.append(Plot(title, xs, series, y_label, styles))
 
     def maybe_rigid(name):
         rigid = cols.get(f"rigid_{name}")
@@ -153,23 +175,33 @@ def build_plots(result) -> list[Plot]:
     scene = result.scene
     lash = scene.valve.lash if scene.valve is not None else 0.0
     linkage = scene.follower.ratio * np.asarray(cols["follower_lift_m"]) - lash
-    add("Valve lift s [mm] over cam angle [°]", [
+    # the valve's own curve first (solid, under), the rigid and linkage curves dashed on top
+    add("Valve lift s", "s [mm]", [
         ("valve s", cols["valve_lift_m"], 1e3),
         ("rigid", maybe_rigid("valve_lift_m"), 1e3),
-        ("linkage S - lash", linkage if maybe_rigid("valve_lift_m") is not None else None, 1e3),
+        ("linkage S − lash", linkage if maybe_rigid("valve_lift_m") is not None else None, 1e3),
     ])
-    add("Velocity v [m/s]", [("valve v", cols["valve_velocity_m_s"], 1.0), ("rigid", maybe_rigid("valve_velocity_m_s"), 1.0)])
-    add("Acceleration p [m/s²]", [("valve p", cols["valve_accel_m_s2"], 1.0), ("rigid", maybe_rigid("valve_accel_m_s2"), 1.0)])
+    add("Velocity v", "v [m/s]", [("valve v", cols["valve_velocity_m_s"], 1.0), ("rigid", maybe_rigid("valve_velocity_m_s"), 1.0)])
+    add("Acceleration p", "p [m/s²]", [("valve p", cols["valve_accel_m_s2"], 1.0), ("rigid", maybe_rigid("valve_accel_m_s2"), 1.0)])
+    add("Forces", "F [N]", [(label, values, 1.0) for label, values in _force_columns(cols)])
+    return plots
+
+
+def _force_columns(cols) -> list[tuple[str, Any]]:
     # the linkage force first (Schenker's back-pressure on the camshaft), then the cam contact and
     # the spring; any further force columns after those, up to five curves
     preferred = ("linkage_force_N", "contact_force_N", "spring_force_N", "required_spring_force_N",
                  "camshaft_back_pressure_N")
     names = [n for n in preferred if n in cols] + sorted(n for n in cols if n.endswith("_N") and n not in preferred)
-    forces = [(name[:-2].replace("_", " "), cols[name], 1.0) for name in names[:5]]
-    if not forces:
-        forces = [("none: tick forces or elastic", np.zeros_like(x), 1.0)]
-    add("Forces [N]", forces)
-    return plots
+    return [(name[:-2].replace("_", " "), cols[name]) for name in names[:5]]
+
+
+def plots_note(result) -> str:
+    """One line for the plots the result has no data for ("" when every plot is drawn)."""
+    if _force_columns(result.columns):
+        return ""
+    return ("No forces plot: this run computes no forces. Tick 'forces' (needs [valve] mass and "
+            "[spring]) or 'elastic' (also a linkage stiffness) under Scene → Effects.")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -249,6 +281,7 @@ class Prepared:
     values: dict  # scene_values(scene): what the GUI fields show
     new_result: bool  # False when only the magnification changed since the worker's previous bundle
     seconds: float = 0.0  # wall time of the preparation
+    plot_note: str = ""  # why a plot is missing (plots_note)
 
     @functools.cached_property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -287,6 +320,7 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
     if same:
         scene, result, lay, parts = previous.scene, previous.result, previous.layout, previous.meshes
         plots, readout, values = previous.plots, previous.readout, previous.values
+        plot_note = previous.plot_note
         lift = previous.lift
     else:
         scene = load_scene(request.path, list(request.overrides))
@@ -314,6 +348,7 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
                 meshes.spring_faces(lay, **SPRING_RESOLUTION).astype(np.uint32),
             )
         plots = build_plots(result)
+        plot_note = plots_note(result)
         readout = readout_markdown(result, _request_label(request))
         values = scene_values(scene)
     poses = meshes.part_poses(scene, result, magnification=request.magnification, lay=lay, lift=lift)
@@ -322,6 +357,7 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
         request=request, scene=scene, result=result, layout=lay, lift=lift, meshes=parts, poses=poses,
         spring_lengths=np.asarray(lengths, dtype=float), plots=plots, readout=readout,
         label=_request_label(request), values=values, new_result=not same, seconds=time.perf_counter() - started,
+        plot_note=plot_note,
     )
     if previous is None or Path(previous.request.path) != Path(request.path):
         prepared.bounds  # another scene file: the viewer aims its camera at it, here off the GUI's loop
@@ -514,6 +550,7 @@ class ComputeWorker:
         return dataclasses.replace(
             prepared, scene=last.scene, result=last.result, layout=last.layout, lift=last.lift,
             meshes=last.meshes, plots=last.plots, readout=last.readout, values=last.values,
+            plot_note=last.plot_note,
         )
 
 
