@@ -27,7 +27,7 @@ run: $(STAMP)
 	$(BIN)/explorer serve $(SCENE)
 
 test: $(TEST_STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run_all.py

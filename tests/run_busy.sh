@@ -14,7 +14,7 @@ status=0
 for i in $(seq 1 "$runs"); do
   marker="run-$$-$i-$RANDOM"
   start=$(date +%s)
-  EXPLORER_TEST_RUN_ID="$marker" "$python" -m pytest -q -p no:cacheprovider > "/tmp/run_busy.$$.$i.log" 2>&1
+  EXPLORER_TEST_RUN_ID="$marker" "$python" -m pytest -q -n auto -p no:cacheprovider > "/tmp/run_busy.$$.$i.log" 2>&1
   code=$?
   left=$(grep -l -s "EXPLORER_TEST_RUN_ID=$marker" /proc/[0-9]*/environ | cut -d/ -f3 | tr '\n' ' ')
   echo "run $i: exit $code in $(( $(date +%s) - start )) s: $(tail -n 1 "/tmp/run_busy.$$.$i.log")"
