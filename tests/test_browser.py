@@ -97,6 +97,27 @@ def _wait_in_step(page, app, names):
 
 
 @contextlib.contextmanager
+def _connected_page(sync_api, tmp_path, server, width=1280, height=800):
+    """A headless-Chromium page on the explorer, connected, with notifications hidden (they
+    cover the panel's fields); the browser is closed afterwards."""
+    with sync_api.sync_playwright() as pw:
+        context = pw.chromium.launch_persistent_context(
+            str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=ARGS,
+            viewport={"width": width, "height": height}, timeout=WAIT_MS,
+        )
+        context.set_default_timeout(WAIT_MS)
+        context.set_default_navigation_timeout(WAIT_MS)
+        try:
+            page = context.new_page()
+            page.goto(f"http://127.0.0.1:{server.get_port()}/")
+            page.get_by_text("Connected").first.wait_for(timeout=WAIT_MS)
+            page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
+            yield page
+        finally:
+            context.close()
+
+
+@contextlib.contextmanager
 def _running_explorer(scene):
     """A viser server on a free local port with the explorer on `scene`; stopped afterwards, and
     the explorer's loop and worker must have met no error meanwhile."""
@@ -354,38 +375,25 @@ def test_typing_into_unit_fields_at_human_speed_uses_what_was_typed(tmp_path):
     )
     with _running_explorer(ROOT / "assets" / "scenes" / "cycloidal_demo.toml") as (server, app):
         assert app.wait_applied(WAIT_S)
-        with sync_api.sync_playwright() as pw:
-            context = pw.chromium.launch_persistent_context(
-                str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=ARGS,
-                viewport={"width": 1280, "height": 800}, timeout=WAIT_MS,
-            )
-            context.set_default_timeout(WAIT_MS)
-            context.set_default_navigation_timeout(WAIT_MS)
-            try:
-                page = context.new_page()
-                page.goto(f"http://127.0.0.1:{server.get_port()}/")
-                page.get_by_text("Connected").first.wait_for(timeout=WAIT_MS)
-                page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
-                for label, text, (section, attribute), si in cases:
-                    # viser's text input does not carry its label's id: the input of the label's row
-                    field = page.locator("label", has_text=label).first.locator(
-                        "xpath=ancestor::div[contains(@class,'mantine-Flex-root')][1]//input")
-                    field.click()
-                    field.press("Control+a")
-                    field.press("Delete")
-                    page.keyboard.type(text, delay=120)
-                    # the page's field holds exactly what was typed, and the result uses it
-                    _wait_until(lambda: abs(getattr(getattr(app.current.scene, section), attribute) - si) <= 1e-9 * si,
-                                f"{label}: the result never used {text!r}")
-                    assert app.wait_applied(WAIT_S)
-                    assert app.error_text == "", app.error_text
-                    assert field.input_value() == text
-                    key = next(k for k, h in app.fields.items() if h.label == label)
-                    assert app.fields[key].value == text
-                    # one computation for the whole typing, not one per key
-                    assert sum(1 for o in app.current.request.overrides if o.startswith(key + "=")) == 1
-            finally:
-                context.close()
+        with _connected_page(sync_api, tmp_path, server) as page:
+            for label, text, (section, attribute), si in cases:
+                # viser's text input does not carry its label's id: the input of the label's row
+                field = page.locator("label", has_text=label).first.locator(
+                    "xpath=ancestor::div[contains(@class,'mantine-Flex-root')][1]//input")
+                field.click()
+                field.press("Control+a")
+                field.press("Delete")
+                page.keyboard.type(text, delay=120)
+                # the page's field holds exactly what was typed, and the result uses it
+                _wait_until(lambda: abs(getattr(getattr(app.current.scene, section), attribute) - si) <= 1e-9 * si,
+                            f"{label}: the result never used {text!r}")
+                assert app.wait_applied(WAIT_S)
+                assert app.error_text == "", app.error_text
+                assert field.input_value() == text
+                key = next(k for k, h in app.fields.items() if h.label == label)
+                assert app.fields[key].value == text
+                # one computation for the whole typing, not one per key
+                assert sum(1 for o in app.current.request.overrides if o.startswith(key + "=")) == 1
 
 
 def test_hovering_a_plot_shows_the_values_under_the_pointer(tmp_path):
@@ -395,29 +403,16 @@ def test_hovering_a_plot_shows_the_values_under_the_pointer(tmp_path):
 
     with _running_explorer(ROOT / "assets" / "scenes" / "cycloidal_demo.toml") as (server, app):
         assert app.wait_applied(WAIT_S)
-        with sync_api.sync_playwright() as pw:
-            context = pw.chromium.launch_persistent_context(
-                str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=ARGS,
-                viewport={"width": 1280, "height": 800}, timeout=WAIT_MS,
-            )
-            context.set_default_timeout(WAIT_MS)
-            context.set_default_navigation_timeout(WAIT_MS)
-            try:
-                page = context.new_page()
-                page.goto(f"http://127.0.0.1:{server.get_port()}/")
-                page.get_by_text("Connected").first.wait_for(timeout=WAIT_MS)
-                page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
-                over = page.locator(".uplot .u-over").first
-                over.wait_for(timeout=WAIT_MS)
-                box = over.bounding_box()
-                page.mouse.move(box["x"] + 0.4 * box["width"], box["y"] + 0.5 * box["height"])
-                # the first plot's legend: angle, then valve s, as numbers (no "--")
-                values = page.wait_for_function(
-                    "() => { const v = [...document.querySelector('.uplot').querySelectorAll('.u-series .u-value')]"
-                    ".map(e => e.textContent); return v.length > 1 && v[0] !== '--' && v[1] !== '--' ? v : null; }",
-                    timeout=WAIT_MS).json_value()
-            finally:
-                context.close()
+        with _connected_page(sync_api, tmp_path, server) as page:
+            over = page.locator(".uplot .u-over").first
+            over.wait_for(timeout=WAIT_MS)
+            box = over.bounding_box()
+            page.mouse.move(box["x"] + 0.4 * box["width"], box["y"] + 0.5 * box["height"])
+            # the first plot's legend: angle, then valve s, as numbers (no "--")
+            values = page.wait_for_function(
+                "() => { const v = [...document.querySelector('.uplot').querySelectorAll('.u-series .u-value')]"
+                ".map(e => e.textContent); return v.length > 1 && v[0] !== '--' && v[1] !== '--' ? v : null; }",
+                timeout=WAIT_MS).json_value()
         angle, lift_mm = float(values[0].replace(",", "")), float(values[1].replace(",", ""))
         assert 0.0 <= angle <= 360.0
         plot = app.current.plots[0]
