@@ -29,6 +29,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 from typing import Callable, Sequence
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
@@ -103,6 +104,16 @@ class GroupGuard:
         except subprocess.TimeoutExpired:
             self._proc.kill()
             self._proc.wait()
+
+
+def spawn_python(code: str, *args: str, env=None, **kwargs) -> subprocess.Popen:
+    """`spawn` of a fresh interpreter running `code` (a helper of ours: not multiprocessing's
+    spawn, which re-runs the caller's main script), importing this package from where this process
+    found it."""
+    env = dict(os.environ if env is None else env)
+    root = str(Path(__file__).resolve().parent.parent)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+    return spawn([sys.executable, "-c", code, *args], env=env, **kwargs)
 
 
 def _signal_group(proc: subprocess.Popen, sig: int) -> bool:

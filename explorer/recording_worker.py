@@ -19,14 +19,12 @@ from __future__ import annotations
 
 import os
 import subprocess
-import sys
 import threading
 from dataclasses import replace
-from pathlib import Path
 from types import SimpleNamespace
 from typing import Mapping
 
-from .processes import spawn
+from .processes import spawn_python
 
 RECYCLE_AFTER = 32  # recordings per helper process: at most ~130 threads and ~50 MB of rerun's leftovers
 JOB_TIMEOUT_S = 600.0  # one recording; the live stream's flush has its own, shorter timeout
@@ -74,15 +72,9 @@ class RecordingWorker:
     def _start(self) -> None:
         from multiprocessing.connection import Connection
 
-        # A plain interpreter, not multiprocessing's spawn: that re-runs the caller's main script
-        # in the child, which breaks any script without an `if __name__ == "__main__"` guard.
-        env = dict(os.environ)
-        package_root = str(Path(__file__).resolve().parent.parent)
-        env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
         # own session (Ctrl-C in the terminal is the explorer's to handle), dies with the thread that
         # started it (and exits when its pipe closes)
-        proc = spawn([sys.executable, "-c", HELPER_MAIN],
-                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
+        proc = spawn_python(HELPER_MAIN, stdin=subprocess.PIPE, stdout=subprocess.PIPE)
         self._proc = proc
         self._send = Connection(os.dup(proc.stdin.fileno()), readable=False)
         self._recv = Connection(os.dup(proc.stdout.fileno()), writable=False)

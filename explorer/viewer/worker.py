@@ -10,7 +10,7 @@ pipe (about 3 MB pickled for the built-in scenes, a few milliseconds).
 The child lives in its own session (Ctrl-C in the terminal is for the server, which then stops
 it), dies with the thread that started it (Linux PR_SET_PDEATHSIG) and when its pipe closes.
 
-The child runs `main(READ_FD, WRITE_FD, PARENT_PID, MEMORY_BYTES)` (see CHILD_MAIN).
+The child runs `main(READ_FD, WRITE_FD, MEMORY_BYTES)` (see CHILD_MAIN).
 """
 
 from __future__ import annotations
@@ -21,12 +21,12 @@ import os
 import pickle
 import signal
 import subprocess
-import sys
 import threading
 import time
 from multiprocessing.connection import Connection
-from pathlib import Path
 from types import MappingProxyType
+
+from ..processes import spawn_python
 from typing import Callable
 
 READY = "ready"
@@ -86,20 +86,14 @@ class ComputeProcess:
             return None if self._proc is None else self._proc.pid
 
     def start(self) -> None:
-        import explorer
-
         to_child_r, to_child_w = os.pipe()
         from_child_r, from_child_w = os.pipe()
-        env = dict(os.environ)
-        root = str(Path(explorer.__file__).resolve().parent.parent)
-        env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
         try:
-            proc = subprocess.Popen(
-                [sys.executable, "-c", CHILD_MAIN, str(to_child_r), str(from_child_w),
-                 str(os.getpid()), str(int(self.memory_bytes))],
+            # own session, dies with the thread that starts it (explorer.processes.spawn)
+            proc = spawn_python(
+                CHILD_MAIN, str(to_child_r), str(from_child_w), str(int(self.memory_bytes)),
                 # stdout is the server's (it prints its URL there); tracebacks go to stderr
-                pass_fds=(to_child_r, from_child_w), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, env=env,
-                start_new_session=True,
+                pass_fds=(to_child_r, from_child_w), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
             )
         except BaseException:
             for fd in (to_child_r, to_child_w, from_child_r, from_child_w):
@@ -227,17 +221,6 @@ class _Pipe:
 # child side
 
 
-def _die_with_parent(parent_pid: int) -> None:
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        PR_SET_PDEATHSIG = 1
-        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    # the parent may have died before prctl: then this process was re-parented already
-    if os.getppid() != parent_pid:
-        os._exit(1)
-
-
 def _limit_memory(memory_bytes: int) -> None:
     if memory_bytes > 0:
         import resource
@@ -246,8 +229,7 @@ def _limit_memory(memory_bytes: int) -> None:
 
 
 def main(argv: list[str]) -> int:
-    read_fd, write_fd, parent_pid, memory_bytes = (int(a) for a in argv[:4])
-    _die_with_parent(parent_pid)
+    read_fd, write_fd, memory_bytes = (int(a) for a in argv[:3])
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server handles Ctrl-C and stops us
     pipe = _Pipe(read_fd, write_fd)
 
