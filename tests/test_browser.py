@@ -302,39 +302,26 @@ def test_each_gear_is_framed_whole_in_the_page(tmp_path):
     pictures = []
     with _running_explorer(first) as (server, app):
         assert app.wait_applied(WAIT_S)
-        with sync_api.sync_playwright() as pw:
-            context = pw.chromium.launch_persistent_context(
-                str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=ARGS,
-                viewport={"width": 1000, "height": 700}, timeout=WAIT_MS,
-            )
-            context.set_default_timeout(WAIT_MS)
-            context.set_default_navigation_timeout(WAIT_MS)
-            try:
-                page = context.new_page()
-                page.goto(f"http://127.0.0.1:{server.get_port()}/")
-                page.get_by_text("Connected").first.wait_for(timeout=WAIT_MS)
-                page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
-                canvas = page.locator("canvas").first
-                narrow = canvas.bounding_box()["width"]
-                page.get_by_role("button", name="Collapse panel area").first.click()  # the plots
-                page.wait_for_function("(w) => document.querySelector('canvas').getBoundingClientRect().width > w + 100",
-                                       arg=narrow, timeout=WAIT_MS)
-                for name, where, picture in GEAR_PICTURES:
-                    if app.scene.value != name:
-                        app.scene.value = name
-                        assert app.wait_applied(WAIT_S)
-                    assert app.error_text == ""
-                    app.angle.value = round(_angle(app.current.result, where), 1)
-                    _wait_in_step(page, app, [n for n in app.current.meshes if n != "spring"])
-                    _wait_framed(app)
-                    page.mouse.move(995, 695)
-                    assert page.evaluate(TWO_FRAMES)
-                    shot = tmp_path / picture
-                    canvas.screenshot(path=str(tmp_path / f"canvas_{picture}"), timeout=WAIT_MS)
-                    page.screenshot(path=str(shot), timeout=WAIT_MS)
-                    pictures.append((shot, tmp_path / f"canvas_{picture}"))
-            finally:
-                context.close()
+        with _connected_page(sync_api, tmp_path, server, width=1000, height=700) as page:
+            canvas = page.locator("canvas").first
+            narrow = canvas.bounding_box()["width"]
+            page.get_by_role("button", name="Collapse panel area").first.click()  # the plots
+            page.wait_for_function("(w) => document.querySelector('canvas').getBoundingClientRect().width > w + 100",
+                                   arg=narrow, timeout=WAIT_MS)
+            for name, where, picture in GEAR_PICTURES:
+                if app.scene.value != name:
+                    app.scene.value = name
+                    assert app.wait_applied(WAIT_S)
+                assert app.error_text == ""
+                app.angle.value = round(_angle(app.current.result, where), 1)
+                _wait_in_step(page, app, [n for n in app.current.meshes if n != "spring"])
+                _wait_framed(app)
+                page.mouse.move(995, 695)
+                assert page.evaluate(TWO_FRAMES)
+                shot = tmp_path / picture
+                canvas.screenshot(path=str(tmp_path / f"canvas_{picture}"), timeout=WAIT_MS)
+                page.screenshot(path=str(shot), timeout=WAIT_MS)
+                pictures.append((shot, tmp_path / f"canvas_{picture}"))
 
     import matplotlib.image
 
