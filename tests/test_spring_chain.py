@@ -120,7 +120,7 @@ def test_exact_matches_scipy_reference(rpm, N):
 def test_light_spring_recovers_the_massless_model():
     # the spring's mass -> 0: the valve of mass M = valve + m_e/2 (-> valve) on a massless spring.
     # The difference falls in proportion to m_s; at m_s = 1e-9 kg it is below 1e-10 m. The seat:
-    # 1e13 N/m critically damped stands for the rigid seat (compression W0/k ~ 2e-11 m); the
+    # 1e13 N/m stands for the rigid seat (compression W0/k ~ 2e-11 m); the
     # comparison runs over the lift, up to the first seat contact. (A damped Kelvin-Voigt seat holds
     # the valve back as it leaves: 4e-10 m with critical damping, so the seat here is undamped)
     rpm = 2000
@@ -142,35 +142,25 @@ def test_light_spring_recovers_the_massless_model():
 
 
 def test_energy_balance_over_a_revolution():
-    # undamped chain, undamped linkage, seat damping only: the work of the linkage on the valve
-    # (force times valve velocity) = change of kinetic + spring energy + loss in the seat damper
-    # + work against the constant loads. Trapezoid on a fine grid: 1e-6 of the energy turned over
+    # undamped chain and linkage, seat damping only: the change of the valve-and-spring energy
+    # (kinetic + chain + seat spring) equals the work of the linkage force and the constant loads
+    # on the valve minus the seat damper's loss. Trapezoid rule on a 36 000-step grid: at each of
+    # the ~20 seat crossings the damper's force c v jumps (Kelvin-Voigt seat), a first-order
+    # error of the quadrature there; measured 2.2e-4 of the energy turned over, bound 1e-3
     rpm = 3000
     m = _model(damping=0.0, damping_ratio=0.0)
-    drive = _drive(rpm)
     t = _grid(rpm, 36000)
-    sol = solve(m, drive, t)
-    n = m.n
+    sol = solve(m, _drive(rpm), t)
     x = np.vstack([sol.s, sol.coils])
     v = np.vstack([sol.v, sol.coil_velocities])
     K = m.spring_stiffness_matrix
-    E = 0.5 * np.einsum("i,it->t", m.masses, v * v) + 0.5 * np.einsum("it,ij,jt->t", x, K, x)
     seat = sol.phase == 0
-    E = E + np.where(seat, 0.5 * m.seat_stiffness * sol.s**2, 0.0)
-    power_in = sol.linkage_force * sol.v - (m.preload + m.closing_load) * sol.v
-    power_loss = np.where(seat, m.seat_damping * sol.v**2, 0.0)
-    work = np.concatenate([[0.0], np.cumsum(0.5 * (power_in[1:] + power_in[:-1]) * np.diff(t))])
-    loss = np.concatenate([[0.0], np.cumsum(0.5 * (power_loss[1:] + power_loss[:-1]) * np.diff(t))])
-    # the linkage's own energy k x^2 / 2 is not in E: the linkage force's power on the valve
-    # is the drive's work minus the linkage's energy change
-    link = np.where(sol.contact, 0.5 * m.stiffness * np.maximum(drive(t)[0] - m.lash - sol.s, 0.0) ** 2, 0.0)
-    drive_power = sol.linkage_force * drive(t)[1]
-    drive_work = np.concatenate([[0.0], np.cumsum(0.5 * (drive_power[1:] + drive_power[:-1]) * np.diff(t))])
-    balance = drive_work - (E - E[0]) - (link - link[0]) - loss + (work - np.concatenate(
-        [[0.0], np.cumsum(0.5 * ((sol.linkage_force * sol.v)[1:] + (sol.linkage_force * sol.v)[:-1]) * np.diff(t))]))
-    scale = np.max(np.abs(drive_work)) + np.max(E)
-    assert np.max(np.abs(balance)) < 1e-5 * scale, np.max(np.abs(balance)) / scale
-    del n, power_in
+    E = (0.5 * np.einsum("i,it->t", m.masses, v * v) + 0.5 * np.einsum("it,ij,jt->t", x, K, x)
+         + np.where(seat, 0.5 * m.seat_stiffness * sol.s**2, 0.0))
+    power = (sol.linkage_force - m.preload - m.closing_load) * sol.v - np.where(seat, m.seat_damping * sol.v**2, 0.0)
+    work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
+    scale = np.max(np.abs(E - E[0]))
+    assert np.max(np.abs(E - E[0] - work)) < 1e-3 * scale, np.max(np.abs(E - E[0] - work)) / scale
 
 
 def test_first_separation_converges_with_elements():
@@ -282,6 +272,10 @@ def test_surge_scene_separates_below_the_rigid_float_speed():
     s = result.summary
     assert s["spring_elements"] == 8
     assert s["surge_amplitude_N"] > 10.0
+    # the valve leaves the cam on the lift flank (before the nose at 67.5 + ... deg), far below the
+    # rigid train's jump speed of the forces effect
+    assert s["first_separation_deg"] is not None and 60.0 < s["first_separation_deg"] < 105.0
+    assert s["jump_speed_rpm"] > 1.5 * s["rpm"]
     f1 = s["spring_modal_frequencies_Hz"][0]
     # the closed form of the chain, and the continuous spring within the 1/N^2 lumping error
     assert f1 == pytest.approx(0.5 * math.sqrt(30.6e3 / 0.0446) * math.sin(math.pi / 18) / (math.pi / 18), rel=2e-3)
