@@ -34,7 +34,8 @@ from .series import hermite5, taylor_shift
 
 FACT = np.array([math.factorial(k) for k in range(7)], dtype=float)
 EPS = np.finfo(float).eps
-WINDOW = 256  # steps scanned at once between events
+WINDOW = 512  # most steps scanned at once between events
+WINDOW_MIN = 16  # steps scanned at once after an event
 
 
 # phi_j(x) = sum_n x^n / (n + j)!, j = 1..6, as x^n (n < 24) times this table: 1/(24+j)! < 1e-24
@@ -42,31 +43,38 @@ _PHI_SERIES = np.array([[1.0 / math.factorial(n + j) for j in range(1, 7)] for n
 
 
 def phi_functions(x: np.ndarray) -> np.ndarray:
-    """(7, *x.shape): phi_0 = e^x, phi_j(x) = sum_n x^n / (n + j)!  (complex x)."""
+    """(7, *x.shape): phi_0 = e^x, phi_j(x) = sum_n x^n / (n + j)!  (complex x). Below |x| = 1
+    the series (24 terms: the next is below 1e-24), beyond it the recurrence
+    phi_j = (phi_(j-1) - 1/(j-1)!) / x, which loses nothing there."""
     x = np.asarray(x, dtype=complex)
     shape = x.shape
     x = x.ravel()
     out = np.empty((7, x.size), dtype=complex)
-    out[0] = np.exp(x)
+    e = out[0] = np.exp(x)
     small = np.abs(x) < 1.0
-    if not small.all():
-        # beyond |x| = 1 the recurrence phi_j = (phi_(j-1) - 1/(j-1)!) / x loses nothing
+    n_small = int(np.count_nonzero(small))
+    if n_small < x.size:
         xs = np.where(small, 1.0, x)
-        f = out[0]
+        f = e
         for j in range(1, 7):
-            f = (f - 1.0 / FACT[j - 1]) / xs
+            f = (f - _INV_FACT[j - 1]) / xs
             out[j] = f
-    if small.any():
-        xm = x[small] if not small.all() else x
-        powers = np.cumprod(np.broadcast_to(xm[:, None], (xm.size, 24)), axis=1) / xm[:, None] if xm.size else None
-        if xm.size:
-            powers[:, 0] = 1.0
-            vals = powers @ _PHI_SERIES  # (m, 6)
-            if small.all():
-                out[1:] = vals.T
-            else:
-                out[1:, small] = vals.T
+    if n_small:
+        xm = x if n_small == x.size else x[small]
+        powers = np.empty((xm.size, 24), dtype=complex)
+        powers[:, 0] = 1.0
+        powers[:, 1:] = xm[:, None]
+        np.cumprod(powers, axis=1, out=powers)
+        vals = (powers @ _PHI_SERIES_C).T  # (6, m)
+        if n_small == x.size:
+            out[1:] = vals
+        else:
+            out[1:, small] = vals
     return out.reshape((7,) + shape)
+
+
+_INV_FACT = [1.0 / math.factorial(k) for k in range(8)]
+_PHI_SERIES_C = _PHI_SERIES.astype(complex)
 
 
 @dataclass(frozen=True)
@@ -110,15 +118,21 @@ def phase_modes(model: ChainModel, contact: bool, seat: bool) -> PhaseModes:
     return PhaseModes(contact, seat, lam, T @ V, inv, inv @ B, A, B)
 
 
-def _sub_poly(P: np.ndarray, a: float, b: float) -> np.ndarray:
-    """Coefficients of P(a + (b - a) u') in u' (P in u over its step, 0 <= a < b <= 1)."""
+def _sub_poly(P, a: float, b: float) -> list:
+    """Coefficients of P(a + (b - a) u') in u' (P in u over its step, 0 <= a < b <= 1): a Taylor
+    shift by a (synthetic division), then the scaling by (b - a)^i."""
+    c = [float(x) for x in P]
+    if a != 0.0:
+        for i in range(5):
+            for k in range(4, i - 1, -1):
+                c[k] += a * c[k + 1]
     d = b - a
-    out = np.zeros(6)
-    # expand sum_k P_k (a + d u')^k
-    for k in range(6):
-        for i in range(k + 1):
-            out[i] += P[k] * math.comb(k, i) * a ** (k - i) * d**i
-    return out
+    if d != 1.0:
+        f = 1.0
+        for i in range(1, 6):
+            f *= d
+            c[i] *= f
+    return c
 
 
 class _Event:
@@ -154,7 +168,7 @@ class ChainSolver:
         if new:
             self.is_out[np.searchsorted(nodes, np.array(new))] = False
         h = self.h = np.diff(nodes)
-        D = np.asarray(drive(nodes), dtype=float)
+        D = self.D_nodes = np.asarray(drive(nodes), dtype=float)
         right, left = D[:3].copy(), D[:3].copy()
         if brk:
             nb = np.array(brk)
@@ -230,16 +244,17 @@ class ChainSolver:
         tb = self._tables[key] = (E, Q)
         return tb
 
-    def advance(self, md: PhaseModes, z0: np.ndarray, Pc: np.ndarray, hh: float) -> np.ndarray:
-        """Modal state after hh from z0, the drive polynomial Pc (in u = tau/hh)."""
+    def advance(self, md: PhaseModes, z0: np.ndarray, Pc, hh: float) -> np.ndarray:
+        """Modal state after hh from z0, the drive polynomial Pc (in u = tau/hh, 6 floats)."""
         if hh <= 0.0:
             return z0
         F = phi_functions(md.lam * hh)
-        D = np.zeros(6)
-        D[:5] = np.arange(1, 6) * Pc[1:] / hh
-        G = np.outer(md.mB[:, 0], Pc) + np.outer(md.mB[:, 1], D)
-        G[:, 0] += md.mB[:, 2]
-        return F[0] * z0 + (G * (F[1:].T * (hh * FACT[:6]))).sum(axis=1)
+        c = [hh * FACT[k] for k in range(6)]
+        # Gamma_k = mB0 P_k + mB1 (k+1) P_(k+1) / hh + mB2 [k = 0]; z = e z0 + sum_k Gamma_k c_k phi_(k+1)
+        wp = np.array([Pc[k] * c[k] for k in range(6)], dtype=complex)
+        wd = np.array([(k + 1) * Pc[k + 1] / hh * c[k] for k in range(5)] + [0.0], dtype=complex)
+        Fk = F[1:]
+        return F[0] * z0 + md.mB[:, 0] * (wp @ Fk) + md.mB[:, 1] * (wd @ Fk) + md.mB[:, 2] * (c[0] * F[1])
 
     # ------------------------------------------------------------------ events
     def event_functions(self, key) -> list[_Event]:
@@ -318,11 +333,12 @@ class ChainSolver:
         nodes, h = self.nodes, self.h
         steps = h.size
         self.z_nodes = np.empty((nodes.size, 2 * self.n), dtype=complex)
-        self.key_nodes = [None] * nodes.size
+        self.key_nodes = np.empty(nodes.size, dtype=np.int8)
         md = self.modes(key)
         z = md.inv @ np.concatenate([x0, v0])
         self._store(0, z, key)
         armed = None
+        window = WINDOW_MIN
         j, u = 0, 0.0  # the state z is at node j + u of its step
         while j < steps:
             events = self.event_functions(key)
@@ -339,21 +355,25 @@ class ChainSolver:
                     continue
                 key, z, u, armed = self._apply(hit, md, events, key, j, z, u)
                 continue
-            L = min(WINDOW, steps - j)
+            # short windows right after an event (events come in clusters: seat bounces),
+            # doubling while the steps stay clear
+            L = min(window, steps - j)
             E, Q = self.tables(key)
             Z = _affine_scan(E[j:j + L], Q[j:j + L], z)  # states at nodes j+1 .. j+L
             Zall = np.vstack([z[None, :], Z])
             ok = self._window_clear(md, rows, events, Zall, j, L)
             bad = (~ok).nonzero()[0]
             done = L if bad.size == 0 else int(bad[0])
-            for i in range(done):
-                self._store(j + i + 1, Zall[i + 1], key)
+            self.z_nodes[j + 1:j + done + 1] = Zall[1:done + 1]
+            self.key_nodes[j + 1:j + done + 1] = key_code(key)
             if done:
                 j += done
                 z = Zall[done]
                 armed = self._arm(md, rows, events, z, j, 0.0, previous=armed)
             if bad.size == 0:
+                window = min(2 * window, WINDOW)
                 continue
+            window = WINDOW_MIN
             hit = self._search_step(md, rows, events, armed, z, j, 0.0, 1.0)
             if hit is None:
                 z = Zall[done + 1]
@@ -365,7 +385,7 @@ class ChainSolver:
 
     def _store(self, i: int, z, key) -> None:
         self.z_nodes[i] = z
-        self.key_nodes[i] = key
+        self.key_nodes[i] = key_code(key)
 
     def _arm(self, md, rows, events, z, j, u, previous=None):
         """An event function is armed while it is on the near side of its crossing; right after
@@ -431,8 +451,13 @@ class ChainSolver:
                 zz = cache[u] = self.advance(md, z, _sub_poly(P, u0, u), (u - u0) * hj)
             return zz
 
-        def gvals(u, zz):
-            return self._local(md, rows, events, zz, P, hj, u)
+        gcache = {}
+
+        def gvals(u, zz):  # g, g', |z''| at u: all event functions at once, shared
+            r = gcache.get(u)
+            if r is None:
+                r = gcache[u] = self._local(md, rows, events, zz, P, hj, u)
+            return r
 
         roots = []
         for i, e in enumerate(events):
@@ -543,8 +568,9 @@ def _newton_bracketed(fg, a: float, b: float, fa: float, fb: float, h: float) ->
         un = u - step
         if not a < un < b:
             un = 0.5 * (a + b)
-        if abs(un - u) <= 2.0 * EPS * max(abs(u), 1e-300):
-            # converged: the last Newton step is below rounding
+        if abs(un - u) <= 1e-13:
+            # converged: u is a fraction of the step, 1e-13 of it is far below the times' rounding
+            # of events (~1e-18 s at these steps), and g's own rounding stops Newton there
             return un
         u = un
     return b if (fb > 0.0) else a
@@ -578,20 +604,31 @@ def start_state(model: ChainModel, drive, t0: float):
     return x, np.zeros_like(x), (contact, seat)
 
 
-def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, keys: list, events, stats,
-                  modes) -> ChainSolution:
-    """The solution's columns from the physical states y (2n, T) and the phase of each sample."""
+# phase types (linkage loaded, seat engaged) by their code 2 * contact + seat
+KEYS = ((False, False), (False, True), (True, False), (True, True))
+
+
+def key_code(key) -> int:
+    return 2 * int(key[0]) + int(key[1])
+
+
+def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes: np.ndarray, events, stats,
+                  modes, D: np.ndarray | None = None) -> ChainSolution:
+    """The solution's columns from the physical states y (2n, T) and the phase code of each
+    sample (key_code); D: the drive (3+, T) at t when the caller has it."""
     n = model.n
-    D = np.asarray(drive(t), dtype=float)
-    contact = np.array([k[0] for k in keys], bool)
-    seat = np.array([k[1] for k in keys], bool)
+    if D is None:
+        D = np.asarray(drive(t), dtype=float)
+    codes = np.asarray(codes)
+    contact = codes >= 2
+    seat = (codes % 2) == 1
     yd = np.empty_like(y)
     ydd = np.empty_like(y)
-    for key in set(keys):
-        idx = np.array([k == key for k in keys])
-        A, B = modes(key)
-        u = np.array([D[0, idx], D[1, idx], np.ones(idx.sum())])
-        u1 = np.array([D[1, idx], D[2, idx], np.zeros(idx.sum())])
+    for code in np.unique(codes).tolist():
+        idx = codes == code
+        A, B = modes(KEYS[code])
+        u = np.array([D[0, idx], D[1, idx], np.ones(int(idx.sum()))])
+        u1 = np.array([D[1, idx], D[2, idx], np.zeros(int(idx.sum()))])
         yd[:, idx] = A @ y[:, idx] + B @ u
         ydd[:, idx] = A @ yd[:, idx] + B @ u1
     s, v = y[0], y[n]
@@ -615,11 +652,11 @@ def solve(model: ChainModel, drive, t: np.ndarray, initial_state=None, max_event
     solver.run(np.asarray(x0, float), np.asarray(v0, float), key)
     out = solver.is_out
     zs = solver.z_nodes[out]
-    keys = [k for k, o in zip(solver.key_nodes, out) if o]
+    codes = solver.key_nodes[out]
     y = np.empty((2 * model.n, zs.shape[0]))
-    for key in set(keys):
-        idx = np.array([k == key for k in keys])
-        y[:, idx] = (solver.modes(key).phys @ zs[idx].T).real
+    for code in np.unique(codes).tolist():
+        idx = codes == code
+        y[:, idx] = (solver.modes(KEYS[code]).phys @ zs[idx].T).real
     stats = {"steps": int(solver.h.size), "events": len(solver.events), "phase_types": len(solver._modes)}
-    return chain_outputs(model, drive, t, y, keys, solver.events, stats,
-                         lambda key: (solver.modes(key).A, solver.modes(key).B))
+    return chain_outputs(model, drive, t, y, codes, solver.events, stats,
+                         lambda key: (solver.modes(key).A, solver.modes(key).B), D=solver.D_nodes[:, out])

@@ -3,8 +3,9 @@
 The same phases and rules: in each phase y' = A y + B [S, S', 1] with the analytic drive (not
 its step polynomials), integrated by solve_ivp (DOP853 by default) with the phase's event
 functions; at an event the phase switches and the integration restarts there. The step is
-bounded by a quarter of the fastest period of the phase (solve_ivp sees crossings only between
-its steps)."""
+bounded by a quarter of the fastest period of the phase, and the integration restarts at the
+valve's apex in flight and at the gap's minimum while the linkage is unloaded (solve_ivp sees
+crossings only between its steps: a hop shorter than a step would go unseen)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from .chain import ChainModel
-from .chain_exact import chain_outputs, phase_modes, start_state
+from .chain_exact import chain_outputs, key_code, phase_modes, start_state
 
 
 def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float = 1e-10,
@@ -39,6 +40,7 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
     keys[0] = key
     i_next = 1
     nfev = 0
+    last_guard = None
     while i_next < t.size:
         A, B, rho = modes(key)
         contact, seat = key
@@ -62,6 +64,16 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
             add("lift-off", lambda tt, yy: yy[0], 1.0)
         else:
             add("seat", lambda tt, yy: yy[0], -1.0)
+        # guards: solve_ivp sees a crossing only between its steps, and a hop of the valve off its
+        # seat (or a touch of the linkage) shorter than a step goes unseen. A restart at the
+        # extremum in between (the valve's apex, the gap's minimum) splits such a pair
+        # (not right after a guard's restart: it is 0 there and would fire again at once, and on
+        # the base circle, S' = 0, both are 0 at the valve's apex)
+        if not seat and last_guard is None:
+            add("guard-apex", lambda tt, yy: yy[n], -1.0)
+        if not contact and last_guard is None:
+            add("guard-gap", lambda tt, yy: float(drive(np.array([tt]))[1, 0]) - yy[n], 1.0)
+        last_guard = None
         if math.isfinite(model.clash_compression):
             for j in range(n):
                 add(f"coil-clash:{j}", (lambda tt, yy, j=j: yy[j] - (yy[j + 1] if j + 1 < n else 0.0)
@@ -70,8 +82,9 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
         sol = solve_ivp(rhs, (t_now, float(t[-1])), y, method=scipy_method, t_eval=t_eval, events=funcs,
                         rtol=rtol, atol=atol, max_step=max_step_fraction * 2.0 * math.pi / rho)
         nfev += sol.nfev
-        m = sol.t.size
-        out[:, i_next:i_next + m] = sol.y
+        m = int(np.size(sol.t))  # (scipy returns lists when a segment ends before any t_eval)
+        if m:
+            out[:, i_next:i_next + m] = np.asarray(sol.y).reshape(2 * n, m)
         keys[i_next:i_next + m] = [key] * m
         i_next += m
         if sol.status != 1:
@@ -80,6 +93,9 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
         t_ev, k = hit
         y = sol.y_events[k][0].copy()
         kind = kinds[k]
+        if kind.startswith("guard"):
+            t_now, last_guard = t_ev, kind
+            continue
         item = {"kind": kind.split(":")[0], "time_s": t_ev}
         if kind == "seat":
             item["velocity_m_s"] = float(y[n])
@@ -89,11 +105,9 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
         key = ({"separation": False, "re-contact": True}.get(kind, contact),
                {"lift-off": False, "seat": True}.get(kind, seat))
         t_now = t_ev
-        # (a clash changes nothing: restart a hair later so the same crossing is not found again)
-        if kind.startswith("coil-clash"):
-            t_now = t_ev
     stats = {"rhs_evaluations": int(nfev), "events": len(events)}
-    return chain_outputs(model, drive, t, out, keys, events, stats, lambda k: modes(k)[:2])
+    codes = np.array([key_code(k) for k in keys])
+    return chain_outputs(model, drive, t, out, codes, events, stats, lambda k: modes(k)[:2])
 
 
 def _link_force(model, drive, tt, yy) -> float:
