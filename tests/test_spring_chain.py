@@ -314,3 +314,35 @@ def test_schenker_gear_surge_model_against_his_mass_split():
     assert len(a) == len(b) == 3
     assert np.max(np.abs(np.array(a) - np.array(b))) < 2.0, (a, b)
     assert np.max(np.abs(split.columns["valve_lift_m"] - chain.columns["valve_lift_m"])) < 1e-3
+
+
+def test_viewer_and_recording_move_the_coils_with_the_surge(tmp_path):
+    # the drawn spring: each coil node's wire point is moved by magnification x (u_j - s r_j);
+    # the recording: one point per coil per step under the spring's frame, at the same surge
+    from explorer import meshes
+    from explorer.recording import with_parts, write_recordings
+    from explorer.recording_read import read_rrd
+
+    scene = load_scene(SCENE, ["solver.steps_per_revolution=720"])
+    result = simulate(scene)
+    lay = meshes.layout(scene, result)
+    w = meshes.spring_surge(result, 10.0)
+    u1 = result.columns["coil_1_displacement_m"]
+    s = result.columns["valve_lift_m"]
+    np.testing.assert_allclose(w[:, 0], 10.0 * (u1 - s * 8 / 9), rtol=1e-12, atol=1e-15)
+    i = int(np.argmax(np.abs(w).max(axis=1)))
+    plain = meshes.spring_vertices(lay, 0.05)
+    moved = meshes.spring_vertices(lay, 0.05, surge=w[i])
+    assert np.max(np.abs(moved[:, 2] - plain[:, 2])) == pytest.approx(np.max(np.abs(w[i])), rel=0.05)
+    np.testing.assert_array_equal(moved[:, :2], plain[:, :2])  # only along the axis
+    out = tmp_path / "surge.rrd"
+    write_recordings(out, [with_parts("surge", result)])
+    run = read_rrd(out)[0]
+    coils = run.temporal["/parts/spring/coils"]
+    positions = coils["Points3D:positions"]
+    assert len(positions) == 720 and len(positions[0]) == 8
+    sz = meshes.spring_axial_scale(scene, result, lay=lay)
+    z = np.array([[p[2] for p in row] for row in positions])
+    # the surge of coil 1, back from the recorded height (float32 in the file: 1e-6 m)
+    z_rest = z + meshes.spring_surge(result)[:, :] / sz[:, None]
+    assert np.max(np.abs(z_rest - z_rest[0])) < 1e-6

@@ -282,6 +282,7 @@ class Prepared:
     new_result: bool  # False when only the magnification changed since the worker's previous bundle
     seconds: float = 0.0  # wall time of the preparation
     plot_note: str = ""  # why a plot is missing (plots_note)
+    spring_surge: np.ndarray | None = None  # (N, coils): the coils' surge as drawn (spring as masses)
 
     @functools.cached_property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -356,6 +357,7 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
     prepared = Prepared(
         request=request, scene=scene, result=result, layout=lay, lift=lift, meshes=parts, poses=poses,
         spring_lengths=np.asarray(lengths, dtype=float), plots=plots, readout=readout,
+        spring_surge=meshes.spring_surge(result, request.magnification),
         label=_request_label(request), values=values, new_result=not same, seconds=time.perf_counter() - started,
         plot_note=plot_note,
     )
