@@ -149,6 +149,8 @@ class ChainSolver:
         self.model, self.drive, self.max_events = model, drive, max_events
         self._modes: dict = {}
         self._tables: dict = {}
+        self._ev_cache: dict = {}
+        self._ev_funcs: dict = {}
         self._build_grid(drive, t)
         self.events: list[dict] = []
         self.n = model.n
@@ -222,27 +224,41 @@ class ChainSolver:
         return md
 
     def tables(self, key):
-        """(E, Q) of every grid step for the phase type: z_(j+1) = E_j z_j + Q_j."""
+        """(W (6, G, 2n), E (G, 2n)) of the phase type for each group of equal step lengths:
+        z_(j+1) = E z_j + sum_k Gamma_jk W_k (once per phase type; window_tables applies them)."""
         tb = self._tables.get(key)
-        if tb is not None:
-            return tb
+        if tb is None:
+            md = self.modes(key)
+            F = phi_functions(md.lam[None, :] * self.h_group[:, None])  # (7, G, 2n)
+            W = F[1:] * (self.h_group[None, :, None] * FACT[:6, None, None])
+            W = np.ascontiguousarray(W)
+            tb = self._tables[key] = (W, W.real.copy(), W.imag.copy(), np.ascontiguousarray(F[0]))
+        return tb
+
+    def window_tables(self, key, j: int, L: int):
+        """(E, Q) (L, 2n) of the steps j .. j+L-1 in the phase type."""
         md = self.modes(key)
-        G = self.h_group.size
-        F = phi_functions(md.lam[None, :] * self.h_group[:, None])  # (7, G, 2n)
-        W = F[1:] * (self.h_group[None, :, None] * FACT[:6, None, None])  # (6, G, 2n)
-        P, h = self.P, self.h
+        W, Wr, Wi, E0 = self.tables(key)
+        P = self.P[:, j:j + L]
+        h = self.h[j:j + L]
         D = np.zeros_like(P)
         D[:5] = np.arange(1, 6)[:, None] * P[1:] / h
-        steps = h.size
-        Q = np.empty((steps, md.lam.size), dtype=complex)
-        for g in range(G):
-            idx = (self.group == g).nonzero()[0]
-            Wg = W[:, g]
-            Q[idx] = (_rc(P[:, idx].T, Wg) * md.mB[:, 0] + _rc(D[:, idx].T, Wg) * md.mB[:, 1]
-                      + Wg[0] * md.mB[:, 2])
-        E = F[0][self.group]
-        tb = self._tables[key] = (E, Q)
-        return tb
+        groups = self.group[j:j + L]
+        g0 = int(groups[0])
+        E = np.empty((L, md.lam.size), dtype=complex)
+        Q = np.empty((L, md.lam.size), dtype=complex)
+        uniform = bool(np.all(groups == g0))
+        for g in ([g0] if uniform else np.unique(groups).tolist()):
+            idx = slice(None) if uniform else (groups == g)
+            PT = np.ascontiguousarray(P[:, idx].T)
+            DT = np.ascontiguousarray(D[:, idx].T)
+            # real drive coefficients times complex tables, as two real products (numpy's mixed
+            # real-complex matmul takes a slow path)
+            qp = (PT @ Wr[:, g]) + 1j * (PT @ Wi[:, g])
+            qd = (DT @ Wr[:, g]) + 1j * (DT @ Wi[:, g])
+            Q[idx] = qp * md.mB[:, 0] + qd * md.mB[:, 1] + W[0, g] * md.mB[:, 2]
+            E[idx] = E0[g]
+        return E, Q
 
     def advance(self, md: PhaseModes, z0: np.ndarray, Pc, hh: float) -> np.ndarray:
         """Modal state after hh from z0, the drive polynomial Pc (in u = tau/hh, 6 floats)."""
@@ -258,6 +274,12 @@ class ChainSolver:
 
     # ------------------------------------------------------------------ events
     def event_functions(self, key) -> list[_Event]:
+        funcs = self._ev_funcs.get(key)
+        if funcs is None:
+            funcs = self._ev_funcs[key] = self._make_event_functions(key)
+        return funcs
+
+    def _make_event_functions(self, key) -> list[_Event]:
         m, n = self.model, self.n
         contact, seat = key
         ev = []
@@ -284,26 +306,28 @@ class ChainSolver:
         return ev
 
     def _event_data(self, key, events):
-        """Per event function: modal row a.Phys, and scalars for g' (modal forcing through a)."""
-        md = self.modes(key)
-        rows = np.array([e.coef @ md.phys for e in events])  # (E, 2n)
-        return md, rows
+        """(modes, rows a.Phys (E, 2n)) of the phase's event functions, once per phase type;
+        their alpha, beta, const and sign as arrays in self._ev_arrays[key]."""
+        cached = self._ev_cache.get(key)
+        if cached is None:
+            md = self.modes(key)
+            rows = np.array([e.coef @ md.phys for e in events])  # (E, 2n)
+            arrays = tuple(np.array([getattr(e, f) for e in events]) for f in ("alpha", "beta", "const", "sign"))
+            cached = self._ev_cache[key] = (md, rows, arrays, md.mB.real.copy(), md.mB.imag.copy(), np.abs(rows),
+                                            (np.abs(md.mB[:, 0]), np.abs(md.mB[:, 1])))
+        return cached[0], cached[1]
 
     def _local(self, md, rows, events, z: np.ndarray, P: np.ndarray, hh: float, u: float):
         """g, g', |g''| at u of a step (z: modal state there): arrays over the events. Also
         z'' magnitudes for the bound."""
         S, S1, S2, S3 = self._drive_poly_at(P, hh, u)
-        drive = np.array([S, S1, 1.0])
-        drive1 = np.array([S1, S2, 0.0])
-        drive2 = np.array([S2, S3, 0.0])
-        gam = md.mB @ drive
-        gam1 = md.mB @ drive1
-        gam2 = md.mB @ drive2
+        mB = md.mB
+        gam = mB[:, 0] * S + mB[:, 1] * S1 + mB[:, 2]
+        gam1 = mB[:, 0] * S1 + mB[:, 1] * S2
+        gam2 = mB[:, 0] * S2 + mB[:, 1] * S3
         dz = md.lam * z + gam
         ddz = md.lam * dz + gam1
-        alpha = np.array([e.alpha for e in events])
-        beta = np.array([e.beta for e in events])
-        const = np.array([e.const for e in events])
+        alpha, beta, const, _ = self._ev_cache[(md.contact, md.seat)][2]
         g = (rows @ z).real + alpha * S + beta * S1 + const
         g1 = (rows @ dz).real + alpha * S1 + beta * S2
         return g, g1, np.abs(ddz), gam2
@@ -315,6 +339,14 @@ class ChainSolver:
         S2b, S3b = self.S2b[j], self.S3b[j]
         mb = np.abs(md.mB[:, 0]) * S2b + np.abs(md.mB[:, 1]) * S3b
         return np.abs(rows) @ (ddz_abs + hh * mb) + alpha * S2b + beta * S3b
+
+    def _bound1(self, md, i, rows, events, ddz_abs, hh: float, j: int) -> float:
+        """_bound2 for event function i alone."""
+        e = events[i]
+        S2b, S3b = float(self.S2b[j]), float(self.S3b[j])
+        arow = self._ev_cache[(md.contact, md.seat)][5][i]
+        mb = self._ev_cache[(md.contact, md.seat)][6]
+        return float(arow @ (ddz_abs + hh * (mb[0] * S2b + mb[1] * S3b))) + abs(e.alpha) * S2b + abs(e.beta) * S3b
 
     @staticmethod
     def _excluded(g0, g1a, gb, g1b, M2, hh):
@@ -358,10 +390,10 @@ class ChainSolver:
             # short windows right after an event (events come in clusters: seat bounces),
             # doubling while the steps stay clear
             L = min(window, steps - j)
-            E, Q = self.tables(key)
-            Z = _affine_scan(E[j:j + L], Q[j:j + L], z)  # states at nodes j+1 .. j+L
+            E, Q = self.window_tables(key, j, L)
+            Z = _affine_scan(E, Q, z)  # states at nodes j+1 .. j+L
             Zall = np.vstack([z[None, :], Z])
-            ok = self._window_clear(md, rows, events, Zall, j, L)
+            ok, gb, g1b = self._window_clear(md, rows, events, Zall, j, L)
             bad = (~ok).nonzero()[0]
             done = L if bad.size == 0 else int(bad[0])
             self.z_nodes[j + 1:j + done + 1] = Zall[1:done + 1]
@@ -369,7 +401,8 @@ class ChainSolver:
             if done:
                 j += done
                 z = Zall[done]
-                armed = self._arm(md, rows, events, z, j, 0.0, previous=armed)
+                # (the functions' values at the window's last clear node, from the window)
+                armed = self._armed_from(md, gb[:, done - 1], g1b[:, done - 1], float(h[j - 1]), previous=armed)
             if bad.size == 0:
                 window = min(2 * window, WINDOW)
                 continue
@@ -394,8 +427,12 @@ class ChainSolver:
         if j >= self.h.size:
             return np.ones(len(events), bool)
         g, g1, _, _ = self._local(md, rows, events, z, self.P[:, j], self.h[j], u)
-        sg, sg1 = np.array([e.sign for e in events]) * g, np.array([e.sign for e in events]) * g1
-        scale = np.abs(g1) * self.h[j] + 1e-300
+        return self._armed_from(md, g, g1, float(self.h[j]), previous)
+
+    def _armed_from(self, md, g, g1, hstep: float, previous=None):
+        sign = self._ev_cache[(md.contact, md.seat)][2][3]
+        sg, sg1 = sign * g, sign * g1
+        scale = np.abs(g1) * hstep + 1e-300
         tiny = np.abs(g) <= 1e-9 * scale
         armed = (sg < 0.0) | (tiny & (sg1 < 0.0))
         if previous is not None:
@@ -414,9 +451,7 @@ class ChainSolver:
         S2e = (k * (k - 1) * Pw).sum(0) / h**2
         Se = Pw.sum(0)
         Za, Zb = Zall[:-1], Zall[1:]
-        alpha = np.array([e.alpha for e in events])[:, None]
-        beta = np.array([e.beta for e in events])[:, None]
-        const = np.array([e.const for e in events])[:, None]
+        alpha, beta, const, _ = (x[:, None] for x in self._ev_cache[(md.contact, md.seat)][2])
         lam, mB = md.lam, md.mB
         gam_a = mB[:, 0][None] * S0[:, None] + mB[:, 1][None] * S10[:, None] + mB[:, 2][None]
         gam_b = mB[:, 0][None] * Se[:, None] + mB[:, 1][None] * S1e[:, None] + mB[:, 2][None]
@@ -433,14 +468,13 @@ class ChainSolver:
         M2 = np.abs(rows) @ (np.abs(ddza) + h[:, None] * mb).T + np.abs(alpha) * S2b + np.abs(beta) * S3b
         # a step is clear when no function can change sign in it (an unarmed one that has come
         # back is armed at the next node by _arm)
-        return np.all(self._excluded(ga, g1a, gb, g1b, M2, h[None, :]), axis=0)
+        return np.all(self._excluded(ga, g1a, gb, g1b, M2, h[None, :]), axis=0), gb, g1b
 
     def _search_step(self, md, rows, events, armed, z, j, u0, u1):
         """The first crossing of an armed function in (u0, u1] of step j: (u, event index) or None.
         Unarmed functions arm where they cross back."""
         hj = float(self.h[j])
         P = self.P[:, j]
-        best = None
         armed_local = armed.copy()
 
         cache = {u0: z}
@@ -459,8 +493,16 @@ class ChainSolver:
                 r = gcache[u] = self._local(md, rows, events, zz, P, hj, u)
             return r
 
+        # all functions at once over the whole interval first: only those not certified free of a
+        # sign change go through the search
+        ga, g1a, ddza, _ = gvals(u0, z)
+        gb, g1b, _, _ = gvals(u1, state(u1))
+        M2 = self._bound2(md, rows, events, ddza, (u1 - u0) * hj, j)
+        free = self._excluded(ga, g1a, gb, g1b, M2, (u1 - u0) * hj)
         roots = []
         for i, e in enumerate(events):
+            if free[i]:
+                continue
             r = self._first_crossing(i, e, armed_local[i], u0, u1, z, state, gvals, md, rows, events, hj, j)
             if r is not None:
                 roots.append((r, i))
@@ -478,19 +520,23 @@ class ChainSolver:
             ga, g1a, ddza, _ = gvals(a, za)
             gb, g1b, _, _ = gvals(b, zb)
             ga, g1a, gb, g1b = ga[i] * e.sign, g1a[i] * e.sign, gb[i] * e.sign, g1b[i] * e.sign
-            M2 = self._bound2(md, rows[i:i + 1], [e], ddza, (b - a) * hj, j)[0]
+            M2 = self._bound1(md, i, rows, events, ddza, (b - a) * hj, j)
             width = (b - a) * hj
             if not armed:
-                if ga >= 0.0 and gb > 0.0 and self._excluded(np.array([ga]), np.array([g1a]), np.array([gb]),
-                                                             np.array([g1b]), np.array([M2]), width)[0]:
+                if ga >= 0.0 and gb > 0.0 and _excluded1(ga, g1a, gb, g1b, M2, width):
                     continue
-            elif ga < 0.0 and gb < 0.0 and self._excluded(np.array([ga]), np.array([g1a]), np.array([gb]),
-                                                          np.array([g1b]), np.array([M2]), width)[0]:
+            elif ga < 0.0 and gb < 0.0 and _excluded1(ga, g1a, gb, g1b, M2, width):
                 continue
             if (ga < 0.0) != (gb < 0.0) and (abs(g1a) - M2 * width > 0.0) and g1a * g1b > 0.0:
-                # one monotone crossing: locate it on the closed form
+                if not armed and gb < 0.0:
+                    # one monotone crossing back to the near side: armed from there on, and no
+                    # crossing out again in this interval
+                    armed = True
+                    continue
+                # one monotone crossing: locate it on the closed form, from the root of the
+                # cubic Hermite interpolant of g (values and slopes at both ends)
                 r = _newton_bracketed(lambda u: tuple(x[i] * e.sign for x in gvals(u, state(u))[:2]),
-                                      a, b, ga, gb, hj)
+                                      a, b, ga, gb, hj, _hermite_root(a, b, ga, gb, g1a * hj, g1b * hj))
                 if armed and gb > 0.0:
                     return r
                 if not armed and gb < 0.0:
@@ -538,14 +584,45 @@ class ChainSolver:
         return new, self.modes(new).inv @ y, u, None
 
 
-def _rc(R: np.ndarray, X: np.ndarray) -> np.ndarray:
-    """R @ X for real R and complex X through two real products (numpy's mixed-type matmul
-    takes a slow path: 16 ms instead of 0.1 ms for a 3600 x 6 by 6 x 18 product)."""
-    R = np.ascontiguousarray(R)
-    return (R @ X.real) + 1j * (R @ X.imag)
+def _excluded1(g0: float, g1a: float, gb: float, g1b: float, M2: float, hh: float) -> bool:
+    """ChainSolver._excluded for one function, in plain floats."""
+    if not g0 * gb > 0.0:
+        return False
+    sgn = 1.0 if g0 > 0.0 else -1.0
+    a0, sa, b0, sb = sgn * g0, sgn * g1a, sgn * gb, -sgn * g1b
+    M = M2 * (1.0 + 1e-9) + 1e-300
+    tl = (sa + math.sqrt(sa * sa + 2.0 * M * a0)) / M
+    tr = (sb + math.sqrt(sb * sb + 2.0 * M * b0)) / M
+    return tl + tr > hh * (1.0 + 1e-12)
 
 
-def _newton_bracketed(fg, a: float, b: float, fa: float, fb: float, h: float) -> float:
+def _hermite_root(a: float, b: float, fa: float, fb: float, da: float, db: float) -> float:
+    """The root in (a, b) of the cubic through f and df/du at both ends (f(a), f(b) of opposite
+    signs): a start for Newton on the closed form, within O((b - a)^4) of the root."""
+    w = b - a
+    # in x = (u - a) / w: p(x) = fa h00 + w da h10 + fb h01 + w db h11
+    c0, c1 = fa, w * da
+    c2 = 3.0 * (fb - fa) - w * (2.0 * da + db)
+    c3 = 2.0 * (fa - fb) + w * (da + db)
+    lo, hi = 0.0, 1.0
+    x = fa / (fa - fb)
+    for _ in range(8):
+        p = ((c3 * x + c2) * x + c1) * x + c0
+        if (p < 0.0) == (fa < 0.0):
+            lo = x
+        else:
+            hi = x
+        dp = (3.0 * c3 * x + 2.0 * c2) * x + c1
+        xn = x - p / dp if dp != 0.0 else 0.5 * (lo + hi)
+        if not lo < xn < hi:
+            xn = 0.5 * (lo + hi)
+        if abs(xn - x) < 1e-15:
+            break
+        x = xn
+    return a + w * x
+
+
+def _newton_bracketed(fg, a: float, b: float, fa: float, fb: float, h: float, start: float | None = None) -> float:
     """The root of a monotone f in [a, b] (f(a), f(b) of opposite signs): Newton steps with the
     analytic slope (f, df/dt) = fg(u), u = t/h, kept inside the shrinking bracket (bisection when
     a step leaves it), to a bracket of a few ulp."""
@@ -553,7 +630,7 @@ def _newton_bracketed(fg, a: float, b: float, fa: float, fb: float, h: float) ->
         return a
     if fb == 0.0:
         return b
-    u = a + (b - a) * fa / (fa - fb)
+    u = start if start is not None and a < start < b else a + (b - a) * fa / (fa - fb)
     for _ in range(100):
         f, df = fg(u)
         if f == 0.0:
