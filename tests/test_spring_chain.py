@@ -165,7 +165,8 @@ def test_energy_balance_over_a_revolution():
 
 def test_first_separation_converges_with_elements():
     # the first separation angle during the lift as N grows: Richardson on N = 8, 16, 32 gives
-    # the order; the half-element lumping makes it second order (the frequencies' order)
+    # the order; the half-element lumping makes it second order (the frequencies' order).
+    # Measured: 61.035, 61.131, 61.158 (64: 61.165) deg, orders 1.83 and 1.92 (N = 16, 32, 64)
     rpm = 3900
     drive, t = _drive(rpm), _grid(rpm)
     angles = []
@@ -175,7 +176,7 @@ def test_first_separation_converges_with_elements():
         angles.append(math.degrees(sep[0] * rpm * math.pi / 30.0))
     d1, d2 = angles[0] - angles[1], angles[1] - angles[2]
     order = math.log2(abs(d1 / d2))
-    assert 1.5 < order < 2.6, (angles, order)
+    assert 1.7 < order < 2.2, (angles, order)
 
 
 def test_stiff_seat_many_elements_high_speed_stays_finite_and_matches_reference():
