@@ -204,8 +204,8 @@ def _run_dask(scene, plan: Plan, names, starts, size, scheduler: str, done) -> N
         futures = [client.submit(dask_chunk, blob, plan.keys, names, s, plan.values[s:s + size],
                                  key=f"explorer-sweep-{token}-{s}", pure=False, retries=3) for s in starts]
         try:
-            for fut, (start, block) in as_completed(futures, with_results=True):
-                done(start, block)
+            for fut in as_completed(futures, loop=client.loop):
+                done(*fut.result())
         finally:
             client.cancel(futures)
 
