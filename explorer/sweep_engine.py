@@ -146,6 +146,12 @@ def _batchable(scene) -> bool:
 
 def engine_row(scene, names, shared: _Shared) -> dict[str, float]:
     """The row of one run, computed as simulate computes it, sharing `shared` across runs."""
+    summary, events, columns = engine_outputs(scene, shared)
+    return row_scalars(set(names), summary, events, columns)
+
+
+def engine_outputs(scene, shared: _Shared) -> tuple[dict, list, dict]:
+    """(summary, elastic events, columns) of one run: what the rows are read from."""
     from .effects import Context, effect_function, resolve
     from .lift import build_lift
 
@@ -160,7 +166,6 @@ def engine_row(scene, names, shared: _Shared) -> dict[str, float]:
     columns: dict[str, np.ndarray] = {"cam_angle_deg": np.degrees(theta), "time_s": t_time}
     summary: dict[str, Any] = {"revolution_time_s": 2.0 * math.pi / omega}
     events: list[dict] = []
-    wanted = set(names)
 
     def ctx():
         return Context(scene, theta, t_time, lift, MappingProxyType(columns), MappingProxyType(summary))
@@ -187,7 +192,7 @@ def engine_row(scene, names, shared: _Shared) -> dict[str, float]:
         summary.update(out.summary)
         events.extend(dict(e, effect="elastic") for e in out.events)
         events.sort(key=lambda e: e["time_s"])
-    return row_scalars(wanted, summary, events, columns)
+    return summary, events, columns
 
 
 def _forces_scalars(scene, lift, omega, shared: _Shared, columns) -> dict:
