@@ -127,6 +127,21 @@ def reference_row(scene, names) -> dict[str, float]:
     return row_scalars(names, result.summary, result.summary["events"], result.columns)
 
 
+CACHE_ENTRIES = 16  # per cache: a tolerance study draws a new lash every run; memory must not grow with runs
+
+
+def _remember(cache: dict, key, make):
+    """cache[key], made on first use; the oldest entry goes when the cache is full."""
+    try:
+        return cache[key]
+    except KeyError:
+        pass
+    if len(cache) >= CACHE_ENTRIES:
+        del cache[next(iter(cache))]
+    value = cache[key] = make()
+    return value
+
+
 @dataclass
 class _Shared:
     """What the runs of one chunk share (built on first use)."""
@@ -181,11 +196,9 @@ def engine_outputs(scene, shared: _Shared) -> tuple[dict, list, dict]:
         summary["max_camshaft_torque_Nm"] = out.summary.get("max_camshaft_torque_Nm")
     if "elastic" in effects:
         ratio, lash = scene.follower.ratio, scene.valve.lash
-        ups = shared.take_ups.get((ratio, lash))
-        if ups is None:
-            from .kinematics import lash_crossings
+        from .kinematics import lash_crossings
 
-            ups = shared.take_ups[(ratio, lash)] = lash_crossings(lift, ratio, lash)[0]
+        ups = _remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
         summary["take_up_times_s"] = [th / omega for th in ups]  # lash_effect's time_s, same arithmetic
         out = effect_function("elastic", scene.follower.type)(ctx())
         columns.update(out.columns)
@@ -205,14 +218,9 @@ def _forces_scalars(scene, lift, omega, shared: _Shared, columns) -> dict:
     n_grid = max(4096, scene.solver.steps_per_revolution)
     columns.update(rigid_train_forces(columns["rigid_valve_lift_m"], columns["rigid_valve_velocity_m_s"],
                                       columns["rigid_valve_accel_m_s2"], loads, ratio))
-    pieces = shared.pieces.get((ratio, lash, n_grid))
-    if pieces is None:
-        pieces = shared.pieces[(ratio, lash, n_grid)] = smooth_pieces(lift, ratio, lash, n_grid)
+    pieces = _remember(shared.pieces, (ratio, lash, n_grid), lambda: smooth_pieces(lift, ratio, lash, n_grid))
     f_min, _ = min_contact_force(lift, loads, omega, ratio, lash, pieces, n_grid)
-    key = (ratio, lash, n_grid, loads)
-    jump = shared.jumps.get(key)
-    if jump is None:
-        jump = shared.jumps[key] = float_speed(lift, loads, ratio, lash, pieces, n_grid)
+    jump = _remember(shared.jumps, (ratio, lash, n_grid, loads), lambda: float_speed(lift, loads, ratio, lash, pieces, n_grid))
     return {"min_contact_force_N": f_min if math.isfinite(f_min) else None,
             "jump_speed_rpm": jump.rpm if math.isfinite(jump.omega) else None}
 

@@ -119,3 +119,19 @@ def test_gear_scenes_take_the_simulate_path_and_agree():
         for name, value in expected.items():
             got = table[i, names.index(name)]
             assert got == value or (math.isnan(got) and math.isnan(value)), name
+
+
+def test_shared_caches_stay_bounded_in_a_tolerance_study():
+    """Memory grows with runs x columns, not with the distinct values drawn: a lash drawn anew
+    every run must not keep a float-speed and pieces entry per run."""
+    from explorer.sweep_engine import CACHE_ENTRIES
+
+    base = load_scene(SCENES / "valve_float_demo.toml", ['effects=["forces"]', "solver.steps_per_revolution=720"])
+    names = result_columns(base)
+    lash = np.random.default_rng(5).uniform(2e-4, 3e-4, CACHE_ENTRIES + 8)[:, None]
+    shared = _Shared()
+    table = compute_chunk(base, ("valve.lash",), lash, names, shared)
+    assert len(shared.pieces) <= CACHE_ENTRIES and len(shared.jumps) <= CACHE_ENTRIES
+    # and an evicted entry, made again, gives the same figures (the cache holds pure results)
+    again = compute_chunk(base, ("valve.lash",), lash[:2], names, shared)
+    assert np.array_equal(again, table[:2])
