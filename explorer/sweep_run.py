@@ -23,6 +23,7 @@ import io
 import math
 import os
 import pickle
+import re
 import signal
 import time
 from types import MappingProxyType
@@ -189,6 +190,18 @@ def _end_pool(pool) -> None:
             proc.join()
 
 
+_ADDRESS = re.compile(r"^(?:(?:tcp|tls|ws|wss)://)?(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):(?P<port>[0-9]{1,5})$")
+
+
+def check_scheduler(address: str) -> None:
+    """A scheduler address is [tcp://]HOST:PORT (tls, ws, wss too; [IPv6] in brackets)."""
+    from .errors import InputError
+
+    m = _ADDRESS.match(str(address or ""))
+    if m is None or not 0 < int(m.group("port")) < 65536:
+        raise InputError("--scheduler", str(address)[:80], "expected tcp://HOST:PORT, such as tcp://127.0.0.1:8786")
+
+
 def _run_dask(scene, plan: Plan, names, starts, size, scheduler: str, done) -> None:
     try:
         from distributed import Client, as_completed
@@ -197,9 +210,17 @@ def _run_dask(scene, plan: Plan, names, starts, size, scheduler: str, done) -> N
 
         raise InputError("--scheduler", scheduler, "needs dask[distributed]: pip install 'valve-gear-explorer[cluster]'") \
             from None
+    check_scheduler(scheduler)
     data = dumps_scene(scene)
     token = os.urandom(6).hex()
-    with Client(scheduler, timeout="20s", set_as_default=False) as client:
+    try:
+        client = Client(scheduler, timeout="10s", set_as_default=False)
+    except (OSError, ValueError, TypeError) as exc:  # refused, timed out, not an address
+        from .errors import InputError
+
+        reason = str(exc).splitlines()[0][:160] if str(exc) else type(exc).__name__
+        raise InputError("--scheduler", scheduler, f"cannot connect to the Dask scheduler: {reason}") from None
+    with client:
         blob = client.scatter(data, broadcast=True)
         futures = [client.submit(dask_chunk, blob, plan.keys, names, s, plan.values[s:s + size],
                                  key=f"explorer-sweep-{token}-{s}", pure=False, retries=3) for s in starts]

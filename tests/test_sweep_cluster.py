@@ -87,3 +87,18 @@ def test_a_worker_killed_mid_sweep_loses_and_duplicates_no_row(serial, cluster):
     runs = np.asarray(result.columns["run"])
     assert runs.tolist() == list(range(plan.runs))  # each run once, in order
     _same(result, table)
+
+
+@pytest.mark.parametrize("address, message", [
+    ("nonsense:::", "expected tcp://HOST:PORT"),
+    ("tcp://127.0.0.1:99999", "expected tcp://HOST:PORT"),
+    ("tcp://127.0.0.1:9", "cannot connect to the Dask scheduler"),  # nothing listens on the discard port
+])
+def test_a_bad_scheduler_is_one_line_and_nothing_written(tmp_path, address, message):
+    from conftest import run_cli
+
+    pytest.importorskip("distributed")
+    r = run_cli("sweep", SCENES / "elastic_float.toml", "--vary", "drive.rpm=3000:4000:3", "-o", tmp_path / "t.csv",
+                "--scheduler", address)
+    assert r.returncode == 2 and message in r.stderr, r.stderr
+    assert r.stderr.count("\n") == 1 and list(tmp_path.iterdir()) == []
