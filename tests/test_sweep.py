@@ -242,3 +242,37 @@ def test_import_explorer_does_not_load_the_sweep_machinery():
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
                        timeout=process_timeout(0.5))
     assert r.stdout.strip() == "[]", r.stdout + r.stderr
+
+
+# ---------------------------------------------------------------- hostile specs
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+_PIECES = st.sampled_from(["1000", "6000", "0", "-5", "1e400", "nan", "inf", "0.3 mm", "3 kN/mm", "N", "mm", "", " ",
+                           ":", ",", "log", "lin", "2.5", "1e7", "10**10**10", "(", ")", "'", "\"", "=", "\x00", "é",
+                           "normal(", "uniform(", "1 rpm", "2 rad/s", "-0 mm"])
+
+
+@settings(max_examples=300, deadline=None)
+@given(key=st.sampled_from(["drive.rpm", "valve.lash", "linkage.stiffness", "seat.restitution", "x.y"]),
+       parts=st.lists(_PIECES, max_size=8), log=st.booleans())
+def test_any_grid_text_is_an_axis_or_one_input_error(key, parts, log):
+    text = "".join(parts)
+    try:
+        axis = parse_axis(key, text, log=log)
+    except InputError as exc:
+        assert "\n" not in str(exc)
+        return
+    assert axis.values.size >= 1 and np.all(np.isfinite(axis.values))
+    assert np.all(np.diff(axis.values) > 0) or "," in text  # a range is increasing; a list is as given
+
+
+@settings(max_examples=200, deadline=None)
+@given(key=st.sampled_from(["drive.rpm", "valve.lash", "spring.preload"]), parts=st.lists(_PIECES, max_size=8))
+def test_any_sample_text_is_a_sample_or_one_input_error(key, parts):
+    text = "".join(parts)
+    try:
+        sample = parse_sample(key, text)
+    except InputError as exc:
+        assert "\n" not in str(exc)
+        return
+    assert math.isfinite(sample.a) and math.isfinite(sample.b)
