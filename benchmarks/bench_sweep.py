@@ -33,8 +33,8 @@ HARDWARE_LIMIT = 100_000.0  # elastic revolutions per second per core (issue #14
 
 
 def _loop(base, keys, values, names):
-    from explorer.sweep_engine import reference_row
-    from explorer.sweep_spec import scene_for
+    from explorer.studies.sweep_engine import reference_row
+    from explorer.studies.sweep_spec import scene_for
 
     for row in values:
         reference_row(scene_for(base, keys, row), names)
@@ -47,9 +47,9 @@ def main() -> None:
     parser.add_argument("--no-cluster", action="store_true")
     args = parser.parse_args()
 
-    from explorer.scene import load_scene
-    from explorer.sweep_engine import _Shared, compute_chunk, result_columns
-    from explorer.sweep_run import plan_from, run_plan
+    from explorer.scene.scene import load_scene
+    from explorer.studies.sweep_engine import _Shared, compute_chunk, result_columns
+    from explorer.studies.sweep_run import plan_from, run_plan
 
     scenes = ROOT / "assets" / "scenes"
     rows = []

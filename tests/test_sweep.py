@@ -15,9 +15,9 @@ import pytest
 
 import explorer
 from conftest import ROOT, SCENES, kill_tree, process_timeout, run_cli
-from explorer.errors import InputError
-from explorer.sweep_spec import make_plan, parse_axis, parse_sample
-from explorer.sweep_table import read_table
+from explorer.core.errors import InputError
+from explorer.studies.sweep_spec import make_plan, parse_axis, parse_sample
+from explorer.studies.sweep_table import read_table
 
 FLOAT = SCENES / "valve_float_demo.toml"
 CYCLOIDAL = SCENES / "cycloidal_demo.toml"
@@ -154,7 +154,7 @@ def test_cli_sweep_writes_parquet_csv_png_and_recording(tmp_path):
 
 
 def test_ctrl_c_keeps_the_finished_runs_as_a_valid_file_marked_incomplete(tmp_path):
-    from explorer.processes import spawn
+    from explorer.core.processes import spawn
 
     out, log = tmp_path / "s.parquet", tmp_path / "err.txt"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
@@ -226,7 +226,7 @@ def test_pictures_for_a_map_and_a_tolerance_study(tmp_path):
     grid = explorer.sweep(FLOAT, vary={"drive.rpm": "2000:5000:3", "linkage.stiffness": "1e6:1e7:3"}, workers=1,
                           log=("linkage.stiffness",))
     assert len(grid) == 9
-    from explorer.sweep_plots import heatmaps_png, histograms_png, separating_share
+    from explorer.studies.sweep_plots import heatmaps_png, histograms_png, separating_share
 
     assert heatmaps_png(grid.table)[:4] == b"\x89PNG"
     tol = explorer.sweep(FLOAT, sample={"valve.lash": "uniform(0.2 mm, 0.3 mm)"}, runs=6, seed=3, workers=1)

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from conftest import SCENES
-from explorer.scene import load_scene
-from explorer.sweep_run import dumps_scene, loads_scene_bytes, plan_from, run_plan
+from explorer.scene.scene import load_scene
+from explorer.studies.sweep_run import dumps_scene, loads_scene_bytes, plan_from, run_plan
 
 # a short revolution keeps the runs quick; the float scene still separates and seats
 SCENE = load_scene(SCENES / "valve_float_demo.toml", ["solver.steps_per_revolution=720"])

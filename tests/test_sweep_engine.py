@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 
 from conftest import SCENES
-from explorer.effects import simulate
-from explorer.errors import InputError
-from explorer.scene import load_scene
-from explorer.sweep_engine import _Shared, compute_chunk, engine_outputs, result_columns, row_scalars
-from explorer.sweep_spec import scene_for
+from explorer.effects.pipeline import simulate
+from explorer.core.errors import InputError
+from explorer.scene.scene import load_scene
+from explorer.studies.sweep_engine import _Shared, compute_chunk, engine_outputs, result_columns, row_scalars
+from explorer.studies.sweep_spec import scene_for
 
 KEYS = ("drive.rpm", "linkage.stiffness", "valve.mass", "spring.preload", "valve.lash", "linkage.damping",
         "seat.restitution")
@@ -124,7 +124,7 @@ def test_gear_scenes_take_the_simulate_path_and_agree():
 def test_shared_caches_stay_bounded_in_a_tolerance_study():
     """Memory grows with runs x columns, not with the distinct values drawn: a lash drawn anew
     every run must not keep a float-speed and pieces entry per run."""
-    from explorer.sweep_engine import CACHE_ENTRIES
+    from explorer.studies.sweep_engine import CACHE_ENTRIES
 
     base = load_scene(SCENES / "valve_float_demo.toml", ['effects=["forces"]', "solver.steps_per_revolution=720"])
     names = result_columns(base)
