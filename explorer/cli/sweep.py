@@ -44,8 +44,9 @@ class _Vary(argparse.Action):
     def __call__(self, parser, namespace, values, option_string=None):
         grids = getattr(namespace, "grids", None) or []
         if option_string == "--log":
-            if not grids:
-                raise InputError("--log", "-", "--log follows the --vary it applies to")
+            if not grids:  # reported by run(): an error here would escape as a traceback
+                namespace.stray_log = True
+                return
             grids[-1] = (grids[-1][0], True)
         else:
             grids.append((values, False))
@@ -118,6 +119,8 @@ def run(args) -> int:
     from ..studies.sweep_run import SweepResult, plan_from, run_plan
     from ..studies.sweep_table import table_format
 
+    if getattr(args, "stray_log", False):
+        raise InputError("--log", "-", "--log follows the --vary it applies to")
     scene = load_scene(args.scene or str(default_scene()), args.overrides)
     vary, log = {}, []
     for text, is_log in args.grids or []:
