@@ -102,3 +102,15 @@ def test_a_bad_scheduler_is_one_line_and_nothing_written(tmp_path, address, mess
                 "--scheduler", address)
     assert r.returncode == 2 and message in r.stderr, r.stderr
     assert r.stderr.count("\n") == 1 and list(tmp_path.iterdir()) == []
+
+
+def test_the_command_runs_on_the_cluster(serial, cluster, tmp_path):
+    from conftest import run_cli
+    from explorer.studies.sweep_table import read_table
+
+    plan, table = serial
+    out = tmp_path / "s.parquet"
+    r = run_cli("sweep", SCENES / "valve_float_demo.toml", "--set", "solver.steps_per_revolution=720",
+                "--vary", f"drive.rpm={VARY['drive.rpm']}", "-o", out, "--scheduler", cluster.scheduler_address)
+    assert r.returncode == 0, r.stderr
+    _same(read_table(out), table)
