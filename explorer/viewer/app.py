@@ -267,6 +267,8 @@ class ExplorerApp:
 
         with gui.add_folder("Scene"):
             self.scene = gui.add_dropdown("Scene", list(self.scene_paths), initial_value=self._scene_label)
+            # right under the scene: an 800 px page shows it even with an error above
+            self.reset = gui.add_button("Reset to scene file", hint="every field back to the scene file's values")
             laws = list(LAWS) + list(SPECIAL_LAWS)
             self.fields: dict[str, Any] = {}
             for key, (label, kind, unit) in PARAMETERS.items():
@@ -287,7 +289,6 @@ class ExplorerApp:
                     handle = gui.add_checkbox(name, initial_value=name == "kinematics")
                     handle.on_update(self._effects_changed)
                     self.effects[name] = handle
-            self.reset = gui.add_button("Reset to scene file")
 
         # plots and read-outs in their own panel on the left, beside the 3D view
         self.side_panel = gui.add_panel()
@@ -297,7 +298,7 @@ class ExplorerApp:
             self.plot_note = gui.add_markdown("", visible=False, order=-1.0)
             # viser's uPlot sends no clicks or pointer positions back to Python: the nearest thing
             # to clicking a plot is this slider right under the plots, on their angle scale
-            self.plot_angle = gui.add_slider("Cam angle [°]", min=0.0, max=360.0, step=0.1, initial_value=0.0,
+            self.plot_angle = gui.add_slider(PLOT_X_LABEL, min=0.0, max=360.0, step=0.1, initial_value=0.0,
                                              order=PLOT_SLIDER_ORDER,
                                              hint="scrub: click or drag to show this angle (pauses the animation)")
         self._readout_tab = self.side_panel.add_tab("Read-outs")
