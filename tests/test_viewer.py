@@ -600,7 +600,7 @@ def test_serve_records_to_rerun_and_finishes_the_file_when_stopped(tmp_path, sto
     from explorer.recording_read import read_rrd
 
     target = tmp_path / "live.rrd"
-    proc, _, _ = _start_serve(DEMO, "--rerun-save", target)
+    proc, _, _ = _start_serve(DEMO, "--shared", "--rerun-save", target)  # a run with no page open
     try:
         # the first result has reached the stream once its writer opened a piece beside the target
         assert _wait_for(lambda: list(tmp_path.glob(".live.rrd.*.parts/*.rrd")), process_timeout())
@@ -770,7 +770,7 @@ def test_serve_streams_every_change_live_to_rerun_on_localhost(tmp_path):
 
     port, viewer_port = free_port(), free_port()
     received = tmp_path / "received.rrd"
-    proc, url, lines = _start_serve(DEMO, "--rerun", "--rerun-port", port)
+    proc, url, lines = _start_serve(DEMO, "--shared", "--rerun", "--rerun-port", port)  # a run with no page
     receiver = browser = None
     try:
         rerun_url = f"rerun+http://127.0.0.1:{port}/proxy"
@@ -1047,3 +1047,71 @@ def _wait_sliders(app, angle):
     while not (abs(app.angle.value - angle) < 1e-9 and abs(app.plot_angle.value - angle) < 1e-9):
         assert time.monotonic() < deadline, (app.angle.value, app.plot_angle.value, angle)
         time.sleep(0.01)
+
+
+# ------------------------------------------------------------------------------------------------
+# #13.7: one session per page
+
+
+def test_each_page_has_its_own_session_and_a_closed_page_frees_it():
+    """Two pages (websocket clients speaking viser's protocol as a page does) on one server each
+    get their own explorer: a change on one page is computed and shown for that page only; the
+    page says whose session it is. A page that closes has its app stopped and dropped: its loop
+    thread and its compute process end, and the other page goes on. Stopping ends the rest."""
+    import psutil
+
+    from explorer.viewer.app import OWN_NOTE
+    from explorer.viewer.sessions import PerClientExplorer
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    explorer = PerClientExplorer(server, str(DEMO), playing=False)
+    url = f"http://127.0.0.1:{server.get_port()}"
+    pages = []
+    try:
+        pages = [_Browser(url), _Browser(url)]
+        for page in pages:
+            page.uuid_of("Camshaft rpm")
+        assert _wait_for(lambda: len(explorer.sessions()) == 2, process_timeout())
+        (id_a, a), (id_b, b) = sorted(explorer.sessions().items())
+        for app in (a, b):
+            assert app.wait_applied(60)
+            assert app.current.scene.drive.rpm == 3000.0
+        workers = {a.worker.process_id, b.worker.process_id}
+        assert len(workers) == 2 and None not in workers
+        # which page is which: the first to connect has the lower client id
+        first = pages[0] if a.client.client_id == min(id_a, id_b) else pages[1]
+        other = pages[1] if first is pages[0] else pages[0]
+        first.set("Camshaft rpm", 1234.0)
+        assert _wait_for(lambda: a.current.scene.drive.rpm == 1234.0, process_timeout())
+        assert b.wait_applied(60) and b.current.scene.drive.rpm == 3000.0
+        assert b.fields["drive.rpm"].value == 3000.0 and a.fields["drive.rpm"].value == 1234.0
+        assert b.worker.computed == 1  # nothing of page A's reached B
+        assert OWN_NOTE in a.share_note.content and OWN_NOTE in b.share_note.content
+        # page A leaves: its session ends, its process and thread with it
+        worker_a, thread_a = psutil.Process(a.worker.process_id), a._thread
+        first.close()
+        pages.remove(first)
+        assert _wait_for(lambda: id_a not in explorer.sessions(), process_timeout())
+        assert _wait_for(lambda: not worker_a.is_running() or worker_a.status() == psutil.STATUS_ZOMBIE,
+                         process_timeout())
+        assert not thread_a.is_alive()
+        assert a.worker._thread is None or not a.worker._thread.is_alive()
+        # B still works
+        other.set("Camshaft rpm", 2000.0)
+        assert _wait_for(lambda: b.current.scene.drive.rpm == 2000.0, process_timeout())
+    finally:
+        for page in pages:
+            page.close()
+        explorer.stop()
+        server.stop()
+    assert explorer.sessions() == {}
+    assert not b._thread.is_alive()
+    for app in (a, b):
+        assert app.loop_errors == 0 and app.worker.internal_errors == 0
+
+
+
+def test_a_shared_session_says_so_on_the_page(app):
+    from explorer.viewer.app import SHARED_NOTE
+
+    assert app.client is None and SHARED_NOTE in app.share_note.content

@@ -68,6 +68,10 @@ TYPING_PAUSE_S = 0.6
 ERROR_BOX_MAX_EM = 7.5
 PLOT_SLIDER_ORDER = 1e6  # after every plot: the plots are added and removed as results change
 NO_EVENT = "—"
+# What the page says about who else sees it (`explorer serve --shared` / `--per-client`)
+SHARED_NOTE = ("Shared session: everyone connected to this server sees these controls and results, "
+               "and a change made on one page changes them on all.")
+OWN_NOTE = "Your own session: your changes are yours; others on this server do not see them."
 
 
 def _user_overrides(overrides) -> dict[str, str]:
@@ -159,9 +163,11 @@ class ExplorerApp:
         on_result: Callable[[Prepared], None] | None = None,
         scenes: list[Path] | None = None,
         time_limit: float | None = COMPUTE_TIME_LIMIT_S,
+        client=None,
     ):
-        from ..scenes import builtin_scenes
+        from ..scenes import builtin_scenes, find_scene
 
+        scene_path = str(find_scene(scene_path))  # a built-in scene named as the Scene list shows it
         port = server.get_port()
         if not origin.guarded(port):
             raise RuntimeError(
@@ -172,6 +178,11 @@ class ExplorerApp:
             origin.allow(port, host)  # the address the user gave (a name the browser will use)
         self._port = port
         self.server = server
+        # Shared (client None): the server's GUI and scene, seen and changed by every page.
+        # Per client: this page's own GUI, scene and camera; nobody else sees them
+        # (PerClientExplorer makes one app per page and ends it when the page goes).
+        self.client = client
+        self.target = client if client is not None else server
         self.fps = fps
         self._lock = threading.Lock()
         self._echo = threading.local()  # set while the loop assigns GUI values itself
@@ -237,8 +248,11 @@ class ExplorerApp:
         self._build_gui()
         # a page counts as connected once it has reported its camera, so its canvas' shape is
         # known: the loop frames the gear for it
-        server.on_client_connect(self._client_connected)
-        server.on_client_disconnect(self._client_disconnected)
+        if client is None:
+            server.on_client_connect(self._client_connected)
+            server.on_client_disconnect(self._client_disconnected)
+        else:
+            self._client_connected(client)
         self.worker = ComputeWorker(on_ready=self._on_ready, on_error=self._on_error, on_result=on_result,
                                     time_limit=time_limit).start()
         self._submit(refresh=True)
@@ -248,11 +262,12 @@ class ExplorerApp:
     # ------------------------------------------------------------------ GUI construction
 
     def _build_gui(self) -> None:
-        gui = self.server.gui
+        gui = self.target.gui
         gui.configure_theme(control_width="large", dark_mode=False, show_logo=False, show_share_button=False)
         gui.main_panel.dock_right()
         gui.main_panel.set_width(380)
         gui.add_markdown("**Valve-Gear Explorer** — cam, roller, lever, spring, valve")
+        self.share_note = gui.add_markdown(f"<small>{SHARED_NOTE if self.client is None else OWN_NOTE}</small>")
         self.status = gui.add_html(self._status_html(""))
 
         with gui.add_folder("Playback"):
@@ -660,7 +675,7 @@ class ExplorerApp:
             aim: set[int] = set()
             if prepared is not None:
                 aim, self._aim_pending = self._aim_pending, set()
-        with self.server.atomic():
+        with self.target.atomic():
             if incoming is not None:
                 self._apply(incoming, refresh, choose_speed)
                 self.handled_serial = max(self.handled_serial, incoming.request.serial)
@@ -679,11 +694,11 @@ class ExplorerApp:
             if self.current is not None:
                 self._pose(angle, force=incoming is not None)
                 self._sync_controls(angle, playing, scrub)
-                clients = self.server.get_clients() if aim else {}
+                clients = self._clients() if aim else {}
                 for client_id in aim:
                     if client_id in clients:
                         self._aim_client(clients[client_id], self.current)
-        self.server.flush()
+        self.target.flush()
         self.frames += 1
 
     def _mark_stale(self) -> None:
@@ -745,7 +760,7 @@ class ExplorerApp:
                 self._shown_meshes[name] = (vertices, faces)
                 continue
             pos, quat = prepared.poses[name]
-            self._handles[name] = self.server.scene.add_mesh_simple(
+            self._handles[name] = self.target.scene.add_mesh_simple(
                 part_node(name), vertices, faces, color=_color(name),
                 position=tuple(pos[i]), wxyz=tuple(quat[i]),
                 flat_shading=False, side="double" if name == "spring" else "front",
@@ -842,14 +857,21 @@ class ExplorerApp:
         """Frame the new scene: the initial camera (new pages, "Reset View") and every page's
         own camera, each for its canvas' shape."""
         frame = camera_frame(prepared)
-        initial = self.server.initial_camera
-        initial.fov = frame.fov
-        initial.up = frame.up
-        initial.position = frame.position
-        initial.look_at = frame.look_at
+        if self.client is None:  # the initial camera is the server's: only a shared app sets it
+            initial = self.server.initial_camera
+            initial.fov = frame.fov
+            initial.up = frame.up
+            initial.position = frame.position
+            initial.look_at = frame.look_at
         self.camera = frame
-        for client in self.server.get_clients().values():
+        for client in self._clients().values():
             self._aim_client(client, prepared)
+
+    def _clients(self) -> dict:
+        """The pages this app shows itself on."""
+        if self.client is not None:
+            return {self.client.client_id: self.client}
+        return self.server.get_clients()
 
     def _aim_client(self, client, prepared: Prepared) -> None:
         camera = client.camera
@@ -907,7 +929,7 @@ class ExplorerApp:
             self._plot_handles = []
             with self._plots_tab:
                 for plot in prepared.plots:
-                    self._plot_handles.append(self.server.gui.add_uplot(
+                    self._plot_handles.append(self.target.gui.add_uplot(
                         data=self._plot_data(plot, self.playback.angle_deg), **plot_options(plot)))
             self._plot_signature = signature
         else:
@@ -950,4 +972,5 @@ class ExplorerApp:
         self._stop.set()
         self._thread.join(timeout=5.0)
         self.worker.stop()  # ends the computing child process too
-        origin.forget(self._port)
+        if self.client is None:
+            origin.forget(self._port)  # per client, the server's guard outlives this page
