@@ -693,7 +693,7 @@ def _assert_same_series(run, result):
     from explorer.recording import series_layout
 
     for s in series_layout(result.columns):
-        assert np.array_equal(run.series[s.path]["value"], result.columns[s.column]), s.column
+        assert np.array_equal(run.series[s.path]["value"], s.values(result.columns)), s.column
 
 
 class _Browser:
