@@ -185,7 +185,7 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                     if run > best:
                         best, best_end = run, j
                 target = (best_end - best / 2.0) % len(s_all) * 360.0 / len(s_all)
-                slider_id = page.locator("label", has_text="Cam angle").first.get_attribute("for")
+                slider_id = page.locator("label", has_text="Cam angle [°]").first.get_attribute("for")
                 box = page.locator(f"[id='{slider_id}']").bounding_box()
                 thumb = f"[id='{slider_id}'] [role=slider]"
                 shown_before = page.locator(thumb).get_attribute("aria-valuenow")
