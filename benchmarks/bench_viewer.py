@@ -13,7 +13,7 @@ Rows (default scene unless --scene):
   - loop frame rate while playing with ten websocket clients connected (clients run in another
     process and drain every message), and the update rate each client receives;
   - frame rate in the browser (distinct cam poses drawn per second) with those ten clients;
-  - per page (`explorer serve`'s default, explorer.viewer.sessions): ten websocket pages on a
+  - per page (`explorer serve`'s default, explorer.view.browser.sessions): ten websocket pages on a
     second server, each with its own explorer and compute process: the time until every page
     has its first result, each page's loop frame rate while playing, the updates each receives,
     the resident memory of the server with its compute processes, and that all of it is gone
@@ -133,10 +133,10 @@ def main(argv=None) -> int:
     import viser
 
     from explorer import load_scene
-    from explorer.effects import simulate
-    from explorer.scenes import default_scene
-    from explorer.viewer.app import ExplorerApp
-    from explorer.viewer.model import Request, prepare
+    from explorer.effects.pipeline import simulate
+    from explorer.scene.builtin import default_scene
+    from explorer.view.browser.app import ExplorerApp
+    from explorer.view.browser.model import Request, prepare
 
     path = args.scene or str(default_scene())
     scene = load_scene(path)
@@ -156,7 +156,7 @@ def main(argv=None) -> int:
     rows.append(("prepare: parameter change recomputed", median_time(prepare_change, args.repeat), 0.1, "s"))
 
     # -- the same change through the explorer's compute process (its time limit's price) -------
-    from explorer.viewer.worker import ComputeProcess
+    from explorer.view.browser.worker import ComputeProcess
 
     child = ComputeProcess()
     overheads = []
@@ -291,7 +291,7 @@ def per_client_report(path: str, pages: int, seconds: float = 8.0) -> bool:
     import psutil
     import viser
 
-    from explorer.viewer.sessions import PerClientExplorer
+    from explorer.view.browser.sessions import PerClientExplorer
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     explorer = PerClientExplorer(server, path, playing=True)

@@ -62,8 +62,8 @@ class Result:
 
 
 def _jsonable(value, key: str = ""):
-    """The summary as JSON values; floats without round-off noise (explorer.units.printable)."""
-    from .units import printable
+    """The summary as JSON values; floats without round-off noise (explorer.core.units.printable)."""
+    from .core.units import printable
 
     if isinstance(value, Mapping):
         return {str(k): _jsonable(v, str(k)) for k, v in value.items()}
@@ -82,8 +82,8 @@ def _jsonable(value, key: str = ""):
 
 
 def write_atomic(path: str | os.PathLike, text: str | bytes) -> None:
-    """Write `text` to `path` by the rules of explorer.outputs (temporary file and rename for a
+    """Write `text` to `path` by the rules of explorer.core.outputs (temporary file and rename for a
     regular file, the umask or the replaced file's mode; devices and pipes written through)."""
-    from .outputs import write_output
+    from .core.outputs import write_output
 
     write_output(path, text)

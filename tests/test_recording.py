@@ -20,9 +20,9 @@ import pytest
 
 from explorer import load_scene
 from explorer.cli import main
-from explorer.effects import simulate
-from explorer.recording import entity_path, series_layout
-from explorer.recording_read import read_blueprint_views, read_rrd
+from explorer.effects.pipeline import simulate
+from explorer.view.rerun.recording import entity_path, series_layout
+from explorer.view.rerun.read import read_blueprint_views, read_rrd
 from conftest import process_timeout
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -65,7 +65,7 @@ DOCUMENTED = {  # the examples of the module docstring
 
 
 def test_documented_entity_paths():
-    import explorer.recording as recording
+    import explorer.view.rerun.recording as recording
 
     for column, path in DOCUMENTED.items():
         assert entity_path(column) == path, column
@@ -167,7 +167,7 @@ def test_blueprint_has_3d_beside_s_v_p_and_forces(float_recording):
     assert "/torque/camshaft" in series["torque"] and "/stress/hertz" in series["stress"]
     # #13.8: every plot spans the revolution on the cam-angle timeline (not a 1-degree window),
     # which the time panel shows, playing a revolution in ANGLE_PLAYBACK_S seconds at 1x
-    from explorer.recording import ANGLE_PLAYBACK_S
+    from explorer.view.rerun.recording import ANGLE_PLAYBACK_S
 
     for v in views:
         if v["class"] == "TimeSeries":
@@ -180,7 +180,7 @@ def test_blueprint_has_3d_beside_s_v_p_and_forces(float_recording):
 def test_legends_sit_where_the_curves_are_not(float_recording):
     """#13.8: each main plot's legend is in the corner whose legend box (LEGEND_BOX of the plot)
     holds no sample of its curves, as the viewer draws them (the curves' own y range)."""
-    from explorer.recording import LEGEND_BOX, MAIN_VIEWS, view_paths
+    from explorer.view.rerun.recording import LEGEND_BOX, MAIN_VIEWS, view_paths
 
     out, _ = float_recording
     run = read_rrd(out)[0]
@@ -199,9 +199,9 @@ def test_legends_sit_where_the_curves_are_not(float_recording):
 
 
 def test_parts_replay_the_motion(float_recording):
-    """Meshes as built by explorer.meshes, poses per step; and an independent physical check:
+    """Meshes as built by explorer.view.parts, poses per step; and an independent physical check:
     the valve (z up, opening downwards) sits lower by exactly the valve lift."""
-    from explorer import meshes
+    from explorer.view import parts as meshes
 
     out, csv = float_recording
     run = read_rrd(out)[0]
@@ -281,7 +281,7 @@ def test_a_sweep_has_an_overlay_of_its_runs(tmp_path):
     """#13.8: a sweep's file holds one recording more whose lift, velocity, acceleration and
     forces are every run's (thinned as overlay_entry keeps them), each a child of the path the
     layout's views draw, named by the run's label: the views show the runs over each other."""
-    from explorer.recording import overlay_entry
+    from explorer.view.rerun.recording import overlay_entry
 
     rpms = (2000, 3000, 4000)
     out = record(tmp_path, str(FLOAT), "--no-parts", "--set", "solver.steps_per_revolution=720",
@@ -340,7 +340,7 @@ def test_bad_output_and_scene(tmp_path, capsys):
 
 
 def test_failure_while_writing_leaves_previous_file_and_no_temporaries(tmp_path, monkeypatch, capsys):
-    import explorer.recording as recording
+    import explorer.view.rerun.recording as recording
 
     out = tmp_path / "run.rrd"
     out.write_bytes(b"previous content")
@@ -399,7 +399,7 @@ def test_killed_midway_never_leaves_a_truncated_target(tmp_path, previous):
 
 
 def test_parts_that_cannot_be_built_leave_a_warning_and_the_series(tmp_path, capsys, monkeypatch):
-    import explorer.recording as recording
+    import explorer.view.rerun.recording as recording
 
     def no_meshes(label, result):
         raise NotImplementedError("no meshes for this gear")
@@ -413,7 +413,7 @@ def test_parts_that_cannot_be_built_leave_a_warning_and_the_series(tmp_path, cap
 
 def test_an_incomplete_file_is_never_renamed_into_place(tmp_path, monkeypatch, capsys):
     """rerun's file sink only logs write errors: the footer check stops a broken file."""
-    import explorer.recording_worker as worker
+    import explorer.view.rerun.worker as worker
 
     out = tmp_path / "run.rrd"
     out.write_bytes(b"previous content")
