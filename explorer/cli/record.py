@@ -51,7 +51,7 @@ def register(sub) -> None:
                        description=HELP.format(max_runs=MAX_RUNS) + "\n" + OUTPUT_HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scenes", nargs="*", metavar="SCENE",
-                   help="scene files (TOML); default: the built-in default scene")
+                   help="scene files (TOML) or built-in scenes by name (cycloidal_demo.toml); default: the built-in default scene")
     p.add_argument("-o", "--output", required=True, metavar="OUT.rrd", help="the rerun file to write")
     p.add_argument(
         "--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
