@@ -20,7 +20,7 @@ from explorer import load_scene  # noqa: E402
 from explorer.dynamics import chain_exact  # noqa: E402
 from explorer.dynamics.chain import ChainModel  # noqa: E402
 from explorer.dynamics.model import Drive, LinkageModel, solve  # noqa: E402
-from explorer.lift import build_lift  # noqa: E402
+from explorer.effects.lift import build_lift  # noqa: E402
 
 
 def first_lift_separation(events, omega):

@@ -17,9 +17,9 @@ from explorer.dynamics.chain import ChainModel, chain_frequencies, continuous_fr
 from explorer.dynamics.chain_exact import phase_modes, phi_functions, solve
 from explorer.dynamics.model import Drive, LinkageModel
 from explorer.dynamics.model import solve as solve_massless
-from explorer.errors import InputError
-from explorer.lift import build_lift
-from explorer.scenes import scenes_dir
+from explorer.core.errors import InputError
+from explorer.effects.lift import build_lift
+from explorer.scene.builtin import scenes_dir
 
 SCENE = scenes_dir() / "spring_surge.toml"
 
@@ -295,7 +295,7 @@ def test_schenker_gear_surge_model_against_his_mass_split():
     # 0.5, 0.5, 1.4 deg apart, lift within 0.52 mm of 20 mm
     import tomllib
 
-    from explorer.scene import apply_overrides, scene_from_dict
+    from explorer.scene.scene import apply_overrides, scene_from_dict
 
     path = scenes_dir() / "schenker1902_fig2.toml"
     base = ['loads.friction="0 kgf"', 'spring.rate="2 kgf/mm"']
@@ -320,9 +320,9 @@ def test_schenker_gear_surge_model_against_his_mass_split():
 def test_viewer_and_recording_move_the_coils_with_the_surge(tmp_path):
     # the drawn spring: each coil node's wire point is moved by magnification x (u_j - s r_j);
     # the recording: one point per coil per step under the spring's frame, at the same surge
-    from explorer import meshes
-    from explorer.recording import with_parts, write_recordings
-    from explorer.recording_read import read_rrd
+    from explorer.view import parts as meshes
+    from explorer.view.rerun.recording import with_parts, write_recordings
+    from explorer.view.rerun.read import read_rrd
 
     scene = load_scene(SCENE, ["solver.steps_per_revolution=720"])
     result = simulate(scene)
