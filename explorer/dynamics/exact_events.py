@@ -355,6 +355,34 @@ class Event:
     comb: str = "one"
 
 
+def _neg(x: float) -> float:
+    return -x if x else 0.0  # (a zero stays +0.0)
+
+
+def event_of(rule, k: float, c: float, lash: float, s_star: float = 0.0) -> Event:
+    """The Event of a phases.EventRule: each component as a row (aP, bP, const, l0, l1), in
+    force units (a gap or a lift is not rescaled: only its sign matters where it stands alone;
+    a gap combined with a force is k gap). s_star: the rest height of a valve at rest."""
+    rows = []
+    for quantity, sign, threshold in rule.comps:
+        if quantity == "force":
+            row = (k, c, -k * lash, -k, -c)
+        elif quantity == "gap" and rule.kind in ("up", "down"):  # at rest: the gap at s_star
+            row = (k, 0.0, -k * (lash + s_star), 0.0, 0.0)
+        elif quantity == "gap":
+            row = (k, 0.0, -k * lash, -k, 0.0)
+        elif quantity == "push":
+            row = (k, c, -k * (lash + s_star) - threshold, 0.0, 0.0)
+        elif quantity == "lift":
+            row = (0.0, 0.0, 0.0, 1.0, 0.0)
+        elif quantity == "velocity":
+            row = (0.0, 0.0, 0.0, 0.0, 1.0)
+        else:
+            raise ValueError(f"unknown event quantity {quantity!r}")
+        rows.append(row if sign > 0.0 else tuple(_neg(x) for x in row))
+    return Event(rule.kind, tuple(rows), rule.comb)
+
+
 def coefficients(comp, P, dP, a, da, n_rows):
     """Scaled Taylor coefficients (n_rows, ...) of one event component over a step."""
     aP, bP, const, l0, l1 = comp

@@ -15,13 +15,13 @@ import math
 import numpy as np
 
 from .exact_events import (Event, coeff_list, coefficients, combine_cleared, combine_cleared1, combine_excluded,
-                           combine_hits, deriv, deriv_list, earliest, excluded_steps, lincomb_into, shift_list,
-                           start_coeffs)
+                           combine_hits, deriv, deriv_list, earliest, event_of, excluded_steps, lincomb_into,
+                           shift_list, start_coeffs)
 from .exact_grid import build_grid
 from .exact_steps import LinearPhase, StepTables, drive_response, expand_step, step_tables, taylor_terms
 from .modal import Propagator
 from .model import LinkageModel
-from .phases import CONTACT, FLIGHT
+from .phases import CONTACT, FLIGHT, moving_events, rest_events
 from .series import horner
 
 _MAX = np.maximum.reduce  # the ufunc itself: ndarray.max adds a Python layer per call
@@ -82,19 +82,8 @@ class PhaseStepper:
 
     # ---------------------------------------------------------------- event functions
     def _moving_events(self, kind: int, sigma: float) -> list[Event]:
-        k, c, lash = self.k, self.c, self.lash
-        events = [Event("seat", ((0.0, 0.0, 0.0, -1.0, 0.0),))]
-        if kind == CONTACT:
-            events.append(Event("separation", ((-k, -c, k * lash, k, c),)))
-        else:
-            gap = (k, 0.0, -k * lash, -k, 0.0)
-            if c > 0.0:
-                events.append(Event("re-contact", (gap, (k, c, -k * lash, -k, -c)), "min"))
-            else:
-                events.append(Event("re-contact", (gap,)))
-        if self.R > 0.0:
-            events.append(Event("velocity-zero", ((0.0, 0.0, 0.0, 0.0, -sigma),)))
-        return events
+        rules = moving_events(kind, self.c > 0.0, self.R > 0.0, sigma)
+        return [event_of(rule, self.k, self.c, self.lash) for rule in rules]
 
     def _moving_setup(self, kind: int, sigma: float):
         """The events of a moving phase and, for scanning windows of nodes: their components as
@@ -135,22 +124,8 @@ class PhaseStepper:
         return hit
 
     def _static_events(self, s_star: float) -> list[Event]:
-        k, c = self.k, self.c
-        off = -k * (self.lash + s_star)
-        thr_up = self.W0 + self.rate * s_star + self.R
-        events = []
-        if c > 0.0:
-            events.append(Event("up", ((k, c, off - thr_up, 0.0, 0.0), (k, 0.0, off, 0.0, 0.0)), "min"))
-        else:
-            events.append(Event("up", ((k, 0.0, off - thr_up, 0.0, 0.0),)))
-        thr_dn = self.W0 + self.rate * s_star - self.R
-        if s_star > 0.0 and thr_dn > 0.0:
-            if c > 0.0:
-                events.append(Event("down", ((-k, -c, thr_dn - off, 0.0, 0.0), (-k, 0.0, -off, 0.0, 0.0)), "max"))
-            else:
-                events.append(Event("down", ((-k, 0.0, thr_dn - off, 0.0, 0.0),)))
-        return events
-
+        rules = rest_events(s_star, self.W0, self.rate, self.R, gap_check=self.c > 0.0)
+        return [event_of(rule, self.k, self.c, self.lash, s_star) for rule in rules]
 
     # ---------------------------------------------------------------- recording
     def _record_static(self, j0: int, j1: int, s_star: float, phase: int) -> None:

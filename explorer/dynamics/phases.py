@@ -1,9 +1,12 @@
 """The phase-transition rules of the elastic valve (model.py), written once for every solver that
-steps phase by phase (exact, taylor; reference.py's start uses phase_of_state too).
+steps phase by phase (exact, taylor; reference.py and schenker1902.py where the same rule applies:
+the start phase, the stick at velocity zero, the seat speed of an event found a hair below it).
 
 Phases (PHASE_CODES): seated, contact (linkage loaded), flight (separated), stuck (held above the
-seat by friction at v = 0). The solvers find *when* an event happens, each its own way; what
-happens *then* is decided here, in plain floats:
+seat by friction at v = 0). Which events can end a phase, and the function whose sign change is
+each event, are the tables moving_events and rest_events; each solver turns them into its own
+functions (exact: linear rows in S, S', s, v; taylor: polynomials with k(t)) and finds *when* an
+event happens its own way. What happens *then* is decided here, in plain floats:
   lift-off / release   a valve at rest whose net force leaves the friction band  release_from_rest
   separation           contact -> flight (the linkage force falls to 0)        AFTER_CROSSING
   re-contact           flight -> contact (the gap closes)                      AFTER_CROSSING
@@ -15,6 +18,7 @@ The start state (s, v) given by a caller is classified by phase_of_state.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 # DynamicsSolution.phase codes: on the seat, moving with the linkage loaded, moving with the linkage
 # unloaded (separated), held above the seat by friction at v = 0
@@ -38,6 +42,56 @@ def phase_of_state(S: float, S1: float, k: float, c: float, lash: float, s: floa
     if abs(net) <= R:
         return PHASE_CODES["stuck"], 1.0
     return kind, (1.0 if net > 0.0 else -1.0)
+
+
+@dataclass(frozen=True)
+class EventRule:
+    """An event that ends a phase: it fires at the first instant where the combination `comb` of
+    its components becomes > 0 ("one": the single component; "min": all of them; "max": any).
+    A component (quantity, sign, threshold) is sign * (quantity - threshold), the quantities:
+      gap       S - lash - s               (the linkage's clearance is closed where > 0)
+      force     k gap + c (S' - v)         (the linkage force, unclipped)
+      lift      s
+      velocity  v
+      push      k (S - lash - s*) + c S'   (a valve at rest at s*: the linkage force on it)
+    with s* the rest height for a valve at rest (gap is then S - lash - s*)."""
+
+    kind: str
+    comps: tuple[tuple[str, float, float], ...]
+    comb: str = "one"
+
+
+def moving_events(phase: int, damped: bool, friction: bool, sigma: float) -> tuple[EventRule, ...]:
+    """The events of a moving valve (phase CONTACT or FLIGHT, friction sign sigma): the linkage
+    lets go (separation) or takes hold again (re-contact; with damping it pushes only where the
+    dashpot's part does not pull it back, min(gap, force)), the valve reaches the seat, and with
+    friction its velocity reaches zero (stick or turn: velocity_zero)."""
+    if phase == CONTACT:
+        crossing = EventRule("separation", (("force", -1.0, 0.0),))
+    elif damped:
+        crossing = EventRule("re-contact", (("gap", 1.0, 0.0), ("force", 1.0, 0.0)), "min")
+    else:
+        crossing = EventRule("re-contact", (("gap", 1.0, 0.0),))
+    events = (crossing, EventRule("seat", (("lift", -1.0, 0.0),)))
+    if friction:
+        events += (EventRule("velocity-zero", (("velocity", -sigma, 0.0),)),)
+    return events
+
+
+def rest_events(s_star: float, W0: float, rate: float, R: float, gap_check: bool) -> tuple[EventRule, ...]:
+    """The events of a valve at rest at s_star (seated: 0): "up" where the linkage pushes harder
+    than the spring, the loads and friction hold it (and its gap is closed), "down" (held above
+    the seat by friction only) where the push falls below the loads less friction (or the gap
+    opens). Without damping the gap's component is implied by the push's (k gap >= push there);
+    gap_check=False leaves it out then."""
+    thr_up = W0 + rate * s_star + R
+    up = (("push", 1.0, thr_up),) + ((("gap", 1.0, 0.0),) if gap_check else ())
+    events = (EventRule("up", up, "min" if len(up) > 1 else "one"),)
+    thr_dn = W0 + rate * s_star - R
+    if s_star > 0.0 and thr_dn > 0.0:
+        down = (("push", -1.0, thr_dn),) + ((("gap", -1.0, 0.0),) if gap_check else ())
+        events += (EventRule("down", down, "max" if len(down) > 1 else "one"),)
+    return events
 
 
 def release_from_rest(which: str, resting: int, S: float, S1: float, k: float, c: float, lash: float, s: float,

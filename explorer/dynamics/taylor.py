@@ -34,8 +34,8 @@ import math
 import numpy as np
 
 from .model import DynamicsSolution, LinkageModel
-from .phases import (AFTER_CROSSING, CONTACT, FLIGHT, SEATED, STUCK, phase_of_state, release_from_rest, rest_force,
-                     seat_rebound, velocity_zero)
+from .phases import (AFTER_CROSSING, CONTACT, FLIGHT, SEATED, STUCK, moving_events, phase_of_state, release_from_rest,
+                     rest_events, rest_force, seat_rebound, velocity_zero)
 from .series import hermite5, horner
 from .tabulated import node_values
 
@@ -166,6 +166,16 @@ def _bisect(ev: _Event, lo: float, hi: float) -> float:
             lo = mid
     return hi
 
+
+
+def _events_of(rule, component) -> list:
+    """The _Events of a phases.EventRule, component(quantity, sign, threshold) giving each
+    component's polynomial (this solver's sign: the event fires where it is < 0): "one" and
+    "min" rules one event, a "max" rule one event per component (the earliest fires)."""
+    polys = [component(*c) for c in rule.comps]
+    if rule.comb == "max":
+        return [_Event(rule.kind, [p]) for p in polys]
+    return [_Event(rule.kind, polys)]
 
 class _Solver:
     def __init__(self, model: LinkageModel, drive, t: np.ndarray, initial_state, zeno_height: float, max_events: int,
@@ -301,52 +311,67 @@ class _Solver:
 
     # ------------------------------------------------------------------ events of a step
     def _moving_events(self, phase, H, S, Sd, k, a, sigma):
+        """The events of phases.moving_events as polynomials in w, each fired a hair (band)
+        beyond its surface: this solver's component is -sign * quantity (+ band) and an event
+        fires where all components are < 0 (a "max" rule: each component an event)."""
         band = self.band
         V = [x / H for x in _deriv(a)]
-        evs = []
         Q = list(S)
         Q[0] -= self.lash
         x = _add(Q, a, 1.0, -1.0)  # gap S - lash - s
-        if phase == CONTACT or self.c:
-            F = _mul(k, x, len(a) + 6)
-            if self.c:
-                F = _add(F, _add(Sd, V, 1.0, -1.0), 1.0, self.c)
-        if phase == CONTACT:
-            g = [y / self.kmax for y in F]
-            g[0] += band
-            evs.append(_Event("separation", [g]))
-        else:
-            comps = [[-y for y in x]]
-            comps[0][0] += band
-            if self.c:
-                g = [-y / self.kmax for y in F]
-                g[0] += band
-                comps.append(g)
-            evs.append(_Event("re-contact", comps))
-        seat = list(a)
-        seat[0] += band
-        evs.append(_Event("seat", [seat]))
-        if self.R:
-            vz = [sigma * y for y in V]
-            vz[0] += band * self.wn
-            evs.append(_Event("velocity-zero", [vz]))
+        F = None
+
+        def force():  # k gap + c (S' - v), scaled by 1/kmax
+            nonlocal F
+            if F is None:
+                F = _mul(k, x, len(a) + 6)
+                if self.c:
+                    F = _add(F, _add(Sd, V, 1.0, -1.0), 1.0, self.c)
+            return F
+
+        def component(quantity, sign):
+            if quantity == "gap":
+                comp, hair = ([-y for y in x] if sign > 0.0 else list(x)), band
+            elif quantity == "force":
+                comp, hair = ([-y / self.kmax for y in force()] if sign > 0.0 else [y / self.kmax for y in force()]), band
+            elif quantity == "lift":
+                comp, hair = ([-y for y in a] if sign > 0.0 else list(a)), band
+            else:  # velocity: the band in speed
+                comp, hair = [-sign * y for y in V], band * self.wn
+            comp[0] += hair
+            return comp
+
+        evs = []
+        for rule in moving_events(phase, bool(self.c), bool(self.R), sigma):
+            evs.extend(_events_of(rule, lambda q, sign, _thr: component(q, sign)))
         return evs, V
 
     def _static_events(self, s_star: float, H, S, Sd, k):
+        """The events of phases.rest_events at s_star as polynomials in w (no band: a valve at
+        rest starts off its surfaces), the push scaled by 1/kmax."""
         Q = list(S)
         Q[0] -= self.lash + s_star
         P = _mul(k, Q, 11)
         if self.c:
             P = _add(P, Sd, 1.0, self.c)
-        W = self.W0 + self.rate * s_star
-        up = [-y / self.kmax for y in P]
-        up[0] += (W + self.R) / self.kmax
-        evs = [_Event("up", [[-y for y in Q], up])]
-        if s_star > 0.0 and W - self.R > 0.0:
-            down = [y / self.kmax for y in P]
-            down[0] -= (W - self.R) / self.kmax
-            evs.append(_Event("down", [list(Q)]))
-            evs.append(_Event("down", [down]))
+        kmax = self.kmax
+
+        def component(quantity, sign, threshold):
+            if quantity == "gap":
+                return [-y for y in Q] if sign > 0.0 else list(Q)
+            if sign > 0.0:  # push - threshold > 0
+                comp = [-y / kmax for y in P]
+                comp[0] += threshold / kmax
+            else:
+                comp = [y / kmax for y in P]
+                comp[0] -= threshold / kmax
+            return comp
+
+        # (the gap's component is kept without damping: a step where it stays >= 0 is cleared
+        # at once by the search)
+        evs = []
+        for rule in rest_events(s_star, self.W0, self.rate, self.R, gap_check=True):
+            evs.extend(_events_of(rule, component))
         return evs
 
     @staticmethod
