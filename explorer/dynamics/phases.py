@@ -1,6 +1,7 @@
-"""The phase-transition rules of the elastic valve (model.py), written once for every solver that
-steps phase by phase (exact, taylor; reference.py and schenker1902.py where the same rule applies:
-the start phase, the stick at velocity zero, the seat speed of an event found a hair below it).
+"""The phase-transition rules of the elastic valve (model.py), written once: exact and taylor
+take all of them; reference.py (scipy) and schenker1902.py take those that apply to them (the
+start phase, touching, the stick at velocity zero, the seat speed of an event found a hair below
+the seat, the rebound speed that ends the bouncing).
 
 Phases (PHASE_CODES): seated, contact (linkage loaded), flight (separated), stuck (held above the
 seat by friction at v = 0). Which events can end a phase, and the function whose sign change is
@@ -12,7 +13,14 @@ event happens its own way. What happens *then* is decided here, in plain floats:
   re-contact           flight -> contact (the gap closes)                      AFTER_CROSSING
   velocity zero        with friction: the valve sticks, or the friction flips  velocity_zero
   seat                 rebound v -> -e v, or rest; the chatter's Zeno sum      seat_rebound
+  (overshoot)          the seat speed of a landing found below the seat        seat_speed
 The start state (s, v) given by a caller is classified by phase_of_state.
+
+Two seat rules stay different, on purpose: the solvers that follow the chatter to its end
+(exact, taylor) sum the Zeno tail (seat_rebound) and choose the phase after a rebound by the
+linkage force at rest; reference and schenker1902 stop the bouncing below rebound_rest_speed and
+choose it by the linkage force at the rebound speed (touching with v). Making them one would
+change those solvers' results (the tests' converged reference among them).
 """
 
 from __future__ import annotations
@@ -94,19 +102,25 @@ def rest_events(s_star: float, W0: float, rate: float, R: float, gap_check: bool
     return events
 
 
+def touching(S: float, S1: float, k: float, c: float, lash: float, s: float, v: float = 0.0) -> bool:
+    """The linkage touches a valve at (s, v) and pushes it: the gap x = S - lash - s is closed and
+    k x + c (S' - v) > 0."""
+    x = S - lash - s
+    return x >= 0.0 and k * x + c * (S1 - v) > 0.0
+
+
 def release_from_rest(which: str, resting: int, S: float, S1: float, k: float, c: float, lash: float, s: float,
                       W0: float, R: float) -> tuple[int, float, bool]:
     """A valve held at rest (PHASE_CODES seated or stuck) whose net force has just left the
     friction band, `which` = "up" or "down": (the moving phase, friction sign, lift-off?)."""
-    x = S - lash - s
-    touching = x >= 0.0 and k * x + c * S1 > 0.0
+    pushes = touching(S, S1, k, c, lash, s)
     seated = resting == PHASE_CODES["seated"]
-    if which == "up" and seated and not touching and c * S1 > 0.0 and W0 + R > 0.0:
+    if which == "up" and seated and not pushes and c * S1 > 0.0 and W0 + R > 0.0:
         # only the linkage can lift a seated valve, so it touches. With damping it can lift the
         # valve the instant its gap closes (the dashpot's c S' alone beats the preload), and the
         # gap recomputed there may round to a hair below zero: that is contact
-        touching = True
-    phase = PHASE_CODES["contact"] if touching else PHASE_CODES["flight"]
+        pushes = True
+    phase = PHASE_CODES["contact"] if pushes else PHASE_CODES["flight"]
     return phase, (1.0 if which == "up" else -1.0), which == "up" and seated
 
 
@@ -147,3 +161,17 @@ def seat_rebound(impact: float, e: float, force: float, M: float, M1: float, W0:
     if decel > 0.0 and rebound * rebound <= 2.0 * decel * zeno_height:
         return SEATED, rebound, m_rest, 2.0 * rebound / (decel * (1.0 - e))
     return (CONTACT if force > 0.0 else FLIGHT), rebound, m_rest, None
+
+
+def seat_speed(v: float, s: float, acc: float) -> float:
+    """A seat event found a hair below the seat (s < 0, moving down at v under the acceleration
+    acc): the speed at s = 0, by energy (v^2 - 2 acc s, the work over the overshoot taken back)."""
+    return -math.sqrt(max(v * v - 2.0 * acc * s, 0.0))
+
+
+def rebound_rest_speed(W0: float, R: float, M: float, rest_height: float) -> float:
+    """The solvers that do not sum the chatter (reference, schenker1902): a rebound slower than this
+    would rise less than rest_height against the seated resistance W0 + R, and ends the bouncing
+    (the Zeno tail of e > 0 dropped, where seat_rebound sums it)."""
+    deceleration = (W0 + R) / M
+    return math.sqrt(2.0 * deceleration * rest_height) if deceleration > 0.0 else 0.0

@@ -35,7 +35,7 @@ import numpy as np
 
 from .model import DynamicsSolution, LinkageModel
 from .phases import (AFTER_CROSSING, CONTACT, FLIGHT, SEATED, STUCK, moving_events, phase_of_state, release_from_rest,
-                     rest_events, rest_force, seat_rebound, velocity_zero)
+                     rest_events, rest_force, seat_rebound, seat_speed, velocity_zero)
 from .series import hermite5, horner
 from .tabulated import node_values
 
@@ -478,7 +478,7 @@ class _Solver:
                 acc = (k * (S - self.lash - s) + self.c * (S1 - v) - self.W0 - self.rate * s - self.R * sigma) / m
             else:
                 acc = -(self.W0 + self.rate * s + self.R * sigma) / m
-            v = -math.sqrt(max(v * v - 2.0 * acc * s, 0.0))
+            v = seat_speed(v, s, acc)
         impact = min(v, 0.0)
         ev = self._event("seat", j, u, impact)
         if -self.e * impact <= 0.0:
