@@ -14,12 +14,12 @@ A new solver added to the table runs all of these without a line here.
 from __future__ import annotations
 
 import inspect
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 import pytest
 
-from explorer import solvers
+from explorer import scene, solvers
 from explorer.dynamics.model import PHASE_CODES, solve
 
 from dynamics_cases import flight_case, rise_in_contact
@@ -47,6 +47,9 @@ def test_table_entry_matches_the_function(name):
     assert params[:3] == ["model", "drive", "t"]
     assert tuple(params[3:]) == info.options
     assert set(info.scene_options) <= set(info.options)
+    # a scene option is a field the loader parses (scene.Solver), not only a key it lets through
+    assert set(info.scene_options) <= {f.name for f in fields(scene.Solver)}
+    assert info.kind in ("piecewise", "fixed-step", "adaptive")
     if info.stability_error is not None:
         assert issubclass(info.stability_error, Exception) and info.unstable_option in info.options
     assert name in solvers.names() and (name in solvers.varying_stiffness()) == info.varying_stiffness

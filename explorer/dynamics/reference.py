@@ -24,12 +24,12 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
+from ..solvers import SCIPY_METHODS
 from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel
 from .phases import phase_of_state, rebound_rest_speed, seat_speed, touching, velocity_zero
 
 REST, CONTACT, FLIGHT = "rest", "contact", "flight"
 IMPLICIT_METHODS = ("Radau", "BDF", "LSODA")
-METHODS = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA")
 SEAT_TOLERANCE = 1e-12  # m: an event this close to the seat while moving down is a seat impact
 MAX_EVENTS = 100_000  # a guard against endless event loops (a bug, not physics)
 
@@ -370,8 +370,8 @@ def solve(
     per instant; default: 4 when the stiffness changes along the cycle (a gear's k(t) costs a
     millisecond an instant), else off.
     """
-    if scipy_method not in METHODS:
-        raise ValueError(f"unknown scipy method {scipy_method!r}; known: {', '.join(METHODS)}")
+    if scipy_method not in SCIPY_METHODS:
+        raise ValueError(f"unknown scipy method {scipy_method!r}; known: {', '.join(SCIPY_METHODS)}")
     t = np.asarray(t, dtype=float)
     n = t.size
     if n == 0 or np.any(np.diff(t) < 0.0):
