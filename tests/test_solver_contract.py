@@ -29,6 +29,9 @@ ALL = list(solvers.SOLVERS)
 
 # known departures from the contract, each with what was measured (strict: fixed, they fail)
 KNOWN = {
+    # the method itself: Schenker's scheme sees an event only at the end of a step (his table of
+    # ordinates), so a landing is found below the seat, faster than it was; correcting its speed
+    # (phases.seat_speed, as reference and taylor do) would no longer be the 1902 scheme
     ("chatter", "schenker1902"): "the fixed-step scheme does not settle: each late-detected landing "
     "gives back energy, a limit cycle of bounces at 0.035 m/s at this step (0.004 m/s at 10x the "
     "steps) instead of the Zeno accumulation",

@@ -198,7 +198,6 @@ class _Solver(PhaseStepper):
             return SEATED, 0.0, 0.0, 1.0, j, u
         return kind, 0.0, rebound, 1.0, j, u
 
-
     def solution(self, t_req: np.ndarray, inverse) -> DynamicsSolution:
         """The results at the output times (inverse: node of each output time, None: one each)."""
         return exact_output.solution(t_req, inverse, self.out_s, self.out_v, self.out_sigma, self.out_phase, self.Dn,

@@ -1,8 +1,10 @@
 """Part of the `exact` solver (exact.py): the event functions of a step and the search for their
 first zero -- scaled Taylor coefficients of the components (gap, linkage force, velocity, lift),
 the rigorous bounds that clear a step (end values plus h^2/8 sup e''), the combination of
-min/max components, the start-of-phase clearance, and the root polish (Newton from the secant
-point, Illinois). See exact.py for the method."""
+min/max components, the start-of-phase clearance, the search in one step (earliest: the first
+event of a step and where) and the root polish (Newton from the secant point, Illinois). The
+events themselves are phases.py's rules, turned into rows here (event_of). See exact.py for the
+method."""
 
 from __future__ import annotations
 

@@ -461,7 +461,7 @@ class PhaseStepper:
                 for ev, Es in zip(events, sets):
                     still |= ~combine_excluded(np.array([excluded_steps(e) for e in Es]), ev.comb)
                 order = np.nonzero(still)[0]
-            else:  # few: _earliest tests each step in plain Python
+            else:  # few: earliest() tests each step in plain Python
                 order = range(cand.size)
             for i_c in order:
                 i = int(cand[i_c])
