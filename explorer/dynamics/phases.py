@@ -92,12 +92,14 @@ def rest_events(s_star: float, W0: float, rate: float, R: float, gap_check: bool
     the seat by friction only) where the push falls below the loads less friction (or the gap
     opens). Without damping the gap's component is implied by the push's (k gap >= push there);
     gap_check=False leaves it out then."""
+    # (the gap first: a resting valve's gap is mostly open, and a search that clears a step on
+    # any component clears it on the first)
     thr_up = W0 + rate * s_star + R
-    up = (("push", 1.0, thr_up),) + ((("gap", 1.0, 0.0),) if gap_check else ())
+    up = ((("gap", 1.0, 0.0),) if gap_check else ()) + (("push", 1.0, thr_up),)
     events = (EventRule("up", up, "min" if len(up) > 1 else "one"),)
     thr_dn = W0 + rate * s_star - R
     if s_star > 0.0 and thr_dn > 0.0:
-        down = (("push", -1.0, thr_dn),) + ((("gap", -1.0, 0.0),) if gap_check else ())
+        down = ((("gap", -1.0, 0.0),) if gap_check else ()) + (("push", -1.0, thr_dn),)
         events += (EventRule("down", down, "max" if len(down) > 1 else "one"),)
     return events
 
