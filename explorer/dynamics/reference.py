@@ -24,7 +24,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from ..solvers import SCIPY_METHODS
+from .solvers import SCIPY_METHODS
 from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel
 from .phases import phase_of_state, rebound_rest_speed, seat_speed, touching, velocity_zero
 

@@ -21,7 +21,7 @@ rolling-lever    eccentric rolling lever ("Waelzhebel"); [lift] law = "gear".
                      opens, lever_stiffness, rod_stiffness (optional; with either, the elastic
                      effect's stiffness is theirs referred to the valve, k(t), in series with
                      [linkage] stiffness, and needs a solver.method that takes k(t):
-                     explorer/solvers.py, varying_stiffness)
+                     explorer/dynamics/solvers.py, varying_stiffness)
                  [gear.valve] type = "rocker" on the valve lever (angle from the direction
                      valve-lever pivot -> rolling-lever pivot)
 trip             latch lifts the valve, releases it at the trip angle; [lift] is the latch's
@@ -30,7 +30,7 @@ trip             latch lifts the valve, releases it at the trip angle; [lift] is
                      latch_friction (mu of the latch face on the catch, 0...1, default 0.15), latch_width and
                      latch_depth (the latch face's bearing area; depth = its engagement, the
                      distance the trip pulls it out); forces, contact and elastic analyse the
-                     latched phase (explorer.gears.trip_effects)
+                     latched phase (explorer.effects.trip)
                  [gear.air_dashpot] diameter, stroke, clearance, orifice_diameter,
                      discharge_coefficient, polytropic_exponent, ambient_pressure, ambient_temperature,
                      inlet ("check-valve", default: the pocket refills through a non-return valve
@@ -52,10 +52,10 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Mapping
 
-from ..errors import InputError
-from ..laws import LAWS
-from ..ranges import AMBIENT_TEMPERATURE, OIL_DENSITY
-from ..reader import Table
+from ..core.errors import InputError
+from ..lift.laws import LAWS
+from ..core.ranges import AMBIENT_TEMPERATURE, OIL_DENSITY
+from ..core.reader import Table
 from . import GEAR_TYPES
 
 SIDES = ("left", "right")
@@ -79,8 +79,8 @@ def _point(t: Table, name: str, default=...) -> tuple[float, float]:
         return default
     if not isinstance(raw, list) or len(raw) != 2:
         raise t.error(name, 'expected a point [x, y], such as ["-120 mm", "70 mm"]')
-    from ..ranges import check_range
-    from ..units import to_si
+    from ..core.ranges import check_range
+    from ..core.units import to_si
 
     return tuple(
         check_range(to_si(v, "length", file=t.file, key=f"{t.key(name)}[{i}]"), "length", file=t.file,
@@ -317,7 +317,7 @@ def _check_scene(spec: GearSpec, fields: dict) -> None:
         raise InputError(file, "follower.roller_radius", f"the {kind} gear needs a roller (roller_radius > 0)")
     if kind == "rolling-lever" and "elastic" in effects:
         rl = spec.part("rolling_lever")
-        from ..solvers import varying_stiffness
+        from ..dynamics.solvers import varying_stiffness
 
         varying = varying_stiffness()
         if (rl["lever_stiffness"] is not None or rl["rod_stiffness"] is not None) \
