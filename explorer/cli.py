@@ -16,6 +16,7 @@ COMMAND_MODULES = [
     "explorer.cli_view",
     "explorer.cli_bench",
     "explorer.cli_fit",
+    "explorer.cli_export",
 ]
 
 DESCRIPTION = """\
@@ -41,6 +42,7 @@ examples:
   explorer record SCENE -o run.rrd --sweep drive.rpm=200,240,300 && explorer view run.rrd
   explorer bench assets/scenes/schenker1902_fig2.toml --output-dir out   (accuracy vs CPU time)
   explorer fit assets/scenes/rocking_cam.toml --lift "9 mm" --open-angle "220 deg"   (rocking-cam contour)
+  explorer export SCENE --format dxf --tolerance "1 um"   (the cam to make it: csv, dxf, stl, glb, grind)
   explorer <command> --help            details of one command
 
 Quantities in scene files carry units ("20 mm", "385 kgf", "2.9 kgf*s**2/m"); a bare number
