@@ -17,6 +17,7 @@ COMMAND_MODULES = [
     "explorer.cli_bench",
     "explorer.cli_fit",
     "explorer.cli_export",
+    "explorer.cli_residual",
 ]
 
 DESCRIPTION = """\
@@ -43,6 +44,7 @@ examples:
   explorer bench assets/scenes/schenker1902_fig2.toml --output-dir out   (accuracy vs CPU time)
   explorer fit assets/scenes/rocking_cam.toml --lift "9 mm" --open-angle "220 deg"   (rocking-cam contour)
   explorer export SCENE --format dxf --tolerance "1 um"   (the cam to make it: csv, dxf, stl, glb, grind)
+  explorer residual assets/scenes/polydyne_demo.toml --rpm 1000:3000:21 --plot r.png   (vibration vs speed)
   explorer <command> --help            details of one command
 
 Quantities in scene files carry units ("20 mm", "385 kgf", "2.9 kgf*s**2/m"); a bare number

@@ -26,6 +26,7 @@ LIFT_BUILDERS: dict[str, str] = {
     "table": "explorer.lift_table:build_table_lift",
     "acceleration": "explorer.lift_acceleration:build_acceleration_lift",
     "contour": "explorer.geometry.lift_from_contour:build_contour_lift",
+    "polydyne": "explorer.polydyne:build_polydyne_lift",
 }
 
 
