@@ -18,6 +18,7 @@ COMMAND_MODULES = [
     "explorer.cli_fit",
     "explorer.cli_export",
     "explorer.cli_residual",
+    "explorer.cli_design",
 ]
 
 DESCRIPTION = """\
@@ -45,6 +46,7 @@ examples:
   explorer fit assets/scenes/rocking_cam.toml --lift "9 mm" --open-angle "220 deg"   (rocking-cam contour)
   explorer export SCENE --format dxf --tolerance "1 um"   (the cam to make it: csv, dxf, stl, glb, grind)
   explorer residual assets/scenes/polydyne_demo.toml --rpm 1000:3000:21 --plot r.png   (vibration vs speed)
+  explorer design assets/scenes/spline_demo.toml --objective peak-acceleration --max-pressure-angle 30   (spline lift)
   explorer <command> --help            details of one command
 
 Quantities in scene files carry units ("20 mm", "385 kgf", "2.9 kgf*s**2/m"); a bare number

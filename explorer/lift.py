@@ -27,6 +27,7 @@ LIFT_BUILDERS: dict[str, str] = {
     "acceleration": "explorer.lift_acceleration:build_acceleration_lift",
     "contour": "explorer.geometry.lift_from_contour:build_contour_lift",
     "polydyne": "explorer.polydyne:build_polydyne_lift",
+    "spline": "explorer.spline_lift:build_spline_lift",
 }
 
 

@@ -33,7 +33,7 @@ EFFECT_DEPENDENCIES: dict[str, tuple[str, ...]] = {
     "gear": ("kinematics",),  # explorer.gears: what is particular to the lever, eccentric and trip gears
 }
 
-SPECIAL_LAWS = ("table", "acceleration", "contour", "gear", "polydyne")  # "gear": the gear's geometry makes the lift
+SPECIAL_LAWS = ("table", "acceleration", "contour", "gear", "polydyne", "spline")  # "gear": the gear's geometry makes the lift
 FOLLOWER_TYPES = ("translating-roller", *GEAR_TYPES)
 MIN_STEPS = 36
 # Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
@@ -57,11 +57,13 @@ LAW_OPTION_PARSERS: dict[str, str] = {
     "table": "explorer.lift_table:parse_table_options",
     "acceleration": "explorer.lift_acceleration:parse_acceleration_options",
     "polydyne": "explorer.polydyne:parse_polydyne_options",
+    "spline": "explorer.spline_lift:parse_spline_options",
 }
 LAW_OPTION_KEYS: dict[str, tuple[str, ...]] = {
     "table": ("file", "angle_unit", "lift_unit", "smoothing"),
     "acceleration": ("points", "angle_unit", "acceleration_unit", "interpolation", "reference_rpm"),
     "polydyne": ("wanted_law", "design_rpm", "ramp"),
+    "spline": ("stations", "continuity", "reference_rpm"),
 }
 # laws whose [lift] height, rise and return shape an event as for the closed-form laws
 SHAPED_LAWS = (*LAWS, "polydyne")
