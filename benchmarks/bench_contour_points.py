@@ -29,10 +29,10 @@ def main(argv=None) -> int:
     parser.add_argument("--repeat", type=int, default=5)
     args = parser.parse_args(argv)
 
-    from explorer.geometry.arcs import build_arc_contour, make_arc_lift
-    from explorer.geometry.parametric import SplineContour, make_parametric_lift, points_accuracy
-    from explorer.geometry.schenker_fig2 import PAPER_DESIGN, arcs
-    from explorer.lift import LawLift
+    from explorer.lift.contours.arcs import build_arc_contour, make_arc_lift
+    from explorer.lift.contours.parametric import SplineContour, make_parametric_lift, points_accuracy
+    from explorer.lift.contours.schenker_fig2 import PAPER_DESIGN, arcs
+    from explorer.lift.curves import LawLift
 
     base = median_time(baseline_workload, args.repeat)
     theta = np.arange(3600) * 2 * math.pi / 3600
@@ -49,7 +49,7 @@ def main(argv=None) -> int:
     for name, lift in cases.items():
         rows = []
         for row in points_accuracy(lift, 0.03, 0.01, 0.0, counts=COUNTS):
-            from explorer.geometry.translating import translating_profile
+            from explorer.lift.contours.translating import translating_profile
 
             n = row["points"]
             pts = translating_profile(lift, np.arange(n) * 2 * math.pi / n, 0.03, 0.01, 0.0).contour

@@ -42,12 +42,12 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     from explorer import load_scene
-    from explorer.effects import Context
-    from explorer.geometry.translating import translating_profile
-    from explorer.kinematics import kinematics_effect
-    from explorer.lift import build_lift
-    from explorer.lift_table import fit_periodic_spline
-    from explorer.scenes import default_scene
+    from explorer.effects.pipeline import Context
+    from explorer.lift.contours.translating import translating_profile
+    from explorer.effects.kinematics import kinematics_effect
+    from explorer.effects.lift import build_lift
+    from explorer.lift.table import fit_periodic_spline
+    from explorer.scene.builtin import default_scene
 
     demo = ROOT / "assets" / "scenes" / "cycloidal_demo.toml"
     scene = load_scene(demo)

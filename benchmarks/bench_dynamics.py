@@ -31,7 +31,7 @@ CASES = [
 
 
 def measure(scene, repeat: int) -> list[tuple[str, float, float]]:
-    from explorer.bench import model_and_drive
+    from explorer.studies.bench import model_and_drive
     from explorer.dynamics import schenker1902
     from explorer.dynamics.model import solve
 
@@ -62,9 +62,9 @@ def rpm_sweep(path: Path, overrides: list[str], rpms: list[float], repeat: int) 
     """The speed ratio against the camshaft speed on one scene: the baseline's cost follows the
     natural periods per revolution (its step is bounded by Tn/4 and must resolve them), the exact
     solver's mostly its fixed cost and the phases between events."""
-    from explorer.bench import model_and_drive
+    from explorer.studies.bench import model_and_drive
     from explorer.dynamics.model import solve
-    from explorer.scene import load_scene
+    from explorer.scene.scene import load_scene
 
     rows = []
     for rpm in rpms:
@@ -95,7 +95,7 @@ def main() -> None:
                         help="the ratio at these camshaft speeds on --scene (default: Schenker's Fig. 2)")
     args = parser.parse_args()
 
-    from explorer.scene import load_scene
+    from explorer.scene.scene import load_scene
 
     scenes = ROOT / "assets" / "scenes"
     if args.rpm_sweep:

@@ -22,12 +22,12 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=7)
     args = parser.parse_args()
 
-    from explorer.effects import simulate
-    from explorer.forces import TrainLoads, float_speed
-    from explorer.lift import build_lift
-    from explorer.scene import load_scene
-    from explorer.springs import advise_spring
-    from explorer.sweeps import contact_margin_loop, contact_margin_sweep
+    from explorer.effects.pipeline import simulate
+    from explorer.mechanics.forces import TrainLoads, float_speed
+    from explorer.effects.lift import build_lift
+    from explorer.scene.scene import load_scene
+    from explorer.effects.spring_design import advise_spring
+    from explorer.studies.sweeps import contact_margin_loop, contact_margin_sweep
 
     path = ROOT / "assets" / "scenes" / "valve_float_demo.toml"
     base = load_scene(path)
@@ -62,7 +62,7 @@ def main() -> None:
     rows.append(("sweep 1000 speeds, vectorised", t_vec, t_vec / t_loop))
     # what a user would do without the sweep: one simulate() per speed (20 speeds, scaled to 1000)
     forces_only = load_scene(path, ['effects=["forces"]']).with_changes(spring_design=None)
-    from explorer.scene import Drive
+    from explorer.scene.scene import Drive
 
     few = rpms[:: len(rpms) // 20][:20]
     t_sim = median_time(lambda: [simulate(forces_only.with_changes(drive=Drive(rpm=float(r)))) for r in few],

@@ -25,11 +25,11 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=7)
     args = parser.parse_args()
 
-    from explorer.effects import Context, simulate
-    from explorer.forces import forces_effect
+    from explorer.effects.pipeline import Context, simulate
+    from explorer.effects.forces import forces_effect
     from explorer.gears import jet as J
-    from explorer.lift import build_lift
-    from explorer.scene import load_scene
+    from explorer.effects.lift import build_lift
+    from explorer.scene.scene import load_scene
 
     rows = []
     for name in ("pivoted_roller_lever", "rocking_cam", "rolling_lever"):

@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/bench_recording.py [SCENE] [--repeats 5]
 
 Rows (median of the repeats; the simulation and the meshes are computed once, outside the timing):
-- columns, series only:  explorer.recording writing the series and events with send_columns
+- columns, series only:  explorer.view.rerun.recording writing the series and events with send_columns
 - columns, with 3D:      the same plus the 3D parts (meshes + one Transform3D per step per part);
                          this is what `explorer record` does per scene (target <= 0.5 s)
 - loop (baseline):       the series written the naive way, rr.set_time + rr.log per step and
@@ -22,8 +22,8 @@ import numpy as np
 from _timing import ROOT, median_time, print_table
 
 from explorer import load_scene
-from explorer.effects import simulate
-from explorer.recording import (
+from explorer.effects.pipeline import simulate
+from explorer.view.rerun.recording import (
     APP_ID, Run, series_layout, step_indexes, with_parts, write_recordings,
 )
 

@@ -128,10 +128,10 @@ def main(argv=None) -> int:
     import viser
 
     from explorer import load_scene
-    from explorer.effects import simulate
-    from explorer.scenes import default_scene
-    from explorer.viewer.app import ExplorerApp
-    from explorer.viewer.model import Request, prepare
+    from explorer.effects.pipeline import simulate
+    from explorer.scene.builtin import default_scene
+    from explorer.view.browser.app import ExplorerApp
+    from explorer.view.browser.model import Request, prepare
 
     path = args.scene or str(default_scene())
     scene = load_scene(path)
@@ -151,7 +151,7 @@ def main(argv=None) -> int:
     rows.append(("prepare: parameter change recomputed", median_time(prepare_change, args.repeat), 0.1, "s"))
 
     # -- the same change through the explorer's compute process (its time limit's price) -------
-    from explorer.viewer.worker import ComputeProcess
+    from explorer.view.browser.worker import ComputeProcess
 
     child = ComputeProcess()
     overheads = []

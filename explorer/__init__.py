@@ -7,15 +7,15 @@
 Viewers (viser, rerun) are imported only by the commands that use them.
 """
 
-from .errors import InputError
-from .scene import Scene, load_scene, loads_scene
+from .core.errors import InputError
+from .core.version import __version__
+from .scene.scene import Scene, load_scene, loads_scene
 
 __all__ = ["InputError", "Scene", "load_scene", "loads_scene", "simulate", "__version__"]
-__version__ = "0.1.0"
 
 
 def simulate(scene):
     """Compute the scene's effects over one revolution; returns a Result (.columns, .summary)."""
-    from .effects import simulate as _simulate
+    from .effects.pipeline import simulate as _simulate
 
     return _simulate(scene)

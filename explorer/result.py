@@ -79,8 +79,8 @@ def _jsonable(value):
 
 
 def write_atomic(path: str | os.PathLike, text: str | bytes) -> None:
-    """Write `text` to `path` by the rules of explorer.outputs (temporary file and rename for a
+    """Write `text` to `path` by the rules of explorer.core.outputs (temporary file and rename for a
     regular file, the umask or the replaced file's mode; devices and pipes written through)."""
-    from .outputs import write_output
+    from .core.outputs import write_output
 
     write_output(path, text)

@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from explorer.dynamics.model import Drive, LinkageModel
-from explorer.lift import LawLift
+from explorer.lift.curves import LawLift
 
 # The converged reference: DOP853 at rtol 1e-12, accurate to ~1e-13 m on lifts of a few mm.
 REF = dict(method="scipy", scipy_method="DOP853", rtol=1e-12, atol=1e-15)

@@ -1,4 +1,4 @@
-"""`explorer bench` (explorer/bench.py, explorer/cli_bench.py): accuracy versus time.
+"""`explorer bench` (explorer/studies/bench.py, explorer/cli/bench.py): accuracy versus time.
 
 Timings are measured but never asserted (machines differ). What is checked: that the numbers
 the table reports are what they claim to be -- errors recomputed independently against an exact
@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 
 from conftest import process_timeout, run_cli
-from explorer.bench import ProgressBar, chart_png, model_and_drive, run_bench
+from explorer.studies.bench import ProgressBar, chart_png, model_and_drive, run_bench
 from explorer.dynamics import schenker1902
 from explorer.dynamics.model import solve
-from explorer.errors import InputError
-from explorer.scene import loads_scene
+from explorer.core.errors import InputError
+from explorer.scene.scene import loads_scene
 from dynamics_cases import float_valve_scene
 
 # A small valve with a soft spring at high speed: lift-off, separations, re-contacts and seat.

@@ -61,7 +61,7 @@ def _server_positions(app, names):
 
 def _framed(app):
     """True once every page reports the camera the viewer aimed for its canvas' shape."""
-    from explorer.viewer.app import CAMERA_FOV
+    from explorer.view.browser.app import CAMERA_FOV
 
     clients = app.server.get_clients()
     if not clients:
@@ -123,7 +123,7 @@ def _running_explorer(scene):
     the explorer's loop and worker must have met no error meanwhile."""
     import viser
 
-    from explorer.viewer.app import ExplorerApp
+    from explorer.view.browser.app import ExplorerApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = ExplorerApp(server, str(scene), playing=False)
@@ -138,9 +138,9 @@ def _running_explorer(scene):
 def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
     sync_api = pytest.importorskip("playwright.sync_api")
 
-    from explorer import meshes
-    from explorer.scenes import default_scene
-    from explorer.viewer.model import step_index
+    from explorer.view import parts as meshes
+    from explorer.scene.builtin import default_scene
+    from explorer.view.browser.model import step_index
 
     with _running_explorer(default_scene()) as (server, app):
         assert app.wait_applied(WAIT_S)
@@ -233,7 +233,7 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                 _wait_in_step(page, app, parts)
                 # the page's plots are those of the result shown: titles and series (and the cursor);
                 # the live legend lists the x axis first (its value under the pointer)
-                from explorer.viewer.app import PLOT_X_LABEL
+                from explorer.view.browser.app import PLOT_X_LABEL
 
                 plots = [[plot.title, [PLOT_X_LABEL] + [label for label, _, _ in plot.series] + ["now"]]
                          for plot in app.current.plots]

@@ -9,20 +9,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from explorer.contact import (
-    ALLOWABLE,
-    ContactSpec,
-    contact_effect,
-    effective_modulus,
-    hertz_line_stress,
-    roller_normal_force,
-    width_rule,
-)
-from explorer.effects import Context, simulate
-from explorer.errors import InputError
-from explorer.lift import build_lift
-from explorer.scene import load_scene, loads_scene
-from explorer.units import AT, KGF
+from explorer.mechanics.contact import ALLOWABLE, ContactSpec, effective_modulus, hertz_line_stress, roller_normal_force, width_rule
+from explorer.effects.contact import contact_effect
+from explorer.effects.pipeline import Context, simulate
+from explorer.core.errors import InputError
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene, loads_scene
+from explorer.core.units import AT, KGF
 
 SCENE = """
 name = "contact test"

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
-from explorer.lift import LawLift
+from explorer.lift.curves import LawLift
 from dynamics_cases import (REF, SCHENKER, BumpLift, ConstantLift, flight_case, friction_apex, rise_in_contact,
                             schenker_drive, stopping_drive)
 
@@ -217,8 +217,8 @@ def test_damped_linkage_recontacts_after_separating_while_compressed(damping):
     re-contact must be found where the linkage would push again, not where the gap closes (it is
     open already). scipy and the exact solver, two independent methods, agree on every event and
     to 1e-10 m (both converged far below that)."""
-    from explorer.bench import model_and_drive
-    from explorer.scene import load_scene
+    from explorer.studies.bench import model_and_drive
+    from explorer.scene.scene import load_scene
 
     scene = load_scene(Path(__file__).resolve().parents[1] / "assets" / "scenes" / "valve_float_demo.toml",
                        ['linkage.stiffness="5e6 N/m"', f'linkage.damping="{damping} N*s/m"'])

@@ -16,7 +16,7 @@ import pytest
 
 from explorer.dynamics import schenker1902 as sch
 from explorer.dynamics.model import Drive, LinkageModel, solve
-from explorer.lift import LawLift
+from explorer.lift.curves import LawLift
 from dynamics_cases import KGF, SCHENKER, ConstantLift, flight_case, rise_in_contact, schenker_drive
 
 
@@ -212,8 +212,8 @@ def test_damped_linkage_recontacts_where_it_would_push_again(damping):
     separations at any step, and come closer to it as the step shrinks."""
     from pathlib import Path
 
-    from explorer.bench import model_and_drive
-    from explorer.scene import load_scene
+    from explorer.studies.bench import model_and_drive
+    from explorer.scene.scene import load_scene
 
     scene = load_scene(Path(__file__).resolve().parents[1] / "assets" / "scenes" / "valve_float_demo.toml",
                        ['linkage.stiffness="5e6 N/m"', f'linkage.damping="{damping} N*s/m"'])

@@ -20,11 +20,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from explorer.bench import model_and_drive
-from explorer.dynamics.effect import linkage_model
+from explorer.studies.bench import model_and_drive
+from explorer.effects.elastic import linkage_model
 from explorer.dynamics.model import VARYING_STIFFNESS, Drive, StiffnessProfile, solve
-from explorer.lift import build_lift
-from explorer.scene import load_scene
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene
 
 from dynamics_cases import cycloidal_groups
 from test_dynamics_varying import A, M1, PRELOAD, RATE, W_S, _manufactured

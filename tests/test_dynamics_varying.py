@@ -18,13 +18,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from explorer.dynamics.effect import linkage_model
+from explorer.effects.elastic import linkage_model
 from explorer.dynamics.model import Drive, LinkageModel, StiffnessProfile, solve
-from explorer.errors import InputError
+from explorer.core.errors import InputError
 from explorer.gears import jet as J
 from explorer.gears.jet import Jet
-from explorer.lift import build_lift
-from explorer.scene import load_scene
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene
 
 SCENES = Path(__file__).resolve().parents[1] / "assets" / "scenes"
 ROLLING = SCENES / "rolling_lever.toml"
@@ -118,7 +118,7 @@ def test_exact_solver_refuses_a_varying_stiffness():
 def test_constant_profile_reproduces_constant_stiffness():
     """k(t) = k everywhere: the varying-stiffness path (tables, cache.k) equals the constant one."""
     scene = load_scene(SCENES / "valve_float_demo.toml", ['linkage.stiffness="5e6 N/m"'])
-    from explorer.bench import model_and_drive
+    from explorer.studies.bench import model_and_drive
 
     model, drive = model_and_drive(scene)
     k = model.stiffness
@@ -197,7 +197,7 @@ def test_rolling_lever_elastic_uses_the_varying_stiffness(rolling):
     """The scene's elastic effect runs with k(t): its range spans the gear's (pick-up stiffer than
     full lift, Schenker's point), and the motion differs from either constant bound by far more
     than the solver's error."""
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     scene, lift = rolling
     result = simulate(scene)
@@ -228,7 +228,7 @@ def test_bench_measures_the_solvers_that_take_k_of_t(rolling, tmp_path):
     """`explorer bench` on the rolling lever: taylor takes the exact solver's place (rows, the
     cross-check against the scipy reference, the speed ratio), each measured against the other
     kind of method; the 1902 scheme converges with the steps."""
-    from explorer.bench import run_bench
+    from explorer.studies.bench import run_bench
 
     scene, _ = rolling
     rep = run_bench(scene, quick=True, repeats=1, differentiation=False)

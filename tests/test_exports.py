@@ -1,6 +1,6 @@
 """`explorer export`: every format read back and measured against the exact cam.
 
-Oracles: the cam contour of Schenker's Fig. 2 is circular arcs (explorer.geometry.arcs), so its
+Oracles: the cam contour of Schenker's Fig. 2 is circular arcs (explorer.lift.contours.arcs), so its
 exported polylines are checked against the circles themselves; the law cam (cycloidal demo)
 against the closed form |pitch| = base + roller + L(theta) (no offset) and dense exact samples.
 Distances to a polyline are exact point-to-segment distances; "dense" exact samples are spaced
@@ -18,9 +18,10 @@ import pytest
 import trimesh
 
 from conftest import SCENES
-from explorer import cli, exports
-from explorer.lift import build_lift
-from explorer.scene import load_scene
+from explorer import cli
+from explorer.view import exports
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene
 
 DEMO = SCENES / "cycloidal_demo.toml"
 FIG2 = SCENES / "schenker1902_fig2.toml"

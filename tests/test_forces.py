@@ -8,17 +8,17 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import SCENES, run_cli
-from explorer.effects import simulate
-from explorer.errors import InputError
-from explorer.forces import (
+from explorer.effects.pipeline import simulate
+from explorer.core.errors import InputError
+from explorer.mechanics.forces import (
     TrainLoads,
     float_speed,
     friction_direction,
     min_contact_force,
     rigid_train_forces,
 )
-from explorer.lift import build_lift
-from explorer.scene import load_scene, loads_scene
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene, loads_scene
 
 SCENE = """
 name = "forces test"
@@ -347,7 +347,7 @@ def test_schenker_fig2_forces_against_the_paper(scenes_dir):
     they need F1 = 21 kg and F2 = 288 kg of spring. The arcs are fitted to his figures, so the
     decelerations must come out within the reading accuracy of a 1902 diagram (1 m/s^2 here, the
     fit is better), and F1, F2 within the paper's whole-kilogram rounding plus that."""
-    from explorer.units import KGF
+    from explorer.core.units import KGF
 
     path = scenes_dir / "schenker1902_fig2.toml"
     if path.exists():
@@ -355,10 +355,10 @@ def test_schenker_fig2_forces_against_the_paper(scenes_dir):
         lift, ratio, lash, w = build_lift(sc), sc.follower.ratio, sc.valve.lash, sc.omega
         loads = TrainLoads.from_scene(sc)
     else:
-        fig2 = pytest.importorskip("explorer.geometry.schenker_fig2")
+        fig2 = pytest.importorskip("explorer.lift.contours.schenker_fig2")
         lift, ratio, lash, w = fig2.lift_of(fig2.PAPER_DESIGN), 1.0, 0.6e-3, fig2.OMEGA
         loads = TrainLoads(mass=2.9 * 9.80665, preload=260 * KGF, rate=0.0, friction=15 * KGF, closing=66 * KGF)
-    from explorer.forces import side_extremes, smooth_pieces
+    from explorer.mechanics.forces import side_extremes, smooth_pieces
 
     sides = side_extremes(lift, loads, w, ratio, lash, smooth_pieces(lift, ratio, lash))
     p1 = sides["opening"]["peak_deceleration_m_s2"]
@@ -382,7 +382,7 @@ def test_loss_intervals_pair_losses_with_regains_on_synthetic_pieces():
     """Closed forms: cos(t) - 1/2 on an open half revolution is <= 0 from pi/3 to its end, where
     the valve seats (the regain); sin(t - 0.3) on a revolution that is open throughout is <= 0
     from pi + 0.3 through 0 to 0.3 (the stretch wraps). A jump at a piece start is a loss there."""
-    from explorer.forces import Pieces, loss_intervals
+    from explorer.mechanics.forces import Pieces, loss_intervals
 
     def pieces(starts, ends, is_open):
         return Pieces(np.array(starts), np.array(ends), np.array(is_open), np.ones(len(starts)))

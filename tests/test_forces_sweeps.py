@@ -5,11 +5,11 @@ brackets the exact float speed."""
 import numpy as np
 import pytest
 
-from explorer.errors import InputError
-from explorer.forces import TrainLoads, float_speed
-from explorer.lift import build_lift
-from explorer.scene import load_scene
-from explorer.sweeps import contact_margin_loop, contact_margin_sweep
+from explorer.core.errors import InputError
+from explorer.mechanics.forces import TrainLoads, float_speed
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene
+from explorer.studies.sweeps import contact_margin_loop, contact_margin_sweep
 
 
 @pytest.fixture

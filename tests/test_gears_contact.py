@@ -1,6 +1,6 @@
 """The 'contact' effect on the seeds' other gears: pivoted roller lever, rocking cam, rolling lever.
 
-One statics (explorer.contact) fed by each gear's contact geometry. Oracles:
+One statics (explorer.mechanics.contact) fed by each gear's contact geometry. Oracles:
 - power balance T w = F v without friction (F the forces effect's valve force, v the kinematics'
   valve velocity; T from the contact geometry: the normal's moment arm, never from F v);
 - with friction, the guide dissipation T w - F v = mu N |sin alpha| |v_roller| >= 0;
@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 
 from conftest import SCENES, run_cli
-from explorer.effects import simulate
-from explorer.lift import build_lift
-from explorer.scene import load_scene
-from explorer.units import AT
+from explorer.effects.pipeline import simulate
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene
+from explorer.core.units import AT
 
 GEARS = ["pivoted_roller_lever", "rocking_cam", "rolling_lever"]
 STATICS = ["kinematics", "lash", "forces", "contact"]

@@ -1,4 +1,4 @@
-"""3D parts of the gears (explorer.gears.meshes via explorer.meshes' dispatch): shapes, colours,
+"""3D parts of the gears (explorer.view.gear_parts via explorer.view.parts' dispatch): shapes, colours,
 and contacts that the drawing must keep - roller on cam, valve pin over the valve stem."""
 
 import math
@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from explorer import meshes
-from explorer.effects import simulate
-from explorer.lift import build_lift
-from explorer.scene import load_scene
+from explorer.view import parts as meshes
+from explorer.effects.pipeline import simulate
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene
 
 SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
 NAMES = ["pivoted_roller_lever", "rocking_cam", "rolling_lever", "trip_gear_dashpot"]

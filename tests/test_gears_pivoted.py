@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from explorer.errors import InputError
+from explorer.core.errors import InputError
 from explorer.gears import jet as J
 from explorer.gears.linkage import RockerDrive
 from explorer.gears.pivoted import (
@@ -20,8 +20,9 @@ from explorer.gears.pivoted import (
     analyse_contour,
     analyse_pitch,
 )
-from explorer.lift import LawLift, build_lift
-from explorer.scene import load_scene
+from explorer.lift.curves import LawLift
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene
 
 SCENE = Path(__file__).resolve().parent.parent / "assets" / "scenes" / "pivoted_roller_lever.toml"
 TH = np.linspace(0.0, 2.0 * math.pi, 1440, endpoint=False)
@@ -154,7 +155,7 @@ def test_valve_ratio_matches_the_lever_arms_for_the_rocker():
 
 
 def test_scene_gear_effect_reports_consistent_values():
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     result = simulate(load_scene(SCENE))
     gear = result.summary["gear"]
@@ -192,7 +193,7 @@ def test_bad_geometry_names_the_part(overrides, key):
 def test_missing_gear_section():
     import tomllib
 
-    from explorer.scene import scene_from_dict
+    from explorer.scene.scene import scene_from_dict
 
     data = tomllib.loads(SCENE.read_text())
     del data["gear"]

@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from explorer.errors import InputError
+from explorer.core.errors import InputError
 from explorer.gears.jet import Jet
 from explorer.gears.linkage import EccentricDrive, IdealEccentricDrive, RockerDrive
 from explorer.gears.rocking import RockingContour, build_rocking_gear, fit_contour, swing_increments
-from explorer.scene import load_scene
+from explorer.scene.scene import load_scene
 
 SCENE = Path(__file__).resolve().parent.parent / "assets" / "scenes" / "rocking_cam.toml"
 TWO_PI = 2.0 * math.pi
@@ -142,7 +142,7 @@ def test_four_bar_timing_asymmetry_is_fixed_by_the_linkage(gear):
     """Two shaft angles with the same rocking angle are mirror images about the line O -> B
     (B the rod pin): theta_open + theta_close - 2 theta_dead = 2 [angle B(chi_open) - angle B(chi_dead)].
     Checked at the valve's opening and closing angles, found on the analytic lift."""
-    from explorer.kinematics import lash_crossings
+    from explorer.mechanics.kinematics import lash_crossings
 
     ups, downs = lash_crossings(GearLift(gear), 1.0, 0.0005)
     td = gear.dead_centre
@@ -238,7 +238,7 @@ def test_dwell_keeps_the_valve_shut_exactly(gear):
 
 def test_fit_contour_reaches_target_lift_and_open_angle(gear):
     fitted = fit_contour(gear, target_lift=0.010, target_open_angle=math.radians(150.0), lash=0.0005)
-    from explorer.kinematics import lash_crossings
+    from explorer.mechanics.kinematics import lash_crossings
 
     ups, downs = lash_crossings(GearLift(fitted), 1.0, 0.0005)
     open_angle = np.mod(downs[0] - ups[0], TWO_PI)
@@ -248,7 +248,7 @@ def test_fit_contour_reaches_target_lift_and_open_angle(gear):
 
 
 def test_scene_summary_reports_symmetry_and_equal_arcs():
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     result = simulate(load_scene(SCENE))
     g = result.summary["gear"]
@@ -294,10 +294,10 @@ import tomllib
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from explorer.effects import simulate
+from explorer.effects.pipeline import simulate
 from explorer.gears.rocking import fit_target, valve_opening
-from explorer.lift import build_lift
-from explorer.scene import scene_from_dict
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import scene_from_dict
 
 SCENE_DATA = tomllib.loads(SCENE.read_text())
 
@@ -398,7 +398,7 @@ def test_reachable_open_angles_are_the_flank_at_either_end_of_the_swing(gear):
     lash_crossings along the shaft angle. Beyond the longest opening the fit refuses."""
     from dataclasses import replace
 
-    from explorer.kinematics import lash_crossings
+    from explorer.mechanics.kinematics import lash_crossings
 
     lash, lift = 0.0005, 0.010
     fit = fit_target(gear, lift, math.radians(200.0), lash)
@@ -435,7 +435,7 @@ def test_top_arc_swing_against_the_flank_crossings(gear):
 
 
 def test_valve_opening_of_a_written_contour_against_lash_crossings(gear):
-    from explorer.kinematics import lash_crossings
+    from explorer.mechanics.kinematics import lash_crossings
 
     for lash in (0.0001, 0.0005, 0.003):  # (zero lash: lash_crossings would count round-off on the dwell)
         top, open_angle = valve_opening(gear, lash)

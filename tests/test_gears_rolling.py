@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from explorer.errors import InputError
+from explorer.core.errors import InputError
 from explorer.gears import jet as J
 from explorer.gears.jet import Jet
 from explorer.gears.rolling import RollingLaw
-from explorer.kinematics import lash_crossings
-from explorer.lift import build_lift
-from explorer.scene import load_scene
+from explorer.mechanics.kinematics import lash_crossings
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene
 
 SCENE = Path(__file__).resolve().parent.parent / "assets" / "scenes" / "rolling_lever.toml"
 TWO_PI = 2.0 * math.pi
@@ -113,7 +113,7 @@ def test_valve_referred_stiffness_by_static_deflection(lift):
 
 
 def test_most_elasticity_sits_in_the_rolling_lever():
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     result = simulate(load_scene(SCENE))
     g = result.summary["gear"]

@@ -42,7 +42,7 @@ def test_bad_geometry_is_one_line_exit_2_no_file(name, override, key, tmp_path):
 
 
 def test_summary_figures(tmp_path):
-    from explorer.gears.figures import main
+    from explorer.studies.gear_figures import main
 
     assert main([str(tmp_path)]) == 0
     for name in ("rocking_cam_swings.png", "trip_buffers.png"):

@@ -8,10 +8,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from explorer import jets
-from explorer.geometry.arcs import Arc, ContourError, build_arc_contour, make_arc_lift
-from explorer.geometry.parametric import SplineContour, make_parametric_lift
-from explorer.geometry.schenker_fig2 import PAPER_DESIGN, arcs as schenker_arcs
+from explorer.core import jets
+from explorer.lift.contours.arcs import Arc, ContourError, build_arc_contour, make_arc_lift
+from explorer.lift.contours.parametric import SplineContour, make_parametric_lift
+from explorer.lift.contours.schenker_fig2 import PAPER_DESIGN, arcs as schenker_arcs
 
 
 def brute_force_height(points: np.ndarray, theta: np.ndarray, roller: float, offset: float) -> np.ndarray:
@@ -200,8 +200,8 @@ def test_point_list_accuracy_improves_with_density():
     h^6 (theory: x64 per halving; asserted > x40); for a 4-5-6-7 law, whose contour's third
     derivative jumps (the law's fourth does), like h^4 (theory x16; asserted > x10).
     Oracle: the law itself."""
-    from explorer.geometry.parametric import points_accuracy
-    from explorer.lift import LawLift
+    from explorer.lift.contours.parametric import points_accuracy
+    from explorer.lift.curves import LawLift
 
     smooth = LawLift(0.008, 0.0, math.pi, 0.0, math.pi, "harmonic", "harmonic")
     err = [row["max_lift_error_m"] for row in points_accuracy(smooth, 0.03, 0.01, 0.0, counts=(90, 180), samples=720)]

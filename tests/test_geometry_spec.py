@@ -10,9 +10,9 @@ from hypothesis import strategies as st
 
 from conftest import SCENES, run_cli
 from explorer import InputError, load_scene, loads_scene, simulate
-from explorer.geometry.contour import cam_contour, pitch_curve
-from explorer.geometry.schenker_fig2 import PAPER_DESIGN, arcs as schenker_arcs
-from explorer.lift import build_lift
+from explorer.effects.contour import cam_contour, pitch_curve
+from explorer.lift.contours.schenker_fig2 import PAPER_DESIGN, arcs as schenker_arcs
+from explorer.effects.lift import build_lift
 
 HEAD = """
 name = "t"
@@ -63,7 +63,7 @@ def test_rotation_turns_the_contour():
 
 def test_points_inline_and_csv_give_the_same_lift(tmp_path):
     contour = np.array(schenker_arcs(PAPER_DESIGN), dtype=object)
-    from explorer.geometry.arcs import build_arc_contour
+    from explorer.lift.contours.arcs import build_arc_contour
 
     pts = build_arc_contour(list(contour)).points_by_arc_length(720) * 1e3
     inline = "points = [" + ", ".join(f"[{float(x)!r}, {float(y)!r}]" for x, y in pts) + "]"
@@ -231,7 +231,7 @@ def test_arc_radius_outside_any_cam_is_refused(radius, reason):
 
 
 def test_cam_spec_equality_and_description():
-    from explorer.geometry.spec import describe
+    from explorer.lift.contours.spec import describe
 
     a = load_scene(SCENES / "schenker1902_fig2.toml")
     b = load_scene(SCENES / "schenker1902_fig2.toml", ["drive.rpm=300"])

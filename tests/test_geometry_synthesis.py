@@ -6,14 +6,14 @@ import math
 import numpy as np
 import pytest
 
-from explorer.errors import InputError
-from explorer.geometry.parametric import SynthesizedContour, make_parametric_lift
-from explorer.geometry.translating import (
+from explorer.core.errors import InputError
+from explorer.lift.contours.parametric import SynthesizedContour, make_parametric_lift
+from explorer.lift.contours.translating import (
     check_undercut,
     pitch_geometry,
     translating_profile,
 )
-from explorer.lift import LawLift
+from explorer.lift.curves import LawLift
 
 LAWS = ["cycloidal", "harmonic", "polynomial-345", "polynomial-4567", "modified-trapezoid", "modified-sine"]
 
@@ -156,7 +156,7 @@ def test_round_trip_synthesis_then_analysis(law, offset, roller):
 
 
 def test_round_trip_reports_a_folded_contour():
-    from explorer.geometry.parametric import ContourFollowError
+    from explorer.lift.contours.parametric import ContourFollowError
 
     lift = law_lift("cycloidal", height=0.02, start=0.0, rise=math.radians(40), dwell=0.0, ret=math.radians(40))
     contour = SynthesizedContour(lift, 0.015, 0.014, 0.0)  # undercut: the envelope has a swallowtail

@@ -23,9 +23,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from explorer.cli import main
-from explorer.effects import NAN_WHERE_UNDEFINED
-from explorer.errors import InputError
-from explorer.units import to_si
+from explorer.effects.pipeline import NAN_WHERE_UNDEFINED
+from explorer.core.errors import InputError
+from explorer.core.units import to_si
 
 from conftest import ROOT, SCENES, process_timeout
 
@@ -380,9 +380,9 @@ def test_quantity_parser_returns_a_finite_float_or_one_line_quickly(value, dimen
 def test_non_finite_results_are_refused(monkeypatch):
     """Behind the ranges: an effect whose arithmetic overflows ends in one line naming it, not in
     a file of NaN."""
-    from explorer import effects
+    from explorer.effects import pipeline as effects
     from explorer.result import EffectOutput
-    from explorer.scene import load_scene
+    from explorer.scene.scene import load_scene
 
     real = effects.effect_function
 

@@ -15,8 +15,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "explorer"
 # and so does an entry here that is no longer in one (delete it).
 #   viewer.model <-> viewer.worker: the viewer's own pair, left to the viewer's work (wt-ux).
 ALLOWED_IN_CYCLES = frozenset({
-    "explorer.viewer.model",
-    "explorer.viewer.worker",
+    "explorer.view.browser.model",
+    "explorer.view.browser.worker",
 })
 
 
@@ -71,10 +71,10 @@ def test_the_checker_finds_a_cycle_through_a_package_and_type_checking(tmp_path)
 
 def test_registry_entries_name_real_functions():
     """The tables that name plug-ins as "module:function" (imported when used) stay resolvable."""
-    from explorer.effects import EFFECT_FUNCTIONS, SECTION_SUMMARIES
+    from explorer.effects.pipeline import EFFECT_FUNCTIONS, SECTION_SUMMARIES
     from explorer.gears.registry import GEARS
-    from explorer.lift import LIFT_BUILDERS
-    from explorer.meshes import CONTOUR_FUNCTIONS
+    from explorer.effects.lift import LIFT_BUILDERS
+    from explorer.view.parts import CONTOUR_FUNCTIONS
 
     targets = list(EFFECT_FUNCTIONS.values()) + list(LIFT_BUILDERS.values()) + list(CONTOUR_FUNCTIONS)
     targets += [target for entries in SECTION_SUMMARIES.values() for _, target in entries]

@@ -213,7 +213,7 @@ def test_law_lift_is_continuous_at_its_breakpoints(start, rise, dwell, ret, law)
     no stretch of the event (it happened on the dwell's end by rounding) read 0 instead of h."""
     from hypothesis import assume
 
-    from explorer.lift import LawLift
+    from explorer.lift.curves import LawLift
 
     assume(rise + dwell + ret <= 2 * math.pi)
     lift = LawLift(0.01, start, rise, dwell, ret, law, law)
@@ -244,7 +244,7 @@ def test_a_brief_opening_inside_one_grid_cell_is_found():
     """Lash 1e-9 m below the peak: the valve is open for 2 acos(1 - 2e-9/h) ~ 0.05 deg, less than a
     grid cell (360/4096 deg), centred between grid points. Closed form of the crossings:
     theta = c -+ acos(2 lash/h - 1)."""
-    from explorer.kinematics import lash_crossings
+    from explorer.mechanics.kinematics import lash_crossings
 
     h, c = 0.01, (100.5 / 4096) * 2 * math.pi  # the peak half-way between grid points
     lash = h - 1e-9

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import cumulative_simpson
 
-from explorer.laws import LAWS
+from explorer.lift.laws import LAWS
 
 U = np.linspace(0.0, 1.0, 400_001)
 

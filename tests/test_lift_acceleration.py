@@ -15,8 +15,9 @@ import pytest
 from scipy.integrate import trapezoid
 
 from explorer import InputError, load_scene, loads_scene, simulate
-from explorer.lift import LawLift, build_lift
-from explorer.lift_acceleration import AccelerationLift, AccelerationOptions
+from explorer.lift.curves import LawLift
+from explorer.effects.lift import build_lift
+from explorer.lift.acceleration import AccelerationLift, AccelerationOptions
 
 from conftest import SCENES, process_timeout
 
@@ -206,7 +207,7 @@ def test_points_of_the_wrong_shape(bad):
 def test_load_time_closure_equals_the_ppoly_closure():
     """Two independent computations of the closure: closed-form piece sums in numpy (used when
     a scene loads) and scipy PPoly antiderivatives (used for the curve). Random curves, fixed seed."""
-    from explorer.lift_acceleration import closure_of_points
+    from explorer.lift.acceleration import closure_of_points
 
     rng = np.random.default_rng(1902)
     for _ in range(200):

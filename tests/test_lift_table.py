@@ -3,7 +3,7 @@
 Oracles: a smooth periodic function with known derivatives (the spline must reproduce them to
 its approximation error), Reinsch's criterion (with a stated noise level the residual rms equals
 it), the analytic cycloidal law behind the shipped synthetic measurement, and the accuracy
-bounds measured by explorer.studies (with margin, fixed noise seeds).
+bounds measured by explorer.studies.accuracy (with margin, fixed noise seeds).
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from explorer import InputError, load_scene, loads_scene, simulate
-from explorer.lift import LawLift
-from explorer.lift_table import fit_periodic_spline, read_lift_csv
-from explorer.studies import differentiation_study
+from explorer.lift.curves import LawLift
+from explorer.lift.table import fit_periodic_spline, read_lift_csv
+from explorer.studies.accuracy import differentiation_study
 
 from conftest import SCENES
 
@@ -189,7 +189,7 @@ def test_shipped_measurement_reproduces_the_cycloidal_demo():
 def test_start_shifts_the_table(tmp_path):
     base = load_in(tmp_path)
     shifted = load_in(tmp_path, 'start = "30 deg"')
-    from explorer.lift import build_lift
+    from explorer.effects.lift import build_lift
 
     theta = np.linspace(0, TWO_PI, 37)
     a = build_lift(base).derivatives(theta)

@@ -1,4 +1,4 @@
-"""3D parts and poses (explorer.meshes) against geometry that does not come from the mesh code:
+"""3D parts and poses (explorer.view.parts) against geometry that does not come from the mesh code:
 Steiner's formula for the cam area, rolling contact distances, the lever's exact ratio, the
 coin-rotation rule for the roller spin, and the spring's length bookkeeping."""
 
@@ -9,10 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from explorer import load_scene, meshes
-from explorer.effects import simulate
-from explorer.geometry.translating import translating_profile
-from explorer.lift import build_lift
+from explorer import load_scene
+from explorer.view import parts as meshes
+from explorer.effects.pipeline import simulate
+from explorer.lift.contours.translating import translating_profile
+from explorer.effects.lift import build_lift
 from explorer.result import Result
 
 from conftest import SCENES
@@ -390,7 +391,7 @@ def test_the_framed_camera_sees_every_vertex_of_the_revolution(name):
     of a sample of steps is in the picture (a convex frustum holding the box's corners holds
     the box), and the gear fills it: its silhouette spans at least 60 % of the picture's width
     or height."""
-    from explorer.viewer.app import ASSUMED_ASPECT, CAMERA_FOV
+    from explorer.view.browser.app import ASSUMED_ASPECT, CAMERA_FOV
 
     lay, parts, poses, lengths = _posed(name)
     lo, hi = meshes.motion_bounds(parts, poses)
@@ -410,7 +411,7 @@ def test_rerun_eye_frames_the_whole_revolution_at_reruns_lens():
     """The rerun recording's 3D eye (a blueprint cannot set rerun's 55-degree field of view)
     comes from the same box over the revolution and the same framing: every corner of the box
     is in a square view at that lens."""
-    from explorer import recording
+    from explorer.view.rerun import recording
 
     scene = load_scene(SCENES / "trip_gear_dashpot.toml", ["solver.steps_per_revolution=360"])
     run = recording.with_parts("trip", simulate(scene))

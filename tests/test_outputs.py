@@ -1,4 +1,4 @@
-"""Output paths (explorer.outputs): what `-o`, `--summary`, `--output-dir` and `record -o` do to
+"""Output paths (explorer.core.outputs): what `-o`, `--summary`, `--output-dir` and `record -o` do to
 the thing they name. A regular file is replaced whole (temporary + rename) with the umask's or the
 old file's mode; a symlink is followed; devices, FIFOs and /dev/stdout are written through and
 stay what they were; directories, block devices, sockets and directories that take no new file
@@ -25,7 +25,7 @@ import numpy as np
 import pytest
 
 from explorer import cli, load_scene
-from explorer.effects import simulate
+from explorer.effects.pipeline import simulate
 from conftest import ROOT, SCENES
 
 DEMO = SCENES / "cycloidal_demo.toml"
@@ -68,12 +68,12 @@ def one_error_line(err: str, *needles: str) -> str:
 @pytest.fixture
 def no_simulation(monkeypatch):
     """Fails the test if a simulation starts: the checks must come before any work."""
-    import explorer.effects
+    import explorer.effects.pipeline
 
     def refuse(*args, **kwargs):
         raise AssertionError("simulated before the output was checked")
 
-    monkeypatch.setattr(explorer.effects, "simulate", refuse)
+    monkeypatch.setattr(explorer.effects.pipeline, "simulate", refuse)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -223,7 +223,7 @@ def test_dev_stdout_appending_to_a_file_is_not_replaced(tmp_path):
 
 
 def test_record_to_dev_stdout_is_a_complete_rrd(tmp_path):
-    from explorer.recording_read import read_rrd
+    from explorer.view.rerun.read import read_rrd
 
     out = tmp_path / "piped.rrd"
     with open(out, "wb") as handle:
@@ -261,9 +261,9 @@ def directory_that_takes_no_file(path: Path):
 
 @pytest.mark.parametrize("command", ["simulate", "summary", "record", "bench"])
 def test_unwritable_directory_is_refused_before_any_work(tmp_path, capsys, no_simulation, command, monkeypatch):
-    import explorer.bench
+    import explorer.studies.bench
 
-    monkeypatch.setattr(explorer.bench, "run_bench", lambda *a, **k: pytest.fail("benchmarked before the check"))
+    monkeypatch.setattr(explorer.studies.bench, "run_bench", lambda *a, **k: pytest.fail("benchmarked before the check"))
     with directory_that_takes_no_file(tmp_path / "ro") as ro:
         args = {"simulate": ["simulate", str(DEMO), "-o", str(ro / "out.csv")],
                 "summary": ["simulate", str(DEMO), "-o", str(tmp_path / "ok.csv"), "--summary", str(ro / "s.json")],
@@ -350,7 +350,7 @@ def test_streamed_csv_is_byte_identical(tmp_path, scene):
     for rows in (1, 777, 5000, 10**6):
         assert "".join(result.csv_chunks(rows)) == expected
     out = tmp_path / "out.csv"
-    from explorer.outputs import write_output
+    from explorer.core.outputs import write_output
 
     write_output(out, result.csv_chunks(333))
     assert out.read_text() == expected
@@ -379,7 +379,7 @@ def test_simulate_writes_the_csv_in_pieces(tmp_path, monkeypatch):
 def test_the_documented_step_maximum_holds(tmp_path, capsys):
     """README and the scene loader agree on the largest steps_per_revolution, and one more is a
     one-line error before any work (the maximum itself is measured in the README, not here)."""
-    from explorer.scene import MAX_STEPS
+    from explorer.scene.scene import MAX_STEPS
 
     readme = (ROOT / "README.md").read_text()
     assert f"36 ... {MAX_STEPS:,}".replace(",", " ") in readme

@@ -18,13 +18,13 @@ from scipy.integrate import quad
 
 from conftest import SCENES
 from explorer import cli
-from explorer.effects import simulate
-from explorer.errors import InputError
-from explorer.laws import law_derivatives
-from explorer.lift import build_lift
-from explorer.polydyne import RISE_POLYNOMIALS, _polynomial_fourier, residual_amplitude
-from explorer.residual import residual_sweep
-from explorer.scene import load_scene
+from explorer.effects.pipeline import simulate
+from explorer.core.errors import InputError
+from explorer.lift.laws import law_derivatives
+from explorer.effects.lift import build_lift
+from explorer.lift.polydyne import RISE_POLYNOMIALS, _polynomial_fourier, residual_amplitude
+from explorer.studies.residual import residual_sweep
+from explorer.scene.scene import load_scene
 
 DEMO = SCENES / "polydyne_demo.toml"
 ERROR_LINE = re.compile(r"^error: [^:\n]+: [^:\n]+: .+$")
@@ -167,7 +167,7 @@ def test_missing_sections_and_ramp(tmp_path):
     text = DEMO.read_text()
     no_linkage = text.replace("[linkage]\nstiffness = \"2e6 N/m\"\n", "").replace(', "elastic"', "")
     with pytest.raises(InputError, match="needs \\[linkage\\]"):
-        from explorer.scene import loads_scene
+        from explorer.scene.scene import loads_scene
 
         loads_scene(no_linkage, "x.toml")
     no_ramp = re.sub(r"\nramp = .*\n", "\n", text)

@@ -1,5 +1,5 @@
 """Child processes end with their whole group on every path, and the test suite itself fails a
-test that leaves one running (explorer/processes.py, tests/conftest.py)."""
+test that leaves one running (explorer/core/processes.py, tests/conftest.py)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import psutil
 import pytest
 
 from conftest import ROOT, process_timeout, started, still_running
-from explorer.processes import Supervisor, run_child, spawn, stop_group
+from explorer.core.processes import Supervisor, run_child, spawn, stop_group
 
 
 # A child that ignores SIGINT and SIGTERM and has a helper of its own in its group; it prints
@@ -45,7 +45,7 @@ def test_a_spawned_child_dies_with_the_thread_that_started_it():
     """PR_SET_PDEATHSIG: a parent killed with SIGKILL cannot clean up, the kernel ends its child."""
     code = textwrap.dedent("""
         import sys, time
-        from explorer.processes import spawn
+        from explorer.core.processes import spawn
         child = spawn(["sleep", "1000"])
         print(child.pid, flush=True)
         time.sleep(1000)
@@ -65,7 +65,7 @@ def test_run_child_ends_the_group_on_a_timeout():
 
 HANGING_SHUTDOWN = textwrap.dedent("""
     import sys, time
-    from explorer.processes import Supervisor
+    from explorer.core.processes import Supervisor
     with Supervisor("hang test", shutdown_timeout_s=float(sys.argv[1])) as sup:
         child = sup.spawn(["/bin/sh", "-c", "trap '' INT TERM; sleep 1000"])
         print(child.pid, flush=True)

@@ -20,9 +20,9 @@ import pytest
 
 from explorer import load_scene
 from explorer.cli import main
-from explorer.effects import simulate
-from explorer.recording import entity_path, series_layout
-from explorer.recording_read import read_blueprint_views, read_rrd
+from explorer.effects.pipeline import simulate
+from explorer.view.rerun.recording import entity_path, series_layout
+from explorer.view.rerun.read import read_blueprint_views, read_rrd
 from conftest import process_timeout
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -65,7 +65,7 @@ DOCUMENTED = {  # the examples of the module docstring
 
 
 def test_documented_entity_paths():
-    import explorer.recording as recording
+    import explorer.view.rerun.recording as recording
 
     for column, path in DOCUMENTED.items():
         assert entity_path(column) == path, column
@@ -166,9 +166,9 @@ def test_blueprint_has_3d_beside_s_v_p_and_forces(float_recording):
 
 
 def test_parts_replay_the_motion(float_recording):
-    """Meshes as built by explorer.meshes, poses per step; and an independent physical check:
+    """Meshes as built by explorer.view.parts, poses per step; and an independent physical check:
     the valve (z up, opening downwards) sits lower by exactly the valve lift."""
-    from explorer import meshes
+    from explorer.view import parts as meshes
 
     out, csv = float_recording
     run = read_rrd(out)[0]
@@ -276,7 +276,7 @@ def test_bad_output_and_scene(tmp_path, capsys):
 
 
 def test_failure_while_writing_leaves_previous_file_and_no_temporaries(tmp_path, monkeypatch, capsys):
-    import explorer.recording as recording
+    import explorer.view.rerun.recording as recording
 
     out = tmp_path / "run.rrd"
     out.write_bytes(b"previous content")
@@ -335,7 +335,7 @@ def test_killed_midway_never_leaves_a_truncated_target(tmp_path, previous):
 
 
 def test_parts_that_cannot_be_built_leave_a_warning_and_the_series(tmp_path, capsys, monkeypatch):
-    import explorer.recording as recording
+    import explorer.view.rerun.recording as recording
 
     def no_meshes(label, result):
         raise NotImplementedError("no meshes for this gear")
@@ -349,7 +349,7 @@ def test_parts_that_cannot_be_built_leave_a_warning_and_the_series(tmp_path, cap
 
 def test_an_incomplete_file_is_never_renamed_into_place(tmp_path, monkeypatch, capsys):
     """rerun's file sink only logs write errors: the footer check stops a broken file."""
-    import explorer.recording_worker as worker
+    import explorer.view.rerun.worker as worker
 
     out = tmp_path / "run.rrd"
     out.write_bytes(b"previous content")

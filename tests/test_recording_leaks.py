@@ -1,4 +1,4 @@
-"""Many recordings in one process: threads and memory stay flat (explorer.recording_worker), and
+"""Many recordings in one process: threads and memory stay flat (explorer.view.rerun.worker), and
 --sweep has a cap that is checked before any work.
 
 rerun-sdk keeps every RecordingStream made from Python, with its threads, until the process exits
@@ -15,9 +15,9 @@ import psutil
 import pytest
 
 from explorer import cli, load_scene
-from explorer.effects import simulate
-from explorer.recording import Run, write_recordings
-from explorer.recording_read import read_rrd
+from explorer.effects.pipeline import simulate
+from explorer.view.rerun.recording import Run, write_recordings
+from explorer.view.rerun.read import read_rrd
 from conftest import SCENES
 
 DEMO = SCENES / "cycloidal_demo.toml"
@@ -66,7 +66,7 @@ def test_threads_and_memory_stay_flat_over_many_recordings(tmp_path, small_resul
 
 
 def test_threads_and_memory_stay_flat_over_many_live_changes(tmp_path, small_result):
-    from explorer.recording_live import LiveStream
+    from explorer.view.rerun.live import LiveStream
 
     stream = LiveStream(save_path=tmp_path / "live.rrd", parts=False)
     try:
@@ -87,8 +87,8 @@ def test_threads_and_memory_stay_flat_over_many_live_changes(tmp_path, small_res
 
 def test_the_helper_is_replaced_before_its_leftovers_grow(tmp_path, small_result):
     """What rerun leaks accumulates in the helper, which is replaced every `recycle_after` jobs."""
-    from explorer.recording import recording_paths
-    from explorer.recording_worker import RecordingWorker, portable_run
+    from explorer.view.rerun.recording import recording_paths
+    from explorer.view.rerun.worker import RecordingWorker, portable_run
 
     worker = RecordingWorker(recycle_after=5)
     pids, counts = [], []
@@ -109,7 +109,7 @@ def test_the_helper_is_replaced_before_its_leftovers_grow(tmp_path, small_result
 
 
 def test_a_failing_job_is_reported_and_the_helper_goes_on(tmp_path, small_result):
-    from explorer.recording_worker import RecordingWorker, portable_run
+    from explorer.view.rerun.worker import RecordingWorker, portable_run
 
     worker = RecordingWorker()
     try:
@@ -136,12 +136,12 @@ def test_a_failing_job_is_reported_and_the_helper_goes_on(tmp_path, small_result
     (["drive.rpm=" + ",".join(str(100 + i) for i in range(501))], 2, 1002),
 ])
 def test_sweep_over_the_cap_is_refused_before_any_work(tmp_path, capsys, monkeypatch, sweeps, scenes, count):
-    import explorer.scene
+    import explorer.scene.scene
 
-    from explorer.cli_record import MAX_RUNS
+    from explorer.cli.record import MAX_RUNS
 
     sweeps = [s if "=" in s else "drive.rpm=" + s for s in sweeps]
-    monkeypatch.setattr(explorer.scene, "load_scene", lambda *a, **k: pytest.fail("a scene was loaded"))
+    monkeypatch.setattr(explorer.scene.scene, "load_scene", lambda *a, **k: pytest.fail("a scene was loaded"))
     args = ["record", *[str(DEMO)] * scenes, "-o", str(tmp_path / "run.rrd")]
     for s in sweeps:
         args += ["--sweep", s]
@@ -153,7 +153,7 @@ def test_sweep_over_the_cap_is_refused_before_any_work(tmp_path, capsys, monkeyp
 
 
 def test_sweep_at_the_cap_is_planned(monkeypatch):
-    from explorer.cli_record import MAX_RUNS, plan_runs
+    from explorer.cli.record import MAX_RUNS, plan_runs
 
     plans = plan_runs([str(DEMO)], ["solver.steps_per_revolution=36"],
                       ["drive.rpm=" + ",".join(str(100 + i) for i in range(MAX_RUNS))])
@@ -165,7 +165,7 @@ def test_swept_extents_in_blocks_equal_the_whole():
     once); blocks change nothing, to the bit."""
     import numpy as np
 
-    from explorer import meshes
+    from explorer.view import parts as meshes
 
     rng = np.random.default_rng(7)
     t = np.linspace(0.0, 2.0 * np.pi, 500, endpoint=False)

@@ -19,12 +19,12 @@ import psutil
 import pytest
 
 from explorer import load_scene
-from explorer.effects import simulate
-from explorer.errors import InputError
-from explorer.recording import rerun_executable, series_layout
-from explorer.recording_live import LiveStream, add_live_arguments, open_live_stream
-from explorer.recording_read import read_blueprint_views, read_rrd
-from explorer.processes import spawn, stop_group
+from explorer.effects.pipeline import simulate
+from explorer.core.errors import InputError
+from explorer.view.rerun.recording import rerun_executable, series_layout
+from explorer.view.rerun.live import LiveStream, add_live_arguments, open_live_stream
+from explorer.view.rerun.read import read_blueprint_views, read_rrd
+from explorer.core.processes import spawn, stop_group
 from conftest import process_timeout
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -157,8 +157,8 @@ def test_grpc_server_on_localhost_reaches_a_rerun_viewer(tmp_path):
 EXIT_SCRIPT = textwrap.dedent("""
     import argparse, sys
     from explorer import load_scene
-    from explorer.effects import simulate
-    from explorer.recording_live import open_live_stream
+    from explorer.effects.pipeline import simulate
+    from explorer.view.rerun.live import open_live_stream
     ns = argparse.Namespace(rerun=True, rerun_save=sys.argv[2] if len(sys.argv) > 2 else None,
                             rerun_port=int(sys.argv[1]))
     stream = open_live_stream(ns)
@@ -184,7 +184,7 @@ def test_process_exits_without_close_and_without_hanging(tmp_path, save):
 
 
 def test_failed_merge_keeps_every_recording_and_says_where(tmp_path, monkeypatch, capsys):
-    import explorer.recording as recording
+    import explorer.view.rerun.recording as recording
 
     def broken_merge(pieces, target):
         raise RuntimeError("disk full")

@@ -170,7 +170,7 @@ def test_view_bad_input(tmp_path, capsys, recording):
 
 def test_view_without_a_rerun_cli_is_one_line(tmp_path, capsys, recording, monkeypatch):
     """No rerun executable (a broken install) or one that cannot start: one line, no traceback."""
-    import explorer.recording as recording_module
+    import explorer.view.rerun.recording as recording_module
 
     def missing():
         raise RuntimeError("the rerun command-line tool was not found")

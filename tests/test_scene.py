@@ -12,8 +12,8 @@ import tomllib
 import pytest
 
 from explorer import load_scene, loads_scene
-from explorer import units
-from explorer.scenes import builtin_scenes
+from explorer.core import units
+from explorer.scene.builtin import builtin_scenes
 
 from conftest import ROOT, SCENES, process_timeout
 

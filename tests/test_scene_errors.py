@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from explorer import InputError, simulate
-from explorer.scene import loads_scene, scene_from_dict
+from explorer.scene.scene import loads_scene, scene_from_dict
 
 from conftest import SCENES
 

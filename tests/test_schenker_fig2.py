@@ -2,7 +2,7 @@
 
 Tolerances: the paper's figures are read off a drawing and given to 2-3 digits, so the
 computed values must match to half a unit of the last digit given (0.005 m/s, 0.5 m/s^2).
-The design (explorer/geometry/schenker_fig2.py) rounds its radii to 0.01 mm; what rounding
+The design (explorer/lift/contours/schenker_fig2.py) rounds its radii to 0.01 mm; what rounding
 costs is inside those tolerances and is checked here, not assumed."""
 
 import math
@@ -12,10 +12,10 @@ import pytest
 
 from conftest import SCENES, run_cli
 from explorer import load_scene, simulate
-from explorer.geometry import schenker_fig2 as fig2
-from explorer.lift import build_lift
-from explorer.scenes import default_scene
-from explorer.units import G0
+from explorer.lift.contours import schenker_fig2 as fig2
+from explorer.effects.lift import build_lift
+from explorer.scene.builtin import default_scene
+from explorer.core.units import G0
 
 SCENE = SCENES / "schenker1902_fig2.toml"
 W = 240 * 2 * math.pi / 60

@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from explorer.dynamics.model import PHASE_CODES
-from explorer.effects import simulate
-from explorer.scene import load_scene, loads_scene
-from explorer.scenes import scenes_dir
+from explorer.effects.pipeline import simulate
+from explorer.scene.scene import load_scene, loads_scene
+from explorer.scene.builtin import scenes_dir
 
 G = 9.80665  # kgf -> N, TME -> kg
 
@@ -76,7 +76,7 @@ def test_the_valve_lifts_when_the_linkage_is_compressed_by_S0(result):
 
 
 def scene_lift(scene):
-    from explorer.lift import build_lift
+    from explorer.effects.lift import build_lift
 
     return build_lift(scene)
 

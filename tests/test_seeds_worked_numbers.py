@@ -10,8 +10,8 @@ import math
 import pytest
 
 from explorer import loads_scene, simulate
-from explorer.lift import build_lift
-from explorer.units import KGF, to_si
+from explorer.effects.lift import build_lift
+from explorer.core.units import KGF, to_si
 
 
 def si(value, dimension):

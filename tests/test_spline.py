@@ -1,7 +1,7 @@
 """Spline lifts (lift.law = "spline") and `explorer design`.
 
 Oracles: the conditions themselves (met to 1e-12 relative), the 3-4-5 and 4-5-6-7 laws (the unique
-polynomials of their end conditions, explorer.laws), the known minimum-jerk optimum (Flash & Hogan
+polynomials of their end conditions, explorer.lift.laws), the known minimum-jerk optimum (Flash & Hogan
 1985: the 3-4-5 polynomial minimises the integral of the squared jerk between rest positions), an
 independent linear programme for the peak acceleration, and the standard laws on the same event.
 """
@@ -16,10 +16,11 @@ import pytest
 
 from conftest import SCENES
 from explorer import cli
-from explorer.design import DesignLimits, design, evaluate
-from explorer.errors import InputError
-from explorer.lift import LawLift, build_lift
-from explorer.scene import load_scene, loads_scene
+from explorer.studies.design import DesignLimits, design, evaluate
+from explorer.core.errors import InputError
+from explorer.lift.curves import LawLift
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene, loads_scene
 
 DEMO = SCENES / "spline_demo.toml"
 ERROR_LINE = re.compile(r"^error: [^:\n]+: [^:\n]+: .+$")
@@ -113,7 +114,7 @@ def test_conditions_met_to_1e_12():
 
 
 def test_spline_runs_every_effect():
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     result = simulate(load_scene(DEMO))
     theta = math.radians(60 + 80)  # the top station: s = 10 mm there, the lash taken off
@@ -170,7 +171,7 @@ def test_known_optimum_minimum_jerk_is_345():
     scene = loads_scene(scene_text(stations, continuity=2))
     report = design(scene, "jerk-energy", DesignLimits())
     assert report.success
-    from explorer.spline_lift import solve_spline
+    from explorer.lift.spline import solve_spline
 
     lift = solve_spline(report.options.stations, 2, scene.lift.start)
     beta = math.radians(70)
@@ -190,7 +191,7 @@ def test_peak_acceleration_beats_every_standard_law_and_the_linear_programme_agr
     best_standard = min(v for v, slacks in report.comparison.values() if min(slacks.values()) >= 0)
     assert report.value < best_standard
     # an independent check of optimality: HiGHS on the same LP (no nonlinear limit is active)
-    from explorer.design import Problem, _peak_by_linear_programme
+    from explorer.studies.design import Problem, _peak_by_linear_programme
 
     problem = Problem(scene, "peak-acceleration", DesignLimits())
     z = _peak_by_linear_programme(scene, problem, 2, 1.0, DesignLimits())

@@ -8,23 +8,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from explorer.errors import InputError
-from explorer.forces import TrainLoads, min_contact_force, rigid_train_forces, smooth_pieces
-from explorer.lift import LawLift, build_lift
-from explorer.scene import loads_scene
-from explorer.springs import (
-    ReversedLift,
-    advise_spring,
-    compare_events,
-    historic_max_spring_force,
-    historic_preload,
-    optimum_deceleration_difference,
-    required_spring_forces,
-    reversed_spring_forces,
-    trinks_closing_force,
-    wasted_spring_force,
-)
-from explorer.units import KGF, TECHNICAL_MASS
+from explorer.core.errors import InputError
+from explorer.mechanics.forces import TrainLoads, min_contact_force, rigid_train_forces, smooth_pieces
+from explorer.lift.curves import LawLift
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import loads_scene
+from explorer.mechanics.springs import ReversedLift, historic_max_spring_force, historic_preload, optimum_deceleration_difference, required_spring_forces, reversed_spring_forces, trinks_closing_force, wasted_spring_force
+from explorer.effects.spring_design import advise_spring, compare_events
+from explorer.core.units import KGF, TECHNICAL_MASS
 
 # Schenker's data (kgf and kgf*s^2/m): M, R, Ds, Dv, Gu, Gf, p1, p2
 M, R = 2.9, 15.0
@@ -334,7 +325,7 @@ def test_asymmetric_split_balances_the_sides():
     # and its peak decelerations differ by 2R/M
     from dataclasses import replace
 
-    from explorer.forces import side_extremes
+    from explorer.mechanics.forces import side_extremes
 
     lift = build_lift(scene)
     balanced = replace(lift, rise=math.radians(asym["rise_deg"]), ret=math.radians(asym["return_deg"]))
@@ -346,8 +337,8 @@ def test_asymmetric_split_balances_the_sides():
 
 
 def test_spring_design_section_in_a_scene(scenes_dir):
-    from explorer.effects import simulate
-    from explorer.scene import load_scene
+    from explorer.effects.pipeline import simulate
+    from explorer.scene.scene import load_scene
 
     scene = load_scene(scenes_dir / "schenker1902_intake_valve.toml")
     summary = simulate(scene).summary
@@ -376,7 +367,7 @@ def test_spring_design_section_rejects_bad_keys():
 def test_trinks_scene_check():
     """[spring_design] trip_closing_time: Trinks' force for the scene's valve (weight M g, friction R,
     lift = the largest valve lift), checked against the constant-acceleration closing time."""
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     text = HARMONIC.format(rpm=1000, friction=12, closing=5) + '[spring_design]\ntrip_closing_time = "40 ms"\n'
     trinks = simulate(loads_scene(text)).summary["spring_design"]["trinks"]
@@ -394,7 +385,7 @@ def test_trinks_scene_check():
 )
 def test_lp_row_reduction_keeps_the_feasible_set(pts, p0, k):
     """A line P0 + k x (k >= 0) lies above all points exactly when it lies above the reduced set."""
-    from explorer.springs import _upper_hull
+    from explorer.mechanics.springs import _upper_hull
 
     x, y = np.array(pts).T
     hx, hy = _upper_hull(x, y)

@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
-from explorer.lift import LawLift
+from explorer.lift.curves import LawLift
 from dynamics_cases import REF, BumpLift, ConstantLift, cycloidal_groups, revolution
 
 
@@ -336,8 +336,8 @@ def test_overdamped_linkage_lifts_the_valve_the_instant_its_gap_closes(damping):
     with the scipy reference, an independent method, on every event and to 1e-10 m."""
     from pathlib import Path
 
-    from explorer.bench import model_and_drive
-    from explorer.scene import load_scene
+    from explorer.studies.bench import model_and_drive
+    from explorer.scene.scene import load_scene
 
     scene = load_scene(Path(__file__).resolve().parents[1] / "assets" / "scenes" / "cycloidal_demo.toml",
                        [f'linkage.damping="{damping} N*s/m"', 'linkage.stiffness="5e6 N/m"'])

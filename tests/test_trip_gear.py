@@ -33,13 +33,13 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from explorer.errors import InputError
+from explorer.core.errors import InputError
 from explorer.gears.dashpot import AirDashpot, OilDashpot, cylinder_area, oil_seating_velocity
 from explorer.gears.trip import ClosingModel, compare_buffers, simulate_closing
-from explorer.kinematics import lash_crossings
-from explorer.lift import build_lift
-from explorer.scene import load_scene
-from explorer.springs import TRINKS_G, trinks_closing_force
+from explorer.mechanics.kinematics import lash_crossings
+from explorer.effects.lift import build_lift
+from explorer.scene.scene import load_scene
+from explorer.mechanics.springs import TRINKS_G, trinks_closing_force
 
 SCENE = Path(__file__).resolve().parent.parent / "assets" / "scenes" / "trip_gear_dashpot.toml"
 M = 3.0
@@ -160,7 +160,7 @@ def test_buffers_compared_by_seating_velocity_and_closing_time():
     hard), the oil one spreads its braking over the stroke and closes later; the oil buffer cannot
     throw the valve back, an air cushion with a small leak can."""
     scene = load_scene(SCENE)
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     result = simulate(scene)
     rows = {r["buffer"]: r for r in result.summary["gear"]["buffer_comparison"]}
@@ -211,7 +211,7 @@ def test_trip_lift_pick_up_release_and_seat():
 
 
 def test_summary_has_latch_impact_and_trinks():
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     result = simulate(load_scene(SCENE))
     g = result.summary["gear"]
@@ -251,7 +251,7 @@ def test_bad_input_names_the_part(overrides, key):
 def test_buffer_without_its_section():
     import tomllib
 
-    from explorer.scene import scene_from_dict
+    from explorer.scene.scene import scene_from_dict
 
     data = tomllib.loads(SCENE.read_text())
     del data["gear"]["air_dashpot"]
@@ -276,7 +276,7 @@ def hand_latch_force(theta, w):
 
 @pytest.fixture(scope="module")
 def full():
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     scene = load_scene(SCENE)
     return scene, simulate(scene)
@@ -348,7 +348,7 @@ def test_latch_throws_the_valve_off_above_the_throw_off_speed():
     """Tripping late (170 deg), near the eccentric's top, at 1100 rpm: the latch decelerates harder
     than spring and loads can follow, so the rigid latch force turns negative before the trip:
     warning, event at the zero crossing (by hand: F(theta) = 0 solved by Brent), min force < 0."""
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     scene = load_scene(SCENE, ["drive.rpm=1100", 'gear.trip.angle="170 deg"',
                                'effects=["kinematics", "lash", "forces", "contact"]'])
@@ -403,8 +403,8 @@ def test_contact_defaults_without_a_latch_face():
     """No latch_width/depth: friction numbers only (default mu 0.15, documented in spec.py)."""
     import tomllib
 
-    from explorer.effects import simulate
-    from explorer.scene import scene_from_dict
+    from explorer.effects.pipeline import simulate
+    from explorer.scene.scene import scene_from_dict
 
     data = tomllib.loads(SCENE.read_text())
     for key in ("latch_width", "latch_depth", "latch_friction"):
@@ -471,7 +471,7 @@ def test_stiff_linkage_converges_to_the_rigid_trip_gear():
     state at the trip tends to the rigid latch's, s_e = s_r - F/k + c dF/dt / k^2 (quasi-static
     lag and its first correction) and v_e = v_r - dF/dt / k; the closing from that state tends to
     the rigid closing (time and seating velocity errors O(1/k): a decade of k, a decade less)."""
-    from explorer.gears.trip_effects import elastic_trip_motion
+    from explorer.effects.trip import elastic_trip_motion
 
     base = load_scene(SCENE)
     rigid = build_lift(base).closing
@@ -502,7 +502,7 @@ def test_elastic_energy_balance_of_the_latched_phase():
     spring's and the closing loads' work, the friction's R x path, and the strain energy left in
     the linkage at the trip. Trapezoid on 40 000 samples of the window (about 1400 per natural
     period): quadrature error ~1e-7 relative; tolerance 1e-6."""
-    from explorer.gears.trip_effects import elastic_trip_motion
+    from explorer.effects.trip import elastic_trip_motion
 
     scene = load_scene(SCENE, ['linkage.damping="0 N*s/m"'])
     lift = build_lift(scene)
@@ -528,7 +528,7 @@ def test_hand_over_to_the_free_closing_is_continuous():
     it exactly; just before and after the trip (1e-7 rad, 1.6e-9 s at 100 rpm) s and v agree to
     first order (|ds| <= |v| dt + a dt^2, |dv| <= max |a| dt); the acceleration jumps as the latch
     lets go (the linkage force drops to 0)."""
-    from explorer.gears.trip_effects import elastic_trip_motion
+    from explorer.effects.trip import elastic_trip_motion
 
     scene = load_scene(SCENE)
     lift = build_lift(scene)
@@ -636,7 +636,7 @@ def test_orifice_pocket_sucks_on_the_latched_lift(full):
     force at the opening (one-sided limit: the scene's comment, 466.75 N at 62.18 deg, B = -85.04 N),
     and the forces' and gear effects' extremes (one source). The check-valve scene (fixture) has
     B = 0 all through the lift."""
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     scene = load_scene(SCENE, [ORIFICE])
     result = simulate(scene)
@@ -687,7 +687,7 @@ def test_orifice_work_per_stroke_includes_the_work_against_the_pocket():
     """Integral of T dtheta over the window = the rigid energy gain (as without a buffer) plus the
     work against the pocket, -integral of B ds from the pick-up to the opening (quad on the
     independent pocket integration, B X' dtheta; 1e-8 relative: the integrators' agreement)."""
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     scene = load_scene(SCENE, [ORIFICE, 'effects=["kinematics", "lash", "forces"]'])
     latch = simulate(scene).summary["latch"]
@@ -742,7 +742,7 @@ def test_check_valve_pocket_pushes_when_the_latch_lowers_the_valve_into_it():
     integration from the entry); the closing starts with that density. The elastic valve is back on
     its seat at the trip: the message says the latch set it down (a lift-off and a seat happened),
     not that it never lifted it."""
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     scene = load_scene(SCENE, ['gear.trip.angle="330 deg"'])
     result = simulate(scene)
@@ -773,7 +773,7 @@ def test_peak_linkage_force_counts_the_force_at_a_trip_inside_one_grid_cell():
     """Tripped at 30 deg, 0.074 deg after the pick-up: no 0.1 deg grid sample falls in the carried
     window, but the linkage force just before the trip does count in the peak (and its angle is the
     trip's). The elastic valve has not lifted yet: 'never lifted'."""
-    from explorer.effects import simulate
+    from explorer.effects.pipeline import simulate
 
     s = simulate(load_scene(SCENE, ['gear.trip.angle="30 deg"'])).summary
     f_trip = s["elastic_trip"]["linkage_force_at_trip_N"]

@@ -4,8 +4,8 @@ import math
 
 import pytest
 
-from explorer.errors import InputError
-from explorer.units import G0, to_si
+from explorer.core.errors import InputError
+from explorer.core.units import G0, to_si
 
 
 def si(value, dim):

@@ -16,13 +16,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from explorer import load_scene, meshes
-from explorer.effects import simulate
-from explorer.lift import build_lift
-from explorer.viewer import model
+from explorer import load_scene
+from explorer.view import parts as meshes
+from explorer.effects.pipeline import simulate
+from explorer.effects.lift import build_lift
+from explorer.view.browser import model
 
 from conftest import ROOT, SCENES, kill_tree, process_timeout, run_cli
-from explorer.processes import spawn, stop_group
+from explorer.core.processes import spawn, stop_group
 
 viser = pytest.importorskip("viser")
 
@@ -32,7 +33,7 @@ FORCES_SCENE = SCENES / "schenker1902_intake_valve.toml"
 
 @pytest.fixture
 def app():
-    from explorer.viewer.app import ExplorerApp
+    from explorer.view.browser.app import ExplorerApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     application = ExplorerApp(server, str(DEMO), playing=False)
@@ -171,7 +172,7 @@ def test_scene_swap_replaces_the_cam_geometry_and_the_plots(app):
 def test_scene_swap_removes_the_parts_the_new_gear_lacks():
     """rocking cam -> Schenker's Fig. 2 -> rocking cam: the scene holds exactly the parts of the
     gear shown (the eccentric and its rod leave with the rocking cam and come back with it)."""
-    from explorer.viewer.app import ExplorerApp
+    from explorer.view.browser.app import ExplorerApp
 
     rocking, fig2 = SCENES / "rocking_cam.toml", SCENES / "schenker1902_fig2.toml"
 
@@ -246,7 +247,7 @@ def test_camera_frames_the_whole_revolution_on_load_and_on_scene_swap(app):
     viewer's lens, for a canvas taller than wide; every part at every 40th step is in its
     picture; and it moves with the scene (the trip gear's dashpot used to be cut off, the
     rocking cam's valve group a speck: the camera was aimed alike for every scene)."""
-    from explorer.viewer.app import ASSUMED_ASPECT, CAMERA_FOV
+    from explorer.view.browser.app import ASSUMED_ASPECT, CAMERA_FOV
 
     initial = app.server.initial_camera
     positions = []
@@ -378,7 +379,7 @@ def test_the_roller_turns_on_smoothly_when_the_revolution_loops(name):
     # (before the fix the jump was 35.5 deg, ~150 steps, for Fig. 2)
     assert seen == pytest.approx(neighbours, rel=0.02)
     if scene.follower.type == "translating-roller":
-        # oracle: explorer.meshes.roller_spin (tested against the cam's perimeter in test_meshes)
+        # oracle: explorer.view.parts.roller_spin (tested against the cam's perimeter in test_meshes)
         theta = np.radians(result.columns["cam_angle_deg"])
         exact = meshes.roller_spin(scene, build_lift(scene), np.append(theta, 2.0 * math.pi))
         total = exact[-1]
@@ -507,7 +508,7 @@ def test_decimation_keeps_spikes_and_the_ends():
 
 
 def test_override_strings_read_back_exactly():
-    from explorer.scene import apply_overrides
+    from explorer.scene.scene import apply_overrides
 
     for key, value in [("drive.rpm", 1234.5), ("valve.lash", "0.3 mm"), ("effects", ["kinematics", "forces"]),
                        ("solver.steps_per_revolution", 720), ("valve.lash", 'x"y\\z')]:
@@ -545,7 +546,7 @@ def test_serve_prints_the_url_and_stops_cleanly_on_ctrl_c():
 
 
 def test_only_loopback_counts_as_local():
-    from explorer.cli_serve import _is_loopback
+    from explorer.cli.serve import _is_loopback
 
     assert _is_loopback("127.0.0.1") and _is_loopback("::1") and _is_loopback("localhost")
     assert not _is_loopback("0.0.0.0") and not _is_loopback("192.168.1.4") and not _is_loopback("example.org")
@@ -566,7 +567,7 @@ def test_reset_returns_to_the_scene_file(app):
 
 
 def test_every_new_result_goes_to_the_live_stream_once():
-    from explorer.viewer.app import ExplorerApp
+    from explorer.view.browser.app import ExplorerApp
 
     logged = []
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
@@ -591,8 +592,8 @@ def test_every_new_result_goes_to_the_live_stream_once():
 def test_serve_records_to_rerun_and_finishes_the_file_when_stopped(tmp_path, stop_signal):
     """Ctrl-C and SIGTERM (kill, systemd, a container stopping) both stop cleanly: the live
     stream is closed, so the --rerun-save file is merged and holds the computed run."""
-    pytest.importorskip("explorer.recording_live")
-    from explorer.recording_read import read_rrd
+    pytest.importorskip("explorer.view.rerun.live")
+    from explorer.view.rerun.read import read_rrd
 
     target = tmp_path / "live.rrd"
     proc, _, _ = _start_serve(DEMO, "--rerun-save", target)
@@ -671,7 +672,7 @@ def _start_serve(*args, timeout=None):
 
 
 def _assert_same_series(run, result):
-    from explorer.recording import series_layout
+    from explorer.view.rerun.recording import series_layout
 
     for s in series_layout(result.columns):
         assert np.array_equal(run.series[s.path]["value"], result.columns[s.column]), s.column
@@ -738,11 +739,11 @@ def test_serve_streams_every_change_live_to_rerun_on_localhost(tmp_path):
     connected to it receives the first run and, after a parameter change made over the
     websocket as a browser makes it, a second recording with that change; SIGINT then stops
     the server cleanly."""
-    pytest.importorskip("explorer.recording_live")
+    pytest.importorskip("explorer.view.rerun.live")
     import socket
 
-    from explorer.recording import rerun_executable
-    from explorer.recording_read import read_rrd
+    from explorer.view.rerun.recording import rerun_executable
+    from explorer.view.rerun.read import read_rrd
 
     def free_port():
         with socket.socket() as s:
@@ -917,7 +918,7 @@ def test_elastic_without_a_stiffness_asks_for_one_instead_of_failing(app):
 
 
 def test_every_plot_names_its_axes_and_keeps_overlapping_curves_apart():
-    from explorer.viewer.app import PLOT_X_LABEL, plot_options
+    from explorer.view.browser.app import PLOT_X_LABEL, plot_options
 
     result = simulate(load_scene(SCENES / "trip_gear_dashpot.toml"))
     plots = model.build_plots(result)

@@ -33,7 +33,7 @@ BROWSER_ARGS = ["--no-sandbox", "--disable-background-networking", "--disable-co
 def running_app(**kwargs):
     import viser
 
-    from explorer.viewer.app import ExplorerApp
+    from explorer.view.browser.app import ExplorerApp
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = None
@@ -78,7 +78,7 @@ def _http_get(port: int) -> int:
 
 
 def test_origin_rules():
-    from explorer.viewer.origin import origin_allowed
+    from explorer.view.browser.origin import origin_allowed
 
     local = ("127.0.0.1", 8080)
     assert origin_allowed(None, local)  # not a browser
@@ -100,7 +100,7 @@ def test_origin_rules():
 def test_cross_origin_handshakes_are_refused_own_origin_accepted():
     from websockets.exceptions import InvalidStatus
 
-    from explorer.viewer import origin
+    from explorer.view.browser import origin
 
     with running_app() as (server, app):
         port = server.get_port()
@@ -127,7 +127,7 @@ def test_cross_origin_handshakes_are_refused_own_origin_accepted():
 def test_a_slow_value_is_abandoned_and_the_server_stays_responsive():
     """The lash that froze the server: whether the unit parser refuses it (an error) or it runs
     into the time limit, the server answers meanwhile and later changes apply."""
-    from explorer.viewer.model import time_limit_message
+    from explorer.view.browser.model import time_limit_message
 
     with running_app(time_limit=3.0) as (server, app):
         port = server.get_port()
@@ -155,7 +155,7 @@ def test_a_slow_value_is_abandoned_and_the_server_stays_responsive():
 
 
 def test_values_out_of_bounds_are_refused_before_any_computation():
-    from explorer.viewer.app import MAX_GUI_STEPS, MAX_TEXT_LENGTH
+    from explorer.view.browser.app import MAX_GUI_STEPS, MAX_TEXT_LENGTH
 
     with running_app() as (server, app):
         steps = app.fields["solver.steps_per_revolution"]
@@ -206,7 +206,7 @@ def test_a_magnification_change_keeps_the_shown_result_across_the_process():
 def test_memory_budget_stops_a_huge_computation():
     """A child with a small address-space limit: the huge request fails inside it, the message
     says so, and the worker goes on."""
-    from explorer.viewer.model import ComputeWorker, Request, memory_limit_message
+    from explorer.view.browser.model import ComputeWorker, Request, memory_limit_message
 
     ready, errors = [], []
     worker = ComputeWorker(on_ready=ready.append, on_error=lambda r, m: errors.append(m), time_limit=None,
@@ -247,7 +247,7 @@ def _worker_of(server_pid: int) -> psutil.Process:
     while time.monotonic() < deadline:
         for child in psutil.Process(server_pid).children():
             with contextlib.suppress(psutil.NoSuchProcess):
-                if "explorer.viewer.worker" in " ".join(child.cmdline()):
+                if "explorer.view.browser.worker" in " ".join(child.cmdline()):
                     return child
         time.sleep(0.05)
     raise AssertionError("explorer serve started no compute process")
@@ -293,7 +293,7 @@ def test_the_worker_process_dies_with_a_killed_server(tmp_path):
     script = textwrap.dedent(f"""
         import sys, time
         sys.path.insert(0, {str(ROOT)!r})
-        from explorer.viewer.worker import ComputeProcess
+        from explorer.view.browser.worker import ComputeProcess
         p = ComputeProcess()
         p.start()
         print(p.pid, flush=True)
@@ -332,7 +332,7 @@ def test_a_page_on_another_site_cannot_connect_the_explorers_own_page_can(tmp_pa
     sync_api = pytest.importorskip("playwright.sync_api")
     import viser
 
-    from explorer.viewer import origin
+    from explorer.view.browser import origin
 
     class Page(http.server.BaseHTTPRequestHandler):
         def do_GET(self):
@@ -378,8 +378,8 @@ def test_a_page_on_another_site_cannot_connect_the_explorers_own_page_can(tmp_pa
 
 
 def test_help_and_readme_state_the_time_limit():
-    from explorer.cli_serve import HELP
-    from explorer.viewer.model import COMPUTE_TIME_LIMIT_S
+    from explorer.cli.serve import HELP
+    from explorer.view.browser.model import COMPUTE_TIME_LIMIT_S
 
     stated = f"{COMPUTE_TIME_LIMIT_S:g} s"
     assert stated in " ".join(HELP.split())

@@ -17,7 +17,7 @@ VARYING_STIFFNESS accept it: the exact solver's closed forms need constant coeff
 
 Every solver has the signature
     solve(model: LinkageModel, drive: Drive, t: np.ndarray, **options) -> DynamicsSolution
-and is listed, with what it accepts, in explorer/solvers.py; `solve()` below dispatches on the
+and is listed, with what it accepts, in explorer/dynamics/solvers.py; `solve()` below dispatches on the
 method name.
 """
 
@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import solvers as registry
+from . import solvers as registry
 from .phases import PHASE_CODES, phase_of_state, release_from_rest  # noqa: F401 (re-exported)
 
 # solvers that accept a LinkageModel with a stiffness_profile (k changing with the position)
@@ -159,7 +159,7 @@ class DynamicsSolution:
 
 def solve(model: LinkageModel, drive: Drive, t: np.ndarray, method: str = "exact", **options) -> DynamicsSolution:
     """Solve with the registry's solver `method` (ValueError: unknown method, or k(t) given to a
-    solver that needs a constant stiffness; explorer.solvers.UnknownOptionError, a TypeError: an option
+    solver that needs a constant stiffness; explorer.dynamics.solvers.UnknownOptionError, a TypeError: an option
     the solver does not have)."""
     info = registry.solver(method)
     if model.stiffness_profile is not None and not info.varying_stiffness:

@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from .. import solvers as registry
+from . import solvers as registry
 from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel
 from .reference import CONTACT, FLIGHT, REST, initial_phase, rebound_rest_speed
 

@@ -14,7 +14,7 @@ from .registry import GEARS
 
 GEAR_TYPES = tuple(GEARS)  # ("pivoted-roller", "rocking-cam", "rolling-lever", "trip")
 
-# Colours (RGB 0-255) of the 3D parts these gears add to explorer.meshes.
+# Colours (RGB 0-255) of the 3D parts these gears add to explorer.view.parts.
 GEAR_PART_COLORS: dict[str, tuple[int, int, int]] = {
     "roller_lever": (90, 170, 110),
     "rod": (150, 160, 175),

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .jet import Jet
 from .linkage import EccentricDrive, RockerDrive, RodLeverDrive, side_sign
 
@@ -26,7 +26,7 @@ def _get(source, name):
 
 
 def law_lift(lift_spec):
-    from ..lift import LawLift
+    from ..lift.curves import LawLift
 
     return LawLift(height=lift_spec.height, start=lift_spec.start, rise=lift_spec.rise, dwell=lift_spec.dwell,
                    ret=lift_spec.ret, rise_law=lift_spec.law, return_law=lift_spec.return_law or lift_spec.law)

@@ -11,7 +11,7 @@ A Jet holds `c`, an array of shape (4, ...): c[k] = d^k f / dx^k for one indepen
 as constants. `solve_implicit` extends jets through equations F(y, x) = 0 (loop closures, cam
 contact) by Newton's method on the jets themselves.
 
-The arithmetic itself (Leibniz, Faa di Bruno, atan2, the inverse-function rule) is explorer.jets,
+The arithmetic itself (Leibniz, Faa di Bruno, atan2, the inverse-function rule) is explorer.core.jets,
 shared with the cam geometry; this module adds the operators, the elementary functions' own
 derivatives and the solvers.
 """
@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import jets
+from ..core import jets
 
 ORDER = 3
 

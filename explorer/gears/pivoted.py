@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from . import jet as J
 from .jet import Jet
 from .linkage import circle_intersection, polar
@@ -126,10 +126,10 @@ class PivotedRollerGear:
         )
 
     def contact_geometry(self, theta):
-        """explorer.contact's view of the cam-roller contact: pressure angle referred to the lever,
+        """explorer.mechanics.contact's view of the cam-roller contact: pressure angle referred to the lever,
         ratio |ds/dpsi| / a (valve travel per roller-centre travel), and the torque arm R x n of
         the normal through the roller centre about the camshaft."""
-        from ..contact import ContactGeometry
+        from ..mechanics.contact import ContactGeometry
 
         g = self.geometry(theta)
         r, n = g.roller_centre, g.normal_ground

@@ -3,9 +3,9 @@
 What the generic code asks of a gear is looked up here, never branched on by type:
   lift      "module:function", scene -> the valve-referred lift curve (lift.build_lift)
   effects   effect name -> "module:function", the gear's variant of that effect, which the
-            pipeline (explorer.effects) runs instead of the generic one (the trip gear's latch
+            pipeline (explorer.effects.pipeline) runs instead of the generic one (the trip gear's latch
             drives only from the pick-up to the trip, so forces, contact and elastic are its own)
-  meshes    module with gear_layout, gear_parts and gear_poses (explorer.meshes)
+  meshes    module with gear_layout, gear_parts and gear_poses (explorer.view.parts)
   rejected  [section] -> why the gear takes no such section (the scene loader's error)
 
 Adding a gear: its own modules and one line of GEARS. Import-light: names only, standard
@@ -27,11 +27,11 @@ _NONE: Mapping[str, str] = MappingProxyType({})
 class GearEntry:
     lift: str = "explorer.gears.build:build_gear_lift"
     effects: Mapping[str, str] = field(default_factory=lambda: _NONE)
-    meshes: str = "explorer.gears.meshes"
+    meshes: str = "explorer.view.gear_parts"
     rejected: Mapping[str, str] = field(default_factory=lambda: _NONE)
 
 
-_TRIP = "explorer.gears.trip_effects"
+_TRIP = "explorer.effects.trip"
 
 GEARS: Mapping[str, GearEntry] = MappingProxyType({
     "pivoted-roller": GearEntry(),

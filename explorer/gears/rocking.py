@@ -10,7 +10,7 @@ offset by the roller radius) in polar form about C:
     rho(phi) = rho0                                   before the flank   (dwell arc: valve shut)
     rho(phi) = rho0 + H f((w(phi) - w_s) / W)          on the flank
     rho(phi) = rho0 + H                                after it          (arc concentric to C)
-with f a normalised lift law (explorer.laws) and w(phi) the swing at which body angle phi would
+with f a normalised lift law (explorer.lift.laws) and w(phi) the swing at which body angle phi would
 come under the roller at rest: the valve starts to lift when the rocking cam has swung w_s from
 its closed end. The same flank serves opening and closing: the valve lift depends only on the
 rocking angle chi, so s(theta) = F(chi(theta)).
@@ -39,8 +39,8 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
-from ..errors import InputError
-from ..laws import law as normalised_law
+from ..core.errors import InputError
+from ..lift.laws import law as normalised_law
 from . import jet as J
 from .jet import Jet
 from .linkage import circle_intersection, polar, polar_curvature, wrap
@@ -220,11 +220,11 @@ class RockingCamGear:
         }
 
     def contact_geometry(self, theta):
-        """explorer.contact's view of the rocking-cam contact: pressure angle referred to the roller
+        """explorer.mechanics.contact's view of the rocking-cam contact: pressure angle referred to the roller
         lever, ratio |ds/dpsi| / a, the normal's moment arm (R - C) x n about the rocking cam's pivot
         C, carried to the eccentric shaft by the four-bar's dchi/dtheta (massless rod: T = M_C chi'),
         and the contour radius at the contact (pitch-curve radius less the roller's)."""
-        from ..contact import ContactGeometry
+        from ..mechanics.contact import ContactGeometry
 
         d = self.contact_details(theta)
         r = self.roller_radius
@@ -374,7 +374,7 @@ def swing_increments(gear, theta_start: float, theta_end: float, n: int) -> tupl
 # --------------------------------------------------------------------------------------------
 #
 # The lift depends on the swing alone, s = F(w), and F rises monotonically over the flank (every
-# law in explorer.laws is monotone, and raising the pitch curve pushes the roller out). So the
+# law in explorer.lift.laws is monotone, and raising the pitch curve pushes the roller out). So the
 # valve is open exactly while the swing exceeds w_o, the swing at which F reaches the lash, and
 #   open angle = theta_close(w_o) - theta_open(w_o)
 # is the four-bar's business alone: the wanted open angle fixes w_o by one bracketed root on the

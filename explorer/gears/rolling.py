@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
-from ..errors import InputError
+from ..core.errors import InputError
 from . import jet as J
 from .jet import Jet
 
@@ -197,14 +197,14 @@ class RollingLeverGear:
         return self.drive.arm * (-ux * math.sin(alpha) + uy * math.cos(alpha)) / norm
 
     def contact_geometry(self, theta):
-        """explorer.contact's view of the rolling faces. The contact P lies on A-B at rho from A; the
+        """explorer.mechanics.contact's view of the rolling faces. The contact P lies on A-B at rho from A; the
         valve lever's point there travels perpendicular to B-P. Face A, seen in the ground at the
         current swing, is A + rho(w') e(gamma - sense (w' - w)): tangent k e_AB - sense rho e_perp,
         so the common normal leans from A-B by atan(k / rho) and the pressure angle (normal against
         the valve lever's travel) is atan(rho / k): circular faces (k = 0) could drive only by
         friction. Radii of both faces from their polar forms about their own pivots (convex > 0).
         Before pick-up (no contact, no force) the values are those of the faces' meeting point."""
-        from ..contact import ContactGeometry
+        from ..mechanics.contact import ContactGeometry
         from . import jet as J
         from .linkage import polar_curvature
 

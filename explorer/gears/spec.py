@@ -29,7 +29,7 @@ trip             latch lifts the valve, releases it at the trip angle; [lift] is
                      latch_friction (mu of the latch face on the catch, 0...1, default 0.15), latch_width and
                      latch_depth (the latch face's bearing area; depth = its engagement, the
                      distance the trip pulls it out); forces, contact and elastic analyse the
-                     latched phase (explorer.gears.trip_effects)
+                     latched phase (explorer.effects.trip)
                  [gear.air_dashpot] diameter, stroke, clearance, orifice_diameter,
                      discharge_coefficient, polytropic_exponent, ambient_pressure, ambient_temperature,
                      inlet ("check-valve", default: the pocket refills through a non-return valve
@@ -51,10 +51,10 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Mapping
 
-from ..errors import InputError
-from ..laws import LAWS
-from ..ranges import AMBIENT_TEMPERATURE, OIL_DENSITY
-from ..reader import Table
+from ..core.errors import InputError
+from ..lift.laws import LAWS
+from ..core.ranges import AMBIENT_TEMPERATURE, OIL_DENSITY
+from ..core.reader import Table
 from . import GEAR_TYPES
 
 SIDES = ("left", "right")
@@ -78,8 +78,8 @@ def _point(t: Table, name: str, default=...) -> tuple[float, float]:
         return default
     if not isinstance(raw, list) or len(raw) != 2:
         raise t.error(name, 'expected a point [x, y], such as ["-120 mm", "70 mm"]')
-    from ..ranges import check_range
-    from ..units import to_si
+    from ..core.ranges import check_range
+    from ..core.units import to_si
 
     return tuple(
         check_range(to_si(v, "length", file=t.file, key=f"{t.key(name)}[{i}]"), "length", file=t.file,

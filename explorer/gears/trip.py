@@ -22,7 +22,7 @@ starts with the pocket density the latched phase leaves at the trip.
 
 Trinks' rule (seed 003): for closing from rest over h in time t, p = 2 h / t^2 and the spring
 force P_f = (p/g - 1) G_v + W_s (G_v valve weight, W_s stuffing-box friction); it lives in
-explorer.springs.trinks_closing_force and the tests check it against this closing model.
+explorer.mechanics.springs.trinks_closing_force and the tests check it against this closing model.
 
 As a lift curve (valve-referred, lash = over-travel): L = latch lift X(theta) up to the trip;
 L = s_o + s(t) while the valve closes freely; after the seat a monotone cubic that leaves s_o
@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .dashpot import AirDashpot, OilDashpot
 
 TWO_PI = 2.0 * math.pi
@@ -413,8 +413,8 @@ class LatchedBuffer:
 def latched_buffer(buffer, latch, overtravel: float, start: float, omega: float, phi_pick: float,
                    phi_trip: float, n_grid: int = 4096, rtol: float = 1e-11) -> LatchedBuffer:
     """The buffer's state and force along the rigid latch motion over the carried window."""
-    from ..forces import velocity_zeros
-    from ..kinematics import lash_crossings
+    from ..mechanics.forces import velocity_zeros
+    from ..mechanics.kinematics import lash_crossings
 
     so, w = overtravel, omega
     ups, downs = lash_crossings(latch, 1.0, so + buffer.stroke, n_grid)
@@ -593,7 +593,7 @@ class TripLift:
 
 def build_trip_lift(latch, overtravel: float, trip_angle: float, omega: float, model: ClosingModel,
                     file: str = "<memory>") -> TripLift:
-    from ..kinematics import lash_crossings
+    from ..mechanics.kinematics import lash_crossings
 
     start = latch.start
     ups, downs = lash_crossings(latch, 1.0, overtravel)

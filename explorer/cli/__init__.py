@@ -1,0 +1,87 @@
+"""The `explorer` command. Each subcommand lives in its own module with `register(subparsers)`;
+modules are light to import (viser and rerun load only inside the command that runs)."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from ..core.errors import InputError
+
+COMMAND_MODULES = [
+    "explorer.cli.simulate",
+    "explorer.cli.serve",
+    "explorer.cli.record",
+    "explorer.cli.view",
+    "explorer.cli.bench",
+    "explorer.cli.fit",
+    "explorer.cli.export",
+    "explorer.cli.residual",
+    "explorer.cli.design",
+]
+
+DESCRIPTION = """\
+Valve-Gear Explorer: how a cam moves a valve.
+
+A scene file (TOML) describes one valve gear at one camshaft speed and lists the effects to
+compute; exactly those run (plus what they need), each timed:
+  kinematics  lift, velocity, acceleration, jerk; pressure angle, radii of curvature
+  lash        take-up and seating instants with the finite impact velocities (Schenker's v1, v2)
+  forces      spring, friction, loads, contact force, required spring force, float speed
+  contact     contact force, self-locking margin, camshaft torque, Hertz stress, cam width
+  elastic     elastic linkage: lift-off, separation, re-contact, seat impact, linkage force
+  gear        lever ratios and statics of the lever, rocking-cam, rolling-lever and trip gears
+Built-in scenes are in assets/scenes; with no scene, the default is Schenker's 1902 exhaust
+cam (Fig. 2 of his paper), computed exactly from its circular arcs.
+"""
+
+EPILOG = """\
+examples:
+  explorer serve                       3D explorer of the default scene on http://127.0.0.1:8080
+  explorer simulate assets/scenes/schenker1902_fig2.toml -o out.csv --summary out.json
+  explorer simulate SCENE --set drive.rpm=300 --set valve.lash="0.3 mm" --set 'effects=["elastic"]'
+  explorer record SCENE -o run.rrd --sweep drive.rpm=200,240,300 && explorer view run.rrd
+  explorer bench assets/scenes/schenker1902_fig2.toml --output-dir out   (accuracy vs CPU time)
+  explorer fit assets/scenes/rocking_cam.toml --lift "9 mm" --open-angle "220 deg"   (rocking-cam contour)
+  explorer export SCENE --format dxf --tolerance "1 um"   (the cam to make it: csv, dxf, stl, glb, grind)
+  explorer residual assets/scenes/polydyne_demo.toml --rpm 1000:3000:21 --plot r.png   (vibration vs speed)
+  explorer design assets/scenes/spline_demo.toml --objective peak-acceleration --max-pressure-angle 30   (spline lift)
+  explorer <command> --help            details of one command
+
+Quantities in scene files carry units ("20 mm", "385 kgf", "2.9 kgf*s**2/m"); a bare number
+means the SI unit of its key, except angles (deg) and drive.rpm (rev/min).
+Bad input ends with one line 'error: FILE: KEY: reason' and exit status 2; nothing is written.
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="explorer", description=DESCRIPTION, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    from ..core.version import __version__
+
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "run", None):
+        parser.print_help()
+        return 0
+    try:
+        return int(args.run(args) or 0)
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a file or port the user named cannot be used: one line, no traceback
+        print(f"error: {exc.filename or '-'}: -: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130

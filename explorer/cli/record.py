@@ -1,0 +1,156 @@
+"""`explorer record`: simulations to a rerun .rrd file, one recording per scene or sweep value."""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import math
+import sys
+
+from ..core.errors import InputError
+
+# Each recording costs ~0.1-0.3 s and ~1-4 MB of the file at 3600 steps with the parts: a thousand
+# is minutes and gigabytes, and a viewer that shows them side by side. Wider sweeps are a typo
+# (--sweep 1,2,...,3000; 50 x 50 x 50) or a job for `explorer simulate` in a loop.
+MAX_RUNS = 1000
+
+HELP = """\
+Record one revolution of each scene into a rerun file (.rrd): the series s, v, p, jerk, forces and
+every other column the scene's effects compute, the 3D parts moving step by step, the events as a
+log, and a default layout. Several scenes, or a --sweep over a scene value, become separate
+recordings in the same file, so the runs can be compared in one viewer (`explorer view FILE`).
+
+Timelines: time (s), step (index), cam_angle_mdeg (cam angle in millidegrees). Entity paths:
+/valve/lift, /valve/velocity, /valve/acceleration, /valve/jerk, /follower/..., /forces/<name>,
+/torque/..., /stress/..., /angles/..., /parts/<part>, /events, /summary
+(full mapping: `python -c "import explorer.view.rerun.recording as r; help(r)"`).
+
+The file appears only when complete (written to a temporary name, then renamed); -o - (stdout),
+/dev/stdout or a FIFO gets the finished file's bytes (`explorer record SCENE -o - > run.rrd`).
+Runs are simulated and written one at a time. At most {max_runs} recordings per file (scenes times
+the combinations of the --sweep values), checked before any work.
+"""
+
+EPILOG = """\
+examples:
+  explorer record assets/scenes/cycloidal_demo.toml -o run.rrd
+  explorer record A.toml B.toml -o compare.rrd
+  explorer record SCENE --sweep drive.rpm=1000,2000,3000 -o speeds.rrd
+  explorer record SCENE --sweep valve.lash="0.1 mm","0.3 mm" --set linkage.stiffness=1e6 -o lash.rrd
+  explorer view speeds.rrd
+"""
+
+
+def register(sub) -> None:
+    from ..core.outputs import HELP as OUTPUT_HELP
+
+    p = sub.add_parser("record", help="simulations to a rerun .rrd file (series, 3D motion, events)",
+                       description=HELP.format(max_runs=MAX_RUNS) + "\n" + OUTPUT_HELP, epilog=EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scenes", nargs="*", metavar="SCENE",
+                   help="scene files (TOML); default: the built-in default scene")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.rrd", help="the rerun file to write")
+    p.add_argument(
+        "--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
+        help='override a scene value in every scene, e.g. --set drive.rpm=600 (repeatable)',
+    )
+    p.add_argument(
+        "--sweep", action="append", default=[], metavar="SECTION.KEY=V1,V2,...",
+        help="one recording per value (repeatable: every combination of the sweeps)",
+    )
+    p.add_argument("--no-parts", action="store_true", help="leave out the 3D parts (series and events only)")
+    p.set_defaults(run=run)
+
+
+
+def parse_sweep(text: str) -> tuple[str, list[str]]:
+    """'drive.rpm=100,200' -> ('drive.rpm', ['100', '200'])."""
+    if "=" not in text:
+        raise InputError("--sweep", text, "a sweep must look like section.key=v1,v2,...")
+    key, _, values_text = text.partition("=")
+    key = key.strip()
+    parts = key.split(".")
+    if not key or len(parts) < 2 or any(not p for p in parts):
+        raise InputError("--sweep", key or text, "sweep key must be dotted, such as drive.rpm")
+    values = [v.strip() for v in values_text.split(",")]
+    if not values or any(not v for v in values):
+        raise InputError("--sweep", key, f"empty value in {values_text!r}; give v1,v2,...")
+    return key, values
+
+
+def plan_runs(scene_paths: list[str], overrides: list[str], sweeps: list[str]):
+    """(label, scene) for every scene and every combination of sweep values; all validated here."""
+    from ..scene.scene import load_scene
+    from ..scene.builtin import default_scene
+
+    scene_paths = scene_paths or [str(default_scene())]
+    parsed = [parse_sweep(s) for s in sweeps]
+    count = len(scene_paths) * math.prod(len(values) for _, values in parsed)
+    if count > MAX_RUNS:
+        factors = ([f"{len(scene_paths)} scenes"] if len(scene_paths) > 1 else []) + [str(len(v)) for _, v in parsed]
+        product = " x ".join(factors) + " = " if len(factors) > 1 else ""
+        raise InputError("--sweep", ", ".join(key for key, _ in parsed) or "SCENE",
+                         f"{product}{count} recordings; at most {MAX_RUNS} per file")
+    combos = list(itertools.product(*[[(key, v) for v in values] for key, values in parsed])) or [()]
+    plans = []
+    for path in scene_paths:
+        for combo in combos:
+            extra = [f"{key}={value}" for key, value in combo]
+            scene = load_scene(path, [*overrides, *extra])
+            label = scene.name
+            if combo:
+                label += " [" + ", ".join(extra) + "]"
+            plans.append((label, scene))
+    labels = [label for label, _ in plans]
+    # labels name the recordings in the viewer: make repeated ones distinguishable
+    seen: dict[str, int] = {}
+    for i, label in enumerate(labels):
+        if labels.count(label) > 1:
+            seen[label] = seen.get(label, 0) + 1
+            plans[i] = (f"{label} #{seen[label]}", plans[i][1])
+    return plans
+
+
+def _with_parts_or_warn(label: str, result):
+    """The run with its 3D parts; if the meshes cannot be built for this gear, the series and
+    events are still worth recording: say so and leave the parts out."""
+    from ..view.rerun.recording import Run, with_parts
+
+    try:
+        return with_parts(label, result)
+    except Exception as exc:  # noqa: BLE001 - a viewer extra must not lose the recording
+        print(f"warning: {label}: 3D parts left out ({type(exc).__name__}: {exc})", file=sys.stderr)
+        return Run(label=label, result=result)
+
+
+def run(args) -> int:
+    from ..effects.pipeline import simulate
+    from ..view.rerun.recording import Run, check_rrd_path, write_recordings
+
+    out = check_rrd_path(args.output, "--output")
+    plans = plan_runs(args.scenes, args.overrides, args.sweep)  # every input error before any work
+    done = []  # (label, steps, events, warnings): all that is kept of a run once it is written
+
+    def runs():
+        for label, scene in plans:
+            result = simulate(scene)
+            yield Run(label=label, result=result) if args.no_parts else _with_parts_or_warn(label, result)
+
+    def written(r) -> None:
+        s = r.result.summary
+        done.append((r.label, len(r.result.columns["time_s"]), len(s.get("events", [])), len(s.get("warnings", []))))
+
+    try:
+        write_recordings(out, runs(), on_run=written)
+    except (OSError, RuntimeError) as exc:  # disk full, rerun CLI missing: not the user's input
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+        print(f"error: {out.name}: --output: writing failed: {reason}", file=sys.stderr)
+        return 1
+    report = sys.stderr if out.is_stdout() else sys.stdout  # stdout may be the file itself
+    steps = sum(d[1] for d in done)
+    print(f"{out.name}: {len(done)} recording{'s' if len(done) != 1 else ''}, {steps} steps", file=report)
+    for label, n, n_events, n_warn in done:
+        print(f"  {label}: {n} steps, {n_events} events, {n_warn} warnings", file=report)
+    if not out.direct:
+        print(f"view it with: explorer view {out.name}", file=report)
+    return 0

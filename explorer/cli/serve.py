@@ -1,0 +1,97 @@
+"""`explorer serve`: the browser explorer on http://127.0.0.1:8080 (viser, offline)."""
+
+from __future__ import annotations
+
+import argparse
+import ipaddress
+import sys
+
+from ..core.errors import InputError
+from ..core.processes import Supervisor
+
+HELP = """\
+Open the 3D explorer in the browser: the cam turns, the roller, lever, spring and valve move
+as computed, with plots of s, v, p and forces over the revolution and a read-out of events,
+peaks and warnings. Change the scene, the lift law, speed, lash, stiffness, spring and the
+effects in the side panel; every change is recomputed at once, in a child process that may take
+10 s: a longer computation is stopped and the page says so, keeping the previous result. Pages
+of other sites cannot connect (websocket handshakes with a foreign Origin get 403).
+
+Binds 127.0.0.1 (this machine only) unless --host says otherwise. Ctrl-C (or SIGTERM, SIGHUP)
+stops it cleanly: the --rerun stream is flushed and the --rerun-save file completed. A stop that
+takes longer than 20 s (EXPLORER_SHUTDOWN_TIMEOUT) on a very busy machine, or a second Ctrl-C,
+ends it at once; the recordings finished so far then stay beside the --rerun-save file, one
+complete .rrd each.
+"""
+
+
+def register(sub) -> None:
+    from .simulate import add_scene_arguments
+
+    p = sub.add_parser("serve", help="3D explorer in the browser (viser)", description=HELP,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_scene_arguments(p)
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1; other hosts expose the explorer to the network)")
+    p.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free one if busy; 0 = any)")
+    p.add_argument("--rerun", action="store_true", help="also stream every computed run to rerun (gRPC on 127.0.0.1)")
+    p.add_argument("--rerun-save", metavar="PATH", help="also record every computed run into this .rrd file")
+    p.add_argument("--rerun-port", type=int, default=None, metavar="N",
+                   help="port of the --rerun gRPC stream on 127.0.0.1 (default 9876)")
+    p.add_argument("--paused", action="store_true", help="start with the animation paused")
+    p.set_defaults(run=run)
+
+
+def _is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def run(args) -> int:
+    from .simulate import scene_from_args
+
+    scene = scene_from_args(args)  # bad scene or --set: the usual one-line error, before any server
+    if not 0 <= args.port <= 65535:
+        raise InputError("--port", "--port", f"must be between 0 and 65535, got {args.port}")
+    if not _is_loopback(args.host):
+        print(f"warning: listening on {args.host}: anyone who can reach this machine can open the explorer",
+              file=sys.stderr)
+    if args.rerun or args.rerun_save:
+        try:
+            from ..view.rerun.live import open_live_stream
+        except ImportError as exc:
+            raise InputError("--rerun", "--rerun", f"rerun streaming is not available ({exc})") from None
+
+    import viser
+
+    from ..view.browser.app import ExplorerApp
+
+    with Supervisor("explorer serve") as supervisor:
+        stream = server = app = None
+        try:
+            if args.rerun or args.rerun_save:
+                stream = open_live_stream(args)
+            server = viser.ViserServer(host=args.host, port=args.port, verbose=False)
+            on_result = (lambda prepared: stream.log(prepared.result, prepared.label)) if stream is not None else None
+            app = ExplorerApp(server, scene.source, args.overrides, playing=not args.paused, on_result=on_result)
+            shown_host = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
+            if not supervisor.stopping.is_set():
+                print(f"Valve-Gear Explorer: http://{shown_host}:{server.get_port()}  (Ctrl-C stops)", flush=True)
+            while not supervisor.stopping.wait(0.5):
+                pass
+            print("stopping", file=sys.stderr)
+        except KeyboardInterrupt:  # a Ctrl-C that came before the handlers were in place
+            print("stopping", file=sys.stderr)
+        finally:
+            # in this order: no new results, no clients, then the stream completes its file
+            if app is not None:
+                app.stop()
+            if server is not None:
+                server.stop()
+            if stream is not None:
+                stream.close()
+    return 0

@@ -1,0 +1,130 @@
+"""Effect `contact`: cam-roller contact statics of a scene (explorer.mechanics.contact holds the physics)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..mechanics.contact import ContactGeometry, ContactSpec, camshaft_torque, contact_loads, contact_point_radius, effective_modulus, hertz_line_stress, hertz_width
+from ..result import EffectOutput
+from ..scene.contact_section import check_follower
+
+
+def translating_geometry(ctx) -> ContactGeometry:
+    """Translating roller: the kinematics' geometry columns when the cam provides them, otherwise
+    the exact closed forms of explorer.lift.contours.translating. The roller centre q = (e, y0 + L)."""
+    c, f = ctx.columns, ctx.scene.follower
+    if "pressure_angle_deg" in c and "contour_radius_m" in c:
+        alpha, contour_radius, reused = np.radians(c["pressure_angle_deg"]), np.asarray(c["contour_radius_m"]), True
+    else:
+        from ..lift.contours.translating import profile_from_derivatives
+
+        profile = profile_from_derivatives(ctx.theta, ctx.lift.derivatives(ctx.theta), f.base_radius, f.roller_radius,
+                                           f.offset)
+        alpha, contour_radius, reused = profile.pressure_angle, profile.contour_radius, False
+    lift = np.asarray(c["follower_lift_m"])
+    arm = camshaft_torque(1.0, alpha, lift, f.base_radius, f.roller_radius, f.offset)
+    return ContactGeometry(
+        pressure_angle=alpha, ratio=np.full(alpha.shape, f.ratio), torque_arm=arm, body_arm=arm,
+        body_radius=contact_point_radius(alpha, lift, f.base_radius, f.roller_radius, f.offset),
+        contour_radius=contour_radius, counter_radius=f.roller_radius, roller_diameter=2.0 * f.roller_radius,
+        from_columns=reused,
+    )
+
+
+def gear_geometry(ctx) -> ContactGeometry:
+    """The gear's own contact geometry (explorer.gears: pivoted.py, rocking.py, rolling.py)."""
+    lift = ctx.lift
+    if not hasattr(lift, "gear"):
+        from .lift import build_lift
+
+        lift = build_lift(ctx.scene)
+    return lift.gear.contact_geometry(ctx.theta)
+
+
+def contact_geometry(ctx) -> ContactGeometry:
+    check_follower(ctx.scene.follower, ctx.scene.source)
+    if ctx.scene.follower.type == "translating-roller":
+        return translating_geometry(ctx)
+    return gear_geometry(ctx)
+
+
+def contact_effect(ctx) -> EffectOutput:
+    scene = ctx.scene
+    spec: ContactSpec = scene.contact if scene.contact is not None else ContactSpec()
+    geometry = contact_geometry(ctx)
+    c = ctx.columns
+    alpha, contour_radius = np.asarray(geometry.pressure_angle), np.asarray(geometry.contour_radius)
+    rho = spec.friction_angle
+    columns = contact_loads(geometry, c["contact_force_N"], c["follower_velocity_m_s"], rho)
+    normal, torque, margin = columns["cam_normal_force_N"], columns["camshaft_torque_Nm"], columns["self_locking_margin_deg"]
+
+    finite_normal = np.where(np.isfinite(normal), normal, np.nan)
+    max_normal = float(np.nanmax(finite_normal)) if np.isfinite(finite_normal).any() else 0.0
+    e_star = effective_modulus(spec.youngs_modulus, spec.poisson_ratio, spec.roller_youngs_modulus, spec.roller_poisson_ratio)
+    required_width, rule = hertz_width(normal, geometry, spec, e_star)
+    width = spec.width if spec.width is not None else required_width
+    if width > 0.0:
+        sigma = hertz_line_stress(normal, width, geometry.counter_radius, contour_radius, e_star)
+    else:
+        sigma = np.zeros_like(normal)
+    columns["hertz_stress_Pa"] = sigma
+    if not geometry.from_columns:  # reuse the kinematics' geometry columns when they exist; add them otherwise
+        columns["pressure_angle_deg"] = np.degrees(alpha)
+        columns["contour_radius_m"] = contour_radius
+
+    theta_deg = np.degrees(ctx.theta)
+    i_alpha = int(np.argmax(np.abs(alpha)))
+    i_margin = int(np.argmin(margin))
+    finite_torque = np.where(np.isfinite(torque), torque, np.nan)
+    i_torque = int(np.nanargmax(finite_torque)) if np.isfinite(finite_torque).any() else 0
+    i_sigma = int(np.argmax(np.where(np.isfinite(sigma), sigma, -1.0)))
+    convex = contour_radius > 0.0
+    summary = {
+        "contact_follower_type": scene.follower.type,
+        "max_pressure_angle_deg": float(np.degrees(np.abs(alpha[i_alpha]))),
+        "max_pressure_angle_cam_angle_deg": float(theta_deg[i_alpha]),
+        "friction_angle_deg": math.degrees(rho),
+        "min_self_locking_margin_deg": float(margin[i_margin]),
+        "min_self_locking_margin_cam_angle_deg": float(theta_deg[i_margin]),
+        "max_cam_normal_force_N": max_normal,
+        "max_camshaft_torque_Nm": float(finite_torque[i_torque]) if np.isfinite(finite_torque).any() else None,
+        "max_camshaft_torque_cam_angle_deg": float(theta_deg[i_torque]),
+        "min_camshaft_torque_Nm": float(np.nanmin(finite_torque)) if np.isfinite(finite_torque).any() else None,
+        "max_hertz_stress_Pa": float(sigma[i_sigma]),
+        "max_hertz_stress_cam_angle_deg": float(theta_deg[i_sigma]),
+        "max_hertz_stress_convex_Pa": float(np.max(np.where(convex, sigma, 0.0))),
+        "max_hertz_stress_concave_Pa": float(np.max(np.where(~convex, sigma, 0.0))),
+        "hertz_width_m": width,
+        "hertz_width_from_rule": spec.width is None,
+        "effective_modulus_Pa": e_star,
+        "hertz_allowable_Pa": spec.allowable_stress,
+        "hertz_utilisation": float(sigma[i_sigma] / spec.allowable_stress),
+        "required_cam_width_m": required_width,
+        "required_cam_width_rule": rule,
+        "width_rule_k_Pa": spec.width_rule_k,
+        "valve_kind": spec.valve,
+        "engine": spec.engine,
+    }
+    warnings: list[str] = []
+    if margin[i_margin] <= 0.0:
+        warnings.append(
+            f"self-locking: pressure angle {summary['max_pressure_angle_deg']:.3f} deg + friction angle "
+            f"{math.degrees(rho):.3f} deg reaches 90 deg at cam angle {theta_deg[i_margin]:.2f} deg "
+            f"(margin {margin[i_margin]:.3f} deg)"
+        )
+    if not np.isfinite(normal).all():
+        warnings.append("contact: the cam cannot lift the follower where it is self-locked (infinite normal force)")
+    if sigma[i_sigma] > spec.allowable_stress:
+        warnings.append(
+            f"contact stress: Hertz {sigma[i_sigma] / 1e6:.4g} MPa at cam angle {theta_deg[i_sigma]:.2f} deg exceeds "
+            f"the allowable {spec.allowable_stress / 1e6:.4g} MPa ({spec.engine}, seed 004) for width {width * 1e3:.4g} mm"
+        )
+    if spec.width is not None and spec.width < required_width:
+        warnings.append(
+            f"cam width {spec.width * 1e3:.4g} mm is below the required {required_width * 1e3:.4g} mm ({rule})"
+            if rule != "P/(k D)" else
+            f"cam width {spec.width * 1e3:.4g} mm is below the width rule b = P/(k D) = {required_width * 1e3:.4g} mm"
+        )
+    return EffectOutput(columns=columns, summary=summary, warnings=tuple(warnings))

@@ -1,0 +1,79 @@
+"""Effect `forces`: the rigid valve-train loads of a scene (explorer.mechanics.forces holds the physics)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..mechanics.forces import TrainLoads, contact_loss_intervals, float_speed, loss_report, min_contact_force, rigid_train_forces, side_extremes, smooth_pieces
+from ..result import EffectOutput
+
+
+def forces_effect(ctx) -> EffectOutput:
+    scene, w = ctx.scene, ctx.omega
+    loads = TrainLoads.from_scene(scene)
+    ratio = scene.follower.ratio
+    lash = scene.valve.lash
+    c = ctx.columns
+    columns = rigid_train_forces(c["rigid_valve_lift_m"], c["rigid_valve_velocity_m_s"], c["rigid_valve_accel_m_s2"],
+                                 loads, ratio)
+    n_grid = max(4096, scene.solver.steps_per_revolution)
+    pieces = smooth_pieces(ctx.lift, ratio, lash, n_grid)
+    f_min, f_theta = min_contact_force(ctx.lift, loads, w, ratio, lash, pieces, n_grid)
+    jump = float_speed(ctx.lift, loads, ratio, lash, pieces, n_grid)
+    sides = side_extremes(ctx.lift, loads, w, ratio, lash, pieces, n_grid)
+    is_open = np.asarray(c["rigid_valve_lift_m"]) > 0.0
+    contact = columns["contact_force_N"]
+    i_max = int(np.argmax(np.where(is_open, contact, -np.inf))) if is_open.any() else 0
+
+    summary: dict = {
+        "min_contact_force_N": f_min if math.isfinite(f_min) else None,
+        "min_contact_force_cam_angle_deg": math.degrees(f_theta) if math.isfinite(f_min) else None,
+        "max_contact_force_N": float(contact[i_max]),
+        "max_contact_force_cam_angle_deg": float(np.degrees(ctx.theta[i_max])),
+        "max_follower_force_N": float(ratio * contact[i_max]),
+        "max_spring_force_N": float(columns["spring_force_N"].max()),
+        "min_spring_margin_N": float(columns["spring_margin_N"].min()),
+        "jump_speed_rpm": jump.rpm if math.isfinite(jump.omega) else None,
+        "jump_cam_angle_deg": math.degrees(jump.theta) if math.isfinite(jump.theta) else None,
+        "valve_floats": bool(math.isfinite(jump.omega) and w >= jump.omega),
+        "friction_N": loads.friction,
+        "closing_loads_N": loads.closing,
+        # Schenker's judgement of the lift curve: spring force needed on each side and his optimum
+        "opening_side": sides["opening"],
+        "closing_side": sides["closing"],
+        "optimum_deceleration_difference_m_s2": 2.0 * loads.friction / loads.mass,
+    }
+    p1, p2 = sides["opening"]["peak_deceleration_m_s2"], sides["closing"]["peak_deceleration_m_s2"]
+    summary["deceleration_difference_m_s2"] = (p2 - p1) if p1 is not None and p2 is not None else None
+    f1, f2 = sides["opening"]["required_spring_force_N"], sides["closing"]["required_spring_force_N"]
+    summary["wasted_spring_force_N"] = abs(f2 - f1) if f1 is not None and f2 is not None else None
+
+    warnings: list[str] = []
+    events: list[dict] = []
+    if jump.static_loss:
+        warnings.append(
+            f"valve float at any speed: the spring and closing loads do not hold the valve on the cam "
+            f"even at standstill (cam angle {math.degrees(jump.theta):.2f} deg)"
+        )
+    intervals = contact_loss_intervals(ctx.lift, loads, w, ratio, lash, pieces, n_grid) if f_min < 0.0 else []
+    summary["contact_loss_cam_angles_deg"] = [[math.degrees(a), math.degrees(b)] for a, b in intervals]
+    loss_events, phrase = loss_report(intervals, w, f_min, f_theta)
+    events.extend(loss_events)
+    if not jump.static_loss and summary["valve_floats"]:
+        # one set of angles, those of this speed; the float speed's own angle is named as such
+        warnings.append(
+            f"valve float: {scene.drive.rpm:.6g} rpm is at or above the float (jump) speed {jump.rpm:.6g} rpm "
+            f"(at which contact is first lost, at cam angle {math.degrees(jump.theta):.2f} deg); at "
+            f"{scene.drive.rpm:.6g} rpm " + (phrase or f"the least rigid contact force is {f_min:.4g} N at cam angle "
+                                                     f"{math.degrees(f_theta):.2f} deg")
+        )
+    seat_force = loads.preload + loads.closing
+    if seat_force < 0.0:
+        warnings.append(
+            f"valve lifts off its seat: opening loads exceed the preload by {-seat_force:.4g} N "
+            f"(closing loads {loads.closing:.4g} N, preload {loads.preload:.4g} N)"
+        )
+    # [spring_design] adds its block to this summary through the pipeline (effects.SECTION_SUMMARIES)
+    return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))

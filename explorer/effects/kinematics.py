@@ -1,0 +1,82 @@
+"""Effects `kinematics` and `lash`: the rigid motion of follower and valve over one revolution,
+and where the lash is taken up and the valve seats (explorer.mechanics.kinematics holds the physics)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..mechanics.kinematics import lash_crossings
+from ..result import EffectOutput
+
+
+def kinematics_effect(ctx) -> EffectOutput:
+    scene, w = ctx.scene, ctx.omega
+    d = ctx.lift.derivatives(ctx.theta)
+    ratio, lash = scene.follower.ratio, scene.valve.lash if scene.valve else 0.0
+    follower = {
+        "follower_lift_m": d[0],
+        "follower_velocity_m_s": w * d[1],
+        "follower_accel_m_s2": w**2 * d[2],
+        "follower_jerk_m_s3": w**3 * d[3],
+    }
+    x = ratio * d[0] - lash
+    is_open = x > 0.0
+    valve = {
+        "valve_lift_m": np.where(is_open, x, 0.0),
+        "valve_velocity_m_s": np.where(is_open, ratio * w * d[1], 0.0),
+        "valve_accel_m_s2": np.where(is_open, ratio * w**2 * d[2], 0.0),
+        "valve_jerk_m_s3": np.where(is_open, ratio * w**3 * d[3], 0.0),
+    }
+    columns = {**follower, **valve}
+    # the rigid motion stays available under its own name when a later effect refines valve_*
+    columns.update({f"rigid_{k}": v for k, v in valve.items()})
+    summary = {
+        "max_follower_lift_m": float(d[0].max()),
+        "max_valve_lift_m": float(valve["valve_lift_m"].max()),
+        "max_valve_velocity_m_s": float(valve["valve_velocity_m_s"].max()),
+        "min_valve_velocity_m_s": float(valve["valve_velocity_m_s"].min()),
+        "max_valve_accel_m_s2": float(valve["valve_accel_m_s2"].max()),
+        "min_valve_accel_m_s2": float(valve["valve_accel_m_s2"].min()),
+        "max_abs_valve_jerk_m_s3": float(np.abs(valve["valve_jerk_m_s3"]).max()),
+        "valve_open_angle_deg": float(360.0 * np.count_nonzero(is_open) / is_open.size),
+    }
+    if scene.follower.type == "translating-roller":
+        # pressure angle and radii of curvature (closed forms); raises InputError on undercut
+        from .contour import geometry_columns
+
+        geo_columns, geo_summary = geometry_columns(scene, ctx.theta, d)
+        columns.update(geo_columns)
+        summary.update(geo_summary)
+    # laws that check themselves (table fit, acceleration closure) carry a report and warnings
+    summary.update(getattr(ctx.lift, "report", None) or {})
+    warnings = tuple(getattr(ctx.lift, "warnings", None) or ())
+    return EffectOutput(columns=columns, summary=summary, warnings=warnings)
+
+
+def lash_effect(ctx) -> EffectOutput:
+    scene, w = ctx.scene, ctx.omega
+    ratio = scene.follower.ratio
+    lash = scene.valve.lash if scene.valve else 0.0
+    ups, downs = lash_crossings(ctx.lift, ratio, lash)
+    events, warnings = [], []
+    summary: dict = {"lash_m": lash, "lash_take_up_angles_deg": [], "seating_angles_deg": []}
+    if ups.size == 0:
+        warnings.append("valve never opens: ratio * lift does not exceed the lash")
+        summary.update(impact_velocity_opening_m_s=0.0, impact_velocity_closing_m_s=0.0)
+        return EffectOutput(summary=summary, warnings=tuple(warnings))
+    v_up = ratio * w * ctx.lift.derivatives(ups)[1]
+    v_down = ratio * w * ctx.lift.derivatives(downs)[1] if downs.size else np.zeros(0)
+    for th, v in zip(ups, v_up):
+        events.append({"kind": "lash-take-up", "time_s": th / w, "cam_angle_deg": math.degrees(th), "velocity_m_s": float(v)})
+    for th, v in zip(downs, v_down):
+        events.append({"kind": "seat", "time_s": th / w, "cam_angle_deg": math.degrees(th), "velocity_m_s": float(v)})
+    # Speeds (>= 0) with which the follower meets the valve and the valve meets its seat.
+    summary.update(
+        impact_velocity_opening_m_s=float(np.max(np.abs(v_up))),
+        impact_velocity_closing_m_s=float(np.max(np.abs(v_down))) if v_down.size else 0.0,
+        lash_take_up_angles_deg=[math.degrees(a) for a in ups],
+        seating_angles_deg=[math.degrees(a) for a in downs],
+    )
+    return EffectOutput(summary=summary, events=tuple(events), warnings=tuple(warnings))

@@ -1,0 +1,91 @@
+"""Follower lift over cam angle: the one curve every effect is computed from.
+
+A lift curve is anything with `derivatives(theta) -> array (4, N)` holding L, dL/dtheta,
+d2L/dtheta2, d3L/dtheta3 (theta in rad, periodic in 2 pi; L in m) and `breakpoints()`, the
+angles in [0, 2 pi) where a derivative may jump. Time derivatives at constant speed follow as
+v = w L', a = w^2 L'', j = w^3 L'''.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from .laws import law as normalised_law
+
+TWO_PI = 2.0 * math.pi
+
+
+class LiftCurve(Protocol):
+    def derivatives(self, theta: np.ndarray) -> np.ndarray: ...
+
+    def breakpoints(self) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class LawLift:
+    """Rise with one law, optional dwell, return with the same or another law, base circle elsewhere."""
+
+    height: float
+    start: float
+    rise: float
+    dwell: float
+    ret: float
+    rise_law: str
+    return_law: str
+
+    def derivatives(self, theta) -> np.ndarray:
+        theta = np.asarray(theta, dtype=float)
+        x = _wrap(theta.reshape(-1) - self.start)  # angle since the rise began
+        out = np.zeros((4, x.size))
+        h = self.height
+        # Classify by the signs of successive differences, not by comparing x with sums such as
+        # rise + dwell: (x - rise) - dwell and x < rise + dwell round differently, which left a
+        # point on the dwell's end in no stretch at all (lift 0 there instead of h).
+        x_top = x - self.rise
+        x_ret = x_top - self.dwell
+        rising = _selection(x_top < 0.0)
+        if rising is not None:
+            f = normalised_law(self.rise_law)(x[rising] / self.rise)
+            f *= h
+            f /= np.array([self.rise**k for k in range(4)])[:, None]  # h f[k] / rise**k
+            out[:, rising] = f
+        top = (x_top >= 0.0) & (x_ret < 0.0)
+        out[0][top] = h
+        falling = _selection((x_ret >= 0.0) & (x_ret < self.ret))
+        if falling is not None:
+            g = normalised_law(self.return_law)(x_ret[falling] / self.ret)
+            out[0, falling] = h * (1.0 - g[0])
+            g = g[1:]
+            g *= -h
+            g /= np.array([self.ret**k for k in range(1, 4)])[:, None]  # -h g[k] / ret**k
+            out[1:, falling] = g
+        return out.reshape((4,) + theta.shape)
+
+    def breakpoints(self) -> np.ndarray:
+        top = self.rise + self.dwell  # the running sums of np.cumsum, in plain Python (4 values)
+        marks = [x + self.start for x in (0.0, self.rise, top, top + self.ret)]
+        return np.array(sorted({x % TWO_PI for x in marks}))  # (float % is np.mod)
+
+
+def _wrap(x: np.ndarray) -> np.ndarray:
+    """np.mod(x, 2 pi) from fmod and one correction (np.mod also computes the quotient and costs
+    three times as much; the drive is evaluated at every node of every revolution)."""
+    x = np.fmod(x, TWO_PI)
+    np.add(x, TWO_PI, out=x, where=x < 0.0)
+    return x
+
+
+def _selection(mask: np.ndarray):
+    """The points where mask holds: a slice when they are one run (sorted angles), else their
+    indices; None when there are none."""
+    idx = mask.nonzero()[0]
+    if idx.size == 0:
+        return None
+    first, last = int(idx[0]), int(idx[-1])
+    return slice(first, last + 1) if last - first + 1 == idx.size else idx
+
+

@@ -1,0 +1,447 @@
+"""Rigid valve-train loads along the cycle: spring, friction, closing loads, contact force, float speed.
+
+Schenker (1902, section 4): the valve, with all moving masses M referred to it, is driven open by
+the linkage (cam, roller, levers) and pushed back by the spring, the stuffing-box friction R and
+constant closing loads D (steam on stem and valve, unbalanced weights, spring weight). With the
+valve lift s, velocity v and acceleration p of the rigid (prescribed) motion, the force the
+linkage must transmit is
+
+    F = M p + F_spring(s) + R sgn(v) + sum D.
+
+F < 0 means the linkage would have to pull: the valve leaves the cam (floats). The spring force
+that keeps F = 0 is the required spring force -(M p + R sgn(v) + sum D); the margin is the spring
+force present minus the required one, which equals F while the valve is open and the force on the
+seat while it is seated (it must hold the valve shut against net opening loads, e.g. the steam on
+an intake-valve stem).
+
+Accelerations scale with the square of the speed and the loads do not, so F = w^2 A(theta) + G(theta)
+with A = M ratio L''(theta) and G = F_spring + R sgn + D. The float (jump) speed is therefore
+w_jump^2 = min over the open stretches with A < 0 of G / (-A), found here on the analytic lift:
+a dense grid over the smooth pieces of the cycle (split at the curve's breakpoints, the lash
+crossings and the velocity zeros where friction flips), refined by zooming in (vectorised) on the grid minimum.
+
+Sign conventions: forces are positive in the valve's opening direction for F, and positive when
+they load the linkage (act to close the valve) for the loads. Friction at rest takes the direction
+the valve is about to move (sign of the acceleration): its one-sided limit right after the instant.
+
+The trip gear's latch drives the valve only from the pick-up to the trip; its forces are those
+of that window (explorer.effects.trip, its variant of this effect in the gear registry),
+not of the free closing after it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ..core.errors import InputError
+
+
+TWO_PI = 2.0 * math.pi
+RPM_PER_RAD_S = 60.0 / TWO_PI
+# Endpoints of each smooth piece are evaluated this far inside, which gives the one-sided limit
+# there to ~1e-11 relative (the pieces are at least a few 1e-6 rad long on any real cam).
+_INSIDE = 1e-11
+
+
+@dataclass(frozen=True)
+class TrainLoads:
+    """The loads of a rigid valve train, referred to the valve, SI."""
+
+    mass: float  # kg, all moving masses referred to the valve
+    preload: float  # N, spring force at closed valve
+    rate: float  # N/m
+    friction: float = 0.0  # N, Coulomb, opposes valve motion
+    closing: float = 0.0  # N, sum of constant loads; + acts to close the valve
+    source: str = "<arguments>"
+
+    def __post_init__(self) -> None:
+        checks = (
+            ("valve.mass", self.mass, self.mass > 0.0, "must be greater than zero"),
+            ("spring.preload", self.preload, self.preload >= 0.0, "must not be negative"),
+            ("spring.rate", self.rate, self.rate >= 0.0, "must not be negative"),
+            ("loads.friction", self.friction, self.friction >= 0.0, "must not be negative (Coulomb friction opposes motion by itself)"),
+            ("loads.closing", self.closing, True, ""),
+        )
+        for key, value, ok, reason in checks:
+            if not math.isfinite(value):
+                raise InputError(self.source, key, f"value must be finite, got {value!r}")
+            if not ok:
+                raise InputError(self.source, key, f"{reason}, got {value!r}")
+
+    @staticmethod
+    def from_scene(scene) -> "TrainLoads":
+        if scene.valve is None:
+            raise InputError(scene.source, "valve", "missing section: effect 'forces' needs [valve] mass")
+        if scene.spring is None:
+            raise InputError(scene.source, "spring", "missing section: effect 'forces' needs [spring] preload and rate")
+        return TrainLoads(
+            mass=scene.valve.mass,
+            preload=scene.spring.preload,
+            rate=scene.spring.rate,
+            friction=scene.loads.friction,
+            closing=scene.loads.closing_total,
+            source=scene.source,
+        )
+
+    def with_spring(self, preload: float, rate: float) -> "TrainLoads":
+        return TrainLoads(self.mass, preload, rate, self.friction, self.closing, self.source)
+
+
+def friction_direction(velocity, accel) -> np.ndarray:
+    """+1 while the valve opens, -1 while it closes; at rest the direction it is about to move."""
+    v = np.asarray(velocity, dtype=float)
+    a = np.asarray(accel, dtype=float)
+    return np.where(v > 0.0, 1.0, np.where(v < 0.0, -1.0, np.sign(a)))
+
+
+def rigid_train_forces(lift, velocity, accel, loads: TrainLoads, ratio: float = 1.0) -> dict[str, np.ndarray]:
+    """Per-step forces of the rigid train from the valve motion (s, v, p arrays, valve side).
+
+    The valve is open where s > 0; while seated the linkage carries nothing (the follower runs
+    inside the lash) and the seat carries spring plus closing loads.
+    """
+    s = np.asarray(lift, dtype=float)
+    v = np.asarray(velocity, dtype=float)
+    a = np.asarray(accel, dtype=float)
+    is_open = s > 0.0
+    inertia = np.where(is_open, loads.mass * a, 0.0)
+    spring = loads.preload + loads.rate * s
+    friction = np.where(is_open, loads.friction * friction_direction(v, a), 0.0)
+    closing = np.full_like(s, loads.closing)
+    contact = np.where(is_open, inertia + spring + friction + closing, 0.0)
+    required = np.where(is_open, -(inertia + friction + closing), -closing)
+    return {
+        "spring_force_N": spring,
+        "inertia_force_N": inertia,
+        "friction_force_N": friction,
+        "closing_load_N": closing,
+        "contact_force_N": contact,
+        "linkage_force_N": contact,  # rigid train: the linkage carries exactly the contact force
+        "follower_force_N": ratio * contact,  # lever: force scales with the valve/follower travel ratio
+        "required_spring_force_N": required,
+        "spring_margin_N": spring - required,
+    }
+
+
+# --- the cycle split into smooth pieces ---------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Pieces:
+    """Stretches of one revolution on which the lift and the load pattern are smooth."""
+
+    start: np.ndarray  # rad
+    end: np.ndarray  # rad, end > start, may pass 2 pi (wraps)
+    is_open: np.ndarray  # bool, valve off its seat
+    direction: np.ndarray  # +1 opening, -1 closing, 0 at rest (dwell)
+
+
+def velocity_zeros(lift, n_grid: int = 4096) -> np.ndarray:
+    """Angles where dL/dtheta changes sign (isolated zeros), polished by Brent's method."""
+    from scipy.optimize import brentq
+
+    grid = np.linspace(0.0, TWO_PI, n_grid + 1)
+    grid = np.unique(np.concatenate([grid, np.asarray(lift.breakpoints(), dtype=float)]))
+    d1 = lift.derivatives(grid)[1]
+    sg = np.sign(d1)
+    roots = []
+    for i in np.nonzero(sg[:-1] * sg[1:] < 0.0)[0]:
+        f = lambda th: float(lift.derivatives(np.array([th]))[1, 0])  # noqa: E731
+        roots.append(brentq(f, grid[i], grid[i + 1], xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200))
+    for i in np.nonzero(sg[1:-1] == 0.0)[0] + 1:  # an exact zero on a grid point between opposite signs
+        if sg[i - 1] * sg[i + 1] < 0.0:
+            roots.append(grid[i])
+    return np.mod(np.asarray(roots, dtype=float), TWO_PI)
+
+
+def smooth_pieces(lift, ratio: float, lash: float, n_grid: int = 4096) -> Pieces:
+    from .kinematics import lash_crossings
+
+    ups, downs = lash_crossings(lift, ratio, lash, n_grid)
+    cuts = np.concatenate([np.asarray(lift.breakpoints(), dtype=float), ups, downs, velocity_zeros(lift, n_grid)])
+    cuts = np.unique(np.mod(cuts, TWO_PI))
+    if cuts.size:  # merge cuts closer than rounding
+        cuts = cuts[np.concatenate([[True], np.diff(cuts) > 1e-13])]
+    if cuts.size == 0:
+        start, end = np.array([0.0]), np.array([TWO_PI])
+    else:
+        start = cuts
+        end = np.append(cuts[1:], cuts[0] + TWO_PI)
+    mid = 0.5 * (start + end)
+    d = lift.derivatives(mid)
+    return Pieces(
+        start=start,
+        end=end,
+        is_open=ratio * d[0] - lash > 0.0,
+        direction=friction_direction(d[1], d[2]),
+    )
+
+
+def sample_pieces(pieces: Pieces, select: np.ndarray | None = None, n_grid: int = 4096):
+    """(theta, direction, owner) samples of the selected pieces (default: open), ends moved just
+    inside so that each end gives its piece's one-sided limit; owner indexes the selected pieces."""
+    chosen = np.nonzero(pieces.is_open if select is None else select)[0]
+    lengths = pieces.end[chosen] - pieces.start[chosen]
+    counts = np.maximum(9, np.ceil(n_grid * lengths / TWO_PI).astype(int))
+    thetas, owner = [], []
+    for k, (i, m) in enumerate(zip(chosen, counts)):
+        a, b = pieces.start[i], pieces.end[i]
+        eps = _INSIDE * max(1.0, b - a)
+        thetas.append(np.linspace(a + eps, b - eps, m))
+        owner.append(np.full(m, k))
+    if not thetas:
+        return np.zeros(0), np.zeros(0), np.zeros(0, dtype=int), chosen
+    owner_a = np.concatenate(owner)
+    return np.concatenate(thetas), pieces.direction[chosen][owner_a], owner_a, chosen
+
+
+def piece_direction(pieces: Pieces, theta: float) -> float:
+    """Friction direction of the piece that holds the angle theta."""
+    t = (theta - pieces.start[0]) % TWO_PI + pieces.start[0]
+    i = int(np.clip(np.searchsorted(pieces.start, t, side="right") - 1, 0, pieces.start.size - 1))
+    return float(pieces.direction[i])
+
+
+def minimise_on_pieces(
+    lift,
+    pieces: Pieces,
+    fun: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    select: np.ndarray | None = None,
+    n_grid: int = 4096,
+    refine: bool = True,
+) -> tuple[float, float]:
+    """Minimum over the selected pieces (default: the open ones; a piece is open as a whole, so
+    callers must not re-test openness per sample: near a seating point the lift rounds to zero)
+    of fun(d, direction) (d = lift derivatives (4, N), direction
+    the piece's friction sign per sample; +inf where fun does not apply). Returns (value, theta);
+    (inf, nan) when nothing applies. Grid minimum per piece, the best pieces refined by bounded
+    zooming in on the grid neighbours of their grid minimum (_zoom_minimum)."""
+    theta, direction, owner, chosen = sample_pieces(pieces, select, n_grid)
+    if chosen.size == 0:
+        return math.inf, math.nan
+    counts = np.bincount(owner, minlength=chosen.size)
+    values = fun(lift.derivatives(np.mod(theta, TWO_PI)), direction)
+    best_value, best_theta = math.inf, math.nan
+    offsets = np.concatenate([[0], np.cumsum(counts)])
+    grid_min = np.array([values[offsets[k] : offsets[k + 1]].min() for k in range(chosen.size)])
+    if not np.isfinite(grid_min).any():
+        return math.inf, math.nan
+    floor = np.nanmin(grid_min)
+    for k in np.argsort(grid_min):
+        if not np.isfinite(grid_min[k]):
+            break
+        seg = values[offsets[k] : offsets[k + 1]]
+        j = int(np.argmin(seg))
+        th_grid = theta[offsets[k] + j]
+        if grid_min[k] < best_value:
+            best_value, best_theta = float(grid_min[k]), float(th_grid)
+        # only pieces whose grid minimum is near the best can hold the true minimum
+        slack = 1e-3 * abs(floor) + 1e-9
+        if not refine or grid_min[k] > floor + slack:
+            continue
+        ts = theta[offsets[k] : offsets[k + 1]]
+        lo, hi = ts[max(j - 1, 0)], ts[min(j + 1, ts.size - 1)]
+        if hi <= lo:
+            continue
+        val, th = _zoom_minimum(lift, fun, pieces.direction[chosen[k]], float(lo), float(hi))
+        if val < best_value:
+            best_value, best_theta = val, th
+    return best_value, float(np.mod(best_theta, TWO_PI))
+
+
+ZOOM_POINTS = 33  # samples per zoom: the bracket shrinks 16-fold per lift evaluation
+
+
+def _zoom_minimum(lift, fun, direction: float, lo: float, hi: float, xatol: float = 1e-10) -> tuple[float, float]:
+    """(value, theta) of the minimum of fun in [lo, hi] (the grid neighbours of a grid minimum):
+    sampled at ZOOM_POINTS angles at once, the bracket narrowed to the best sample's neighbours,
+    until it is shorter than xatol (7 rounds from a 4096-point grid; the value is then within
+    f'' xatol^2 / 2 of a smooth minimum, |f'| xatol of one at a kink: far below anything measured
+    for 1e-10 rad). One vectorised lift
+    evaluation a round instead of Brent's one per point: a gear's lift (jets through a linkage,
+    a Newton solve for the cam contact) costs nearly the same for 33 angles as for one."""
+    best_value, best_theta = math.inf, lo
+    dirn = np.full(ZOOM_POINTS, direction)
+    for _ in range(60):
+        ts = np.linspace(lo, hi, ZOOM_POINTS)
+        values = np.asarray(fun(lift.derivatives(np.mod(ts, TWO_PI)), dirn), dtype=float)
+        values = np.where(np.isfinite(values), values, np.inf)
+        j = int(np.argmin(values))
+        if values[j] < best_value:
+            best_value, best_theta = float(values[j]), float(ts[j])
+        if hi - lo <= xatol:
+            break
+        lo, hi = float(ts[max(j - 1, 0)]), float(ts[min(j + 1, ZOOM_POINTS - 1)])
+    return best_value, best_theta
+
+
+# --- speed-independent and speed-scaled parts of the contact force ------------------------------
+
+
+def load_parts(d: np.ndarray, direction, loads: TrainLoads, ratio: float, lash: float):
+    """(A, G, open) with contact force F = w^2 A + G on open samples (d = lift derivatives)."""
+    x = ratio * d[0] - lash
+    is_open = x > 0.0
+    s = np.where(is_open, x, 0.0)
+    a_coef = loads.mass * ratio * d[2]
+    g_part = loads.preload + loads.rate * s + loads.friction * direction + loads.closing
+    return a_coef, g_part, is_open
+
+
+@dataclass(frozen=True)
+class FloatSpeed:
+    omega: float  # rad/s, lowest camshaft speed where the rigid contact force reaches zero (inf: never)
+    theta: float  # rad, cam angle where it does (nan: never)
+    static_loss: bool  # True when the loads alone already lose contact (spring too weak at standstill)
+
+    @property
+    def rpm(self) -> float:
+        return self.omega * RPM_PER_RAD_S
+
+
+def float_speed(lift, loads: TrainLoads, ratio: float = 1.0, lash: float = 0.0, pieces: Pieces | None = None,
+                n_grid: int = 4096) -> FloatSpeed:
+    """Exact float (jump) speed of the rigid train: w^2 = min over open, decelerating stretches of G/(-A)."""
+    pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
+
+    def static(d, direction):
+        return load_parts(d, direction, loads, ratio, lash)[1]
+
+    g_min, g_theta = minimise_on_pieces(lift, pieces, static, n_grid=n_grid)
+    if g_min < 0.0:
+        return FloatSpeed(0.0, g_theta, True)
+
+    def quotient(d, direction):
+        a_coef, g_part, _ = load_parts(d, direction, loads, ratio, lash)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            q = g_part / -a_coef
+        return np.where(a_coef < 0.0, q, np.inf)
+
+    q_min, q_theta = minimise_on_pieces(lift, pieces, quotient, n_grid=n_grid)
+    if not math.isfinite(q_min):
+        return FloatSpeed(math.inf, math.nan, False)
+    return FloatSpeed(math.sqrt(max(q_min, 0.0)), q_theta, False)
+
+
+def min_contact_force(lift, loads: TrainLoads, omega: float, ratio: float = 1.0, lash: float = 0.0,
+                      pieces: Pieces | None = None, n_grid: int = 4096) -> tuple[float, float]:
+    """(smallest rigid contact force over the open stretches, its cam angle), refined on the analytic lift."""
+    pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
+
+    def force(d, direction):
+        a_coef, g_part, _ = load_parts(d, direction, loads, ratio, lash)
+        return omega**2 * a_coef + g_part
+
+    return minimise_on_pieces(lift, pieces, force, n_grid=n_grid)
+
+
+def side_extremes(lift, loads: TrainLoads, omega: float, ratio: float, lash: float, pieces: Pieces,
+                  n_grid: int = 4096) -> dict:
+    """Schenker's figures per side: largest deceleration p1 (opening, v > 0) and p2 (closing, v < 0)
+    of the valve, and the spring forces F1, F2 they require (max of the required spring force there)."""
+    out: dict = {}
+    for side, sign in (("opening", 1.0), ("closing", -1.0)):
+        select = pieces.is_open & (pieces.direction == sign)
+
+        def accel(d, direction):
+            return ratio * omega**2 * d[2]
+
+        def neg_required(d, direction):
+            a_coef, g_part, _ = load_parts(d, direction, loads, ratio, lash)
+            # required spring force = -(w^2 A + R sgn + D); its maximum is minus the minimum of this
+            return omega**2 * a_coef + loads.friction * direction + loads.closing
+
+        p, p_theta = minimise_on_pieces(lift, pieces, accel, select=select, n_grid=n_grid)
+        r, r_theta = minimise_on_pieces(lift, pieces, neg_required, select=select, n_grid=n_grid)
+        out[side] = {
+            "peak_deceleration_m_s2": p if math.isfinite(p) else None,
+            "peak_deceleration_cam_angle_deg": math.degrees(p_theta) if math.isfinite(p) else None,
+            "required_spring_force_N": -r if math.isfinite(r) else None,
+            "required_spring_force_cam_angle_deg": math.degrees(r_theta) if math.isfinite(r) else None,
+        }
+    return out
+
+
+def loss_intervals(pieces: Pieces, force_of, n_grid: int = 4096) -> list[tuple[float, float]]:
+    """Where the force force_of(theta, direction) (vectorised) is <= 0 on the open pieces, as
+    (loss, regain) pairs of cam angles in [0, 2 pi), in the order of the revolution (a stretch that
+    runs through 0 has loss > regain). One definition for every report of contact loss:
+
+    - loss: the force falls from > 0 to <= 0 inside a piece (a grid sign change polished by
+      Brent's method), or a piece starts with it <= 0 although it was > 0 at the end of the piece
+      before or the valve was seated (a jump at a breakpoint, the lash take-up);
+    - regain: it rises back above 0 inside a piece, at a piece start, or at the end of the open
+      stretch (the valve seats and its seat holds it).
+    """
+    from scipy.optimize import brentq
+
+    n = pieces.start.size
+    if n == 0:
+        return []
+    first = np.zeros(n, dtype=bool)  # force <= 0 just after the piece's start (closed: never)
+    last = np.zeros(n, dtype=bool)  # ... just before its end
+    inside: list[list[tuple[float, bool]]] = [[] for _ in range(n)]  # (angle, is_loss)
+    for i in np.nonzero(pieces.is_open)[0]:
+        a, b = pieces.start[i], pieces.end[i]
+        eps = _INSIDE * max(1.0, b - a)
+        th = np.linspace(a + eps, b - eps, max(9, int(math.ceil(n_grid * (b - a) / TWO_PI))))
+        direction = float(pieces.direction[i])
+        f = force_of(th, direction)
+        first[i], last[i] = f[0] <= 0.0, f[-1] <= 0.0
+        negative = f <= 0.0
+        for j in np.nonzero(negative[:-1] != negative[1:])[0]:
+            root = brentq(lambda t: float(force_of(np.atleast_1d(t), direction)[0]), th[j], th[j + 1],
+                          xtol=1e-14, maxiter=200)
+            inside[i].append((float(root), bool(negative[j + 1])))
+    transitions: list[tuple[float, bool]] = []
+    for i in range(n):
+        if first[i] != last[(i - 1) % n]:
+            transitions.append((float(pieces.start[i]), bool(first[i])))
+        transitions.extend(inside[i])
+    if not transitions:
+        return []
+    # pair each loss with the regain after it, wrapping around the revolution
+    k = next((j for j, (_, loss) in enumerate(transitions) if loss), None)
+    if k is None:
+        return []
+    ordered = transitions[k:] + transitions[:k]
+    out = []
+    for (t0, loss0), (t1, loss1) in zip(ordered[0::2], ordered[1::2]):
+        if loss0 and not loss1:  # they alternate by construction
+            out.append((float(np.mod(t0, TWO_PI)), float(np.mod(t1, TWO_PI))))
+    return out
+
+
+def contact_loss_intervals(lift, loads: TrainLoads, omega: float, ratio: float, lash: float, pieces: Pieces,
+                           n_grid: int = 4096) -> list[tuple[float, float]]:
+    """Where the rigid contact force is <= 0 at speed omega: (loss, regain) cam angles, rad."""
+
+    def force_of(t, direction):
+        a_coef, g_part, _ = load_parts(lift.derivatives(np.mod(t, TWO_PI)), direction, loads, ratio, lash)
+        return omega**2 * a_coef + g_part
+
+    return loss_intervals(pieces, force_of, n_grid)
+
+
+def loss_report(intervals, omega: float, min_force: float, min_theta: float) -> tuple[list[dict], str]:
+    """The events (a loss and its regain, paired) and the phrase the warnings use, from one list."""
+    events, stretches = [], []
+    for loss, regain in intervals:
+        events.append({"kind": "rigid-contact-loss", "time_s": loss / omega, "cam_angle_deg": math.degrees(loss)})
+        events.append({"kind": "rigid-contact-regain", "time_s": regain / omega,
+                       "cam_angle_deg": math.degrees(regain)})
+        stretches.append(f"{math.degrees(loss):.2f} to {math.degrees(regain):.2f} deg")
+    phrase = ""
+    if stretches:
+        phrase = (f"the rigid contact force is at or below zero from cam angle {', and from '.join(stretches)} "
+                  f"(least {min_force:.4g} N at {math.degrees(min_theta):.2f} deg)")
+    return events, phrase
+
+
+# --- the effect ---------------------------------------------------------------------------------
+
+

@@ -1,0 +1,64 @@
+"""The [contact] section of a scene and the follower types the contact statics cover."""
+
+from __future__ import annotations
+
+import math
+
+from ..core.errors import InputError
+from ..core.ranges import FRICTION_COEFFICIENT
+from ..gears.registry import effect_variant, gear
+from ..mechanics.contact import ALLOWABLE, CONTACT_TYPES, ROLLER_TYPES, STEEL_E, STEEL_NU, WIDTH_RULE_K, ContactSpec
+
+
+def check_follower(follower, file: str) -> None:
+    """The follower types the contact statics cover; a roller where the width rule needs one."""
+    if effect_variant(follower.type, "contact") is not None:  # the gear's own statics (the trip gear's latch)
+        return
+    if follower.type not in CONTACT_TYPES:
+        raise InputError(file, "follower.type", f"effect 'contact' does not model follower type {follower.type!r}")
+    if follower.type in ROLLER_TYPES and follower.roller_radius <= 0.0:
+        raise InputError(file, "follower.roller_radius",
+                         "effect 'contact' needs a roller (roller_radius > 0) for the Hertz stress and the width rule")
+
+
+def parse_contact_section(table, fields) -> ContactSpec:
+    """[contact] -> ContactSpec; called with table None when the effect runs without the section."""
+    file = fields.get("source", "<memory>")
+    follower = fields.get("follower")
+    if "contact" in fields.get("effects", ()) and follower is not None:
+        check_follower(follower, file)
+    if table is None:
+        return ContactSpec()
+    entry = gear(follower.type) if follower is not None else None
+    if entry is not None and "contact" in entry.rejected:  # the trip gear: no cam and roller
+        raise InputError(file, "contact", entry.rejected["contact"])
+    table.reject_unknown((
+        "friction_angle", "friction_coefficient", "youngs_modulus", "poisson_ratio", "roller_youngs_modulus",
+        "roller_poisson_ratio", "width", "valve", "width_rule_k", "engine", "allowable_stress",
+    ))
+    if table.has("friction_angle") and table.has("friction_coefficient"):
+        raise table.error("friction_coefficient", "give friction_angle or friction_coefficient, not both")
+    if table.has("friction_coefficient"):
+        mu = table.number("friction_coefficient", minimum=FRICTION_COEFFICIENT[0], maximum=FRICTION_COEFFICIENT[1])
+        rho = math.atan(mu)
+    else:
+        rho = table.quantity("friction_angle", "angle", 0.0)
+        if not 0.0 <= rho < 0.5 * math.pi:
+            raise table.error("friction_angle", f"must lie in [0 deg, 90 deg), got {table.raw('friction_angle')!r}")
+    e_cam = table.quantity("youngs_modulus", "pressure", STEEL_E, positive=True)
+    nu_cam = table.number("poisson_ratio", STEEL_NU, minimum=-1.0, maximum=0.5, open_minimum=True, open_maximum=True)
+    valve = table.string("valve", "exhaust", choices=tuple(WIDTH_RULE_K))
+    engine = table.string("engine", "large-gas", choices=tuple(ALLOWABLE))
+    return ContactSpec(
+        friction_angle=rho,
+        youngs_modulus=e_cam,
+        poisson_ratio=nu_cam,
+        roller_youngs_modulus=table.quantity("roller_youngs_modulus", "pressure", e_cam, positive=True),
+        roller_poisson_ratio=table.number("roller_poisson_ratio", nu_cam, minimum=-1.0, maximum=0.5,
+                                          open_minimum=True, open_maximum=True),
+        width=table.quantity("width", "length", positive=True) if table.has("width") else None,
+        valve=valve,
+        width_rule_k=table.quantity("width_rule_k", "pressure", WIDTH_RULE_K[valve], positive=True),
+        engine=engine,
+        allowable_stress=table.quantity("allowable_stress", "pressure", ALLOWABLE[engine], positive=True),
+    )

@@ -1,0 +1,459 @@
+"""Scene files (TOML) -> a validated, frozen Scene with every quantity in SI.
+
+A scene describes one valve gear at one speed and lists the effects to compute. Each section is
+read through `reader.Table`, so any bad value ends in one InputError naming file, key and
+reason. Sections owned by other modules (lift-law options, [cam], [contact], ...) are parsed by
+those modules' `parse_*` functions, called from here so that all validation happens at load time.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import os
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Mapping
+
+from ..core.errors import InputError
+from ..gears import GEAR_TYPES
+from ..lift.laws import LAWS
+from ..core.reader import Table
+
+# effect name -> effects it needs (resolved by effects.resolve); kept here, free of heavy imports,
+# so that a scene can be validated without importing any solver.
+EFFECT_DEPENDENCIES: dict[str, tuple[str, ...]] = {
+    "kinematics": (),
+    "lash": ("kinematics",),
+    "forces": ("kinematics", "lash"),
+    "contact": ("kinematics", "lash", "forces"),
+    "elastic": ("kinematics", "lash"),
+    "gear": ("kinematics",),  # explorer.gears: what is particular to the lever, eccentric and trip gears
+}
+
+SPECIAL_LAWS = ("table", "acceleration", "contour", "gear", "polydyne", "spline")  # "gear": the gear's geometry makes the lift
+FOLLOWER_TYPES = ("translating-roller", *GEAR_TYPES)
+MIN_STEPS = 36
+# Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
+# w^3 L''' must not overflow) and catch unit slips such as "10 m" for "10 mm".
+MAX_RPM = 100_000.0
+MAX_LIFT = 1.0  # m
+MIN_EVENT_ANGLE = math.radians(0.1)  # rise and return of the analytic laws
+MAX_RATIO = 100.0
+MAX_STEPS = 1_000_000  # at this count simulate (elastic) needs ~20 s and 0.7 GB, record ~50 s and 2 GB; 10x that took 4 min and 5.6 GB
+
+# Optional sections parsed by the module that owns them: section -> "module:function".
+# The function takes (Table, partial scene fields dict) and returns a frozen object.
+OWNED_SECTIONS: dict[str, str] = {
+    "cam": "explorer.lift.contours.spec:parse_cam_section",
+    "contact": "explorer.scene.contact_section:parse_contact_section",
+    "spring_design": "explorer.mechanics.springs:parse_spring_design_section",
+    "gear": "explorer.gears.spec:parse_gear_section",
+}
+# Law-specific [lift] keys, parsed by the module of the law: law -> "module:function".
+LAW_OPTION_PARSERS: dict[str, str] = {
+    "table": "explorer.lift.table:parse_table_options",
+    "acceleration": "explorer.lift.acceleration:parse_acceleration_options",
+    "polydyne": "explorer.lift.polydyne:parse_polydyne_options",
+    "spline": "explorer.lift.spline:parse_spline_options",
+}
+LAW_OPTION_KEYS: dict[str, tuple[str, ...]] = {
+    "table": ("file", "angle_unit", "lift_unit", "smoothing"),
+    "acceleration": ("points", "angle_unit", "acceleration_unit", "interpolation", "reference_rpm"),
+    "polydyne": ("wanted_law", "design_rpm", "ramp"),
+    "spline": ("stations", "continuity", "reference_rpm"),
+}
+# laws whose [lift] height, rise and return shape an event as for the closed-form laws
+SHAPED_LAWS = (*LAWS, "polydyne")
+
+
+@dataclass(frozen=True)
+class Drive:
+    rpm: float  # rev/min, > 0
+
+    @property
+    def omega(self) -> float:
+        """Camshaft angular speed in rad/s."""
+        return self.rpm * 2.0 * math.pi / 60.0
+
+
+@dataclass(frozen=True)
+class LiftSpec:
+    law: str
+    height: float = 0.0  # m, follower (roller-centre) lift, lash included
+    start: float = 0.0  # rad
+    rise: float = 0.0  # rad
+    dwell: float = 0.0  # rad
+    ret: float = 0.0  # rad
+    return_law: str | None = None
+    options: Any = None  # law-specific, parsed by the law's module
+
+
+@dataclass(frozen=True)
+class Follower:
+    type: str = "translating-roller"
+    base_radius: float = 0.03  # m, base circle of the cam contour
+    roller_radius: float = 0.0  # m
+    offset: float = 0.0  # m, follower axis offset from the cam centre
+    ratio: float = 1.0  # valve travel per follower travel
+
+
+@dataclass(frozen=True)
+class Valve:
+    mass: float  # kg, effective moving mass referred to the valve
+    lash: float = 0.0  # m, clearance at the valve
+    oscillating_mass: float | None = None  # kg, Schenker's M1 (mass while the linkage is compressed)
+
+
+@dataclass(frozen=True)
+class Spring:
+    preload: float  # N at closed valve
+    rate: float  # N/m
+
+
+@dataclass(frozen=True)
+class Loads:
+    friction: float = 0.0  # N, Coulomb, opposes valve motion
+    closing: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))  # N, + closes
+
+    @property
+    def closing_total(self) -> float:
+        return float(sum(self.closing.values()))
+
+
+@dataclass(frozen=True)
+class Linkage:
+    stiffness: float  # N/m referred to the valve
+    damping: float = 0.0  # N*s/m, viscous, in parallel with the stiffness
+
+
+@dataclass(frozen=True)
+class Seat:
+    restitution: float = 0.0
+
+
+@dataclass(frozen=True)
+class Solver:
+    method: str = "exact"
+    steps_per_revolution: int = 3600
+    scipy_method: str = "DOP853"
+    rtol: float = 1e-10
+    atol: float = 1e-13
+
+
+@dataclass(frozen=True)
+class Scene:
+    name: str
+    effects: tuple[str, ...]
+    drive: Drive
+    lift: LiftSpec
+    follower: Follower
+    valve: Valve | None
+    spring: Spring | None
+    loads: Loads
+    linkage: Linkage | None
+    seat: Seat
+    solver: Solver
+    source: str = "<memory>"  # file the scene came from, for messages and relative paths
+    description: str = ""
+    cam: Any = None  # owned by explorer.lift.contours.spec
+    contact: Any = None  # owned by explorer.mechanics.contact
+    spring_design: Any = None  # owned by explorer.mechanics.springs (optional advice and historic rules)
+    gear: Any = None  # owned by explorer.gears.spec (pivoted lever, rocking cam, rolling lever, trip gear)
+
+    @property
+    def directory(self) -> Path:
+        return Path(self.source).parent if self.source != "<memory>" else Path.cwd()
+
+    @property
+    def omega(self) -> float:
+        return self.drive.omega
+
+    def with_changes(self, **sections: Any) -> "Scene":
+        """A copy with whole sections replaced (for sweeps and the GUI)."""
+        return replace(self, **sections)
+
+
+TOP_KEYS = (
+    "name", "description", "effects", "drive", "lift", "follower", "valve", "spring", "loads",
+    "linkage", "seat", "solver", *OWNED_SECTIONS,
+)
+
+
+def load_scene(path: str | os.PathLike, overrides: list[str] | tuple[str, ...] = ()) -> Scene:
+    """Read and validate a scene file; `overrides` are "section.key=value" strings (TOML values)."""
+    from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
+
+    file = str(path)
+    data = read_regular(path, file=file, key="-", limit=MAX_SCENE_FILE_BYTES)
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise InputError(file, "-", "not a UTF-8 text file") from None
+    return loads_scene(text, file, overrides)
+
+
+# tomllib and copy.deepcopy recurse once per level of nesting: a few thousand nested arrays or
+# tables end in RecursionError. No scene nests deeper than a few levels.
+MAX_NESTING = 32
+
+
+def loads_scene(text: str, source: str = "<memory>", overrides=()) -> Scene:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(source, "-", f"malformed TOML: {_first_line(str(exc))}") from None
+    except RecursionError:
+        raise InputError(source, "-", f"malformed TOML: nested too deeply (at most {MAX_NESTING} levels)") from None
+    _check_nesting(data, source, "-")
+    return scene_from_dict(apply_overrides(data, overrides, source), source)
+
+
+def _first_line(text: str) -> str:
+    return text.splitlines()[0] if text else text
+
+
+def _check_nesting(value, file: str, key: str) -> None:
+    """InputError if arrays/tables nest deeper than MAX_NESTING (iterative: no recursion)."""
+    stack = [(value, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if depth > MAX_NESTING:
+            raise InputError(file, key, f"nested too deeply (at most {MAX_NESTING} levels of arrays and tables)")
+        if isinstance(node, dict):
+            stack.extend((v, depth + 1) for v in node.values())
+        elif isinstance(node, list):
+            stack.extend((v, depth + 1) for v in node)
+
+
+def apply_overrides(data: dict, overrides, file: str) -> dict:
+    """Apply "a.b.c=value" overrides to a copy of the raw TOML dict. Values are TOML when they
+    parse as TOML (numbers, booleans, quoted strings, arrays), otherwise taken as plain strings,
+    so `--set lift.height="12 mm"` and `--set lift.height=12mm` both work."""
+    import copy
+
+    data = copy.deepcopy(data)
+    for item in overrides:
+        if "=" not in item:
+            raise InputError(file, item, "override must look like section.key=value")
+        dotted, text = item.split("=", 1)
+        dotted = dotted.strip()
+        parts = dotted.split(".")
+        if not dotted or any(not p for p in parts):
+            raise InputError(file, dotted or item, "override key must be dotted, such as lift.height")
+        if len(parts) > MAX_NESTING:
+            raise InputError(file, dotted[:60], f"override key nested too deeply (at most {MAX_NESTING} levels)")
+        try:
+            value = tomllib.loads(f"v = {text}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()
+        except RecursionError:
+            raise InputError(file, dotted, f"value nested too deeply (at most {MAX_NESTING} levels)") from None
+        _check_nesting(value, file, dotted)
+        if isinstance(value, str) and value == text.strip() and "=" in value:
+            # "drive.rpm=5=6": a second "=" is a typo, not part of a quantity or a name
+            raise InputError(file, dotted, "more than one '=' in the override; write section.key=value")
+        node = data
+        for part in parts[:-1]:
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                raise InputError(file, dotted, f"'{part}' is not a table")
+            node = child
+        node[parts[-1]] = value
+    return data
+
+
+def _import(target: str):
+    module, _, name = target.partition(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
+    top = Table(data, file, "")
+    top.reject_unknown(TOP_KEYS)
+    name = top.string("name", default=Path(file).stem if file != "<memory>" else "scene")
+    description = top.string("description", default="")
+
+    effects_raw = top.raw("effects", default=["kinematics"])
+    if not isinstance(effects_raw, list) or not all(isinstance(e, str) for e in effects_raw):
+        raise top.error("effects", "expected a list of effect names, such as [\"kinematics\", \"lash\"]")
+    for effect in effects_raw:
+        if effect not in EFFECT_DEPENDENCIES:
+            raise top.error("effects", f"unknown effect {effect!r}; known: {', '.join(EFFECT_DEPENDENCIES)}")
+    effects = tuple(dict.fromkeys(effects_raw))
+    if not effects:
+        raise top.error("effects", "list at least one effect")
+
+    drive_t = top.table("drive")
+    drive_t.reject_unknown(("rpm",))
+    rpm_si = drive_t.quantity("rpm", "speed", positive=True)
+    raw_rpm = drive_t.raw("rpm")
+    # a bare number is rev/min already: keep it exact rather than round-tripping through rad/s
+    rpm = float(raw_rpm) if isinstance(raw_rpm, (int, float)) else rpm_si * 60.0 / (2.0 * math.pi)
+    if rpm > MAX_RPM:
+        raise drive_t.error("rpm", f"more than {MAX_RPM:g} rpm is outside any valve gear, got {raw_rpm!r}")
+    drive = Drive(rpm=rpm)
+
+    follower = _parse_follower(top.table("follower", required=False), file)
+    lift = _parse_lift(top.table("lift"), file)
+    valve = _parse_valve(top.table("valve", required=False))
+    spring = _parse_spring(top.table("spring", required=False))
+    loads = _parse_loads(top.table("loads", required=False), file)
+    linkage = _parse_linkage(top.table("linkage", required=False))
+    seat_t = top.table("seat", required=False) or Table({}, file, "seat")
+    seat_t.reject_unknown(("restitution",))
+    seat = Seat(restitution=seat_t.number("restitution", 0.0, minimum=0.0, maximum=1.0, open_maximum=True))
+    solver = _parse_solver(top.table("solver", required=False) or Table({}, file, "solver"))
+
+    needs = _closure(effects)
+    if ("forces" in needs or "elastic" in needs) and valve is None:
+        raise InputError(file, "valve", "missing section: effects 'forces' and 'elastic' need [valve] mass")
+    if ("forces" in needs or "elastic" in needs) and spring is None:
+        raise InputError(file, "spring", "missing section: effects 'forces' and 'elastic' need [spring] preload and rate")
+    if "elastic" in needs and linkage is None:
+        raise InputError(file, "linkage", "missing section: effect 'elastic' needs [linkage] stiffness")
+
+    fields: dict[str, Any] = dict(
+        name=name, description=description, effects=effects, drive=drive, lift=lift, follower=follower,
+        valve=valve, spring=spring, loads=loads, linkage=linkage, seat=seat, solver=solver, source=file,
+    )
+    for section, target in OWNED_SECTIONS.items():
+        table = top.table(section, required=False)
+        fields[section] = _import(target)(table, fields) if table is not None or section in needs else None
+    if lift.law in LAW_OPTION_PARSERS:
+        options = _import(LAW_OPTION_PARSERS[lift.law])(top.table("lift"), fields)
+        fields["lift"] = replace(lift, options=options)
+    if lift.law == "contour" and fields.get("cam") is None:
+        raise InputError(file, "cam", "missing section: lift.law = 'contour' takes the lift from [cam]")
+    if follower.type in GEAR_TYPES and fields.get("gear") is None:
+        raise InputError(file, "gear", f"missing section: follower.type '{follower.type}' needs [gear]")
+    if lift.law == "gear" and follower.type not in ("rocking-cam", "rolling-lever"):
+        raise InputError(file, "lift.law", "lift.law = 'gear' is for the rocking-cam and rolling-lever gears")
+    return Scene(**fields)
+
+
+def _closure(effects) -> set[str]:
+    out: set[str] = set()
+    stack = list(effects)
+    while stack:
+        effect = stack.pop()
+        if effect not in out:
+            out.add(effect)
+            stack.extend(EFFECT_DEPENDENCIES[effect])
+    return out
+
+
+def _parse_follower(t: Table | None, file: str) -> Follower:
+    if t is None:
+        return Follower()
+    t.reject_unknown(("type", "base_radius", "roller_radius", "offset", "ratio"))
+    follower = Follower(
+        type=t.string("type", "translating-roller", choices=FOLLOWER_TYPES),
+        base_radius=t.quantity("base_radius", "length", 0.03, positive=True),
+        roller_radius=t.quantity("roller_radius", "length", 0.0, nonnegative=True),
+        offset=t.quantity("offset", "length", 0.0),
+        ratio=t.number("ratio", 1.0, minimum=0.0, open_minimum=True, maximum=MAX_RATIO),
+    )
+    if abs(follower.offset) >= follower.base_radius + follower.roller_radius:
+        raise t.error("offset", "offset must be smaller than base radius + roller radius")
+    return follower
+
+
+def _parse_lift(t: Table, file: str) -> LiftSpec:
+    laws = (*LAWS, *SPECIAL_LAWS)
+    law = t.string("law", choices=laws)
+    common = ("law", "height", "start", "rise", "dwell", "return", "return_law")
+    t.reject_unknown(common + LAW_OPTION_KEYS.get(law, ()))
+    if law == "contour":
+        return LiftSpec(law=law)
+    height = t.quantity("height", "length", positive=True) if law in SHAPED_LAWS else t.quantity("height", "length", 0.0, nonnegative=True)
+    start = t.quantity("start", "angle", 0.0)
+    if not 0.0 <= start < 2.0 * math.pi:
+        raise t.error("start", "must lie in [0 deg, 360 deg)")
+    if height > MAX_LIFT:
+        raise t.error("height", f"more than {MAX_LIFT:g} m of lift is outside any valve gear, got {t.raw('height')!r}")
+    rise = t.quantity("rise", "angle", positive=True) if law in SHAPED_LAWS else t.quantity("rise", "angle", 0.0, nonnegative=True)
+    dwell = t.quantity("dwell", "angle", 0.0, nonnegative=True)
+    ret = t.quantity("return", "angle", rise, positive=True) if law in SHAPED_LAWS else t.quantity("return", "angle", 0.0, nonnegative=True)
+    return_law = t.string("return_law", None, choices=LAWS) if t.has("return_law") else None
+    for key, angle in (("rise", rise), ("return", ret)):
+        if law in SHAPED_LAWS and angle < MIN_EVENT_ANGLE:
+            raise t.error(key, f"must be at least {math.degrees(MIN_EVENT_ANGLE):g} deg, got {angle:.3g} rad")
+    if rise + dwell + ret > 2.0 * math.pi * (1.0 + 1e-12):
+        total = math.degrees(rise + dwell + ret)
+        raise t.error("return", f"rise + dwell + return = {total:.6g} deg exceeds 360 deg")
+    return LiftSpec(law=law, height=height, start=start, rise=rise, dwell=dwell, ret=ret, return_law=return_law)
+
+
+def _parse_valve(t: Table | None) -> Valve | None:
+    if t is None:
+        return None
+    t.reject_unknown(("mass", "lash", "oscillating_mass"))
+    mass = t.quantity("mass", "mass", positive=True)
+    m1 = t.quantity("oscillating_mass", "mass", positive=True) if t.has("oscillating_mass") else None
+    if m1 is not None and m1 > mass:
+        raise t.error("oscillating_mass", "cannot exceed the total moving mass valve.mass")
+    return Valve(mass=mass, lash=t.quantity("lash", "length", 0.0, nonnegative=True), oscillating_mass=m1)
+
+
+def _parse_spring(t: Table | None) -> Spring | None:
+    if t is None:
+        return None
+    t.reject_unknown(("preload", "rate"))
+    return Spring(
+        preload=t.quantity("preload", "force", nonnegative=True),
+        rate=t.quantity("rate", "stiffness", 0.0, nonnegative=True),
+    )
+
+
+def _parse_loads(t: Table | None, file: str) -> Loads:
+    if t is None:
+        return Loads()
+    t.reject_unknown(("friction", "closing"))
+    friction = t.quantity("friction", "force", 0.0, nonnegative=True)
+    closing: dict[str, float] = {}
+    ct = t.table("closing", required=False)
+    if ct is not None:
+        for key in ct.data:
+            closing[key] = ct.quantity(key, "force")
+    return Loads(friction=friction, closing=MappingProxyType(closing))
+
+
+def _parse_linkage(t: Table | None) -> Linkage | None:
+    if t is None:
+        return None
+    t.reject_unknown(("stiffness", "damping"))
+    return Linkage(
+        stiffness=t.quantity("stiffness", "stiffness", positive=True),
+        damping=t.quantity("damping", "damping", 0.0, nonnegative=True),
+    )
+
+
+def __getattr__(name: str):
+    """SOLVER_METHODS, the [solver] method choices (one per entry of explorer/dynamics/solvers.py), read
+    from the registry when asked: `import explorer` does not load it."""
+    if name == "SOLVER_METHODS":
+        from ..dynamics.solvers import names
+
+        return names()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _parse_solver(t: Table) -> Solver:
+    from ..dynamics import solvers as solver_registry  # (the registry: on the first [solver] table)
+
+    t.reject_unknown(("method", "steps_per_revolution", "scipy_method", "rtol", "atol"))
+    steps = t.number("steps_per_revolution", 3600, integer=True)
+    if steps < MIN_STEPS:
+        raise t.error("steps_per_revolution", f"too few steps: {steps:.6g} (at least {MIN_STEPS})")
+    if steps > MAX_STEPS:
+        raise t.error("steps_per_revolution", f"too many steps: {steps:.6g} (at most {MAX_STEPS})")
+    return Solver(
+        method=t.string("method", "exact", choices=solver_registry.names()),
+        steps_per_revolution=int(steps),
+        scipy_method=t.string("scipy_method", "DOP853", choices=solver_registry.SCIPY_METHODS),
+        rtol=t.number("rtol", 1e-10, minimum=1e-14, maximum=1e-1),
+        atol=t.number("atol", 1e-13, minimum=1e-20, maximum=1e-1),
+    )

@@ -1,0 +1,587 @@
+"""What the browser explorer shows, computed without any viewer: a request (scene file, GUI
+overrides, magnification) becomes a `Prepared` bundle of meshes, per-step poses, plot data and
+read-outs. `ComputeWorker` does this off the GUI threads, newest request wins, in a child process
+with a time and memory budget (explorer.view.browser.worker).
+
+Nothing here imports viser, so it is testable and reusable (the benchmark drives it directly).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import threading
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from ...core.errors import InputError
+
+# Parameters the GUI edits: scene key -> (label, kind, display unit). Values typed with units
+# are passed to the scene reader as strings, so the GUI accepts exactly what a scene file does.
+PARAMETERS: dict[str, tuple[str, str, str]] = {
+    "lift.law": ("Lift law", "choice", ""),
+    "drive.rpm": ("Camshaft rpm", "number", "rpm"),
+    "valve.lash": ("Lash", "quantity", "mm"),
+    "linkage.stiffness": ("Linkage stiffness", "quantity", "N/mm"),
+    "spring.preload": ("Spring preload", "quantity", "N"),
+    "spring.rate": ("Spring rate", "quantity", "N/mm"),
+    "solver.steps_per_revolution": ("Steps / revolution", "integer", ""),
+}
+
+
+@dataclass(frozen=True)
+class Request:
+    """One thing to show: a scene file, overrides ("section.key=value"), a magnification."""
+
+    path: str
+    overrides: tuple[str, ...] = ()
+    magnification: float = 1.0
+    serial: int = 0  # increases with every request, so the newest is known
+
+
+def override(key: str, value: Any) -> str:
+    """A "section.key=value" override whose value the TOML reader reads back unchanged."""
+    if isinstance(value, bool):
+        return f"{key}={'true' if value else 'false'}"
+    if isinstance(value, (list, tuple)):
+        return f"{key}=[{', '.join(json.dumps(str(v)) for v in value)}]"
+    if isinstance(value, int):
+        return f"{key}={value}"
+    if isinstance(value, float):
+        return f"{key}={value!r}" if math.isfinite(value) else f"{key}={'nan' if math.isnan(value) else ('inf' if value > 0 else '-inf')}"
+    return f"{key}={json.dumps(str(value))}"
+
+
+def scene_values(scene) -> dict[str, Any]:
+    """The scene's current value of each editable parameter, in the GUI's display units
+    (None where the scene has no such section)."""
+    per_si = {"mm": 1e3, "N/mm": 1e-3, "N": 1.0}  # exact factors: no unit registry on this path
+
+    def q(value, unit):
+        return None if value is None else f"{_round(value * per_si[unit])} {unit}"
+
+    return {
+        "lift.law": scene.lift.law,
+        "drive.rpm": float(scene.drive.rpm),
+        "valve.lash": q(scene.valve.lash if scene.valve else None, "mm"),
+        "linkage.stiffness": q(scene.linkage.stiffness if scene.linkage else None, "N/mm"),
+        "spring.preload": q(scene.spring.preload if scene.spring else None, "N"),
+        "spring.rate": q(scene.spring.rate if scene.spring else None, "N/mm"),
+        "solver.steps_per_revolution": int(scene.solver.steps_per_revolution),
+    }
+
+
+def _round(x: float) -> str:
+    return f"{x:.6g}"
+
+
+# The spring is resent every frame while the valve moves: a coarser tube than the default keeps
+# that message small (1.5k vertices, 18 kB) while the coils still look round.
+SPRING_RESOLUTION = {"segments_per_turn": 24, "wire_segments": 8}
+
+# ---------------------------------------------------------------------------------------------
+# Plots
+
+
+@dataclass(frozen=True)
+class Plot:
+    title: str
+    x: np.ndarray  # cam angle, deg (decimated)
+    series: tuple[tuple[str, np.ndarray, str], ...]  # (label, values, colour), drawn in this order
+    y_label: str = ""  # the y axis' name with its unit
+    styles: tuple[dict, ...] = ()  # per series: uPlot line options (width, dash)
+
+
+SERIES_COLORS = ("#c0392b", "#2471a3", "#7d8a96", "#27ae60", "#8e44ad", "#d68910", "#17a589")
+DISPLAY_POINTS = 720
+X_LABEL = "cam angle θ [°]"
+# Curves that lie on each other stay apart: the first of a plot is drawn solid and widest, the
+# later ones on top of it thinner and dashed, each with its own dash, so where two coincide both
+# colours show in turn.
+DASHES = ((), (7, 4), (2, 3), (10, 3, 2, 3), (4, 4), (1, 5), (12, 6))
+WIDTHS = (3.0, 1.8, 1.8, 1.6, 1.6, 1.6, 1.6)
+
+
+def decimate(x: np.ndarray, ys: list[np.ndarray], points: int = DISPLAY_POINTS) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Thin columns to about `points` samples for the plots, keeping each bucket's extremes
+    (min and max of every series, in their order) so impacts and spikes stay visible."""
+    n = len(x)
+    if n <= points:
+        return x.copy(), [y.copy() for y in ys]
+    buckets = points // 2
+    edges = np.linspace(0, n, buckets + 1).astype(int)
+    starts, ends = edges[:-1], edges[1:]
+    xs = np.empty(2 * buckets)
+    xs[0::2], xs[1::2] = x[starts], x[ends - 1]
+    out = []
+    for y in ys:
+        # NaN marks where a column does not apply (e.g. the trip gear's spring requirement while
+        # the valve closes freely): a bucket's extremes ignore it, an all-NaN bucket stays NaN
+        gaps = np.isnan(y)
+        lo = np.fmin.reduceat(y, starts)
+        hi = np.fmax.reduceat(y, starts)
+        i_lo = _argreduce(np.where(gaps, np.inf, y) if gaps.any() else y, starts, ends, np.argmin)
+        i_hi = _argreduce(np.where(gaps, -np.inf, y) if gaps.any() else y, starts, ends, np.argmax)
+        first_is_lo = i_lo <= i_hi
+        z = np.empty(2 * buckets)
+        z[0::2] = np.where(first_is_lo, lo, hi)
+        z[1::2] = np.where(first_is_lo, hi, lo)
+        out.append(z)
+    return xs, out
+
+
+def _argreduce(y, starts, ends, fn):
+    width = int((ends - starts).max())
+    idx = np.minimum(starts[:, None] + np.arange(width)[None, :], ends[:, None] - 1)
+    return np.take_along_axis(idx, fn(y[idx], axis=1)[:, None], axis=1)[:, 0]
+
+
+def _same_curve(a: np.ndarray, b: np.ndarray) -> bool:
+    scale = max(float(np.nanmax(np.abs(a))) if np.isfinite(a).any() else 0.0, 1e-30)
+    return a.shape == b.shape and bool(np.all((np.isnan(a) & np.isnan(b)) | (np.abs(a - b) <= 1e-9 * scale)))
+
+
+def build_plots(result) -> list[Plot]:
+    """s, v, p and the forces over one revolution, from whatever columns the effects made. A
+    plot without data (no force effect) is left out; `plots_note` says why in one line."""
+    cols = result.columns
+    x = np.asarray(cols["cam_angle_deg"], dtype=float)
+    plots = []
+
+    def add(title, y_label, entries):
+        entries = [(label, np.asarray(values, dtype=float) * k) for label, values, k in entries if values is not None]
+        if not entries:
+            return
+        xs, ys = decimate(x, [v for _, v in entries])
+        labels = [label for label, _ in entries]
+        for i, (label, values) in enumerate(entries):  # a curve equal to an earlier one says so
+            twin = next((labels[j] for j in range(i) if _same_curve(entries[j][1], values)), None)
+            if twin is not None:
+                labels[i] = f"{label} (= {twin})"
+        series = tuple((label, y, SERIES_COLORS[i % len(SERIES_COLORS)]) for i, (label, y) in enumerate(zip(labels, ys)))
+        styles = tuple({"width": WIDTHS[i % len(WIDTHS)], "dash": list(DASHES[i % len(DASHES)])} for i in range(len(series)))
+        plots.append(Plot(title, xs, series, y_label, styles))
+
+    def maybe_rigid(name):
+        rigid = cols.get(f"rigid_{name}")
+        return rigid if rigid is not None and not np.array_equal(rigid, cols[name]) else None
+
+    scene = result.scene
+    lash = scene.valve.lash if scene.valve is not None else 0.0
+    linkage = scene.follower.ratio * np.asarray(cols["follower_lift_m"]) - lash
+    # the valve's own curve first (solid, under), the rigid and linkage curves dashed on top
+    add("Valve lift s", "s [mm]", [
+        ("valve s", cols["valve_lift_m"], 1e3),
+        ("rigid", maybe_rigid("valve_lift_m"), 1e3),
+        ("linkage S − lash", linkage if maybe_rigid("valve_lift_m") is not None else None, 1e3),
+    ])
+    add("Velocity v", "v [m/s]", [("valve v", cols["valve_velocity_m_s"], 1.0), ("rigid", maybe_rigid("valve_velocity_m_s"), 1.0)])
+    add("Acceleration p", "p [m/s²]", [("valve p", cols["valve_accel_m_s2"], 1.0), ("rigid", maybe_rigid("valve_accel_m_s2"), 1.0)])
+    add("Forces", "F [N]", [(label, values, 1.0) for label, values in _force_columns(cols)])
+    return plots
+
+
+def _force_columns(cols) -> list[tuple[str, Any]]:
+    # the linkage force first (Schenker's back-pressure on the camshaft), then the cam contact and
+    # the spring; any further force columns after those, up to five curves
+    preferred = ("linkage_force_N", "contact_force_N", "spring_force_N", "required_spring_force_N",
+                 "camshaft_back_pressure_N")
+    names = [n for n in preferred if n in cols] + sorted(n for n in cols if n.endswith("_N") and n not in preferred)
+    return [(name[:-2].replace("_", " "), cols[name]) for name in names[:5]]
+
+
+def plots_note(result) -> str:
+    """One line for the plots the result has no data for ("" when every plot is drawn)."""
+    if _force_columns(result.columns):
+        return ""
+    return ("No forces plot: this run computes no forces. Tick 'forces' (needs [valve] mass and "
+            "[spring]) or 'elastic' (also a linkage stiffness) under Scene → Effects.")
+
+
+# ---------------------------------------------------------------------------------------------
+# Read-outs
+
+
+UNIT_SUFFIXES = (
+    ("_m_s2", "m/s²", 1.0), ("_m_s3", "m/s³", 1.0), ("_m_s", "m/s", 1.0), ("_rpm", "rpm", 1.0),
+    ("_deg", "°", 1.0), ("_mm", "mm", 1.0), ("_m", "mm", 1e3), ("_N_m", "N·m", 1.0), ("_Nm", "N·m", 1.0),
+    ("_N", "N", 1.0), ("_Pa", "MPa", 1e-6), ("_s", "ms", 1e3), ("_kg", "kg", 1.0), ("_J", "J", 1.0),
+)
+SKIP_SUMMARY = {"scene", "rpm", "steps_per_revolution", "effects", "events", "warnings", "lash_m"}
+
+
+def _fmt_value(key: str, value) -> tuple[str, str]:
+    for suffix, unit, k in UNIT_SUFFIXES:
+        if key.endswith(suffix):
+            return key[: -len(suffix)].replace("_", " "), f"{value * k:.4g} {unit}"
+    return key.replace("_", " "), f"{value:.4g}"
+
+
+def readout_markdown(result, label: str = "") -> str:
+    """Compute times, events, key figures (peaks, jump speed, impact speeds...) and warnings."""
+    s = result.summary
+    lines = [f"**{s.get('scene', '')}** at {s.get('rpm', 0):g} rpm, {s.get('steps_per_revolution', 0)} steps"]
+    if label:
+        lines.append(f"<small>{label}</small>")
+    # warnings first: undercut, self-locking, float... are what a designer must not miss
+    warnings = list(s.get("warnings", []))
+    lines += ["", f"**Warnings** ({len(warnings)})", ""]
+    lines += [f"- ⚠ {w}" for w in warnings] or ["none"]
+    lines += ["", "| effect | compute |", "|---|---:|"]
+    for name, info in s.get("effects", {}).items():
+        lines.append(f"| {name} | {1e3 * info['compute_time_s']:.2f} ms |")
+    events = list(s.get("events", []))
+    lines += ["", f"**Events** ({len(events)})", ""]
+    if events:
+        lines += ["| event | angle | speed |", "|---|---:|---:|"]
+        for e in events[:14]:
+            v = e.get("velocity_m_s", e.get("relative_velocity_m_s"))
+            speed = f"{v:+.3f} m/s" if isinstance(v, (int, float)) else ""
+            lines.append(f"| {e.get('kind', '?')} | {e.get('cam_angle_deg', float('nan')):.2f}° | {speed} |")
+        if len(events) > 14:
+            lines.append(f"| … {len(events) - 14} more | | |")
+    else:
+        lines.append("none")
+    figures = []
+    for key, value in s.items():
+        if key in SKIP_SUMMARY or isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue
+        if not math.isfinite(float(value)):
+            continue
+        figures.append(_fmt_value(key, float(value)))
+    if figures:
+        lines += ["", "**Key figures**", "", "| quantity | value |", "|---|---:|"]
+        lines += [f"| {name} | {text} |" for name, text in figures]
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------------
+# The prepared bundle
+
+
+@dataclass(frozen=True)
+class Prepared:
+    request: Request
+    scene: Any
+    result: Any
+    layout: Any
+    lift: Any  # the lift curve (reused when only the magnification changes)
+    meshes: dict  # part -> (vertices float32 (V, 3), faces uint32 (F, 3))
+    poses: dict  # part -> (positions (N, 3), wxyz (N, 4))
+    spring_lengths: np.ndarray  # (N,)
+    plots: list
+    readout: str
+    label: str
+    values: dict  # scene_values(scene): what the GUI fields show
+    new_result: bool  # False when only the magnification changed since the worker's previous bundle
+    seconds: float = 0.0  # wall time of the preparation
+    plot_note: str = ""  # why a plot is missing (plots_note)
+
+    @functools.cached_property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World box (lo, hi) of every part over the whole revolution, where the camera looks
+        (explorer.view.parts.motion_bounds; tens of milliseconds, so computed once, when asked)."""
+        from .. import parts as meshes
+
+        return meshes.motion_bounds(self.meshes, self.poses)
+
+
+def _request_label(request: Request) -> str:
+    name = Path(request.path).name
+    return name + ("".join(f"  {o}" for o in request.overrides) if request.overrides else "")
+
+
+def _same_cam(a, b) -> bool:
+    """True when two scenes have the same cam: lift spec, cam section and follower geometry.
+    Sections may hold arrays (point contours) whose == is ambiguous: then they count as different."""
+    try:
+        return bool(a.lift == b.lift and a.cam == b.cam and a.follower == b.follower and a.directory == b.directory)
+    except (ValueError, TypeError):
+        return False
+
+
+def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
+    """Load, simulate and build everything the viewer needs. Raises InputError on bad input.
+    Reuses the previous simulation when only the magnification changed."""
+    from .. import parts as meshes
+    from ...effects.pipeline import simulate
+    from ...gears import GEAR_TYPES
+    from ...effects.lift import build_lift
+    from ...scene.scene import load_scene
+
+    started = time.perf_counter()
+    same = previous is not None and (previous.request.path, previous.request.overrides) == (request.path, request.overrides)
+    if same:
+        scene, result, lay, parts = previous.scene, previous.result, previous.layout, previous.meshes
+        plots, readout, values = previous.plots, previous.readout, previous.values
+        plot_note = previous.plot_note
+        lift = previous.lift
+    else:
+        scene = load_scene(request.path, list(request.overrides))
+        lift = build_lift(scene)
+        result = simulate(scene, lift=lift)
+        lay = meshes.layout(scene, result)
+        # only the cam depends on more than the layout: keep the other meshes when it is unchanged,
+        # and the cam too when its lift and geometry are (an edit of speed, lash, springs...).
+        # Another kind of gear has other parts; the seeds' other gears (explorer.gears) draw
+        # levers and links from their own geometry, so they keep parts only with the same cam.
+        keep = previous is not None and previous.scene.follower.type == scene.follower.type \
+            and previous.layout == lay
+        keep_cam = keep and _same_cam(previous.scene, scene)
+        if keep and not keep_cam and scene.follower.type in GEAR_TYPES:
+            keep = False
+        built = meshes.build_parts(scene, result, lay=lay, lift=lift, only=() if keep_cam else ("cam",) if keep else None)
+        parts = dict(previous.meshes) if keep else {}
+        parts.update({
+            name: (np.ascontiguousarray(m.vertices, dtype=np.float32), np.ascontiguousarray(m.faces, dtype=np.uint32))
+            for name, m in built.items() if name != "spring"
+        })
+        if "spring" in built:
+            parts["spring"] = (
+                meshes.spring_vertices(lay, lay.spring_rest_length, **SPRING_RESOLUTION).astype(np.float32),
+                meshes.spring_faces(lay, **SPRING_RESOLUTION).astype(np.uint32),
+            )
+        plots = build_plots(result)
+        plot_note = plots_note(result)
+        readout = readout_markdown(result, _request_label(request))
+        values = scene_values(scene)
+    poses = meshes.part_poses(scene, result, magnification=request.magnification, lay=lay, lift=lift)
+    lengths = meshes.spring_length(lay, meshes.displayed_valve_lift(result, request.magnification))
+    prepared = Prepared(
+        request=request, scene=scene, result=result, layout=lay, lift=lift, meshes=parts, poses=poses,
+        spring_lengths=np.asarray(lengths, dtype=float), plots=plots, readout=readout,
+        label=_request_label(request), values=values, new_result=not same, seconds=time.perf_counter() - started,
+        plot_note=plot_note,
+    )
+    if previous is None or Path(previous.request.path) != Path(request.path):
+        prepared.bounds  # another scene file: the viewer aims its camera at it, here off the GUI's loop
+    return prepared
+
+
+# ---------------------------------------------------------------------------------------------
+# Worker
+
+
+# Every recomputation has a budget: it runs in a child process (explorer.view.browser.worker) that is
+# killed when it takes longer than this, or needs more memory than MEMORY_LIMIT_BYTES. Seconds
+# rather than minutes: the explorer is for trying changes, and the slowest built-in scene takes
+# about 1 s on a loaded 2-core machine.
+COMPUTE_TIME_LIMIT_S = 10.0
+# A computation running longer than this is abandoned as soon as a newer request waits (newest
+# wins): starting a fresh child costs about half a second, less than waiting out a slow one.
+SUPERSEDE_AFTER_S = 1.0
+MEMORY_LIMIT_BYTES = 4 << 30  # address space of the child (its libraries alone reserve ~1.5 GB)
+
+
+def time_limit_message(seconds: float, previous: bool) -> str:
+    shown = "the previous result is shown" if previous else "nothing to show yet"
+    return f"computation took longer than {seconds:g} s and was stopped; {shown}"
+
+
+def memory_limit_message(limit_bytes: int, previous: bool) -> str:
+    shown = "the previous result is shown" if previous else "nothing to show yet"
+    return f"computation needed more than {limit_bytes / 2**30:g} GB of memory and was stopped; {shown}"
+
+
+@dataclass
+class ComputeWorker:
+    """One background thread; `submit` replaces any request not yet started (newest wins, no
+    queue). Results go to `on_ready(prepared)`, bad input to `on_error(request, message)`.
+
+    The thread hands each request to a child process and waits at most `time_limit` seconds for
+    it (None: no limit); past that the child is killed, `on_error` gets the time-limit message,
+    and the next request starts a fresh child. A computation past SUPERSEDE_AFTER_S is killed
+    as soon as a newer request waits."""
+
+    on_ready: Callable[[Prepared], None]
+    on_error: Callable[[Request, str], None]
+    on_result: Callable[[Prepared], None] | None = None  # e.g. the rerun live stream
+    time_limit: float | None = COMPUTE_TIME_LIMIT_S
+    memory_limit: int = MEMORY_LIMIT_BYTES
+    _pending: Request | None = None
+    _busy: bool = False
+    _stop: bool = False
+    _last: Prepared | None = None
+    _cond: threading.Condition = field(default_factory=threading.Condition)
+    _thread: threading.Thread | None = None
+    _process: Any = None  # worker.ComputeProcess
+    computed: int = 0  # how many requests were actually computed (for tests and benchmarks)
+    submitted: int = 0
+    internal_errors: int = 0  # exceptions other than InputError (should stay 0)
+    abandoned: int = 0  # computations stopped at the time or memory limit
+    superseded: int = 0  # slow computations stopped for a newer request
+
+    def start(self) -> "ComputeWorker":
+        from .worker import ComputeProcess
+
+        self._process = ComputeProcess(memory_bytes=self.memory_limit)
+        self._thread = threading.Thread(target=self._run, name="explorer-compute", daemon=True)
+        self._thread.start()
+        return self
+
+    @property
+    def process_id(self) -> int | None:
+        """The computing child's pid (None while there is none): tests check it is gone."""
+        return None if self._process is None else self._process.pid
+
+    def submit(self, request: Request) -> None:
+        with self._cond:
+            self._pending = request
+            self.submitted += 1
+            self._cond.notify_all()
+
+    def waiting(self) -> bool:
+        """Whether a request waits that the thread has not taken yet."""
+        with self._cond:
+            return self._pending is not None
+
+    def idle(self) -> bool:
+        with self._cond:
+            return self._pending is None and not self._busy
+
+    def wait_idle(self, timeout: float = 30.0) -> bool:
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while self._pending is not None or self._busy:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                self._cond.wait(left)
+        return True
+
+    def stop(self) -> None:
+        with self._cond:
+            self._stop = True
+            self._cond.notify_all()
+        if self._process is not None:
+            self._process.shutdown()  # a computation in progress ends now, not at its limit
+        if self._thread is not None:
+            self._thread.join(timeout=10.0)
+        if self._process is not None:
+            self._process.reap()
+
+    def _run(self) -> None:
+        # the child is started, called and reaped from this thread only: its death signal
+        # (PR_SET_PDEATHSIG) fires when the thread that started it ends
+        try:
+            while True:
+                with self._cond:
+                    while self._pending is None and not self._stop:
+                        self._cond.wait()
+                    if self._stop:
+                        return
+                    request, self._pending = self._pending, None
+                    self._busy = True
+                try:
+                    self._compute(request)
+                finally:
+                    with self._cond:
+                        self._busy = False
+                        self._cond.notify_all()
+        finally:
+            self._process.reap()
+
+    def _compute(self, request: Request) -> None:
+        from .worker import Superseded, TimeLimitExceeded, WorkerDied
+
+        started = time.monotonic()
+
+        def superseded() -> bool:
+            # read without the lock: a stale answer only delays the check by one poll
+            return self._stop or (self._pending is not None and time.monotonic() - started > SUPERSEDE_AFTER_S)
+
+        try:
+            kind, payload = self._process.call(request, self.time_limit, superseded)
+        except Superseded:
+            if not self._stop:
+                self.superseded += 1  # the newer request is next; no message for this one
+            return
+        except TimeLimitExceeded:
+            self.abandoned += 1
+            self.on_error(request, time_limit_message(self.time_limit, self._last is not None))
+            return
+        except WorkerDied as exc:
+            if not self._stop:
+                self.internal_errors += 1
+                self.on_error(request, f"internal error: {exc}")
+            return
+        except Exception as exc:  # a bug must not end this thread: show it, start a fresh child
+            self.internal_errors += 1
+            traceback.print_exc()
+            self._process.kill()
+            self._process.reap()  # the child's previous result is no longer the one held here
+            self.on_error(request, f"internal error: {type(exc).__name__}: {exc}")
+            return
+        if kind == "input":
+            self.on_error(request, payload)
+        elif kind == "memory":
+            self.abandoned += 1
+            self.on_error(request, memory_limit_message(self.memory_limit, self._last is not None))
+        elif kind == "internal":
+            self.internal_errors += 1
+            self.on_error(request, payload)
+        else:
+            prepared = self._relink(*payload)
+            self._last = prepared
+            self.computed += 1
+            self.on_ready(prepared)
+            if self.on_result is not None and prepared.new_result:
+                try:
+                    self.on_result(prepared)
+                except Exception:
+                    traceback.print_exc()
+
+    def _relink(self, prepared: Prepared, reused: int | None) -> Prepared:
+        """A bundle that reused the previous simulation (only the magnification changed) shares
+        the previous bundle's objects again, as it did in the child: the viewer tells what to
+        redraw by identity, and a pickled copy would redraw the plots and every mesh. `reused`
+        is the serial of the bundle the child reused; only that one may be linked to."""
+        last = self._last
+        if reused is None or last is None or last.request.serial != reused:
+            return prepared
+        import dataclasses
+
+        return dataclasses.replace(
+            prepared, scene=last.scene, result=last.result, layout=last.layout, lift=last.lift,
+            meshes=last.meshes, plots=last.plots, readout=last.readout, values=last.values,
+            plot_note=last.plot_note,
+        )
+
+
+# ---------------------------------------------------------------------------------------------
+# Playback clock
+
+
+SPEEDS: tuple[tuple[str, float], ...] = (
+    ("real time", 1.0), ("1/2", 0.5), ("1/5", 0.2), ("1/10", 0.1), ("1/20", 0.05), ("1/50", 0.02),
+    ("1/100", 0.01), ("1/200", 0.005), ("1/500", 0.002), ("1/1000", 0.001), ("1/2000", 5e-4),
+    ("1/5000", 2e-4), ("1/10000", 1e-4),
+)
+
+
+def default_speed(revolution_time: float, target_seconds: float = 4.0) -> str:
+    """The listed speed whose slowed revolution lasts closest to `target_seconds` (log scale)."""
+    return min(SPEEDS, key=lambda kv: abs(math.log(revolution_time / kv[1] / target_seconds)))[0]
+
+
+@dataclass
+class Playback:
+    angle_deg: float = 0.0
+    playing: bool = True
+    speed: float = 0.01
+
+    def advance(self, dt: float, revolution_time: float) -> float:
+        if self.playing and revolution_time > 0.0:
+            self.angle_deg = (self.angle_deg + 360.0 * dt * self.speed / revolution_time) % 360.0
+        return self.angle_deg
+
+
+def step_index(angle_deg: float, n: int) -> int:
+    """Step of a revolution sampled at theta_i = 360 i / n that is nearest to `angle_deg`."""
+    return int(round((angle_deg % 360.0) * n / 360.0)) % n

@@ -1,0 +1,903 @@
+"""3D parts of a valve gear (trimesh, z up, metres, real dimensions) and their pose per step.
+
+Shared by the browser explorer (viser) and the rerun recordings, so both show the same machine.
+
+The gear is laid out like a push-rod gear of Schenker's time, in the x-z plane:
+
+    camshaft along y at the origin; the cam turns counter-clockwise in the x-z plane
+    (cam frame (x, y) of explorer.lift.contours.translating -> world (x, z));
+    roller follower on the vertical axis x = offset, pushed up by the cam;
+    a lever (rocker) about a fixed pivot: the follower lifts its left end at arm a, the right
+    end (arm b = ratio * a) pushes the valve down through an adjusting screw with a ball end;
+    the lash is the gap between that ball and the valve stem (the screw is set `lash` above the
+    lever's line, so the valve and its seat stay where they are whatever the lash);
+    the valve opens downwards, away from its seat, against a helical spring between a fixed
+    spring seat and the retainer on the stem.
+
+The lever angle is phi = asin(L / a), so the follower end rises by exactly L and the valve end
+drops by exactly b sin(phi) = ratio * L: the lever reproduces the scene's constant ratio.
+
+Every part's mesh is in its own local frame; `part_poses` gives one (position, wxyz) per step of
+a Result. The spring changes shape: `spring_vertices` gives its vertices at any length
+(fixed faces `spring_faces`), `spring_mesh` a whole mesh, `spring_axial_scale` a cheap
+per-step z-scale of the rest mesh for viewers that can only scale.
+
+Magnification m (for the lash and sub-millimetre dynamics): the displayed valve lift is
+s' = max(0, s_rigid + m (s - s_rigid)) and the displayed gap between screw ball and stem is
+m times the true gap; cam, roller, follower and lever keep their true positions, and the
+adjusting screw slides in the lever to show the magnified gap. With m = 1 every contact is exact.
+"""
+
+from __future__ import annotations
+
+import math
+import importlib
+from dataclasses import dataclass
+
+import numpy as np
+import trimesh
+
+from ..gears import GEAR_PART_COLORS
+from ..gears.registry import meshes_module
+
+# Display colours (RGB 0-255), shared by the viewers so parts look the same everywhere.
+PART_COLORS: dict[str, tuple[int, int, int]] = {
+    "cam": (214, 126, 44),
+    "camshaft": (120, 124, 132),
+    "roller": (60, 130, 200),
+    "follower": (150, 160, 175),
+    "follower_guide": (95, 100, 110),
+    "lever": (90, 170, 110),
+    "lever_pivot": (95, 100, 110),
+    "adjuster": (230, 200, 60),
+    "valve": (200, 70, 70),
+    "spring": (170, 120, 210),
+    "seat": (110, 112, 120),
+}
+# Parts that never move (their pose is the same at every step).
+STATIC_PARTS = ("follower_guide", "lever_pivot", "seat")
+
+
+# The seeds' other gears (pivoted lever, rocking cam, rolling lever, trip gear) bring their own
+# parts: explorer.view.gear_parts builds them; layout, build_parts and part_poses dispatch to it.
+# Their colours are looked up on demand, so this table still lists exactly the stock parts.
+class _PartColors(dict):
+    def __missing__(self, name):
+        return GEAR_PART_COLORS[name]
+
+
+PART_COLORS = _PartColors(PART_COLORS)
+
+# The drawn rollers (this module's and explorer.view.gear_parts') have four bores, a quarter turn
+# apart: they look the same after a quarter turn.
+ROLLER_MARKS = 4
+
+SPRING_ACTIVE_COILS = 6
+SPRING_DEAD_COILS = 1.0  # closed, touching coil at each end
+SPRING_SEGMENTS_PER_TURN = 36
+SPRING_WIRE_SEGMENTS = 12  # a multiple of 4: the wire's top and bottom are vertices
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Every dimension of the displayed gear, in metres (world frame, z up)."""
+
+    base_radius: float
+    roller_radius: float
+    offset: float
+    prime_y: float  # roller-centre height at zero lift, sqrt((Rb + rr)^2 - e^2)
+    ratio: float
+    max_follower_lift: float
+    valve_travel: float  # ratio * max follower lift: the valve's travel without lash, for sizing
+    cam_width: float
+    roller_width: float
+    roller_draw_radius: float  # drawn radius (a knife edge, rr = 0, gets a small tip)
+    shaft_radius: float
+    rod_radius: float
+    arm_follower: float  # a
+    arm_valve: float  # b = ratio * a
+    lever_half_thickness: float
+    pivot: tuple[float, float, float]
+    ball_radius: float  # adjusting-screw ball
+    valve_x: float
+    stem_top_rest: float  # z of the stem top with the valve closed
+    stem_radius: float
+    valve_radius: float
+    seat_z: float  # z of the seat contact (top face of the closed valve head)
+    retainer_drop: float  # stem top to retainer underside (spring top)
+    retainer_thickness: float
+    spring_seat_z: float  # z of the fixed spring seat (spring bottom)
+    spring_rest_length: float  # spring length with the valve closed
+    spring_mean_radius: float
+    spring_wire_radius: float
+
+    @property
+    def spring_solid_length(self) -> float:
+        return 2.0 * self.spring_wire_radius * (SPRING_ACTIVE_COILS + 2.0 * SPRING_DEAD_COILS + 1.0)
+
+
+def _max_follower_lift(scene, result=None) -> float:
+    if result is not None and "follower_lift_m" in result.columns:
+        return max(float(np.max(result.columns["follower_lift_m"])), 0.0)
+    from ..effects.lift import build_lift
+
+    return max(float(np.max(build_lift(scene).derivatives(np.linspace(0.0, 2.0 * math.pi, 3600, endpoint=False))[0])), 0.0)
+
+
+def layout(scene, result=None) -> Layout:
+    """Dimensions derived from the cam geometry (base circle, roller, offset, ratio, lift).
+
+    Parts the scene does not dimension (lever, valve, spring) are proportioned from the cam and
+    the lift so that the gear looks plausible at any scale: lever arms long enough for small
+    angles, valve diameter about three times its lift, a spring that never goes solid. Speed,
+    lash, masses and springs do not enter, so editing them never moves the seat or the frame;
+    the lash is taken up by the adjusting screw, which stands `lash` above the lever's line."""
+    gear_meshes = meshes_module(scene.follower.type)  # a gear lays out its own parts
+    if gear_meshes is not None:
+        return gear_meshes.gear_layout(scene, result)
+    f = scene.follower
+    rb, rr, e, ratio = f.base_radius, f.roller_radius, f.offset, f.ratio
+    h = _max_follower_lift(scene, result)
+    s = ratio * h
+    prime_y = math.sqrt((rb + rr) ** 2 - e * e)
+    size = rb + rr  # the scale of the drawing
+    cam_width = 0.45 * size
+    roller_draw = rr if rr > 0.0 else 0.06 * rb
+    arm_a = max(1.4 * (rb + rr + h), 3.2 * h, 1e-3)
+    arm_b = ratio * arm_a
+    lever_half = 0.12 * size
+    ball = 1.6 * lever_half
+    # lever high enough for the follower guide between roller and lever
+    pivot_z = prime_y + roller_draw + h + 0.9 * size
+    valve_x = e + arm_a + arm_b
+    valve_radius = min(max(1.6 * s, 0.45 * size), 0.9 * size)
+    stem_radius = max(0.16 * valve_radius, 0.03 * size)
+    stem_top_rest = pivot_z - ball
+    spring_mean = 0.72 * valve_radius
+    wire = 0.1 * spring_mean
+    solid = 2.0 * wire * (SPRING_ACTIVE_COILS + 2.0 * SPRING_DEAD_COILS + 1.0)
+    # a spring that stays at least 25 % above solid at full lift (more if the motion overshoots)
+    spring_rest = 1.25 * solid + 1.5 * s + 0.5 * stem_radius
+    retainer_drop = 2.5 * stem_radius
+    retainer_thickness = 0.6 * stem_radius + wire
+    spring_seat_z = stem_top_rest - retainer_drop - retainer_thickness - spring_rest
+    seat_z = spring_seat_z - 0.9 * valve_radius
+    return Layout(
+        base_radius=rb, roller_radius=rr, offset=e, prime_y=prime_y, ratio=ratio,
+        max_follower_lift=h, valve_travel=s, cam_width=cam_width, roller_width=0.8 * cam_width,
+        roller_draw_radius=roller_draw, shaft_radius=0.32 * rb, rod_radius=max(0.35 * roller_draw, 0.08 * size),
+        arm_follower=arm_a, arm_valve=arm_b, lever_half_thickness=lever_half, pivot=(e + arm_a, 0.0, pivot_z),
+        ball_radius=ball, valve_x=valve_x, stem_top_rest=stem_top_rest, stem_radius=stem_radius,
+        valve_radius=valve_radius, seat_z=seat_z, retainer_drop=retainer_drop,
+        retainer_thickness=retainer_thickness, spring_seat_z=spring_seat_z, spring_rest_length=spring_rest,
+        spring_mean_radius=spring_mean, spring_wire_radius=wire,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Cam contour and the cam disc
+
+
+# "module:function" of the geometry package's exact contour of a scene with a [cam] section
+# (contour/arc cams): (scene, lift, n) -> (N, 2) array or an object with .contour. Imported
+# when used; the first entry serves.
+CONTOUR_FUNCTIONS: tuple[str, ...] = ("explorer.effects.contour:cam_contour",)
+
+
+def _external_contour(scene, lift, n: int):
+    """The geometry package's exact contour for contour/arc cams (CONTOUR_FUNCTIONS)."""
+    if getattr(scene, "cam", None) is None:
+        return None
+    for target in CONTOUR_FUNCTIONS:
+        module, _, attr = target.partition(":")
+        out = getattr(importlib.import_module(module), attr)(scene, lift, n)
+        out = getattr(out, "contour", out)
+        return np.asarray(out, dtype=float)
+    return None
+
+
+def cam_contour(scene, lift=None, n: int = 720) -> np.ndarray:
+    """Cam surface (N, 2) in the cam frame, counter-clockwise, metres.
+
+    For law cams the exact envelope of the roller (explorer.lift.contours.translating); for contour
+    and arc cams the geometry package's own contour when it provides `cam_contour`, else the
+    envelope of the roller over the lift derived from that contour (the same surface wherever
+    the roller touches it). Samples include the lift curve's breakpoints, so corners between
+    arcs and the ends of dwells are exact vertices."""
+    from ..lift.contours.translating import translating_profile
+    from ..effects.lift import build_lift
+
+    lift = lift if lift is not None else build_lift(scene)
+    xy = _external_contour(scene, lift, n)
+    if xy is None:
+        theta = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+        theta = np.unique(np.concatenate([theta, np.mod(np.asarray(lift.breakpoints(), dtype=float), 2.0 * math.pi)]))
+        f = scene.follower
+        xy = translating_profile(lift, theta, f.base_radius, f.roller_radius, f.offset).contour
+    xy = _drop_duplicates(xy)
+    if _signed_area(xy) < 0.0:
+        xy = xy[::-1]
+    return xy
+
+
+def _drop_duplicates(xy: np.ndarray) -> np.ndarray:
+    step = np.linalg.norm(np.diff(xy, axis=0, append=xy[:1]), axis=1)
+    keep = step > 1e-12 * max(1.0, float(np.abs(xy).max()))
+    return xy[keep]
+
+
+def _signed_area(xy: np.ndarray) -> float:
+    x, y = xy[:, 0], xy[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def _is_star_shaped(xy: np.ndarray) -> bool:
+    """True when the polar angle about the origin strictly increases around the contour, so a
+    triangle fan from the shaft centre covers the disc without overlap."""
+    angle = np.unwrap(np.arctan2(xy[:, 1], xy[:, 0]))
+    step = np.diff(np.append(angle, angle[0] + 2.0 * math.pi))
+    return bool(np.all(step > 0.0)) and abs(angle[-1] - angle[0]) < 2.0 * math.pi
+
+
+def _ear_clip(xy: np.ndarray) -> np.ndarray:
+    """Triangulate a simple counter-clockwise polygon (fallback for cams not star-shaped about
+    their centre; O(n^2), used only for unusual contours)."""
+    idx = list(range(len(xy)))
+    tris = []
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    guard = 0
+    while len(idx) > 3 and guard < 10 * len(xy) ** 2:
+        guard += 1
+        clipped = False
+        for k in range(len(idx)):
+            i0, i1, i2 = idx[k - 1], idx[k], idx[(k + 1) % len(idx)]
+            a, b, c = xy[i0], xy[i1], xy[i2]
+            if cross(a, b, c) <= 0.0:
+                continue
+            inside = False
+            for j in idx:
+                if j in (i0, i1, i2):
+                    continue
+                p = xy[j]
+                if cross(a, b, p) >= 0 and cross(b, c, p) >= 0 and cross(c, a, p) >= 0:
+                    inside = True
+                    break
+            if not inside:
+                tris.append((i0, i1, i2))
+                del idx[k]
+                clipped = True
+                break
+        if not clipped:
+            break
+    if len(idx) == 3:
+        tris.append(tuple(idx))
+    return np.asarray(tris, dtype=np.int64)
+
+
+def extrude_contour(xy: np.ndarray, width: float) -> trimesh.Trimesh:
+    """Prism of a counter-clockwise contour (cam frame x, y -> world x, z) over y in
+    [-width/2, width/2]. Caps and side have their own vertices, so the edges shade sharp."""
+    n = len(xy)
+    x, z = xy[:, 0], xy[:, 1]
+    half = 0.5 * width
+    front = np.column_stack([x, np.full(n, -half), z])  # y = -w/2
+    back = np.column_stack([x, np.full(n, half), z])
+    i = np.arange(n)
+    j = (i + 1) % n
+    if _is_star_shaped(xy):
+        cap = np.column_stack([np.full(n, n), i, j])  # fan from the centre vertex
+        cap_vertices = np.vstack([xy, [[0.0, 0.0]]])
+    else:
+        cap = _ear_clip(xy)
+        cap_vertices = xy
+    m = len(cap_vertices)
+    cap_front = np.column_stack([cap_vertices[:, 0], np.full(m, -half), cap_vertices[:, 1]])
+    cap_back = np.column_stack([cap_vertices[:, 0], np.full(m, half), cap_vertices[:, 1]])
+    # A counter-clockwise polygon in the (x, z) plane has its right-hand normal along -y, so the
+    # front cap (y = -w/2) keeps the winding and the back cap reverses it.
+    vertices = np.vstack([cap_front, cap_back, front, back])
+    faces_front = cap
+    faces_back = cap[:, ::-1] + m
+    o = 2 * m
+    # outward side normal for a counter-clockwise contour is (dz, -dx) in (x, z): with t the
+    # contour step, (back - front) x t = w e_y x t points that way
+    side = np.vstack([np.column_stack([o + i, o + n + j, o + j]), np.column_stack([o + i, o + n + i, o + n + j])])
+    mesh = trimesh.Trimesh(vertices, np.vstack([faces_front, faces_back, side]), process=False)
+    if mesh.volume < 0.0:
+        mesh.invert()
+    return mesh
+
+
+# ---------------------------------------------------------------------------------------------
+# Simple solids
+
+
+def _cylinder_y(radius: float, length: float, sections: int = 48, center=(0.0, 0.0, 0.0)) -> trimesh.Trimesh:
+    m = trimesh.creation.cylinder(radius=radius, height=length, sections=sections)
+    m.apply_transform(trimesh.transformations.rotation_matrix(math.pi / 2.0, [1.0, 0.0, 0.0]))
+    m.apply_translation(center)
+    return m
+
+
+def _cylinder_z(radius: float, z0: float, z1: float, sections: int = 40, x: float = 0.0) -> trimesh.Trimesh:
+    m = trimesh.creation.cylinder(radius=radius, height=abs(z1 - z0), sections=sections)
+    m.apply_translation([x, 0.0, 0.5 * (z0 + z1)])
+    return m
+
+
+def _tube_z(r_in: float, r_out: float, z0: float, z1: float, sections: int = 40, x: float = 0.0) -> trimesh.Trimesh:
+    m = trimesh.creation.annulus(r_min=r_in, r_max=r_out, height=abs(z1 - z0), sections=sections)
+    m.apply_translation([x, 0.0, 0.5 * (z0 + z1)])
+    return m
+
+
+def _box(extents, center) -> trimesh.Trimesh:
+    m = trimesh.creation.box(extents=extents)
+    m.apply_translation(center)
+    return m
+
+
+def _concat(meshes) -> trimesh.Trimesh:
+    return trimesh.util.concatenate([m for m in meshes if m is not None])
+
+
+def _stadium_bar(x0: float, x1: float, half: float, width: float, sections: int = 24) -> trimesh.Trimesh:
+    """A flat bar along x with semicircular ends of radius `half` centred at x0 and x1 (in x-z),
+    extruded over y; its round ends are the lever's contact pads."""
+    top = np.linspace(-0.5 * math.pi, 0.5 * math.pi, sections)
+    right = np.column_stack([x1 + half * np.cos(top), half * np.sin(top)])
+    left = np.column_stack([x0 - half * np.cos(top), -half * np.sin(top)])
+    return extrude_contour(np.vstack([right, left]), width)
+
+
+# ---------------------------------------------------------------------------------------------
+# Parts
+
+
+def _valve_mesh(lay: Layout) -> trimesh.Trimesh:
+    """Stem, retainer and head as one solid of revolution; local origin at the stem top."""
+    rs, rv = lay.stem_radius, lay.valve_radius
+    ret_top = -lay.retainer_drop
+    ret_bot = ret_top - lay.retainer_thickness
+    ret_r = lay.spring_mean_radius + 1.6 * lay.spring_wire_radius
+    head_top = lay.seat_z - lay.stem_top_rest  # seat contact, relative to the stem top
+    head_face = 0.25 * rv  # height of the 45-degree seat face
+    neck = 0.55 * rv
+    head_thick = 0.12 * rv
+    profile = np.array([
+        [0.0, 0.0],
+        [rs, 0.0],
+        [rs, ret_top],
+        [ret_r, ret_top],
+        [ret_r, ret_bot],
+        [rs, ret_bot],
+        [rs, head_top + neck],
+        [1.6 * rs, head_top + 0.35 * neck],
+        [rv - head_face, head_top],
+        [rv, head_top - head_face],
+        [rv, head_top - head_face - head_thick],
+        [0.0, head_top - head_face - head_thick],
+    ])
+    return trimesh.creation.revolve(profile[::-1], sections=48)
+
+
+def _seat_mesh(lay: Layout) -> trimesh.Trimesh:
+    """Fixed parts around the valve: seat ring, valve guide, spring seat and two ribs between."""
+    x, rv, rs = lay.valve_x, lay.valve_radius, lay.stem_radius
+    face = 0.25 * rv
+    # the ring's inner lower edge lies on the valve's 45-degree face: line contact when closed
+    ring = _tube_z(rv - 0.5 * face, 1.3 * rv, lay.seat_z - 0.5 * face, lay.seat_z + 0.35 * rv, 64, x)
+    guide_bottom = lay.seat_z + 0.35 * rv + 0.55 * rv
+    guide = _tube_z(1.15 * rs, 2.0 * rs, guide_bottom, lay.spring_seat_z, 32, x)
+    washer = _tube_z(1.15 * rs, lay.spring_mean_radius + 1.8 * lay.spring_wire_radius,
+                     lay.spring_seat_z - 0.5 * rs, lay.spring_seat_z, 48, x)
+    ribs = []
+    rib_h = guide_bottom + 0.4 * rv - (lay.seat_z + 0.35 * rv)
+    for ang in (0.5 * math.pi, 1.5 * math.pi):  # two ribs along y: seen edge-on from the front
+        r_mid = 0.5 * (2.0 * rs + 1.3 * rv)
+        rib = _box([1.3 * rv - 2.0 * rs, 0.15 * rs, rib_h], [0.0, 0.0, 0.0])
+        rib.apply_transform(trimesh.transformations.rotation_matrix(ang, [0.0, 0.0, 1.0]))
+        rib.apply_translation([x + r_mid * math.cos(ang), r_mid * math.sin(ang), lay.seat_z + 0.35 * rv + 0.5 * rib_h])
+        ribs.append(rib)
+    return _concat([ring, guide, washer, *ribs])
+
+
+def _roller_mesh(lay: Layout) -> trimesh.Trimesh:
+    """Roller about the y axis with four bores, so that its spin is visible; local origin at its centre."""
+    r, w = lay.roller_draw_radius, lay.roller_width
+    if lay.roller_radius <= 0.0:
+        return trimesh.creation.icosphere(subdivisions=2, radius=r)
+    rim = _cylinder_y(r, w, 64)
+    hub = _cylinder_y(0.28 * r, 1.15 * w, 24)
+    marks = [
+        _cylinder_y(0.12 * r, 1.04 * w, 12, (0.62 * r * math.cos(a), 0.0, 0.62 * r * math.sin(a)))
+        for a in (2.0 * math.pi / ROLLER_MARKS) * np.arange(ROLLER_MARKS)
+    ]
+    return _concat([rim, hub, *marks])
+
+
+def _follower_mesh(lay: Layout) -> trimesh.Trimesh:
+    """Fork around the roller and the rod up to the lever; local origin at the roller centre."""
+    r, w = lay.roller_draw_radius, lay.roller_width
+    rod_top = lay.pivot[2] - lay.lever_half_thickness - lay.prime_y  # rod top at zero lift
+    plate_t = 0.12 * w
+    plate_h = 1.6 * r
+    plates = [
+        _box([1.3 * r, plate_t, plate_h], [0.0, sgn * (0.5 * w + 0.6 * plate_t + 0.02 * w), 0.35 * plate_h])
+        for sgn in (-1.0, 1.0)
+    ]
+    bridge = _box([1.3 * r, w + 2.6 * plate_t, plate_t * 1.5], [0.0, 0.0, 0.35 * plate_h + 0.5 * plate_h])
+    rod = _cylinder_z(lay.rod_radius, 0.35 * plate_h + 0.5 * plate_h, rod_top, 32)
+    pin = _cylinder_y(0.22 * r, w + 3.0 * plate_t, 16)
+    return _concat([*plates, bridge, rod, pin])
+
+
+def _follower_guide_mesh(lay: Layout) -> trimesh.Trimesh:
+    r = lay.roller_draw_radius
+    z_low = lay.prime_y + lay.max_follower_lift + 1.9 * r + 0.05 * lay.base_radius
+    z_high = lay.pivot[2] - lay.lever_half_thickness - 0.25 * (lay.base_radius + lay.roller_radius)
+    z_high = max(z_high, z_low + 0.1 * lay.base_radius)
+    return _tube_z(1.15 * lay.rod_radius, 1.9 * lay.rod_radius, z_low, z_high, 32, lay.offset)
+
+
+def _lever_mesh(lay: Layout) -> trimesh.Trimesh:
+    """Lever in its own frame: pivot at the origin, follower pad at x = -a, valve end at x = +b."""
+    half, w = lay.lever_half_thickness, 0.7 * lay.cam_width
+    bar = _stadium_bar(-lay.arm_follower, lay.arm_valve, half, w)
+    boss = _cylinder_y(1.5 * half, 1.2 * w, 32)
+    end_boss = _cylinder_z(1.25 * lay.ball_radius * 0.6, -half, 1.4 * half, 24, lay.arm_valve)
+    return _concat([bar, boss, end_boss])
+
+
+def _adjuster_mesh(lay: Layout) -> trimesh.Trimesh:
+    """Adjusting screw with a ball end; local origin at the ball centre."""
+    rb = lay.ball_radius
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=rb)
+    stud = _cylinder_z(0.45 * rb, 0.0, 2.6 * rb, 20)
+    nut = _cylinder_z(0.8 * rb, 1.7 * rb, 2.3 * rb, 6)
+    return _concat([ball, stud, nut])
+
+
+def _pivot_mesh(lay: Layout) -> trimesh.Trimesh:
+    half = lay.lever_half_thickness
+    w = 0.7 * lay.cam_width
+    px, _, pz = lay.pivot
+    shaft = _cylinder_y(0.7 * half, 2.2 * w, 24, (px, 0.0, pz))
+    posts = [_box([1.6 * half, 0.25 * w, 1.2 * half], [px, sgn * 0.95 * w, pz]) for sgn in (-1.0, 1.0)]
+    return _concat([shaft, *posts])
+
+
+def _camshaft_mesh(lay: Layout) -> trimesh.Trimesh:
+    shaft = _cylinder_y(lay.shaft_radius, 3.2 * lay.cam_width, 40)
+    key = _box([0.5 * lay.shaft_radius, 3.2 * lay.cam_width, 0.4 * lay.shaft_radius],
+               [0.0, 0.0, lay.shaft_radius])  # key: makes the shaft's turning visible
+    return _concat([shaft, key])
+
+
+# ---------------------------------------------------------------------------------------------
+# Spring
+
+
+def spring_faces(lay: Layout | None = None, segments_per_turn: int = SPRING_SEGMENTS_PER_TURN,
+                 wire_segments: int = SPRING_WIRE_SEGMENTS) -> np.ndarray:
+    """Faces of the spring tube (same for every length; pass the resolution used for the vertices)."""
+    turns = SPRING_ACTIVE_COILS + 2.0 * SPRING_DEAD_COILS
+    n_path = int(round(turns * segments_per_turn)) + 1
+    k = wire_segments
+    i = np.arange(n_path - 1)[:, None] * k
+    j = np.arange(k)[None, :]
+    a = i + j
+    b = i + (j + 1) % k
+    c = a + k
+    d = b + k
+    tube = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
+    # end caps: fans to the two centre vertices appended after the tube rings
+    n_ring = n_path * k
+    first = np.column_stack([np.full(k, n_ring), (np.arange(k) + 1) % k, np.arange(k)])
+    last0 = (n_path - 1) * k
+    last = np.column_stack([np.full(k, n_ring + 1), last0 + np.arange(k), last0 + (np.arange(k) + 1) % k])
+    return np.concatenate([tube, first, last]).astype(np.int64)
+
+
+def spring_vertices(lay: Layout, length, segments_per_turn: int = SPRING_SEGMENTS_PER_TURN,
+                    wire_segments: int = SPRING_WIRE_SEGMENTS) -> np.ndarray:
+    """Vertices of the spring at `length` (scalar -> (V, 3); array (N,) -> (N, V, 3)), local frame
+    with the spring's bottom at z = 0 on the z axis.
+
+    The resolution (segments per turn, polygon of the wire) is a choice: a viewer that resends
+    the spring every frame uses a coarser one. Closed ends: one dead coil at each end with pitch = wire diameter (touching), the active coils
+    share what is left, so the ends stay flat as the spring compresses, as real springs do."""
+    length = np.asarray(length, dtype=float)
+    scalar = length.ndim == 0
+    length = np.atleast_1d(length)
+    rw, rm = lay.spring_wire_radius, lay.spring_mean_radius
+    dead, active = SPRING_DEAD_COILS, SPRING_ACTIVE_COILS
+    turns = active + 2.0 * dead
+    n_path = int(round(turns * segments_per_turn)) + 1
+    t = np.linspace(0.0, turns, n_path)  # turns along the wire
+    phi = 2.0 * math.pi * t
+    # axial position: dead coils at pitch 2 rw, active coils at the pitch that fills the length
+    dead_pitch = 2.0 * rw
+    active_span = length[:, None] - 2.0 * rw - 2.0 * dead * dead_pitch  # centre-line span of active coils
+    active_pitch = np.maximum(active_span / active, dead_pitch)
+    u = np.clip(t - dead, 0.0, active)[None, :]
+    z = rw + dead_pitch * (np.minimum(t, dead)[None, :] + np.maximum(t - dead - active, 0.0)[None, :]) + active_pitch * u
+    centre = np.stack(np.broadcast_arrays(rm * np.cos(phi)[None, :], rm * np.sin(phi)[None, :], z), axis=-1)
+    # frame along the helix: radial direction and the tangent-normal in the (tangent, z) plane
+    radial = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], -1)[None, :, :]
+    pitch_here = np.where((t >= dead) & (t <= dead + active), 1.0, 0.0)[None, :] * active_pitch + \
+        np.where((t < dead) | (t > dead + active), 1.0, 0.0)[None, :] * dead_pitch
+    tangent = np.stack(np.broadcast_arrays(
+        -2.0 * math.pi * rm * np.sin(phi)[None, :], 2.0 * math.pi * rm * np.cos(phi)[None, :], pitch_here), -1)
+    tangent /= np.linalg.norm(tangent, axis=-1, keepdims=True)
+    binormal = np.cross(tangent, radial)
+    ang = np.linspace(0.0, 2.0 * math.pi, wire_segments, endpoint=False)
+    ring = rw * (np.cos(ang)[None, None, :, None] * radial[:, :, None, :]
+                 + np.sin(ang)[None, None, :, None] * binormal[:, :, None, :])
+    tube = (centre[:, :, None, :] + ring).reshape(len(length), -1, 3)
+    ends = np.stack([centre[:, 0], centre[:, -1]], axis=1)
+    out = np.concatenate([tube, ends], axis=1)
+    return out[0] if scalar else out
+
+
+def spring_length(lay: Layout, valve_lift) -> np.ndarray:
+    """Spring length for a (displayed) valve lift: the retainer moves down with the valve."""
+    return lay.spring_rest_length - np.asarray(valve_lift, dtype=float)
+
+
+def spring_mesh(scene, lift_value: float, result=None, lay: Layout | None = None) -> trimesh.Trimesh:
+    """The spring compressed by valve lift `lift_value` (m), local frame (bottom at the origin)."""
+    lay = lay or layout(scene, result)
+    return trimesh.Trimesh(spring_vertices(lay, float(spring_length(lay, lift_value))), spring_faces(lay), process=False)
+
+
+# ---------------------------------------------------------------------------------------------
+# Assembly
+
+
+def build_parts(scene, result=None, lay: Layout | None = None, lift=None, contour_samples: int = 720,
+                only: tuple[str, ...] | None = None) -> dict[str, trimesh.Trimesh]:
+    """Every part's mesh in its local frame (see `part_poses` for where each frame sits);
+    `only` limits it to some parts (a viewer whose layout did not change rebuilds just the cam).
+
+    cam and camshaft: origin on the shaft axis; roller and follower: origin at the roller centre;
+    lever: origin at the pivot; adjuster: ball centre; valve: stem top; spring: its bottom
+    (at rest length); static parts (follower_guide, lever_pivot, seat): world frame."""
+    gear_meshes = meshes_module(scene.follower.type)
+    if gear_meshes is not None:
+        return gear_meshes.gear_parts(scene, result, lay=lay, lift=lift, only=only)
+    lay = lay or layout(scene, result)
+    builders = {
+        "cam": lambda: extrude_contour(cam_contour(scene, lift, contour_samples), lay.cam_width),
+        "camshaft": lambda: _camshaft_mesh(lay),
+        "roller": lambda: _roller_mesh(lay),
+        "follower": lambda: _follower_mesh(lay),
+        "follower_guide": lambda: _follower_guide_mesh(lay),
+        "lever": lambda: _lever_mesh(lay),
+        "lever_pivot": lambda: _pivot_mesh(lay),
+        "adjuster": lambda: _adjuster_mesh(lay),
+        "valve": lambda: _valve_mesh(lay),
+        "spring": lambda: trimesh.Trimesh(spring_vertices(lay, lay.spring_rest_length), spring_faces(lay), process=False),
+        "seat": lambda: _seat_mesh(lay),
+    }
+    return {name: build() for name, build in builders.items() if only is None or name in only}
+
+
+def quat_about_y(angle) -> np.ndarray:
+    """(N, 4) wxyz quaternions of right-handed rotations by `angle` (rad) about +y."""
+    angle = np.asarray(angle, dtype=float)
+    out = np.zeros(angle.shape + (4,))
+    out[..., 0] = np.cos(0.5 * angle)
+    out[..., 2] = np.sin(0.5 * angle)
+    return out
+
+
+def displayed_valve_lift(result, magnification: float = 1.0) -> np.ndarray:
+    """Valve lift as drawn: the rigid lift plus `magnification` times the deviation of the
+    most detailed valve motion from it; never below the seat."""
+    s = np.asarray(result.columns["valve_lift_m"], dtype=float)
+    rigid = np.asarray(result.columns.get("rigid_valve_lift_m", s), dtype=float)
+    return np.maximum(rigid + magnification * (s - rigid), 0.0)
+
+
+def roller_spin(scene, lift, theta: np.ndarray) -> np.ndarray:
+    """Roller angle (rad, counter-clockwise in the cam plane) for rolling without slip on the cam,
+    zero at theta[0]. Pure rolling: the roller's surface speed at the contact equals the cam's,
+    omega_r rr = (omega x p - v_f) . t, integrated over the (uniform or not) samples.
+
+    Over a revolution the roller turns by perimeter / rr, in general not a whole number of turns:
+    `part_poses` draws it with `loop_spin` so that a looped animation does not jump at 360 -> 0."""
+    rr = scene.follower.roller_radius
+    if rr <= 0.0:
+        return np.zeros_like(theta)
+    from ..lift.contours.translating import profile_from_derivatives
+
+    f = scene.follower
+    d = lift.derivatives(theta)
+    prof = profile_from_derivatives(theta, d, f.base_radius, rr, f.offset)
+    p = prof.contact_local
+    centre = np.column_stack([np.full(len(theta), f.offset), math.sqrt((f.base_radius + rr) ** 2 - f.offset**2) + d[0]])
+    nrm = (p - centre) / rr
+    tangent = np.column_stack([-nrm[:, 1], nrm[:, 0]])
+    cam_velocity = np.column_stack([-p[:, 1], p[:, 0]])  # omega x p per unit omega
+    follower_velocity = np.column_stack([np.zeros(len(theta)), d[1]])
+    rate = np.sum((cam_velocity - follower_velocity) * tangent, axis=1) / rr  # d(beta)/d(theta)
+    steps = np.diff(theta)
+    return np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * steps)])
+
+
+def loop_spin(spin: np.ndarray, total: float, marks: int = ROLLER_MARKS) -> np.ndarray:
+    """The roller spin as drawn in a looped animation of one revolution.
+
+    A revolution turns the roller by `total` (rad), in general not a whole number of quarter
+    turns, so replaying the revolution made the bores jump at 360 -> 0 (by up to 45 degrees,
+    against a fraction of a degree per step). The drawing scales the spin by the least factor
+    that makes `total` a whole number of the marks' period 2 pi / marks: the roller then rolls as
+    if its radius were off by that factor, at most (pi / marks) / |total| (3.4 % for Schenker's
+    Fig. 2 gear) and looks the same at the end of the revolution as at its start. A roller that
+    turns less than half a period in a revolution gets a constant correction instead (a ramp of
+    at most (pi / marks) / (2 pi) rad per radian of cam angle). `spin` holds the n uniform steps
+    of one revolution, zero at the first."""
+    period = 2.0 * math.pi / marks
+    turns = round(total / period)
+    if turns == 0:
+        theta_fraction = np.arange(len(spin)) / len(spin)
+        return spin - total * theta_fraction
+    return spin * (turns * period / total)
+
+
+def part_poses(scene, result, magnification: float = 1.0, lay: Layout | None = None, lift=None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """One world pose per step of `result.columns` for every part: name -> (positions (N, 3),
+    wxyz (N, 4)). The spring's pose is fixed; its shape follows `spring_length(lay,
+    displayed_valve_lift(result, magnification))`."""
+    from ..effects.lift import build_lift
+
+    gear_meshes = meshes_module(scene.follower.type)
+    if gear_meshes is not None:
+        poses = gear_meshes.gear_poses(scene, result, magnification=magnification, lay=lay, lift=lift)
+        if "roller" in poses:
+            poses["roller"] = (poses["roller"][0], _looped_roller_rotation(poses["roller"][1]))
+        return poses
+    lay = lay or layout(scene, result)
+    cols = result.columns
+    theta = np.radians(np.asarray(cols["cam_angle_deg"], dtype=float))
+    n = theta.size
+    L = np.asarray(cols["follower_lift_m"], dtype=float)
+    s_true = np.asarray(cols["valve_lift_m"], dtype=float)
+    s_disp = displayed_valve_lift(result, magnification)
+    ident = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
+
+    def fixed(x, y, z):
+        return np.tile([x, y, z], (n, 1)).astype(float)
+
+    # cam frame (x, y) -> world (x, z); a counter-clockwise turn by theta there is a rotation by
+    # -theta about +y in the world
+    cam_q = quat_about_y(-theta)
+    roller_pos = np.column_stack([np.full(n, lay.offset), np.zeros(n), lay.prime_y + L])
+    lift = lift if lift is not None else build_lift(scene)
+    # the revolution's last step back to 2 pi too: the spin over the whole revolution
+    spin = roller_spin(scene, lift, np.append(theta, theta[0] + 2.0 * math.pi))
+    spin = loop_spin(spin[:-1], spin[-1])
+    phi = np.arcsin(np.clip(L / lay.arm_follower, -1.0, 1.0))
+    px, py, pz = lay.pivot
+    stem_top = lay.stem_top_rest - s_disp
+    # true gap between screw ball and stem top (negative: linkage compressed)
+    gap = (scene.valve.lash if scene.valve is not None else 0.0) + s_true - lay.ratio * L
+    ball_bottom = stem_top + magnification * gap
+    ball_x = px + lay.arm_valve * np.cos(phi)
+    return {
+        "cam": (fixed(0.0, 0.0, 0.0), cam_q),
+        "camshaft": (fixed(0.0, 0.0, 0.0), cam_q),
+        "roller": (roller_pos, quat_about_y(-spin)),
+        "follower": (roller_pos.copy(), ident.copy()),
+        "follower_guide": (fixed(0.0, 0.0, 0.0), ident.copy()),
+        "lever": (fixed(px, py, pz), quat_about_y(phi)),
+        "lever_pivot": (fixed(0.0, 0.0, 0.0), ident.copy()),
+        "adjuster": (np.column_stack([ball_x, np.zeros(n), ball_bottom + lay.ball_radius]), quat_about_y(phi)),
+        "valve": (np.column_stack([np.full(n, lay.valve_x), np.zeros(n), stem_top]), ident.copy()),
+        "spring": (fixed(lay.valve_x, 0.0, lay.spring_seat_z), ident.copy()),
+        "seat": (fixed(0.0, 0.0, 0.0), ident.copy()),
+    }
+
+
+def _looped_roller_rotation(wxyz: np.ndarray) -> np.ndarray:
+    """`loop_spin` for a roller given as per-step rotations about y (the other gears' rollers,
+    whose spin explorer.view.gear_parts integrates from its own geometry). The revolution's last
+    step back to the start is estimated from its neighbours (a drawing, not a result)."""
+    wxyz = np.asarray(wxyz, dtype=float)
+    if len(wxyz) < 3 or not np.allclose(wxyz[:, [1, 3]], 0.0, atol=1e-12):
+        return wxyz
+    angle = np.unwrap(2.0 * np.arctan2(wxyz[:, 2], wxyz[:, 0]))
+    steps = np.diff(angle)
+    total = angle[-1] - angle[0] + 0.5 * (steps[-1] + steps[0])
+    return quat_about_y(angle[0] + loop_spin(angle - angle[0], total))
+
+
+def spring_axial_scale(scene, result, magnification: float = 1.0, lay: Layout | None = None) -> np.ndarray:
+    """Per-step z-scale of the rest-length spring mesh from `build_parts` (cheap alternative to
+    per-step vertices for viewers that can only scale a node; the wire's section flattens a little)."""
+    lay = lay or layout(scene, result)
+    return spring_length(lay, displayed_valve_lift(result, magnification)) / lay.spring_rest_length
+
+
+# ---------------------------------------------------------------------------------------------
+# Framing: the box the parts sweep over a revolution, and a camera that sees all of it
+
+
+def _part_vertices(mesh) -> np.ndarray:
+    """(V, 3) float vertices of a trimesh, a (vertices, faces) pair or a bare vertex array."""
+    if hasattr(mesh, "vertices"):
+        return np.asarray(mesh.vertices, dtype=float)
+    if isinstance(mesh, tuple):
+        return np.asarray(mesh[0], dtype=float)
+    return np.asarray(mesh, dtype=float)
+
+
+def _hull_2d(points: np.ndarray) -> np.ndarray:
+    """Vertices of the convex hull of (V, 2) points (all of them when the hull is degenerate):
+    the extremes of a rotated set are those of its rotated hull, and the hull is much smaller."""
+    if len(points) <= 16:
+        return points
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return points[ConvexHull(points).vertices]
+    except (QhullError, ValueError):
+        return points
+
+
+def _rotation_matrices(wxyz: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) rotation matrices of (N, 4) quaternions w, x, y, z (normalised here)."""
+    q = np.asarray(wxyz, dtype=float)
+    q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    w, x, y, z = q.T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], axis=1)
+
+
+def _swept_extents(vertices: np.ndarray, wxyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-rotation (N, 3) lows and highs of the rotated vertices (before the translation)."""
+    q = np.asarray(wxyz, dtype=float)
+    q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    if np.all(q[:, 1] == 0.0) and np.all(q[:, 3] == 0.0):
+        # a turn about y (every part of these gears): y is unchanged, and x-z is a plane rotation
+        # of the part's outline, so its hull in x-z decides the extremes
+        hull = _hull_2d(vertices[:, [0, 2]])
+        angle = 2.0 * np.arctan2(q[:, 2], q[:, 0])
+        n = len(q)
+        lo = np.column_stack([np.empty(n), np.full(n, vertices[:, 1].min()), np.empty(n)])
+        hi = np.column_stack([np.empty(n), np.full(n, vertices[:, 1].max()), np.empty(n)])
+        # in blocks: (rotations x hull points) at a million steps was gigabytes. cos and sin are
+        # taken whole: numpy's vector loops may round a block's last elements differently
+        cos, sin = np.cos(angle)[:, None], np.sin(angle)[:, None]
+        chunk = max(1, 2_000_000 // max(len(hull), 1))
+        for start in range(0, n, chunk):
+            block = slice(start, start + chunk)
+            c, s = cos[block], sin[block]
+            x = c * hull[None, :, 0] + s * hull[None, :, 1]
+            z = -s * hull[None, :, 0] + c * hull[None, :, 1]
+            lo[block, 0], hi[block, 0] = x.min(axis=1), x.max(axis=1)
+            lo[block, 2], hi[block, 2] = z.min(axis=1), z.max(axis=1)
+        return lo, hi
+    lo, hi = np.empty((len(q), 3)), np.empty((len(q), 3))
+    rotations = _rotation_matrices(q)
+    chunk = max(1, 2_000_000 // max(len(vertices), 1))
+    for start in range(0, len(q), chunk):
+        world = np.einsum("nij,vj->nvi", rotations[start:start + chunk], vertices)
+        lo[start:start + chunk], hi[start:start + chunk] = world.min(axis=1), world.max(axis=1)
+    return lo, hi
+
+
+def motion_bounds(parts, poses) -> tuple[np.ndarray, np.ndarray]:
+    """World box (lo, hi) holding every part at every step of `poses`: the union over the
+    revolution, not one instant (the valve opens, levers swing, a tripped latch swings aside).
+
+    `parts`: name -> trimesh, (vertices, faces) or vertices, in the part's own frame; `poses`:
+    name -> (positions (N, 3), wxyz (N, 4)) as from `part_poses` (a part without a pose is
+    already in the world frame). Exact, not sampled: each distinct rotation of a part is applied
+    to its vertices (to its x-z hull for turns about y). The spring is drawn at its rest length
+    and only shortens as the valve opens (its bottom stays put), so its rest mesh bounds it."""
+    lows, highs = [], []
+    for name, mesh in parts.items():
+        vertices = _part_vertices(mesh)
+        if vertices.size == 0:
+            continue
+        if name not in poses:
+            lows.append(vertices.min(axis=0))
+            highs.append(vertices.max(axis=0))
+            continue
+        positions = np.asarray(poses[name][0], dtype=float)
+        wxyz = np.asarray(poses[name][1], dtype=float)
+        rotations, inverse = np.unique(wxyz, axis=0, return_inverse=True)
+        lo, hi = _swept_extents(vertices, rotations)
+        inverse = np.asarray(inverse).reshape(-1)
+        lows.append((lo[inverse] + positions).min(axis=0))
+        highs.append((hi[inverse] + positions).max(axis=0))
+    if not lows:
+        raise ValueError("no vertices to bound")
+    return np.min(lows, axis=0), np.max(highs, axis=0)
+
+
+# The gear works in the x-z plane: look at it from the front (along +y), a little from the
+# right and from above, so that the parts' thickness shows.
+VIEW_DIRECTION = (0.2, -1.0, 0.3)  # from the target towards the camera
+VIEW_UP = (0.0, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    """A perspective camera: where it is, what it looks at, its up vector and vertical field of
+    view (rad), for a picture of width/height `aspect`."""
+
+    position: tuple[float, float, float]
+    look_at: tuple[float, float, float]
+    up: tuple[float, float, float]
+    fov: float
+    aspect: float
+
+
+def camera_axes(position, look_at, up) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit right, up and forward vectors of a camera at `position` looking at `look_at`."""
+    forward = np.asarray(look_at, dtype=float) - np.asarray(position, dtype=float)
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, np.asarray(up, dtype=float))
+    right /= np.linalg.norm(right)
+    return right, np.cross(right, forward), forward
+
+
+def frame_bounds(lo, hi, fov: float = math.radians(45.0), aspect: float = 1.0, direction=VIEW_DIRECTION,
+                 up=VIEW_UP, margin: float = 0.05) -> CameraFrame:
+    """The nearest camera looking along -`direction` whose picture (vertical field of view
+    `fov`, width/height `aspect`) holds the whole box lo..hi, `margin` of the half-width and
+    half-height to spare on the tightest side, with the box's picture centred.
+
+    With the camera's axes fixed (right, up, forward) and corners k at (x_k, y_k, d_k) along
+    them, a camera at (p_r, p_u, p_f) sees corner k when |x_k - p_r| <= t_h (d_k - p_f), and
+    likewise upwards, t = tan(half angle). Linear constraints: the largest p_f they allow
+    sideways is (A + B) / 2 with A = min(d_k - x_k / t_h), B = min(d_k + x_k / t_h) (the two
+    side planes then both touch a corner), and the camera takes the smaller of the sideways and
+    upward limits. At that depth it is placed sideways and upwards where the extreme corners
+    project symmetrically (max u = -min u, a monotone root), which also minimises the largest
+    |u|, so every corner stays in view."""
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    centre = 0.5 * (lo + hi)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    direction = np.asarray(direction, dtype=float)
+    direction = direction / np.linalg.norm(direction)
+    right, upward, forward = camera_axes(centre + direction, centre, up)
+    x, y, d = corners @ right, corners @ upward, corners @ forward
+    tan_v = math.tan(0.5 * fov) * (1.0 - margin)
+    tan_h = math.tan(0.5 * fov) * aspect * (1.0 - margin)
+
+    def reach(c, t):
+        return 0.5 * (float(np.min(d - c / t)) + float(np.min(d + c / t)))
+
+    # a box without depth seen edge-on would put the camera on it: keep a near distance
+    near = 1e-3 * max(float(np.linalg.norm(hi - lo)), 1e-6)
+    p_f = min(reach(x, tan_h), reach(y, tan_v), float(d.min()) - near)
+    depth = d - p_f
+
+    def symmetric(c):
+        """p with max((c - p) / depth) = -min((c - p) / depth), by bisection (decreasing in p)."""
+        a, b = float(c.min()), float(c.max())
+        for _ in range(200):
+            m = 0.5 * (a + b)
+            u = (c - m) / depth
+            if u.max() + u.min() > 0.0:
+                a = m
+            else:
+                b = m
+            if b - a <= 1e-15 * max(1.0, abs(m)):
+                break
+        return 0.5 * (a + b)
+
+    position = symmetric(x) * right + symmetric(y) * upward + p_f * forward
+    look_at = position + (float(centre @ forward) - p_f) * forward
+    return CameraFrame(position=tuple(map(float, position)), look_at=tuple(map(float, look_at)),
+                       up=tuple(map(float, np.asarray(up, dtype=float))), fov=float(fov), aspect=float(aspect))

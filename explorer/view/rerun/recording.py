@@ -1,0 +1,587 @@
+"""Rerun recordings of simulations: per-step series, the animated 3D parts, events, a layout.
+
+One simulation (a Result) becomes one rerun *recording*, named by a label (the scene name, plus
+the sweep value when there is one). All recordings share the application id `valve-gear-explorer`,
+so the viewer shows them side by side and can compare them.
+
+Timelines (every per-step row carries all three):
+- `time`            duration, t = θ/ω in seconds from the start of the revolution (the CSV's time_s)
+- `step`            sequence, the step index 0 … N−1 of the revolution
+- `cam_angle_mdeg`  sequence, the cam angle in millidegrees, round(1000·θ/°) — comparable between
+                    runs at different speeds or step counts
+
+Entity paths of the series (one scalar per step; SI values exactly as in `explorer simulate`'s
+CSV; the series name in the viewer carries the unit). A column `<stem>_<unit>` maps by these
+rules, first match wins:
+- unit N   (forces)       -> /forces/<stem without "_force">   linkage_force_N  -> /forces/linkage
+                                                               spring_force_N   -> /forces/spring
+                                                               contact_force_N  -> /forces/contact
+- unit Nm  (torques)      -> /torque/<stem without "_torque">  camshaft_torque_Nm -> /torque/camshaft
+- unit Pa  (stresses)     -> /stress/<stem without "_stress">  hertz_stress_Pa -> /stress/hertz
+- unit deg, rad (angles)  -> /angles/<stem without "_angle">   pressure_angle_deg -> /angles/pressure
+- rigid_valve_<q>         -> /valve_rigid/<q>   rigid_valve_lift_m -> /valve_rigid/lift (the rigid-train
+                                                motion, kept beside an elastic one)
+- valve_<q>               -> /valve/<q>         valve_lift_m -> /valve/lift, valve_velocity_m_s ->
+                                                /valve/velocity, valve_accel_m_s2 ->
+                                                /valve/acceleration, valve_jerk_m_s3 -> /valve/jerk
+- follower_<q>            -> /follower/<q>      follower_lift_m -> /follower/lift (roller centre, lash
+                                                included)
+- other lengths, unit m   -> /lengths/<stem>    contour_radius_m -> /lengths/contour_radius
+- anything else           -> /other/<column>
+("accel" is spelled out as "acceleration".) `cam_angle_deg` and `time_s` are the timelines, not
+series. Should two columns land on one path, the later one goes to /other/<column>.
+
+Other entities:
+- /parts/<name>   Mesh3D (static, the part in its own frame, z up, metres) and a Transform3D per step
+                  (translation, rotation) from explorer.view.parts: the recording replays the motion.
+                  A part that never moves gets one static Transform3D instead; the spring gets a
+                  per-step axial scale of its rest mesh (meshes.spring_axial_scale).
+                  /parts carries the z-up view coordinates.
+- /__properties/scene   label, scene name, source file, rpm, steps per revolution.
+- /events         TextLog entries at the events' exact instants (lift-off, separation, re-contact,
+                  seat, lash-take-up, … from result.summary["events"]) at level INFO, and the
+                  result's warnings at level WARN at t = 0.
+- /summary        TextDocument (static, markdown): scene, label, peaks, effect timings, warnings.
+
+The default blueprint puts the 3D view (over the event log) beside time-series views of lift s,
+velocity v, acceleration p and the forces (with tabs for jerk, torque, stress, angles, follower).
+
+Files are written by the rules of explorer.core.outputs: to a hidden temporary name beside the
+target, renamed when complete (and only if rerun's footer is there), so an interrupted run never
+leaves a truncated file under the target name (a killed run may leave its hidden `.NAME.*.part(s)`
+temporaries behind); a device or pipe (`-o /dev/stdout`) gets the finished file's bytes. Several
+recordings are each written to their own temporary file, one after the other (a sweep holds one
+run in memory at a time), and merged into one with `rerun rrd merge` (the CLI that ships in the
+rerun-sdk wheel) together with the layout for all of them: the Python SDK writes one recording per
+file sink. The logging itself runs in a helper process (explorer.view.rerun.worker): rerun keeps
+every stream made in a process, with its threads, until that process exits.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, Mapping, Sequence
+
+import numpy as np
+
+from ...core.processes import run_child
+
+APP_ID = "valve-gear-explorer"
+MERGE_TIMEOUT_S = 600.0  # `rerun rrd merge` of a long live session; it is killed past this
+TIMELINE_TIME = "time"
+TIMELINE_STEP = "step"
+TIMELINE_ANGLE = "cam_angle_mdeg"
+TIMELINES = (TIMELINE_TIME, TIMELINE_STEP, TIMELINE_ANGLE)
+INDEX_COLUMNS = ("cam_angle_deg", "time_s")
+EVENTS_PATH = "/events"
+SUMMARY_PATH = "/summary"
+PARTS_PATH = "/parts"
+
+# Unit suffixes of column names, longest first so that "_m_s2" is not read as "_s2" or "_m".
+UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
+    ("m_s3", "m/s³"), ("m_s2", "m/s²"), ("m_s", "m/s"),
+    ("rad_s2", "rad/s²"), ("rad_s", "rad/s"),
+    ("N_m", "N/m"), ("Nm", "N·m"), ("Pa", "Pa"), ("deg", "°"), ("rad", "rad"),
+    ("kg", "kg"), ("J", "J"), ("W", "W"), ("N", "N"), ("m", "m"), ("s", "s"),
+)
+# unit -> (group path, word dropped from the end of the stem)
+UNIT_GROUPS = {"N": ("/forces", "_force"), "Nm": ("/torque", "_torque"), "Pa": ("/stress", "_stress"),
+               "deg": ("/angles", "_angle"), "rad": ("/angles", "_angle")}
+PREFIX_GROUPS = (("rigid_valve_", "/valve_rigid"), ("valve_", "/valve"), ("follower_", "/follower"))
+
+
+@dataclass(frozen=True)
+class Series:
+    """Where one result column goes: entity path, the name shown in the viewer, its unit."""
+
+    column: str
+    path: str
+    name: str
+    unit: str
+
+
+def split_unit(column: str) -> tuple[str, str, str]:
+    """'valve_velocity_m_s' -> ('valve_velocity', 'm_s', 'm/s'); no known suffix -> (column, '', '')."""
+    for suffix, label in UNIT_SUFFIXES:
+        if column.endswith("_" + suffix) and len(column) > len(suffix) + 1:
+            return column[: -len(suffix) - 1], suffix, label
+    return column, "", ""
+
+
+def _quantity(word: str) -> str:
+    return "acceleration" if word == "accel" else word
+
+
+def entity_path(column: str) -> str:
+    """The entity path of a result column, by the rules in the module docstring."""
+    stem, unit, _ = split_unit(column)
+    if unit in UNIT_GROUPS:
+        group, drop = UNIT_GROUPS[unit]
+        leaf = stem[: -len(drop)] if stem.endswith(drop) and len(stem) > len(drop) else stem
+        return f"{group}/{leaf}"
+    for prefix, group in PREFIX_GROUPS:
+        if stem.startswith(prefix) and len(stem) > len(prefix):
+            return f"{group}/{_quantity(stem[len(prefix):])}"
+    if unit == "m":
+        return f"/lengths/{stem}"
+    return f"/other/{column}"
+
+
+def series_layout(columns: Iterable[str]) -> list[Series]:
+    """Series for every column except the timelines, with collision-free paths."""
+    out: list[Series] = []
+    used: set[str] = set()
+    for column in columns:
+        if column in INDEX_COLUMNS:
+            continue
+        path = entity_path(column)
+        if path in used:
+            path = f"/other/{column}"
+        used.add(path)
+        stem, _, unit = split_unit(column)
+        name = " ".join(_quantity(w) for w in stem.split("_")) + (f" [{unit}]" if unit else "")
+        out.append(Series(column=column, path=path, name=name, unit=unit))
+    return out
+
+
+def step_indexes(result) -> dict[str, np.ndarray]:
+    """The three timelines of the per-step rows: time in s, step index, cam angle in mdeg."""
+    angle = np.asarray(result.columns["cam_angle_deg"], dtype=float)
+    return {
+        TIMELINE_TIME: np.asarray(result.columns["time_s"], dtype=float),
+        TIMELINE_STEP: np.arange(angle.size, dtype=np.int64),
+        TIMELINE_ANGLE: np.rint(angle * 1000.0).astype(np.int64),
+    }
+
+
+def duration_ns(seconds) -> np.ndarray:
+    """Seconds as numpy nanosecond durations, rounded to nearest (rerun truncates floats)."""
+    return np.rint(np.asarray(seconds, dtype=np.float64) * 1e9).astype(np.int64).astype("timedelta64[ns]")
+
+
+def _time_columns(rr, index: Mapping[str, np.ndarray]) -> list:
+    return [
+        rr.TimeColumn(TIMELINE_TIME, duration=duration_ns(index[TIMELINE_TIME])),
+        rr.TimeColumn(TIMELINE_STEP, sequence=index[TIMELINE_STEP]),
+        rr.TimeColumn(TIMELINE_ANGLE, sequence=index[TIMELINE_ANGLE]),
+    ]
+
+
+# ---------------------------------------------------------------------------------------------
+# what goes into one recording
+
+
+def recording_paths(result, part_names: Iterable[str] = ()) -> list[str]:
+    """Entity paths a recording of `result` holds (used to build the blueprint before logging)."""
+    paths = [s.path for s in series_layout(result.columns)]
+    paths += [f"{PARTS_PATH}/{name}" for name in part_names]
+    return paths + [EVENTS_PATH, SUMMARY_PATH]
+
+
+def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Mapping | None = None,
+               scales: Mapping | None = None, colors: Mapping | None = None) -> None:
+    """Log one simulation into the recording stream `rec` (series, parts, events, summary)."""
+    import rerun as rr
+
+    rec.send_recording_name(label)
+    scene = result.scene
+    rec.send_property("scene", rr.AnyValues(
+        label=label, name=str(getattr(scene, "name", "")), source=str(getattr(scene, "source", "")),
+        rpm=float(result.summary.get("rpm", float("nan"))),
+        steps_per_revolution=int(result.summary.get("steps_per_revolution", len(result.columns["time_s"]))),
+    ))
+    index = step_indexes(result)
+    times = _time_columns(rr, index)
+    for series in series_layout(result.columns):
+        rec.log(series.path, rr.SeriesLines(names=series.name), static=True)
+        values = np.asarray(result.columns[series.column], dtype=np.float64)
+        rec.send_columns(series.path, indexes=times, columns=rr.Scalars.columns(scalars=values))
+    if parts:
+        _log_parts(rec, rr, parts, poses or {}, scales or {}, colors or {}, times)
+    _log_events(rec, rr, result, index)
+    rec.log(SUMMARY_PATH, rr.TextDocument(summary_markdown(result, label), media_type="text/markdown"), static=True)
+
+
+def _log_parts(rec, rr, parts: Mapping, poses: Mapping, scales: Mapping, colors: Mapping, times) -> None:
+    """Static meshes in their own frames plus one Transform3D per step (send_columns); a part
+    that changes shape (the spring) gets a per-step scale of its rest mesh."""
+    rec.log(PARTS_PATH, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    for name, mesh in parts.items():
+        path = f"{PARTS_PATH}/{name}"
+        rec.log(path, mesh_archetype(rr, mesh, colors.get(name)), static=True)
+        if name in poses:
+            positions, wxyz = poses[name]
+            positions = np.asarray(positions, dtype=np.float64)
+            xyzw = np.asarray(wxyz, dtype=np.float64)[:, [1, 2, 3, 0]]  # rerun stores x, y, z, w
+            if name not in scales and np.all(positions == positions[:1]) and np.all(xyzw == xyzw[:1]):
+                # a part that never moves: one static pose instead of thousands of equal rows
+                rec.log(path, rr.Transform3D(translation=positions[0], quaternion=xyzw[0]), static=True)
+                continue
+            extra = {"scale": np.asarray(scales[name], dtype=np.float64)} if name in scales else {}
+            rec.send_columns(path, indexes=times,
+                             columns=rr.Transform3D.columns(translation=positions, quaternion=xyzw, **extra))
+
+
+def mesh_archetype(rr, mesh, color=None):
+    """rr.Mesh3D from a trimesh.Trimesh, with vertex normals and the part's colour."""
+    kwargs = {}
+    visual = getattr(mesh, "visual", None)
+    if color is not None:
+        kwargs["albedo_factor"] = tuple(int(c) for c in color)
+    elif visual is not None and getattr(visual, "kind", None) in ("vertex", "face"):
+        kwargs["vertex_colors"] = np.asarray(visual.vertex_colors, dtype=np.uint8)
+    return rr.Mesh3D(
+        vertex_positions=np.asarray(mesh.vertices, dtype=np.float32),
+        triangle_indices=np.asarray(mesh.faces, dtype=np.uint32),
+        vertex_normals=np.asarray(mesh.vertex_normals, dtype=np.float32),
+        **kwargs,
+    )
+
+
+def event_text(event: Mapping) -> str:
+    """One line for an event: kind, angle, time, then its further numbers."""
+    skip = {"kind", "time_s", "cam_angle_deg", "effect"}
+    extras = []
+    for key, value in event.items():
+        if key in skip:
+            continue
+        if isinstance(value, (float, np.floating)):
+            extras.append(f"{key} = {float(value):.6g}")
+        else:
+            extras.append(f"{key} = {value}")
+    head = f"{event['kind']} at {float(event['cam_angle_deg']):.4f}° (t = {1e3 * float(event['time_s']):.6f} ms)"
+    if event.get("effect"):
+        head += f" [{event['effect']}]"
+    return head + ("; " + ", ".join(extras) if extras else "")
+
+
+def _log_events(rec, rr, result, index: Mapping[str, np.ndarray]) -> None:
+    events = list(result.summary.get("events", []))
+    warnings = list(result.summary.get("warnings", []))
+    n = index[TIMELINE_STEP].size
+    texts, levels, t, step, mdeg = [], [], [], [], []
+    for message in warnings:  # a warning belongs to the whole run: show it at the start
+        texts.append(f"warning: {message}")
+        levels.append("WARN")
+        t.append(0.0)
+        step.append(0)
+        mdeg.append(0)
+    for event in events:
+        angle = float(event["cam_angle_deg"])
+        texts.append(event_text(event))
+        levels.append("INFO")
+        t.append(float(event["time_s"]))
+        # the step at or before the instant; the exact instant is on the `time` timeline
+        step.append(min(n - 1, max(0, int(math.floor(angle / 360.0 * n + 1e-9)))))
+        mdeg.append(int(round(angle * 1000.0)))
+    if not texts:
+        return
+    rec.send_columns(
+        EVENTS_PATH,
+        indexes=[rr.TimeColumn(TIMELINE_TIME, duration=duration_ns(t)),
+                 rr.TimeColumn(TIMELINE_STEP, sequence=np.asarray(step, dtype=np.int64)),
+                 rr.TimeColumn(TIMELINE_ANGLE, sequence=np.asarray(mdeg, dtype=np.int64))],
+        columns=rr.TextLog.columns(text=texts, level=levels),
+    )
+
+
+def summary_markdown(result, label: str) -> str:
+    """The summary as a short markdown page: scalar entries, effect timings, warnings."""
+    s = result.summary
+    lines = [f"# {label}", ""]
+    source = getattr(result.scene, "source", "")
+    if source:
+        lines += [f"scene file: `{source}`", ""]
+    lines += ["| quantity | value |", "|---|---|"]
+    for key, value in s.items():
+        if key in ("effects", "events", "warnings") or isinstance(value, (dict, list, tuple)):
+            continue
+        if isinstance(value, (float, np.floating)):
+            value = f"{float(value):.6g}"
+        lines.append(f"| {key} | {value} |")
+    effects = s.get("effects", {})
+    if effects:
+        lines += ["", "| effect | compute time |", "|---|---|"]
+        lines += [f"| {name} | {1e3 * info['compute_time_s']:.3f} ms |" for name, info in effects.items()]
+    warnings = list(s.get("warnings", []))
+    if warnings:
+        lines += ["", "**warnings**", ""] + [f"- {w}" for w in warnings]
+    return "\n".join(lines) + "\n"
+
+
+# ---------------------------------------------------------------------------------------------
+# layout
+
+
+def parts_bounds(parts: Mapping, poses: Mapping, step: int | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+    """World bounding box (lo, hi) of the parts over the whole revolution (explorer.view.parts.
+    motion_bounds: the moving parts' sweep, which the 3D camera must see), or posed at `step`."""
+    if step is None:
+        from ..parts import motion_bounds
+
+        try:
+            return motion_bounds(parts, poses)
+        except ValueError:  # no vertices at all
+            return None
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    for name, mesh in parts.items():
+        v = np.asarray(mesh.vertices, dtype=float)
+        if name in poses:
+            position, wxyz = np.asarray(poses[name][0][step]), np.asarray(poses[name][1][step])
+            v = v @ quaternion_matrix(wxyz).T + position
+        if v.size:
+            lo, hi = np.minimum(lo, v.min(axis=0)), np.maximum(hi, v.max(axis=0))
+    return (lo, hi) if np.all(np.isfinite(lo)) else None
+
+
+def quaternion_matrix(wxyz) -> np.ndarray:
+    """3x3 rotation matrix of a unit quaternion (w, x, y, z)."""
+    w, x, y, z = np.asarray(wxyz, dtype=float) / np.linalg.norm(wxyz)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+# rerun's 3D eye has a fixed vertical field of view (Eye::DEFAULT_FOV_Y in re_view_spatial,
+# 55 degrees) that a blueprint cannot set; the 3D view of the default layout is about as wide as
+# tall or wider, so framing for a square view keeps the gear whole.
+RERUN_FOV_Y = math.radians(55.0)
+RERUN_VIEW_ASPECT = 1.0
+
+
+def eye_for(bounds) -> dict:
+    """The camera the browser explorer uses (explorer.view.parts.frame_bounds: in front of the gear,
+    which works in the x-z plane, a little from above and the side), as near as it can be while
+    seeing the whole box at rerun's field of view."""
+    from ..parts import frame_bounds
+
+    lo, hi = (np.asarray(b, dtype=float) for b in bounds)
+    frame = frame_bounds(lo, hi, fov=RERUN_FOV_Y, aspect=RERUN_VIEW_ASPECT)
+    return {"position": list(frame.position), "look_target": list(frame.look_at), "eye_up": list(frame.up)}
+
+
+def blueprint(paths: Iterable[str], bounds=None):
+    """The default layout: 3D view and event log beside time series of s, v, p and forces;
+    `bounds` (lo, hi) of the parts places the 3D camera."""
+    import rerun.blueprint as rrb
+
+    paths = list(dict.fromkeys(paths))
+
+    def present(*candidates: str) -> list[str]:
+        return [p for p in candidates if p in paths]
+
+    def group(prefix: str) -> list[str]:
+        return [p for p in paths if p.startswith(prefix + "/")]
+
+    def view(name: str, contents: list[str]):
+        return rrb.TimeSeriesView(origin="/", contents=contents, name=name)
+
+    main = [
+        view("valve lift s", present("/valve/lift", "/valve_rigid/lift", "/follower/lift") or ["/valve/lift"]),
+        view("velocity v", present("/valve/velocity", "/valve_rigid/velocity") or ["/valve/velocity"]),
+        view("acceleration p", present("/valve/acceleration", "/valve_rigid/acceleration") or ["/valve/acceleration"]),
+    ]
+    tabs = [view("forces", ["/forces/**"])]
+    extra = [("jerk", present("/valve/jerk", "/valve_rigid/jerk")), ("torque", group("/torque")),
+             ("stress", group("/stress")), ("angles", group("/angles")), ("follower", group("/follower")),
+             ("lengths", group("/lengths")), ("other", group("/other"))]
+    tabs += [view(name, contents) for name, contents in extra if contents]
+    left = rrb.Vertical(
+        rrb.Spatial3DView(origin=PARTS_PATH, name="valve gear",
+                          eye_controls=rrb.EyeControls3D(**eye_for(bounds)) if bounds is not None else None),
+        rrb.Tabs(rrb.TextLogView(origin=EVENTS_PATH, name="events"),
+                 rrb.TextDocumentView(origin=SUMMARY_PATH, name="summary")),
+        row_shares=[3, 1],
+    )
+    right = rrb.Vertical(*main, rrb.Tabs(*tabs), row_shares=[1, 1, 1, 1])
+    return rrb.Blueprint(
+        rrb.Horizontal(left, right, column_shares=[1, 1]),
+        rrb.TimePanel(timeline=TIMELINE_TIME),
+        collapse_panels=False,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# files
+
+
+@dataclass(frozen=True)
+class Run:
+    """One recording to write: its label, the result, and optionally the 3D parts and poses."""
+
+    label: str
+    result: object
+    parts: Mapping | None = None  # name -> trimesh.Trimesh in the part's own frame
+    poses: Mapping | None = None  # name -> (positions (N, 3), wxyz (N, 4))
+    scales: Mapping | None = None  # name -> (N, 3) per-step scale of the part's mesh
+    colors: Mapping | None = None  # name -> RGB(A) 0-255
+
+
+def with_parts(label: str, result) -> Run:
+    """A Run with the 3D parts, poses and colours of explorer.view.parts (the builders `serve`
+    uses). The spring's rest mesh is scaled along its axis per step (meshes.spring_axial_scale):
+    per-step vertices would cost 3600 x thousands of vertices per recording."""
+    from .. import parts as meshes
+
+    scene = result.scene
+    lay = meshes.layout(scene, result)
+    parts = meshes.build_parts(scene, result, lay=lay)
+    poses = meshes.part_poses(scene, result, lay=lay)
+    scales = {}
+    if "spring" in parts and hasattr(meshes, "spring_axial_scale"):
+        sz = np.asarray(meshes.spring_axial_scale(scene, result, lay=lay), dtype=np.float64)
+        scales["spring"] = np.column_stack([np.ones_like(sz), np.ones_like(sz), sz])
+    colors = dict(getattr(meshes, "PART_COLORS", {}))
+    return Run(label=label, result=result, parts=parts, poses=poses, scales=scales, colors=colors)
+
+
+def new_recording(label: str):
+    import rerun as rr
+
+    # a fresh random id: two files opened together must never merge into one recording
+    return rr.RecordingStream(APP_ID, recording_id=f"{label}-{uuid.uuid4().hex[:12]}")
+
+
+def _write_one(path: Path, run: Run, layout) -> None:
+    """One run into its own file in this process. Every rerun stream made here stays in memory
+    with its threads until the process exits (see explorer.view.rerun.worker): the commands write
+    through the helper process instead."""
+    import rerun as rr
+
+    rec = new_recording(run.label)
+    rec.set_sinks(rr.FileSink(str(path)), default_blueprint=layout)
+    try:
+        log_result(rec, run.result, run.label, run.parts, run.poses, run.scales, run.colors)
+        rec.flush()
+    finally:
+        rec.disconnect()  # closes the file with its footer
+
+
+def union_bounds(boxes):
+    boxes = [b for b in boxes if b is not None]
+    if not boxes:
+        return None
+    return np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
+
+
+def write_recordings(path, runs: Iterable[Run], on_run=None) -> None:
+    """Write the runs as separate recordings into one .rrd file that appears only when complete
+    (explorer.core.outputs: temporary file and rename; written through for a device or pipe).
+
+    `runs` may be a generator: each run is logged (in the helper process of
+    explorer.view.rerun.worker) and dropped before the next is made, so a long sweep needs the
+    memory of one run. `on_run(run)` is called after each is written. A single run is one file
+    with its layout as default blueprint; several are one file each, without, merged with
+    `rerun rrd merge` together with the layout for all of them, written last."""
+    from ...core.outputs import as_output, output_path
+    from .worker import RecordingWorker, write_file
+
+    out = as_output(path, "output")
+    it = iter(runs)
+    first = next(it, None)
+    if first is None:
+        raise ValueError("no runs to record")
+    second = next(it, None)
+    with output_path(out) as tmp, RecordingWorker() as worker:
+        if second is None:
+            paths = recording_paths(first.result, (first.parts or {}).keys())
+            bounds = parts_bounds(first.parts, first.poses or {}) if first.parts else None
+            write_file(worker, tmp, first, (paths, bounds))
+            if on_run is not None:
+                on_run(first)
+        else:
+            _write_merged(worker, out, tmp, itertools.chain([first, second], it), on_run)
+        check_complete(tmp)
+
+
+def _write_merged(worker, out, tmp: Path, runs: Iterable[Run], on_run) -> None:
+    from .worker import write_blueprint, write_file
+
+    parent = None if out.direct else out.target.parent  # a device's temporaries go to the system's
+    work_dir = Path(tempfile.mkdtemp(prefix=f".{Path(out.name).name}.", suffix=".parts", dir=parent))
+    try:
+        pieces: list[Path] = []
+        paths: list[str] = []
+        boxes = []
+        for run in runs:
+            paths += recording_paths(run.result, (run.parts or {}).keys())
+            if run.parts:
+                boxes.append(parts_bounds(run.parts, run.poses or {}))
+            piece = work_dir / f"{len(pieces):05d}.rrd"
+            write_file(worker, piece, run, None)
+            pieces.append(piece)
+            if on_run is not None:
+                on_run(run)
+            del run  # the next run is made only now: one in memory at a time
+        layout = work_dir / "layout.rbl"
+        write_blueprint(worker, layout, (list(dict.fromkeys(paths)), union_bounds(boxes)))
+        merge_rrd([*pieces, layout], tmp)
+    finally:
+        shutil.rmtree(work_dir, ignore_errors=True)
+
+
+def check_rrd_path(path: str, option: str):
+    """An output .rrd path the user named (`option` names the flag in the error), checked before
+    any work by the rules of explorer.core.outputs (a .rrd name, a directory that takes a new file;
+    /dev/stdout or a FIFO need no suffix): an explorer.core.outputs.Output."""
+    from ...core.outputs import check_output
+
+    return check_output(path, option, suffix=".rrd")
+
+
+def temporary_name(path: Path, directory: Path | None = None) -> Path:
+    """A hidden, unique name beside `path` (or in `directory`)."""
+    directory = directory if directory is not None else (path.parent if str(path.parent) else Path("."))
+    return directory / f".{path.name}.{uuid.uuid4().hex[:12]}.part"
+
+
+def check_complete(path: Path) -> None:
+    """Refuse to publish a file without its footer: rerun's file sink reports write errors
+    (a full disk) only in its log, so check the result before renaming it into place."""
+    from rerun_bindings import check_for_rrd_footer
+
+    if not Path(path).is_file() or not check_for_rrd_footer(str(path)):
+        raise RuntimeError(f"writing the recording failed: {path} is incomplete (no rrd footer)")
+
+
+def rerun_executable() -> list[str]:
+    """The rerun CLI that ships in the rerun-sdk wheel (as rerun_cli does it), as an argv prefix."""
+    override = os.environ.get("RERUN_CLI_PATH")
+    if override:
+        return [override]
+    try:
+        import rerun_cli
+
+        base = Path(rerun_cli.__file__).parent
+        suffix = ".exe" if sys.platform.startswith("win") else ""
+        for candidate in (base / "Rerun.app" / "Contents" / "MacOS" / "Rerun", base / f"rerun{suffix}"):
+            if candidate.is_file():
+                return [str(candidate)]
+    except ImportError:
+        pass
+    found = shutil.which("rerun")
+    if found:
+        return [found]
+    raise RuntimeError("the rerun command-line tool was not found (it ships with the rerun-sdk package)")
+
+
+def merge_rrd(pieces: Sequence[Path], out: Path) -> None:
+    """Merge several .rrd files (one recording each) into one file holding all of them."""
+    cmd = [*rerun_executable(), "rrd", "merge", "-o", str(out), *map(str, pieces)]
+    # its own group, dying with us, ended as a group on a stop signal or a timeout
+    proc = run_child(cmd, timeout=MERGE_TIMEOUT_S, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                     stderr=subprocess.PIPE, text=True, env={**os.environ, "RUST_LOG": "warn"})
+    if proc.returncode != 0:
+        tail = "\n".join(proc.stderr.strip().splitlines()[-5:])
+        raise RuntimeError(f"rerun rrd merge failed (exit {proc.returncode}): {tail}")
