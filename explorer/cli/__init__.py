@@ -19,6 +19,7 @@ COMMAND_MODULES = [
     "explorer.cli.export",
     "explorer.cli.residual",
     "explorer.cli.design",
+    "explorer.cli.spectrum",
 ]
 
 DESCRIPTION = """\
@@ -47,6 +48,7 @@ examples:
   explorer export SCENE --format dxf --tolerance "1 um"   (the cam to make it: csv, dxf, stl, glb, grind)
   explorer residual assets/scenes/polydyne_demo.toml --rpm 1000:3000:21 --plot r.png   (vibration vs speed)
   explorer design assets/scenes/spline_demo.toml --objective peak-acceleration --max-pressure-angle 30   (spline lift)
+  explorer spectrum SCENE --orders 60 --plot s.png   (harmonics of the valve acceleration vs cam order)
   explorer <command> --help            details of one command
 
 Quantities in scene files carry units ("20 mm", "385 kgf", "2.9 kgf*s**2/m"); a bare number
