@@ -275,3 +275,15 @@ def test_csv_to_stdout(capfd):
     text = capfd.readouterr().out
     table = np.loadtxt(io.StringIO(text), delimiter=",", comments="#", skiprows=4)
     assert table.shape[1] == 10 and len(table) >= 16
+
+
+def test_real_command_one_line(tmp_path):
+    """What a user sees: `python -m explorer export` with a bad option, in a subprocess."""
+    from conftest import run_cli
+
+    proc = run_cli("export", DEMO, "--format", "grind", "-o", tmp_path / "g.csv")
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.count("\n") == 1 and ERROR_LINE.match(proc.stderr.strip()), proc.stderr
+    assert list(tmp_path.iterdir()) == []
+    proc = run_cli("export", DEMO, "--format", "dxf", "-o", tmp_path / "cam.dxf")
+    assert proc.returncode == 0 and (tmp_path / "cam.dxf").read_text().startswith("  0\nSECTION")
