@@ -287,3 +287,18 @@ def test_real_command_one_line(tmp_path):
     assert list(tmp_path.iterdir()) == []
     proc = run_cli("export", DEMO, "--format", "dxf", "-o", tmp_path / "cam.dxf")
     assert proc.returncode == 0 and (tmp_path / "cam.dxf").read_text().startswith("  0\nSECTION")
+
+
+@pytest.mark.parametrize("wheel_mm", [100.0, 300.0])
+def test_grinding_a_convex_cam_with_any_wheel(tmp_path, wheel_mm):
+    """A convex cam (the spline demo) grinds with any wheel; a breakpoint that coincides with a
+    grid angle (204 deg) once made a zero step that read as the path winding back."""
+    scene_path = SCENES / "spline_demo.toml"
+    out = export(tmp_path, scene_path, "grind", "--grinding-wheel-radius", f"{wheel_mm} mm", "--points", 720)
+    table = np.loadtxt(out, delimiter=",", comments="#", skiprows=4)
+    psi = 0.5 * math.pi - np.radians(table[:, 0])
+    wc = table[:, 1:2] * np.column_stack([np.cos(psi), np.sin(psi)])
+    from scipy.spatial import cKDTree
+
+    nearest, _ = cKDTree(dense_exact(exports.cam_source(load_scene(scene_path)), n=200_000)).query(wc)
+    assert np.max(np.abs(nearest - wheel_mm * 1e-3)) < 1e-8

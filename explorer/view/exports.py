@@ -84,6 +84,19 @@ def geometry(lift, theta, base_radius: float, roller_radius: float, offset: floa
     )
 
 
+def angles_with(uniform: int, breakpoints) -> np.ndarray:
+    """`uniform` equally spaced cam angles in [0, 2 pi) and the breakpoints, sorted, without
+    near-copies: a breakpoint computed as start + knot and the grid angle k 2 pi / n that it
+    equals differ by an ulp, and two points one ulp apart make a zero chord and a zero step."""
+    theta = np.sort(np.concatenate([np.linspace(0.0, TWO_PI, uniform, endpoint=False),
+                                    np.mod(np.asarray(breakpoints, dtype=float), TWO_PI)]))
+    keep = np.append(True, np.diff(theta) > 1e-12)
+    theta = theta[keep]
+    if theta.size > 1 and theta[-1] > TWO_PI - 1e-12:  # the same as angle 0
+        theta = theta[:-1]
+    return theta
+
+
 @dataclass(frozen=True)
 class CamSource:
     """What an export needs of a scene: its lift curve and follower geometry."""
@@ -114,7 +127,7 @@ def cam_source(scene, lift=None) -> CamSource:
                          f"exports are for translating-roller cams; this scene's follower is {f.type!r}")
     src = CamSource(lift if lift is not None else build_lift(scene), f.base_radius, f.roller_radius,
                     f.offset, scene.name, scene.source)
-    theta = np.unique(np.concatenate([np.linspace(0.0, TWO_PI, 7200, endpoint=False), src.breakpoints()]))
+    theta = angles_with(7200, src.breakpoints())
     g = src.at(theta)
     with np.errstate(divide="ignore"):
         rho = 1.0 / g.pitch_curvature
@@ -140,8 +153,7 @@ def chord_polyline(curve, tolerance: float, breakpoints=(), start_points: int = 
     closed curve `curve(theta) -> (N, 2)` (period 2 pi). Breakpoints are always vertices (a
     corner of the exact curve is a corner of the polyline). Returns (theta, points) without
     repeating the first point."""
-    theta = np.unique(np.concatenate([np.linspace(0.0, TWO_PI, start_points, endpoint=False),
-                                      np.mod(np.asarray(breakpoints, dtype=float), TWO_PI)]))
+    theta = angles_with(start_points, breakpoints)
     frac = np.arange(1, probes + 1) / (probes + 1.0)
     while True:
         ends = np.append(theta, theta[0] + TWO_PI)
@@ -179,7 +191,7 @@ def _drop_repeats(theta: np.ndarray, xy: np.ndarray, within: float) -> tuple[np.
 def point_table(src: CamSource, points: int = 3600) -> str:
     """CSV: one row per cam angle (uniform, plus the lift's breakpoints): contour and pitch point,
     outward normal, signed curvatures, pressure angle."""
-    theta = np.unique(np.concatenate([np.linspace(0.0, TWO_PI, points, endpoint=False), src.breakpoints()]))
+    theta = angles_with(points, src.breakpoints())
     g = src.at(theta)
     out = io.StringIO()
     out.write(f"# {src.name}: cam contour and pitch curve in the cam frame (m); the cam turns counter-clockwise,\n"
@@ -267,7 +279,7 @@ def grinding_table(src: CamSource, wheel_radius: float, points: int = 3600) -> G
     cam so that the wheel centre lies on the wheel's line, the ground y axis (the follower's
     direction), i.e. a = 90 deg - polar angle of the centre in the cam frame."""
     key = "--grinding-wheel-radius"
-    theta = np.unique(np.concatenate([np.linspace(0.0, TWO_PI, 8 * points, endpoint=False), src.breakpoints()]))
+    theta = angles_with(8 * points, src.breakpoints())
     g = src.at(theta)
     concave = g.contour_curvature < 0.0
     if np.any(concave):
