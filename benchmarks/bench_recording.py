@@ -42,7 +42,7 @@ def loop_baseline(path: Path, result) -> None:
     for i in range(index["step"].size):
         rec.set_time("time", duration=float(index["time"][i]))
         rec.set_time("step", sequence=int(index["step"][i]))
-        rec.set_time("cam_angle_mdeg", sequence=int(index["cam_angle_mdeg"][i]))
+        rec.set_time("cam_angle_deg", sequence=int(index["cam_angle_deg"][i]))
         for path, v in values.items():
             rec.log(path, rr.Scalars(float(v[i])))
     rec.disconnect()

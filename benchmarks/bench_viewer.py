@@ -13,6 +13,11 @@ Rows (default scene unless --scene):
   - loop frame rate while playing with ten websocket clients connected (clients run in another
     process and drain every message), and the update rate each client receives;
   - frame rate in the browser (distinct cam poses drawn per second) with those ten clients;
+  - per page (`explorer serve`'s default, explorer.view.browser.sessions): ten websocket pages on a
+    second server, each with its own explorer and compute process: the time until every page
+    has its first result, each page's loop frame rate while playing, the updates each receives,
+    the resident memory of the server with its compute processes, and that all of it is gone
+    once the pages leave;
   - a burst of 1000 GUI changes sent over the websocket by the ten clients (cam-angle slider and
     rpm, 100 each, as fast as they can), three times: errors in clients, loop and worker, whether
     the newest request ends up shown, and process memory after each burst (must not grow).
@@ -275,8 +280,61 @@ def main(argv=None) -> int:
     print(f"Python heap growth from round 2 to {len(burst_rows)}: {growth:+.2f} MB (requests are cumulative;"
           " 'computed' < 'requests' is the newest-wins coalescing)")
     failed |= client_errors > 0 or any(e or not ok for _, _, e, ok, _, _ in burst_rows) or growth > 2.0
+    failed |= per_client_report(path, 10)
     print("all targets met" if not failed else "SOME TARGETS MISSED")
     return 0
+
+
+def per_client_report(path: str, pages: int, seconds: float = 8.0) -> bool:
+    """Ten pages with a session each (PerClientExplorer, playing); prints the rows, returns
+    whether a target was missed (frame rate >= 30/s per page, nothing left once they leave)."""
+    import psutil
+    import viser
+
+    from explorer.view.browser.sessions import PerClientExplorer
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    explorer = PerClientExplorer(server, path, playing=True)
+    me = psutil.Process()
+    before = {c.pid for c in me.children(recursive=True)}
+    try:
+        url = f"ws://127.0.0.1:{server.get_port()}"
+        started = time.perf_counter()
+        clients = subprocess.Popen([sys.executable, __file__, "--clients", url, str(pages), str(seconds + 60)],
+                                   stdout=subprocess.PIPE, text=True, cwd=ROOT)
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            apps = explorer.sessions()
+            if len(apps) == pages and all(a.current is not None for a in apps.values()):
+                break
+            time.sleep(0.05)
+        ready = time.perf_counter() - started
+        apps = explorer.sessions()
+        frames0 = {k: a.frames for k, a in apps.items()}
+        t0 = time.perf_counter()
+        time.sleep(seconds)
+        elapsed = time.perf_counter() - t0
+        rates = [(a.frames - frames0[k]) / elapsed for k, a in apps.items()]
+        children = [c for c in me.children(recursive=True) if c.pid not in before and c.pid != clients.pid]
+        rss = me.memory_info().rss + sum(c.memory_info().rss for c in children if c.is_running())
+        clients.terminate()
+        clients.wait(timeout=60)
+        deadline = time.monotonic() + 60
+        while explorer.sessions() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        left = len(explorer.sessions())
+        time.sleep(1.0)
+        alive = [c for c in children if c.is_running() and c.status() != psutil.STATUS_ZOMBIE]
+    finally:
+        explorer.stop()
+        server.stop()
+    rate = statistics.median(rates) if rates else 0.0
+    print(f"per page ({pages} pages, each its own explorer and compute process, playing):")
+    print(f"  all {len(apps)} pages shown their first result after {ready:.2f} s; loop frame rate per page "
+          f"median {rate:.1f}/s (min {min(rates, default=0.0):.1f}/s); server + compute processes "
+          f"{rss / 2**20:.0f} MB resident ({len(children)} compute processes)")
+    print(f"  after the pages left: {left} sessions, {len(alive)} compute processes running")
+    return rate < 30.0 or left > 0 or bool(alive) or len(apps) != pages
 
 
 def browser_rows(server, app, closed_angle, lashes, repeat):

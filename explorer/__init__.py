@@ -11,7 +11,7 @@ from .core.errors import InputError
 from .core.version import __version__
 from .scene.scene import Scene, load_scene, loads_scene
 
-__all__ = ["InputError", "Scene", "load_scene", "loads_scene", "simulate", "__version__"]
+__all__ = ["InputError", "Scene", "load_scene", "loads_scene", "simulate", "sweep", "__version__"]
 
 
 def simulate(scene):
@@ -19,3 +19,11 @@ def simulate(scene):
     from .effects.pipeline import simulate as _simulate
 
     return _simulate(scene)
+
+
+def sweep(scene, vary=None, sample=None, **options):
+    """Many runs of a scene, one row of figures each (explorer.studies.sweep_run.sweep):
+    explorer.sweep("assets/scenes/valve_float_demo.toml", vary={"drive.rpm": "1000:6000:500"})"""
+    from .studies.sweep_run import sweep as _sweep
+
+    return _sweep(scene, vary, sample, **options)

@@ -61,16 +61,19 @@ class Result:
         return json.dumps(_jsonable(dict(self.summary)), indent=2, allow_nan=False) + "\n"
 
 
-def _jsonable(value):
+def _jsonable(value, key: str = ""):
+    """The summary as JSON values; floats without round-off noise (explorer.core.units.printable)."""
+    from .core.units import printable
+
     if isinstance(value, Mapping):
-        return {str(k): _jsonable(v) for k, v in value.items()}
+        return {str(k): _jsonable(v, str(k)) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
+        return [_jsonable(v, key) for v in value]
     if isinstance(value, np.ndarray):
-        return [_jsonable(v) for v in value.tolist()]
+        return [_jsonable(v, key) for v in value.tolist()]
     if isinstance(value, (np.floating, float)):
         value = float(value)
-        return value if math.isfinite(value) else None
+        return printable(value, key) if math.isfinite(value) else None
     if isinstance(value, (np.integer,)):
         return int(value)
     if isinstance(value, np.bool_):

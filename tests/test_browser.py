@@ -185,7 +185,7 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                     if run > best:
                         best, best_end = run, j
                 target = (best_end - best / 2.0) % len(s_all) * 360.0 / len(s_all)
-                slider_id = page.locator("label", has_text="Cam angle").first.get_attribute("for")
+                slider_id = page.locator("label", has_text="Cam angle [°]").first.get_attribute("for")
                 box = page.locator(f"[id='{slider_id}']").bounding_box()
                 thumb = f"[id='{slider_id}'] [role=slider]"
                 shown_before = page.locator(thumb).get_attribute("aria-valuenow")
@@ -405,3 +405,89 @@ def test_hovering_a_plot_shows_the_values_under_the_pointer(tmp_path):
         plot = app.current.plots[0]
         i = int(np.argmin(np.abs(plot.x - angle)))
         assert lift_mm == pytest.approx(plot.series[0][1][i], abs=0.02 + 0.01 * abs(plot.series[0][1][i]))
+
+
+def _row_input(page, label, tag="input"):
+    """The input of the GUI row labelled `label` (viser's inputs do not carry their label's id)."""
+    return page.locator("label", has_text=label).first.locator(
+        f"xpath=ancestor::div[contains(@class,'mantine-Flex-root')][1]//{tag}")
+
+
+def test_slider_under_the_plots_and_the_event_list_jump_the_animation(tmp_path):
+    """Issue #13.4 and #13.5 in a real page. A click on the cam-angle slider right under the
+    plots (viser's uPlot sends no clicks back: this is the nearest thing) pauses the animation
+    at the angle clicked; choosing an event in "Go to event" shows the gear at that event's
+    angle. The events table holds every event and scrolls."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+    with _running_explorer(ROOT / "assets" / "scenes" / "valve_float_demo.toml") as (server, app):
+        assert app.wait_applied(WAIT_S)
+        events = app.current.result.summary["events"]
+        assert len(events) > 14
+        with _connected_page(sync_api, tmp_path, server) as page:
+            app.play.value = True  # running, so that a click must pause it
+            # the slider in the Plots tab sits below the last plot
+            plots_slider = _row_input(page, "cam angle θ [°]", "div[contains(@class,'mantine-Slider-root')]")
+            plots_slider.wait_for(timeout=WAIT_MS)
+            plots_slider.scroll_into_view_if_needed()
+            page.evaluate(TWO_FRAMES)
+            box = plots_slider.bounding_box()
+            last_plot = page.locator(".uplot").last.bounding_box()
+            assert box["y"] >= last_plot["y"] + last_plot["height"] - 1  # under the plots
+            page.mouse.click(box["x"] + 0.75 * box["width"], box["y"] + 0.5 * box["height"])
+            _wait_until(lambda: not app.playback.playing and 200.0 < app.playback.angle_deg < 340.0,
+                        "a click on the slider under the plots did not scrub")
+            clicked = app.playback.angle_deg
+            assert app.wait_applied(WAIT_S)
+            assert app.playback.angle_deg == clicked and not app.playback.playing
+            # the page's gear shows the server's pose at that angle
+            _wait_in_step(page, app, ["valve", "cam"])
+
+            # the events table: every event, scrolling inside its box
+            table = page.locator(".explorer-events")
+            page.get_by_role("tab", name="Read-outs").click()
+            table.wait_for(timeout=WAIT_MS)
+            assert table.locator("tbody tr").count() == len(events)
+            scroll = table.evaluate("e => [e.scrollHeight, e.clientHeight]")
+            assert scroll[0] > scroll[1]  # more than fits: it scrolls
+            # pick the last event (beyond the old "… 11 more") in the list
+            target = events[-1]
+            label = app.event_jump.options[-1]
+            page.get_by_role("combobox", name="Go to event").click()
+            page.get_by_role("option", name=label).click()
+            _wait_until(lambda: abs(app.playback.angle_deg - target["cam_angle_deg"] % 360.0) < 1e-9,
+                        "choosing an event did not move the animation there")
+            assert not app.playback.playing
+            expected = _wait_in_step(page, app, ["valve"])
+            pos, _ = app.current.poses["valve"]
+            n = len(app.current.result.columns["cam_angle_deg"])
+            from explorer.view.browser.model import step_index
+
+            np.testing.assert_allclose(expected["/gear/valve"], pos[step_index(target["cam_angle_deg"], n)], atol=1e-9)
+
+
+def test_a_long_error_keeps_the_controls_on_an_800px_page(tmp_path):
+    """Issue #13.6: with a long error in the status box, at 1280x800 the box scrolls within its
+    height and every control of the Scene folder down to "Reset to scene file" stays on the page
+    (a screenshot is kept in tmp_path for whoever looks); the plots say they are stale."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+    with _running_explorer(ROOT / "assets" / "scenes" / "cycloidal_demo.toml") as (server, app):
+        assert app.wait_applied(WAIT_S)
+        with _connected_page(sync_api, tmp_path, server) as page:
+            app._reject("error: Lash: " + "a very long reason that goes on; " * 40)
+            _wait_until(lambda: app.error_text.startswith("error: Lash"), "no error shown")
+            alert = page.locator(".explorer-error")
+            alert.wait_for(timeout=WAIT_MS)
+            page.get_by_text("Stale:").first.wait_for(timeout=WAIT_MS)
+            page.evaluate(TWO_FRAMES)
+            page.screenshot(path=str(tmp_path / "error_1280x800.png"))
+            box = alert.bounding_box()
+            assert box["height"] <= 7.5 * 16 + 20  # 7.5 em at most, plus padding and border
+            assert alert.evaluate("e => e.scrollHeight > e.clientHeight")  # the rest scrolls
+            reset = page.get_by_role("button", name="Reset to scene file")
+            reset_box = reset.bounding_box()
+            assert reset_box is not None and reset_box["y"] + reset_box["height"] <= 800, reset_box
+            for label in ("Play", "Scene", "Lift law", "Spring rate [N/mm]", "Steps / revolution"):
+                row = page.locator("label", has_text=label).first.bounding_box()
+                assert row is not None and row["y"] + row["height"] <= 800, (label, row)

@@ -212,3 +212,60 @@ def test_write_failure_is_one_line(tmp_path):
     assert proc.returncode == 2
     assert proc.stderr.splitlines() == [f"error: {out}: --output: cannot write: File too large"]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_builtin_scenes_by_their_dropdown_name(tmp_path, monkeypatch, capsys):
+    """Issue #13.9: `explorer simulate cycloidal_demo.toml` in any directory finds the built-in
+    scene the explorer's Scene dropdown lists under that name (with or without .toml); a file of
+    that name in the working directory wins; a name with a directory part is always a path; an
+    unknown name is still one error line naming the file as it was given."""
+    monkeypatch.chdir(tmp_path)
+    by_name, by_path = tmp_path / "a.json", tmp_path / "b.json"
+    assert cli.main(["simulate", "cycloidal_demo.toml", "--summary", str(by_name)]) == 0
+    assert cli.main(["simulate", str(DEMO), "--summary", str(by_path)]) == 0
+    a, b = json.loads(by_name.read_text()), json.loads(by_path.read_text())
+    assert a["scene"] == b["scene"] == "Cycloidal demo"
+    assert cli.main(["simulate", "cycloidal_demo", "--summary", str(by_name)]) == 0
+    assert json.loads(by_name.read_text())["scene"] == "Cycloidal demo"
+    # a local file of that name is what the user means
+    (tmp_path / "cycloidal_demo.toml").write_text(DEMO.read_text().replace('"Cycloidal demo"', '"Local copy"'))
+    assert cli.main(["simulate", "cycloidal_demo.toml", "--summary", str(by_name)]) == 0
+    assert json.loads(by_name.read_text())["scene"] == "Local copy"
+    capsys.readouterr()
+    for given in ("./nosuch_demo.toml", "nosuch_demo.toml", "sub/cycloidal_demo.toml"):
+        assert cli.main(["simulate", given]) == 2
+        assert capsys.readouterr().err == f"error: {given}: -: file not found\n"
+
+
+def test_outputs_have_normal_permissions_and_no_roundoff_noise(tmp_path):
+    """Issue #13.9: CSV and JSON are created 0666 less the umask (0644 under umask 022), not 0600;
+    the printed summary holds no round-off (4.97e-14 for a difference of equal decelerations,
+    53.400000000000006, -0): explorer.core.units.printable."""
+    import os
+
+    out, summary = tmp_path / "out.csv", tmp_path / "out.json"
+    old = os.umask(0o022)
+    try:
+        proc = run_cli("simulate", SCENES / "pivoted_roller_lever.toml", "-o", out, "--summary", summary)
+    finally:
+        os.umask(old)
+    assert proc.returncode == 0, proc.stderr
+    assert (out.stat().st_mode & 0o777) == 0o644 and (summary.stat().st_mode & 0o777) == 0o644
+    text = summary.read_text()
+    data = json.loads(text)
+    # the deceleration difference of this scene is a difference of equal figures: exactly 0 printed
+    assert data["deceleration_difference_m_s2"] == 0.0
+    assert not re.search(r"e-1\d|e-[2-9]\d|-0[,\n]|-0\.0[,\n]", text), text
+    numbers = [float(m) for m in re.findall(r"-?\d+\.\d+(?:e-?\d+)?", text)]
+    assert numbers and all(x == float(f"{x:.12g}") for x in numbers)
+
+
+def test_printable_rule():
+    from explorer.core.units import printable
+
+    assert printable(4.973799150320701e-14) == 0.0
+    assert str(printable(-1e-12)) == "0.0"  # never -0
+    assert printable(53.400000000000006) == 53.4
+    assert printable(-1.2699e-3) == -1.2699e-3
+    assert printable(1.003992514422124e-09, "closure_relative_error") == 1.00399251442e-09
+    assert printable(2.5e-9) == 2.5e-9

@@ -41,6 +41,19 @@ def test_bad_geometry_is_one_line_exit_2_no_file(name, override, key, tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("law", ["table", "acceleration", "contour"])
+def test_a_lever_cam_from_a_lift_that_is_no_closed_form_law_is_one_line(law, tmp_path):
+    """The pivoted lever synthesises its cam through a closed-form law's jets: a table or an
+    acceleration law is refused at load time by name (it once ended in a KeyError traceback)."""
+    out = tmp_path / "out.csv"
+    proc = run_cli("simulate", SCENES / "pivoted_roller_lever.toml", "--set", f'lift.law="{law}"', "-o", out)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and ": lift.law: " in lines[0], lines
+    assert "Traceback" not in proc.stderr
+    assert not out.exists()
+
+
 def test_summary_figures(tmp_path):
     from explorer.studies.gear_figures import main
 

@@ -231,7 +231,7 @@ def test_record_to_dev_stdout_is_a_complete_rrd(tmp_path):
                         stdout=handle, stderr=subprocess.PIPE)
     assert proc.returncode == 0, proc.stderr
     assert b"2 recordings" in proc.stderr
-    assert len(read_rrd(out)) == 2
+    assert len(read_rrd(out)) == 3  # the two runs and their overlay
     assert [p.name for p in tmp_path.iterdir()] == ["piped.rrd"]
 
 

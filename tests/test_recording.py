@@ -2,7 +2,7 @@
 `explorer simulate` on the same scene (values, entity paths, timelines, events, blueprint, 3D).
 
 Tolerances: the series are float64 in both the CSV (repr round-trips exactly) and the .rrd, so
-they must be equal bit for bit. The `time` timeline is stored as integer nanoseconds: within
+they must be equal bit for bit (lengths: the CSV's metres times 1000, the same multiplication). The `time` timeline is stored as integer nanoseconds: within
 0.5 ns of time_s. Transforms are stored as float32 by rerun: relative 1e-6 of the gear's size.
 """
 
@@ -106,16 +106,18 @@ def test_series_equal_simulate_output(float_recording):
     assert n == 3600
     for s in series_layout(csv):
         got = series[s.path]
-        assert np.array_equal(got["value"], csv[s.column]), s.column  # bit for bit
+        assert np.array_equal(got["value"], s.values(csv)), s.column  # bit for bit
+        assert s.scale == (1e3 if s.column.endswith("_m") else 1.0), s.column  # lengths in mm (#13.8)
         assert np.array_equal(got["step"], np.arange(n))
         assert np.max(np.abs(got["time"] - csv["time_s"] * 1e9)) <= 0.5
-        assert np.array_equal(got["cam_angle_mdeg"], np.rint(csv["cam_angle_deg"] * 1000).astype(np.int64))
+        # the cam-angle timeline is in whole degrees (#13.8: it was millidegrees)
+        assert np.array_equal(got["cam_angle_deg"], np.rint(csv["cam_angle_deg"]).astype(np.int64))
     # the headline quantities are where the docstring says
     for path in ("/valve/lift", "/valve/velocity", "/valve/acceleration", "/valve/jerk", "/forces/linkage",
                  "/forces/spring", "/forces/contact", "/torque/camshaft", "/angles/pressure", "/stress/hertz"):
         assert path in series, path
     # every series has its name (with unit) for the legend
-    assert run.static["/valve/lift"]["SeriesLines:names"] == ["valve lift [m]"]
+    assert run.static["/valve/lift"]["SeriesLines:names"] == ["valve lift [mm]"]
     assert run.static["/forces/linkage"]["SeriesLines:names"] == ["linkage force [N]"]
 
 
@@ -137,7 +139,7 @@ def test_events_and_warnings_are_logged_at_their_instants(float_recording):
         times = [log["time"][i] for i in rows]
         assert any(abs(t - event["time_s"] * 1e9) <= 0.5 for t in times), event
         i = rows[int(np.argmin([abs(t - event["time_s"] * 1e9) for t in times]))]
-        assert log["cam_angle_mdeg"][i] == round(event["cam_angle_deg"] * 1000)
+        assert log["cam_angle_deg"][i] == np.rint(event["cam_angle_deg"])
         n = result.columns["time_s"].size  # the step at or before the instant
         assert log["step"][i] == math.floor(event["cam_angle_deg"] / 360 * n + 1e-9)
 
@@ -158,11 +160,42 @@ def test_blueprint_has_3d_beside_s_v_p_and_forces(float_recording):
     spatial = next(v for v in views if v["class"] == "3D")
     assert spatial["origin"] == "/parts"
     series = {v["name"]: v["contents"] for v in views if v["class"] == "TimeSeries"}
-    assert "/valve/lift" in series["valve lift s"]
-    assert "/valve/velocity" in series["velocity v"]
-    assert "/valve/acceleration" in series["acceleration p"]
+    assert "/valve/lift/**" in series["valve lift s"]  # with children: a sweep's overlay draws there too
+    assert "/valve/velocity/**" in series["velocity v"]
+    assert "/valve/acceleration/**" in series["acceleration p"]
     assert series["forces"] == ["/forces/**"]
     assert "/torque/camshaft" in series["torque"] and "/stress/hertz" in series["stress"]
+    # #13.8: every plot spans the revolution on the cam-angle timeline (not a 1-degree window),
+    # which the time panel shows, playing a revolution in ANGLE_PLAYBACK_S seconds at 1x
+    from explorer.view.rerun.recording import ANGLE_PLAYBACK_S
+
+    for v in views:
+        if v["class"] == "TimeSeries":
+            assert v["time_ranges"]["cam_angle_deg"] == (0, 360), v["name"]
+    panel = next(v for v in views if v["class"] == "TimePanel")
+    assert panel["timeline"] == "cam_angle_deg" and panel["playback_speed"] == 1.0
+    assert 360.0 / panel["fps"] == pytest.approx(ANGLE_PLAYBACK_S) and 2.0 <= ANGLE_PLAYBACK_S <= 20.0
+
+
+def test_legends_sit_where_the_curves_are_not(float_recording):
+    """#13.8: each main plot's legend is in the corner whose legend box (LEGEND_BOX of the plot)
+    holds no sample of its curves, as the viewer draws them (the curves' own y range)."""
+    from explorer.view.rerun.recording import LEGEND_BOX, MAIN_VIEWS, view_paths
+
+    out, _ = float_recording
+    run = read_rrd(out)[0]
+    views = {v["name"]: v for v in read_blueprint_views(out) if v["class"] == "TimeSeries"}
+    w, h = LEGEND_BOX
+    for name in [n for n, _ in MAIN_VIEWS] + ["forces"]:
+        paths = view_paths(name, run.series)
+        assert paths, name
+        corner = views[name]["legend_corner"]
+        x = np.concatenate([run.series[p]["cam_angle_deg"] for p in paths]).astype(float)
+        y = np.concatenate([run.series[p]["value"] for p in paths])
+        u, v = x / 360.0, (y - y.min()) / (y.max() - y.min())
+        across = u >= 1 - w if corner.startswith("Right") else u <= w
+        up = v >= 1 - h if corner.endswith("Top") else v <= h
+        assert not np.any(across & up), (name, corner)
 
 
 def test_parts_replay_the_motion(float_recording):
@@ -213,16 +246,17 @@ def test_sweep_and_several_scenes_make_separate_recordings(tmp_path):
     out = record(tmp_path, str(CYCLOIDAL), str(FLOAT), "--set", steps, "--sweep", "drive.rpm=600,1200",
                  "--no-parts")
     runs = {r.name: r for r in read_rrd(out)}
-    expected = {f"{scene} [drive.rpm={rpm}]" for scene in ("Cycloidal demo", "Valve float demo")
+    # the varied value first (#13.8): the viewer's list cuts long names at the end
+    expected = {f"drive.rpm={rpm} · {scene}" for scene in ("Cycloidal demo", "Valve float demo")
                 for rpm in (600, 1200)}
-    assert set(runs) == expected
-    assert len({r.recording_id for r in runs.values()}) == 4
+    assert set(runs) == expected | {"overlay: all 4 runs"}
+    assert len({r.recording_id for r in runs.values()}) == 5
     for scene_file, scene_name in ((CYCLOIDAL, "Cycloidal demo"), (FLOAT, "Valve float demo")):
         for rpm in (600, 1200):
             csv = simulate_csv(tmp_path, scene_file, steps, f"drive.rpm={rpm}")
-            series = runs[f"{scene_name} [drive.rpm={rpm}]"].series
+            series = runs[f"drive.rpm={rpm} · {scene_name}"].series
             for s in series_layout(csv):
-                assert np.array_equal(series[s.path]["value"], csv[s.column]), (scene_name, rpm, s.column)
+                assert np.array_equal(series[s.path]["value"], s.values(csv)), (scene_name, rpm, s.column)
             # the time axis follows the speed: one revolution lasts 60/rpm s
             last = series["/valve/lift"]["time"][-1]
             assert abs(last - 60.0 / rpm * 359 / 360 * 1e9) <= 0.5
@@ -234,13 +268,43 @@ def test_two_sweeps_make_every_combination(tmp_path):
     out = record(tmp_path, str(CYCLOIDAL), "--set", "solver.steps_per_revolution=72", "--no-parts",
                  "--sweep", "drive.rpm=600,1200", "--sweep", 'valve.lash=0.1mm,0.2mm')
     names = sorted(r.name for r in read_rrd(out))
-    assert names == sorted(f"Cycloidal demo [drive.rpm={r}, valve.lash={l}]"
-                           for r in (600, 1200) for l in ("0.1mm", "0.2mm"))
-    lifts = {r.name: r.series["/valve/lift"]["value"].max() for r in read_rrd(out)}
-    # more lash, less valve lift, by exactly the lash difference (ratio 1)
-    a = lifts["Cycloidal demo [drive.rpm=600, valve.lash=0.1mm]"]
-    b = lifts["Cycloidal demo [drive.rpm=600, valve.lash=0.2mm]"]
-    assert abs((a - b) - 0.1e-3) <= 1e-12
+    assert names == sorted([f"drive.rpm={r}, valve.lash={l} · Cycloidal demo"
+                            for r in (600, 1200) for l in ("0.1mm", "0.2mm")] + ["overlay: all 4 runs"])
+    lifts = {r.name: r.series["/valve/lift"]["value"].max() for r in read_rrd(out) if "/valve/lift" in r.series}
+    # more lash, less valve lift, by exactly the lash difference (ratio 1), in mm
+    a = lifts["drive.rpm=600, valve.lash=0.1mm · Cycloidal demo"]
+    b = lifts["drive.rpm=600, valve.lash=0.2mm · Cycloidal demo"]
+    assert abs((a - b) - 0.1) <= 1e-9
+
+
+def test_a_sweep_has_an_overlay_of_its_runs(tmp_path):
+    """#13.8: a sweep's file holds one recording more whose lift, velocity, acceleration and
+    forces are every run's (thinned as overlay_entry keeps them), each a child of the path the
+    layout's views draw, named by the run's label: the views show the runs over each other."""
+    from explorer.view.rerun.recording import overlay_entry
+
+    rpms = (2000, 3000, 4000)
+    out = record(tmp_path, str(FLOAT), "--no-parts", "--set", "solver.steps_per_revolution=720",
+                 "--sweep", "drive.rpm=" + ",".join(map(str, rpms)))
+    runs = {r.name: r for r in read_rrd(out)}
+    overlay = runs.pop("overlay: all 3 runs")
+    views = {v["name"]: v["contents"] for v in read_blueprint_views(out) if v["class"] == "TimeSeries"}
+    for k, rpm in enumerate(rpms, start=1):
+        label = f"drive.rpm={rpm} · Valve float demo"
+        result = simulate(load_scene(FLOAT, ["solver.steps_per_revolution=720", f"drive.rpm={rpm}"]))
+        _, angle, _, curves = overlay_entry(label, result)
+        assert {"/valve/lift", "/valve/velocity", "/valve/acceleration", "/forces/contact"} <= set(curves)
+        for path, values in curves.items():
+            child = f"{path}/run{k:02d}"
+            assert np.array_equal(overlay.series[child]["value"], values), child
+            assert np.array_equal(overlay.series[child]["cam_angle_deg"], np.rint(angle).astype(np.int64))
+            assert overlay.static[child]["SeriesLines:names"] == [label]
+            # the view that draws `path` in a run draws the overlay's child too
+            assert any(c == f"{path}/**" or (c.endswith("/**") and child.startswith(c[:-2])) for cs in views.values()
+                       for c in cs), child
+        # the overlay's lift is the run's own lift, thinned
+        stride = 720 // len(angle)
+        assert np.array_equal(curves["/valve/lift"], runs[label].series["/valve/lift"]["value"][::stride])
 
 
 # ---------------------------------------------------------------------------------------------

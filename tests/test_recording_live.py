@@ -38,7 +38,7 @@ def result_at(rpm: float, steps: int = 360):
 def assert_same_series(run, result) -> None:
     series = run.series
     for s in series_layout(result.columns):
-        assert np.array_equal(series[s.path]["value"], result.columns[s.column]), s.column
+        assert np.array_equal(series[s.path]["value"], s.values(result.columns)), s.column
 
 
 def free_port() -> int:

@@ -189,3 +189,28 @@ def test_only_the_roller_centre_geometry_matters():
     a, b = fig2.lift_of(fig2.PAPER_DESIGN).derivatives(th), fig2.lift_of(other).derivatives(th)
     assert np.max(np.abs(a[0] - b[0])) < 1e-12
     assert np.max(np.abs(a[2] - b[2])) < 1e-9 * np.abs(a[2]).max()
+
+
+def test_readme_reproduces_f1_f2_and_the_3600_step_figures():
+    """Issue #13.9: the README's command gives F1/F2 = 20.48 / 288.27 kgf (his 21 / 288) from the
+    shipped scene with the §4 steam load, and its 3600-step figures are what the default run
+    reports (the exact one-sided values at F are test_paper_figures')."""
+    import json
+
+    from conftest import ROOT, run_cli
+
+    readme = (ROOT / "README.md").read_text()
+    command = """explorer simulate --set 'loads.closing.steam_on_stem_and_valve="46 kgf"'"""
+    assert command in readme and "20.48 and 288.27 kgf" in readme
+    proc = run_cli("simulate", "--set", 'loads.closing.steam_on_stem_and_valve="46 kgf"')
+    assert proc.returncode == 0, proc.stderr
+    s = json.loads(proc.stdout)
+    kgf = 9.80665
+    assert s["opening_side"]["required_spring_force_N"] / kgf == pytest.approx(20.48, abs=0.005)
+    assert s["closing_side"]["required_spring_force_N"] / kgf == pytest.approx(288.27, abs=0.005)
+    default = json.loads(run_cli("simulate").stdout)
+    assert "3600 steps: −1.2685" in readme and "3600 steps: −115.88 → +158.72" in readme
+    assert round(default["min_valve_velocity_m_s"], 4) == -1.2685
+    assert (round(default["min_valve_accel_m_s2"], 2), round(default["max_valve_accel_m_s2"], 2)) == (-115.88, 158.72)
+    assert default["opening_side"]["required_spring_force_N"] / kgf == pytest.approx(-23.5, abs=0.05)
+    assert default["closing_side"]["required_spring_force_N"] / kgf == pytest.approx(244.3, abs=0.05)

@@ -396,7 +396,8 @@ def test_the_roller_turns_on_smoothly_when_the_revolution_loops(name):
         ("drive.rpm", -5.0, "drive.rpm: must be greater than zero"),
         ("solver.steps_per_revolution", 10, "too few steps"),
         ("spring.rate", "lots", "spring.rate"),
-        ("lift.law", "contour", "cam"),
+        # a law the scene cannot take is not offered (#13.6): a page that sends it anyway is refused
+        ("lift.law", "contour", "not one of the choices"),
     ],
 )
 def test_bad_values_are_rejected_with_a_visible_message(app, key, value, needle):
@@ -410,12 +411,16 @@ def test_bad_values_are_rejected_with_a_visible_message(app, key, value, needle)
     assert needle.split(":")[0] in app.status.content and 'role="alert"' in app.status.content
     assert app.applied_serial == serial  # the last good motion stays on screen
     np.testing.assert_array_equal(_node(app, "valve").position, valve_before)
+    # ... and says it is stale, on both tabs (#13.6)
+    for banner in (app.stale_plots, app.stale_readout):
+        assert banner.visible and "Stale" in banner.content and app.current.label in banner.content
     assert app._thread.is_alive() and app.worker._thread.is_alive()
     # a good value clears the message
     app.fields[key].value = {"valve.lash": "0.3 mm", "drive.rpm": 3000.0, "solver.steps_per_revolution": 3600,
                              "spring.rate": "25 N/mm", "lift.law": "cycloidal"}[key]
     assert app.wait_applied(60)
     assert app.error_text == "" and "ready" in app.status.content
+    assert not app.stale_plots.visible and not app.stale_readout.visible
 
 
 def test_parameter_changes_recompute_and_the_newest_wins(app):
@@ -596,7 +601,7 @@ def test_serve_records_to_rerun_and_finishes_the_file_when_stopped(tmp_path, sto
     from explorer.view.rerun.read import read_rrd
 
     target = tmp_path / "live.rrd"
-    proc, _, _ = _start_serve(DEMO, "--rerun-save", target)
+    proc, _, _ = _start_serve(DEMO, "--shared", "--rerun-save", target)  # a run with no page open
     try:
         # the first result has reached the stream once its writer opened a piece beside the target
         assert _wait_for(lambda: list(tmp_path.glob(".live.rrd.*.parts/*.rrd")), process_timeout())
@@ -620,11 +625,25 @@ def test_readout_lists_every_effect_event_and_warning():
     text = model.readout_markdown(result)
     for name, info in result.summary["effects"].items():
         assert f"| {name} | {1e3 * info['compute_time_s']:.2f} ms |" in text
-    for event in result.summary["events"][:14]:
-        assert f"| {event['kind']} | {event['cam_angle_deg']:.2f}° |" in text
     for warning in result.summary["warnings"]:
         assert f"- ⚠ {warning}" in text
     assert text.index("**Warnings**") < text.index("**Key figures**")
+    # every event (#13.5: there were "… 11 more"), in the scrolling table and in "Go to event"
+    events = result.summary["events"]
+    assert len(events) > 14
+    table = model.events_html(result)
+    choices = model.event_choices(result)
+    assert table.count("<tr>") == len(events) + 1 and "more" not in table and "overflow-y:auto" in table
+    assert [angle for _, angle in choices] == [e["cam_angle_deg"] for e in events]
+    for k, (event, (label, _)) in enumerate(zip(events, choices), start=1):
+        assert label.startswith(f"{k}. {event['kind']} at {event['cam_angle_deg']:.2f}°")
+        assert f"<td>{event['kind']}</td><td style='text-align:right'>{event['cam_angle_deg']:.2f}°</td>" in table
+    # the spring advisor's advice (#13.9): its preload and rate, in the GUI's units
+    advice = result.summary["spring_design"]["advice"]
+    assert "**Spring advice**" in text
+    assert f"preload {advice['preload_N']:.4g} N, rate {advice['rate_N_m'] * 1e-3:.4g} N/mm" in text
+    # no round-off noise: the event comparison's zero saving is printed as 0
+    assert "e-1" not in text and "-0 " not in text
 
 
 # ------------------------------------------------------------------------------------------------
@@ -675,7 +694,7 @@ def _assert_same_series(run, result):
     from explorer.view.rerun.recording import series_layout
 
     for s in series_layout(result.columns):
-        assert np.array_equal(run.series[s.path]["value"], result.columns[s.column]), s.column
+        assert np.array_equal(run.series[s.path]["value"], s.values(result.columns)), s.column
 
 
 class _Browser:
@@ -752,7 +771,7 @@ def test_serve_streams_every_change_live_to_rerun_on_localhost(tmp_path):
 
     port, viewer_port = free_port(), free_port()
     received = tmp_path / "received.rrd"
-    proc, url, lines = _start_serve(DEMO, "--rerun", "--rerun-port", port)
+    proc, url, lines = _start_serve(DEMO, "--shared", "--rerun", "--rerun-port", port)  # a run with no page
     receiver = browser = None
     try:
         rerun_url = f"rerun+http://127.0.0.1:{port}/proxy"
@@ -963,3 +982,137 @@ def test_built_in_scenes_open_with_the_effects_their_name_promises(name, promise
     assert "Forces" in titles and model.plots_note(result) == ""
     if name == "valve_float_demo.toml":  # the float is simulated, not only predicted
         assert result.summary["elastic_event_counts"].get("separation", 0) > 0
+
+
+# ------------------------------------------------------------------------------------------------
+# #13.4-6: scrubbing under the plots, every event a jump target, laws the scene can take
+
+
+def test_law_dropdown_offers_only_laws_the_scene_can_take(app):
+    """Issue #13.6: the law dropdown lists exactly the laws with which this scene file loads and
+    builds its lift (oracle: load each law of the full list directly), and every law offered
+    computes without an error in the explorer."""
+    from explorer.lift.laws import LAWS
+    from explorer.effects.lift import build_lift
+    from explorer.scene.scene import SPECIAL_LAWS
+
+    def loads(path, law):
+        try:
+            build_lift(load_scene(path, [f'lift.law="{law}"']))
+            return True
+        except Exception:  # noqa: BLE001 - the point: what fails is not offered
+            return False
+
+    for scene in ("cycloidal_demo.toml", "table_demo.toml", "pivoted_roller_lever.toml"):
+        path = SCENES / scene
+        app.scene.value = scene
+        assert app.wait_applied(60)
+        offered = tuple(app.fields["lift.law"].options)
+        expected = tuple(law for law in (*LAWS, *SPECIAL_LAWS) if law == load_scene(path).lift.law or loads(path, law))
+        assert offered == expected, scene
+        assert "contour" not in offered  # none of these has a [cam] contour
+        assert app.fields["lift.law"].value == load_scene(path).lift.law
+    # every law offered on the last scene computes
+    for law in offered:
+        app.fields["lift.law"].value = law
+        assert app.wait_applied(60)
+        assert app.error_text == "", (law, app.error_text)
+        assert app.current.scene.lift.law == law
+
+
+def test_go_to_event_and_the_slider_under_the_plots_scrub(app):
+    """Issue #13.5/#13.4: choosing an event in "Go to event" pauses the animation at the event's
+    cam angle (the summary's figure); the slider under the plots scrubs like the one in Playback,
+    and both sliders then show the angle."""
+    events = app.current.result.summary["events"]
+    assert events and app.event_jump.options[0] == "—" and len(app.event_jump.options) == len(events) + 1
+    for label, event in zip(app.event_jump.options[1:], events):
+        app.play.value = True
+        assert app.wait_applied(60)  # a frame with the Play box applied
+        app.event_jump.value = label
+        assert app.wait_applied(60)
+        assert app.playback.angle_deg == pytest.approx(event["cam_angle_deg"] % 360.0, abs=1e-9)
+        assert not app.playback.playing and app.play.value is False
+        _wait_sliders(app, round(event["cam_angle_deg"], 1) % 360.0)
+    n = len(app.current.result.columns["cam_angle_deg"])
+    app.plot_angle.value = 123.4
+    assert app.wait_applied(60)
+    assert app.playback.angle_deg == pytest.approx(123.4)
+    _wait_sliders(app, 123.4)
+    pos, _ = app.current.poses["valve"]
+    np.testing.assert_allclose(_node(app, "valve").position, pos[model.step_index(123.4, n)], atol=1e-12)
+
+
+def _wait_sliders(app, angle):
+    deadline = time.monotonic() + 30
+    while not (abs(app.angle.value - angle) < 1e-9 and abs(app.plot_angle.value - angle) < 1e-9):
+        assert time.monotonic() < deadline, (app.angle.value, app.plot_angle.value, angle)
+        time.sleep(0.01)
+
+
+# ------------------------------------------------------------------------------------------------
+# #13.7: one session per page
+
+
+def test_each_page_has_its_own_session_and_a_closed_page_frees_it():
+    """Two pages (websocket clients speaking viser's protocol as a page does) on one server each
+    get their own explorer: a change on one page is computed and shown for that page only; the
+    page says whose session it is. A page that closes has its app stopped and dropped: its loop
+    thread and its compute process end, and the other page goes on. Stopping ends the rest."""
+    import psutil
+
+    from explorer.view.browser.app import OWN_NOTE
+    from explorer.view.browser.sessions import PerClientExplorer
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    explorer = PerClientExplorer(server, str(DEMO), playing=False)
+    url = f"http://127.0.0.1:{server.get_port()}"
+    pages = []
+    try:
+        pages = [_Browser(url), _Browser(url)]
+        for page in pages:
+            page.uuid_of("Camshaft rpm")
+        assert _wait_for(lambda: len(explorer.sessions()) == 2, process_timeout())
+        (id_a, a), (id_b, b) = sorted(explorer.sessions().items())
+        for app in (a, b):
+            assert app.wait_applied(60)
+            assert app.current.scene.drive.rpm == 3000.0
+        workers = {a.worker.process_id, b.worker.process_id}
+        assert len(workers) == 2 and None not in workers
+        # which page is which: the first to connect has the lower client id
+        first = pages[0] if a.client.client_id == min(id_a, id_b) else pages[1]
+        other = pages[1] if first is pages[0] else pages[0]
+        first.set("Camshaft rpm", 1234.0)
+        assert _wait_for(lambda: a.current.scene.drive.rpm == 1234.0, process_timeout())
+        assert b.wait_applied(60) and b.current.scene.drive.rpm == 3000.0
+        assert b.fields["drive.rpm"].value == 3000.0 and a.fields["drive.rpm"].value == 1234.0
+        assert b.worker.computed == 1  # nothing of page A's reached B
+        assert OWN_NOTE in a.share_note.content and OWN_NOTE in b.share_note.content
+        # page A leaves: its session ends, its process and thread with it
+        worker_a, thread_a = psutil.Process(a.worker.process_id), a._thread
+        first.close()
+        pages.remove(first)
+        assert _wait_for(lambda: id_a not in explorer.sessions(), process_timeout())
+        assert _wait_for(lambda: not worker_a.is_running() or worker_a.status() == psutil.STATUS_ZOMBIE,
+                         process_timeout())
+        assert not thread_a.is_alive()
+        assert a.worker._thread is None or not a.worker._thread.is_alive()
+        # B still works
+        other.set("Camshaft rpm", 2000.0)
+        assert _wait_for(lambda: b.current.scene.drive.rpm == 2000.0, process_timeout())
+    finally:
+        for page in pages:
+            page.close()
+        explorer.stop()
+        server.stop()
+    assert explorer.sessions() == {}
+    assert not b._thread.is_alive()
+    for app in (a, b):
+        assert app.loop_errors == 0 and app.worker.internal_errors == 0
+
+
+
+def test_a_shared_session_says_so_on_the_page(app):
+    from explorer.view.browser.app import SHARED_NOTE
+
+    assert app.client is None and SHARED_NOTE in app.share_note.content

@@ -253,17 +253,23 @@ def _worker_of(server_pid: int) -> psutil.Process:
     raise AssertionError("explorer serve started no compute process")
 
 
+@pytest.mark.parametrize("mode", ["--shared", "--per-client"])
 @pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGKILL])
-def test_explorer_serve_guards_itself_and_leaves_no_worker(stop_signal):
+def test_explorer_serve_guards_itself_and_leaves_no_worker(stop_signal, mode):
     """The command itself: the Origin check is in place (cli_serve imports the app before it
-    starts the server), and its compute process ends with it, stopped cleanly or killed."""
-    from test_viewer import _kill, _start_serve
+    starts the server), and its compute process ends with it, stopped cleanly or killed. Per
+    client, the compute process is the connected page's."""
+    from test_viewer import _Browser, _kill, _start_serve
 
-    proc, url, _ = _start_serve(DEMO)
+    proc, url, _ = _start_serve(DEMO, mode)
+    page = None
     try:
         port = int(url.rstrip("/").rsplit(":", 1)[1])
         assert _handshake(port, "http://evil.example") == 403
         assert _handshake(port, f"http://127.0.0.1:{port}") == 101
+        if mode == "--per-client":
+            page = _Browser(url)
+            page.uuid_of("Camshaft rpm")  # its session is there
         worker = _worker_of(proc.pid)
         assert os.getsid(worker.pid) == worker.pid
         proc.send_signal(stop_signal)
@@ -271,6 +277,9 @@ def test_explorer_serve_guards_itself_and_leaves_no_worker(stop_signal):
         assert proc.returncode == (0 if stop_signal == signal.SIGINT else -signal.SIGKILL)
         assert _ends(worker.pid), "the compute process outlived explorer serve"
     finally:
+        if page is not None:
+            with contextlib.suppress(Exception):
+                page.close()
         _kill(proc)
 
 
@@ -392,12 +401,13 @@ def test_the_issues_attack_over_the_websocket_leaves_explorer_serve_responsive_a
     HTTP, and Ctrl-C stops it at once, with its compute process, even mid-computation."""
     from test_viewer import _Browser, _kill, _start_serve
 
-    proc, url, _ = _start_serve(DEMO)
+    proc, url, _ = _start_serve(DEMO)  # per client: the page's own session takes the attack
     browser = None
     try:
         port = int(url.rstrip("/").rsplit(":", 1)[1])
-        worker = _worker_of(proc.pid)
         browser = _Browser(url)
+        browser.uuid_of("Lash [mm]")
+        worker = _worker_of(proc.pid)
         browser.set("Lash [mm]", SLOW_LASH)
         assert _http_get(port) == 200
         browser.set("Steps / revolution", 10_000_000)

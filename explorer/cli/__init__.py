@@ -16,6 +16,7 @@ COMMAND_MODULES = [
     "explorer.cli.view",
     "explorer.cli.bench",
     "explorer.cli.fit",
+    "explorer.cli.sweep",
     "explorer.cli.export",
     "explorer.cli.residual",
     "explorer.cli.design",
@@ -45,6 +46,7 @@ examples:
   explorer record SCENE -o run.rrd --sweep drive.rpm=200,240,300 && explorer view run.rrd
   explorer bench assets/scenes/schenker1902_fig2.toml --output-dir out   (accuracy vs CPU time)
   explorer fit assets/scenes/rocking_cam.toml --lift "9 mm" --open-angle "220 deg"   (rocking-cam contour)
+  explorer sweep SCENE --vary drive.rpm=1000:6000:500 -o speeds.parquet --plot speeds.png   (operating range)
   explorer export SCENE --format dxf --tolerance "1 um"   (the cam to make it: csv, dxf, stl, glb, grind)
   explorer residual assets/scenes/polydyne_demo.toml --rpm 1000:3000:21 --plot r.png   (vibration vs speed)
   explorer design assets/scenes/spline_demo.toml --objective peak-acceleration --max-pressure-angle 30   (spline lift)

@@ -20,10 +20,13 @@ every other column the scene's effects compute, the 3D parts moving step by step
 log, and a default layout. Several scenes, or a --sweep over a scene value, become separate
 recordings in the same file, so the runs can be compared in one viewer (`explorer view FILE`).
 
-Timelines: time (s), step (index), cam_angle_mdeg (cam angle in millidegrees). Entity paths:
-/valve/lift, /valve/velocity, /valve/acceleration, /valve/jerk, /follower/..., /forces/<name>,
-/torque/..., /stress/..., /angles/..., /parts/<part>, /events, /summary
-(full mapping: `python -c "import explorer.view.rerun.recording as r; help(r)"`).
+Timelines: cam_angle_deg (whole degrees; the default: plots span 0-360 deg and a revolution
+plays in 6 s at 1x), time (s), step (index). Lengths in mm as in the browser explorer, the rest
+SI. Entity paths: /valve/lift, /valve/velocity, /valve/acceleration, /valve/jerk, /follower/...,
+/forces/<name>, /torque/..., /stress/..., /angles/..., /parts/<part>, /events, /summary
+(full mapping: `python -c "import explorer.view.rerun.recording as r; help(r)"`). Sweep recordings are
+named by the varied value first ("drive.rpm=600 · Cycloidal demo"); several runs get one more
+recording, "overlay: all N runs", that draws their s, v, p and forces over each other.
 
 The file appears only when complete (written to a temporary name, then renamed); -o - (stdout),
 /dev/stdout or a FIFO gets the finished file's bytes (`explorer record SCENE -o - > run.rrd`).
@@ -48,7 +51,7 @@ def register(sub) -> None:
                        description=HELP.format(max_runs=MAX_RUNS) + "\n" + OUTPUT_HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scenes", nargs="*", metavar="SCENE",
-                   help="scene files (TOML); default: the built-in default scene")
+                   help="scene files (TOML) or built-in scenes by name (cycloidal_demo.toml); default: the built-in default scene")
     p.add_argument("-o", "--output", required=True, metavar="OUT.rrd", help="the rerun file to write")
     p.add_argument(
         "--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
@@ -97,9 +100,8 @@ def plan_runs(scene_paths: list[str], overrides: list[str], sweeps: list[str]):
         for combo in combos:
             extra = [f"{key}={value}" for key, value in combo]
             scene = load_scene(path, [*overrides, *extra])
-            label = scene.name
-            if combo:
-                label += " [" + ", ".join(extra) + "]"
+            # the varied value first: the viewer's recording list cuts long names at the end
+            label = f"{', '.join(extra)} · {scene.name}" if combo else scene.name
             plans.append((label, scene))
     labels = [label for label, _ in plans]
     # labels name the recordings in the viewer: make repeated ones distinguishable

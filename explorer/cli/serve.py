@@ -17,6 +17,10 @@ effects in the side panel; every change is recomputed at once, in a child proces
 10 s: a longer computation is stopped and the page says so, keeping the previous result. Pages
 of other sites cannot connect (websocket handshakes with a foreign Origin get 403).
 
+Every page (browser tab) has its own session by default: its own controls, results and compute
+process, ended when the page closes; at most 32 pages at once. --shared gives all pages one
+session instead (one person's change shows on every page); the page says which it is.
+
 Binds 127.0.0.1 (this machine only) unless --host says otherwise. Ctrl-C (or SIGTERM, SIGHUP)
 stops it cleanly: the --rerun stream is flushed and the --rerun-save file completed. A stop that
 takes longer than 20 s (EXPLORER_SHUTDOWN_TIMEOUT) on a very busy machine, or a second Ctrl-C,
@@ -39,6 +43,12 @@ def register(sub) -> None:
     p.add_argument("--rerun-port", type=int, default=None, metavar="N",
                    help="port of the --rerun gRPC stream on 127.0.0.1 (default 9876)")
     p.add_argument("--paused", action="store_true", help="start with the animation paused")
+    share = p.add_mutually_exclusive_group()
+    share.add_argument("--per-client", dest="shared", action="store_false",
+                       help="every page its own controls, results and computation (the default)")
+    share.add_argument("--shared", dest="shared", action="store_true",
+                       help="one session for all pages: a change on one page changes every page")
+    p.set_defaults(shared=False)
     p.set_defaults(run=run)
 
 
@@ -69,6 +79,7 @@ def run(args) -> int:
     import viser
 
     from ..view.browser.app import ExplorerApp
+    from ..view.browser.sessions import PerClientExplorer
 
     with Supervisor("explorer serve") as supervisor:
         stream = server = app = None
@@ -77,7 +88,11 @@ def run(args) -> int:
                 stream = open_live_stream(args)
             server = viser.ViserServer(host=args.host, port=args.port, verbose=False)
             on_result = (lambda prepared: stream.log(prepared.result, prepared.label)) if stream is not None else None
-            app = ExplorerApp(server, scene.source, args.overrides, playing=not args.paused, on_result=on_result)
+            if args.shared:
+                app = ExplorerApp(server, scene.source, args.overrides, playing=not args.paused, on_result=on_result)
+            else:
+                app = PerClientExplorer(server, scene.source, args.overrides, playing=not args.paused,
+                                        on_result=on_result)
             shown_host = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
             if not supervisor.stopping.is_set():
                 print(f"Valve-Gear Explorer: http://{shown_host}:{server.get_port()}  (Ctrl-C stops)", flush=True)

@@ -20,7 +20,7 @@ output on /dev/stdout, the brief report goes to stderr.
 
 def add_scene_arguments(parser: argparse.ArgumentParser, optional: bool = True) -> None:
     parser.add_argument(
-        "scene", nargs="?" if optional else None, help="scene file (TOML); default: the built-in default scene"
+        "scene", nargs="?" if optional else None, help="scene file (TOML) or a built-in scene by name (cycloidal_demo.toml); default: the built-in default scene"
     )
     parser.add_argument(
         "--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",

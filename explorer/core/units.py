@@ -355,3 +355,24 @@ G0 = 9.80665  # m/s^2, standard gravity: 1 kgf = G0 N exactly
 KGF = G0  # N per kgf
 TECHNICAL_MASS = G0  # kg per kgf*s^2/m
 AT = G0 * 1e4  # Pa per technical atmosphere (kgf/cm^2)
+
+
+# Printed figures: a summary holds differences of equal quantities (a deceleration difference,
+# a closure integral, a saving of zero) that come out as round-off, 1e-12 instead of 0. No figure
+# this program prints means anything below a nanometre, a nanonewton or a nano-anything in SI,
+# so smaller magnitudes print as 0; dimensionless relative errors (keys with "relative") keep
+# theirs, they are the figure. The rest keep 12 significant digits: 53.400000000000006 is 53.4,
+# and no computed quantity here is known to better than that.
+NOISE_FLOOR_SI = 1e-9
+PRINTED_DIGITS = 12
+
+
+def printable(value: float, key: str = "") -> float:
+    """`value` without round-off noise for printing: |value| < NOISE_FLOOR_SI -> 0.0 (unless
+    `key` names a relative figure), 12 significant digits, and never -0.0."""
+    if not math.isfinite(value):
+        return value
+    if abs(value) < NOISE_FLOOR_SI and "relative" not in key:
+        return 0.0
+    value = float(f"{value:.{PRINTED_DIGITS}g}")
+    return value + 0.0  # -0.0 + 0.0 is +0.0

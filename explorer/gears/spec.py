@@ -312,6 +312,10 @@ def _check_scene(spec: GearSpec, fields: dict) -> None:
                          f"{'lift' if kind == 'pivoted-roller' else 'latch motion'})")
     if kind == "pivoted-roller" and lift.law == "contour":
         raise InputError(file, "lift.law", "a pivoted roller lever synthesises its cam from a lift law, not from [cam]")
+    if kind == "pivoted-roller" and lift.law not in LAWS:
+        # its cam is synthesised through the closed-form law's jets (gears/pivoted.py)
+        raise InputError(file, "lift.law", f"a pivoted roller lever synthesises its cam from one of the laws "
+                         f"{', '.join(LAWS)}, not from law \"{lift.law}\"")
     if kind in ("pivoted-roller", "rocking-cam") and follower.roller_radius <= 0.0:
         raise InputError(file, "follower.roller_radius", f"the {kind} gear needs a roller (roller_radius > 0)")
     if kind == "rolling-lever" and "elastic" in effects:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 DEFAULT_SCENE = "schenker1902_fig2.toml"
@@ -19,6 +20,22 @@ def scenes_dir() -> Path:
 
 def builtin_scenes() -> list[Path]:
     return sorted(scenes_dir().glob("*.toml"))
+
+
+def find_scene(name: str | os.PathLike) -> str | os.PathLike:
+    """The file a scene argument names: the path itself when something is there, else the
+    built-in scene of that name as the explorer's Scene dropdown lists it ("cycloidal_demo.toml",
+    or without ".toml"), else the argument unchanged (its reader then says "file not found").
+    A name with a directory part is always a path: "./x.toml" never means a built-in."""
+    text = os.fspath(name)
+    if os.path.lexists(text) or os.sep in text or not text:
+        return name
+    try:
+        builtins = {p.name: p for p in builtin_scenes()}
+    except FileNotFoundError:
+        return name
+    found = builtins.get(text) or builtins.get(text + ".toml")
+    return str(found) if found is not None else name
 
 
 def default_scene() -> Path:

@@ -186,8 +186,10 @@ def load_scene(path: str | os.PathLike, overrides: list[str] | tuple[str, ...] =
     """Read and validate a scene file; `overrides` are "section.key=value" strings (TOML values)."""
     from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
 
-    file = str(path)
-    data = read_regular(path, file=file, key="-", limit=MAX_SCENE_FILE_BYTES)
+    from .builtin import find_scene
+
+    file = str(path)  # errors name the file as the user gave it
+    data = read_regular(find_scene(path), file=file, key="-", limit=MAX_SCENE_FILE_BYTES)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:

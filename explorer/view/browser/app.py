@@ -63,6 +63,15 @@ MAGNIFICATION_RANGE = (1.0, 50.0)
 # A value typed into a field on the page is applied once the typing pauses this long (newest
 # wins), never per keystroke: viser sends every change of a text or number input.
 TYPING_PAUSE_S = 0.6
+# The error box shows at most this many lines' height and scrolls beyond: a long message must not
+# push the controls below it off an 800 px page.
+ERROR_BOX_MAX_EM = 7.5
+PLOT_SLIDER_ORDER = 1e6  # after every plot: the plots are added and removed as results change
+NO_EVENT = "—"
+# What the page says about who else sees it (`explorer serve --shared` / `--per-client`)
+SHARED_NOTE = ("Shared session: everyone connected to this server sees these controls and results, "
+               "and a change made on one page changes them on all.")
+OWN_NOTE = "Your own session: your changes are yours; others on this server do not see them."
 
 
 def _user_overrides(overrides) -> dict[str, str]:
@@ -154,9 +163,11 @@ class ExplorerApp:
         on_result: Callable[[Prepared], None] | None = None,
         scenes: list[Path] | None = None,
         time_limit: float | None = COMPUTE_TIME_LIMIT_S,
+        client=None,
     ):
-        from ...scene.builtin import builtin_scenes
+        from ...scene.builtin import builtin_scenes, find_scene
 
+        scene_path = str(find_scene(scene_path))  # a built-in scene named as the Scene list shows it
         port = server.get_port()
         if not origin.guarded(port):
             raise RuntimeError(
@@ -167,6 +178,11 @@ class ExplorerApp:
             origin.allow(port, host)  # the address the user gave (a name the browser will use)
         self._port = port
         self.server = server
+        # Shared (client None): the server's GUI and scene, seen and changed by every page.
+        # Per client: this page's own GUI, scene and camera; nobody else sees them
+        # (PerClientExplorer makes one app per page and ends it when the page goes).
+        self.client = client
+        self.target = client if client is not None else server
         self.fps = fps
         self._lock = threading.Lock()
         self._echo = threading.local()  # set while the loop assigns GUI values itself
@@ -218,10 +234,12 @@ class ExplorerApp:
         self._last_spring = math.nan
         self._last_cursor = 0.0
         self._play_shown = playing  # what the loop last put in the Play box and the slider
-        self._slider_shown = 0.0
+        self._slider_shown = [0.0, 0.0]  # what the loop last put into each cam-angle slider
         self._cursor_index = -1
         self._plot_handles: list[Any] = []
         self._plot_signature: list[tuple] = []
+        self._event_angles: dict[str, float] = {}  # "Go to event" entry -> cam angle (under the lock)
+        self._stale_shown = None
         self.camera: meshes.CameraFrame | None = None  # the initial camera (new pages, Reset View)
         self.client_cameras: dict[int, meshes.CameraFrame] = {}  # what each page was last aimed at
         self._earlier_aims: dict[int, tuple] = {}  # and the aims before that, newest last
@@ -230,8 +248,11 @@ class ExplorerApp:
         self._build_gui()
         # a page counts as connected once it has reported its camera, so its canvas' shape is
         # known: the loop frames the gear for it
-        server.on_client_connect(self._client_connected)
-        server.on_client_disconnect(self._client_disconnected)
+        if client is None:
+            server.on_client_connect(self._client_connected)
+            server.on_client_disconnect(self._client_disconnected)
+        else:
+            self._client_connected(client)
         self.worker = ComputeWorker(on_ready=self._on_ready, on_error=self._on_error, on_result=on_result,
                                     time_limit=time_limit).start()
         self._submit(refresh=True)
@@ -241,11 +262,12 @@ class ExplorerApp:
     # ------------------------------------------------------------------ GUI construction
 
     def _build_gui(self) -> None:
-        gui = self.server.gui
+        gui = self.target.gui
         gui.configure_theme(control_width="large", dark_mode=False, show_logo=False, show_share_button=False)
         gui.main_panel.dock_right()
         gui.main_panel.set_width(380)
         gui.add_markdown("**Valve-Gear Explorer** — cam, roller, lever, spring, valve")
+        self.share_note = gui.add_markdown(f"<small>{SHARED_NOTE if self.client is None else OWN_NOTE}</small>")
         self.status = gui.add_html(self._status_html(""))
 
         with gui.add_folder("Playback"):
@@ -260,6 +282,8 @@ class ExplorerApp:
 
         with gui.add_folder("Scene"):
             self.scene = gui.add_dropdown("Scene", list(self.scene_paths), initial_value=self._scene_label)
+            # right under the scene: an 800 px page shows it even with an error above
+            self.reset = gui.add_button("Reset to scene file", hint="every field back to the scene file's values")
             laws = list(LAWS) + list(SPECIAL_LAWS)
             self.fields: dict[str, Any] = {}
             for key, (label, kind, unit) in PARAMETERS.items():
@@ -280,22 +304,33 @@ class ExplorerApp:
                     handle = gui.add_checkbox(name, initial_value=name == "kinematics")
                     handle.on_update(self._effects_changed)
                     self.effects[name] = handle
-            self.reset = gui.add_button("Reset to scene file")
 
         # plots and read-outs in their own panel on the left, beside the 3D view
         self.side_panel = gui.add_panel()
         self._plots_tab = self.side_panel.add_tab("Plots")
         with self._plots_tab:
-            self.plot_note = gui.add_markdown("", visible=False)
+            self.stale_plots = gui.add_markdown("", visible=False, order=-2.0)
+            self.plot_note = gui.add_markdown("", visible=False, order=-1.0)
+            # viser's uPlot sends no clicks or pointer positions back to Python: the nearest thing
+            # to clicking a plot is this slider right under the plots, on their angle scale
+            self.plot_angle = gui.add_slider(PLOT_X_LABEL, min=0.0, max=360.0, step=0.1, initial_value=0.0,
+                                             order=PLOT_SLIDER_ORDER,
+                                             hint="scrub: click or drag to show this angle (pauses the animation)")
         self._readout_tab = self.side_panel.add_tab("Read-outs")
         with self._readout_tab:
+            self.stale_readout = gui.add_markdown("", visible=False)
             self.readout = gui.add_markdown("computing…")
+            self.event_jump = gui.add_dropdown("Go to event", (NO_EVENT,), initial_value=NO_EVENT,
+                                               hint="shows the gear at the event's cam angle (pauses the animation)")
+            self.events_table = gui.add_html("")
         self.side_panel.dock_left()
         self.side_panel.set_width(440)
 
         self.play.on_update(self._play_changed)
         self.speed.on_update(self._speed_changed)
         self.angle.on_update(self._angle_changed)
+        self.plot_angle.on_update(self._angle_changed)
+        self.event_jump.on_update(self._event_chosen)
         self.magnification.on_update(self._magnification_changed)
         self.scene.on_update(self._scene_changed)
         self.reset.on_click(self._reset_clicked)
@@ -310,9 +345,11 @@ class ExplorerApp:
         if not message:
             return '<div style="color:#2e7d32;font-size:0.85em">ready</div>'
 
+        # a long message scrolls inside its box: the controls below stay where they are
         return (
-            '<div role="alert" style="color:#b71c1c;background:#fdecea;border:1px solid #f5c6cb;'
-            'border-radius:4px;padding:4px 6px;font-size:0.85em;white-space:pre-wrap">'
+            '<div role="alert" class="explorer-error" style="color:#b71c1c;background:#fdecea;'
+            'border:1px solid #f5c6cb;border-radius:4px;padding:4px 6px;font-size:0.85em;white-space:pre-wrap;'
+            f'max-height:{ERROR_BOX_MAX_EM}em;overflow-y:auto;overflow-wrap:anywhere">'
             f"{html.escape(message)}</div>"
         )
 
@@ -469,6 +506,16 @@ class ExplorerApp:
         with self._lock:
             self._magnification = min(max(value, MAGNIFICATION_RANGE[0]), MAGNIFICATION_RANGE[1])
         self._submit()
+
+    def _event_chosen(self, event) -> None:
+        if self._is_echo():
+            return
+        with self._lock:
+            angle = self._event_angles.get(event.target.value)
+            if angle is None:
+                return  # the "—" entry, or a list replaced meanwhile
+            self._scrub = angle
+            self._pause_requested = True
 
     def _play_changed(self, event) -> None:
         if self._is_echo():
@@ -628,7 +675,7 @@ class ExplorerApp:
             aim: set[int] = set()
             if prepared is not None:
                 aim, self._aim_pending = self._aim_pending, set()
-        with self.server.atomic():
+        with self.target.atomic():
             if incoming is not None:
                 self._apply(incoming, refresh, choose_speed)
                 self.handled_serial = max(self.handled_serial, incoming.request.serial)
@@ -643,15 +690,30 @@ class ExplorerApp:
             if (self.error_text, note) != self._status_shown:
                 self.status.content = self._status_html(self.error_text, note)
                 self._status_shown = (self.error_text, note)
+            self._mark_stale()
             if self.current is not None:
                 self._pose(angle, force=incoming is not None)
                 self._sync_controls(angle, playing, scrub)
-                clients = self.server.get_clients() if aim else {}
+                clients = self._clients() if aim else {}
                 for client_id in aim:
                     if client_id in clients:
                         self._aim_client(clients[client_id], self.current)
-        self.server.flush()
+        self.target.flush()
         self.frames += 1
+
+    def _mark_stale(self) -> None:
+        """While the last change failed, the plots and read-outs say that they are the previous
+        result's (the status box says why)."""
+        stale = bool(self.error_text) and self.current is not None
+        key = (stale, self.current.label if stale else "")
+        if key == self._stale_shown:
+            return
+        text = (f"⚠ **Stale:** the last change failed (see the red box); shown is the previous result, "
+                f"`{self.current.label}`") if stale else ""
+        for handle in (self.stale_plots, self.stale_readout):
+            handle.content = text
+            handle.visible = stale
+        self._stale_shown = key
 
     def _sync_controls(self, angle: float, playing: bool, scrub: float | None) -> None:
         """Keep the Play box and the cam-angle slider in step with the playback, without ever
@@ -668,11 +730,12 @@ class ExplorerApp:
             elif box == self._play_shown:
                 self.play.value = self._play_shown = playing
             shown = round(angle, 1) % 360.0
-            slider = self.angle.value
-            if abs(slider - shown) < 1e-9 or (scrub is not None and abs(slider - scrub) < 1e-9):
-                self._slider_shown = slider  # in step, or the scrub just applied came from it
-            if abs(slider - self._slider_shown) < 1e-9 and abs(slider - shown) > 1e-9:
-                self.angle.value = self._slider_shown = shown
+            for k, handle in enumerate((self.angle, self.plot_angle)):
+                slider = handle.value
+                if abs(slider - shown) < 1e-9 or (scrub is not None and abs(slider - scrub) < 1e-9):
+                    self._slider_shown[k] = slider  # in step, or the scrub just applied came from it
+                if abs(slider - self._slider_shown[k]) < 1e-9 and abs(slider - shown) > 1e-9:
+                    handle.value = self._slider_shown[k] = shown
 
     def _apply(self, prepared: Prepared, refresh: bool, choose_speed: bool) -> None:
         """A new result (or a new magnification): meshes that changed, plots, read-outs, fields."""
@@ -697,7 +760,7 @@ class ExplorerApp:
                 self._shown_meshes[name] = (vertices, faces)
                 continue
             pos, quat = prepared.poses[name]
-            self._handles[name] = self.server.scene.add_mesh_simple(
+            self._handles[name] = self.target.scene.add_mesh_simple(
                 part_node(name), vertices, faces, color=_color(name),
                 position=tuple(pos[i]), wxyz=tuple(quat[i]),
                 flat_shading=False, side="double" if name == "spring" else "front",
@@ -712,6 +775,13 @@ class ExplorerApp:
         if previous is None or prepared.result is not previous.result:
             self._update_plots(prepared)
             self.readout.content = prepared.readout
+            self._show_events(prepared)
+        law = self.fields["lift.law"]
+        if prepared.laws and tuple(law.options) != prepared.laws:
+            with self._programmatic():  # only the laws this scene can take
+                if law.value not in prepared.laws and prepared.scene.lift.law in prepared.laws:
+                    law.value = prepared.scene.lift.law
+                law.options = prepared.laws
         if previous is None or Path(previous.request.path) != Path(prepared.request.path):
             self._aim_camera(prepared)
         self._show_values(prepared, refresh)
@@ -721,6 +791,16 @@ class ExplorerApp:
                 self.playback.speed = dict(SPEEDS)[label]
             with self._programmatic():
                 self.speed.value = label
+
+    def _show_events(self, prepared: Prepared) -> None:
+        self.events_table.content = prepared.events_html
+        labels = tuple(label for label, _ in prepared.events)
+        with self._lock:
+            self._event_angles = dict(prepared.events)
+        with self._programmatic():
+            self.event_jump.options = (NO_EVENT, *labels)
+            self.event_jump.value = NO_EVENT
+            self.event_jump.disabled = not labels
 
     def _show_values(self, prepared: Prepared, refresh: bool) -> None:
         """Make every field show the value the result was computed with, except a field the user
@@ -777,14 +857,21 @@ class ExplorerApp:
         """Frame the new scene: the initial camera (new pages, "Reset View") and every page's
         own camera, each for its canvas' shape."""
         frame = camera_frame(prepared)
-        initial = self.server.initial_camera
-        initial.fov = frame.fov
-        initial.up = frame.up
-        initial.position = frame.position
-        initial.look_at = frame.look_at
+        if self.client is None:  # the initial camera is the server's: only a shared app sets it
+            initial = self.server.initial_camera
+            initial.fov = frame.fov
+            initial.up = frame.up
+            initial.position = frame.position
+            initial.look_at = frame.look_at
         self.camera = frame
-        for client in self.server.get_clients().values():
+        for client in self._clients().values():
             self._aim_client(client, prepared)
+
+    def _clients(self) -> dict:
+        """The pages this app shows itself on."""
+        if self.client is not None:
+            return {self.client.client_id: self.client}
+        return self.server.get_clients()
 
     def _aim_client(self, client, prepared: Prepared) -> None:
         camera = client.camera
@@ -842,7 +929,7 @@ class ExplorerApp:
             self._plot_handles = []
             with self._plots_tab:
                 for plot in prepared.plots:
-                    self._plot_handles.append(self.server.gui.add_uplot(
+                    self._plot_handles.append(self.target.gui.add_uplot(
                         data=self._plot_data(plot, self.playback.angle_deg), **plot_options(plot)))
             self._plot_signature = signature
         else:
@@ -885,4 +972,5 @@ class ExplorerApp:
         self._stop.set()
         self._thread.join(timeout=5.0)
         self.worker.stop()  # ends the computing child process too
-        origin.forget(self._port)
+        if self.client is None:
+            origin.forget(self._port)  # per client, the server's guard outlives this page

@@ -217,10 +217,78 @@ SKIP_SUMMARY = {"scene", "rpm", "steps_per_revolution", "effects", "events", "wa
 
 
 def _fmt_value(key: str, value) -> tuple[str, str]:
+    from ...core.units import printable
+
+    value = printable(float(value), key)  # round-off (4.97e-14, -0) shows as 0
     for suffix, unit, k in UNIT_SUFFIXES:
         if key.endswith(suffix):
-            return key[: -len(suffix)].replace("_", " "), f"{value * k:.4g} {unit}"
+            return key[: -len(suffix)].replace("_", " "), f"{printable(value * k):.4g} {unit}"
     return key.replace("_", " "), f"{value:.4g}"
+
+
+def _event_speed(event) -> str:
+    from ...core.units import printable
+
+    v = event.get("velocity_m_s", event.get("relative_velocity_m_s"))
+    return f"{printable(float(v)):+.3f} m/s" if isinstance(v, (int, float)) and not isinstance(v, bool) else ""
+
+
+def event_choices(result) -> list[tuple[str, float]]:
+    """Every event of the result as (label, cam angle in degrees), in the order of the summary:
+    the entries of the explorer's "Go to event" list. Labels are numbered, so equal kinds at
+    different angles stay distinct."""
+    out = []
+    for k, e in enumerate(result.summary.get("events", []), start=1):
+        angle = e.get("cam_angle_deg")
+        if not isinstance(angle, (int, float)) or not math.isfinite(float(angle)):
+            continue
+        speed = _event_speed(e)
+        out.append((f"{k}. {e.get('kind', '?')} at {float(angle):.2f}°" + (f", {speed}" if speed else ""),
+                    float(angle)))
+    return out
+
+
+EVENTS_HEIGHT_PX = 220  # the events table scrolls inside this height: every event is there
+
+
+def events_html(result) -> str:
+    """All events as a table that scrolls within EVENTS_HEIGHT_PX (no "… 11 more")."""
+    import html
+
+    events = list(result.summary.get("events", []))
+    if not events:
+        return "<div style='font-size:0.85em'>no events</div>"
+    rows = []
+    for k, e in enumerate(events, start=1):
+        angle = e.get("cam_angle_deg")
+        shown = f"{float(angle):.2f}°" if isinstance(angle, (int, float)) else ""
+        rows.append(f"<tr><td>{k}</td><td>{html.escape(str(e.get('kind', '?')))}</td>"
+                    f"<td style='text-align:right'>{shown}</td>"
+                    f"<td style='text-align:right'>{html.escape(_event_speed(e))}</td></tr>")
+    return (f"<div class='explorer-events' style='max-height:{EVENTS_HEIGHT_PX}px;overflow-y:auto;font-size:0.85em'>"
+            "<table style='width:100%;border-collapse:collapse'><thead><tr><th>#</th><th>event</th>"
+            "<th style='text-align:right'>angle</th><th style='text-align:right'>speed</th></tr></thead><tbody>"
+            + "".join(rows) + "</tbody></table></div>")
+
+
+def spring_advice_lines(summary) -> list[str]:
+    """The spring advisor's advice (forces effect, [spring_design]) as read-out lines."""
+    design = summary.get("spring_design")
+    advice = design.get("advice") if isinstance(design, dict) else None
+    if not isinstance(advice, dict):
+        return []
+
+    def n(key, k=1.0, unit="N"):
+        v = advice.get(key)
+        return f"{v * k:.4g} {unit}" if isinstance(v, (int, float)) and math.isfinite(v) else "?"
+
+    lines = ["", f"**Spring advice** for {advice.get('rpm', 0):g} rpm with a margin of {n('safety_margin_N')}", ""]
+    lines.append(f"- preload {n('preload_N')}, rate {n('rate_N_m', 1e-3, 'N/mm')} "
+                 f"(largest spring force {n('max_spring_force_N')})")
+    lines.append(f"- with the scene's rate: preload {n('preload_for_current_rate_N')}")
+    lines.append(f"- force needed {n('needed_spring_force_N')} (opening {n('opening_required_spring_force_N')}, "
+                 f"closing {n('closing_required_spring_force_N')})")
+    return lines
 
 
 def readout_markdown(result, label: str = "") -> str:
@@ -236,18 +304,8 @@ def readout_markdown(result, label: str = "") -> str:
     lines += ["", "| effect | compute |", "|---|---:|"]
     for name, info in s.get("effects", {}).items():
         lines.append(f"| {name} | {1e3 * info['compute_time_s']:.2f} ms |")
-    events = list(s.get("events", []))
-    lines += ["", f"**Events** ({len(events)})", ""]
-    if events:
-        lines += ["| event | angle | speed |", "|---|---:|---:|"]
-        for e in events[:14]:
-            v = e.get("velocity_m_s", e.get("relative_velocity_m_s"))
-            speed = f"{v:+.3f} m/s" if isinstance(v, (int, float)) else ""
-            lines.append(f"| {e.get('kind', '?')} | {e.get('cam_angle_deg', float('nan')):.2f}° | {speed} |")
-        if len(events) > 14:
-            lines.append(f"| … {len(events) - 14} more | | |")
-    else:
-        lines.append("none")
+    # the events are a table of their own beside this text (events_html) with "Go to event"
+    lines += spring_advice_lines(s)
     figures = []
     for key, value in s.items():
         if key in SKIP_SUMMARY or isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -282,6 +340,9 @@ class Prepared:
     new_result: bool  # False when only the magnification changed since the worker's previous bundle
     seconds: float = 0.0  # wall time of the preparation
     plot_note: str = ""  # why a plot is missing (plots_note)
+    laws: tuple[str, ...] = ()  # the lift laws this scene file can take (offered_laws)
+    events: tuple[tuple[str, float], ...] = ()  # event_choices(result)
+    events_html: str = ""
 
     @functools.cached_property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -306,6 +367,29 @@ def _same_cam(a, b) -> bool:
         return False
 
 
+def offered_laws(path: str, overrides=(), current: str | None = None) -> tuple[str, ...]:
+    """The lift laws the scene file can take: each law of the dropdown that the scene loads and
+    builds a lift with (a table law needs its table, a contour its [cam], "gear" a gear...).
+    Any failure, not only bad input, leaves the law out: the dropdown must not offer what cannot
+    be computed. The current law is always offered. Tens of milliseconds, once per scene file."""
+    from ...lift.laws import LAWS
+    from ...effects.lift import build_lift
+    from ...scene.scene import SPECIAL_LAWS, load_scene
+
+    others = [o for o in overrides if not o.startswith("lift.law=")]
+    offered = []
+    for law in (*LAWS, *SPECIAL_LAWS):
+        if law == current:
+            offered.append(law)
+            continue
+        try:
+            build_lift(load_scene(path, [*others, override("lift.law", law)]))
+        except Exception:  # noqa: BLE001 - whatever fails, the law is not offered
+            continue
+        offered.append(law)
+    return tuple(offered)
+
+
 def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
     """Load, simulate and build everything the viewer needs. Raises InputError on bad input.
     Reuses the previous simulation when only the magnification changed."""
@@ -322,6 +406,7 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
         plots, readout, values = previous.plots, previous.readout, previous.values
         plot_note = previous.plot_note
         lift = previous.lift
+        events, table = previous.events, previous.events_html
     else:
         scene = load_scene(request.path, list(request.overrides))
         lift = build_lift(scene)
@@ -351,13 +436,18 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
         plot_note = plots_note(result)
         readout = readout_markdown(result, _request_label(request))
         values = scene_values(scene)
+        events, table = tuple(event_choices(result)), events_html(result)
+    if previous is not None and previous.request.path == request.path and previous.laws:
+        laws = previous.laws if scene.lift.law in previous.laws else (*previous.laws, scene.lift.law)
+    else:
+        laws = offered_laws(request.path, request.overrides, scene.lift.law)
     poses = meshes.part_poses(scene, result, magnification=request.magnification, lay=lay, lift=lift)
     lengths = meshes.spring_length(lay, meshes.displayed_valve_lift(result, request.magnification))
     prepared = Prepared(
         request=request, scene=scene, result=result, layout=lay, lift=lift, meshes=parts, poses=poses,
         spring_lengths=np.asarray(lengths, dtype=float), plots=plots, readout=readout,
         label=_request_label(request), values=values, new_result=not same, seconds=time.perf_counter() - started,
-        plot_note=plot_note,
+        plot_note=plot_note, laws=laws, events=events, events_html=table,
     )
     if previous is None or Path(previous.request.path) != Path(request.path):
         prepared.bounds  # another scene file: the viewer aims its camera at it, here off the GUI's loop
@@ -550,7 +640,7 @@ class ComputeWorker:
         return dataclasses.replace(
             prepared, scene=last.scene, result=last.result, layout=last.layout, lift=last.lift,
             meshes=last.meshes, plots=last.plots, readout=last.readout, values=last.values,
-            plot_note=last.plot_note,
+            plot_note=last.plot_note, events=last.events, events_html=last.events_html,
         )
 
 

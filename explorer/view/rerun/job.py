@@ -15,11 +15,20 @@ import signal
 def _execute(job: dict) -> None:
     import rerun as rr
 
-    from .recording import APP_ID, blueprint, log_result, new_recording
+    from .recording import APP_ID, blueprint, log_overlay, log_result, new_recording
 
     layout = blueprint(*job["layout"]) if job.get("layout") is not None else None
     if job["kind"] == "blueprint":
         layout.save(APP_ID, job["path"])
+        return
+    if job["kind"] == "overlay":
+        rec = new_recording("overlay")
+        rec.set_sinks(rr.FileSink(job["path"]))
+        try:
+            log_overlay(rec, job["runs"], job["label"])
+            rec.flush()
+        finally:
+            rec.disconnect()
         return
     sinks = [rr.FileSink(where) if kind == "file" else rr.GrpcSink(where) for kind, where in job["sinks"]]
     run = job["run"]

@@ -121,6 +121,9 @@ def read_blueprint_views(path) -> list[dict]:
     views: dict[str, dict] = {}
     for chunk in reader.stream(store=stores[0]):
         entity = chunk.entity_path
+        if entity == "/time_panel":
+            _time_panel(chunk, views)
+            continue
         if not entity.startswith("/view/"):
             continue
         view_id = entity.split("/")[2]
@@ -141,4 +144,25 @@ def read_blueprint_views(path) -> list[dict]:
                 view["name"] = last[0]
             elif name.endswith("ViewContents:query"):
                 view["contents"] = list(last)
-    return list(views.values())
+            elif name == "PlotLegend:corner":  # 1 LeftTop, 2 RightTop, 3 LeftBottom, 4 RightBottom
+                view["legend_corner"] = ("LeftTop", "RightTop", "LeftBottom", "RightBottom")[last[0] - 1]
+            elif name == "VisibleTimeRanges:ranges":
+                view["time_ranges"] = {r["timeline"]: (r["range"]["start"], r["range"]["end"]) for r in last}
+    panel = views.pop("__time_panel__", None)
+    return list(views.values()) + ([panel] if panel else [])
+
+
+def _time_panel(chunk, views: dict) -> None:
+    """The time panel's timeline, fps and playback speed, as a pseudo-view {"class": "TimePanel"}."""
+    batch = chunk.to_record_batch()
+    panel = views.setdefault("__time_panel__", {"class": "TimePanel"})
+    for name in batch.schema.names:
+        if ":" not in name or name == ROW_ID:
+            continue
+        values = batch.column(name).to_pylist()
+        if not values or values[-1] is None:
+            continue
+        last = values[-1]
+        for key in ("timeline", "fps", "playback_speed"):
+            if name.endswith(":" + key):
+                panel[key] = last[0] if isinstance(last, list) else last

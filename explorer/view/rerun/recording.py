@@ -7,11 +7,15 @@ so the viewer shows them side by side and can compare them.
 Timelines (every per-step row carries all three):
 - `time`            duration, t = θ/ω in seconds from the start of the revolution (the CSV's time_s)
 - `step`            sequence, the step index 0 … N−1 of the revolution
-- `cam_angle_mdeg`  sequence, the cam angle in millidegrees, round(1000·θ/°) — comparable between
-                    runs at different speeds or step counts
+- `cam_angle_deg`   sequence, the cam angle in whole degrees, round(θ/°) — comparable between runs
+                    at different speeds or step counts; the default timeline. Its plots span 0 to
+                    360°, and at 1× a revolution plays in ANGLE_PLAYBACK_S seconds (a sequence
+                    timeline plays `fps` values a second: fps = 360 / ANGLE_PLAYBACK_S). The
+                    steps within one degree share its value; `step` has every step.
 
-Entity paths of the series (one scalar per step; SI values exactly as in `explorer simulate`'s
-CSV; the series name in the viewer carries the unit). A column `<stem>_<unit>` maps by these
+Entity paths of the series (one scalar per step; the values of `explorer simulate`'s CSV in the
+browser explorer's display units: lengths in mm (the CSV's metres times 1000), everything else
+SI as in the CSV; the series name in the viewer carries the unit). A column `<stem>_<unit>` maps by these
 rules, first match wins:
 - unit N   (forces)       -> /forces/<stem without "_force">   linkage_force_N  -> /forces/linkage
                                                                spring_force_N   -> /forces/spring
@@ -45,6 +49,14 @@ Other entities:
 
 The default blueprint puts the 3D view (over the event log) beside time-series views of lift s,
 velocity v, acceleration p and the forces (with tabs for jerk, torque, stress, angles, follower).
+Each plot's legend sits in the corner its curves leave empty (legend_corner).
+
+Several runs in one file (a --sweep, several scenes) also get one recording more, named
+"overlay: …", that holds the lift, velocity, acceleration and forces of every run, each run a
+child entity (/valve/lift/run01, … named by its label) on the cam-angle and step timelines: the
+same layout, opened on that recording, draws the runs over each other. Sweep recordings are named
+by their varied value first ("drive.rpm=600 · Cycloidal demo"), so the viewer's list, which cuts
+long names, still tells them apart.
 
 Files are written by the rules of explorer.core.outputs: to a hidden temporary name beside the
 target, renamed when complete (and only if rerun's footer is there), so an interrupted run never
@@ -79,7 +91,11 @@ APP_ID = "valve-gear-explorer"
 MERGE_TIMEOUT_S = 600.0  # `rerun rrd merge` of a long live session; it is killed past this
 TIMELINE_TIME = "time"
 TIMELINE_STEP = "step"
-TIMELINE_ANGLE = "cam_angle_mdeg"
+TIMELINE_ANGLE = "cam_angle_deg"
+ANGLE_PLAYBACK_S = 6.0  # one revolution at 1x on the cam-angle timeline
+OVERLAY_PATH_PREFIX = "run"
+# lengths in the browser explorer's unit (mm); unit suffix -> (factor, shown unit)
+DISPLAY_UNITS = {"m": (1e3, "mm")}
 TIMELINES = (TIMELINE_TIME, TIMELINE_STEP, TIMELINE_ANGLE)
 INDEX_COLUMNS = ("cam_angle_deg", "time_s")
 EVENTS_PATH = "/events"
@@ -106,7 +122,13 @@ class Series:
     column: str
     path: str
     name: str
-    unit: str
+    unit: str  # the unit shown (mm for lengths)
+    scale: float = 1.0  # shown value = SI column value * scale
+
+    def values(self, columns: Mapping) -> np.ndarray:
+        """The logged values: the SI column in the shown unit."""
+        values = np.asarray(columns[self.column], dtype=np.float64)
+        return values * self.scale if self.scale != 1.0 else values
 
 
 def split_unit(column: str) -> tuple[str, str, str]:
@@ -147,20 +169,26 @@ def series_layout(columns: Iterable[str]) -> list[Series]:
         if path in used:
             path = f"/other/{column}"
         used.add(path)
-        stem, _, unit = split_unit(column)
+        stem, suffix, unit = split_unit(column)
+        scale, unit = DISPLAY_UNITS.get(suffix, (1.0, unit))
         name = " ".join(_quantity(w) for w in stem.split("_")) + (f" [{unit}]" if unit else "")
-        out.append(Series(column=column, path=path, name=name, unit=unit))
+        out.append(Series(column=column, path=path, name=name, unit=unit, scale=scale))
     return out
 
 
 def step_indexes(result) -> dict[str, np.ndarray]:
-    """The three timelines of the per-step rows: time in s, step index, cam angle in mdeg."""
+    """The three timelines of the per-step rows: time in s, step index, cam angle in degrees."""
     angle = np.asarray(result.columns["cam_angle_deg"], dtype=float)
     return {
         TIMELINE_TIME: np.asarray(result.columns["time_s"], dtype=float),
         TIMELINE_STEP: np.arange(angle.size, dtype=np.int64),
-        TIMELINE_ANGLE: np.rint(angle * 1000.0).astype(np.int64),
+        TIMELINE_ANGLE: angle_sequence(angle),
     }
+
+
+def angle_sequence(angle_deg) -> np.ndarray:
+    """Cam angles in degrees as the cam-angle timeline's integers (nearest whole degree)."""
+    return np.rint(np.asarray(angle_deg, dtype=float)).astype(np.int64)
 
 
 def duration_ns(seconds) -> np.ndarray:
@@ -203,7 +231,7 @@ def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Map
     times = _time_columns(rr, index)
     for series in series_layout(result.columns):
         rec.log(series.path, rr.SeriesLines(names=series.name), static=True)
-        values = np.asarray(result.columns[series.column], dtype=np.float64)
+        values = series.values(result.columns)
         rec.send_columns(series.path, indexes=times, columns=rr.Scalars.columns(scalars=values))
     if parts:
         _log_parts(rec, rr, parts, poses or {}, scales or {}, colors or {}, times)
@@ -268,13 +296,13 @@ def _log_events(rec, rr, result, index: Mapping[str, np.ndarray]) -> None:
     events = list(result.summary.get("events", []))
     warnings = list(result.summary.get("warnings", []))
     n = index[TIMELINE_STEP].size
-    texts, levels, t, step, mdeg = [], [], [], [], []
+    texts, levels, t, step, degrees = [], [], [], [], []
     for message in warnings:  # a warning belongs to the whole run: show it at the start
         texts.append(f"warning: {message}")
         levels.append("WARN")
         t.append(0.0)
         step.append(0)
-        mdeg.append(0)
+        degrees.append(0)
     for event in events:
         angle = float(event["cam_angle_deg"])
         texts.append(event_text(event))
@@ -282,14 +310,14 @@ def _log_events(rec, rr, result, index: Mapping[str, np.ndarray]) -> None:
         t.append(float(event["time_s"]))
         # the step at or before the instant; the exact instant is on the `time` timeline
         step.append(min(n - 1, max(0, int(math.floor(angle / 360.0 * n + 1e-9)))))
-        mdeg.append(int(round(angle * 1000.0)))
+        degrees.append(int(angle_sequence(angle)))
     if not texts:
         return
     rec.send_columns(
         EVENTS_PATH,
         indexes=[rr.TimeColumn(TIMELINE_TIME, duration=duration_ns(t)),
                  rr.TimeColumn(TIMELINE_STEP, sequence=np.asarray(step, dtype=np.int64)),
-                 rr.TimeColumn(TIMELINE_ANGLE, sequence=np.asarray(mdeg, dtype=np.int64))],
+                 rr.TimeColumn(TIMELINE_ANGLE, sequence=np.asarray(degrees, dtype=np.int64))],
         columns=rr.TextLog.columns(text=texts, level=levels),
     )
 
@@ -371,29 +399,137 @@ def eye_for(bounds) -> dict:
     return {"position": list(frame.position), "look_target": list(frame.look_at), "eye_up": list(frame.up)}
 
 
-def blueprint(paths: Iterable[str], bounds=None):
+# the main plots of the layout: name -> the series paths it draws (those a recording has)
+MAIN_VIEWS = (
+    ("valve lift s", ("/valve/lift", "/valve_rigid/lift", "/follower/lift")),
+    ("velocity v", ("/valve/velocity", "/valve_rigid/velocity")),
+    ("acceleration p", ("/valve/acceleration", "/valve_rigid/acceleration")),
+)
+FORCES_VIEW = "forces"
+OVERLAID = tuple(p for _, paths in MAIN_VIEWS for p in paths[:1]) + ("/forces",)  # what the overlay holds
+CORNERS = ("RightTop", "LeftTop", "RightBottom", "LeftBottom")  # in this order of preference
+# the legend's box as fractions of the plot: about what rerun's legend takes in a view of the
+# default layout (a few lines of text in one corner)
+LEGEND_BOX = (0.35, 0.3)
+
+
+def view_paths(name: str, paths: Iterable[str]) -> list[str]:
+    """The series of one main view (or "forces") among `paths`."""
+    paths = list(paths)
+    if name == FORCES_VIEW:
+        return [p for p in paths if p.startswith("/forces/")]
+    wanted = dict(MAIN_VIEWS)[name]
+    return [p for p in paths if p in wanted or any(p.startswith(w + "/") for w in wanted)]
+
+
+def legend_corner(curves: Iterable[tuple[np.ndarray, np.ndarray]], box=LEGEND_BOX) -> str:
+    """The corner of a plot over 0..360° where a legend box (fractions of width and height)
+    covers the fewest samples of the curves [(angle in degrees, values)]; the y range is the
+    curves' own (what the viewer shows by default). Ties go by CORNERS' order."""
+    xs, ys = [], []
+    for x, y in curves:
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        keep = np.isfinite(x) & np.isfinite(y)
+        xs.append(x[keep])
+        ys.append(y[keep])
+    x = np.concatenate(xs) if xs else np.zeros(0)
+    y = np.concatenate(ys) if ys else np.zeros(0)
+    if y.size == 0:
+        return CORNERS[0]
+    lo, hi = float(y.min()), float(y.max())
+    span = hi - lo if hi > lo else 1.0
+    u, v = x / 360.0, (y - lo) / span  # 0..1 across, 0 (bottom) .. 1 (top)
+    w, h = box
+    inside = {
+        "RightTop": (u >= 1 - w) & (v >= 1 - h), "LeftTop": (u <= w) & (v >= 1 - h),
+        "RightBottom": (u >= 1 - w) & (v <= h), "LeftBottom": (u <= w) & (v <= h),
+    }
+    return min(CORNERS, key=lambda c: (int(np.count_nonzero(inside[c])), CORNERS.index(c)))
+
+
+def legend_corners(runs_curves: Iterable[Mapping[str, tuple[np.ndarray, np.ndarray]]]) -> dict[str, str]:
+    """view name -> legend corner, over the curves of one or more runs ({path: (angle, values)})."""
+    per_view: dict[str, list] = {}
+    for curves in runs_curves:
+        for name in [n for n, _ in MAIN_VIEWS] + [FORCES_VIEW]:
+            for path in view_paths(name, curves):
+                per_view.setdefault(name, []).append(curves[path])
+    return {name: legend_corner(curves) for name, curves in per_view.items()}
+
+
+def plotted_curves(result, points: int = 720) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """{path: (angle, shown values)} of the series the main views draw, thinned to about
+    `points` samples (enough to place a legend; a sweep keeps these for every run)."""
+    angle = np.asarray(result.columns["cam_angle_deg"], dtype=float)
+    stride = max(1, angle.size // points)
+    out = {}
+    for series in series_layout(result.columns):
+        if any(view_paths(name, [series.path]) for name in [n for n, _ in MAIN_VIEWS] + [FORCES_VIEW]):
+            out[series.path] = (angle[::stride], series.values(result.columns)[::stride])
+    return out
+
+
+def log_overlay(rec, runs: Sequence[tuple[str, np.ndarray, np.ndarray, Mapping[str, np.ndarray]]],
+                label: str) -> None:
+    """The overlay recording of several runs: each run's curves (plotted_curves) under
+    <path>/runNN, named by the run's label, on the cam-angle and time timelines."""
+    import rerun as rr
+
+    rec.send_recording_name(label)
+    lines = [f"# {label}", "", "| curve | run |", "|---|---|"]
+    for k, (run_label, angle, time_s, curves) in enumerate(runs, start=1):
+        child = f"{OVERLAY_PATH_PREFIX}{k:02d}"
+        lines.append(f"| {child} | {run_label} |")
+        indexes = [rr.TimeColumn(TIMELINE_ANGLE, sequence=angle_sequence(angle)),
+                   rr.TimeColumn(TIMELINE_TIME, duration=duration_ns(time_s))]
+        for path, values in curves.items():
+            rec.log(f"{path}/{child}", rr.SeriesLines(names=run_label), static=True)
+            rec.send_columns(f"{path}/{child}", indexes=indexes,
+                             columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)))
+    rec.log(SUMMARY_PATH, rr.TextDocument("\n".join(lines) + "\n", media_type="text/markdown"), static=True)
+
+
+def overlay_entry(label: str, result, points: int = 720):
+    """What the overlay recording keeps of one run: (label, angle, time, {path: shown values}),
+    thinned to about `points` samples, so a long sweep holds little of each run."""
+    curves = plotted_curves(result, points)
+    angle = np.asarray(result.columns["cam_angle_deg"], dtype=float)
+    stride = max(1, angle.size // points)
+    kept = {p: v for p, (_, v) in curves.items() if any(p == o or p.startswith(o + "/") for o in OVERLAID)}
+    return label, angle[::stride], np.asarray(result.columns["time_s"], dtype=float)[::stride], kept
+
+
+def blueprint(paths: Iterable[str], bounds=None, corners: Mapping[str, str] | None = None):
     """The default layout: 3D view and event log beside time series of s, v, p and forces;
-    `bounds` (lo, hi) of the parts places the 3D camera."""
+    `bounds` (lo, hi) of the parts places the 3D camera; `corners` (legend_corners) puts each
+    plot's legend where its curves are not. The plots span the whole revolution on the cam-angle
+    timeline; a view's paths include their children, so that the overlay recording of a sweep
+    (/valve/lift/run01, ...) draws every run in the same views."""
     import rerun.blueprint as rrb
 
     paths = list(dict.fromkeys(paths))
-
-    def present(*candidates: str) -> list[str]:
-        return [p for p in candidates if p in paths]
+    corners = dict(corners or {})
 
     def group(prefix: str) -> list[str]:
         return [p for p in paths if p.startswith(prefix + "/")]
 
-    def view(name: str, contents: list[str]):
-        return rrb.TimeSeriesView(origin="/", contents=contents, name=name)
+    revolution = [rrb.VisibleTimeRange(TIMELINE_ANGLE, start=rrb.TimeRangeBoundary.absolute(seq=0),
+                                       end=rrb.TimeRangeBoundary.absolute(seq=360))]
+    for timeline in (TIMELINE_STEP, TIMELINE_TIME):
+        revolution.append(rrb.VisibleTimeRange(timeline, start=rrb.TimeRangeBoundary.infinite(),
+                                               end=rrb.TimeRangeBoundary.infinite()))
 
-    main = [
-        view("valve lift s", present("/valve/lift", "/valve_rigid/lift", "/follower/lift") or ["/valve/lift"]),
-        view("velocity v", present("/valve/velocity", "/valve_rigid/velocity") or ["/valve/velocity"]),
-        view("acceleration p", present("/valve/acceleration", "/valve_rigid/acceleration") or ["/valve/acceleration"]),
-    ]
-    tabs = [view("forces", ["/forces/**"])]
-    extra = [("jerk", present("/valve/jerk", "/valve_rigid/jerk")), ("torque", group("/torque")),
+    def view(name: str, contents: list[str]):
+        legend = rrb.PlotLegend(corner=corners[name], visible=True) if name in corners else None
+        return rrb.TimeSeriesView(origin="/", contents=contents, name=name, plot_legend=legend,
+                                  time_ranges=revolution)
+
+    main = []
+    for name, candidates in MAIN_VIEWS:
+        present = [p for p in candidates if p in paths or any(q.startswith(p + "/") for q in paths)]
+        main.append(view(name, [f"{p}/**" for p in present] or [f"{candidates[0]}/**"]))
+    tabs = [view(FORCES_VIEW, ["/forces/**"])]
+    extra = [("jerk", [p for p in ("/valve/jerk", "/valve_rigid/jerk") if p in paths]), ("torque", group("/torque")),
              ("stress", group("/stress")), ("angles", group("/angles")), ("follower", group("/follower")),
              ("lengths", group("/lengths")), ("other", group("/other"))]
     tabs += [view(name, contents) for name, contents in extra if contents]
@@ -407,7 +543,7 @@ def blueprint(paths: Iterable[str], bounds=None):
     right = rrb.Vertical(*main, rrb.Tabs(*tabs), row_shares=[1, 1, 1, 1])
     return rrb.Blueprint(
         rrb.Horizontal(left, right, column_shares=[1, 1]),
-        rrb.TimePanel(timeline=TIMELINE_TIME),
+        rrb.TimePanel(timeline=TIMELINE_ANGLE, fps=360.0 / ANGLE_PLAYBACK_S, playback_speed=1.0),
         collapse_panels=False,
     )
 
@@ -497,7 +633,8 @@ def write_recordings(path, runs: Iterable[Run], on_run=None) -> None:
         if second is None:
             paths = recording_paths(first.result, (first.parts or {}).keys())
             bounds = parts_bounds(first.parts, first.poses or {}) if first.parts else None
-            write_file(worker, tmp, first, (paths, bounds))
+            corners = legend_corners([plotted_curves(first.result)])
+            write_file(worker, tmp, first, (paths, bounds, corners))
             if on_run is not None:
                 on_run(first)
         else:
@@ -506,7 +643,7 @@ def write_recordings(path, runs: Iterable[Run], on_run=None) -> None:
 
 
 def _write_merged(worker, out, tmp: Path, runs: Iterable[Run], on_run) -> None:
-    from .worker import write_blueprint, write_file
+    from .worker import write_blueprint, write_file, write_overlay
 
     parent = None if out.direct else out.target.parent  # a device's temporaries go to the system's
     work_dir = Path(tempfile.mkdtemp(prefix=f".{Path(out.name).name}.", suffix=".parts", dir=parent))
@@ -514,18 +651,25 @@ def _write_merged(worker, out, tmp: Path, runs: Iterable[Run], on_run) -> None:
         pieces: list[Path] = []
         paths: list[str] = []
         boxes = []
+        overlay = []  # each run's thinned main curves: the overlay recording and the legends
         for run in runs:
             paths += recording_paths(run.result, (run.parts or {}).keys())
             if run.parts:
                 boxes.append(parts_bounds(run.parts, run.poses or {}))
+            overlay.append(overlay_entry(run.label, run.result))
             piece = work_dir / f"{len(pieces):05d}.rrd"
             write_file(worker, piece, run, None)
             pieces.append(piece)
             if on_run is not None:
                 on_run(run)
             del run  # the next run is made only now: one in memory at a time
+        piece = work_dir / "overlay.rrd"
+        write_overlay(worker, piece, overlay, f"overlay: all {len(overlay)} runs")
+        pieces.append(piece)
+        corners = legend_corners({path: (angle, values) for path, values in curves.items()}
+                                 for _, angle, _, curves in overlay)
         layout = work_dir / "layout.rbl"
-        write_blueprint(worker, layout, (list(dict.fromkeys(paths)), union_bounds(boxes)))
+        write_blueprint(worker, layout, (list(dict.fromkeys(paths)), union_bounds(boxes), corners))
         merge_rrd([*pieces, layout], tmp)
     finally:
         shutil.rmtree(work_dir, ignore_errors=True)

@@ -142,6 +142,11 @@ def write_file(worker: RecordingWorker, path, run, layout: tuple | None) -> None
                          "layout": layout, "default_blueprint": layout is not None})
 
 
+def write_overlay(worker: RecordingWorker, path, runs: list, label: str) -> None:
+    """The overlay recording of a sweep (explorer.view.rerun.recording.log_overlay) into its own file."""
+    worker.run({"kind": "overlay", "path": str(path), "runs": runs, "label": label})
+
+
 def write_blueprint(worker: RecordingWorker, path, layout: tuple) -> None:
     """Only the blueprint, for the application id of every recording (merged in last)."""
     worker.run({"kind": "blueprint", "path": str(path), "layout": layout})
