@@ -113,6 +113,20 @@ def test_conditions_met_to_1e_12():
     np.testing.assert_allclose(lift.local_derivatives(np.array([math.radians(80)]), 2)[2, 0] * w**2, -600.0, rtol=1e-12)
 
 
+def test_spline_on_a_pivoted_lever_is_one_line(tmp_path):
+    """The gears build their lift from a closed-form law or a table: a spline there is refused
+    naming lift.law (main's pivoted-lever rule), never a traceback."""
+    lever = (SCENES / "pivoted_roller_lever.toml").read_text()
+    stations = DEMO.read_text()
+    block = stations[stations.index("[[lift.stations]]"):stations.index("[follower]")]
+    text = re.sub(r"\[lift\][^\[]*", '[lift]\nlaw = "spline"\nstart = "60 deg"\n' + block, lever, count=1)
+    with pytest.raises(InputError) as info:
+        from explorer.effects.pipeline import simulate
+
+        simulate(loads_scene(text, str(tmp_path / "x.toml")))
+    assert info.value.key == "lift.law"
+
+
 def test_spline_runs_every_effect():
     from explorer.effects.pipeline import simulate
 
