@@ -127,7 +127,7 @@ def test_cross_origin_handshakes_are_refused_own_origin_accepted():
 def test_a_slow_value_is_abandoned_and_the_server_stays_responsive():
     """The lash that froze the server: whether the unit parser refuses it (an error) or it runs
     into the time limit, the server answers meanwhile and later changes apply."""
-    from explorer.view.browser.model import time_limit_message
+    from explorer.view.browser.compute import time_limit_message
 
     with running_app(time_limit=3.0) as (server, app):
         port = server.get_port()
@@ -206,7 +206,8 @@ def test_a_magnification_change_keeps_the_shown_result_across_the_process():
 def test_memory_budget_stops_a_huge_computation():
     """A child with a small address-space limit: the huge request fails inside it, the message
     says so, and the worker goes on."""
-    from explorer.view.browser.model import ComputeWorker, Request, memory_limit_message
+    from explorer.view.browser.compute import ComputeWorker, memory_limit_message
+    from explorer.view.browser.model import Request
 
     ready, errors = [], []
     worker = ComputeWorker(on_ready=ready.append, on_error=lambda r, m: errors.append(m), time_limit=None,

@@ -32,12 +32,12 @@ from .. import parts as meshes
 from ...lift.laws import LAWS
 from ...scene.scene import EFFECT_DEPENDENCIES, SPECIAL_LAWS
 from . import origin
+from .compute import ComputeWorker
 from .model import (
     COMPUTE_TIME_LIMIT_S,
     PARAMETERS,
     SPEEDS,
     SPRING_RESOLUTION,
-    ComputeWorker,
     Playback,
     Prepared,
     Request,

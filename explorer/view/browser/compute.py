@@ -1,0 +1,187 @@
+"""The browser's compute thread: newest request wins, each computed in a killable child process
+(explorer.view.browser.worker) that runs `model.prepare`; time and memory limits."""
+
+from __future__ import annotations
+
+import threading
+import time
+import traceback
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from .model import COMPUTE_TIME_LIMIT_S, MEMORY_LIMIT_BYTES, Prepared, Request, SUPERSEDE_AFTER_S
+
+
+def time_limit_message(seconds: float, previous: bool) -> str:
+    shown = "the previous result is shown" if previous else "nothing to show yet"
+    return f"computation took longer than {seconds:g} s and was stopped; {shown}"
+
+
+def memory_limit_message(limit_bytes: int, previous: bool) -> str:
+    shown = "the previous result is shown" if previous else "nothing to show yet"
+    return f"computation needed more than {limit_bytes / 2**30:g} GB of memory and was stopped; {shown}"
+
+
+@dataclass
+class ComputeWorker:
+    """One background thread; `submit` replaces any request not yet started (newest wins, no
+    queue). Results go to `on_ready(prepared)`, bad input to `on_error(request, message)`.
+
+    The thread hands each request to a child process and waits at most `time_limit` seconds for
+    it (None: no limit); past that the child is killed, `on_error` gets the time-limit message,
+    and the next request starts a fresh child. A computation past SUPERSEDE_AFTER_S is killed
+    as soon as a newer request waits."""
+
+    on_ready: Callable[[Prepared], None]
+    on_error: Callable[[Request, str], None]
+    on_result: Callable[[Prepared], None] | None = None  # e.g. the rerun live stream
+    time_limit: float | None = COMPUTE_TIME_LIMIT_S
+    memory_limit: int = MEMORY_LIMIT_BYTES
+    _pending: Request | None = None
+    _busy: bool = False
+    _stop: bool = False
+    _last: Prepared | None = None
+    _cond: threading.Condition = field(default_factory=threading.Condition)
+    _thread: threading.Thread | None = None
+    _process: Any = None  # worker.ComputeProcess
+    computed: int = 0  # how many requests were actually computed (for tests and benchmarks)
+    submitted: int = 0
+    internal_errors: int = 0  # exceptions other than InputError (should stay 0)
+    abandoned: int = 0  # computations stopped at the time or memory limit
+    superseded: int = 0  # slow computations stopped for a newer request
+
+    def start(self) -> "ComputeWorker":
+        from .worker import ComputeProcess
+
+        self._process = ComputeProcess(memory_bytes=self.memory_limit)
+        self._thread = threading.Thread(target=self._run, name="explorer-compute", daemon=True)
+        self._thread.start()
+        return self
+
+    @property
+    def process_id(self) -> int | None:
+        """The computing child's pid (None while there is none): tests check it is gone."""
+        return None if self._process is None else self._process.pid
+
+    def submit(self, request: Request) -> None:
+        with self._cond:
+            self._pending = request
+            self.submitted += 1
+            self._cond.notify_all()
+
+    def waiting(self) -> bool:
+        """Whether a request waits that the thread has not taken yet."""
+        with self._cond:
+            return self._pending is not None
+
+    def idle(self) -> bool:
+        with self._cond:
+            return self._pending is None and not self._busy
+
+    def wait_idle(self, timeout: float = 30.0) -> bool:
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while self._pending is not None or self._busy:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                self._cond.wait(left)
+        return True
+
+    def stop(self) -> None:
+        with self._cond:
+            self._stop = True
+            self._cond.notify_all()
+        if self._process is not None:
+            self._process.shutdown()  # a computation in progress ends now, not at its limit
+        if self._thread is not None:
+            self._thread.join(timeout=10.0)
+        if self._process is not None:
+            self._process.reap()
+
+    def _run(self) -> None:
+        # the child is started, called and reaped from this thread only: its death signal
+        # (PR_SET_PDEATHSIG) fires when the thread that started it ends
+        try:
+            while True:
+                with self._cond:
+                    while self._pending is None and not self._stop:
+                        self._cond.wait()
+                    if self._stop:
+                        return
+                    request, self._pending = self._pending, None
+                    self._busy = True
+                try:
+                    self._compute(request)
+                finally:
+                    with self._cond:
+                        self._busy = False
+                        self._cond.notify_all()
+        finally:
+            self._process.reap()
+
+    def _compute(self, request: Request) -> None:
+        from .worker import Superseded, TimeLimitExceeded, WorkerDied
+
+        started = time.monotonic()
+
+        def superseded() -> bool:
+            # read without the lock: a stale answer only delays the check by one poll
+            return self._stop or (self._pending is not None and time.monotonic() - started > SUPERSEDE_AFTER_S)
+
+        try:
+            kind, payload = self._process.call(request, self.time_limit, superseded)
+        except Superseded:
+            if not self._stop:
+                self.superseded += 1  # the newer request is next; no message for this one
+            return
+        except TimeLimitExceeded:
+            self.abandoned += 1
+            self.on_error(request, time_limit_message(self.time_limit, self._last is not None))
+            return
+        except WorkerDied as exc:
+            if not self._stop:
+                self.internal_errors += 1
+                self.on_error(request, f"internal error: {exc}")
+            return
+        except Exception as exc:  # a bug must not end this thread: show it, start a fresh child
+            self.internal_errors += 1
+            traceback.print_exc()
+            self._process.kill()
+            self._process.reap()  # the child's previous result is no longer the one held here
+            self.on_error(request, f"internal error: {type(exc).__name__}: {exc}")
+            return
+        if kind == "input":
+            self.on_error(request, payload)
+        elif kind == "memory":
+            self.abandoned += 1
+            self.on_error(request, memory_limit_message(self.memory_limit, self._last is not None))
+        elif kind == "internal":
+            self.internal_errors += 1
+            self.on_error(request, payload)
+        else:
+            prepared = self._relink(*payload)
+            self._last = prepared
+            self.computed += 1
+            self.on_ready(prepared)
+            if self.on_result is not None and prepared.new_result:
+                try:
+                    self.on_result(prepared)
+                except Exception:
+                    traceback.print_exc()
+
+    def _relink(self, prepared: Prepared, reused: int | None) -> Prepared:
+        """A bundle that reused the previous simulation (only the magnification changed) shares
+        the previous bundle's objects again, as it did in the child: the viewer tells what to
+        redraw by identity, and a pickled copy would redraw the plots and every mesh. `reused`
+        is the serial of the bundle the child reused; only that one may be linked to."""
+        last = self._last
+        if reused is None or last is None or last.request.serial != reused:
+            return prepared
+        import dataclasses
+
+        return dataclasses.replace(
+            prepared, scene=last.scene, result=last.result, layout=last.layout, lift=last.lift,
+            meshes=last.meshes, plots=last.plots, readout=last.readout, values=last.values,
+            plot_note=last.plot_note, events=last.events, events_html=last.events_html,
+        )
