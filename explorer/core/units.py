@@ -30,6 +30,7 @@ DIMENSIONS: dict[str, tuple[str, str, str]] = {
     "area": ("[area]", "m**2", "m**2"),
     "velocity": ("[length]/[time]", "m/s", "m/s"),
     "acceleration": ("[length]/[time]**2", "m/s**2", "m/s**2"),
+    "jerk": ("[length]/[time]**3", "m/s**3", "m/s**3"),
     "torque": ("[force]*[length]", "N*m", "N*m"),
     "density": ("[mass]/[length]**3", "kg/m**3", "kg/m**3"),
     "dimensionless": ("", "", ""),
