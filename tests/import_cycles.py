@@ -67,6 +67,18 @@ def import_graph(package_dir: Path, named: bool = False) -> dict[str, set[str]]:
     return graph
 
 
+def write_package(root: Path, files: dict[str, str]) -> Path:
+    """A throwaway package `pkg` under root (name -> source, dedented), for the checkers' own tests."""
+    import textwrap
+
+    package = Path(root) / "pkg"
+    for name, text in files.items():
+        path = package / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(textwrap.dedent(text))
+    return package
+
+
 def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     """Strongly connected components that are cycles (Tarjan), each sorted, largest first."""
     index: dict[str, int] = {}

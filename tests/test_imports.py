@@ -4,10 +4,9 @@
 from __future__ import annotations
 
 import importlib
-import textwrap
 from pathlib import Path
 
-from import_cycles import cycles, import_graph
+from import_cycles import cycles, import_graph, write_package
 
 PACKAGE = Path(__file__).resolve().parents[1] / "explorer"
 
@@ -30,17 +29,9 @@ def test_no_module_joins_an_import_cycle():
     assert cycle_problems(PACKAGE, ALLOWED_IN_CYCLES) == []
 
 
-def _package(root: Path, files: dict[str, str]) -> Path:
-    package = root / "pkg"
-    for name, text in files.items():
-        path = package / name
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(textwrap.dedent(text))
-    return package
-
 
 def test_the_checker_finds_a_planted_cycle_of_function_local_imports(tmp_path):
-    package = _package(tmp_path, {
+    package = write_package(tmp_path, {
         "__init__.py": "",
         "a.py": "from .b import g\n\ndef f():\n    return g()\n",
         "b.py": "def g():\n    from . import a  # hidden in a function\n    return a\n",
@@ -57,7 +48,7 @@ def test_the_checker_finds_a_planted_cycle_of_function_local_imports(tmp_path):
 
 
 def test_the_checker_finds_a_cycle_through_a_package_and_type_checking(tmp_path):
-    package = _package(tmp_path, {
+    package = write_package(tmp_path, {
         "__init__.py": "from .x import X\n",
         "x.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pkg import Y\nX = 1\n",
         "y.py": "import pkg\n",

@@ -22,10 +22,9 @@ notebook API: load_scene, simulate) and __main__ sit on top.
 
 from __future__ import annotations
 
-import textwrap
 from pathlib import Path
 
-from import_cycles import import_graph
+from import_cycles import import_graph, write_package
 
 PACKAGE = Path(__file__).resolve().parents[1] / "explorer"
 
@@ -84,20 +83,12 @@ def test_every_folder_of_the_package_is_a_layer():
     assert folders | modules <= named
 
 
-def _package(root: Path, files: dict[str, str]) -> Path:
-    package = root / "pkg"
-    for name, text in files.items():
-        path = package / name
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(textwrap.dedent(text))
-    return package
-
 
 PLANTED_LAYERS = (("core",), ("lift",), ("view", "studies"), ("__init__",))
 
 
 def test_the_checker_finds_planted_violations(tmp_path):
-    package = _package(tmp_path, {
+    package = write_package(tmp_path, {
         "__init__.py": "from .lift.curve import c\n",
         "core/__init__.py": "",
         "core/errors.py": "def e():\n    from ..lift import curve  # up, hidden in a function\n",
@@ -117,7 +108,7 @@ def test_the_checker_finds_planted_violations(tmp_path):
 
 
 def test_the_checker_accepts_a_clean_package(tmp_path):
-    package = _package(tmp_path, {
+    package = write_package(tmp_path, {
         "__init__.py": "from .studies.bench import b\n",
         "core/__init__.py": "",
         "core/errors.py": "class E(Exception):\n    pass\n",

@@ -27,6 +27,7 @@ from ..core.errors import InputError
 from ..result import EffectOutput
 from ..dynamics.chain import CHAIN_EVENT_KINDS, ChainModel, solid_travel
 from ..dynamics.model import Drive
+from .elastic_events import revolution_events
 
 
 def chain_solver(method: str, file: str):
@@ -100,17 +101,8 @@ def chain_elastic_effect(ctx) -> EffectOutput:
     deviation = np.where(open_valve, s - (D[0] - model.lash - W / model.stiffness), 0.0)
     separated = open_valve & ~contact
 
-    events, warnings = [], []
-    t_start = float(t_run[0])
-    for ev in sol.events:
-        if ev["kind"] not in CHAIN_EVENT_KINDS or ev["time_s"] >= t_start + period:
-            continue
-        t_ev = math.fmod(ev["time_s"], period)
-        item = {"kind": ev["kind"], "time_s": t_ev, "cam_angle_deg": math.degrees(omega * t_ev) % 360.0}
-        if "velocity_m_s" in ev:
-            item["velocity_m_s"] = float(ev["velocity_m_s"])
-        events.append(item)
-    events.sort(key=lambda e: e["time_s"])
+    warnings = []
+    events = revolution_events(sol.events, CHAIN_EVENT_KINDS, float(t_run[0]), period, omega)
     clashes = [e for e in events if e["kind"] == "coil-clash"]
     if clashes:
         warnings.append(f"coil clash: the spring reaches its solid height {len(clashes)} time(s), first at "

@@ -35,6 +35,7 @@ import numpy as np
 from ..core.errors import InputError
 from ..result import EffectOutput
 from ..dynamics import solvers as registry
+from .elastic_events import revolution_events
 from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, StiffnessProfile, solve
 
 
@@ -188,17 +189,7 @@ def elastic_effect(ctx) -> EffectOutput:
     back_pressure = ratio * force
     separated = open_valve & ~contact
 
-    events = []
-    t_start = float(t_run[0])
-    for ev in sol.events:
-        if ev["kind"] not in EVENT_KINDS or ev["time_s"] >= t_start + period:
-            continue
-        t_ev = math.fmod(ev["time_s"], period)
-        item = {"kind": ev["kind"], "time_s": t_ev, "cam_angle_deg": math.degrees(omega * t_ev) % 360.0}
-        if "velocity_m_s" in ev:
-            item["velocity_m_s"] = float(ev["velocity_m_s"])
-        events.append(item)
-    events.sort(key=lambda e: e["time_s"])
+    events = revolution_events(sol.events, EVENT_KINDS, float(t_run[0]), period, omega)
 
     stats = {k: v for k, v in sol.stats.items() if k != "warnings"}
     if model.stiffness_profile is not None:

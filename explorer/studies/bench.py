@@ -27,17 +27,16 @@ the grids stop at 36 000 steps (scipy tabulates the drive and k(t) at 4 nodes a 
 
 from __future__ import annotations
 
-import io
 import math
 import statistics
 import time
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
 
 from ..dynamics import solvers as solver_registry
+from .charts import figure, png
 from ..core.errors import InputError
 
 STEPS = (90, 360, 900, 3600, 9000, 36_000, 90_000, 360_000)
@@ -381,31 +380,13 @@ STYLE = {
 FLOOR_M = 1e-16  # errors of exactly 0 drawn here on the log axis
 
 
-@contextmanager
-def _figure(*grid, **options):
-    """A matplotlib figure and its axes (off-screen backend), closed however the drawing ends."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(*grid, **options)
-    try:
-        yield fig, axes
-    finally:
-        plt.close(fig)
 
 
-def _png(fig) -> bytes:
-    fig.tight_layout()
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png")
-    return buffer.getvalue()
 
 
 def chart_png(report: BenchReport) -> bytes:
     """Error versus CPU time, log-log, one series per method, the Pareto front dashed."""
-    with _figure(figsize=(8.0, 5.6), dpi=110) as (fig, ax):
+    with figure(figsize=(8.0, 5.6), dpi=110) as (fig, ax):
         for i, method in enumerate(dict.fromkeys(r.method for r in report.runs)):
             rows = [r for r in report.runs if r.method == method]
             style = STYLE.get(method) or dict(color=f"C{i}", marker="v")  # (a solver new to the table)
@@ -434,13 +415,13 @@ def chart_png(report: BenchReport) -> bytes:
                      fontsize=10)
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=8, loc="upper right")
-        return _png(fig)
+        return png(fig)
 
 
 def differentiation_png(study) -> bytes:
     """Errors of v and p from a fitted measured lift against the sample count, one line per noise."""
     cols = study.columns()
-    with _figure(1, 2, figsize=(9.0, 4.0), dpi=110) as (fig, axes):
+    with figure(1, 2, figsize=(9.0, 4.0), dpi=110) as (fig, axes):
         for ax, key, title in ((axes[0], "relative_velocity_error", "velocity v"), (axes[1], "relative_accel_error", "acceleration p")):
             for sigma in sorted(set(cols["noise_m"].tolist())):
                 sel = cols["noise_m"] == sigma
@@ -454,7 +435,7 @@ def differentiation_png(study) -> bytes:
             ax.grid(True, which="major", alpha=0.3)
         axes[1].legend(fontsize=8)
         fig.suptitle(f"Differentiating a measured lift: {study.reference}, {study.rpm:g} rpm", fontsize=10)
-        return _png(fig)
+        return png(fig)
 
 
 @dataclass

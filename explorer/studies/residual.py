@@ -128,11 +128,11 @@ def table_text(scene, rows) -> str:
 
 def chart_png(scene, rows) -> bytes:
     """Deviation (and the dwell amplitude with its closed form) against speed, log scale."""
-    from .bench import _figure, _png
+    from .charts import figure, png
 
     rpm = np.array([r.rpm for r in rows])
     floor = 1e-16
-    with _figure(figsize=(8.0, 4.8), dpi=110) as (fig, ax):
+    with figure(figsize=(8.0, 4.8), dpi=110) as (fig, ax):
         ax.semilogy(rpm, np.maximum([r.max_deviation_m for r in rows], floor), "o-", label="largest deviation over the revolution")
         if any(r.dwell_amplitude_m is not None for r in rows):
             amp = [np.nan if r.dwell_amplitude_m is None else max(r.dwell_amplitude_m, floor) for r in rows]
@@ -149,7 +149,7 @@ def chart_png(scene, rows) -> bytes:
         ax.set_title(f"{scene.name}: residual vibration")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
-        return _png(fig)
+        return png(fig)
 
 
 def parse_speeds(text: str) -> np.ndarray:

@@ -70,9 +70,9 @@ def table_text(scene, spectrum: Spectrum) -> str:
 
 
 def chart_png(scene, spectrum: Spectrum) -> bytes:
-    from .bench import _figure, _png
+    from .charts import figure, png
 
-    with _figure(figsize=(8.0, 4.6), dpi=110) as (fig, ax):
+    with figure(figsize=(8.0, 4.6), dpi=110) as (fig, ax):
         floor = max(float(spectrum.amplitude.max()) * 1e-8, 1e-12)
         ax.semilogy(spectrum.orders, np.maximum(spectrum.amplitude, floor), "o-", ms=3, lw=0.8,
                     label="amplitude of the order")
@@ -84,4 +84,4 @@ def chart_png(scene, spectrum: Spectrum) -> bytes:
         ax.set_title(f"{scene.name}: spectrum at {spectrum.rpm:g} rpm")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
-        return _png(fig)
+        return png(fig)

@@ -11,12 +11,11 @@ draws its charts) and a rerun recording with the swept key as a timeline.
 
 from __future__ import annotations
 
-import io
 import math
-from contextlib import contextmanager
 
 import numpy as np
 
+from .charts import figure, png
 from .sweep_spec import SWEEP_KEYS
 
 # what a designer looks at first, in this order (those the table has are drawn)
@@ -26,25 +25,8 @@ FIGURES = ("seating_velocity_m_s", "peak_linkage_force_N", "max_deviation_m", "s
 HEATMAPS = ("seating_velocity_m_s", "peak_linkage_force_N", "max_deviation_m", "min_contact_force_N")
 
 
-@contextmanager
-def _figure(*grid, **options):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(*grid, squeeze=False, **options)
-    try:
-        yield fig, axes
-    finally:
-        plt.close(fig)
 
 
-def _png(fig) -> bytes:
-    fig.tight_layout()
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png")
-    return buffer.getvalue()
 
 
 def _figures(table) -> list[str]:
@@ -76,7 +58,7 @@ def lines_png(table) -> bytes:
     rows = math.ceil(n / cols)
     floats = np.asarray(table.columns.get("float_speed_rpm", []), float)
     float_rpm = float(floats[np.isfinite(floats)][0]) if key == "drive.rpm" and np.isfinite(floats).any() else None
-    with _figure(rows, cols, figsize=(5.2 * cols, 2.6 * rows + 0.6), dpi=100) as (fig, grid):
+    with figure(rows, cols, figsize=(5.2 * cols, 2.6 * rows + 0.6), dpi=100, squeeze=False) as (fig, grid):
         for i, name in enumerate(figs):
             ax = grid[i // cols][i % cols]
             ax.plot(x, np.asarray(table.columns[name], float), linewidth=1.0, color="C0")
@@ -92,7 +74,7 @@ def lines_png(table) -> bytes:
         for j in range(len(figs), rows * cols):
             grid[j // cols][j % cols].axis("off")
         fig.suptitle(_title(table), fontsize=10)
-        return _png(fig)
+        return png(fig)
 
 
 def heatmaps_png(table) -> bytes:
@@ -100,10 +82,10 @@ def heatmaps_png(table) -> bytes:
     (ka, na), (kb, nb) = [(a["key"], a["points"]) for a in meta["axes"][:2]]
     full = len(table) == na * nb
     names = [h for h in HEATMAPS if h in table.columns] or _figures(table)[:1]
-    with _figure(1, max(1, len(names)), figsize=(4.6 * max(1, len(names)), 4.2), dpi=100) as (fig, grid):
+    with figure(1, max(1, len(names)), figsize=(4.6 * max(1, len(names)), 4.2), dpi=100, squeeze=False) as (fig, grid):
         if not full or not names:
             grid[0][0].text(0.5, 0.5, "incomplete sweep: no map", ha="center")
-            return _png(fig)
+            return png(fig)
         xa = np.asarray(table.columns[_key_column(ka)], float).reshape(na, nb)[:, 0]
         xb = np.asarray(table.columns[_key_column(kb)], float).reshape(na, nb)[0, :]
         for ax, name in zip(grid[0], names):
@@ -122,7 +104,7 @@ def heatmaps_png(table) -> bytes:
             ax.set_title(name + ("\n(white: boundary of first separation)" if "separations" in table.columns else ""),
                          fontsize=8)
         fig.suptitle(_title(table), fontsize=10)
-        return _png(fig)
+        return png(fig)
 
 
 def histograms_png(table) -> bytes:
@@ -130,7 +112,7 @@ def histograms_png(table) -> bytes:
     n = max(1, len(figs))
     cols = min(3, n)
     rows = math.ceil(n / cols)
-    with _figure(rows, cols, figsize=(4.2 * cols, 2.8 * rows + 0.8), dpi=100) as (fig, grid):
+    with figure(rows, cols, figsize=(4.2 * cols, 2.8 * rows + 0.8), dpi=100, squeeze=False) as (fig, grid):
         for i, name in enumerate(figs):
             ax = grid[i // cols][i % cols]
             data = np.asarray(table.columns[name], float)
@@ -145,7 +127,7 @@ def histograms_png(table) -> bytes:
             share = float(np.mean(np.asarray(table.columns["separations"]) > 0))
             title += f"\n{100.0 * share:.2f} % of the runs separate"
         fig.suptitle(title, fontsize=10)
-        return _png(fig)
+        return png(fig)
 
 
 def separating_share(table) -> float | None:
