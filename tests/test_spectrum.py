@@ -62,6 +62,27 @@ def test_natural_frequency_as_cam_order():
     assert acceleration_spectrum(replace(no_linkage, linkage=None), build_lift(no_linkage), 5).natural_order is None
 
 
+def test_the_springs_surge_frequencies_as_cam_orders():
+    """Against the closed forms: the chain's 2 (N+1) sqrt(k/m_s) sin(j pi / (2 (N+1))) when the
+    scene cuts the spring into N masses, the continuous spring's (j/2) sqrt(k/m_s) otherwise."""
+    from dataclasses import replace
+
+    scene = load_scene(SCENES / "spring_surge.toml")
+    spring, w = scene.spring, scene.omega
+    N, k, m = spring.elements, spring.rate, spring.mass
+    spectrum = acceleration_spectrum(scene, build_lift(scene), orders=200)
+    chain = [2 * (N + 1) * math.sqrt(k / m) * math.sin(j * math.pi / (2 * (N + 1))) / w for j in range(1, N + 1)]
+    assert spectrum.spring_orders == pytest.approx([o for o in chain if o <= 200], rel=1e-13)
+    assert spectrum.spring_orders  # the scene's spring surges within 200 orders
+    massless_chain = replace(scene, spring=replace(spring, elements=0))
+    continuous = acceleration_spectrum(massless_chain, build_lift(scene), orders=200).spring_orders
+    f1 = 0.5 * math.sqrt(k / m)  # Hz
+    expected = [j * f1 * 2 * math.pi / w for j in range(1, 1000) if j * f1 * 2 * math.pi / w <= 200]
+    assert continuous == pytest.approx(expected, rel=1e-13)
+    no_mass = replace(scene, spring=replace(spring, mass=0.0, elements=0))
+    assert acceleration_spectrum(no_mass, build_lift(scene), orders=200).spring_orders == ()
+
+
 def test_spectrum_command(tmp_path, capsys):
     table, plot = tmp_path / "s.csv", tmp_path / "s.png"
     assert cli.main(["spectrum", str(DEMO), "--orders", "30", "-o", str(table), "--plot", str(plot)]) == 0

@@ -11,8 +11,10 @@ The C_n come from the FFT of the analytic curve sampled at N equally spaced angl
 coefficients differ from the true ones by the aliased orders n +- N, ... which for a law with a
 continuous acceleration fall as 1/N^2 (tests: the cycloidal rise and return against its closed
 form). A linkage of stiffness k + rate and mass M1 rings at wn = sqrt((k + rate)/M1), i.e. at cam
-order wn / w: the orders near it are the ones that excite it. A spring's own surge modes are not
-modelled here (no spring mass model).
+order wn / w: the orders near it are the ones that excite it. A spring with mass ([spring] mass or
+wire geometry) surges at its own frequencies, ends held: those of its chain of `elements` masses
+when the scene cuts it into masses, else the continuous spring's f_j = (j/2) sqrt(k/m_s); they
+are marked as cam orders too.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ class Spectrum:
     rpm: float
     natural_order: float | None  # wn / w of the linkage in contact (None without [linkage])
     samples: int
+    spring_orders: tuple[float, ...] = ()  # the spring's surge frequencies / w, within the orders shown
 
 
 def acceleration_spectrum(scene, lift, orders: int = 100, samples: int | None = None) -> Spectrum:
@@ -54,12 +57,29 @@ def acceleration_spectrum(scene, lift, orders: int = 100, samples: int | None = 
         rate = scene.spring.rate if scene.spring is not None else 0.0
         natural = math.sqrt((scene.linkage.stiffness + rate) / mass) / w
     k = np.arange(1, orders + 1)
-    return Spectrum(k, 2.0 * np.abs(c[k]), np.angle(c[k]), float(c[0].real), scene.drive.rpm, natural, n)
+    return Spectrum(k, 2.0 * np.abs(c[k]), np.angle(c[k]), float(c[0].real), scene.drive.rpm, natural, n,
+                    spring_surge_orders(scene.spring, w, orders))
+
+
+def spring_surge_orders(spring, omega: float, orders: int) -> tuple[float, ...]:
+    """The spring's own frequencies (ends held) as cam orders up to `orders`; () for a massless spring."""
+    from ..dynamics.chain import chain_frequencies, continuous_frequencies
+
+    if spring is None or spring.mass <= 0.0 or spring.rate <= 0.0:
+        return ()
+    if spring.elements > 0:
+        w_j = chain_frequencies(spring.elements, spring.rate, spring.mass)
+    else:
+        first = 2.0 * math.pi * continuous_frequencies(1, spring.rate, spring.mass)[0]
+        w_j = 2.0 * math.pi * continuous_frequencies(int(orders * omega / first) + 1, spring.rate, spring.mass)
+    return tuple(float(x) for x in w_j / omega if x <= orders)
 
 
 def table_text(scene, spectrum: Spectrum) -> str:
     out = io.StringIO()
     marked = "" if spectrum.natural_order is None else f"; the linkage rings at cam order {spectrum.natural_order:.6g}"
+    if spectrum.spring_orders:
+        marked += "; the spring surges at cam orders " + ", ".join(f"{o:.6g}" for o in spectrum.spring_orders)
     out.write(f"# {scene.name}: harmonics of the drive acceleration ratio w^2 L'' at {spectrum.rpm:g} rpm "
               f"(FFT of {spectrum.samples} samples){marked}\n")
     out.write("order,frequency_Hz,amplitude_m_s2,phase_rad\n")
@@ -79,6 +99,9 @@ def chart_png(scene, spectrum: Spectrum) -> bytes:
         if spectrum.natural_order is not None:
             ax.axvline(spectrum.natural_order, color="crimson", lw=1.2,
                        label=f"linkage natural frequency (order {spectrum.natural_order:.1f})")
+        for i, order in enumerate(spectrum.spring_orders):
+            ax.axvline(order, color="teal", lw=0.9, ls="--",
+                       label="spring surge frequencies (ends held)" if i == 0 else None)
         ax.set_xlabel("cam order (per revolution)")
         ax.set_ylabel("drive acceleration amplitude [m/s²]")
         ax.set_title(f"{scene.name}: spectrum at {spectrum.rpm:g} rpm")
