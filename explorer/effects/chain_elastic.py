@@ -27,7 +27,7 @@ from ..core.errors import InputError
 from ..result import EffectOutput
 from ..dynamics.chain import CHAIN_EVENT_KINDS, ChainModel, solid_travel
 from ..dynamics.model import Drive
-from .elastic_events import revolution_events
+from .elastic_events import revolution_events, valve_motion_summary
 
 
 def chain_solver(method: str, file: str):
@@ -123,12 +123,7 @@ def chain_elastic_effect(ctx) -> EffectOutput:
         "peak_linkage_force_N": float(force.max()),
         "peak_camshaft_back_pressure_N": float((ratio * force).max()),
         "separated_angle_deg": float(360.0 * np.count_nonzero(separated) / n),
-        "elastic_max_valve_lift_m": float(s.max()),
-        "elastic_max_valve_velocity_m_s": float(v.max()),
-        "elastic_min_valve_velocity_m_s": float(v.min()),
-        "elastic_max_valve_accel_m_s2": float(a.max()),
-        "elastic_min_valve_accel_m_s2": float(a.min()),
-        "elastic_event_counts": {kind: sum(e["kind"] == kind for e in events) for kind in CHAIN_EVENT_KINDS},
+        **valve_motion_summary(s, v, a, events, CHAIN_EVENT_KINDS),
         "elastic_solver": dict(sol.stats),
     }
     columns = {

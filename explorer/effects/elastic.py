@@ -35,7 +35,7 @@ import numpy as np
 from ..core.errors import InputError
 from ..result import EffectOutput
 from ..dynamics import solvers as registry
-from .elastic_events import revolution_events
+from .elastic_events import revolution_events, valve_motion_summary
 from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, StiffnessProfile, solve
 
 
@@ -203,12 +203,7 @@ def elastic_effect(ctx) -> EffectOutput:
         "peak_linkage_force_N": float(force.max()),
         "peak_camshaft_back_pressure_N": float(back_pressure.max()),
         "separated_angle_deg": float(360.0 * np.count_nonzero(separated) / n),
-        "elastic_max_valve_lift_m": float(s.max()),
-        "elastic_max_valve_velocity_m_s": float(v.max()),
-        "elastic_min_valve_velocity_m_s": float(v.min()),
-        "elastic_max_valve_accel_m_s2": float(a.max()),
-        "elastic_min_valve_accel_m_s2": float(a.min()),
-        "elastic_event_counts": {kind: sum(e["kind"] == kind for e in events) for kind in EVENT_KINDS},
+        **valve_motion_summary(s, v, a, events, EVENT_KINDS),
         "elastic_solver": stats,
     }
     columns = {

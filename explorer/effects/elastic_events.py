@@ -19,3 +19,15 @@ def revolution_events(solver_events, kinds, t_start: float, period: float, omega
         events.append(item)
     events.sort(key=lambda e: e["time_s"])
     return events
+
+
+def valve_motion_summary(s, v, a, events: list[dict], kinds) -> dict:
+    """The elastic valve's extremes over the revolution and how many events of each kind."""
+    return {
+        "elastic_max_valve_lift_m": float(s.max()),
+        "elastic_max_valve_velocity_m_s": float(v.max()),
+        "elastic_min_valve_velocity_m_s": float(v.min()),
+        "elastic_max_valve_accel_m_s2": float(a.max()),
+        "elastic_min_valve_accel_m_s2": float(a.min()),
+        "elastic_event_counts": {kind: sum(e["kind"] == kind for e in events) for kind in kinds},
+    }
