@@ -35,6 +35,9 @@ class ComputeWorker:
     on_ready: Callable[[Prepared], None]
     on_error: Callable[[Request, str], None]
     on_result: Callable[[Prepared], None] | None = None  # e.g. the rerun live stream
+    # the speed sweep of each new result (explorer.view.browser.speedsweep), computed in the same
+    # child between requests, one step at a time; None: no sweep
+    on_sweep: Callable[[int, Any], None] | None = None  # (serial, SpeedSweep or None: nothing to sweep)
     time_limit: float | None = COMPUTE_TIME_LIMIT_S
     memory_limit: int = MEMORY_LIMIT_BYTES
     _pending: Request | None = None
@@ -49,6 +52,9 @@ class ComputeWorker:
     internal_errors: int = 0  # exceptions other than InputError (should stay 0)
     abandoned: int = 0  # computations stopped at the time or memory limit
     superseded: int = 0  # slow computations stopped for a newer request
+    sweep_steps: int = 0  # speed-sweep steps computed (for tests)
+    _sweep: Any = None  # the SpeedSweep being filled in, or a SweepTask still to start
+    _span: tuple[str, tuple[float, float]] | None = None  # (scene path, speed range) last swept
 
     def start(self) -> "ComputeWorker":
         from .worker import ComputeProcess
@@ -105,12 +111,21 @@ class ComputeWorker:
         try:
             while True:
                 with self._cond:
-                    while self._pending is None and not self._stop:
+                    while self._pending is None and not self._stop and self._sweep is None:
                         self._cond.wait()
                     if self._stop:
                         return
-                    request, self._pending = self._pending, None
-                    self._busy = True
+                    if self._pending is None:
+                        # nothing newer to compute: one step of the speed sweep (not counted as
+                        # busy: the result shown is complete; the sweep fills in behind it)
+                        sweep = self._sweep
+                        request = None
+                    else:
+                        request, self._pending = self._pending, None
+                        self._busy = True
+                if request is None:
+                    self._sweep_step(sweep)
+                    continue
                 try:
                     self._compute(request)
                 finally:
@@ -164,11 +179,68 @@ class ComputeWorker:
             self._last = prepared
             self.computed += 1
             self.on_ready(prepared)
+            if self.on_sweep is not None and prepared.new_result:
+                from .speedsweep import SweepTask
+
+                path = prepared.request.path
+                span = self._span[1] if self._span is not None and self._span[0] == path else None
+                with self._cond:
+                    self._sweep = SweepTask(prepared.request.serial, None, span)
             if self.on_result is not None and prepared.new_result:
                 try:
                     self.on_result(prepared)
                 except Exception:
                     traceback.print_exc()
+
+    def sweep_idle(self) -> bool:
+        """Whether nothing is waiting and the speed sweep of the newest result is complete."""
+        with self._cond:
+            return self._pending is None and not self._busy and self._sweep is None
+
+    def _sweep_step(self, sweep) -> None:
+        """Start the sweep (rigid figures at every speed) or compute its next elastic speed,
+        in the child; hand the sweep so far to `on_sweep`. A newer request waiting for more than
+        SUPERSEDE_AFTER_S stops a slow step (the child is restarted), as for requests."""
+        from .speedsweep import SpeedSweep, SweepTask, with_elastic
+        from .worker import Superseded, TimeLimitExceeded, WorkerDied
+
+        started = time.monotonic()
+        if isinstance(sweep, SweepTask):
+            task = sweep
+        else:
+            task = SweepTask(sweep.serial, sweep.next_elastic())
+
+        def superseded() -> bool:
+            return self._stop or (self._pending is not None and time.monotonic() - started > SUPERSEDE_AFTER_S)
+
+        try:
+            kind, payload = self._process.call(task, self.time_limit, superseded)
+        except (Superseded, TimeLimitExceeded, WorkerDied):
+            kind, payload = "stopped", None
+        except Exception:
+            traceback.print_exc()
+            self._process.kill()
+            self._process.reap()
+            kind, payload = "stopped", None
+        self.sweep_steps += 1
+        if kind == "sweep" and isinstance(payload, SpeedSweep):
+            self._span = (self._last.request.path if self._last is not None else "", payload.span)
+            done = payload
+        elif kind == "sweep" and isinstance(sweep, SpeedSweep):
+            done = with_elastic(sweep, payload)
+        else:
+            done = None  # stale, failed or stopped: this sweep ends here
+        with self._cond:
+            if self._sweep is sweep:  # no newer result meanwhile
+                self._sweep = done if done is not None and done.next_elastic() is not None else None
+            current = self._sweep is None or self._sweep is done
+            self._cond.notify_all()
+        nothing = kind == "sweep" and payload is None  # the scene has no rigid forces to sweep
+        if (done is not None or nothing) and current:
+            try:
+                self.on_sweep(task.serial, done)
+            except Exception:
+                traceback.print_exc()
 
     def _relink(self, prepared: Prepared, reused: int | None) -> Prepared:
         """A bundle that reused the previous simulation (only the magnification changed) shares
