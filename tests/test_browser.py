@@ -491,3 +491,34 @@ def test_a_long_error_keeps_the_controls_on_an_800px_page(tmp_path):
             for label in ("Play", "Scene", "Lift law", "Spring rate [N/mm]", "Steps / revolution"):
                 row = page.locator("label", has_text=label).first.bounding_box()
                 assert row is not None and row["y"] + row["height"] <= 800, (label, row)
+
+
+def test_speed_sweep_plot_appears_and_choosing_a_speed_updates_the_rpm(tmp_path):
+    """Issue #14.2 in a real page: the speed-sweep plot of the scene is drawn under the plots with
+    the speed slider right under it; a click on that slider recomputes at the speed clicked, and
+    the page's Camshaft rpm field shows it."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+    with _running_explorer(ROOT / "assets" / "scenes" / "valve_float_demo.toml") as (server, app):
+        assert app.wait_applied(WAIT_S)
+        _wait_until(lambda: app.sweep is not None, "no speed sweep was computed")
+        before = app.current.scene.drive.rpm
+        span = app.sweep.span
+        with _connected_page(sync_api, tmp_path, server) as page:
+            title = page.locator(".uplot .u-title", has_text="Speed sweep (rigid)")
+            title.wait_for(timeout=WAIT_MS)
+            rigid_plot = title.locator("xpath=ancestor::div[contains(@class,'uplot')][1]")
+            slider = _row_input(page, "Speed [rpm]", "div[contains(@class,'mantine-Slider-root')]")
+            slider.wait_for(timeout=WAIT_MS)
+            slider.scroll_into_view_if_needed()
+            page.evaluate(TWO_FRAMES)
+            box, plot_box = slider.bounding_box(), rigid_plot.bounding_box()
+            assert box["y"] >= plot_box["y"] + plot_box["height"] - 1  # right under the sweep plot
+            page.mouse.click(box["x"] + 0.25 * box["width"], box["y"] + 0.5 * box["height"])
+            _wait_until(lambda: app.current.scene.drive.rpm != before and app.handled_serial >= app._serial,
+                        "a click on the speed slider did not recompute at another speed")
+            chosen = app.current.scene.drive.rpm
+            assert 0.15 * span[1] < chosen < 0.35 * span[1]
+            rpm_field = _row_input(page, "Camshaft rpm")
+            page.wait_for_function("([e, v]) => Math.abs(parseFloat(e.value) - v) < 1e-6",
+                                   arg=[rpm_field.element_handle(), chosen], timeout=WAIT_MS)

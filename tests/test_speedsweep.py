@@ -154,7 +154,7 @@ def test_choosing_a_speed_under_the_sweep_sets_the_requests_rpm():
         deadline = time.monotonic() + WAIT_S
         while app.sweep is None and time.monotonic() < deadline:
             time.sleep(0.01)
-        assert app.sweep is not None and len(app._sweep_handles) == 2
+        assert app.sweep is not None and len(app._sweep_handles) == 3  # forces, torque, elastic
         before = np.asarray(app._sweep_handles[0].data[-2])
         assert app.sweep_rpm.value == app.current.scene.drive.rpm
         app.sweep_rpm.value = 1800.0  # as a page's slider would
@@ -171,3 +171,19 @@ def test_choosing_a_speed_under_the_sweep_sets_the_requests_rpm():
         app.stop()
         server.stop()
     assert app.loop_errors == 0 and app.worker.internal_errors == 0
+
+
+@pytest.mark.parametrize("path,overrides", [(SCENES / "schenker1902_intake_valve.toml", ()),
+                                            (FLOAT, ('effects=["forces", "contact"]',))])
+def test_torque_sweep_equals_the_contact_effects_peak_at_sample_speeds(path, overrides):
+    """Oracle: the contact effect's max_camshaft_torque_Nm of `simulate` at that speed (its own
+    per-step normal force and arm). T = c(F) F is the same product per sample: 1e-9 relative."""
+    scene, lift = _scene(path, *overrides)
+    base = simulate(scene, lift=lift)
+    rpms = [0.3 * scene.drive.rpm, scene.drive.rpm, 2.2 * scene.drive.rpm]
+    got = ss.torque_sweep(scene, lift, base, rpms)
+    for rpm, mine in zip(rpms, got):
+        expected = simulate(ss.at_speed(scene, rpm), lift=lift).summary["max_camshaft_torque_Nm"]
+        assert mine == pytest.approx(expected, rel=1e-9, abs=1e-12)
+    sweep = ss.start_sweep(scene, lift, 1, result=base)
+    assert sweep.peak_torque is not None and len(ss.sweep_plots(sweep, scene.drive.rpm)) >= 2

@@ -346,14 +346,14 @@ class ExplorerApp:
             self.plot_angle = gui.add_slider(PLOT_X_LABEL, min=0.0, max=360.0, step=0.1, initial_value=0.0,
                                              order=PLOT_SLIDER_ORDER,
                                              hint="scrub: click or drag to show this angle (pauses the animation)")
-            # the speed sweep under the plots: its plots are added as sweeps arrive (orders
-            # SWEEP_ORDER + 1, + 3); this slider sits right under the rigid one, on its speed scale
+            # the speed sweep under the plots: its plots are added as sweeps arrive (at
+            # SWEEP_ORDER + 1, + 3, + 5); this slider sits right under the rigid one, on its speed scale
             # (viser's uPlot reports no clicks, as for the cam angle above)
             self.sweep_note = gui.add_markdown("**Speed sweep:** computing…", order=SWEEP_ORDER)
             self.sweep_rpm = gui.add_slider("Speed [rpm]", min=0.0, max=1.0, step=1.0, initial_value=0.0,
                                             order=SWEEP_ORDER + 2, disabled=True,
                                             hint="choose a camshaft speed: the gear, plots and read-outs move to it")
-            self.sweep_progress = gui.add_markdown("", order=SWEEP_ORDER + 4)
+            self.sweep_progress = gui.add_markdown("", order=SWEEP_ORDER + 10)
         self._readout_tab = self.side_panel.add_tab("Read-outs")
         with self._readout_tab:
             self.stale_readout = gui.add_markdown("", visible=False)

@@ -43,6 +43,7 @@ class SpeedSweep:
     first_separation_deg: np.ndarray  # cam angle of the first separation (nan: none)
     seating_velocity: np.ndarray  # m/s, hardest seat impact, < 0 (nan: none)
     max_deviation: np.ndarray  # m, largest deviation of the valve from the rigid lift
+    peak_torque: np.ndarray | None = None  # N m, rigid camshaft torque peak (None: no contact effect)
     elastic_done: int = 0  # how many elastic speeds are computed (in order)
     note: str = ""  # why a part is missing
 
@@ -77,8 +78,9 @@ def _round_up(x: float) -> float:
     return math.ceil(x / p * 10.0) * p / 10.0
 
 
-def speed_parts(scene, lift):
-    """(A, G) on the open samples of the scene's grid: F = w^2 A + G (as studies.sweeps)."""
+def speed_parts(scene, lift, open_mask: bool = False):
+    """(A, G) on the open samples of the scene's grid: F = w^2 A + G (as studies.sweeps); with
+    `open_mask` also which samples of the grid those are."""
     from ...mechanics.forces import TWO_PI, TrainLoads, friction_direction, load_parts
 
     loads = TrainLoads.from_scene(scene)
@@ -87,7 +89,68 @@ def speed_parts(scene, lift):
     d = lift.derivatives(theta)
     lash = scene.valve.lash if scene.valve is not None else 0.0
     a_coef, g_part, is_open = load_parts(d, friction_direction(d[1], d[2]), loads, scene.follower.ratio, lash)
+    if open_mask:
+        return a_coef[is_open], g_part[is_open], is_open
     return a_coef[is_open], g_part[is_open]
+
+
+def torque_factors(scene, lift, result, is_open):
+    """(c_push, c_pull) on the open samples: the rigid camshaft torque is T = c F with c = c_push
+    where the valve-side contact force F > 0, c_pull where F < 0, from the contact effect's own
+    geometry and laws (explorer.mechanics.contact.contact_loads: T = N arm, N = ratio F / (cos a
+    - mu sin a sign v) when pushing, ratio F / cos a when pulling; inf: self-locked). The geometry
+    and the sign of the follower's velocity do not depend on the speed."""
+    from types import MappingProxyType
+
+    from ...effects.contact import contact_geometry
+    from ...effects.pipeline import Context
+    from ...mechanics.contact import ContactSpec
+
+    n = scene.solver.steps_per_revolution
+    theta = np.arange(n) * (2.0 * math.pi / n)
+    cols = result.columns
+    ctx = Context(scene, theta, np.asarray(cols["time_s"]), lift, MappingProxyType(dict(cols)),
+                  MappingProxyType(dict(result.summary)))
+    geometry = contact_geometry(ctx)
+    spec = scene.contact if scene.contact is not None else ContactSpec()
+    alpha = np.abs(np.asarray(geometry.pressure_angle, dtype=float))
+    v = np.sign(np.asarray(cols["follower_velocity_m_s"], dtype=float))
+    arm = np.asarray(geometry.ratio, dtype=float) * np.asarray(geometry.torque_arm, dtype=float)
+    denominator = np.cos(alpha) - math.tan(spec.friction_angle) * np.sin(alpha) * v
+    with np.errstate(divide="ignore", invalid="ignore"):
+        push = np.where(denominator > 0.0, arm / denominator, np.inf)
+        pull = arm / np.cos(alpha)
+    return push[is_open], pull[is_open]
+
+
+def torque_sweep(scene, lift, result, rpms) -> np.ndarray:
+    """Peak rigid camshaft torque [N m] at each speed of `rpms` (the contact effect's
+    max_camshaft_torque_Nm: the largest finite value; closed samples carry no force)."""
+    from ...mechanics.forces import RPM_PER_RAD_S
+
+    rpm = np.asarray(rpms, dtype=float).ravel()
+    a_coef, g_part, is_open = speed_parts(scene, lift, open_mask=True)
+    push, pull = torque_factors(scene, lift, result, is_open)
+    floor = 0.0 if not is_open.all() else -np.inf
+    out = np.full(rpm.size, floor)
+    if a_coef.size == 0:
+        return np.zeros(rpm.size)
+    w2 = (rpm / RPM_PER_RAD_S) ** 2
+    block = max(1, _BLOCK_CELLS // a_coef.size)
+    for start in range(0, rpm.size, block):
+        end = min(rpm.size, start + block)
+        forces = w2[start:end, None] * a_coef[None, :] + g_part[None, :]
+        with np.errstate(invalid="ignore"):
+            torque = forces * np.where(forces > 0.0, push[None, :], pull[None, :])
+        torque = np.where(np.isfinite(torque), torque, -np.inf)  # self-locked samples: no finite torque
+        out[start:end] = np.maximum(out[start:end], torque.max(axis=1))
+    return np.where(np.isfinite(out), out, np.nan)
+
+
+def has_contact(scene) -> bool:
+    from ...effects.pipeline import resolve
+
+    return "contact" in resolve(scene.effects)
 
 
 def rigid_sweep(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray]:
@@ -117,7 +180,7 @@ def has_elastic(scene) -> bool:
     return "elastic" in resolve(scene.effects)
 
 
-def start_sweep(scene, lift, serial: int, previous: tuple[float, float] | None = None) -> SpeedSweep | None:
+def start_sweep(scene, lift, serial: int, previous: tuple[float, float] | None = None, result=None) -> SpeedSweep | None:
     """The rigid part of the sweep of this scene (elastic entries NaN); None when the scene has
     no rigid forces (no [valve] mass or [spring]): then there is nothing to sweep."""
     from ...core.errors import InputError
@@ -132,11 +195,12 @@ def start_sweep(scene, lift, serial: int, previous: tuple[float, float] | None =
         span = sweep_span(float(scene.drive.rpm), float_rpm, previous)
         rpm = np.linspace(span[0], span[1], RIGID_SPEEDS)
         low, high = rigid_sweep(scene, lift, rpm)
+        torque = torque_sweep(scene, lift, result, rpm) if result is not None and has_contact(scene) else None
     except (InputError, ValueError, AttributeError):
         return None
     elastic = np.linspace(span[1] / ELASTIC_SPEEDS, span[1], ELASTIC_SPEEDS) if has_elastic(scene) else np.empty(0)
     nan = np.full(elastic.shape, np.nan)
-    return SpeedSweep(serial, rpm, low, high, float_rpm, span, elastic, nan, nan.copy(), nan.copy(),
+    return SpeedSweep(serial, rpm, low, high, float_rpm, span, elastic, nan, nan.copy(), nan.copy(), peak_torque=torque,
                       note="" if elastic.size else "no elastic effect: rigid figures only")
 
 
@@ -182,14 +246,19 @@ def marker(x: np.ndarray, value: float) -> np.ndarray:
 
 
 def sweep_plots(sweep: SpeedSweep, current_rpm: float) -> list[tuple[str, str, np.ndarray, list, list]]:
-    """(title, y label, x, [(label, values, colour)], [marker arrays]) for the rigid and, where the
-    scene has it, the elastic plot; markers: current speed, then the float speed (rigid plot)."""
+    """(title, y label, x, [(label, values, colour)], [marker arrays]) for the rigid forces and,
+    where the scene has them, the camshaft torque and the elastic figures; markers: the current
+    speed, then the rigid float speed."""
     plots = [(
         "Speed sweep (rigid)", "F [N]", sweep.rpm,
         [("min contact force", sweep.min_contact_force, "#c0392b"),
          ("peak linkage force", sweep.peak_linkage_force, "#2471a3")],
         [marker(sweep.rpm, current_rpm), marker(sweep.rpm, sweep.float_rpm)],
     )]
+    if sweep.peak_torque is not None:
+        plots.append(("Speed sweep (rigid camshaft torque)", "T [N·m]", sweep.rpm,
+                      [("peak camshaft torque", sweep.peak_torque, "#17a589")],
+                      [marker(sweep.rpm, current_rpm), marker(sweep.rpm, sweep.float_rpm)]))
     if sweep.elastic_total:
         plots.append((
             f"Speed sweep (elastic, {sweep.elastic_done}/{sweep.elastic_total} speeds)", "", sweep.elastic_rpm,
@@ -211,8 +280,8 @@ class SweepTask:
     span: tuple[float, float] | None = None
 
 
-def run_task(task: SweepTask, scene, lift):
+def run_task(task: SweepTask, scene, lift, result=None):
     """What the child answers a SweepTask with, for the scene and lift of that result."""
     if task.rpm is None:
-        return start_sweep(scene, lift, task.serial, task.span)
+        return start_sweep(scene, lift, task.serial, task.span, result)
     return elastic_figures(scene, lift, task.rpm)

@@ -236,7 +236,7 @@ def _sweep_reply(task, last, result_serial: int):
     if last is None or task.serial != result_serial:
         return ("stale", None)
     try:
-        return ("sweep", run_task(task, last.scene, last.lift))
+        return ("sweep", run_task(task, last.scene, last.lift, last.result))
     except MemoryError:
         return ("memory", "")
     except Exception as exc:  # a sweep that fails must not end the child: the viewer shows why
