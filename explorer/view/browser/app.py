@@ -90,7 +90,15 @@ SWEEP_X_LABEL = "camshaft speed [rpm]"
 WIDTH_SWEEP = (2.5, 1.8, 1.8)
 
 
-def sweep_plot_options(title: str, y_label: str, series, span: tuple[float, float]) -> dict:
+def sweep_scales(span: tuple[float, float], y_range: tuple[float, float]) -> dict:
+    # y set from Python: uPlot's autorange fails on the NaN of elastic speeds not yet computed
+    return {"x": {"time": False, "auto": False, "range": [0.0, float(span[1])]},
+            "y": {"auto": False, "range": [float(y_range[0]), float(y_range[1])]},
+            "cursor": {"auto": False, "range": [0.02, 1.0]}}
+
+
+def sweep_plot_options(title: str, y_label: str, series, span: tuple[float, float],
+                       y_range: tuple[float, float] = (0.0, 1.0)) -> dict:
     """uPlot options of a speed-sweep plot: x the camshaft speed over the sweep's range; two
     markers drawn like the cam-angle cursor (a spike on a scale whose visible range starts above
     0): the current speed (black) and the rigid float speed (red, dashed)."""
@@ -101,8 +109,7 @@ def sweep_plot_options(title: str, y_label: str, series, span: tuple[float, floa
     out.append({"label": "rigid float speed", "stroke": "#e74c3c", "width": 1.5, "dash": [6, 4], "scale": "cursor"})
     return dict(
         series=tuple(out), title=title,
-        scales={"x": {"time": False, "auto": False, "range": [0.0, float(span[1])]},
-                "cursor": {"auto": False, "range": [0.02, 1.0]}},
+        scales=sweep_scales(span, y_range),
         axes=({"label": SWEEP_X_LABEL, "size": 30, "labelSize": 16, "labelGap": 0},
               {"label": y_label, "size": 58, "labelSize": 16, "labelGap": 0}),
         padding=(14, 18, 0, 0), aspect=2.0,
@@ -1016,23 +1023,26 @@ class ExplorerApp:
             return
         rpm = float(self.current.scene.drive.rpm)
         plots = sweep_plots(sweep, rpm)
-        signature = (sweep.span, tuple(tuple(label for label, _, _ in series) for _, _, _, series, _ in plots))
-        data = [(x, *(values for _, values, _ in series), *markers) for _, _, x, series, markers in plots]
+        signature = (sweep.span, tuple(tuple(label for label, _, _ in series) for _, _, _, series, _, _ in plots))
+        data = [(x, *(values for _, values, _ in series), *markers) for _, _, x, series, markers, _ in plots]
         if signature != self._sweep_signature:
             for handle in self._sweep_handles:
                 handle.remove()
             self._sweep_handles = []
             with self._plots_tab:
-                for k, ((title, y_label, _, series, _), values) in enumerate(zip(plots, data)):
+                for k, ((title, y_label, _, series, _, y_lim), values) in enumerate(zip(plots, data)):
                     self._sweep_handles.append(self.target.gui.add_uplot(
                         data=values, order=SWEEP_ORDER + 1 + 2 * k,
-                        **sweep_plot_options(title, y_label, series, sweep.span)))
+                        **sweep_plot_options(title, y_label, series, sweep.span, y_lim)))
             self._sweep_signature = signature
         else:
-            for handle, values, (title, *_rest) in zip(self._sweep_handles, data, plots):
+            for handle, values, (title, _, _, _, _, y_lim) in zip(self._sweep_handles, data, plots):
                 handle.data = values
                 if handle.title != title:
                     handle.title = title
+                scales = sweep_scales(sweep.span, y_lim)
+                if handle.scales != scales:
+                    handle.scales = scales
         float_text = f"{sweep.float_rpm:.0f} rpm" if math.isfinite(sweep.float_rpm) else "none"
         self.sweep_note.content = (f"**Speed sweep** of this scene: {sweep.rpm.size} speeds up to "
                                    f"{sweep.span[1]:g} rpm; rigid float speed {float_text}.")

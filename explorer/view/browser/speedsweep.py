@@ -236,38 +236,70 @@ def with_elastic(sweep: SpeedSweep, figures: tuple[float, float, float]) -> Spee
                                elastic_done=k + 1)
 
 
-def marker(x: np.ndarray, value: float) -> np.ndarray:
-    """A one-sample spike (0..1) at the sample nearest `value`: drawn on its own scale whose
-    visible range starts above 0, it shows as a vertical line (as the cam-angle cursor)."""
-    out = np.zeros(len(x))
-    if math.isfinite(value) and len(x) and x[0] - (x[-1] - x[0]) <= value <= 2 * x[-1]:
-        out[int(np.argmin(np.abs(x - value)))] = 1.0
-    return out
+def with_markers(x: np.ndarray, values: list[np.ndarray], at: list[float]):
+    """(x, values, markers) for a uPlot: each marker a vertical line at its exact speed. uPlot
+    draws a series against one shared x, so every finite marker speed m in range gets the samples
+    m - d, m, m + d (d a thousandth of a grid step) inserted, where the curves take their linear
+    interpolation (what the plot draws between the samples anyway) and the marker series is 1 at m
+    and 0 elsewhere: drawn on a scale whose visible range starts above 0 it shows as a vertical
+    line (as the cam-angle cursor)."""
+    x = np.asarray(x, dtype=float)
+    d = 1e-3 * float(np.min(np.diff(x))) if x.size > 1 else 1e-3
+    inserted = sorted({float(v) + k * d for v in at if math.isfinite(v) and x[0] <= v <= x[-1] for k in (-1, 0, 1)})
+    xs = np.union1d(x, np.asarray(inserted, dtype=float))
+    out = []
+    for y in values:
+        y = np.asarray(y, dtype=float)
+        ok = np.isfinite(y)
+        yi = np.interp(xs, x[ok], y[ok]) if ok.sum() >= 2 else np.full(xs.shape, np.nan)
+        # keep gaps: an inserted sample between two samples one of which is NaN is NaN
+        left = np.clip(np.searchsorted(x, xs, side="right") - 1, 0, x.size - 1)
+        right = np.clip(left + 1, 0, x.size - 1)
+        exact = np.isin(xs, x)
+        yi = np.where(exact, np.interp(xs, x, np.where(ok, y, 0.0)), yi)
+        yi = np.where(exact, np.where(np.isin(xs, x[ok]), yi, np.nan), np.where(ok[left] & ok[right], yi, np.nan))
+        out.append(yi)
+    markers = []
+    for v in at:
+        m = np.zeros(xs.size)
+        if math.isfinite(v) and x[0] <= v <= x[-1]:
+            m[int(np.argmin(np.abs(xs - v)))] = 1.0
+        markers.append(m)
+    return xs, out, markers
 
 
-def sweep_plots(sweep: SpeedSweep, current_rpm: float) -> list[tuple[str, str, np.ndarray, list, list]]:
-    """(title, y label, x, [(label, values, colour)], [marker arrays]) for the rigid forces and,
-    where the scene has them, the camshaft torque and the elastic figures; markers: the current
-    speed, then the rigid float speed."""
-    plots = [(
-        "Speed sweep (rigid)", "F [N]", sweep.rpm,
-        [("min contact force", sweep.min_contact_force, "#c0392b"),
-         ("peak linkage force", sweep.peak_linkage_force, "#2471a3")],
-        [marker(sweep.rpm, current_rpm), marker(sweep.rpm, sweep.float_rpm)],
-    )]
+def y_range(values: list[np.ndarray]) -> tuple[float, float]:
+    """The y range the plot shows: the finite values with 5 % margin (uPlot's own autorange
+    fails on NaN, which marks an elastic speed not computed yet or a figure that does not apply)."""
+    finite = np.concatenate([np.asarray(v, dtype=float)[np.isfinite(v)] for v in values] or [np.empty(0)])
+    if finite.size == 0:
+        return (0.0, 1.0)
+    lo, hi = float(finite.min()), float(finite.max())
+    pad = 0.05 * (hi - lo) if hi > lo else max(abs(hi), 1.0) * 0.05
+    return (lo - pad, hi + pad)
+
+
+def sweep_plots(sweep: SpeedSweep, current_rpm: float) -> list[tuple]:
+    """(title, y label, x, [(label, values, colour)], [current-speed marker, float-speed marker],
+    y range) for the rigid forces and, where the scene has them, the camshaft torque and the
+    elastic figures; markers at the exact speeds (with_markers)."""
+    specs = [("Speed sweep (rigid)", "F [N]", sweep.rpm,
+              [("min contact force", sweep.min_contact_force, "#c0392b"),
+               ("peak linkage force", sweep.peak_linkage_force, "#2471a3")])]
     if sweep.peak_torque is not None:
-        plots.append(("Speed sweep (rigid camshaft torque)", "T [N·m]", sweep.rpm,
-                      [("peak camshaft torque", sweep.peak_torque, "#17a589")],
-                      [marker(sweep.rpm, current_rpm), marker(sweep.rpm, sweep.float_rpm)]))
+        specs.append(("Speed sweep (rigid camshaft torque)", "T [N·m]", sweep.rpm,
+                      [("peak camshaft torque", sweep.peak_torque, "#17a589")]))
     if sweep.elastic_total:
-        plots.append((
-            f"Speed sweep (elastic, {sweep.elastic_done}/{sweep.elastic_total} speeds)", "", sweep.elastic_rpm,
-            [("seating velocity [m/s]", sweep.seating_velocity, "#8e44ad"),
-             ("largest deviation [mm]", sweep.max_deviation * 1e3, "#27ae60"),
-             ("first separation [°/100]", sweep.first_separation_deg / 100.0, "#d68910")],
-            [marker(sweep.elastic_rpm, current_rpm), marker(sweep.elastic_rpm, sweep.float_rpm)],
-        ))
-    return plots
+        specs.append((f"Speed sweep (elastic, {sweep.elastic_done}/{sweep.elastic_total} speeds)", "", sweep.elastic_rpm,
+                      [("seating velocity [m/s]", sweep.seating_velocity, "#8e44ad"),
+                       ("largest deviation [mm]", sweep.max_deviation * 1e3, "#27ae60"),
+                       ("first separation [°/100]", sweep.first_separation_deg / 100.0, "#d68910")]))
+    out = []
+    for title, y_label, x, series in specs:
+        xs, ys, markers = with_markers(x, [v for _, v, _ in series], [current_rpm, sweep.float_rpm])
+        shown = tuple((label, y, colour) for (label, _, colour), y in zip(series, ys))
+        out.append((title, y_label, xs, list(shown), markers, y_range(ys)))
+    return out
 
 
 @dataclass(frozen=True)
