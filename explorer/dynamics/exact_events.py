@@ -1,11 +1,14 @@
 """Part of the `exact` solver (exact.py): the event functions of a step and the search for their
 first zero -- scaled Taylor coefficients of the components (gap, linkage force, velocity, lift),
 the rigorous bounds that clear a step (end values plus h^2/8 sup e''), the combination of
-min/max components, the start-of-phase clearance, and the root polish (Newton from the secant
-point, Illinois). See exact.py for the method."""
+min/max components, the start-of-phase clearance, the search in one step (earliest: the first
+event of a step and where) and the root polish (Newton from the secant point, Illinois). The
+events themselves are phases.py's rules, turned into rows here (event_of). See exact.py for the
+method."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -354,6 +357,34 @@ class Event:
     comb: str = "one"
 
 
+def _neg(x: float) -> float:
+    return -x if x else 0.0  # (a zero stays +0.0)
+
+
+def event_of(rule, k: float, c: float, lash: float, s_star: float = 0.0) -> Event:
+    """The Event of a phases.EventRule: each component as a row (aP, bP, const, l0, l1), in
+    force units (a gap or a lift is not rescaled: only its sign matters where it stands alone;
+    a gap combined with a force is k gap). s_star: the rest height of a valve at rest."""
+    rows = []
+    for quantity, sign, threshold in rule.comps:
+        if quantity == "force":
+            row = (k, c, -k * lash, -k, -c)
+        elif quantity == "gap" and rule.kind in ("up", "down"):  # at rest: the gap at s_star
+            row = (k, 0.0, -k * (lash + s_star), 0.0, 0.0)
+        elif quantity == "gap":
+            row = (k, 0.0, -k * lash, -k, 0.0)
+        elif quantity == "push":
+            row = (k, c, -k * (lash + s_star) - threshold, 0.0, 0.0)
+        elif quantity == "lift":
+            row = (0.0, 0.0, 0.0, 1.0, 0.0)
+        elif quantity == "velocity":
+            row = (0.0, 0.0, 0.0, 0.0, 1.0)
+        else:
+            raise ValueError(f"unknown event quantity {quantity!r}")
+        rows.append(row if sign > 0.0 else tuple(_neg(x) for x in row))
+    return Event(rule.kind, tuple(rows), rule.comb)
+
+
 def coefficients(comp, P, dP, a, da, n_rows):
     """Scaled Taylor coefficients (n_rows, ...) of one event component over a step."""
     aP, bP, const, l0, l1 = comp
@@ -396,3 +427,142 @@ def start_coeffs(comps, comb, P, dP, a, da, s0, v0):
         return Es, any_zero
     starts = [e[0] for e in Es]
     return Es, any_zero and (min(starts) if comb == "min" else max(starts)) == 0.0
+
+
+# ---------------------------------------------------------------- the search in one step
+MAX_DEPTH = 6  # refinement levels of the event search (8 sub-intervals each: 4e-6 of a step)
+SUBDIVISIONS = 8
+
+
+def earliest(events, coeff_sets, zero_flags, t_abs: float, h_loc: float, stats: dict):
+    """Earliest event over one step: (kind, w) or None. coeff_sets: per event, its components'
+    coefficient vectors over w in [0, 1]."""
+    best = None
+    for ev, Es, zero in zip(events, coeff_sets, zero_flags):
+        lists = Es
+        w_lo = 0.0
+        if zero:
+            # starting on its zero: most often it leaves it downwards and the plain test for
+            # the whole step suffices; otherwise clear the start analytically, test the rest
+            if len(lists) == 1:
+                if excluded1(lists[0]):
+                    continue
+            else:
+                ex = [excluded1(e) for e in lists]
+                if (any(ex) if ev.comb == "min" else all(ex)):
+                    continue
+            clear = [start_clearance(e) if e[0] == 0.0 else 0.0 for e in lists]
+            w_lo = max(clear) if ev.comb == "min" else min(clear)
+            if w_lo >= 1.0:
+                continue
+        e = lists[0]
+        if len(lists) == 1:
+            e_lo, e_hi = (e[0] if w_lo == 0.0 else horner(e, w_lo)), sum(e)
+            # (a sign change from one end to the other needs no exclusion test)
+            if not e_lo <= 0.0 < e_hi and (
+                    excluded1(e, e_hi) if w_lo == 0.0 else excluded_range(e, w_lo, 1.0)):
+                continue
+        else:
+            ex = [excluded1(e) if w_lo == 0.0 else excluded_range(e, w_lo, 1.0) for e in lists]
+            if (any(ex) if ev.comb == "min" else all(ex)):
+                continue
+        if (ev.comb == "one" and e_lo <= 0.0 < e_hi
+                and rising_range(e, w_lo, 1.0)):  # one simple crossing: polish it directly
+            stats["newton_roots"] = stats.get("newton_roots", 0) + 1
+            w = root_rising(e, w_lo, 1.0, max(0.5 * math.ulp(abs(t_abs)) / h_loc, 1e-300), e_lo, e_hi)
+        elif positive_at(lists, ev.comb, w_lo):  # already > 0 where the search would begin
+            w = w_lo
+        else:
+            w = _first_root(Es, ev.comb, w_lo, t_abs, h_loc, stats)
+        if w is None:
+            continue
+        # the seat is rigid: when the valve lands in the same instant as another event
+        # (zero lash on the base circle: gap and lift close together) the seat decides
+        tie = best is not None and abs(w - best[1]) <= 1e-9 * max(w, 1e-300) + 64.0 * EPS
+        if best is None or w < best[1] and not (tie and best[0] == "seat") or tie and ev.kind == "seat":
+            best = (ev.kind, w)
+    return best
+
+
+def _first_root(Es, comb, w_lo: float, t_abs: float, h_loc: float, stats: dict):
+    """First w in [w_lo, 1] where the combined function becomes > 0, or None."""
+    stats["detail_searches"] += 1
+    pts = np.linspace(w_lo, 1.0, SUBDIVISIONS + 1)
+    xtol = max(0.5 * math.ulp(abs(t_abs)) / h_loc, 1e-300) if h_loc > 0 else 1e-300
+    E = np.array(Es)  # (components, N+1)
+    return _search(E, comb, pts, 0, xtol)
+
+
+def _search(E, comb, pts, depth, xtol):
+    nc, nr = E.shape
+    powers = pts[:, None] ** np.arange(nr)
+    n = np.arange(nr, dtype=float)
+    vals = (powers @ E.T).T  # (nc, K)
+    ders = (powers[:, :-1] @ (E[:, 1:] * n[1:]).T).T
+    cv = combine(vals, comb)
+    w2 = E[:, 2:] * (n[2:] * (n[2:] - 1.0))  # (nc, nr-2)
+    pa, pb = powers[:-1, :nr - 2], powers[1:, :nr - 2]
+    D = pts[1:] - pts[:-1]
+    ex = np.array([
+        excluded(vals[c, :-1], ders[c, :-1], vals[c, 1:], ders[c, 1:],
+                  np.maximum(pa * w2[c], pb * w2[c]).sum(axis=1), D)
+        for c in range(nc)
+    ])
+    ex = combine_excluded(ex, comb)
+    for i in np.nonzero(~ex)[0]:
+        lo, hi = float(pts[i]), float(pts[i + 1])
+        if cv[i] > 0.0:
+            return lo
+        if cv[i + 1] > 0.0:
+            if depth < MAX_DEPTH and not _monotone(E, comb, lo, hi, ders[:, i]):
+                r = _search(E, comb, np.linspace(lo, hi, SUBDIVISIONS + 1), depth + 1, xtol)
+                if r is not None:
+                    return r
+            return _brent(E, comb, lo, hi, xtol)
+        if depth < MAX_DEPTH:
+            r = _search(E, comb, np.linspace(lo, hi, SUBDIVISIONS + 1), depth + 1, xtol)
+            if r is not None:
+                return r
+    return None
+
+
+def _monotone(E, comb, lo, hi, d_lo) -> bool:
+    """e' > 0 on [lo, hi] for a single-component function (then its root there is unique)."""
+    if comb != "one":
+        return False
+    e = E[0]
+    n = np.arange(2, e.size, dtype=float)
+    w = n * (n - 1.0) * e[2:]
+    B2lo = np.minimum(w * lo ** (n - 2.0), w * hi ** (n - 2.0)).sum()
+    return float(d_lo[0]) + min(0.0, B2lo) * (hi - lo) > 0.0
+
+
+def _brent(E, comb, lo, hi, xtol):
+    cs = [list(map(float, e)) for e in E]
+    if comb == "one":
+        c0 = cs[0]
+
+        def f(x):
+            return horner(c0, x)
+    elif comb == "min":
+
+        def f(x):
+            return min(horner(c, x) for c in cs)
+    else:
+
+        def f(x):
+            return max(horner(c, x) for c in cs)
+    flo = f(lo)
+    if flo > 0.0:
+        return lo
+    if flo == 0.0:  # leave the zero: bisect on the sign for the first point where f > 0
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            if mid <= lo or mid >= hi:
+                break
+            if f(mid) > 0.0:
+                hi = mid
+            else:
+                lo = mid
+        return hi
+    return illinois(f, lo, hi, flo, f(hi), xtol)

@@ -12,8 +12,9 @@ without the spring's share) is used while the linkage is compressed, M otherwise
 
 A lever whose ratio changes with its position (the rolling lever) has a valve-referred stiffness
 that changes along the cycle: k(t) from a StiffnessProfile. The contact equation keeps its form
-with k(t) in place of k; the force is k(t) (S - lash - s) + c (S' - s'). Only the solvers in
-VARYING_STIFFNESS accept it: the exact solver's closed forms need constant coefficients.
+with k(t) in place of k; the force is k(t) (S - lash - s) + c (S' - s'). Only the solvers whose
+registry entry says varying_stiffness accept it: the exact solver's closed forms need constant
+coefficients.
 
 Every solver has the signature
     solve(model: LinkageModel, drive: Drive, t: np.ndarray, **options) -> DynamicsSolution
@@ -32,9 +33,6 @@ import numpy as np
 
 from . import solvers as registry
 from .phases import PHASE_CODES, phase_of_state, release_from_rest  # noqa: F401 (re-exported)
-
-# solvers that accept a LinkageModel with a stiffness_profile (k changing with the position)
-VARYING_STIFFNESS = registry.varying_stiffness()
 
 EVENT_KINDS = ("lift-off", "separation", "re-contact", "seat")
 @dataclass(frozen=True)
@@ -164,6 +162,6 @@ def solve(model: LinkageModel, drive: Drive, t: np.ndarray, method: str = "exact
     info = registry.solver(method)
     if model.stiffness_profile is not None and not info.varying_stiffness:
         raise ValueError(f"method {method!r} needs a constant linkage stiffness; for a stiffness that changes "
-                         f"along the cycle use {' or '.join(map(repr, VARYING_STIFFNESS))}")
+                         f"along the cycle use {' or '.join(map(repr, registry.varying_stiffness()))}")
     info.check_options(options)
     return info.function()(model, drive, np.asarray(t, dtype=float), **options)

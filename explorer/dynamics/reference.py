@@ -24,11 +24,12 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel, phase_of_state
+from .solvers import SCIPY_METHODS
+from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel
+from .phases import phase_of_state, rebound_rest_speed, seat_speed, touching, velocity_zero
 
 REST, CONTACT, FLIGHT = "rest", "contact", "flight"
 IMPLICIT_METHODS = ("Radau", "BDF", "LSODA")
-METHODS = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA")
 SEAT_TOLERANCE = 1e-12  # m: an event this close to the seat while moving down is a seat impact
 MAX_EVENTS = 100_000  # a guard against endless event loops (a bug, not physics)
 
@@ -265,13 +266,6 @@ def _missed_crossing(sol, functions, watch: dict, t_seg: float):
     return best
 
 
-def rebound_rest_speed(model: LinkageModel, rest_height: float) -> float:
-    """Rebound speed below which a seat bounce ends: it would rise less than rest_height
-    against the seated resistance (the Zeno tail of e > 0 is dropped there)."""
-    deceleration = (model.seated_resistance + model.friction) / model.mass
-    return math.sqrt(2.0 * deceleration * rest_height) if deceleration > 0.0 else 0.0
-
-
 def initial_phase(model: LinkageModel, S: float, Sd: float, s: float, v: float, k=None) -> tuple[str, float]:
     """Phase and friction direction of a valve given at (s, v) with the drive at (S, S') (seated
     and stuck are both REST here, with direction 0)."""
@@ -376,8 +370,8 @@ def solve(
     per instant; default: 4 when the stiffness changes along the cycle (a gear's k(t) costs a
     millisecond an instant), else off.
     """
-    if scipy_method not in METHODS:
-        raise ValueError(f"unknown scipy method {scipy_method!r}; known: {', '.join(METHODS)}")
+    if scipy_method not in SCIPY_METHODS:
+        raise ValueError(f"unknown scipy method {scipy_method!r}; known: {', '.join(SCIPY_METHODS)}")
     t = np.asarray(t, dtype=float)
     n = t.size
     if n == 0 or np.any(np.diff(t) < 0.0):
@@ -405,7 +399,7 @@ def solve(
     scale = float(np.abs(drive(np.linspace(t[0], t_end, 257))[0]).max()) + abs(model.lash) + 1e-3
     band = 64 * np.finfo(float).eps * scale
     friction_events = model.friction > 0.0
-    rest_speed = rebound_rest_speed(model, rest_height)
+    rest_speed = rebound_rest_speed(model.seated_resistance, model.friction, model.mass, rest_height)
 
     out = {name: np.zeros(n) for name in ("s", "v", "a", "f", "j")}
     in_contact = np.zeros(n, dtype=bool)
@@ -451,8 +445,9 @@ def solve(
                 events.append({"kind": "lift-off", "time_s": released, "velocity_m_s": 0.0})
             tcur, v, d = released, 0.0, float(direction)
             S0, Sd0 = cache(tcur)
-            touching = S0 - model.lash - s >= 0.0 and linkage_force(model, S0, Sd0, s, 0.0, k_now(tcur)) > 0.0
-            phase = CONTACT if touching else FLIGHT
+            k0 = k_now(tcur)
+            pushes = touching(S0, Sd0, model.stiffness if k0 is None else k0, model.damping, model.lash, s)
+            phase = CONTACT if pushes else FLIGHT
             continue
 
         later = breaks[breaks > tcur]
@@ -514,6 +509,7 @@ def solve(
             continue
         S0, Sd0 = cache(tcur)
         k0 = k_now(tcur)
+        k_here = model.stiffness if k0 is None else k0
         if s <= SEAT_TOLERANCE and v < 0.0 and "seat" not in fired:
             # the valve reaches the seat in the same instant as another event (zero lash on the
             # base circle: gap and lift close together); the seat, being rigid, decides
@@ -521,7 +517,7 @@ def solve(
         if "seat" in fired:
             if s < 0.0:  # the event fired a hair below the seat: the speed at s = 0, by energy
                 a_here = contact_acceleration(model, S0, Sd0, s, v, d, k0) if phase == CONTACT else flight_acceleration(model, s, d)
-                v = -math.sqrt(max(v * v - 2.0 * a_here * s, 0.0))
+                v = seat_speed(v, s, a_here)
             s = 0.0
             events.append({"kind": "seat", "time_s": tcur, "velocity_m_s": v})
             v = -model.restitution * v
@@ -529,7 +525,7 @@ def solve(
                 phase, v = REST, 0.0
             else:
                 d = 1.0
-                phase = CONTACT if S0 - model.lash >= 0.0 and linkage_force(model, S0, Sd0, 0.0, v, k0) > 0.0 else FLIGHT
+                phase = CONTACT if touching(S0, Sd0, k_here, model.damping, model.lash, 0.0, v) else FLIGHT
         elif "separation" in fired:
             events.append({"kind": "separation", "time_s": tcur, "velocity_m_s": v})
             phase = FLIGHT
@@ -538,11 +534,13 @@ def solve(
             phase = CONTACT
         elif "velocity-zero" in fired:
             v = 0.0
-            net = (linkage_force(model, S0, Sd0, s, 0.0, k0) if phase == CONTACT else 0.0) - static_resistance(model, s)
-            if abs(net) <= model.friction:
+            code = PHASE_CODES["contact"] if phase == CONTACT else PHASE_CODES["flight"]
+            _, sign = velocity_zero(code, S0, Sd0, k_here, model.damping, model.lash, s, model.seated_resistance,
+                                    model.spring_rate, model.friction)
+            if sign is None:
                 phase = REST  # stuck: friction holds the valve
             else:
-                d = 1.0 if net > 0.0 else -1.0
+                d = sign
     return DynamicsSolution(
         t=t, s=out["s"], v=out["v"], a=out["a"], linkage_force=out["f"], contact=in_contact,
         events=tuple(events), stats=stats, jerk=out["j"], phase=phase_out,

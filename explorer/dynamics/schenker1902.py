@@ -29,7 +29,8 @@ import numpy as np
 
 from . import solvers as registry
 from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel
-from .reference import CONTACT, FLIGHT, REST, initial_phase, rebound_rest_speed
+from .phases import rebound_rest_speed, touching
+from .reference import CONTACT, FLIGHT, REST, initial_phase
 
 VARIANTS = ("printed", "newmark")
 MASS_RULES = ("model", "paper")
@@ -126,7 +127,7 @@ def solve(
     m1, m = model.oscillating_mass, model.mass
     w_const = model.preload + model.closing_load
     e = model.restitution
-    rest_speed = rebound_rest_speed(model, rest_height)
+    rest_speed = rebound_rest_speed(model.seated_resistance, model.friction, model.mass, rest_height)
     seat_deceleration = (model.seated_resistance + model.friction) / model.mass
     newmark, paper = variant == "newmark", masses == "paper"
 
@@ -210,7 +211,7 @@ def solve(
                 record(i)
                 continue
             d = 1.0
-            phase = CONTACT if S2 - lash >= 0.0 and k * (S2 - lash) + c * (Sd2 - v2) > 0.0 else FLIGHT
+            phase = CONTACT if touching(S2, Sd2, k, c, lash, 0.0, v2) else FLIGHT
         elif phase == CONTACT and k * (S2 - lash - s2) + c * (Sd2 - v2) < 0.0:
             events.append({"kind": "separation", "time_s": float(t2), "velocity_m_s": v2})
             phase = FLIGHT

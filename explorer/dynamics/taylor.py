@@ -34,8 +34,8 @@ import math
 import numpy as np
 
 from .model import DynamicsSolution, LinkageModel
-from .phases import (AFTER_CROSSING, CONTACT, FLIGHT, SEATED, STUCK, phase_of_state, release_from_rest, rest_force,
-                     seat_rebound, velocity_zero)
+from .phases import (AFTER_CROSSING, CONTACT, FLIGHT, SEATED, STUCK, moving_events, phase_of_state, release_from_rest,
+                     rest_events, rest_force, seat_rebound, seat_speed, velocity_zero)
 from .series import hermite5, horner
 from .tabulated import node_values
 
@@ -96,7 +96,10 @@ def _add(p, q, alpha: float = 1.0, beta: float = 1.0) -> list:
 
 def _curv(c) -> float:
     """sup over [0, 1] of |p''| (w-scale), bounded by the coefficients."""
-    return sum(k * (k - 1) * abs(c[k]) for k in range(2, len(c)))
+    acc = 0  # (a loop, not sum() of a generator: a third of the time, the same additions in order)
+    for k in range(2, len(c)):
+        acc += k * (k - 1) * abs(c[k])
+    return acc
 
 
 class _Event:
@@ -167,6 +170,7 @@ def _bisect(ev: _Event, lo: float, hi: float) -> float:
     return hi
 
 
+
 class _Solver:
     def __init__(self, model: LinkageModel, drive, t: np.ndarray, initial_state, zeno_height: float, max_events: int,
                  max_rho_h: float = MAX_RHO_H):
@@ -180,6 +184,7 @@ class _Solver:
         self.zeno_height = zeno_height
         self.max_events = max_events
         self.initial_state = initial_state
+        self._plans: dict = {}  # event rules per phase and friction sign (int keys), or per rest height
         profile = model.stiffness_profile
         self.kmax = model.stiffness if profile is None else max(model.stiffness, profile.bounds()[1])
         alpha = 0.5 * self.c / self.M1
@@ -300,53 +305,86 @@ class _Solver:
         return a
 
     # ------------------------------------------------------------------ events of a step
+    def _plan(self, key, rules) -> tuple:
+        """A phases.py rule set as (kind, a "max" rule?, components) per event, each component
+        (quantity, its sign > 0?, the factor of its polynomial: -sign for the velocity, the
+        threshold / kmax for the push), kept per phase and friction sign (or rest height): a step
+        then only fills in the polynomials."""
+        plan = self._plans[key] = tuple(
+            (r.kind, r.comb == "max",
+             tuple((q, sign > 0.0, -sign if q == "velocity" else threshold / self.kmax) for q, sign, threshold in r.comps))
+            for r in rules)
+        return plan
+
     def _moving_events(self, phase, H, S, Sd, k, a, sigma):
+        """The events of phases.moving_events as polynomials in w: a component sign * quantity
+        is -sign * quantity here, fired a hair (band) beyond its surface, the force scaled by
+        1/kmax and the velocity's band in speed."""
         band = self.band
         V = [x / H for x in _deriv(a)]
-        evs = []
         Q = list(S)
         Q[0] -= self.lash
         x = _add(Q, a, 1.0, -1.0)  # gap S - lash - s
-        if phase == CONTACT or self.c:
-            F = _mul(k, x, len(a) + 6)
-            if self.c:
-                F = _add(F, _add(Sd, V, 1.0, -1.0), 1.0, self.c)
-        if phase == CONTACT:
-            g = [y / self.kmax for y in F]
-            g[0] += band
-            evs.append(_Event("separation", [g]))
-        else:
-            comps = [[-y for y in x]]
-            comps[0][0] += band
-            if self.c:
-                g = [-y / self.kmax for y in F]
-                g[0] += band
-                comps.append(g)
-            evs.append(_Event("re-contact", comps))
-        seat = list(a)
-        seat[0] += band
-        evs.append(_Event("seat", [seat]))
-        if self.R:
-            vz = [sigma * y for y in V]
-            vz[0] += band * self.wn
-            evs.append(_Event("velocity-zero", [vz]))
+        F = None
+        evs = []
+        key = phase if sigma > 0.0 else -1 - phase  # (an int: the cheapest key)
+        plan = self._plans.get(key) or self._plan(key, moving_events(phase, bool(self.c), bool(self.R), sigma))
+        for kind, split, comps in plan:
+            polys = []
+            for quantity, up, factor in comps:
+                if quantity == "lift":
+                    comp = [-y for y in a] if up else list(a)
+                    comp[0] += band
+                elif quantity == "gap":
+                    comp = [-y for y in x] if up else list(x)
+                    comp[0] += band
+                elif quantity == "force":
+                    if F is None:  # k gap + c (S' - v)
+                        F = _mul(k, x, len(a) + 6)
+                        if self.c:
+                            F = _add(F, _add(Sd, V, 1.0, -1.0), 1.0, self.c)
+                    kmax = self.kmax
+                    comp = [-y / kmax for y in F] if up else [y / kmax for y in F]
+                    comp[0] += band
+                else:  # velocity
+                    comp = [factor * y for y in V]
+                    comp[0] += band * self.wn
+                polys.append(comp)
+            if split:  # a "max" rule (any component): one event per component, the earliest fires
+                evs.extend(_Event(kind, [p]) for p in polys)
+            else:  # the event fires where all components are < 0
+                evs.append(_Event(kind, polys))
         return evs, V
 
     def _static_events(self, s_star: float, H, S, Sd, k):
+        """The events of phases.rest_events at s_star as polynomials in w (no band: a valve at
+        rest starts off its surfaces), the push scaled by 1/kmax. The gap's component is kept
+        without damping too: a step where it stays >= 0 is cleared at once by the search."""
         Q = list(S)
         Q[0] -= self.lash + s_star
         P = _mul(k, Q, 11)
         if self.c:
             P = _add(P, Sd, 1.0, self.c)
-        W = self.W0 + self.rate * s_star
-        up = [-y / self.kmax for y in P]
-        up[0] += (W + self.R) / self.kmax
-        evs = [_Event("up", [[-y for y in Q], up])]
-        if s_star > 0.0 and W - self.R > 0.0:
-            down = [y / self.kmax for y in P]
-            down[0] -= (W - self.R) / self.kmax
-            evs.append(_Event("down", [list(Q)]))
-            evs.append(_Event("down", [down]))
+        kmax = self.kmax
+        evs = []
+        plan = self._plans.get(("rest", s_star)) or self._plan(
+            ("rest", s_star), rest_events(s_star, self.W0, self.rate, self.R, gap_check=True))
+        for kind, split, comps in plan:
+            polys = []
+            for quantity, up, thr in comps:
+                if quantity == "gap":
+                    comp = [-y for y in Q] if up else list(Q)
+                elif up:  # push - threshold > 0
+                    comp = [-y / kmax for y in P]
+                    comp[0] += thr
+                else:
+                    comp = [y / kmax for y in P]
+                    comp[0] -= thr
+                polys.append(comp)
+            if split:  # a "max" rule (any component): one event per component, the earliest fires
+                evs.extend(_Event(kind, [p]) for p in polys)
+            else:  # the event fires where all components are < 0
+                evs.append(_Event(kind, polys))
         return evs
 
     @staticmethod
@@ -453,7 +491,7 @@ class _Solver:
                 acc = (k * (S - self.lash - s) + self.c * (S1 - v) - self.W0 - self.rate * s - self.R * sigma) / m
             else:
                 acc = -(self.W0 + self.rate * s + self.R * sigma) / m
-            v = -math.sqrt(max(v * v - 2.0 * acc * s, 0.0))
+            v = seat_speed(v, s, acc)
         impact = min(v, 0.0)
         ev = self._event("seat", j, u, impact)
         if -self.e * impact <= 0.0:

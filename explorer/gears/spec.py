@@ -20,7 +20,8 @@ rolling-lever    eccentric rolling lever ("Waelzhebel"); [lift] law = "gear".
                  [gear.rolling_lever] valve_lever_pivot, contact_radius, growth, contact_swing,
                      opens, lever_stiffness, rod_stiffness (optional; with either, the elastic
                      effect's stiffness is theirs referred to the valve, k(t), in series with
-                     [linkage] stiffness, and needs solver.method "taylor", "scipy" or "schenker1902")
+                     [linkage] stiffness, and needs a solver.method that takes k(t):
+                     explorer/dynamics/solvers.py, varying_stiffness)
                  [gear.valve] type = "rocker" on the valve lever (angle from the direction
                      valve-lever pivot -> rolling-lever pivot)
 trip             latch lifts the valve, releases it at the trip angle; [lift] is the latch's
@@ -320,13 +321,14 @@ def _check_scene(spec: GearSpec, fields: dict) -> None:
         raise InputError(file, "follower.roller_radius", f"the {kind} gear needs a roller (roller_radius > 0)")
     if kind == "rolling-lever" and "elastic" in effects:
         rl = spec.part("rolling_lever")
-        from ..dynamics.model import VARYING_STIFFNESS
+        from ..dynamics.solvers import varying_stiffness
 
+        varying = varying_stiffness()
         if (rl["lever_stiffness"] is not None or rl["rod_stiffness"] is not None) \
-                and fields["solver"].method not in VARYING_STIFFNESS:
+                and fields["solver"].method not in varying:
             raise InputError(file, "solver.method", f"method \"{fields['solver'].method}\" needs a constant linkage "
                              "stiffness, but the rolling lever's (lever_stiffness, rod_stiffness) changes with its ratio "
-                             "along the lift: use method = " + " or ".join(f'"{m}"' for m in VARYING_STIFFNESS))
+                             "along the lift: use method = " + " or ".join(f'"{m}"' for m in varying))
     if kind == "trip":
         if lift.law not in LAWS:
             raise InputError(file, "lift.law", f"the trip gear's latch follows one of the laws: {', '.join(LAWS)}")

@@ -440,7 +440,7 @@ def __getattr__(name: str):
 def _parse_solver(t: Table) -> Solver:
     from ..dynamics import solvers as solver_registry  # (the registry: on the first [solver] table)
 
-    t.reject_unknown(("method", "steps_per_revolution", "scipy_method", "rtol", "atol"))
+    t.reject_unknown(("method", "steps_per_revolution", *solver_registry.scene_options()))
     steps = t.number("steps_per_revolution", 3600, integer=True)
     if steps < MIN_STEPS:
         raise t.error("steps_per_revolution", f"too few steps: {steps:.6g} (at least {MIN_STEPS})")

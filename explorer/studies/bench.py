@@ -198,7 +198,6 @@ def run_bench(
     differentiation: bool = True,
 ) -> BenchReport:
     """Time every method and resolution on the scene; see the module docstring."""
-    from ..dynamics import schenker1902
     from ..dynamics.model import solve
 
     model, drive = model_and_drive(scene)
@@ -210,12 +209,15 @@ def run_bench(
         steps = tuple(n for n in steps if n <= VARYING_MAX_STEPS)
     rtols = QUICK_RTOLS if quick else RTOLS
     finest = max(steps)
-    min_stable = schenker1902.min_stable_steps(model, drive.omega)
-    stable_steps = [n for n in steps if n >= min_stable]
+    # the solvers, by their kind in the registry: the first piecewise one that takes this model,
+    # every fixed-step one at the steps where it is stable, scipy (the adaptive reference) by rtol
+    fast = solver_registry.of_kind("piecewise", varying)[0]
+    fixed = solver_registry.of_kind("fixed-step", varying)
+    min_stable = {name: solver_registry.solver(name).min_stable_steps(model, drive.omega) for name in fixed}
+    stable_steps = {name: [n for n in steps if n >= min_stable[name]] for name in fixed}
     ratio_repeats = max(5, repeats)
 
-    fast = "taylor" if varying else "exact"  # the piecewise solver for this model
-    total = 2 + len(steps) + len(stable_steps) + len(rtols) + 1 + (1 if differentiation else 0)
+    total = 2 + len(steps) + sum(map(len, stable_steps.values())) + len(rtols) + 1 + (1 if differentiation else 0)
     done = 0
 
     def tick(label: str) -> None:
@@ -265,7 +267,7 @@ def run_bench(
     runs: list[Run] = []
     notes: list[str] = []
     # warm-up: the first call of each solver pays for imports and caches, not for the method
-    for method in (fast, "schenker1902", "scipy"):
+    for method in (fast, *fixed, "scipy"):
         options = solver_registry.solver(method).unstable_options()
         solve(model, drive, grid(360), method=method, **options)
 
@@ -277,23 +279,26 @@ def run_bench(
     fast_fine = solve(model, drive, t_fine, method=fast)
     reference_check = float(np.abs(fast_fine.s - ref.s).max())
     if varying:
-        notes.append("exact replaced by taylor: the linkage stiffness changes along the cycle (k(t)) and the exact "
+        first = solver_registry.of_kind("piecewise")[0]
+        notes.append(f"{first} replaced by {fast}: the linkage stiffness changes along the cycle (k(t)) and the {first} "
                      "solver's closed forms need constant coefficients")
 
     def fast_on(n: int) -> np.ndarray:
         if finest % n == 0:
             return fast_fine.s[:: finest // n]
         return solve(model, drive, grid(n), method=fast).s
-    for n in stable_steps:
-        tick(f"schenker1902 at {n} steps")
-        t = t_on(n)
-        runs.append(record("schenker1902", f"{n} steps", n, None, lambda t=t: solve(model, drive, t, method="schenker1902")))
-    skipped = [n for n in steps if n < min_stable]
-    if skipped:
-        notes.append(
-            f"schenker1902 skipped at {', '.join(map(str, skipped))} steps: unstable beyond h = "
-            f"{schenker1902.stability_limit():.3f} Tn (needs >= {min_stable} steps per revolution)"
-        )
+    for method in fixed:
+        for n in stable_steps[method]:
+            tick(f"{method} at {n} steps")
+            t = t_on(n)
+            runs.append(record(method, f"{n} steps", n, None, lambda t=t, m=method: solve(model, drive, t, method=m)))
+        skipped = [n for n in steps if n < min_stable[method]]
+        if skipped:
+            notes.append(
+                f"{method} skipped at {', '.join(map(str, skipped))} steps: unstable beyond h = "
+                f"{revolution / min_stable[method] / model.natural_period():.3f} Tn (needs >= {min_stable[method]} "
+                "steps per revolution)"
+            )
     t_default = t_on(default_steps)
     for rtol in rtols:
         tick(f"scipy DOP853 rtol {rtol:g}")
@@ -326,7 +331,7 @@ def run_bench(
     return BenchReport(
         scene=scene.name, rpm=scene.drive.rpm, default_steps=default_steps, natural_period_s=model.natural_period(),
         revolution_s=revolution,
-        reference=(f"{fast} and schenker1902 against scipy DOP853 rtol {REFERENCE_RTOL:g} atol {REFERENCE_RTOL * 1e-3:g} m "
+        reference=(f"{' and '.join((fast, *fixed))} against scipy DOP853 rtol {REFERENCE_RTOL:g} atol {REFERENCE_RTOL * 1e-3:g} m "
                    f"(events, max step Tn/4{', drive and k(t) tabulated' if varying else ''}); scipy against {fast}; "
                    f"both at {finest} steps"),
         reference_check_m=reference_check, reference_events=tuple(e["kind"] for e in ref.events),
@@ -401,14 +406,14 @@ def _png(fig) -> bytes:
 def chart_png(report: BenchReport) -> bytes:
     """Error versus CPU time, log-log, one series per method, the Pareto front dashed."""
     with _figure(figsize=(8.0, 5.6), dpi=110) as (fig, ax):
-        for method, style in STYLE.items():
+        for i, method in enumerate(dict.fromkeys(r.method for r in report.runs)):
             rows = [r for r in report.runs if r.method == method]
-            if not rows:
-                continue
+            style = STYLE.get(method) or dict(color=f"C{i}", marker="v")  # (a solver new to the table)
             x = [max(r.cpu_time_s, 1e-6) for r in rows]
             y = [max(r.max_error_m, FLOOR_M) for r in rows]
-            label = {"exact": "exact (steps/rev)", "schenker1902": "schenker1902 (steps/rev)", "scipy": "scipy DOP853 (rtol)",
-                     "taylor": "taylor, k(t) (steps/rev)"}[method]
+            varying = method == report.check_method and "k(t)" in report.reference  # (in exact's place)
+            label = (f"{method} DOP853 (rtol)" if rows[0].rtol is not None
+                     else f"{method}{', k(t)' if varying else ''} (steps/rev)")
             ax.plot(x, y, linestyle="-", linewidth=1.2, markersize=6, label=label, **style)
             for r, xi, yi in zip(rows, x, y):
                 text = f"{r.rtol:.0e}" if r.rtol is not None else f"{r.steps:g}"
