@@ -16,6 +16,9 @@ from .model import COMPUTE_TIME_LIMIT_S, MEMORY_LIMIT_BYTES, Prepared, Request, 
 # stopped (its child killed; a fresh one starts in about half a second). Most steps are shorter:
 # one elastic run of the default scene takes ~0.17 s on the loaded 2-core machine.
 SWEEP_YIELD_S = 0.3
+# The sweep starts only once no change has come for this long: while someone drags a slider or
+# types, every change goes straight to the child, and no sweep step stands in its way.
+SWEEP_QUIET_S = 0.5
 
 
 def time_limit_message(seconds: float, previous: bool) -> str:
@@ -119,8 +122,14 @@ class ComputeWorker:
         try:
             while True:
                 with self._cond:
-                    while self._pending is None and not self._stop and self._sweep is None:
-                        self._cond.wait()
+                    while self._pending is None and not self._stop:
+                        if self._sweep is None:
+                            self._cond.wait()
+                            continue
+                        quiet = time.monotonic() - self._pending_at
+                        if quiet >= SWEEP_QUIET_S:
+                            break
+                        self._cond.wait(SWEEP_QUIET_S - quiet)
                     if self._stop:
                         return
                     if self._pending is None:
