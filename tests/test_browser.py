@@ -238,7 +238,9 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                 plots = [[plot.title, [PLOT_X_LABEL] + [label for label, _, _ in plot.series] + ["now"]]
                          for plot in app.current.plots]
                 page.wait_for_function(
-                    "(expected) => JSON.stringify([...document.querySelectorAll('.uplot')].map(u => ["
+                    # the cam-angle plots; the speed sweep's plots below them are another test's
+                    "(expected) => JSON.stringify([...document.querySelectorAll('.uplot')].filter(u =>"
+                    " !(u.querySelector('.u-title')?.textContent ?? '').startsWith('Speed sweep')).map(u => ["
                     "u.querySelector('.u-title')?.textContent,"
                     " [...u.querySelectorAll('.u-series .u-label')].map(e => e.textContent)])) === JSON.stringify(expected)",
                     arg=plots, timeout=WAIT_MS,
@@ -432,7 +434,8 @@ def test_slider_under_the_plots_and_the_event_list_jump_the_animation(tmp_path):
             plots_slider.scroll_into_view_if_needed()
             page.evaluate(TWO_FRAMES)
             box = plots_slider.bounding_box()
-            last_plot = page.locator(".uplot").last.bounding_box()
+            # the last cam-angle plot (the speed sweep's plots come below the slider)
+            last_plot = page.locator(".uplot").filter(has_not_text="Speed sweep").last.bounding_box()
             assert box["y"] >= last_plot["y"] + last_plot["height"] - 1  # under the plots
             page.mouse.click(box["x"] + 0.75 * box["width"], box["y"] + 0.5 * box["height"])
             _wait_until(lambda: not app.playback.playing and 200.0 < app.playback.angle_deg < 340.0,
