@@ -239,6 +239,23 @@ CASES: list[Case] = [
     Case("scene is a directory", ("simulate", "{fix}", "-o", "{tmp}/out.csv"), "-"),
     Case("fit scene is a FIFO", ("fit", "{fix}/fifo", "--lift", "9 mm", "--open-angle", "220 deg"), "-"),
     Case("view a FIFO", ("view", "{fix}/fifo"), "-"),
+    # --- design for dynamics (#16): polydyne, spline, exports, residual, design, spectrum --------------
+    sim("polydyne_demo.toml", 'lift.design_rpm="1e308 rpm"', key="lift.design_rpm"),
+    sim("polydyne_demo.toml", 'lift.ramp="1e-300 deg"', key="lift.ramp"),
+    sim("spline_demo.toml", 'lift.continuity=1e308', key="lift.continuity"),
+    text_case("spline of 65 stations", (SCENES / "spline_demo.toml").read_text().split("[[lift.stations]]")[0]
+              + '[[lift.stations]]\nangle = "0 deg"\ns = "0 mm"\n' * 65 + (SCENES / "spline_demo.toml").read_text()
+              [(SCENES / "spline_demo.toml").read_text().index("[follower]"):], "lift.stations"),
+    Case("export tolerance 1e-300 m", ("export", str(SCENES / DEMO), "--format", "dxf", "--tolerance", "1e-300 m",
+                                       "-o", "{tmp}/cam.dxf"), "--tolerance"),
+    Case("export wheel power tower", ("export", str(SCENES / DEMO), "--format", "grind", "--grinding-wheel-radius",
+                                      "10**10**10 mm", "-o", "{tmp}/g.csv"), "--grinding-wheel-radius"),
+    Case("residual rpm 1e308", ("residual", str(SCENES / "polydyne_demo.toml"), "--rpm", "1:1e308:5", "-o",
+                                "{tmp}/r.csv"), "--rpm"),
+    Case("design band nan", ("design", str(SCENES / "spline_demo.toml"), "--objective", "residual-vibration",
+                             "--band", "nan:5"), "--band"),
+    Case("spectrum 1e9 orders", ("spectrum", str(SCENES / DEMO), "--orders", "1000000000", "-o", "{tmp}/s.csv"),
+         "--orders"),
     # --- correct results: the strict grammar still reads what people write ----------------------------
     sim(DEMO, 'lift.height="10.3 mm"', key=None),
     sim(DEMO, "lift.height=10.3mm", key=None),

@@ -17,6 +17,10 @@ COMMAND_MODULES = [
     "explorer.cli.bench",
     "explorer.cli.fit",
     "explorer.cli.sweep",
+    "explorer.cli.export",
+    "explorer.cli.residual",
+    "explorer.cli.design",
+    "explorer.cli.spectrum",
 ]
 
 DESCRIPTION = """\
@@ -43,6 +47,10 @@ examples:
   explorer bench assets/scenes/schenker1902_fig2.toml --output-dir out   (accuracy vs CPU time)
   explorer fit assets/scenes/rocking_cam.toml --lift "9 mm" --open-angle "220 deg"   (rocking-cam contour)
   explorer sweep SCENE --vary drive.rpm=1000:6000:500 -o speeds.parquet --plot speeds.png   (operating range)
+  explorer export SCENE --format dxf --tolerance "1 um"   (the cam to make it: csv, dxf, stl, glb, grind)
+  explorer residual assets/scenes/polydyne_demo.toml --rpm 1000:3000:21 --plot r.png   (vibration vs speed)
+  explorer design assets/scenes/spline_demo.toml --objective peak-acceleration --max-pressure-angle 30   (spline lift)
+  explorer spectrum SCENE --orders 60 --plot s.png   (harmonics of the valve acceleration vs cam order)
   explorer <command> --help            details of one command
 
 Quantities in scene files carry units ("20 mm", "385 kgf", "2.9 kgf*s**2/m"); a bare number

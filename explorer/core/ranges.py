@@ -37,6 +37,7 @@ RANGES: dict[str, tuple[float, float]] = {
     "area": (1e-18, 100.0),  # m**2
     "velocity": (1e-9, 1e4),  # m/s
     "acceleration": (1e-9, 1e9),  # m/s**2
+    "jerk": (1e-9, 1e14),  # m/s**3
     "torque": (1e-6, 1e10),  # N*m (and N*m/rad: a lever's rotational stiffness)
 }
 SHOWN_UNITS: dict[str, tuple[str, float]] = {
@@ -44,7 +45,7 @@ SHOWN_UNITS: dict[str, tuple[str, float]] = {
     "speed": ("rpm", 1.0 / _RPM),
     "length": ("m", 1.0), "mass": ("kg", 1.0), "force": ("N", 1.0), "stiffness": ("N/m", 1.0),
     "damping": ("N*s/m", 1.0), "pressure": ("Pa", 1.0), "time": ("s", 1.0), "area": ("m**2", 1.0),
-    "velocity": ("m/s", 1.0), "acceleration": ("m/s**2", 1.0), "torque": ("N*m", 1.0),
+    "velocity": ("m/s", 1.0), "acceleration": ("m/s**2", 1.0), "jerk": ("m/s**3", 1.0), "torque": ("N*m", 1.0),
 }
 # dotted key (glob) -> (smallest non-zero size, largest size) in SI, narrower than the dimension's
 KEY_RANGES: dict[str, tuple[float, float]] = {

@@ -30,7 +30,9 @@ DIMENSIONS: dict[str, tuple[str, str, str]] = {
     "area": ("[area]", "m**2", "m**2"),
     "velocity": ("[length]/[time]", "m/s", "m/s"),
     "acceleration": ("[length]/[time]**2", "m/s**2", "m/s**2"),
+    "jerk": ("[length]/[time]**3", "m/s**3", "m/s**3"),
     "torque": ("[force]*[length]", "N*m", "N*m"),
+    "density": ("[mass]/[length]**3", "kg/m**3", "kg/m**3"),
     "dimensionless": ("", "", ""),
 }
 
@@ -310,6 +312,7 @@ _FAST_UNITS: dict[str, tuple[str, float]] = {
     "m/s": ("velocity", 1.0), "mm/s": ("velocity", 1e-3),
     "m/s**2": ("acceleration", 1.0), "m/s^2": ("acceleration", 1.0),
     "N*m": ("torque", 1.0), "kgf*m": ("torque", _G),
+    "kg/m**3": ("density", 1.0), "kg/m^3": ("density", 1.0),
 }
 _NUMBER = re.compile(r"([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*)")
 _OPERATOR_SPACES = re.compile(r"\s*([*/^])\s*")

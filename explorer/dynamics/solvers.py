@@ -48,6 +48,9 @@ class SolverInfo:
     # contact over 6000 steps, a manufactured k(t) motion over 800) at default settings, m: what
     # this solver claims there (measured: schenker1902 2e-10, scipy 3e-13, taylor 8e-16)
     contract_tolerance_m: float = 0.0
+    # "module:function" that solves the spring-chain model (spring.elements > 0), None when this
+    # solver takes only the massless spring
+    chain_entry: str | None = None
 
     @property
     def fixed_step(self) -> bool:
@@ -63,6 +66,13 @@ class SolverInfo:
     def function(self):
         """The solver's `solve` function (imports its module)."""
         module, _, name = self.entry.partition(":")
+        return getattr(importlib.import_module(module), name)
+
+    def chain_function(self):
+        """The solver's function for the spring-chain model (imports its module), or None."""
+        if self.chain_entry is None:
+            return None
+        module, _, name = self.chain_entry.partition(":")
         return getattr(importlib.import_module(module), name)
 
     def check_options(self, options) -> None:
@@ -83,7 +93,7 @@ SOLVERS: dict[str, SolverInfo] = {info.name: info for info in (
     SolverInfo("exact", "explorer.dynamics.exact:solve",
                "piecewise-exact closed forms per step, events to machine precision (constant k)",
                varying_stiffness=False, options=("initial_state", "zeno_height", "max_events", "chunk"),
-               contract_tolerance_m=0.0),
+               contract_tolerance_m=0.0, chain_entry="explorer.dynamics.chain_exact:solve"),
     SolverInfo("schenker1902", "explorer.dynamics.schenker1902:solve",
                "Schenker's 1902 fixed-step scheme (printed or Newmark), second order",
                varying_stiffness=True,
@@ -96,7 +106,8 @@ SOLVERS: dict[str, SolverInfo] = {info.name: info for info in (
                varying_stiffness=True,
                options=("scipy_method", "rtol", "atol", "max_step_fraction", "initial_state", "rest_height",
                         "watch_extrema", "tabulate"),
-               scene_options=("scipy_method", "rtol", "atol"), kind="adaptive", contract_tolerance_m=1e-11),
+               scene_options=("scipy_method", "rtol", "atol"), kind="adaptive", contract_tolerance_m=1e-11,
+               chain_entry="explorer.dynamics.chain_reference:solve"),
     SolverInfo("taylor", "explorer.dynamics.taylor:solve",
                "Taylor-series steps with polynomial k(t), events as polynomial roots",
                varying_stiffness=True, options=("initial_state", "zeno_height", "max_events", "max_rho_h"),

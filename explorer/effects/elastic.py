@@ -137,6 +137,10 @@ def linkage_model(scene, lift, omega: float) -> LinkageModel:
 
 def elastic_effect(ctx) -> EffectOutput:
     scene = ctx.scene
+    if scene.spring.elements > 0:  # the spring as a body: its own model and solvers (issue #15)
+        from .chain_elastic import chain_elastic_effect
+
+        return chain_elastic_effect(ctx)
     omega = ctx.omega
     model = linkage_model(scene, ctx.lift, omega)
     ratio = scene.follower.ratio

@@ -19,6 +19,8 @@ LIFT_BUILDERS: dict[str, str] = {
     "table": "explorer.lift.table:build_table_lift",
     "acceleration": "explorer.lift.acceleration:build_acceleration_lift",
     "contour": "explorer.lift.contours.lift_from_contour:build_contour_lift",
+    "polydyne": "explorer.lift.polydyne:build_polydyne_lift",
+    "spline": "explorer.lift.spline:build_spline_lift",
 }
 
 

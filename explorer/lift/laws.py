@@ -143,3 +143,45 @@ LAWS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
 def law(name: str) -> Callable[[np.ndarray], np.ndarray]:
     """The normalised law `name`: u -> array (4, ...) of f, f', f'', f'''."""
     return LAWS[name]
+
+
+def _polynomial_high(coefficients: tuple[float, ...], u: np.ndarray, order: int) -> np.ndarray:
+    p0 = np.polynomial.Polynomial(coefficients)
+    return np.stack([p0.deriv(k)(u) if k else p0(u) for k in range(order + 1)])
+
+
+def _cycloidal_high(u: np.ndarray, order: int) -> np.ndarray:
+    # f = u - sin(a)/(2 pi), a = 2 pi u: f^(n) = -(2 pi)^(n-1) sin(a + n pi/2) for n >= 2
+    a = TWO_PI * u
+    rows = [u - np.sin(a) / TWO_PI, 1.0 - np.cos(a)]
+    rows += [-(TWO_PI ** (n - 1)) * np.sin(a + n * 0.5 * math.pi) for n in range(2, order + 1)]
+    return np.stack(rows[: order + 1])
+
+
+def _harmonic_high(u: np.ndarray, order: int) -> np.ndarray:
+    # f = (1 - cos(pi u))/2: f^(n) = -(pi^n / 2) cos(pi u + n pi/2) for n >= 1
+    a = math.pi * u
+    rows = [0.5 * (1.0 - np.cos(a))]
+    rows += [-0.5 * math.pi**n * np.cos(a + n * 0.5 * math.pi) for n in range(1, order + 1)]
+    return np.stack(rows)
+
+
+# Laws with closed-form derivatives beyond the jerk (a polydyne cam needs the wanted lift's fourth
+# and fifth); the trapezoid and sine families' jerk jumps, so no polydyne cam can take them anyway.
+HIGH_ORDER_LAWS: dict[str, Callable[[np.ndarray, int], np.ndarray]] = {
+    "cycloidal": _cycloidal_high,
+    "harmonic": _harmonic_high,
+    "polynomial-345": lambda u, order: _polynomial_high((0, 0, 0, 10, -15, 6), u, order),
+    "polynomial-4567": lambda u, order: _polynomial_high((0, 0, 0, 0, 35, -84, 70, -20), u, order),
+}
+
+
+def law_derivatives(name: str, u, order: int) -> np.ndarray:
+    """(order + 1, ...) array: f and its first `order` derivatives of the normalised law `name`,
+    in closed form (KeyError: a law without closed-form derivatives beyond the third). Complex u
+    is kept complex (the tests' complex-step oracle)."""
+    u = np.asarray(u)
+    u = u if np.iscomplexobj(u) else u.astype(float)
+    if order <= 3:
+        return LAWS[name](u)[: order + 1]
+    return HIGH_ORDER_LAWS[name](u, order)

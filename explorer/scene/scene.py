@@ -33,7 +33,7 @@ EFFECT_DEPENDENCIES: dict[str, tuple[str, ...]] = {
     "gear": ("kinematics",),  # explorer.gears: what is particular to the lever, eccentric and trip gears
 }
 
-SPECIAL_LAWS = ("table", "acceleration", "contour", "gear")  # "gear": the gear's geometry makes the lift
+SPECIAL_LAWS = ("table", "acceleration", "contour", "gear", "polydyne", "spline")  # "gear": the gear's geometry makes the lift
 FOLLOWER_TYPES = ("translating-roller", *GEAR_TYPES)
 MIN_STEPS = 36
 # Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
@@ -56,11 +56,17 @@ OWNED_SECTIONS: dict[str, str] = {
 LAW_OPTION_PARSERS: dict[str, str] = {
     "table": "explorer.lift.table:parse_table_options",
     "acceleration": "explorer.lift.acceleration:parse_acceleration_options",
+    "polydyne": "explorer.lift.polydyne:parse_polydyne_options",
+    "spline": "explorer.lift.spline:parse_spline_options",
 }
 LAW_OPTION_KEYS: dict[str, tuple[str, ...]] = {
     "table": ("file", "angle_unit", "lift_unit", "smoothing"),
     "acceleration": ("points", "angle_unit", "acceleration_unit", "interpolation", "reference_rpm"),
+    "polydyne": ("wanted_law", "design_rpm", "ramp"),
+    "spline": ("stations", "continuity", "reference_rpm"),
 }
+# laws whose [lift] height, rise and return shape an event as for the closed-form laws
+SHAPED_LAWS = (*LAWS, "polydyne")
 
 
 @dataclass(frozen=True)
@@ -105,6 +111,13 @@ class Valve:
 class Spring:
     preload: float  # N at closed valve
     rate: float  # N/m
+    # the spring as a body (issue #15): its mass, the masses it is cut into (0: massless, the
+    # linkage model of Schenker), the damping ratio of its own modes, its lengths (coil clash)
+    mass: float = 0.0  # kg, the active coils
+    elements: int = 0
+    damping_ratio: float = 0.0
+    free_length: float | None = None  # m
+    solid_height: float | None = None  # m
 
 
 @dataclass(frozen=True)
@@ -126,6 +139,8 @@ class Linkage:
 @dataclass(frozen=True)
 class Seat:
     restitution: float = 0.0
+    stiffness: float | None = None  # N/m: an elastic seat (bounce resolved in time) instead of restitution
+    damping: float = 0.0  # N*s/m, with stiffness
 
 
 @dataclass(frozen=True)
@@ -298,9 +313,7 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     spring = _parse_spring(top.table("spring", required=False))
     loads = _parse_loads(top.table("loads", required=False), file)
     linkage = _parse_linkage(top.table("linkage", required=False))
-    seat_t = top.table("seat", required=False) or Table({}, file, "seat")
-    seat_t.reject_unknown(("restitution",))
-    seat = Seat(restitution=seat_t.number("restitution", 0.0, minimum=0.0, maximum=1.0, open_maximum=True))
+    seat = _parse_seat(top.table("seat", required=False) or Table({}, file, "seat"))
     solver = _parse_solver(top.table("solver", required=False) or Table({}, file, "solver"))
 
     needs = _closure(effects)
@@ -310,6 +323,8 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
         raise InputError(file, "spring", "missing section: effects 'forces' and 'elastic' need [spring] preload and rate")
     if "elastic" in needs and linkage is None:
         raise InputError(file, "linkage", "missing section: effect 'elastic' needs [linkage] stiffness")
+    if spring is not None and spring.elements > 0:
+        _check_spring_chain(spring, valve, seat, loads, file)
 
     fields: dict[str, Any] = dict(
         name=name, description=description, effects=effects, drive=drive, lift=lift, follower=follower,
@@ -364,18 +379,18 @@ def _parse_lift(t: Table, file: str) -> LiftSpec:
     t.reject_unknown(common + LAW_OPTION_KEYS.get(law, ()))
     if law == "contour":
         return LiftSpec(law=law)
-    height = t.quantity("height", "length", positive=True) if law in LAWS else t.quantity("height", "length", 0.0, nonnegative=True)
+    height = t.quantity("height", "length", positive=True) if law in SHAPED_LAWS else t.quantity("height", "length", 0.0, nonnegative=True)
     start = t.quantity("start", "angle", 0.0)
     if not 0.0 <= start < 2.0 * math.pi:
         raise t.error("start", "must lie in [0 deg, 360 deg)")
     if height > MAX_LIFT:
         raise t.error("height", f"more than {MAX_LIFT:g} m of lift is outside any valve gear, got {t.raw('height')!r}")
-    rise = t.quantity("rise", "angle", positive=True) if law in LAWS else t.quantity("rise", "angle", 0.0, nonnegative=True)
+    rise = t.quantity("rise", "angle", positive=True) if law in SHAPED_LAWS else t.quantity("rise", "angle", 0.0, nonnegative=True)
     dwell = t.quantity("dwell", "angle", 0.0, nonnegative=True)
-    ret = t.quantity("return", "angle", rise, positive=law in LAWS) if law in LAWS else t.quantity("return", "angle", 0.0, nonnegative=True)
+    ret = t.quantity("return", "angle", rise, positive=True) if law in SHAPED_LAWS else t.quantity("return", "angle", 0.0, nonnegative=True)
     return_law = t.string("return_law", None, choices=LAWS) if t.has("return_law") else None
     for key, angle in (("rise", rise), ("return", ret)):
-        if law in LAWS and angle < MIN_EVENT_ANGLE:
+        if law in SHAPED_LAWS and angle < MIN_EVENT_ANGLE:
             raise t.error(key, f"must be at least {math.degrees(MIN_EVENT_ANGLE):g} deg, got {angle:.3g} rad")
     if rise + dwell + ret > 2.0 * math.pi * (1.0 + 1e-12):
         total = math.degrees(rise + dwell + ret)
@@ -394,14 +409,97 @@ def _parse_valve(t: Table | None) -> Valve | None:
     return Valve(mass=mass, lash=t.quantity("lash", "length", 0.0, nonnegative=True), oscillating_mass=m1)
 
 
+SPRING_GEOMETRY = ("wire_diameter", "coil_diameter", "active_coils", "shear_modulus")
+# a rate or mass given besides the wire geometry must agree with it within this fraction
+SPRING_CONSISTENCY = 0.01
+
+
 def _parse_spring(t: Table | None) -> Spring | None:
     if t is None:
         return None
-    t.reject_unknown(("preload", "rate"))
+    t.reject_unknown(("preload", "rate", "mass", *SPRING_GEOMETRY, "density", "solid_height", "free_length",
+                      "elements", "damping_ratio"))
+    preload = t.quantity("preload", "force", nonnegative=True)
+    geometry = [name for name in SPRING_GEOMETRY if t.has(name)]
+    rate = mass = None
+    if geometry:
+        missing = [name for name in SPRING_GEOMETRY if not t.has(name)]
+        if missing:
+            raise t.error(missing[0], f"missing key: the rate G*d^4/(8*D^3*n) needs {', '.join(SPRING_GEOMETRY)}")
+        d = t.quantity("wire_diameter", "length", positive=True)
+        D = t.quantity("coil_diameter", "length", positive=True)
+        n = t.number("active_coils", minimum=0.0, open_minimum=True)
+        G = t.quantity("shear_modulus", "pressure", positive=True)
+        if not D > d:
+            raise t.error("coil_diameter", "must exceed spring.wire_diameter (mean coil diameter)")
+        rate = G * d**4 / (8.0 * D**3 * n)
+        if t.has("density"):
+            # the active coils' wire: length pi D n, section pi d^2 / 4
+            mass = t.quantity("density", "density", positive=True) * math.pi**2 * d * d * D * n / 4.0
+    elif t.has("density"):
+        raise t.error("density", "gives the spring's mass only with its wire geometry "
+                      f"({', '.join(SPRING_GEOMETRY)}); or give spring.mass")
+    rate = _agreeing(t, "rate", "stiffness", rate, "N/m")
+    mass = _agreeing(t, "mass", "mass", mass, "kg")
+    elements = int(t.number("elements", 0, integer=True, minimum=0, maximum=MAX_SPRING_ELEMENTS))
+    free = t.quantity("free_length", "length", positive=True) if t.has("free_length") else None
+    solid = t.quantity("solid_height", "length", positive=True) if t.has("solid_height") else None
+    if free is not None and solid is not None and not solid < free:
+        raise t.error("solid_height", "must be below spring.free_length")
     return Spring(
-        preload=t.quantity("preload", "force", nonnegative=True),
-        rate=t.quantity("rate", "stiffness", 0.0, nonnegative=True),
+        preload=preload, rate=rate, mass=mass, elements=elements,
+        damping_ratio=t.number("damping_ratio", 0.0, minimum=0.0, maximum=1.0, open_maximum=True),
+        free_length=free, solid_height=solid,
     )
+
+
+MAX_SPRING_ELEMENTS = 256
+
+
+def _agreeing(t: Table, key: str, dimension: str, from_geometry: float | None, unit: str) -> float:
+    """The spring's `key`: as given, from the wire geometry, or both when they agree within 1 %
+    (else an error naming both)."""
+    if not t.has(key):
+        return 0.0 if from_geometry is None else from_geometry
+    given = t.quantity(key, dimension, nonnegative=True)
+    if from_geometry is not None and abs(given - from_geometry) > SPRING_CONSISTENCY * from_geometry:
+        source = ("spring.shear_modulus, wire_diameter, coil_diameter, active_coils" if key == "rate"
+                  else "spring.density and the wire geometry")
+        raise t.error(key, f"{given:.6g} {unit} disagrees with {from_geometry:.6g} {unit} from {source} by "
+                      f"{100.0 * abs(given / from_geometry - 1.0):.3g} % (at most {100 * SPRING_CONSISTENCY:g} %)")
+    return given
+
+
+def _parse_seat(t: Table) -> Seat:
+    t.reject_unknown(("restitution", "stiffness", "damping"))
+    if t.has("stiffness") and t.has("restitution"):
+        raise t.error("stiffness", "an elastic seat resolves the bounce in time: give seat.stiffness (and "
+                      "seat.damping) or seat.restitution, not both")
+    if t.has("damping") and not t.has("stiffness"):
+        raise t.error("damping", "is the damping of an elastic seat: give seat.stiffness too")
+    return Seat(
+        restitution=t.number("restitution", 0.0, minimum=0.0, maximum=1.0, open_maximum=True),
+        stiffness=t.quantity("stiffness", "stiffness", positive=True) if t.has("stiffness") else None,
+        damping=t.quantity("damping", "damping", 0.0, nonnegative=True),
+    )
+
+
+def _check_spring_chain(spring: Spring, valve, seat: Seat, loads, file: str) -> None:
+    """What the spring as a chain of masses (spring.elements > 0) needs from the other sections."""
+    if not spring.mass > 0.0:
+        raise InputError(file, "spring.elements", "the spring as masses needs its mass: give spring.mass, or "
+                         "spring.density with its wire geometry")
+    if not spring.rate > 0.0:
+        raise InputError(file, "spring.elements", "the spring as masses needs spring.rate > 0 (or its wire geometry)")
+    if seat.stiffness is None:
+        raise InputError(file, "seat.stiffness", "with spring.elements > 0 the valve's bounce on its seat is "
+                         "resolved in time: give seat.stiffness (and seat.damping) instead of a restitution")
+    if valve is not None and valve.oscillating_mass is not None:
+        raise InputError(file, "valve.oscillating_mass", "with spring.elements > 0 the spring's mass is modelled "
+                         "itself: give valve.mass without the spring's share, and no oscillating_mass")
+    if loads.friction > 0.0:
+        raise InputError(file, "loads.friction", "not yet supported with spring.elements > 0 (the valve's "
+                         "sticking would need its own phase); set it to 0 or spring.elements = 0")
 
 
 def _parse_loads(t: Table | None, file: str) -> Loads:

@@ -503,7 +503,7 @@ def spring_faces(lay: Layout | None = None, segments_per_turn: int = SPRING_SEGM
 
 
 def spring_vertices(lay: Layout, length, segments_per_turn: int = SPRING_SEGMENTS_PER_TURN,
-                    wire_segments: int = SPRING_WIRE_SEGMENTS) -> np.ndarray:
+                    wire_segments: int = SPRING_WIRE_SEGMENTS, surge=None) -> np.ndarray:
     """Vertices of the spring at `length` (scalar -> (V, 3); array (N,) -> (N, V, 3)), local frame
     with the spring's bottom at z = 0 on the z axis.
 
@@ -525,6 +525,14 @@ def spring_vertices(lay: Layout, length, segments_per_turn: int = SPRING_SEGMENT
     active_pitch = np.maximum(active_span / active, dead_pitch)
     u = np.clip(t - dead, 0.0, active)[None, :]
     z = rw + dead_pitch * (np.minimum(t, dead)[None, :] + np.maximum(t - dead - active, 0.0)[None, :]) + active_pitch * u
+    if surge is not None:
+        w = np.atleast_2d(np.asarray(surge, dtype=float))
+        N = w.shape[1]
+        # node j sits at the fraction 1 - j/(N+1) of the active coils from the seat; the ends hold
+        frac = np.concatenate([[0.0], 1.0 - np.arange(N, 0, -1) / (N + 1), [1.0]])
+        vals = np.concatenate([np.zeros((w.shape[0], 1)), w[:, ::-1], np.zeros((w.shape[0], 1))], axis=1)
+        f = u[0] / active
+        z = z - np.stack([np.interp(f, frac, row) for row in vals])
     centre = np.stack(np.broadcast_arrays(rm * np.cos(phi)[None, :], rm * np.sin(phi)[None, :], z), axis=-1)
     # frame along the helix: radial direction and the tangent-normal in the (tangent, z) plane
     radial = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], -1)[None, :, :]
@@ -714,6 +722,44 @@ def _looped_roller_rotation(wxyz: np.ndarray) -> np.ndarray:
     steps = np.diff(angle)
     total = angle[-1] - angle[0] + 0.5 * (steps[-1] + steps[0])
     return quat_about_y(angle[0] + loop_spin(angle - angle[0], total))
+
+
+def spring_surge(result, magnification: float = 1.0) -> np.ndarray | None:
+    """(T, N): the coils' displacements beyond the quasi-static shape u_j - s (1 - j/(N+1)), times
+    the magnification, from a result of the spring as N masses (coil_<j>_displacement_m); None
+    for a massless spring."""
+    cols = result.columns
+    N = 0
+    while f"coil_{N + 1}_displacement_m" in cols:
+        N += 1
+    if N == 0:
+        return None
+    s = np.asarray(cols["valve_lift_m"], dtype=float)
+    r = 1.0 - np.arange(1, N + 1) / (N + 1)
+    u = np.column_stack([np.asarray(cols[f"coil_{j}_displacement_m"], dtype=float) for j in range(1, N + 1)])
+    return magnification * (u - s[:, None] * r[None, :])
+
+
+def coil_points(lay: Layout, result, magnification: float = 1.0) -> np.ndarray | None:
+    """(T, N, 3): the spring's coil masses (spring as N masses) in the frame of the rest-length
+    spring mesh, for a recording that scales that mesh along its axis per step
+    (spring_axial_scale): on the wire's mean circle, at the node's place in the active coils,
+    moved by the surge (divided by the axial scale the frame applies). None: massless spring."""
+    w = spring_surge(result, magnification)
+    if w is None:
+        return None
+    T, N = w.shape
+    sz = spring_axial_scale(result.scene, result, magnification, lay=lay)
+    r = 1.0 - np.arange(1, N + 1) / (N + 1)
+    rw, rm = lay.spring_wire_radius, lay.spring_mean_radius
+    turns = SPRING_DEAD_COILS + r * SPRING_ACTIVE_COILS
+    span = lay.spring_rest_length - 2.0 * rw - 4.0 * SPRING_DEAD_COILS * rw
+    z_rest = rw + 2.0 * rw * SPRING_DEAD_COILS + r * span
+    out = np.empty((T, N, 3))
+    out[:, :, 0] = rm * np.cos(2.0 * math.pi * turns)[None, :]
+    out[:, :, 1] = rm * np.sin(2.0 * math.pi * turns)[None, :]
+    out[:, :, 2] = z_rest[None, :] - w / np.asarray(sz, dtype=float)[:, None]
+    return out
 
 
 def spring_axial_scale(scene, result, magnification: float = 1.0, lay: Layout | None = None) -> np.ndarray:

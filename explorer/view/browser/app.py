@@ -968,9 +968,10 @@ class ExplorerApp:
                 handle.position = pos[i]
                 handle.wxyz = quat[i]
             length = float(prepared.spring_lengths[i])
-            if abs(length - self._last_spring) > 1e-9 and "spring" in self._handles:
+            surge = None if prepared.spring_surge is None else prepared.spring_surge[i]
+            if (abs(length - self._last_spring) > 1e-9 or surge is not None) and "spring" in self._handles:
                 self._handles["spring"].vertices = meshes.spring_vertices(
-                    prepared.layout, length, **SPRING_RESOLUTION).astype(np.float32)
+                    prepared.layout, length, **SPRING_RESOLUTION, surge=surge).astype(np.float32)
                 self._last_spring = length
             self._last_index = i
         now = time.perf_counter()

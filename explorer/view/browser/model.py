@@ -340,6 +340,7 @@ class Prepared:
     laws: tuple[str, ...] = ()  # the lift laws this scene file can take (offered_laws)
     events: tuple[tuple[str, float], ...] = ()  # event_choices(result)
     events_html: str = ""
+    spring_surge: np.ndarray | None = None  # (N, coils): the coils' surge as drawn (spring as masses)
 
     @functools.cached_property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -443,6 +444,7 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
     prepared = Prepared(
         request=request, scene=scene, result=result, layout=lay, lift=lift, meshes=parts, poses=poses,
         spring_lengths=np.asarray(lengths, dtype=float), plots=plots, readout=readout,
+        spring_surge=meshes.spring_surge(result, request.magnification),
         label=_request_label(request), values=values, new_result=not same, seconds=time.perf_counter() - started,
         plot_note=plot_note, laws=laws, events=events, events_html=table,
     )

@@ -216,7 +216,7 @@ def recording_paths(result, part_names: Iterable[str] = ()) -> list[str]:
 
 
 def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Mapping | None = None,
-               scales: Mapping | None = None, colors: Mapping | None = None) -> None:
+               scales: Mapping | None = None, colors: Mapping | None = None, points: Mapping | None = None) -> None:
     """Log one simulation into the recording stream `rec` (series, parts, events, summary)."""
     import rerun as rr
 
@@ -235,6 +235,11 @@ def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Map
         rec.send_columns(series.path, indexes=times, columns=rr.Scalars.columns(scalars=values))
     if parts:
         _log_parts(rec, rr, parts, poses or {}, scales or {}, colors or {}, times)
+        for name, pts in (points or {}).items():  # child of the part: its pose and scale apply
+            pts = np.asarray(pts, dtype=np.float64)
+            rec.send_columns(f"{PARTS_PATH}/{name}/coils", indexes=times,
+                             columns=rr.Points3D.columns(positions=pts.reshape(-1, 3)).partition(
+                                 lengths=[pts.shape[1]] * pts.shape[0]))
     _log_events(rec, rr, result, index)
     rec.log(SUMMARY_PATH, rr.TextDocument(summary_markdown(result, label), media_type="text/markdown"), static=True)
 
@@ -562,6 +567,7 @@ class Run:
     poses: Mapping | None = None  # name -> (positions (N, 3), wxyz (N, 4))
     scales: Mapping | None = None  # name -> (N, 3) per-step scale of the part's mesh
     colors: Mapping | None = None  # name -> RGB(A) 0-255
+    points: Mapping | None = None  # name -> (N, K, 3) per-step points in the part's frame (the coils)
 
 
 def with_parts(label: str, result) -> Run:
@@ -579,7 +585,12 @@ def with_parts(label: str, result) -> Run:
         sz = np.asarray(meshes.spring_axial_scale(scene, result, lay=lay), dtype=np.float64)
         scales["spring"] = np.column_stack([np.ones_like(sz), np.ones_like(sz), sz])
     colors = dict(getattr(meshes, "PART_COLORS", {}))
-    return Run(label=label, result=result, parts=parts, poses=poses, scales=scales, colors=colors)
+    points = {}
+    if "spring" in parts and hasattr(meshes, "coil_points"):
+        coils = meshes.coil_points(lay, result)  # the spring as masses: its surge, visible
+        if coils is not None:
+            points["spring"] = coils
+    return Run(label=label, result=result, parts=parts, poses=poses, scales=scales, colors=colors, points=points)
 
 
 def new_recording(label: str):
@@ -598,7 +609,7 @@ def _write_one(path: Path, run: Run, layout) -> None:
     rec = new_recording(run.label)
     rec.set_sinks(rr.FileSink(str(path)), default_blueprint=layout)
     try:
-        log_result(rec, run.result, run.label, run.parts, run.poses, run.scales, run.colors)
+        log_result(rec, run.result, run.label, run.parts, run.poses, run.scales, run.colors, run.points)
         rec.flush()
     finally:
         rec.disconnect()  # closes the file with its footer

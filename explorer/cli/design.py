@@ -1,0 +1,76 @@
+"""`explorer design`: optimise a spline lift's free station values."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..core.errors import InputError
+
+HELP = """\
+Choose the "free" station values of a spline lift (law = "spline") to minimise an objective at
+the scene's speed, subject to limits (scipy.optimize SLSQP, on a grid of the event):
+  --objective peak-acceleration | peak-jerk | jerk-energy | residual-vibration (over --band)
+  --max-pressure-angle A, --radius-margin L (convex pitch radius >= roller radius + L),
+  --contact-margin F with --contact-rpm N (rigid contact force >= F at every speed up to N)
+Prints the optimum, each constraint's slack (relative, >= 0 met) and the standard laws on the
+same event; --toml prints the optimised [[lift.stations]] to paste into the scene.
+"""
+
+
+def register(sub) -> None:
+    from .simulate import add_scene_arguments
+    from ..studies.design import OBJECTIVES
+
+    p = sub.add_parser("design", help="optimise a spline lift (peak acceleration, jerk, residual vibration)",
+                       description=HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_scene_arguments(p)
+    p.add_argument("--objective", required=True, choices=OBJECTIVES)
+    p.add_argument("--max-pressure-angle", metavar="ANGLE")
+    p.add_argument("--radius-margin", metavar="LENGTH")
+    p.add_argument("--contact-margin", metavar="FORCE")
+    p.add_argument("--contact-rpm", type=float, metavar="RPM")
+    p.add_argument("--band", metavar="A:B", help="speed band of the residual-vibration objective, rpm")
+    p.add_argument("--toml", action="store_true", help="print only the optimised stations")
+    p.set_defaults(run=run)
+
+
+def _quantity(text, dimension, option):
+    from ..core.units import to_si
+
+    if text is None:
+        return None
+    value = to_si(text, dimension, file="<command line>", key=option)
+    if value < 0.0:
+        raise InputError("<command line>", option, f"must not be negative, got {text!r}")
+    return value
+
+
+def run(args) -> int:
+    import math
+
+    from .simulate import scene_from_args
+    from ..studies.design import DesignLimits, design, report_text, stations_toml
+
+    angle = _quantity(args.max_pressure_angle, "angle", "--max-pressure-angle")
+    if angle is not None and not 0.0 < angle < math.pi / 2:
+        raise InputError("<command line>", "--max-pressure-angle", "must lie between 0 and 90 deg")
+    band = None
+    if args.band is not None:
+        try:
+            lo, hi = (float(v) for v in args.band.split(":"))
+        except ValueError:
+            raise InputError("<command line>", "--band", f"expected A:B in rpm, got {args.band[:40]!r}") from None
+        if not (0.0 < lo <= hi <= 100_000.0):
+            raise InputError("<command line>", "--band", "expected 0 < A <= B <= 100000 rpm")
+        band = (lo, hi)
+    if args.contact_rpm is not None and not 0.0 < args.contact_rpm <= 100_000.0:
+        raise InputError("<command line>", "--contact-rpm", "must lie in (0, 100000] rpm")
+    limits = DesignLimits(angle, _quantity(args.radius_margin, "length", "--radius-margin"),
+                          _quantity(args.contact_margin, "force", "--contact-margin"), args.contact_rpm, band)
+    scene = scene_from_args(args)
+    if sys.stderr.isatty():
+        print("optimising ...", file=sys.stderr)
+    report = design(scene, args.objective, limits)
+    sys.stdout.write(stations_toml(scene, report) if args.toml else report_text(scene, report))
+    return 0 if report.success else 1

@@ -1,0 +1,122 @@
+"""`explorer export`: the cam to make it (point table, DXF, STL/GLB solid, grinding table)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..core.errors import InputError
+
+HELP = """\
+Export a scene's cam (translating roller follower) to make it:
+  csv    point table: cam angle, contour and pitch-curve points, outward normal, signed
+         curvature of both, pressure angle (SI units; --points rows, plus the lift's breakpoints)
+  dxf    drawing in mm: contour (layer CAM) and pitch curve (layer PITCH) as closed polylines
+         whose chords stay within --tolerance of the exact curves
+  stl    solid cam in mm (contour to --tolerance, extruded over --width along the cam axis z)
+  glb    the same solid in metres (glTF)
+  grind  grinding table: wheel-centre distance from the cam axis at --points uniform grinder
+         angles, for a wheel of --grinding-wheel-radius fed radially
+Every export comes from the closed-form contour of the analytic lift; the tests read each back
+and measure its distance from the exact contour.
+"""
+
+DEFAULT_TOLERANCE = "1 um"
+EXTENSIONS = {"csv": ".csv", "dxf": ".dxf", "stl": ".stl", "glb": ".glb", "grind": ".csv"}
+
+
+def register(sub) -> None:
+    from .simulate import add_scene_arguments
+    from ..view.exports import FORMATS
+    from ..core.outputs import HELP as OUTPUT_HELP
+
+    p = sub.add_parser("export", help="the cam as a point table, DXF, STL/GLB solid or grinding table",
+                       description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_scene_arguments(p)
+    p.add_argument("--format", required=True, choices=FORMATS)
+    p.add_argument("-o", "--output", metavar="PATH",
+                   help="where to write (default: the scene's name with the format's extension; - for stdout)")
+    p.add_argument("--tolerance", default=None, metavar="LENGTH",
+                   help=f"largest distance of a chord from the exact curve (dxf, stl, glb; default {DEFAULT_TOLERANCE})")
+    p.add_argument("--points", type=int, default=None, metavar="N", help="rows of the csv and grind tables (default 3600)")
+    p.add_argument("--width", default=None, metavar="LENGTH", help="cam width of the solid (stl, glb; default: the 3D view's)")
+    p.add_argument("--grinding-wheel-radius", default=None, metavar="LENGTH", help="wheel radius (grind; required)")
+    p.set_defaults(run=run)
+
+
+def _length(text: str | None, option: str, default: str | None = None) -> float | None:
+    from ..core.units import to_si
+
+    if text is None and default is None:
+        return None
+    value = to_si(text if text is not None else default, "length", file="<command line>", key=option)
+    if not value > 0.0:
+        raise InputError("<command line>", option, f"must be positive, got {text!r}")
+    return value
+
+
+def _check_options(args) -> tuple[float, float | None, float | None, int]:
+    from ..view.exports import MAX_POINTS, MAX_TOLERANCE, MIN_POINTS, MIN_TOLERANCE
+
+    fmt = args.format
+    unused = {
+        "--tolerance": args.tolerance is not None and fmt not in ("dxf", "stl", "glb"),
+        "--width": args.width is not None and fmt not in ("stl", "glb"),
+        "--points": args.points is not None and fmt not in ("csv", "grind"),
+        "--grinding-wheel-radius": args.grinding_wheel_radius is not None and fmt != "grind",
+    }
+    for option, bad in unused.items():
+        if bad:
+            raise InputError("<command line>", option, f"not used by --format {fmt}")
+    tolerance = _length(args.tolerance, "--tolerance", DEFAULT_TOLERANCE)
+    if not MIN_TOLERANCE <= tolerance <= MAX_TOLERANCE:
+        raise InputError("<command line>", "--tolerance",
+                         f"must be between {MIN_TOLERANCE * 1e3:g} mm and {MAX_TOLERANCE * 1e3:g} mm, got {args.tolerance!r}")
+    width = _length(args.width, "--width")
+    if width is not None and width > 10.0:
+        raise InputError("<command line>", "--width", f"more than 10 m is outside any cam, got {args.width!r}")
+    wheel = _length(args.grinding_wheel_radius, "--grinding-wheel-radius")
+    if fmt == "grind" and wheel is None:
+        raise InputError("<command line>", "--grinding-wheel-radius", "--format grind needs the wheel radius, such as '150 mm'")
+    if wheel is not None and wheel > 10.0:
+        raise InputError("<command line>", "--grinding-wheel-radius", f"more than 10 m is outside any grinder, got {args.grinding_wheel_radius!r}")
+    points = 3600 if args.points is None else args.points
+    if not MIN_POINTS <= points <= MAX_POINTS:
+        raise InputError("<command line>", "--points", f"must be between {MIN_POINTS} and {MAX_POINTS}, got {points}")
+    return tolerance, width, wheel, points
+
+
+def run(args) -> int:
+    from ..view import exports
+    from .simulate import scene_from_args
+    from ..core.outputs import check_output, write_output
+
+    tolerance, width, wheel, points = _check_options(args)
+    scene = scene_from_args(args)
+    name = args.output or f"{Path(scene.source).stem if scene.source != '<memory>' else 'cam'}{EXTENSIONS[args.format]}"
+    out = check_output(name, "--output")
+    src = exports.cam_source(scene)
+    if args.format == "csv":
+        data = exports.point_table(src, points)
+    elif args.format == "dxf":
+        data = exports.dxf_text(src, tolerance)
+    elif args.format in ("stl", "glb"):
+        if width is None:
+            from ..view.parts import layout
+
+            width = layout(scene).cam_width
+        data = (exports.stl_bytes if args.format == "stl" else exports.glb_bytes)(src, tolerance, width)
+    else:
+        data = exports.grinding_text(src, exports.grinding_table(src, wheel, points))
+    try:
+        write_output(out, data)
+    except OSError as exc:
+        raise InputError(out.name, out.option, f"cannot write: {exc.strerror or exc}") from None
+    if not out.is_stdout():
+        size = len(data)
+        detail = f" to {tolerance * 1e6:.4g} um" if args.format in ("dxf", "stl", "glb") else ""
+        print(f"{scene.name}: {args.format}{detail} -> {out.name} ({size} bytes)",
+              file=sys.stdout)
+    return 0
+

@@ -1,0 +1,47 @@
+"""`explorer spectrum`: harmonics of the valve drive's acceleration against cam order."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..core.errors import InputError
+
+HELP = """\
+Harmonic content of the drive acceleration ratio * w^2 * L'' of the scene at its speed, against
+cam order (times per revolution), from the FFT of the analytic curve, with the linkage's natural
+frequency marked as a cam order. Table as CSV (stdout without -o), chart as PNG.
+"""
+
+
+def register(sub) -> None:
+    from .simulate import add_scene_arguments
+    from ..core.outputs import HELP as OUTPUT_HELP
+
+    p = sub.add_parser("spectrum", help="harmonics of the valve acceleration against cam order (table, plot)",
+                       description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_scene_arguments(p)
+    p.add_argument("--orders", type=int, default=100, metavar="N", help="orders 1..N (default 100)")
+    p.add_argument("-o", "--output", metavar="TABLE.csv", help="write the table here (default: stdout)")
+    p.add_argument("--plot", metavar="CHART.png", help="write the chart here")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from .simulate import scene_from_args
+    from ..core.outputs import check_output, write_output
+    from ..effects.lift import build_lift
+    from ..studies.spectrum import MAX_ORDERS, acceleration_spectrum, chart_png, table_text
+
+    if not 1 <= args.orders <= MAX_ORDERS:
+        raise InputError("<command line>", "--orders", f"must be between 1 and {MAX_ORDERS}, got {args.orders}")
+    scene = scene_from_args(args)
+    table_out = check_output(args.output or "-", "--output")
+    plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot else None
+    spectrum = acceleration_spectrum(scene, build_lift(scene), args.orders)
+    try:
+        write_output(table_out, table_text(scene, spectrum))
+        if plot_out is not None:
+            write_output(plot_out, chart_png(scene, spectrum))
+    except OSError as exc:
+        raise InputError("<command line>", "--output", f"cannot write: {exc.strerror or exc}") from None
+    return 0

@@ -1,0 +1,194 @@
+"""The valve spring as a body (issue #15): the valve plus the spring cut into N masses.
+
+The massless model (model.py) lumps the spring into a force and its mass into Schenker's M/M1
+split. Here the spring of rate k and mass m_s is a chain of N + 1 equal elements of stiffness
+k_e = (N + 1) k between the seat (fixed) and the retainer (on the valve); its mass is lumped
+m_e = m_s / (N + 1) at the N coil nodes and half an element at each end (the seat's half is
+held, the retainer's half moves with the valve). The half-end lumping makes the chain's
+eigenfrequencies converge to the continuous spring's at second order in 1/N (tests).
+
+Degrees of freedom x = [s, u_1, ..., u_N]: the valve lift and the coil displacements (in the
+lift direction), u_1 next to the retainer, u_N next to the seat. Element j (0..N) is compressed
+by x_j - x_{j+1} beyond its installed state (x_{N+1} = 0, the seat). Equations:
+    M x'' + C x' + K x = f(t)
+with K the chain's stiffness, plus the linkage's k_l on s while the linkage is loaded (contact:
+force k_l (S - lash - s) + c_l (S' - s') > 0) and the seat's k_seat on s while the valve is below
+its seat (s < 0, force -k_seat s - c_seat s', a Kelvin-Voigt seat: with damping it may pull a
+little as the valve leaves). f holds preload and closing loads on the valve and the drive.
+The spring's own damping: modal damping ratio zeta on the chain's modes relative to its
+quasi-static shape (u_j = s (1 - j/(N+1))), so the quasi-static compression is not damped and
+each mode of the chain with its ends held has exactly the ratio zeta.
+
+Each combination (linkage loaded or not) x (seat engaged or not) is a linear phase with constant
+coefficients; chain_exact.py solves it with the eigen-decomposition of the phase's state matrix
+(once per phase type and speed), chain_reference.py with scipy.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+# events of the chain model: those of the massless model and the spring reaching solid length
+CHAIN_EVENT_KINDS = ("lift-off", "separation", "re-contact", "seat", "coil-clash")
+
+
+@dataclass(frozen=True)
+class ChainModel:
+    valve_mass: float  # kg: valve and retainer without the spring
+    spring_mass: float  # kg: the active coils
+    elements: int  # N coil masses
+    spring_rate: float  # N/m
+    preload: float  # N at the closed valve
+    stiffness: float  # N/m, linkage, referred to the valve
+    seat_stiffness: float  # N/m
+    damping: float = 0.0  # N*s/m, linkage
+    lash: float = 0.0  # m
+    closing_load: float = 0.0  # N
+    seat_damping: float = 0.0  # N*s/m
+    damping_ratio: float = 0.0  # of the spring's own modes
+    # compression of one element (beyond its installed state) at which its coils touch: inf when
+    # the spring's lengths are not given
+    clash_compression: float = math.inf
+
+    @staticmethod
+    def from_scene(scene) -> "ChainModel":
+        sp, v = scene.spring, scene.valve
+        clash = math.inf
+        if sp.free_length is not None and sp.solid_height is not None:
+            clash = solid_travel(sp) / (sp.elements + 1)
+        return ChainModel(
+            valve_mass=v.mass, spring_mass=sp.mass, elements=sp.elements, spring_rate=sp.rate,
+            preload=sp.preload, stiffness=scene.linkage.stiffness, damping=scene.linkage.damping,
+            lash=v.lash, closing_load=scene.loads.closing_total, seat_stiffness=scene.seat.stiffness,
+            seat_damping=scene.seat.damping, damping_ratio=sp.damping_ratio, clash_compression=clash,
+        )
+
+    # -- the chain --------------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        return self.elements + 1  # degrees of freedom
+
+    @property
+    def element_stiffness(self) -> float:
+        return (self.elements + 1) * self.spring_rate
+
+    @property
+    def element_mass(self) -> float:
+        return self.spring_mass / (self.elements + 1)
+
+    @cached_property
+    def masses(self) -> np.ndarray:
+        m = np.full(self.n, self.element_mass)
+        m[0] = self.valve_mass + 0.5 * self.element_mass
+        return m
+
+    @cached_property
+    def spring_stiffness_matrix(self) -> np.ndarray:
+        """K of the chain alone (valve node 0 joined to the seat through N + 1 elements)."""
+        n, ke = self.n, self.element_stiffness
+        K = np.zeros((n, n))
+        idx = np.arange(n)
+        K[idx, idx] = 2.0 * ke
+        K[0, 0] = ke
+        K[idx[:-1], idx[1:]] = K[idx[1:], idx[:-1]] = -ke
+        return K
+
+    @cached_property
+    def coil_modes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(omega (N,), mass-normalised shapes (N, N)) of the coils with both ends held."""
+        N = self.elements
+        ke, me = self.element_stiffness, self.element_mass
+        Kc = self.spring_stiffness_matrix[1:, 1:].copy()
+        Kc[0, 0] = 2.0 * ke
+        w2, Q = np.linalg.eigh(Kc / me)
+        return np.sqrt(np.maximum(w2, 0.0)), Q / math.sqrt(me) if N else Q
+
+    @cached_property
+    def spring_damping_matrix(self) -> np.ndarray:
+        """C = T' C_c T: modal damping zeta of the held-ends coil modes, acting on the coils'
+        motion relative to the quasi-static shape, w = u - r s (r_j = 1 - j/(N+1))."""
+        n, N = self.n, self.elements
+        if self.damping_ratio == 0.0 or N == 0:
+            return np.zeros((n, n))
+        w, Phi = self.coil_modes
+        me = self.element_mass
+        Cc = (me * Phi) @ np.diag(2.0 * self.damping_ratio * w) @ (me * Phi).T
+        T = np.zeros((N, n))
+        T[:, 0] = -(1.0 - np.arange(1, N + 1) / (N + 1))
+        T[:, 1:] = np.eye(N)
+        return T.T @ Cc @ T
+
+    def phase_matrices(self, contact: bool, seat: bool) -> tuple[np.ndarray, np.ndarray]:
+        """(K, C) of a phase: the chain plus the linkage (contact) and the seat (seat)."""
+        K = self.spring_stiffness_matrix.copy()
+        C = self.spring_damping_matrix.copy()
+        if contact:
+            K[0, 0] += self.stiffness
+            C[0, 0] += self.damping
+        if seat:
+            K[0, 0] += self.seat_stiffness
+            C[0, 0] += self.seat_damping
+        return K, C
+
+    def forcing_vectors(self, contact: bool) -> np.ndarray:
+        """(n, 3): f = F[:, 0] S + F[:, 1] S' + F[:, 2] (forces on the degrees of freedom)."""
+        F = np.zeros((self.n, 3))
+        F[0, 2] = -self.preload - self.closing_load
+        if contact:
+            F[0, 0] = self.stiffness
+            F[0, 1] = self.damping
+            F[0, 2] -= self.stiffness * self.lash
+        return F
+
+    # -- what is reported ---------------------------------------------------------------------
+    def spring_modal_frequencies(self) -> np.ndarray:
+        """The spring's own frequencies (Hz), ends held: the chain's, closed form."""
+        return chain_frequencies(self.elements, self.spring_rate, self.spring_mass) / (2.0 * math.pi)
+
+    def retainer_force(self, x: np.ndarray, xd: np.ndarray) -> np.ndarray:
+        """Force of the spring on the retainer (N, compressive), x and xd (n, T)."""
+        K, C = self.spring_stiffness_matrix, self.spring_damping_matrix
+        return self.preload + K[0] @ x + C[0] @ xd
+
+    def static_retainer_force(self, s: np.ndarray) -> np.ndarray:
+        return self.preload + self.spring_rate * np.asarray(s)
+
+    def element_compressions(self, x: np.ndarray) -> np.ndarray:
+        """(N + 1, T): each element's compression beyond its installed state."""
+        return x - np.vstack([x[1:], np.zeros((1,) + x.shape[1:])])
+
+
+def chain_frequencies(N: int, k: float, m_s: float) -> np.ndarray:
+    """omega_j (rad/s, j = 1..N) of N masses m_s/(N+1) between held ends through N + 1 springs
+    (N + 1) k: 2 sqrt(k_e/m_e) sin(j pi / (2 (N + 1)))."""
+    j = np.arange(1, N + 1)
+    return 2.0 * (N + 1) * math.sqrt(k / m_s) * np.sin(j * math.pi / (2.0 * (N + 1)))
+
+
+def continuous_frequencies(count: int, k: float, m_s: float) -> np.ndarray:
+    """The continuous spring's f_j = (j / 2) sqrt(k / m_s) (Hz), ends held."""
+    return 0.5 * np.arange(1, count + 1) * math.sqrt(k / m_s)
+
+
+def solid_travel(spring) -> float:
+    """Valve lift at which the spring's static length reaches its solid height (m)."""
+    return spring.free_length - spring.preload / spring.rate - spring.solid_height
+
+
+def static_equilibrium(model: ChainModel, S: float, S1: float = 0.0) -> tuple[np.ndarray, bool, bool]:
+    """(x, contact, seat) of the valve at rest with the drive at S (S' = S1 ignored by the
+    displacement; the damper's c S' is a force): the first consistent phase."""
+    for contact, seat in ((False, True), (True, True), (True, False), (False, False)):
+        K, _ = model.phase_matrices(contact, seat)
+        F = model.forcing_vectors(contact)
+        x = np.linalg.solve(K, F[:, 0] * S + F[:, 1] * S1 + F[:, 2])
+        s = x[0]
+        gap = S - model.lash - s
+        force = model.stiffness * gap + model.damping * S1
+        if (seat == (s < 0.0)) and (contact == (gap >= 0.0 and force > 0.0)):
+            return x, contact, seat
+    raise ValueError("no static equilibrium of the valve on its seat")

@@ -1,0 +1,159 @@
+"""Effect `elastic` with the spring as a body (spring.elements > 0, issue #15).
+
+The valve, the spring cut into N masses (chain.py), the linkage one-sided at the cam side and an
+elastic seat one-sided at the valve, solved over one revolution from the lowest drive position
+(where the valve rests on its seat, in static equilibrium) by the scene's solver's chain
+function (explorer/dynamics/solvers.py: chain_entry; exact and scipy have one).
+
+Columns: those of the massless elastic effect (valve_lift_m, ..., linkage_force_N,
+camshaft_back_pressure_N, deviation_from_drive_m, valve_in_contact, valve_phase), and
+  spring_force_retainer_N   the spring's force on the retainer, with its surge (dynamic)
+  spring_force_static_N     preload + rate * lift: what the massless spring would push
+  surge_force_N             their difference
+  seat_force_N              the elastic seat's force on the valve
+  coil_<j>_displacement_m   coil j (1 next to the retainer) in the lift direction
+Summary: the spring's modal frequencies (ends held) and the cam orders that excite them (the
+drive's harmonics nearest to each), surge amplitude, first separation, clash warnings.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..dynamics import solvers as registry
+from ..core.errors import InputError
+from ..result import EffectOutput
+from ..dynamics.chain import CHAIN_EVENT_KINDS, ChainModel, solid_travel
+from ..dynamics.model import Drive
+
+
+def chain_solver(method: str, file: str):
+    """The chain function of the registry's solver `method`, or InputError naming solver.method."""
+    function = registry.solver(method).chain_function()
+    if function is None:
+        able = [name for name, info in registry.SOLVERS.items() if info.chain_entry]
+        raise InputError(file, "solver.method", f"{method!r} takes only the massless spring; with spring.elements > 0 "
+                         f"use {' or '.join(map(repr, able))}")
+    return function
+
+
+def check_solid(scene, drive_lift_max: float) -> None:
+    """InputError when the static lift alone compresses the spring to its solid height."""
+    sp = scene.spring
+    if sp.free_length is None or sp.solid_height is None:
+        return
+    travel = solid_travel(sp)
+    lift = drive_lift_max - scene.valve.lash
+    if lift >= travel:
+        raise InputError(scene.source, "spring.solid_height", f"the valve lift {lift * 1e3:.4g} mm alone compresses "
+                         f"the spring to its solid height (travel to solid {travel * 1e3:.4g} mm from closed)")
+
+
+def exciting_orders(frequencies_hz: np.ndarray, omega: float, drive_values: np.ndarray, count: int = 3) -> list:
+    """Per mode: its frequency as a cam order (f / camshaft frequency) and the drive's harmonic
+    amplitudes at the integer orders around it (the cam orders that excite it)."""
+    f_cam = omega / (2.0 * math.pi)
+    S = np.asarray(drive_values, dtype=float)
+    spectrum = np.abs(np.fft.rfft(S)) * 2.0 / S.size
+    out = []
+    for f in frequencies_hz[:count]:
+        order = f / f_cam
+        near = [int(math.floor(order)), int(math.ceil(order))]
+        near = sorted({k for k in near if 1 <= k < spectrum.size})
+        out.append({"frequency_Hz": float(f), "cam_order": float(order),
+                    "exciting_orders": {str(k): float(spectrum[k]) for k in near}})
+    return out
+
+
+def chain_elastic_effect(ctx) -> EffectOutput:
+    scene = ctx.scene
+    omega = ctx.omega
+    model = ChainModel.from_scene(scene)
+    ratio = scene.follower.ratio
+    drive = Drive(ctx.lift, ratio, omega)
+    n = ctx.time.size
+    period = 2.0 * math.pi / omega
+    D = drive(ctx.time)
+    check_solid(scene, float(D[0].max()))
+    solve = chain_solver(scene.solver.method, scene.source)
+    options = {name: getattr(scene.solver, name) for name in registry.solver(scene.solver.method).scene_options}
+    i0 = int(np.argmin(D[0]))
+    t_run = np.concatenate([ctx.time[i0:], ctx.time[:i0] + period])
+    sol = solve(model, drive, t_run, **options)
+    back = (np.arange(n) + i0) % n
+
+    def rotate(values) -> np.ndarray:
+        out = np.empty(n)
+        out[back] = np.asarray(values, dtype=float)[:n]
+        return out
+
+    s, v, a, jerk = rotate(sol.s), rotate(sol.v), rotate(sol.a), rotate(sol.jerk)
+    force = rotate(sol.linkage_force)
+    contact = rotate(sol.contact) > 0.5
+    phase = rotate(sol.phase)
+    retainer = rotate(sol.retainer_force)
+    static = model.static_retainer_force(s)
+    W = model.preload + model.closing_load + model.spring_rate * s
+    open_valve = s > 0.0
+    deviation = np.where(open_valve, s - (D[0] - model.lash - W / model.stiffness), 0.0)
+    separated = open_valve & ~contact
+
+    events, warnings = [], []
+    t_start = float(t_run[0])
+    for ev in sol.events:
+        if ev["kind"] not in CHAIN_EVENT_KINDS or ev["time_s"] >= t_start + period:
+            continue
+        t_ev = math.fmod(ev["time_s"], period)
+        item = {"kind": ev["kind"], "time_s": t_ev, "cam_angle_deg": math.degrees(omega * t_ev) % 360.0}
+        if "velocity_m_s" in ev:
+            item["velocity_m_s"] = float(ev["velocity_m_s"])
+        events.append(item)
+    events.sort(key=lambda e: e["time_s"])
+    clashes = [e for e in events if e["kind"] == "coil-clash"]
+    if clashes:
+        warnings.append(f"coil clash: the spring reaches its solid height {len(clashes)} time(s), first at "
+                        f"{clashes[0]['cam_angle_deg']:.2f} deg (the model goes on without the coils' contact)")
+    separations = [e["cam_angle_deg"] for e in events if e["kind"] == "separation"]
+    freqs = model.spring_modal_frequencies()
+    summary = {
+        "elastic_method": scene.solver.method,
+        "elastic_model": f"valve + spring of {model.elements} masses, elastic seat",
+        "spring_mass_kg": model.spring_mass,
+        "spring_elements": model.elements,
+        "spring_modal_frequencies_Hz": [float(f) for f in freqs[:5]],
+        "spring_modes_cam_orders": exciting_orders(freqs, omega, D[0]),
+        "surge_amplitude_N": float(np.max(np.abs(retainer - static))),
+        "peak_spring_force_retainer_N": float(retainer.max()),
+        "first_separation_deg": separations[0] if separations else None,
+        "max_deviation_m": float(np.abs(deviation).max()),
+        "peak_linkage_force_N": float(force.max()),
+        "peak_camshaft_back_pressure_N": float((ratio * force).max()),
+        "separated_angle_deg": float(360.0 * np.count_nonzero(separated) / n),
+        "elastic_max_valve_lift_m": float(s.max()),
+        "elastic_max_valve_velocity_m_s": float(v.max()),
+        "elastic_min_valve_velocity_m_s": float(v.min()),
+        "elastic_max_valve_accel_m_s2": float(a.max()),
+        "elastic_min_valve_accel_m_s2": float(a.min()),
+        "elastic_event_counts": {kind: sum(e["kind"] == kind for e in events) for kind in CHAIN_EVENT_KINDS},
+        "elastic_solver": dict(sol.stats),
+    }
+    columns = {
+        "valve_lift_m": s,
+        "valve_velocity_m_s": v,
+        "valve_accel_m_s2": a,
+        "valve_jerk_m_s3": jerk,
+        "linkage_force_N": force,
+        "camshaft_back_pressure_N": ratio * force,
+        "deviation_from_drive_m": deviation,
+        "valve_in_contact": contact.astype(float),
+        "valve_phase": phase,
+        "spring_force_retainer_N": retainer,
+        "spring_force_static_N": static,
+        "surge_force_N": retainer - static,
+        "seat_force_N": rotate(sol.seat_force),
+    }
+    for j in range(model.elements):
+        columns[f"coil_{j + 1}_displacement_m"] = rotate(sol.coils[j])
+    return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))

@@ -1,0 +1,328 @@
+"""`polydyne` law: the cam that makes an elastic linkage give the wanted valve lift (Dudley 1948).
+
+Schenker's "Rückwärtskonstruktion" (1902) laid the lift curve out for given accelerations and
+drew the cam backwards from it; Dudley's polydyne cam does the same with the linkage's
+elasticity. In contact the valve obeys (explorer.dynamics.model, no damping)
+
+    M1 s'' = k (S - lash - s) - W(s),   W(s) = preload + rate s + closing loads
+
+so a drive S(t) = lash + s + (M1 s'' + W(s)) / k makes the valve follow any wanted s(t) exactly.
+With s'' = w_d^2 d2s/dtheta2 at the design speed w_d the cam lift (follower, before the ratio) is
+
+    L(theta) = [lash + s + (M1 w_d^2 s_theta_theta + W(s)) / k] / ratio      while the valve is open,
+
+and its derivatives are exact: L^(n) = [s^(n) (1 + rate/k) + (M1 w_d^2 / k) s^(n+2)] / ratio, which
+needs the wanted lift to its fifth derivative for the cam's jerk (closed forms, explorer.lift.laws).
+
+Before the valve lifts the linkage must take up the lash and be loaded to W(0): a take-up ramp
+(cycloidal, angle `ramp`) raises S from 0 to S0 = lash + W(0)/k; at its end the valve lifts with
+zero velocity and acceleration. After the event the same ramp, reversed, unloads the linkage.
+
+Smoothness: S is continuous only if s'' is, and its slope only if s''' is: a wanted law whose
+acceleration or jerk jumps (cycloidal and 3-4-5 at their ends) would need a cam with a step or a
+corner, and is refused naming that derivative. The linkage must push throughout
+(M1 w_d^2 s_theta_theta + W(s) > 0), and the model has no term for Coulomb friction (it flips at the
+valve's reversal and would step the cam by 2 R / k) or a damper (then S follows from a differential
+equation): both are refused.
+
+Off the design speed the valve deviates: with e = s - s_wanted, in contact
+M1 e'' + (k + rate) e = M1 (w_d^2 - w^2) s_theta_theta(w t), a linear oscillator whose residual
+vibration after a rise has the closed form in `residual_amplitude`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..core.errors import InputError
+from .laws import HIGH_ORDER_LAWS, LAWS, law_derivatives
+
+TWO_PI = 2.0 * math.pi
+OPTION_KEYS = ("wanted_law", "design_rpm", "ramp")
+DERIVATIVE_NAMES = ("lift", "velocity", "acceleration", "jerk")
+JUMP_TOLERANCE = 1e-9  # relative to h / beta^k: rounding of the closed forms is ~1e-15
+MIN_RAMP = math.radians(0.1)
+RAMP_LAW = "cycloidal"  # zero slope and curvature at both ends of the take-up ramp
+
+
+@dataclass(frozen=True)
+class PolydyneOptions:
+    wanted_law: str
+    return_law: str
+    design_rpm: float  # rev/min
+    ramp: float  # rad
+
+
+@dataclass(frozen=True)
+class Train:
+    """What the polydyne formula takes from the scene (SI)."""
+
+    mass: float  # M1, the mass the contact phase moves
+    stiffness: float
+    preload: float  # W(0) = preload + closing loads
+    rate: float
+    lash: float
+    ratio: float
+
+    @staticmethod
+    def from_fields(valve, spring, loads, linkage, follower) -> "Train":
+        mass = valve.oscillating_mass if valve.oscillating_mass is not None else valve.mass
+        return Train(mass, linkage.stiffness, spring.preload + loads.closing_total, spring.rate, valve.lash, follower.ratio)
+
+
+@dataclass(frozen=True)
+class WantedLift:
+    """The valve lift wanted, in event coordinates x (rad since the rise starts): rise of `height`
+    over `rise` with `rise_law`, dwell, return with `return_law`; 0 outside [0, end)."""
+
+    height: float
+    rise: float
+    dwell: float
+    ret: float
+    rise_law: str
+    return_law: str
+
+    @property
+    def end(self) -> float:
+        return self.rise + self.dwell + self.ret
+
+    def derivatives(self, x, order: int = 5) -> np.ndarray:
+        """(order + 1, N): s and its derivatives per radian at event angles x."""
+        x = np.asarray(x, dtype=float).reshape(-1)
+        out = np.zeros((order + 1, x.size))
+        h = self.height
+        rising = (x >= 0.0) & (x < self.rise)
+        if np.any(rising):
+            f = law_derivatives(self.rise_law, x[rising] / self.rise, order)
+            out[:, rising] = h * f / np.array([self.rise**k for k in range(order + 1)])[:, None]
+        top = (x >= self.rise) & (x - self.rise < self.dwell)
+        out[0, top] = h
+        x_ret = x - self.rise - self.dwell
+        falling = (x_ret >= 0.0) & (x_ret < self.ret) & ~top & ~rising
+        if np.any(falling):
+            g = law_derivatives(self.return_law, x_ret[falling] / self.ret, order)
+            scale = np.array([self.ret**k for k in range(order + 1)])[:, None]
+            out[:, falling] = -h * g / scale
+            out[0, falling] += h
+        return out
+
+    def joints(self) -> list[tuple[str, np.ndarray, np.ndarray, str, float, str]]:
+        """(where, values before, values after, law, its angle, its key) of the lift and its first
+        three derivatives per radian at each joint of the event."""
+        h = self.height
+        powers = np.arange(4)
+        rise0 = h * LAWS[self.rise_law](np.zeros(1))[:, 0] / self.rise**powers
+        rise1 = h * LAWS[self.rise_law](np.ones(1))[:, 0] / self.rise**powers
+        ret0 = -h * LAWS[self.return_law](np.zeros(1))[:, 0] / self.ret**powers
+        ret1 = -h * LAWS[self.return_law](np.ones(1))[:, 0] / self.ret**powers
+        ret0[0] += h
+        ret1[0] += h
+        rest, top = np.zeros(4), np.array([h, 0.0, 0.0, 0.0])
+        rise = (self.rise_law, self.rise, "lift.wanted_law")
+        ret = (self.return_law, self.ret, "lift.return_law")
+        out = [("the start of the rise", rest, rise0, *rise)]
+        if self.dwell > 0.0:
+            out += [("the end of the rise", rise1, top, *rise), ("the start of the return", top, ret0, *ret)]
+        else:
+            out += [("the top, where the rise meets the return", rise1, ret0, *rise)]
+        out.append(("the end of the return", ret1, rest, *ret))
+        return out
+
+
+@dataclass(frozen=True)
+class PolydyneLift:
+    """The polydyne cam's follower lift (LiftCurve): ramp, event, ramp; base circle elsewhere."""
+
+    wanted: WantedLift
+    train: Train
+    start: float  # rad, cam angle where the valve starts to lift
+    ramp: float  # rad
+    design_omega: float  # rad/s
+
+    @property
+    def ramp_height(self) -> float:
+        """S0 = lash + W(0)/k, valve-referred: the drive at which the seated valve lifts."""
+        return self.train.lash + self.train.preload / self.train.stiffness
+
+    def wanted_valve_lift(self, theta, order: int = 3) -> np.ndarray:
+        """(order + 1, N): the wanted valve lift and its derivatives per radian at cam angles theta."""
+        return self.wanted.derivatives(_wrap(np.asarray(theta, dtype=float) - self.start), order)
+
+    def linkage_force(self, theta) -> np.ndarray:
+        """Linkage force at the design speed, M1 w_d^2 s'' + W(s), while the valve is open (N)."""
+        s = self.wanted_valve_lift(theta, 2)
+        t = self.train
+        return t.mass * self.design_omega**2 * s[2] + t.preload + t.rate * s[0]
+
+    def derivatives(self, theta) -> np.ndarray:
+        theta = np.asarray(theta, dtype=float)
+        x = _wrap(theta.reshape(-1) - self.start + self.ramp)  # 0 where the opening ramp starts
+        out = np.zeros((4, x.size))
+        t, w = self.train, self.wanted
+        s0 = self.ramp_height
+        powers = np.array([self.ramp**k for k in range(4)])[:, None]
+        up = x < self.ramp
+        if np.any(up):
+            out[:, up] = s0 * LAWS[RAMP_LAW](x[up] / self.ramp) / powers
+        x_event = x - self.ramp
+        event = (x_event >= 0.0) & (x_event < w.end)
+        if np.any(event):
+            s = w.derivatives(x_event[event], 5)
+            c = t.mass * self.design_omega**2 / t.stiffness
+            gain = 1.0 + t.rate / t.stiffness
+            out[:, event] = gain * s[:4] + c * s[2:6]
+            out[0, event] += t.lash + t.preload / t.stiffness
+        x_down = x_event - w.end
+        down = (x_down >= 0.0) & (x_down < self.ramp) & ~event & ~up
+        if np.any(down):
+            g = LAWS[RAMP_LAW](x_down[down] / self.ramp)
+            out[:, down] = -s0 * g / powers
+            out[0, down] += s0
+        out /= t.ratio
+        return out.reshape((4,) + theta.shape)
+
+    def breakpoints(self) -> np.ndarray:
+        w = self.wanted
+        marks = [-self.ramp, 0.0, w.rise, w.rise + w.dwell, w.end, w.end + self.ramp]
+        return np.array(sorted({(m + self.start) % TWO_PI for m in marks}))
+
+    @property
+    def report(self) -> dict:
+        theta = self.start + np.linspace(0.0, self.wanted.end, 4001)
+        force = self.linkage_force(theta)
+        return {
+            "polydyne_design_rpm": self.design_omega * 60.0 / TWO_PI,
+            "polydyne_ramp_height_m": self.ramp_height / self.train.ratio,
+            "polydyne_min_linkage_force_at_design_N": float(force.min()),
+        }
+
+
+def _wrap(x: np.ndarray) -> np.ndarray:
+    return np.mod(x, TWO_PI)
+
+
+def parse_polydyne_options(table, fields: dict[str, Any]) -> PolydyneOptions:
+    """[lift] keys of the polydyne law, checked at load: the wanted law is smooth enough, the
+    linkage pushes throughout at the design speed, and the train has what the formula needs."""
+    file = table.file
+    for section in ("valve", "spring", "linkage"):
+        if fields.get(section) is None:
+            raise InputError(file, section, f"missing section: lift.law = 'polydyne' designs the cam for the train's "
+                             f"mass, spring and stiffness and needs [{section}]")
+    if fields["loads"].friction != 0.0:
+        raise InputError(file, "loads.friction", "a polydyne cam cannot compensate Coulomb friction: it flips where the "
+                         "valve turns and would step the cam by 2 friction / stiffness; set it to 0 for the design")
+    if fields["linkage"].damping != 0.0:
+        raise InputError(file, "linkage.damping", "the polydyne formula has no damper term (the cam would follow from a "
+                         "differential equation, not from the wanted lift); set it to 0 for the design")
+    if fields["follower"].type != "translating-roller":
+        raise InputError(file, "lift.law", "the polydyne law is for the translating-roller follower")
+    wanted_law = table.string("wanted_law", choices=tuple(LAWS))
+    return_law = table.string("return_law", wanted_law, choices=tuple(LAWS)) if table.has("return_law") else wanted_law
+    if table.has("design_rpm"):
+        omega = table.quantity("design_rpm", "speed", positive=True)
+    else:
+        omega = fields["drive"].omega
+    if not table.has("ramp"):
+        raise table.error("ramp", "the polydyne cam needs a take-up ramp angle (lash plus the linkage's preload "
+                          "deflection are taken up over it), such as \"15 deg\"")
+    ramp = table.quantity("ramp", "angle", positive=True)
+    if ramp < MIN_RAMP:
+        raise table.error("ramp", f"must be at least {math.degrees(MIN_RAMP):g} deg")
+    spec = fields["lift"]
+    total = spec.rise + spec.dwell + spec.ret + 2.0 * ramp
+    if total > TWO_PI * (1.0 + 1e-12):
+        raise table.error("ramp", f"two ramps + rise + dwell + return = {math.degrees(total):.6g} deg exceed 360 deg")
+    options = PolydyneOptions(wanted_law, return_law, omega * 60.0 / TWO_PI, ramp)
+    lift = polydyne_lift(spec, options, fields["valve"], fields["spring"], fields["loads"], fields["linkage"], fields["follower"])
+    check_polydyne(lift, file)
+    return options
+
+
+def check_polydyne(lift: PolydyneLift, file: str) -> None:
+    """InputError when the wanted lift is too rough for a cam, or the linkage would have to pull."""
+    w = lift.wanted
+    omega = lift.design_omega
+    for where, before, after, law_name, beta, key in w.joints():
+        for k in range(4):
+            jump = after[k] - before[k]
+            if abs(jump) > JUMP_TOLERANCE * w.height / beta**k:
+                units = ("m", "m/s", "m/s**2", "m/s**3")[k]
+                consequence = "a step in the cam" if k <= 2 else "a corner in the cam (its slope would jump)"
+                raise InputError(file, key, f"{law_name!r} is too rough for a polydyne cam: the cam lift "
+                                 f"S = s + (M w^2 s'' + W)/k needs the wanted valve {DERIVATIVE_NAMES[k]} continuous, and it "
+                                 f"jumps by {jump * omega**k:.4g} {units} at {where} (at {omega * 60 / TWO_PI:g} rpm), "
+                                 f"which makes {consequence}; use a law continuous to the jerk, such as polynomial-4567")
+    for name in {w.rise_law, w.return_law}:
+        if name not in HIGH_ORDER_LAWS:
+            raise InputError(file, "lift.wanted_law", f"{name!r} has no closed-form fourth and fifth derivative, which "
+                             "the polydyne cam's acceleration and jerk need")
+    theta = lift.start + np.linspace(0.0, w.end, 20001)[1:-1]
+    force = lift.linkage_force(theta)
+    i = int(np.argmin(force))
+    if not force[i] > 0.0:
+        raise InputError(file, "lift.design_rpm", f"at {omega * 60 / TWO_PI:g} rpm the linkage would have to pull: the "
+                         f"force M w^2 s'' + W(s) falls to {force[i]:.4g} N at cam angle "
+                         f"{math.degrees(theta[i]) % 360:.3f} deg; more spring preload or rate, or a lower design speed")
+    d = lift.derivatives(np.linspace(0.0, TWO_PI, 7201))
+    if np.any(d[0] < -1e-15) or not np.all(np.isfinite(d)):
+        raise InputError(file, "lift", "the polydyne cam dips below its base circle")
+
+
+def polydyne_lift(spec, options: PolydyneOptions, valve, spring, loads, linkage, follower) -> PolydyneLift:
+    wanted = WantedLift(spec.height, spec.rise, spec.dwell, spec.ret, options.wanted_law, options.return_law)
+    train = Train.from_fields(valve, spring, loads, linkage, follower)
+    return PolydyneLift(wanted, train, spec.start, options.ramp, options.design_rpm * TWO_PI / 60.0)
+
+
+def build_polydyne_lift(scene) -> PolydyneLift:
+    """The scene's polydyne cam, from its current train (a changed stiffness or spring redesigns it)."""
+    lift = polydyne_lift(scene.lift, scene.lift.options, scene.valve, scene.spring, scene.loads, scene.linkage, scene.follower)
+    check_polydyne(lift, scene.source)
+    return lift
+
+
+# ---------------------------------------------------------------------------------------------
+# Off the design speed
+
+
+def _polynomial_fourier(coefficients, lam: float) -> complex:
+    """Integral over [0, 1] of p(u) exp(i lam u) for the polynomial p (ascending coefficients), in
+    closed form: sum_k (-1)^k [p^(k)(u) e^(i lam u)]_0^1 / (i lam)^(k+1)."""
+    p = np.polynomial.Polynomial(coefficients)
+    total = 0.0 + 0.0j
+    k = 0
+    while True:
+        term = (p(1.0) * np.exp(1j * lam) - p(0.0)) / (1j * lam) ** (k + 1)
+        total += (-1) ** k * term
+        if p.degree() == 0:
+            break
+        p = p.deriv()
+        k += 1
+    return complex(total)
+
+
+RISE_POLYNOMIALS = {"polynomial-345": (0, 0, 0, 10, -15, 6), "polynomial-4567": (0, 0, 0, 0, 35, -84, 70, -20)}
+
+
+def residual_amplitude(lift: PolydyneLift, rpm: float) -> float:
+    """Closed form (linear case: the valve stays in contact, no damping) of the valve's vibration
+    amplitude about the wanted lift during the dwell after a polynomial rise, at `rpm`:
+
+        A = |w_d^2 - w^2| h / (beta w wn) |integral_0^1 f''(u) exp(i lam u) du|,  lam = wn beta / w
+
+    from Duhamel's integral of e'' + wn^2 e = (w_d^2 - w^2) s_theta_theta(w t), e(0) = e'(0) = 0."""
+    w = lift.wanted
+    if w.rise_law not in RISE_POLYNOMIALS:
+        raise ValueError("closed form only for polynomial rises")
+    t = lift.train
+    omega = rpm * TWO_PI / 60.0
+    wn = math.sqrt((t.stiffness + t.rate) / t.mass)
+    lam = wn * w.rise / omega
+    accel = np.polynomial.Polynomial(RISE_POLYNOMIALS[w.rise_law]).deriv(2).coef
+    integral = _polynomial_fourier(accel, lam)
+    return abs(lift.design_omega**2 - omega**2) * w.height / (w.rise * omega * wn) * abs(integral)

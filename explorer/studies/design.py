@@ -1,0 +1,446 @@
+"""`explorer design`: choose a spline lift's free station values (scipy.optimize, SLSQP).
+
+Objectives (all at the scene's speed, valve side, time units):
+  peak-acceleration   max |a|            (epigraph: minimise t with -t <= a_i <= t on the grid)
+  peak-jerk           max |j|
+  jerk-energy         integral of j^2 over the event (exact: squared polynomials integrated)
+  residual-vibration  largest residual amplitude after the event, over a speed band, of a linear
+                      follower (mass M, stiffness k + rate) kept in contact: |integral of
+                      a(t) exp(i wn t) dt| / wn^2 * wn, in closed form per polynomial segment
+
+Constraints, each reported with its slack at the optimum (>= 0 means met), on a grid of the
+event refined at the stations:
+  pressure angle <= max_pressure_angle; convex pitch radius >= roller radius + radius_margin
+  (written as curvature * (r + margin) <= 1, smooth through straight stretches); rigid contact
+  force >= contact_margin at every speed up to contact_rpm (F = w^2 A + G is linear in w^2, so
+  the ends of the range suffice); lift >= 0 (no dip below the base circle). The duration is
+  fixed: the stations do not move.
+
+The same objective and constraints are evaluated for the standard laws on the same event (same
+height, rise, dwell, return) for the comparison table.
+
+A known optimum, reproduced in tests/test_spline.py: the minimum of the integral of the squared
+jerk for a rise with s, v, a given at both ends is the 3-4-5 polynomial (the minimum-jerk
+trajectory: Flash & Hogan, J. Neurosci. 5 (1985) 1688-1703; the Euler-Lagrange equation
+s^(6) = 0 with six end conditions). Starting from stations whose values are all free, the
+optimiser finds it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.errors import InputError
+
+TWO_PI = 2.0 * math.pi
+OBJECTIVES = ("peak-acceleration", "peak-jerk", "jerk-energy", "residual-vibration")
+STANDARD_LAWS = ("cycloidal", "harmonic", "polynomial-345", "polynomial-4567", "modified-trapezoid", "modified-sine")
+GRID = 1200  # points per event (plus the stations)
+
+
+@dataclass(frozen=True)
+class DesignLimits:
+    max_pressure_angle: float | None = None  # rad
+    radius_margin: float | None = None  # m, beyond the roller radius
+    contact_margin: float | None = None  # N
+    contact_rpm: float | None = None  # rev/min
+    band: tuple[float, float] | None = None  # rpm, residual-vibration objective
+    band_points: int = 11
+
+
+@dataclass
+class Evaluation:
+    objective: float
+    constraints: dict = field(default_factory=dict)  # name -> slack (>= 0 met)
+
+
+def _free(options):
+    return [(i, k) for i, st in enumerate(options.stations) for k in range(4) if st.free[k]]
+
+
+class Problem:
+    """The scene's spline with its free values as variables z (scaled to order 1). The lift is
+    affine in the station values (they are the right-hand side of one linear system), so on the
+    grid its derivatives are d(z) = base + sum_i z_i basis_i, exactly: one spline solve per free
+    value, then every evaluation is a matrix product."""
+
+    def __init__(self, scene, objective: str, limits: DesignLimits):
+        from ..lift.spline import solve_spline
+
+        if scene.lift.law != "spline":
+            raise InputError(scene.source, "lift.law", "explorer design works on a spline lift (law = \"spline\")")
+        if objective not in OBJECTIVES:
+            raise InputError("<command line>", "--objective", f"one of {', '.join(OBJECTIVES)}")
+        needs_train = limits.contact_margin is not None or objective == "residual-vibration"
+        if needs_train and (scene.valve is None or scene.spring is None
+                            or (objective == "residual-vibration" and scene.linkage is None)):
+            raise InputError(scene.source, "valve", "the contact margin and the residual vibration need [valve] and "
+                             "[spring] (and [linkage] for the vibration)")
+        self.scene, self.objective, self.limits = scene, objective, limits
+        self.options = scene.lift.options
+        self.free = _free(self.options)
+        if not self.free:
+            raise InputError(scene.source, "lift.stations", "no station value is \"free\": nothing to design")
+        knots = np.array([s.angle for s in self.options.stations])
+        self.knots = knots
+        width = float(np.mean(np.diff(knots)))
+        height = max(abs(st.values[0]) for st in self.options.stations if st.values[0] is not None) or 1e-3
+        self.scale = np.array([height / width**k for _, k in self.free])
+        x = np.unique(np.concatenate([np.linspace(0.0, knots[-1], GRID), knots]))
+        self.x = x[x < knots[-1]]
+        self.solve = solve_spline
+        theta = scene.lift.start + self.x
+        zero = np.zeros(len(self.free))
+        self.base = self.lift(zero).derivatives(theta)
+        self.basis = np.stack([self.lift(np.eye(len(self.free))[i]).derivatives(theta) - self.base
+                               for i in range(len(self.free))])
+
+    def lift(self, z):
+        from ..lift.spline import with_values
+
+        values = {key: float(zi * si) for key, zi, si in zip(self.free, z, self.scale)}
+        options = with_values(self.options, values)
+        return self.solve(options.stations, options.continuity, self.scene.lift.start, self.scene.source)
+
+    def derivatives(self, z) -> np.ndarray:
+        return self.base + np.tensordot(np.asarray(z, dtype=float), self.basis, axes=1)
+
+    def start(self) -> np.ndarray:
+        return np.array([self.options.stations[i].values[k] for i, k in self.free]) / self.scale
+
+
+def evaluate(scene, lift, objective: str, limits: DesignLimits, x=None) -> tuple[float, dict, dict]:
+    """(objective value, {name: per-sample slack arrays, scaled for the optimiser}, {name: smallest
+    slack in its unit}) of any lift curve on the scene's event (x: event angles since lift.start;
+    default a grid over one revolution)."""
+    x = np.linspace(0.0, TWO_PI, 3 * GRID, endpoint=False) if x is None else x
+    d = lift.derivatives(scene.lift.start + x)
+    arrays, slacks = constraint_arrays(scene, d, limits)
+    return objective_value(scene, lift, d, objective, limits), arrays, slacks
+
+
+def objective_value(scene, lift, d, objective: str, limits: DesignLimits) -> float:
+    """The objective; inf for a peak or energy of a derivative that has a jump below it (the
+    harmonic law's acceleration jumps at its ends: its jerk has a Dirac impulse there)."""
+    w, ratio = scene.omega, scene.follower.ratio
+    below = {"peak-acceleration": 1, "peak-jerk": 2, "jerk-energy": 2}.get(objective)
+    if below is not None and _jumps(lift, below):
+        return math.inf
+    if objective == "peak-acceleration":
+        return float(np.max(np.abs(ratio * w**2 * d[2])))
+    if objective == "peak-jerk":
+        return float(np.max(np.abs(ratio * w**3 * d[3])))
+    if objective == "jerk-energy":
+        return _jerk_energy(lift, ratio * w**3 / math.sqrt(w))  # over time: j = ratio w^3 L''', dt = d theta / w
+    return residual_vibration(scene, lift, limits)
+
+
+def _jumps(lift, k: int) -> bool:
+    """Whether the k-th derivative of the lift jumps at one of its breakpoints."""
+    b = np.asarray(lift.breakpoints(), dtype=float)
+    if b.size == 0:
+        return False
+    eps = 1e-9
+    left, right = lift.derivatives(b - eps)[k], lift.derivatives(b + eps)[k]
+    scale = float(np.max(np.abs(lift.derivatives(np.linspace(0.0, TWO_PI, 721))[k]))) or 1.0
+    # a smooth derivative moves by ~2 eps |next derivative| over the gap; a jump is far larger
+    return bool(np.any(np.abs(right - left) > 1e-4 * scale))
+
+
+def constraint_arrays(scene, d, limits: DesignLimits) -> tuple[dict, dict]:
+    """Per-sample slacks scaled to order 1 with fixed scales (a scale that moved with the lift
+    would bend the optimiser's linearisation), and the smallest slack of each in its unit."""
+    from ..lift.contours.translating import pitch_geometry
+
+    f = scene.follower
+    ratio = f.ratio
+    arrays: dict = {"lift >= 0": d[0] / (f.base_radius + f.roller_radius)}
+    slacks: dict = {"lift >= 0 [mm]": 1e3 * float(np.min(d[0]))}
+    if limits.max_pressure_angle is not None:
+        phi, _ = pitch_geometry(d, f.base_radius, f.roller_radius, f.offset)
+        arrays["pressure angle"] = (limits.max_pressure_angle - np.abs(phi)) / limits.max_pressure_angle
+        slacks["pressure angle [deg]"] = math.degrees(limits.max_pressure_angle - float(np.max(np.abs(phi))))
+    if limits.radius_margin is not None:
+        kappa = _pitch_curvature(d, f)
+        arrays["convex radius"] = 1.0 - kappa * (f.roller_radius + limits.radius_margin)
+        convex = kappa > 0.0
+        smallest = float(np.min(1.0 / kappa[convex])) if np.any(convex) else math.inf
+        slacks["convex radius [mm]"] = 1e3 * (smallest - f.roller_radius - limits.radius_margin)
+    if limits.contact_margin is not None:
+        from ..mechanics.forces import TrainLoads, friction_direction, load_parts
+
+        loads = TrainLoads.from_scene(scene)
+        a_coef, g_part, is_open = load_parts(d, friction_direction(d[1], d[2]), loads, ratio, scene.valve.lash)
+        wc = (limits.contact_rpm or scene.drive.rpm) * TWO_PI / 60.0
+        force = np.minimum(wc**2 * a_coef + g_part, g_part)  # the ends of [0, wc]
+        scale = max(abs(limits.contact_margin), loads.preload, 1.0)
+        arrays["contact margin"] = np.where(is_open, (force - limits.contact_margin) / scale, 1.0)
+        slacks["contact margin [N]"] = float(np.min(force[is_open]) - limits.contact_margin) if np.any(is_open) else math.inf
+    return arrays, slacks
+
+
+def _pitch_curvature(d, f) -> np.ndarray:
+    e = f.offset
+    y = math.sqrt((f.base_radius + f.roller_radius) ** 2 - e * e) + d[0]
+    ty = d[1] - e
+    return (ty * (2.0 * d[1] - e) - y * (d[2] - y)) / (y * y + ty * ty) ** 1.5
+
+
+def _jerk_energy(lift, factor: float) -> float:
+    """Integral of (factor * L''')^2 d theta over the event, exact for a spline lift (its
+    polynomials squared and integrated), else by Gauss-Legendre per breakpoint interval."""
+    total = 0.0
+    coefficients = getattr(lift, "coefficients", None)
+    if coefficients is not None:
+        for i, c in enumerate(coefficients):
+            width = lift.knots[i + 1] - lift.knots[i]
+            p = np.polynomial.Polynomial(c).deriv(3) / width**3
+            q = (p * p).integ()
+            total += (q(1.0) - q(0.0)) * width
+        return factor**2 * total
+    b = np.sort(np.mod(lift.breakpoints(), TWO_PI))
+    edges = np.append(b, b[0] + TWO_PI)
+    u, wts = np.polynomial.legendre.leggauss(40)
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        t = 0.5 * (hi - lo) * (u + 1.0) + lo
+        jj = lift.derivatives(t)[3]
+        total += 0.5 * (hi - lo) * float(np.sum(wts * jj * jj))
+    return factor**2 * total
+
+
+def _residual_nodes(scene, lift):
+    """Gauss-Legendre nodes and weights over the event between the lift's breakpoints (exact for
+    polynomial segments up to degree 95 times the smooth exponential's expansion)."""
+    u, wts = np.polynomial.legendre.leggauss(48)
+    b = np.sort(np.mod(lift.breakpoints() - scene.lift.start, TWO_PI))
+    b = np.unique(np.append(b, TWO_PI))
+    nodes = [0.5 * (hi - lo) * (u + 1.0) + lo for lo, hi in zip(b[:-1], b[1:])]
+    weights = [0.5 * (hi - lo) * wts for lo, hi in zip(b[:-1], b[1:])]
+    return np.concatenate(nodes), np.concatenate(weights)
+
+
+def _residual_kernel(scene, limits: DesignLimits, x, wx) -> np.ndarray:
+    """(speeds, nodes) complex weights: the residual amplitude at each speed of the band is
+    |kernel @ (ratio L'')| (see residual_vibration)."""
+    band = limits.band or (scene.drive.rpm, scene.drive.rpm)
+    wn = math.sqrt((scene.linkage.stiffness + scene.spring.rate) / scene.valve.mass)
+    speeds = np.linspace(band[0], band[1], limits.band_points if band[0] != band[1] else 1) * TWO_PI / 60.0
+    # s''(t) = w^2 L''(theta), dt = d theta / w, t = x / w: integral = sum wx w L'' exp(i wn x / w)
+    return scene.follower.ratio * wx[None, :] * speeds[:, None] * np.exp(1j * wn * x[None, :] / speeds[:, None]) / wn
+
+
+def residual_vibration(scene, lift, limits: DesignLimits) -> float:
+    """Largest residual amplitude (m) over the speed band of the follower error e of
+    M e'' + K e = -M s''(t) (rigid-cam vibration of a linear follower, K = k + rate, kept in
+    contact) after the event, from rest: |integral of s''(t) exp(i wn t) dt| / wn."""
+    x, wx = _residual_nodes(scene, lift)
+    d2 = lift.derivatives(scene.lift.start + x)[2]
+    return float(np.max(np.abs(_residual_kernel(scene, limits, x, wx) @ d2)))
+
+
+@dataclass(frozen=True)
+class DesignReport:
+    objective: str
+    value: float
+    start_value: float
+    values: dict  # (station, derivative) -> value per rad^k
+    slacks: dict  # constraint -> smallest slack (relative; >= 0 met)
+    comparison: dict  # law -> (objective, slacks)
+    iterations: int
+    success: bool
+    message: str
+    options: object  # the optimised SplineOptions
+    method: str = "SLSQP"
+
+
+def _peak_by_linear_programme(scene, problem, row: int, factor: float, limits: DesignLimits):
+    """The peak objective with the linear constraints only (lift >= 0, and the contact margin with
+    the friction direction of the starting lift): minimise t with -t <= factor d_row(z) <= t, an LP
+    in (z, t) solved exactly by HiGHS. None if HiGHS fails."""
+    from scipy.optimize import linprog
+
+    from ..mechanics.forces import TrainLoads, friction_direction
+
+    n = len(problem.free)
+    # in units of the largest starting value: HiGHS's tolerances are absolute (a jerk in m/s**3
+    # of order 1e6 made it give up)
+    unit = max(float(np.max(np.abs(problem.derivatives(problem.start())[row]))), 1e-300)
+    column0, gain = problem.base[row] / unit, problem.basis[:, row, :].T / unit
+    ones = np.ones((gain.shape[0], 1))
+    size = scene.follower.base_radius
+    blocks = [np.hstack([gain, -ones]), np.hstack([-gain, -ones]),
+              np.hstack([-problem.basis[:, 0, :].T / size, np.zeros((gain.shape[0], 1))])]
+    bounds = [-column0, column0, problem.base[0] / size]
+    if limits.contact_margin is not None:
+        loads = TrainLoads.from_scene(scene)
+        d0 = problem.derivatives(problem.start())
+        ratio, lash = scene.follower.ratio, scene.valve.lash
+        opened = ratio * d0[0] - lash > 0.0
+        direction = friction_direction(d0[1], d0[2])
+        wc = (limits.contact_rpm or scene.drive.rpm) * TWO_PI / 60.0
+        for w2 in (wc**2, 0.0):  # F = w^2 M ratio L'' + preload + rate (ratio L - lash) + R dir + closing >= margin
+            lin = (w2 * loads.mass * ratio * problem.basis[:, 2, :] + loads.rate * ratio * problem.basis[:, 0, :]).T
+            const = (w2 * loads.mass * ratio * problem.base[2] + loads.preload + loads.rate * (ratio * problem.base[0] - lash)
+                     + loads.friction * direction + loads.closing)
+            scale = max(abs(limits.contact_margin), loads.preload, 1.0)
+            blocks.append(np.hstack([-lin[opened], np.zeros((int(opened.sum()), 1))]) / scale)
+            bounds.append((const[opened] - limits.contact_margin) / scale)
+    cost = np.append(np.zeros(n), 1.0)
+    result = linprog(cost, A_ub=np.vstack(blocks), b_ub=np.concatenate(bounds), bounds=[(None, None)] * (n + 1),
+                     method="highs")
+    return result.x[:-1] if result.status == 0 else None
+
+
+def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> DesignReport:
+    """Minimise `objective` over the free station values subject to `limits` (SLSQP). The peak
+    objectives are solved in epigraph form (minimise t with -t <= a_i <= t), whose constraints are
+    linear in the variables and get their exact Jacobian from the basis."""
+    from scipy.optimize import minimize
+
+    from ..lift.curves import LawLift
+
+    problem = Problem(scene, objective, limits)
+    z0 = problem.start()
+    peak = objective in ("peak-acceleration", "peak-jerk")
+    w, ratio = scene.omega, scene.follower.ratio
+    row, factor = (2, ratio * w**2) if objective == "peak-acceleration" else (3, ratio * w**3)
+    start_value = objective_value(scene, problem.lift(z0), problem.derivatives(z0), objective, limits)
+    norm = start_value if start_value > 0 else 1.0
+
+    def limits_of(z):
+        return np.concatenate(list(constraint_arrays(scene, problem.derivatives(z), limits)[0].values()))
+
+    method = "SLSQP"
+    if peak:
+        # The LP without the nonlinear limits (HiGHS) gives a start near the optimum; SLSQP then
+        # minimises with every limit, in epigraph form; the better of the two feasible points wins.
+        z_lp = _peak_by_linear_programme(scene, problem, row, factor, limits)
+        gain = factor / norm * problem.basis[:, row, :].T  # d(column)/dz, (samples, free)
+        n_free = len(problem.free)
+
+        def column(z):
+            return factor / norm * problem.derivatives(z)[row]
+
+        def epigraph(y):
+            c = column(y[:-1])
+            return np.concatenate([y[-1] - c, y[-1] + c])
+
+        def epigraph_jac(y):
+            ones = np.ones((gain.shape[0], 1))
+            return np.vstack([np.hstack([-gain, ones]), np.hstack([gain, ones])])
+
+        cons = [{"type": "ineq", "fun": epigraph, "jac": epigraph_jac},
+                {"type": "ineq", "fun": lambda y: limits_of(y[:-1])}]
+        first = z0 if z_lp is None else z_lp
+        y0 = np.append(first, np.max(np.abs(column(first))))
+        result = minimize(lambda y: y[-1], y0, jac=lambda y: np.append(np.zeros(n_free), 1.0), method="SLSQP",
+                          constraints=cons, options={"maxiter": maxiter, "ftol": 1e-12})
+        candidates = [(result.x[:-1], "SLSQP")] + ([(z_lp, "HiGHS")] if z_lp is not None else [])
+        feasible = [(np.max(np.abs(column(z))), z, name) for z, name in candidates if np.all(limits_of(z) >= -1e-9)]
+        z, method = (min(feasible, key=lambda item: item[0])[1:] if feasible else (result.x[:-1], "SLSQP"))
+        method = ("HiGHS (LP start), then SLSQP" if z_lp is not None else "SLSQP") + f"; best: {method}"
+        success, message, iterations = bool(feasible), str(result.message), int(result.nit)
+    elif objective == "residual-vibration":
+        # the amplitudes are |c_s + G_s z| (linear in z inside the modulus): epigraph on their
+        # squares, smooth everywhere, with exact Jacobians
+        xq, wq = _residual_nodes(scene, problem.lift(z0))
+        theta = scene.lift.start + xq
+        base = problem.lift(np.zeros(len(problem.free))).derivatives(theta)[2]
+        cols = np.stack([problem.lift(np.eye(len(problem.free))[i]).derivatives(theta)[2] - base
+                         for i in range(len(problem.free))], axis=1)
+        kernel = _residual_kernel(scene, limits, xq, wq)
+        c, G = kernel @ base / norm, kernel @ cols / norm
+        n_free = len(problem.free)
+
+        def squared(y):
+            amp = c + G @ y[:-1]
+            return y[-1] - (amp.real**2 + amp.imag**2)
+
+        def squared_jac(y):
+            amp = c + G @ y[:-1]
+            dz = -2.0 * (amp.real[:, None] * G.real + amp.imag[:, None] * G.imag)
+            return np.hstack([dz, np.ones((len(amp), 1))])
+
+        cons = [{"type": "ineq", "fun": squared, "jac": squared_jac},
+                {"type": "ineq", "fun": lambda y: limits_of(y[:-1])}]
+        y0 = np.append(z0, 1.0)
+        result = minimize(lambda y: y[-1], y0, jac=lambda y: np.append(np.zeros(n_free), 1.0), method="SLSQP",
+                          constraints=cons, options={"maxiter": maxiter, "ftol": 1e-16})
+        z = result.x[:-1]
+        success, message, iterations = bool(result.success), str(result.message), int(result.nit)
+    else:
+        fun = lambda z: objective_value(scene, problem.lift(z), problem.derivatives(z), objective, limits) / norm  # noqa: E731
+        cons = [{"type": "ineq", "fun": limits_of}]
+        result = minimize(fun, z0, method="SLSQP", constraints=cons, options={"maxiter": maxiter, "ftol": 1e-14})
+        z = result.x
+        success, message, iterations = bool(result.success), str(result.message), int(result.nit)
+    lift = problem.lift(z)
+    value, _, slacks = evaluate(scene, lift, objective, limits, problem.x)
+    values = {key: float(zi * si) for key, zi, si in zip(problem.free, z, problem.scale)}
+    comparison = {}
+    height, rise, dwell, ret = _event_shape(problem)
+    for law_name in STANDARD_LAWS:
+        std = LawLift(height=height, start=scene.lift.start, rise=rise, dwell=dwell, ret=ret,
+                      rise_law=law_name, return_law=law_name)
+        comparison[law_name] = evaluate(scene, std, objective, limits, problem.x)[::2]
+    from ..lift.spline import with_values
+
+    # SLSQP often ends a nonsmooth (peak) problem with "positive directional derivative for
+    # linesearch" at its optimum: the result counts when every limit is met and it improved
+    met = all(v >= -1e-9 for v in slacks.values()) and value <= start_value
+    return DesignReport(objective, value, start_value, values, slacks, comparison, iterations,
+                        met, message if met else message + "; a limit is violated or nothing improved",
+                        with_values(problem.options, values), method)
+
+
+def _event_shape(problem) -> tuple[float, float, float, float]:
+    """(height, rise, dwell, return) of the spline's event: the stations with the largest s mark
+    the top (the first ends the rise, the last starts the return)."""
+    st = problem.options.stations
+    s = np.array([v.values[0] if v.values[0] is not None else -np.inf for v in st])
+    top = np.nonzero(s == s.max())[0]
+    knots = problem.knots
+    return float(s.max()), float(knots[top[0]]), float(knots[top[-1]] - knots[top[0]]), float(knots[-1] - knots[top[-1]])
+
+
+def report_text(scene, report: DesignReport) -> str:
+    from ..lift.spline import NAMES
+
+    unit = {"peak-acceleration": "m/s**2", "peak-jerk": "m/s**3", "jerk-energy": "m**2/s**5",
+            "residual-vibration": "m"}[report.objective]
+    w = scene.omega
+    lines = [f"{scene.name}: minimise {report.objective} with {report.method}, {report.iterations} iterations "
+             f"({'limits met' if report.success else 'FAILED'}; solver: {report.message})",
+             f"  optimum {report.value:.6g} {unit} (start {report.start_value:.6g})"]
+    for (i, k), value in report.values.items():
+        lines.append(f"  station {i} {NAMES[k]} = {value * w**k:.9g} {('m', 'm/s', 'm/s**2', 'm/s**3')[k]}")
+    lines.append("  constraint slacks (>= 0 met):")
+    for name, slack in report.slacks.items():
+        lines.append(f"    {name:<16s} {slack:+.4g}")
+    lines.append(f"  standard laws on the same event ({report.objective}; slacks):")
+    for law_name, (value, slacks) in report.comparison.items():
+        cells = "  ".join(f"{name.split(' [')[0]} {slack:+.4g}" for name, slack in slacks.items())
+        lines.append(f"    {law_name:<20s} {value:11.6g} {unit}   {cells}{'  VIOLATES' if min(slacks.values()) < 0 else ''}")
+    return "\n".join(lines) + "\n"
+
+
+def stations_toml(scene, report: DesignReport) -> str:
+    """The optimised [[lift.stations]] in scene syntax."""
+    from ..lift.spline import NAMES
+
+    w = report.options.reference_rpm * TWO_PI / 60.0
+    units = ("mm", "m/s", "m/s**2", "m/s**3")
+    scale = (1e3, 1.0, 1.0, 1.0)
+    out = []
+    for st in report.options.stations:
+        out.append("[[lift.stations]]")
+        out.append(f'angle = "{math.degrees(st.angle):.12g} deg"')
+        for k, value in enumerate(st.values):
+            if value is not None:
+                out.append(f'{NAMES[k]} = "{value * w**k * scale[k]:.12g} {units[k]}"')
+        out.append("")
+    return "\n".join(out)
+

@@ -1,0 +1,331 @@
+"""Exports to make the cam: point table, DXF drawing, STL/GLB solid, grinding table.
+
+All four come from the same closed forms as the kinematics (explorer.lift.contours.translating): the
+roller centre (pitch curve) and the contact point with the roller (cam contour) at cam angle
+theta, the contact normal and the signed radii of curvature, from the lift's analytic
+derivatives. Nothing is sampled and then differentiated.
+
+Chord tolerance. The drawing and the solid approximate the contour by chords; `chord_polyline`
+chooses the cam angles so that no chord strays from the exact curve by more than the tolerance
+(interval bisection with the distance of exact interior points to the chord as the test, at half
+the tolerance so that what lies between those points has room). The tests read the files back
+and measure the distance to the exact curve independently.
+
+Grinding. A radial-feed grinder turns the cam and moves the wheel centre along one fixed line
+through the cam axis. A wheel of radius Rw touching the contour has its centre at
+contact + Rw * normal (the contour's offset curve); the table gives, for uniformly spaced grinder
+angles, the distance of that centre from the cam axis. With Rw equal to the roller radius and no
+follower offset the table is the follower's own lift (y0 + L at grinder angle = cam angle): a
+test. A wheel larger than the contour's smallest concave radius would cut into the flank: an
+error naming where.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.errors import InputError
+
+TWO_PI = 2.0 * math.pi
+FORMATS = ("csv", "dxf", "stl", "glb", "grind")
+MIN_TOLERANCE = 1e-9  # m; below this the chords' own rounding (1e-16 relative of a 0.1 m cam) is near
+MAX_TOLERANCE = 1e-3  # m; coarser than any cam drawing
+MAX_POLYLINE_POINTS = 2_000_000  # a 1 nm tolerance on a 50 mm cam needs ~200 000
+MIN_POINTS, MAX_POINTS = 8, 1_000_000
+
+
+@dataclass(frozen=True)
+class CamGeometry:
+    """Closed-form geometry at cam angles theta (cam frame, metres; normals outward, unit)."""
+
+    theta: np.ndarray
+    pitch: np.ndarray  # (N, 2) roller-centre path
+    contour: np.ndarray  # (N, 2) contact point on the cam
+    normal: np.ndarray  # (N, 2) outward contact normal
+    pitch_curvature: np.ndarray  # 1/m, > 0 convex, 0 straight
+    contour_curvature: np.ndarray  # 1/m, > 0 convex
+    pressure_angle: np.ndarray  # rad
+
+
+def geometry(lift, theta, base_radius: float, roller_radius: float, offset: float) -> CamGeometry:
+    """The pitch curve, contour, normal and curvatures at `theta` (see geometry.translating for
+    the closed forms; curvature = 1/radius keeps straight stretches finite)."""
+    theta = np.asarray(theta, dtype=float)
+    d = lift.derivatives(theta)
+    e = offset
+    y0 = math.sqrt((base_radius + roller_radius) ** 2 - e * e)
+    y = y0 + d[0]
+    tx, ty = y, d[1] - e
+    norm_t = np.hypot(tx, ty)
+    cross = ty * (2.0 * d[1] - e) - y * (d[2] - y)
+    pitch_curvature = cross / norm_t**3
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # 1/(rho - r) = k / (1 - r k): finite wherever the contour is not a cusp (undercut is refused)
+        contour_curvature = pitch_curvature / (1.0 - roller_radius * pitch_curvature)
+    nx, ny = -ty / norm_t, tx / norm_t
+    c, s = np.cos(theta), np.sin(theta)
+
+    def to_cam(x, yy):
+        return np.column_stack([c * x + s * yy, -s * x + c * yy])
+
+    centre_x = np.full_like(y, e)
+    return CamGeometry(
+        theta=theta,
+        pitch=to_cam(centre_x, y),
+        contour=to_cam(centre_x - roller_radius * nx, y - roller_radius * ny),
+        normal=to_cam(nx, ny),
+        pitch_curvature=pitch_curvature,
+        contour_curvature=contour_curvature,
+        pressure_angle=np.arctan2(ty, tx),
+    )
+
+
+def angles_with(uniform: int, breakpoints) -> np.ndarray:
+    """`uniform` equally spaced cam angles in [0, 2 pi) and the breakpoints, sorted, without
+    near-copies: a breakpoint computed as start + knot and the grid angle k 2 pi / n that it
+    equals differ by an ulp, and two points one ulp apart make a zero chord and a zero step."""
+    theta = np.sort(np.concatenate([np.linspace(0.0, TWO_PI, uniform, endpoint=False),
+                                    np.mod(np.asarray(breakpoints, dtype=float), TWO_PI)]))
+    keep = np.append(True, np.diff(theta) > 1e-12)
+    theta = theta[keep]
+    if theta.size > 1 and theta[-1] > TWO_PI - 1e-12:  # the same as angle 0
+        theta = theta[:-1]
+    return theta
+
+
+@dataclass(frozen=True)
+class CamSource:
+    """What an export needs of a scene: its lift curve and follower geometry."""
+
+    lift: object
+    base_radius: float
+    roller_radius: float
+    offset: float
+    name: str
+    source: str
+
+    def at(self, theta) -> CamGeometry:
+        return geometry(self.lift, theta, self.base_radius, self.roller_radius, self.offset)
+
+    def breakpoints(self) -> np.ndarray:
+        return np.mod(np.asarray(self.lift.breakpoints(), dtype=float), TWO_PI)
+
+
+def cam_source(scene, lift=None) -> CamSource:
+    """The scene's cam; InputError for gears whose cam is not a translating-roller cam, and for an
+    undercut cam (its contour folds: nothing to make)."""
+    from ..lift.contours.translating import find_undercut, undercut_error
+    from ..effects.lift import build_lift
+
+    f = scene.follower
+    if f.type != "translating-roller":
+        raise InputError(scene.source, "follower.type",
+                         f"exports are for translating-roller cams; this scene's follower is {f.type!r}")
+    src = CamSource(lift if lift is not None else build_lift(scene), f.base_radius, f.roller_radius,
+                    f.offset, scene.name, scene.source)
+    theta = angles_with(7200, src.breakpoints())
+    g = src.at(theta)
+    with np.errstate(divide="ignore"):
+        rho = 1.0 / g.pitch_curvature
+    i = find_undercut(rho, f.roller_radius)
+    if i is not None:
+        raise undercut_error(float(theta[i]), float(rho[i]), f.roller_radius, scene.source)
+    return src
+
+
+def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance of points p (..., 2) from the segments a-b (..., 2)."""
+    ab = b - a
+    length2 = np.sum(ab * ab, axis=-1)
+    t = np.where(length2 > 0.0, np.sum((p - a) * ab, axis=-1) / np.where(length2 > 0.0, length2, 1.0), 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    q = a + t[..., None] * ab
+    return np.hypot(*(p - q).T).T
+
+
+def chord_polyline(curve, tolerance: float, breakpoints=(), start_points: int = 360,
+                   probes: int = 9, max_points: int = MAX_POLYLINE_POINTS, key: str = "--tolerance") -> tuple[np.ndarray, np.ndarray]:
+    """Cam angles and points of a closed polyline whose chords stay within `tolerance` of the
+    closed curve `curve(theta) -> (N, 2)` (period 2 pi). Breakpoints are always vertices (a
+    corner of the exact curve is a corner of the polyline). Returns (theta, points) without
+    repeating the first point."""
+    theta = angles_with(start_points, breakpoints)
+    frac = np.arange(1, probes + 1) / (probes + 1.0)
+    while True:
+        ends = np.append(theta, theta[0] + TWO_PI)
+        a, b = ends[:-1], ends[1:]
+        pa = curve(a)
+        pb = np.roll(pa, -1, axis=0)
+        inner = a[:, None] + frac[None, :] * (b - a)[:, None]
+        pin = curve(inner.ravel()).reshape(inner.shape + (2,))
+        dist = _segment_distance(pin, pa[:, None, :], pb[:, None, :]).max(axis=1)
+        bad = dist > 0.5 * tolerance
+        if not np.any(bad):
+            return theta, pa
+        if theta.size + np.count_nonzero(bad) > max_points:
+            raise InputError("<command line>", key,
+                             f"a chord tolerance of {tolerance:.3g} m needs more than {max_points} points on this cam; "
+                             "use a larger tolerance")
+        theta = np.sort(np.concatenate([theta, 0.5 * (a[bad] + b[bad]) % TWO_PI]))
+
+
+def _drop_repeats(theta: np.ndarray, xy: np.ndarray, within: float) -> tuple[np.ndarray, np.ndarray]:
+    """Drop a vertex closer than `within` to the one before it: the roller pivoting on a corner of
+    the cam touches one point over a range of angles, and rounding makes near-copies of it
+    (1.9e-13 m apart on Schenker's cam) that a solid would turn into degenerate faces. Moving a
+    vertex by `within` moves the polyline by no more."""
+    step = np.hypot(*np.diff(xy, axis=0, append=xy[:1]).T)
+    keep = step > within
+    return theta[keep], xy[keep]
+
+
+# ---------------------------------------------------------------------------------------------
+# The four exports: each returns the bytes or text to write (written by the caller through
+# explorer.core.outputs, so the usual rules for output files apply).
+
+
+def point_table(src: CamSource, points: int = 3600) -> str:
+    """CSV: one row per cam angle (uniform, plus the lift's breakpoints): contour and pitch point,
+    outward normal, signed curvatures, pressure angle."""
+    theta = angles_with(points, src.breakpoints())
+    g = src.at(theta)
+    out = io.StringIO()
+    out.write(f"# {src.name}: cam contour and pitch curve in the cam frame (m); the cam turns counter-clockwise,\n"
+              "# the point at cam angle theta touches the roller at that angle; normal outward, unit;\n"
+              "# curvature 1/radius, > 0 convex, < 0 concave, 0 straight\n")
+    out.write("cam_angle_deg,contour_x_m,contour_y_m,pitch_x_m,pitch_y_m,normal_x,normal_y,"
+              "contour_curvature_1_m,pitch_curvature_1_m,pressure_angle_deg\n")
+    table = np.column_stack([np.degrees(theta), g.contour, g.pitch, g.normal, g.contour_curvature,
+                             g.pitch_curvature, np.degrees(g.pressure_angle)])
+    np.savetxt(out, table, delimiter=",", fmt="%.17g")
+    return out.getvalue()
+
+
+def contour_polyline(src: CamSource, tolerance: float, which: str = "contour", merge: float = 0.0) -> np.ndarray:
+    """(N, 2) vertices of the closed contour (or pitch curve) to the chord tolerance, counter-
+    clockwise (the order drawings and solids expect); vertices closer than max(merge, 1e-3 of the
+    tolerance) to their predecessor are dropped."""
+    theta, xy = chord_polyline(lambda t: getattr(src.at(t), which), tolerance, src.breakpoints())
+    theta, xy = _drop_repeats(theta, xy, max(merge, 1e-3 * tolerance))
+    return xy[::-1]  # increasing cam angle runs clockwise around the cam
+
+
+def dxf_text(src: CamSource, tolerance: float) -> str:
+    """A DXF (R2010, millimetres) with the contour (layer CAM) and pitch curve (layer PITCH) as
+    closed LWPOLYLINEs to the chord tolerance, and the shaft centre as a point."""
+    import ezdxf
+    from ezdxf import units
+
+    doc = ezdxf.new("R2010", units=units.MM)
+    doc.layers.add("CAM", color=7)
+    doc.layers.add("PITCH", color=1, linetype="DASHED")
+    msp = doc.modelspace()
+    for layer, which in (("CAM", "contour"), ("PITCH", "pitch")):
+        xy = contour_polyline(src, tolerance, which) * 1e3
+        msp.add_lwpolyline(xy.tolist(), format="xy", close=True, dxfattribs={"layer": layer})
+    msp.add_point((0.0, 0.0), dxfattribs={"layer": "CAM"})
+    stream = io.StringIO()
+    doc.write(stream)
+    return stream.getvalue()
+
+
+def cam_solid(src: CamSource, tolerance: float, width: float):
+    """trimesh solid of the cam: the contour polyline extruded over `width` along the cam axis
+    (z), centred on z = 0; metres."""
+    import trimesh
+
+    from .parts import extrude_contour
+
+    # float32 in STL and glTF resolves ~4e-9 m at 0.05 m: closer vertices would collapse into
+    # degenerate faces
+    mesh = extrude_contour(contour_polyline(src, tolerance, merge=1e-8), width)  # contour in (x, z), width along y
+    # (x, y, z) -> (x, z, -y): the contour back in the x-y plane, the cam axis along z
+    mesh.apply_transform(trimesh.transformations.rotation_matrix(-math.pi / 2.0, [1.0, 0.0, 0.0]))
+    return mesh
+
+
+def stl_bytes(src: CamSource, tolerance: float, width: float) -> bytes:
+    """Binary STL in millimetres (STL carries no unit; CAM software assumes mm)."""
+    mesh = cam_solid(src, tolerance, width)
+    mesh.apply_scale(1e3)
+    return mesh.export(file_type="stl")
+
+
+def glb_bytes(src: CamSource, tolerance: float, width: float) -> bytes:
+    """Binary glTF in metres (glTF's unit)."""
+    return cam_solid(src, tolerance, width).export(file_type="glb")
+
+
+@dataclass(frozen=True)
+class GrindingTable:
+    grinder_angle: np.ndarray  # rad, uniform: the cam's rotation on the grinder
+    wheel_centre: np.ndarray  # m, distance of the wheel centre from the cam axis
+    cam_angle: np.ndarray  # rad, the follower cam angle whose contact point the wheel touches
+    wheel_radius: float
+
+
+def wheel_centre(src: CamSource, theta, wheel_radius: float) -> np.ndarray:
+    """(N, 2) wheel centre in the cam frame when the wheel touches the contact point of theta."""
+    g = src.at(theta)
+    return g.contour + wheel_radius * g.normal
+
+
+def grinding_table(src: CamSource, wheel_radius: float, points: int = 3600) -> GrindingTable:
+    """Wheel-centre distance at `points` uniform grinder angles. The grinder angle a rotates the
+    cam so that the wheel centre lies on the wheel's line, the ground y axis (the follower's
+    direction), i.e. a = 90 deg - polar angle of the centre in the cam frame."""
+    key = "--grinding-wheel-radius"
+    theta = angles_with(8 * points, src.breakpoints())
+    g = src.at(theta)
+    concave = g.contour_curvature < 0.0
+    if np.any(concave):
+        radius = -1.0 / g.contour_curvature[concave]
+        i = int(np.argmin(radius))
+        if radius[i] <= wheel_radius:
+            raise InputError("<command line>", key,
+                             f"a wheel of radius {wheel_radius * 1e3:.6g} mm cannot grind the concave flank of radius "
+                             f"{radius[i] * 1e3:.6g} mm at cam angle {math.degrees(theta[concave][i]):.3f} deg")
+    c = g.contour + wheel_radius * g.normal
+    psi = np.unwrap(np.arctan2(c[:, 1], c[:, 0]))
+    step = np.diff(np.append(psi, psi[0] - TWO_PI))
+    if not np.all(step < 0.0):
+        raise InputError("<command line>", key,
+                         "the wheel-centre path winds back on itself: this cam cannot be ground with a radial wheel feed")
+    alpha = np.arange(points) * (TWO_PI / points)
+    # psi decreases by 2 pi over theta in [0, 2 pi): find theta with psi(theta) = pi/2 - alpha
+    target = psi[0] - np.mod(psi[0] - (0.5 * math.pi - alpha), TWO_PI)
+    ends = np.append(psi, psi[0] - TWO_PI)
+    grid = np.append(theta, TWO_PI)
+    j = np.clip(np.searchsorted(-ends, -target, side="right") - 1, 0, theta.size - 1)
+    lo, hi = grid[j], grid[j + 1]
+
+    def polar(t):
+        p = wheel_centre(src, t, wheel_radius)
+        return np.arctan2(p[:, 1], p[:, 0])
+
+    def offset_angle(t):  # psi(t) - target, wrapped near zero (the bracket is one grid cell)
+        return np.angle(np.exp(1j * (polar(t) - target)))
+
+    for _ in range(64):  # bisection in the bracket: the polar angle is monotone there
+        mid = 0.5 * (lo + hi)
+        above = offset_angle(mid) > 0.0  # psi still above target: the root lies later
+        lo = np.where(above, mid, lo)
+        hi = np.where(above, hi, mid)
+    root = 0.5 * (lo + hi)
+    centre = wheel_centre(src, root, wheel_radius)
+    return GrindingTable(alpha, np.hypot(centre[:, 0], centre[:, 1]), np.mod(root, TWO_PI), wheel_radius)
+
+
+def grinding_text(src: CamSource, table: GrindingTable) -> str:
+    out = io.StringIO()
+    out.write(f"# {src.name}: grinding table for a wheel of radius {table.wheel_radius * 1e3:.9g} mm fed radially;\n"
+              "# grinder_angle: the cam's rotation that brings the ground point to the wheel's line;\n"
+              "# wheel_centre: distance of the wheel centre from the cam axis; cam_angle: the follower cam angle of that point\n")
+    out.write("grinder_angle_deg,wheel_centre_m,cam_angle_deg\n")
+    np.savetxt(out, np.column_stack([np.degrees(table.grinder_angle), table.wheel_centre, np.degrees(table.cam_angle)]),
+               delimiter=",", fmt="%.17g")
+    return out.getvalue()
