@@ -238,7 +238,9 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                 plots = [[plot.title, [PLOT_X_LABEL] + [label for label, _, _ in plot.series] + ["now"]]
                          for plot in app.current.plots]
                 page.wait_for_function(
-                    "(expected) => JSON.stringify([...document.querySelectorAll('.uplot')].map(u => ["
+                    # the cam-angle plots; the speed sweep's plots below them are another test's
+                    "(expected) => JSON.stringify([...document.querySelectorAll('.uplot')].filter(u =>"
+                    " !(u.querySelector('.u-title')?.textContent ?? '').startsWith('Speed sweep')).map(u => ["
                     "u.querySelector('.u-title')?.textContent,"
                     " [...u.querySelectorAll('.u-series .u-label')].map(e => e.textContent)])) === JSON.stringify(expected)",
                     arg=plots, timeout=WAIT_MS,
@@ -432,7 +434,8 @@ def test_slider_under_the_plots_and_the_event_list_jump_the_animation(tmp_path):
             plots_slider.scroll_into_view_if_needed()
             page.evaluate(TWO_FRAMES)
             box = plots_slider.bounding_box()
-            last_plot = page.locator(".uplot").last.bounding_box()
+            # the last cam-angle plot (the speed sweep's plots come below the slider)
+            last_plot = page.locator(".uplot").filter(has_not_text="Speed sweep").last.bounding_box()
             assert box["y"] >= last_plot["y"] + last_plot["height"] - 1  # under the plots
             page.mouse.click(box["x"] + 0.75 * box["width"], box["y"] + 0.5 * box["height"])
             _wait_until(lambda: not app.playback.playing and 200.0 < app.playback.angle_deg < 340.0,
@@ -491,3 +494,34 @@ def test_a_long_error_keeps_the_controls_on_an_800px_page(tmp_path):
             for label in ("Play", "Scene", "Lift law", "Spring rate [N/mm]", "Steps / revolution"):
                 row = page.locator("label", has_text=label).first.bounding_box()
                 assert row is not None and row["y"] + row["height"] <= 800, (label, row)
+
+
+def test_speed_sweep_plot_appears_and_choosing_a_speed_updates_the_rpm(tmp_path):
+    """Issue #14.2 in a real page: the speed-sweep plot of the scene is drawn under the plots with
+    the speed slider right under it; a click on that slider recomputes at the speed clicked, and
+    the page's Camshaft rpm field shows it."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+    with _running_explorer(ROOT / "assets" / "scenes" / "valve_float_demo.toml") as (server, app):
+        assert app.wait_applied(WAIT_S)
+        _wait_until(lambda: app.sweep is not None, "no speed sweep was computed")
+        before = app.current.scene.drive.rpm
+        span = app.sweep.span
+        with _connected_page(sync_api, tmp_path, server) as page:
+            title = page.locator(".uplot .u-title", has_text="Speed sweep (rigid)")
+            title.wait_for(timeout=WAIT_MS)
+            rigid_plot = title.locator("xpath=ancestor::div[contains(@class,'uplot')][1]")
+            slider = _row_input(page, "Speed [rpm]", "div[contains(@class,'mantine-Slider-root')]")
+            slider.wait_for(timeout=WAIT_MS)
+            slider.scroll_into_view_if_needed()
+            page.evaluate(TWO_FRAMES)
+            box, plot_box = slider.bounding_box(), rigid_plot.bounding_box()
+            assert box["y"] >= plot_box["y"] + plot_box["height"] - 1  # right under the sweep plot
+            page.mouse.click(box["x"] + 0.25 * box["width"], box["y"] + 0.5 * box["height"])
+            _wait_until(lambda: app.current.scene.drive.rpm != before and app.handled_serial >= app._serial,
+                        "a click on the speed slider did not recompute at another speed")
+            chosen = app.current.scene.drive.rpm
+            assert 0.15 * span[1] < chosen < 0.35 * span[1]
+            rpm_field = _row_input(page, "Camshaft rpm")
+            page.wait_for_function("([e, v]) => Math.abs(parseFloat(e.value) - v) < 1e-6",
+                                   arg=[rpm_field.element_handle(), chosen], timeout=WAIT_MS)

@@ -67,6 +67,7 @@ TYPING_PAUSE_S = 0.6
 # push the controls below it off an 800 px page.
 ERROR_BOX_MAX_EM = 7.5
 PLOT_SLIDER_ORDER = 1e6  # after every plot: the plots are added and removed as results change
+SWEEP_ORDER = 2e6  # the speed sweep below the plots and their slider
 NO_EVENT = "—"
 # What the page says about who else sees it (`explorer serve --shared` / `--per-client`)
 SHARED_NOTE = ("Shared session: everyone connected to this server sees these controls and results, "
@@ -85,6 +86,37 @@ def _user_overrides(overrides) -> dict[str, str]:
 
 
 PLOT_X_LABEL = "cam angle θ [°]"
+SWEEP_X_LABEL = "camshaft speed [rpm]"
+WIDTH_SWEEP = (2.5, 1.8, 1.8)
+
+
+def sweep_scales(span: tuple[float, float], y_range: tuple[float, float]) -> dict:
+    # y set from Python: uPlot's autorange fails on the NaN of elastic speeds not yet computed
+    return {"x": {"time": False, "auto": False, "range": [0.0, float(span[1])]},
+            "y": {"auto": False, "range": [float(y_range[0]), float(y_range[1])]},
+            "cursor": {"auto": False, "range": [0.02, 1.0]}}
+
+
+def sweep_plot_options(title: str, y_label: str, series, span: tuple[float, float],
+                       y_range: tuple[float, float] = (0.0, 1.0)) -> dict:
+    """uPlot options of a speed-sweep plot: x the camshaft speed over the sweep's range; two
+    markers drawn like the cam-angle cursor (a spike on a scale whose visible range starts above
+    0): the current speed (black) and the rigid float speed (red, dashed)."""
+    out = [{"label": SWEEP_X_LABEL}]
+    for k, (label, _, colour) in enumerate(series):
+        out.append({"label": label, "stroke": colour, "width": WIDTH_SWEEP[k % len(WIDTH_SWEEP)]})
+    out.append({"label": "current speed", "stroke": "#111111", "width": 1.5, "scale": "cursor"})
+    out.append({"label": "rigid float speed", "stroke": "#e74c3c", "width": 1.5, "dash": [6, 4], "scale": "cursor"})
+    return dict(
+        series=tuple(out), title=title,
+        scales=sweep_scales(span, y_range),
+        axes=({"label": SWEEP_X_LABEL, "size": 30, "labelSize": 16, "labelGap": 0},
+              {"label": y_label, "size": 58, "labelSize": 16, "labelGap": 0}),
+        padding=(14, 18, 0, 0), aspect=2.0,
+        legend={"show": True, "live": True},
+        cursor={"focus": {"prox": 12}},
+        focus={"alpha": 0.35},
+    )
 
 
 def plot_options(plot) -> dict:
@@ -222,6 +254,7 @@ class ExplorerApp:
         self._error: tuple[int, str] | None = None
         self.playback = Playback(playing=playing)
         self._speed_chosen = False
+        self._sweep_incoming: tuple[int, Any] | None = None  # (serial, SpeedSweep or None) from the worker
 
         # applied state (loop thread only)
         self.current: Prepared | None = None
@@ -238,6 +271,10 @@ class ExplorerApp:
         self._cursor_index = -1
         self._plot_handles: list[Any] = []
         self._plot_signature: list[tuple] = []
+        self.sweep: Any = None  # the SpeedSweep shown (loop thread)
+        self._sweep_handles: list[Any] = []
+        self._sweep_signature: tuple = ()
+        self._sweep_rpm_shown = math.nan  # what the loop last put into the sweep's speed slider
         self._event_angles: dict[str, float] = {}  # "Go to event" entry -> cam angle (under the lock)
         self._stale_shown = None
         self.camera: meshes.CameraFrame | None = None  # the initial camera (new pages, Reset View)
@@ -254,7 +291,7 @@ class ExplorerApp:
         else:
             self._client_connected(client)
         self.worker = ComputeWorker(on_ready=self._on_ready, on_error=self._on_error, on_result=on_result,
-                                    time_limit=time_limit).start()
+                                    on_sweep=self._on_sweep, time_limit=time_limit).start()
         self._submit(refresh=True)
         self._thread = threading.Thread(target=self._loop, name="explorer-loop", daemon=True)
         self._thread.start()
@@ -316,6 +353,14 @@ class ExplorerApp:
             self.plot_angle = gui.add_slider(PLOT_X_LABEL, min=0.0, max=360.0, step=0.1, initial_value=0.0,
                                              order=PLOT_SLIDER_ORDER,
                                              hint="scrub: click or drag to show this angle (pauses the animation)")
+            # the speed sweep under the plots: its plots are added as sweeps arrive (at
+            # SWEEP_ORDER + 1, + 3, + 5); this slider sits right under the rigid one, on its speed scale
+            # (viser's uPlot reports no clicks, as for the cam angle above)
+            self.sweep_note = gui.add_markdown("**Speed sweep:** computing…", order=SWEEP_ORDER)
+            self.sweep_rpm = gui.add_slider("Speed [rpm]", min=0.0, max=1.0, step=1.0, initial_value=0.0,
+                                            order=SWEEP_ORDER + 2, disabled=True,
+                                            hint="choose a camshaft speed: the gear, plots and read-outs move to it")
+            self.sweep_progress = gui.add_markdown("", order=SWEEP_ORDER + 10)
         self._readout_tab = self.side_panel.add_tab("Read-outs")
         with self._readout_tab:
             self.stale_readout = gui.add_markdown("", visible=False)
@@ -330,6 +375,7 @@ class ExplorerApp:
         self.speed.on_update(self._speed_changed)
         self.angle.on_update(self._angle_changed)
         self.plot_angle.on_update(self._angle_changed)
+        self.sweep_rpm.on_update(self._sweep_speed_chosen)
         self.event_jump.on_update(self._event_chosen)
         self.magnification.on_update(self._magnification_changed)
         self.scene.on_update(self._scene_changed)
@@ -543,6 +589,20 @@ class ExplorerApp:
             self._scrub = angle
             self._pause_requested = True
 
+    def _sweep_speed_chosen(self, event) -> None:
+        """A speed chosen under the sweep plot: the same as typing it into Camshaft rpm."""
+        if self._is_echo():
+            return
+        value = event.target.value
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(float(value)) \
+                or float(value) <= 0.0:
+            return
+        self._apply_edit("drive.rpm", float(value))
+
+    def _on_sweep(self, serial: int, sweep) -> None:
+        with self._lock:
+            self._sweep_incoming = (serial, sweep)
+
     def _submit(self, refresh: bool = False, edited: tuple[str, ...] = ()) -> None:
         with self._lock:
             self._serial += 1
@@ -652,6 +712,7 @@ class ExplorerApp:
             incoming, self._incoming = self._incoming, None
             error, self._error = self._error, None
             scrub, self._scrub = self._scrub, None
+            sweep, self._sweep_incoming = self._sweep_incoming, None
             pause, self._pause_requested = self._pause_requested, False
             if scrub is not None:
                 self.playback.angle_deg = scrub % 360.0
@@ -691,6 +752,8 @@ class ExplorerApp:
                 self.status.content = self._status_html(self.error_text, note)
                 self._status_shown = (self.error_text, note)
             self._mark_stale()
+            if sweep is not None or incoming is not None:
+                self._show_sweep(sweep)
             if self.current is not None:
                 self._pose(angle, force=incoming is not None)
                 self._sync_controls(angle, playing, scrub)
@@ -936,6 +999,63 @@ class ExplorerApp:
         else:
             for handle, plot in zip(self._plot_handles, prepared.plots):
                 handle.data = self._plot_data(plot, self.playback.angle_deg)
+
+    def _show_sweep(self, arrived) -> None:
+        """The speed sweep: a new or extended sweep (`arrived`: (serial, SpeedSweep or None)), or
+        only the current-speed marker after a new result (loop thread)."""
+        from .speedsweep import sweep_plots
+
+        if arrived is not None:
+            serial, sweep = arrived
+            if sweep is None:
+                self.sweep = None
+            elif self.sweep is None or sweep.serial >= self.sweep.serial:
+                self.sweep = sweep
+        sweep = self.sweep
+        if sweep is None or self.current is None:
+            for handle in self._sweep_handles:
+                handle.remove()
+            self._sweep_handles, self._sweep_signature = [], ()
+            self.sweep_rpm.disabled = True
+            self.sweep_progress.content = ""
+            if arrived is not None and arrived[1] is None:
+                self.sweep_note.content = ("**Speed sweep:** none; it needs the rigid forces ([valve] mass and "
+                                           "[spring]): tick 'forces' under Scene → Effects.")
+            return
+        rpm = float(self.current.scene.drive.rpm)
+        plots = sweep_plots(sweep, rpm)
+        signature = (sweep.span, tuple(tuple(label for label, _, _ in series) for _, _, _, series, _, _ in plots))
+        data = [(x, *(values for _, values, _ in series), *markers) for _, _, x, series, markers, _ in plots]
+        if signature != self._sweep_signature:
+            for handle in self._sweep_handles:
+                handle.remove()
+            self._sweep_handles = []
+            with self._plots_tab:
+                for k, ((title, y_label, _, series, _, y_lim), values) in enumerate(zip(plots, data)):
+                    self._sweep_handles.append(self.target.gui.add_uplot(
+                        data=values, order=SWEEP_ORDER + 1 + 2 * k,
+                        **sweep_plot_options(title, y_label, series, sweep.span, y_lim)))
+            self._sweep_signature = signature
+        else:
+            for handle, values, (title, _, _, _, _, y_lim) in zip(self._sweep_handles, data, plots):
+                handle.data = values
+                if handle.title != title:
+                    handle.title = title
+                scales = sweep_scales(sweep.span, y_lim)
+                if handle.scales != scales:
+                    handle.scales = scales
+        float_text = f"{sweep.float_rpm:.0f} rpm" if math.isfinite(sweep.float_rpm) else "none"
+        self.sweep_note.content = (f"**Speed sweep** of this scene: {sweep.rpm.size} speeds up to "
+                                   f"{sweep.span[1]:g} rpm; rigid float speed {float_text}.")
+        self.sweep_progress.content = f"<small>{sweep.progress()}</small>"
+        with self._programmatic():
+            slider = self.sweep_rpm
+            if (slider.min, slider.max) != (0.0, float(sweep.span[1])):
+                slider.min, slider.max = 0.0, float(sweep.span[1])
+                slider.step = float(sweep.span[0])
+            slider.disabled = False
+            if rpm != self._sweep_rpm_shown:
+                slider.value = self._sweep_rpm_shown = rpm
 
     @staticmethod
     def _plot_data(plot, angle: float) -> tuple[np.ndarray, ...]:

@@ -12,6 +12,15 @@ from typing import Any, Callable
 from .model import COMPUTE_TIME_LIMIT_S, MEMORY_LIMIT_BYTES, Prepared, Request, SUPERSEDE_AFTER_S
 
 
+# How long a parameter change may wait for a speed-sweep step in progress before that step is
+# stopped (its child killed; a fresh one starts in about half a second). Most steps are shorter:
+# one elastic run of the default scene takes ~0.17 s on the loaded 2-core machine.
+SWEEP_YIELD_S = 0.3
+# The sweep starts only once no change has come for this long: while someone drags a slider or
+# types, every change goes straight to the child, and no sweep step stands in its way.
+SWEEP_QUIET_S = 0.5
+
+
 def time_limit_message(seconds: float, previous: bool) -> str:
     shown = "the previous result is shown" if previous else "nothing to show yet"
     return f"computation took longer than {seconds:g} s and was stopped; {shown}"
@@ -35,6 +44,9 @@ class ComputeWorker:
     on_ready: Callable[[Prepared], None]
     on_error: Callable[[Request, str], None]
     on_result: Callable[[Prepared], None] | None = None  # e.g. the rerun live stream
+    # the speed sweep of each new result (explorer.view.browser.speedsweep), computed in the same
+    # child between requests, one step at a time; None: no sweep
+    on_sweep: Callable[[int, Any], None] | None = None  # (serial, SpeedSweep or None: nothing to sweep)
     time_limit: float | None = COMPUTE_TIME_LIMIT_S
     memory_limit: int = MEMORY_LIMIT_BYTES
     _pending: Request | None = None
@@ -49,6 +61,10 @@ class ComputeWorker:
     internal_errors: int = 0  # exceptions other than InputError (should stay 0)
     abandoned: int = 0  # computations stopped at the time or memory limit
     superseded: int = 0  # slow computations stopped for a newer request
+    sweep_steps: int = 0  # speed-sweep steps computed (for tests)
+    _pending_at: float = 0.0  # when the waiting request came
+    _sweep: Any = None  # the SpeedSweep being filled in, or a SweepTask still to start
+    _span: tuple[str, tuple[float, float]] | None = None  # (scene path, speed range) last swept
 
     def start(self) -> "ComputeWorker":
         from .worker import ComputeProcess
@@ -66,6 +82,7 @@ class ComputeWorker:
     def submit(self, request: Request) -> None:
         with self._cond:
             self._pending = request
+            self._pending_at = time.monotonic()
             self.submitted += 1
             self._cond.notify_all()
 
@@ -106,11 +123,26 @@ class ComputeWorker:
             while True:
                 with self._cond:
                     while self._pending is None and not self._stop:
-                        self._cond.wait()
+                        if self._sweep is None:
+                            self._cond.wait()
+                            continue
+                        quiet = time.monotonic() - self._pending_at
+                        if quiet >= SWEEP_QUIET_S:
+                            break
+                        self._cond.wait(SWEEP_QUIET_S - quiet)
                     if self._stop:
                         return
-                    request, self._pending = self._pending, None
-                    self._busy = True
+                    if self._pending is None:
+                        # nothing newer to compute: one step of the speed sweep (not counted as
+                        # busy: the result shown is complete; the sweep fills in behind it)
+                        sweep = self._sweep
+                        request = None
+                    else:
+                        request, self._pending = self._pending, None
+                        self._busy = True
+                if request is None:
+                    self._sweep_step(sweep)
+                    continue
                 try:
                     self._compute(request)
                 finally:
@@ -164,11 +196,70 @@ class ComputeWorker:
             self._last = prepared
             self.computed += 1
             self.on_ready(prepared)
+            if self.on_sweep is not None and prepared.new_result:
+                from .speedsweep import SweepTask
+
+                path = prepared.request.path
+                span = self._span[1] if self._span is not None and self._span[0] == path else None
+                with self._cond:
+                    self._sweep = SweepTask(prepared.request.serial, None, span)
             if self.on_result is not None and prepared.new_result:
                 try:
                     self.on_result(prepared)
                 except Exception:
                     traceback.print_exc()
+
+    def sweep_idle(self) -> bool:
+        """Whether nothing is waiting and the speed sweep of the newest result is complete."""
+        with self._cond:
+            return self._pending is None and not self._busy and self._sweep is None
+
+    def _sweep_step(self, sweep) -> None:
+        """Start the sweep (rigid figures at every speed) or compute its next elastic speed,
+        in the child; hand the sweep so far to `on_sweep`. A request waiting for more than
+        SWEEP_YIELD_S stops a slow step (the child is restarted); the sweep then ends (the new
+        result starts its own)."""
+        from .speedsweep import SpeedSweep, SweepTask, with_elastic
+        from .worker import Superseded, TimeLimitExceeded, WorkerDied
+
+        if isinstance(sweep, SweepTask):
+            task = sweep
+        else:
+            task = SweepTask(sweep.serial, sweep.next_elastic())
+
+        def superseded() -> bool:
+            # a change must not wait long for a sweep step (an elastic run at the sweep's top
+            # speed can take a second): past SWEEP_YIELD_S the step is dropped, the child restarted
+            return self._stop or (self._pending is not None and time.monotonic() - self._pending_at > SWEEP_YIELD_S)
+
+        try:
+            kind, payload = self._process.call(task, self.time_limit, superseded)
+        except (Superseded, TimeLimitExceeded, WorkerDied):
+            kind, payload = "stopped", None
+        except Exception:
+            traceback.print_exc()
+            self._process.kill()
+            self._process.reap()
+            kind, payload = "stopped", None
+        self.sweep_steps += 1
+        if kind == "sweep" and isinstance(payload, SpeedSweep):
+            self._span = (self._last.request.path if self._last is not None else "", payload.span)
+            done = payload
+        elif kind == "sweep" and isinstance(sweep, SpeedSweep):
+            done = with_elastic(sweep, payload)
+        else:
+            done = None  # stale, failed or stopped: this sweep ends here
+        with self._cond:
+            if self._sweep is sweep:  # no newer result meanwhile
+                self._sweep = done if done is not None and done.next_elastic() is not None else None
+            current = self._sweep is None or self._sweep is done
+            self._cond.notify_all()
+        nothing = kind == "sweep" and payload is None  # the scene has no rigid forces to sweep
+        if (done is not None or nothing) and current:
+            try:
+                self.on_sweep(task.serial, done)
+            except Exception:
+                traceback.print_exc()
 
     def _relink(self, prepared: Prepared, reused: int | None) -> Prepared:
         """A bundle that reused the previous simulation (only the magnification changed) shares

@@ -228,6 +228,24 @@ def _limit_memory(memory_bytes: int) -> None:
         resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
 
 
+def _sweep_reply(task, last, result_serial: int):
+    """("sweep", figures) for a speed-sweep task on the result held, ("stale", None) when the
+    child no longer holds that result (a newer one came, or the child was restarted)."""
+    from .speedsweep import run_task
+
+    if last is None or task.serial != result_serial:
+        return ("stale", None)
+    try:
+        return ("sweep", run_task(task, last.scene, last.lift, last.result))
+    except MemoryError:
+        return ("memory", "")
+    except Exception as exc:  # a sweep that fails must not end the child: the viewer shows why
+        import traceback
+
+        traceback.print_exc()
+        return ("internal", f"internal error in the speed sweep: {type(exc).__name__}: {exc}")
+
+
 def main(argv: list[str]) -> int:
     read_fd, write_fd, memory_bytes = (int(a) for a in argv[:3])
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server handles Ctrl-C and stops us
@@ -235,6 +253,7 @@ def main(argv: list[str]) -> int:
 
     from ...core.errors import InputError
     from .model import prepare
+    from .speedsweep import SweepTask
 
     # what `prepare` imports on first use, imported before the first time limit starts counting
     from ...effects import pipeline as effects  # noqa: F401
@@ -246,11 +265,15 @@ def main(argv: list[str]) -> int:
     _limit_memory(memory_bytes)
     pipe.send(READY)
     last = None
+    result_serial = -1  # the request whose simulation `last` holds (a magnification reuses it)
     while True:
         try:
             request = pipe.recv()
         except (EOFError, OSError):
             return 0  # the server closed the pipe: it is done with us
+        if isinstance(request, SweepTask):
+            pipe.send(_sweep_reply(request, last, result_serial))
+            continue
         try:
             prepared = prepare(request, last)
         except InputError as exc:
@@ -265,6 +288,8 @@ def main(argv: list[str]) -> int:
             reply = ("internal", f"internal error: {type(exc).__name__}: {exc}")
         else:
             reused = None if prepared.new_result else last.request.serial
+            if prepared.new_result:
+                result_serial = prepared.request.serial
             last = prepared
             reply = ("ok", (prepared, reused))
         try:

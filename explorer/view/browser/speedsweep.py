@@ -1,0 +1,319 @@
+"""The browser's speed sweep: figures of the current scene against camshaft speed, without viser.
+
+Rigid figures at every speed, vectorised: on the scene's own sampling grid the rigid contact
+force is F_i(w) = w^2 A_i + G_i (explorer.mechanics.forces.load_parts), so the smallest contact
+force and the largest linkage force (the rigid linkage carries the contact force) at RIGID_SPEEDS
+speeds are one broadcast min/max over (speeds x open samples). These are grid values, the same
+as `simulate`'s contact_force_N column at that speed (tests/test_speedsweep.py); the float speed
+marked is the exact one (explorer.mechanics.forces.float_speed).
+
+Elastic figures (first separation, seating velocity, largest deviation from the rigid lift) need
+the elastic solver at each speed: `elastic_figures` runs `simulate` at one speed; the compute
+thread asks the compute child for them one speed at a time while it has nothing newer to do
+(explorer.view.browser.compute), so a parameter change waits at most one such run.
+
+This lives in view/ rather than reusing explorer.studies.sweeps: view/ and studies/ must not
+import each other (issue #12 layers), and both build on explorer.mechanics.forces.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+RIGID_SPEEDS = 500
+ELASTIC_SPEEDS = 24
+_BLOCK_CELLS = 2_000_000  # speeds x samples per block (16 MB of float64)
+
+
+@dataclass(frozen=True)
+class SpeedSweep:
+    """The sweep of one result (`serial`: its request). Elastic entries are NaN until computed."""
+
+    serial: int
+    rpm: np.ndarray  # rev/min, RIGID_SPEEDS speeds over `span`
+    min_contact_force: np.ndarray  # N, smallest rigid contact force over the open samples
+    peak_linkage_force: np.ndarray  # N, largest rigid linkage (= contact) force
+    float_rpm: float  # rev/min, exact rigid float speed (nan: never floats)
+    span: tuple[float, float]  # rev/min, the plotted range
+    elastic_rpm: np.ndarray  # rev/min, the coarser elastic speeds (empty: no elastic effect)
+    first_separation_deg: np.ndarray  # cam angle of the first separation (nan: none)
+    seating_velocity: np.ndarray  # m/s, hardest seat impact, < 0 (nan: none)
+    max_deviation: np.ndarray  # m, largest deviation of the valve from the rigid lift
+    peak_torque: np.ndarray | None = None  # N m, rigid camshaft torque peak (None: no contact effect)
+    elastic_done: int = 0  # how many elastic speeds are computed (in order)
+    note: str = ""  # why a part is missing
+
+    @property
+    def elastic_total(self) -> int:
+        return int(self.elastic_rpm.size)
+
+    def next_elastic(self) -> float | None:
+        """The next elastic speed to compute (None: all done)."""
+        return float(self.elastic_rpm[self.elastic_done]) if self.elastic_done < self.elastic_total else None
+
+    def progress(self) -> str:
+        if self.elastic_total == 0:
+            return self.note or "rigid figures at every speed"
+        return f"elastic figures: {self.elastic_done} of {self.elastic_total} speeds done"
+
+
+def sweep_span(rpm: float, float_rpm: float, previous: tuple[float, float] | None = None) -> tuple[float, float]:
+    """The speed range plotted: kept from the previous sweep while the current speed lies well
+    inside it (choosing a speed on the plot must not rescale the plot under the pointer), else
+    0 to twice the current speed or 1.25 times the float speed, whichever is larger."""
+    if previous is not None and previous[0] <= rpm <= 0.98 * previous[1]:
+        return previous
+    hi = max(2.0 * rpm, 1.25 * float_rpm if math.isfinite(float_rpm) else 0.0)
+    hi = _round_up(hi)
+    return (hi / RIGID_SPEEDS, hi)
+
+
+def _round_up(x: float) -> float:
+    """x rounded up to two significant digits (a plot range with round tick labels)."""
+    p = 10.0 ** math.floor(math.log10(x))
+    return math.ceil(x / p * 10.0) * p / 10.0
+
+
+def speed_parts(scene, lift, open_mask: bool = False):
+    """(A, G) on the open samples of the scene's grid: F = w^2 A + G (as studies.sweeps); with
+    `open_mask` also which samples of the grid those are."""
+    from ...mechanics.forces import TWO_PI, TrainLoads, friction_direction, load_parts
+
+    loads = TrainLoads.from_scene(scene)
+    n = scene.solver.steps_per_revolution
+    theta = np.arange(n) * (TWO_PI / n)  # the floats simulate samples at
+    d = lift.derivatives(theta)
+    lash = scene.valve.lash if scene.valve is not None else 0.0
+    a_coef, g_part, is_open = load_parts(d, friction_direction(d[1], d[2]), loads, scene.follower.ratio, lash)
+    if open_mask:
+        return a_coef[is_open], g_part[is_open], is_open
+    return a_coef[is_open], g_part[is_open]
+
+
+def torque_factors(scene, lift, result, is_open):
+    """(c_push, c_pull) on the open samples: the rigid camshaft torque is T = c F with c = c_push
+    where the valve-side contact force F > 0, c_pull where F < 0, from the contact effect's own
+    geometry and laws (explorer.mechanics.contact.contact_loads: T = N arm, N = ratio F / (cos a
+    - mu sin a sign v) when pushing, ratio F / cos a when pulling; inf: self-locked). The geometry
+    and the sign of the follower's velocity do not depend on the speed."""
+    from types import MappingProxyType
+
+    from ...effects.contact import contact_geometry
+    from ...effects.pipeline import Context
+    from ...mechanics.contact import ContactSpec
+
+    n = scene.solver.steps_per_revolution
+    theta = np.arange(n) * (2.0 * math.pi / n)
+    cols = result.columns
+    ctx = Context(scene, theta, np.asarray(cols["time_s"]), lift, MappingProxyType(dict(cols)),
+                  MappingProxyType(dict(result.summary)))
+    geometry = contact_geometry(ctx)
+    spec = scene.contact if scene.contact is not None else ContactSpec()
+    alpha = np.abs(np.asarray(geometry.pressure_angle, dtype=float))
+    v = np.sign(np.asarray(cols["follower_velocity_m_s"], dtype=float))
+    arm = np.asarray(geometry.ratio, dtype=float) * np.asarray(geometry.torque_arm, dtype=float)
+    denominator = np.cos(alpha) - math.tan(spec.friction_angle) * np.sin(alpha) * v
+    with np.errstate(divide="ignore", invalid="ignore"):
+        push = np.where(denominator > 0.0, arm / denominator, np.inf)
+        pull = arm / np.cos(alpha)
+    return push[is_open], pull[is_open]
+
+
+def torque_sweep(scene, lift, result, rpms) -> np.ndarray:
+    """Peak rigid camshaft torque [N m] at each speed of `rpms` (the contact effect's
+    max_camshaft_torque_Nm: the largest finite value; closed samples carry no force)."""
+    from ...mechanics.forces import RPM_PER_RAD_S
+
+    rpm = np.asarray(rpms, dtype=float).ravel()
+    a_coef, g_part, is_open = speed_parts(scene, lift, open_mask=True)
+    push, pull = torque_factors(scene, lift, result, is_open)
+    floor = 0.0 if not is_open.all() else -np.inf
+    out = np.full(rpm.size, floor)
+    if a_coef.size == 0:
+        return np.zeros(rpm.size)
+    w2 = (rpm / RPM_PER_RAD_S) ** 2
+    block = max(1, _BLOCK_CELLS // a_coef.size)
+    for start in range(0, rpm.size, block):
+        end = min(rpm.size, start + block)
+        forces = w2[start:end, None] * a_coef[None, :] + g_part[None, :]
+        with np.errstate(invalid="ignore"):
+            torque = forces * np.where(forces > 0.0, push[None, :], pull[None, :])
+        torque = np.where(np.isfinite(torque), torque, -np.inf)  # self-locked samples: no finite torque
+        out[start:end] = np.maximum(out[start:end], torque.max(axis=1))
+    return np.where(np.isfinite(out), out, np.nan)
+
+
+def has_contact(scene) -> bool:
+    from ...effects.pipeline import resolve
+
+    return "contact" in resolve(scene.effects)
+
+
+def rigid_sweep(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray]:
+    """(smallest contact force, largest linkage force) in N at each speed of `rpms`, on the
+    scene's grid (+inf, 0 when the valve never opens)."""
+    from ...mechanics.forces import RPM_PER_RAD_S
+
+    rpm = np.asarray(rpms, dtype=float).ravel()
+    a_coef, g_part = speed_parts(scene, lift)
+    if a_coef.size == 0:
+        return np.full(rpm.shape, np.inf), np.zeros(rpm.shape)
+    w2 = (rpm / RPM_PER_RAD_S) ** 2
+    lo, hi = np.empty(rpm.size), np.empty(rpm.size)
+    block = max(1, _BLOCK_CELLS // a_coef.size)
+    for start in range(0, rpm.size, block):
+        end = min(rpm.size, start + block)
+        forces = w2[start:end, None] * a_coef[None, :]
+        forces += g_part[None, :]
+        lo[start:end] = forces.min(axis=1)
+        hi[start:end] = forces.max(axis=1)
+    return lo, hi
+
+
+def has_elastic(scene) -> bool:
+    from ...effects.pipeline import resolve
+
+    return "elastic" in resolve(scene.effects)
+
+
+def start_sweep(scene, lift, serial: int, previous: tuple[float, float] | None = None, result=None) -> SpeedSweep | None:
+    """The rigid part of the sweep of this scene (elastic entries NaN); None when the scene has
+    no rigid forces (no [valve] mass or [spring]): then there is nothing to sweep."""
+    from ...core.errors import InputError
+    from ...mechanics.forces import TrainLoads, float_speed
+
+    try:
+        loads = TrainLoads.from_scene(scene)
+        lash = scene.valve.lash if scene.valve is not None else 0.0
+        jump = float_speed(lift, loads, scene.follower.ratio, lash,
+                           n_grid=max(4096, scene.solver.steps_per_revolution))
+        float_rpm = jump.rpm if math.isfinite(jump.omega) else math.nan
+        span = sweep_span(float(scene.drive.rpm), float_rpm, previous)
+        rpm = np.linspace(span[0], span[1], RIGID_SPEEDS)
+        low, high = rigid_sweep(scene, lift, rpm)
+        torque = torque_sweep(scene, lift, result, rpm) if result is not None and has_contact(scene) else None
+    except (InputError, ValueError, AttributeError):
+        return None
+    elastic = np.linspace(span[1] / ELASTIC_SPEEDS, span[1], ELASTIC_SPEEDS) if has_elastic(scene) else np.empty(0)
+    nan = np.full(elastic.shape, np.nan)
+    return SpeedSweep(serial, rpm, low, high, float_rpm, span, elastic, nan, nan.copy(), nan.copy(), peak_torque=torque,
+                      note="" if elastic.size else "no elastic effect: rigid figures only")
+
+
+def at_speed(scene, rpm: float):
+    """The scene driven at `rpm` rev/min, everything else unchanged."""
+    return dataclasses.replace(scene, drive=dataclasses.replace(scene.drive, rpm=float(rpm)))
+
+
+def elastic_figures(scene, lift, rpm: float) -> tuple[float, float, float]:
+    """(first separation [deg], seating velocity [m/s], largest deviation [m]) of `simulate` at
+    `rpm`: NaN where there is none, all NaN when the run fails (too slow for the step budget)."""
+    from ...core.errors import InputError
+    from ...effects.pipeline import simulate
+
+    try:
+        result = simulate(at_speed(scene, rpm), lift=lift)
+    except (InputError, RuntimeError, ValueError, ArithmeticError):
+        return (math.nan, math.nan, math.nan)
+    events = [e for e in result.summary.get("events", []) if e.get("effect", "elastic") == "elastic"]
+    seps = [float(e["cam_angle_deg"]) for e in events if e.get("kind") == "separation"]
+    seats = [float(e["velocity_m_s"]) for e in events if e.get("kind") == "seat"]
+    deviation = result.summary.get("max_deviation_m")
+    return (seps[0] if seps else math.nan, min(seats) if seats else math.nan,
+            math.nan if deviation is None else float(deviation))
+
+
+def with_elastic(sweep: SpeedSweep, figures: tuple[float, float, float]) -> SpeedSweep:
+    """The sweep with the next elastic speed's figures filled in."""
+    k = sweep.elastic_done
+    sep, seat, dev = sweep.first_separation_deg.copy(), sweep.seating_velocity.copy(), sweep.max_deviation.copy()
+    sep[k], seat[k], dev[k] = figures
+    return dataclasses.replace(sweep, first_separation_deg=sep, seating_velocity=seat, max_deviation=dev,
+                               elastic_done=k + 1)
+
+
+def with_markers(x: np.ndarray, values: list[np.ndarray], at: list[float]):
+    """(x, values, markers) for a uPlot: each marker a vertical line at its exact speed. uPlot
+    draws a series against one shared x, so every finite marker speed m in range gets the samples
+    m - d, m, m + d (d a thousandth of a grid step) inserted, where the curves take their linear
+    interpolation (what the plot draws between the samples anyway) and the marker series is 1 at m
+    and 0 elsewhere: drawn on a scale whose visible range starts above 0 it shows as a vertical
+    line (as the cam-angle cursor)."""
+    x = np.asarray(x, dtype=float)
+    d = 1e-3 * float(np.min(np.diff(x))) if x.size > 1 else 1e-3
+    inserted = sorted({float(v) + k * d for v in at if math.isfinite(v) and x[0] <= v <= x[-1] for k in (-1, 0, 1)})
+    xs = np.union1d(x, np.asarray(inserted, dtype=float))
+    out = []
+    for y in values:
+        y = np.asarray(y, dtype=float)
+        ok = np.isfinite(y)
+        yi = np.interp(xs, x[ok], y[ok]) if ok.sum() >= 2 else np.full(xs.shape, np.nan)
+        # keep gaps: an inserted sample between two samples one of which is NaN is NaN
+        left = np.clip(np.searchsorted(x, xs, side="right") - 1, 0, x.size - 1)
+        right = np.clip(left + 1, 0, x.size - 1)
+        exact = np.isin(xs, x)
+        yi = np.where(exact, np.interp(xs, x, np.where(ok, y, 0.0)), yi)
+        yi = np.where(exact, np.where(np.isin(xs, x[ok]), yi, np.nan), np.where(ok[left] & ok[right], yi, np.nan))
+        out.append(yi)
+    markers = []
+    for v in at:
+        m = np.zeros(xs.size)
+        if math.isfinite(v) and x[0] <= v <= x[-1]:
+            m[int(np.argmin(np.abs(xs - v)))] = 1.0
+        markers.append(m)
+    return xs, out, markers
+
+
+def y_range(values: list[np.ndarray]) -> tuple[float, float]:
+    """The y range the plot shows: the finite values with 5 % margin (uPlot's own autorange
+    fails on NaN, which marks an elastic speed not computed yet or a figure that does not apply)."""
+    finite = np.concatenate([np.asarray(v, dtype=float)[np.isfinite(v)] for v in values] or [np.empty(0)])
+    if finite.size == 0:
+        return (0.0, 1.0)
+    lo, hi = float(finite.min()), float(finite.max())
+    pad = 0.05 * (hi - lo) if hi > lo else max(abs(hi), 1.0) * 0.05
+    return (lo - pad, hi + pad)
+
+
+def sweep_plots(sweep: SpeedSweep, current_rpm: float) -> list[tuple]:
+    """(title, y label, x, [(label, values, colour)], [current-speed marker, float-speed marker],
+    y range) for the rigid forces and, where the scene has them, the camshaft torque and the
+    elastic figures; markers at the exact speeds (with_markers)."""
+    specs = [("Speed sweep (rigid)", "F [N]", sweep.rpm,
+              [("min contact force", sweep.min_contact_force, "#c0392b"),
+               ("peak linkage force", sweep.peak_linkage_force, "#2471a3")])]
+    if sweep.peak_torque is not None:
+        specs.append(("Speed sweep (rigid camshaft torque)", "T [N·m]", sweep.rpm,
+                      [("peak camshaft torque", sweep.peak_torque, "#17a589")]))
+    if sweep.elastic_total:
+        specs.append((f"Speed sweep (elastic, {sweep.elastic_done}/{sweep.elastic_total} speeds)", "", sweep.elastic_rpm,
+                      [("seating velocity [m/s]", sweep.seating_velocity, "#8e44ad"),
+                       ("largest deviation [mm]", sweep.max_deviation * 1e3, "#27ae60"),
+                       ("first separation [°/100]", sweep.first_separation_deg / 100.0, "#d68910")]))
+    out = []
+    for title, y_label, x, series in specs:
+        xs, ys, markers = with_markers(x, [v for _, v, _ in series], [current_rpm, sweep.float_rpm])
+        shown = tuple((label, y, colour) for (label, _, colour), y in zip(series, ys))
+        out.append((title, y_label, xs, list(shown), markers, y_range(ys)))
+    return out
+
+
+@dataclass(frozen=True)
+class SweepTask:
+    """A message to the compute child: for the result of request `serial`, the rigid sweep
+    (`rpm` None, `span` the previous range or None) or the elastic figures at `rpm`."""
+
+    serial: int
+    rpm: float | None = None
+    span: tuple[float, float] | None = None
+
+
+def run_task(task: SweepTask, scene, lift, result=None):
+    """What the child answers a SweepTask with, for the scene and lift of that result."""
+    if task.rpm is None:
+        return start_sweep(scene, lift, task.serial, task.span, result)
+    return elastic_figures(scene, lift, task.rpm)

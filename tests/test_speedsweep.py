@@ -1,0 +1,208 @@
+"""The browser explorer's speed sweep (issue #14.2): the figures against independent
+computations, the markers, choosing a speed, and the progressive elastic part."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+from conftest import SCENES, process_timeout
+from explorer.effects.lift import build_lift
+from explorer.effects.pipeline import simulate
+from explorer.scene.scene import load_scene
+from explorer.view.browser import speedsweep as ss
+
+FLOAT = SCENES / "valve_float_demo.toml"
+WAIT_S = process_timeout()
+
+
+def _scene(path=FLOAT, *overrides):
+    scene = load_scene(str(path), list(overrides))
+    return scene, build_lift(scene)
+
+
+@pytest.mark.parametrize("rpm", [137.0, 1500.0, 2890.0, 6100.0])
+def test_rigid_sweep_equals_simulate_at_sample_speeds(rpm):
+    """Oracle: `simulate` at that one speed (forces effect, per-step loop-free arrays of its own)
+    on the same grid: the smallest contact force over the open steps and the largest linkage
+    force. The sweep evaluates w^2 A + G instead of (m p + spring + ...) at each step, so the two
+    agree to round-off: 1e-9 relative to the largest force."""
+    scene, lift = _scene(FLOAT, 'effects=["forces"]')
+    low, high = ss.rigid_sweep(scene, lift, [rpm, 2 * rpm])
+    result = simulate(ss.at_speed(scene, rpm), lift=lift)
+    cols = result.columns
+    is_open = np.asarray(cols["rigid_valve_lift_m"] if "rigid_valve_lift_m" in cols else cols["valve_lift_m"]) > 0.0
+    force = np.asarray(cols["contact_force_N"])[is_open]
+    linkage = np.asarray(cols["linkage_force_N"])[is_open]
+    scale = float(np.abs(force).max())
+    assert low[0] == pytest.approx(force.min(), abs=1e-9 * scale)
+    assert high[0] == pytest.approx(linkage.max(), abs=1e-9 * scale)
+    # and the other speed of the same call is independent of the first
+    other = simulate(ss.at_speed(scene, 2 * rpm), lift=lift).columns
+    assert low[1] == pytest.approx(np.asarray(other["contact_force_N"])[is_open].min(), abs=1e-9 * scale * 4)
+
+
+def test_rigid_sweep_agrees_with_the_studies_margin_sweep_and_the_float_speed():
+    """A second oracle: explorer.studies.sweeps (the CLI's vectorised sweep, its own code) on the
+    same grid, bit for bit up to summation order; and the first speed whose margin is <= 0
+    brackets the exact float speed the sweep marks."""
+    from explorer.studies.sweeps import contact_margin_sweep
+
+    scene, lift = _scene(FLOAT, 'effects=["forces"]')
+    sweep = ss.start_sweep(scene, lift, serial=1)
+    ref = contact_margin_sweep(scene, sweep.rpm, lift=lift)
+    np.testing.assert_allclose(sweep.min_contact_force, ref.min_contact_force, rtol=0, atol=1e-9)
+    step = sweep.rpm[1] - sweep.rpm[0]
+    first = ref.first_float_rpm()
+    assert first is not None and first - step <= sweep.float_rpm <= first + 1e-9
+    assert sweep.rpm.size == ss.RIGID_SPEEDS and sweep.elastic_total == 0
+    assert sweep.span[1] >= 2 * scene.drive.rpm and sweep.span[1] >= 1.25 * sweep.float_rpm
+
+
+def test_elastic_figures_equal_the_sweep_engines_row():
+    """Oracle: explorer.studies.sweep_engine.reference_row (the `explorer sweep` CLI's row from
+    `simulate`) at the same speed: first separation, seating velocity, largest deviation, exactly."""
+    from explorer.studies.sweep_engine import reference_row, result_columns
+
+    scene, lift = _scene()
+    assert ss.has_elastic(scene)
+    for rpm in (900.0, 2600.0):
+        sep, seat, dev = ss.elastic_figures(scene, lift, rpm)
+        at = ss.at_speed(scene, rpm)
+        row = reference_row(at, result_columns(at))
+        for mine, theirs in ((sep, row["first_separation_deg"]), (seat, row["seating_velocity_m_s"]),
+                             (dev, row["max_deviation_m"])):
+            assert (math.isnan(mine) and math.isnan(theirs)) or mine == theirs
+
+
+def test_the_span_stays_while_the_speed_is_inside_and_grows_beyond():
+    assert ss.sweep_span(1000.0, math.nan) == (4.0, 2000.0)
+    assert ss.sweep_span(1000.0, 3000.0) == (7.6, 3800.0)  # 1.25 x 3000, up to two digits
+    kept = (4.0, 2000.0)
+    assert ss.sweep_span(1500.0, math.nan, kept) is kept  # choosing a speed keeps the plot's scale
+    assert ss.sweep_span(2500.0, math.nan, kept)[1] == 5000.0
+
+
+def test_the_markers_stand_at_the_exact_speeds_and_the_curves_are_unchanged():
+    scene, lift = _scene()
+    sweep = ss.start_sweep(scene, lift, serial=1)
+    plots = {}
+    for rpm in (500.0, 1234.5, 2900.0):
+        rigid, elastic = ss.sweep_plots(sweep, rpm)
+        for title, _, x, series, (now, floating), (lo, hi) in (rigid, elastic):
+            assert np.all(np.diff(x) > 0)
+            assert now.sum() == 1.0 and x[np.argmax(now)] == rpm  # where the speed is, not the nearest sample
+            assert floating.sum() == 1.0 and x[np.argmax(floating)] == sweep.float_rpm
+            plots[title, rpm] = x[np.argmax(now)]
+        # the rigid curves still pass through every computed sample, and the inserted samples
+        # lie on the straight line between their neighbours
+        _, _, x, series, _, (lo, hi) = rigid
+        on_grid = np.isin(x, sweep.rpm)
+        np.testing.assert_array_equal(series[0][1][on_grid], sweep.min_contact_force)
+        np.testing.assert_allclose(series[0][1], np.interp(x, sweep.rpm, sweep.min_contact_force), rtol=1e-12, atol=1e-9)
+        assert lo < sweep.min_contact_force.min() and hi > sweep.peak_linkage_force.max()
+    assert plots["Speed sweep (rigid)", 500.0] < plots["Speed sweep (rigid)", 2900.0]  # the marker moves with the speed
+
+
+def test_not_yet_computed_elastic_speeds_stay_gaps():
+    scene, lift = _scene()
+    sweep = ss.start_sweep(scene, lift, serial=1)
+    sweep = ss.with_elastic(ss.with_elastic(sweep, (10.0, -0.5, 1e-4)), (20.0, -0.7, 2e-4))
+    _, _, x, series, _, (lo, hi) = ss.sweep_plots(sweep, 1000.0)[-1]
+    deviation = series[1][1]
+    done = x <= sweep.elastic_rpm[1]
+    assert np.isfinite(deviation[done]).all() and np.isnan(deviation[~done]).all()
+    assert lo <= -0.7 and hi >= 0.2  # the figures computed so far are in view
+
+
+def test_a_scene_without_forces_has_no_sweep():
+    scene, lift = _scene(SCENES / "table_demo.toml")
+    assert scene.spring is None  # no spring: no rigid contact force to sweep
+    assert ss.start_sweep(scene, lift, serial=1) is None
+
+
+def test_the_worker_fills_the_elastic_sweep_in_progressively_and_the_newest_wins():
+    """In the compute child, between requests: the rigid sweep first, then one elastic speed at a
+    time; a new request in the middle starts the newer result's sweep and the old one stops."""
+    from explorer.view.browser.compute import ComputeWorker
+    from explorer.view.browser.model import Request
+
+    sweeps = []
+    worker = ComputeWorker(on_ready=lambda p: None, on_error=lambda r, m: sweeps.append(("error", m)),
+                           on_sweep=lambda serial, s: sweeps.append((serial, s))).start()
+    try:
+        worker.submit(Request(str(FLOAT), serial=1))
+        deadline = time.monotonic() + 4 * WAIT_S
+        while not any(s is not None and s.elastic_done >= 2 for _, s in sweeps[1:]) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        worker.submit(Request(str(FLOAT), ("drive.rpm=1500",), serial=2))
+        assert worker.wait_idle(WAIT_S)
+        while not worker.sweep_idle() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert worker.sweep_idle()
+    finally:
+        worker.stop()
+    first = [s for serial, s in sweeps if serial == 1]
+    done = [s.elastic_done for s in first]
+    assert done[:3] == [0, 1, 2] and done == sorted(done)  # progressive, in order
+    assert done[-1] < ss.ELASTIC_SPEEDS  # stopped by the newer request
+    last = sweeps[-1][1]
+    assert sweeps[-1][0] == 2 and last.serial == 2 and last.elastic_done == ss.ELASTIC_SPEEDS
+    assert last.span == first[0].span  # same scene file, 1500 rpm inside: the plot keeps its scale
+    assert np.isfinite(last.max_deviation).all()
+    # the filled-in figures are simulate's at those speeds
+    scene, lift = _scene(FLOAT, "drive.rpm=1500")
+    k = ss.ELASTIC_SPEEDS // 2
+    expected = ss.elastic_figures(scene, lift, last.elastic_rpm[k])
+    got = (last.first_separation_deg[k], last.seating_velocity[k], last.max_deviation[k])
+    assert all((math.isnan(e) and math.isnan(g)) or e == g for e, g in zip(expected, got))
+
+
+def test_choosing_a_speed_under_the_sweep_sets_the_requests_rpm():
+    viser = pytest.importorskip("viser")
+    from explorer.view.browser.app import ExplorerApp
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    app = ExplorerApp(server, str(FLOAT), playing=False)
+    try:
+        assert app.wait_applied(WAIT_S)
+        deadline = time.monotonic() + WAIT_S
+        # the loop thread shows the sweep: wait until it has put the speed into the slider
+        while (app.sweep is None or app.sweep_rpm.value != app.current.scene.drive.rpm) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert app.sweep is not None and app.sweep_rpm.value == app.current.scene.drive.rpm
+        assert len(app._sweep_handles) == 3 and not app.sweep_rpm.disabled  # forces, torque, elastic
+        before = np.asarray(app._sweep_handles[0].data[-2])
+        app.sweep_rpm.value = 1800.0  # as a page's slider would
+        assert app.wait_applied(WAIT_S)
+        assert "drive.rpm=1800.0" in app.current.request.overrides
+        assert app.current.scene.drive.rpm == 1800.0
+        assert app.fields["drive.rpm"].value == 1800.0
+        deadline = time.monotonic() + WAIT_S
+        while np.array_equal(np.asarray(app._sweep_handles[0].data[-2]), before) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        x, now = np.asarray(app._sweep_handles[0].data[0]), np.asarray(app._sweep_handles[0].data[-2])
+        assert abs(x[np.argmax(now)] - 1800.0) <= x[1] - x[0]  # the marker moved to the speed chosen
+    finally:
+        app.stop()
+        server.stop()
+    assert app.loop_errors == 0 and app.worker.internal_errors == 0
+
+
+@pytest.mark.parametrize("path,overrides", [(SCENES / "schenker1902_intake_valve.toml", ()),
+                                            (FLOAT, ('effects=["forces", "contact"]',))])
+def test_torque_sweep_equals_the_contact_effects_peak_at_sample_speeds(path, overrides):
+    """Oracle: the contact effect's max_camshaft_torque_Nm of `simulate` at that speed (its own
+    per-step normal force and arm). T = c(F) F is the same product per sample: 1e-9 relative."""
+    scene, lift = _scene(path, *overrides)
+    base = simulate(scene, lift=lift)
+    rpms = [0.3 * scene.drive.rpm, scene.drive.rpm, 2.2 * scene.drive.rpm]
+    got = ss.torque_sweep(scene, lift, base, rpms)
+    for rpm, mine in zip(rpms, got):
+        expected = simulate(ss.at_speed(scene, rpm), lift=lift).summary["max_camshaft_torque_Nm"]
+        assert mine == pytest.approx(expected, rel=1e-9, abs=1e-12)
+    sweep = ss.start_sweep(scene, lift, 1, result=base)
+    assert sweep.peak_torque is not None and len(ss.sweep_plots(sweep, scene.drive.rpm)) >= 2
