@@ -18,19 +18,17 @@ read-only mappings (MappingProxyType, which plain pickle refuses) written as dic
 
 from __future__ import annotations
 
-import copyreg
-import io
 import math
 import os
 import pickle
 import re
 import signal
 import time
-from types import MappingProxyType
 from typing import Callable
 
 import numpy as np
 
+from ..core.pickling import dumps as dumps_scene
 from .sweep_engine import _Shared, compute_chunk, result_columns
 from .sweep_spec import SWEEP_KEYS, Plan
 from .sweep_table import SweepTable
@@ -40,18 +38,6 @@ from .sweep_table import SweepTable
 # that progress and an interrupt come often and the cores stay busy to the end.
 MAX_CHUNK = 64
 
-
-def _proxy(mapping: dict) -> MappingProxyType:
-    return MappingProxyType(mapping)
-
-
-def dumps_scene(scene) -> bytes:
-    buf = io.BytesIO()
-    pickler = pickle.Pickler(buf, protocol=pickle.HIGHEST_PROTOCOL)
-    pickler.dispatch_table = copyreg.dispatch_table.copy()
-    pickler.dispatch_table[MappingProxyType] = lambda m: (_proxy, (dict(m),))
-    pickler.dump(scene)
-    return buf.getvalue()
 
 
 def loads_scene_bytes(data: bytes):

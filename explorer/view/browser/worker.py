@@ -15,8 +15,6 @@ The child runs `main(READ_FD, WRITE_FD, MEMORY_BYTES)` (see CHILD_MAIN).
 
 from __future__ import annotations
 
-import copyreg
-import io
 import os
 import pickle
 import signal
@@ -24,8 +22,8 @@ import subprocess
 import threading
 import time
 from multiprocessing.connection import Connection
-from types import MappingProxyType
 
+from ...core.pickling import dumps
 from ...core.processes import spawn_python
 from typing import Callable
 
@@ -48,20 +46,6 @@ class WorkerDied(Exception):
 class Superseded(Exception):
     pass
 
-
-def _mapping_proxy(items: dict) -> MappingProxyType:
-    return MappingProxyType(items)
-
-
-def dumps(obj) -> bytes:
-    """Pickle with read-only mappings (scene and result use MappingProxyType, which pickle
-    refuses) sent as plain dicts and rebuilt as proxies on the other side."""
-    buffer = io.BytesIO()
-    pickler = pickle.Pickler(buffer, protocol=pickle.HIGHEST_PROTOCOL)
-    pickler.dispatch_table = copyreg.dispatch_table.copy()
-    pickler.dispatch_table[MappingProxyType] = lambda m: (_mapping_proxy, (dict(m),))
-    pickler.dump(obj)
-    return buffer.getvalue()
 
 
 # ---------------------------------------------------------------------------------------------
