@@ -90,7 +90,7 @@ def _check_options(args) -> tuple[float, float | None, float | None, int]:
 def run(args) -> int:
     from ..view import exports
     from .simulate import scene_from_args
-    from ..core.outputs import check_output, write_output
+    from ..core.outputs import check_output, write_checked
 
     tolerance, width, wheel, points = _check_options(args)
     scene = scene_from_args(args)
@@ -109,10 +109,7 @@ def run(args) -> int:
         data = (exports.stl_bytes if args.format == "stl" else exports.glb_bytes)(src, tolerance, width)
     else:
         data = exports.grinding_text(src, exports.grinding_table(src, wheel, points))
-    try:
-        write_output(out, data)
-    except OSError as exc:
-        raise InputError(out.name, out.option, f"cannot write: {exc.strerror or exc}") from None
+    write_checked(out, data)
     if not out.is_stdout():
         size = len(data)
         detail = f" to {tolerance * 1e6:.4g} um" if args.format in ("dxf", "stl", "glb") else ""

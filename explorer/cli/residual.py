@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..core.errors import InputError
 
 HELP = """\
 Run the scene's elastic linkage at each speed and compare the valve with the lift the cam is made
@@ -32,7 +31,7 @@ def register(sub) -> None:
 def run(args) -> int:
     from ..studies.bench import ProgressBar
     from .simulate import scene_from_args
-    from ..core.outputs import check_output, write_output
+    from ..core.outputs import check_output, write_checked
     from ..studies.residual import chart_png, parse_speeds, residual_sweep, table_text
 
     speeds = parse_speeds(args.rpm)
@@ -41,10 +40,7 @@ def run(args) -> int:
     plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot else None
     progress = ProgressBar(sys.stderr) if speeds.size > 4 and sys.stderr.isatty() else None
     rows = residual_sweep(scene, speeds, progress)
-    try:
-        write_output(table_out, table_text(scene, rows))
-        if plot_out is not None:
-            write_output(plot_out, chart_png(scene, rows))
-    except OSError as exc:
-        raise InputError("<command line>", "--output", f"cannot write: {exc.strerror or exc}") from None
+    write_checked(table_out, table_text(scene, rows))
+    if plot_out is not None:
+        write_checked(plot_out, chart_png(scene, rows))
     return 0

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..core.errors import InputError
 
 HELP = """\
 Simulate one revolution of a scene: every effect the scene lists, nothing else.
@@ -47,18 +46,9 @@ def register(sub) -> None:
     p.set_defaults(run=run)
 
 
-def _write(out, pieces) -> None:
-    from ..core.outputs import write_output
-
-    try:
-        write_output(out, pieces)
-    except OSError as exc:  # full disk, a race with the checks: still one line, nothing left behind
-        raise InputError(out.name, out.option, f"cannot write: {exc.strerror or exc}") from None
-
-
 def run(args) -> int:
     from ..effects.pipeline import simulate
-    from ..core.outputs import check_output
+    from ..core.outputs import check_output, write_checked
 
     scene = scene_from_args(args)
     # both outputs before any work, so that a bad --summary does not leave the CSV written
@@ -67,9 +57,9 @@ def run(args) -> int:
     json_out = check_output(args.summary, "--summary") if args.summary else None
     result = simulate(scene)
     if csv_out is not None:
-        _write(csv_out, result.csv_chunks())  # in pieces: the largest step counts are gigabytes of text
+        write_checked(csv_out, result.csv_chunks())  # in pieces: the largest step counts are gigabytes of text
     if json_out is not None:
-        _write(json_out, result.json_text())
+        write_checked(json_out, result.json_text())
     if csv_out is None and json_out is None:
         sys.stdout.write(result.json_text())
     else:

@@ -74,7 +74,7 @@ def register(sub) -> None:
     p.add_argument("--record", metavar="OUT.rrd", help="a rerun recording with the swept keys as timelines")
     p.add_argument("--workers", type=int, help="local worker processes (default: every core; 1: this process)")
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on this Dask distributed scheduler")
-    p.add_argument("--yes", action="store_true", help=f"allow more than 10^7 runs")
+    p.add_argument("--yes", action="store_true", help="allow more than 10^7 runs")
     p.set_defaults(run=run, grids=None)
 
 

@@ -263,3 +263,13 @@ def output_path(out: Output, work_dir: Path | None = None) -> Iterator[Path]:
         raise
     finally:
         os.close(fd)
+
+
+def write_checked(out, data, option: str = "output") -> None:
+    """write_output for a command: a failure to write (a full disk, a race with the checks) is one
+    line naming the output and its option, nothing left behind."""
+    out = as_output(out, option)
+    try:
+        write_output(out, data)
+    except OSError as exc:
+        raise out.error(f"cannot write: {exc.strerror or exc}") from None
