@@ -303,6 +303,19 @@ class FloatSpeed:
         return self.omega * RPM_PER_RAD_S
 
 
+def grid_load_parts(scene, lift, n: int | None = None):
+    """(theta, A, G, is_open) on the scene's sampling grid of n steps (default: the scene's): the
+    rigid contact force is F = w^2 A + G where the valve is open, so every speed of a sweep costs
+    one multiply-add per sample."""
+    loads = TrainLoads.from_scene(scene)
+    n = n or scene.solver.steps_per_revolution
+    theta = np.arange(n) * (TWO_PI / n)  # the floats simulate samples at
+    d = lift.derivatives(theta)
+    lash = scene.valve.lash if scene.valve is not None else 0.0
+    a_coef, g_part, is_open = load_parts(d, friction_direction(d[1], d[2]), loads, scene.follower.ratio, lash)
+    return theta, a_coef, g_part, is_open
+
+
 def float_speed(lift, loads: TrainLoads, ratio: float = 1.0, lash: float = 0.0, pieces: Pieces | None = None,
                 n_grid: int = 4096) -> FloatSpeed:
     """Exact float (jump) speed of the rigid train: w^2 = min over open, decelerating stretches of G/(-A)."""

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import InputError
-from ..mechanics.forces import RPM_PER_RAD_S, TWO_PI, TrainLoads, friction_direction, load_parts
+from ..mechanics.forces import RPM_PER_RAD_S, grid_load_parts
 
 _BLOCK_CELLS = 2_000_000  # speeds x samples per block (16 MB of float64)
 
@@ -37,11 +37,7 @@ def speed_parts(scene, lift=None, n: int | None = None):
     from ..effects.lift import build_lift
 
     lift = lift if lift is not None else build_lift(scene)
-    loads = TrainLoads.from_scene(scene)
-    n = n or scene.solver.steps_per_revolution
-    theta = np.arange(n) * (TWO_PI / n)
-    d = lift.derivatives(theta)
-    a_coef, g_part, is_open = load_parts(d, friction_direction(d[1], d[2]), loads, scene.follower.ratio, scene.valve.lash)
+    theta, a_coef, g_part, is_open = grid_load_parts(scene, lift, n)
     return theta[is_open], a_coef[is_open], g_part[is_open]
 
 

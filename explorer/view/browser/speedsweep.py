@@ -79,16 +79,11 @@ def _round_up(x: float) -> float:
 
 
 def speed_parts(scene, lift, open_mask: bool = False):
-    """(A, G) on the open samples of the scene's grid: F = w^2 A + G (as studies.sweeps); with
+    """(A, G) on the open samples of the scene's grid: F = w^2 A + G (mechanics.forces.grid_load_parts); with
     `open_mask` also which samples of the grid those are."""
-    from ...mechanics.forces import TWO_PI, TrainLoads, friction_direction, load_parts
+    from ...mechanics.forces import grid_load_parts
 
-    loads = TrainLoads.from_scene(scene)
-    n = scene.solver.steps_per_revolution
-    theta = np.arange(n) * (TWO_PI / n)  # the floats simulate samples at
-    d = lift.derivatives(theta)
-    lash = scene.valve.lash if scene.valve is not None else 0.0
-    a_coef, g_part, is_open = load_parts(d, friction_direction(d[1], d[2]), loads, scene.follower.ratio, lash)
+    _, a_coef, g_part, is_open = grid_load_parts(scene, lift)
     if open_mask:
         return a_coef[is_open], g_part[is_open], is_open
     return a_coef[is_open], g_part[is_open]
