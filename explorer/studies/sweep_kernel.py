@@ -1,0 +1,83 @@
+"""The compiled path of the sweep's batch engine: the elastic figures of a run from the compiled
+exact solver (explorer/dynamics/exact_kernel.py), sharing across runs what does not depend on the
+varied values.
+
+Shared per chunk (sweep_engine._Shared): the lift curve; the grid of one revolution in cam angle
+(exact_kernel.RevolutionGrid: the drive's step polynomials in u = tau/h are the same at every
+speed, S' and S'' scale with omega and omega^2, the times with 1/omega), one per lever ratio and
+steps per revolution, and the split grids of stiff linkages (per the split they need; bounded
+cache); the lash take-up angles per lash. A run then costs its scene's values, one compiled call
+(the stepping, the events and the figures) and, when the scene has them, the rigid effects
+(forces, contact) as sweep_engine computes them.
+
+The compiled path takes a run when the elastic effect would solve the LinkageModel with the
+registry's `exact` solver and a constant stiffness (no spring chain, no stiffness carried by the
+lift, a lift shared by all runs): `accepts`. Otherwise sweep_engine's other paths do.
+
+numba is imported (with exact_kernel) only when a run takes this path.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+ELASTIC = ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
+           "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
+           "largest_bounce_m")
+
+
+def accepts(scene, shared) -> bool:
+    """The elastic effect of this scene is the compiled kernel's model and method."""
+    from ..effects.pipeline import resolve
+    from ..gears.registry import GEARS
+
+    if scene.follower.type in GEARS:  # a gear builds its own lift and may bring its own effects
+        return False
+    if "elastic" not in resolve(scene.effects):
+        return False
+    if scene.spring.elements > 0 or scene.solver.method != "exact":
+        return False
+    if shared.lift is None:
+        from ..effects.lift import build_lift
+
+        shared.lift = build_lift(scene)
+    return getattr(shared.lift, "linkage_stiffness", None) is None
+
+
+def elastic_run(scene, shared):
+    """(figures as a dict of ELASTIC, valve lift at the output samples, the revolution's elastic
+    events) of one run. InputError: a speed beyond the solver's step budget (as the elastic
+    effect); RuntimeError: a motion that does not settle (as the exact solver)."""
+    from ..dynamics import exact_kernel as kernel
+    from ..dynamics.model import LinkageModel
+    from ..effects.elastic import check_resolution
+    from ..mechanics.kinematics import lash_crossings
+    from .sweep_cache import remember as _remember
+
+    lift = shared.lift
+    ratio, lash = scene.follower.ratio, scene.valve.lash
+    n = scene.solver.steps_per_revolution
+    omega = scene.drive.omega
+    model = LinkageModel.from_scene(scene)
+    period = 2.0 * math.pi / omega
+    check_resolution(model, np.array([0.0, period]), "exact", scene.source)
+    base = _remember(shared.grids, (ratio, n), lambda: kernel.revolution_grid(lift, ratio, n))
+    rho_theta = kernel.phase_rates(model) / omega
+    parts = kernel.split_parts(base, rho_theta)
+    grid = base if parts is None else _remember(
+        shared.grids, (ratio, n, parts.tobytes()), lambda: kernel.revolution_grid(lift, ratio, n, rho_theta, base))
+    ups = _remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
+    take_up = ups[0] / omega if len(ups) else math.nan
+    fig, lift_column, rev = kernel.run_revolution(grid, omega, model, ratio, take_up)
+    return dict(zip(ELASTIC, fig.tolist())), lift_column, rev
+
+
+def kernel_outputs(scene, shared) -> tuple[list[dict], np.ndarray]:
+    """For tests: (the revolution's elastic events as the elastic effect lists them, the valve lift
+    at the output samples as its valve_lift_m column)."""
+    from ..dynamics.exact_kernel import revolution_events
+
+    _, lift_column, rev = elastic_run(scene, shared)
+    return revolution_events(rev), lift_column
