@@ -702,21 +702,6 @@ def _zero_flags(E, zr, ev_r0, ev_nr, ev_comb, n_ev, zeros):
             zeros[q] = anyz and st == 0.0
 
 
-@njit(cache=True)
-def _step_bounds(P, h):
-    """Bounds of |S'|, |S''|, |S'''| over a step from its coefficients (exact_grid's Sb)."""
-    b1 = 0.0
-    b2 = 0.0
-    b3 = 0.0
-    for n in range(6):
-        x = abs(P[n])
-        b1 += n * x
-        b2 += n * (n - 1) * x
-        b3 += n * (n - 1) * (n - 2) * x
-    inv = 1.0 / h
-    return b1 * inv, b2 * inv * inv, b3 * inv * inv * inv
-
-
 # ---------------------------------------------------------------- the solver
 @njit(cache=True)
 def _grow(ev, n):
@@ -744,13 +729,22 @@ def _drive_at(PT, Dn, h, ns, j, u, tmp):
 
 
 @njit(cache=True)
-def solve_nodes(nodes, h, PT, Dn, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height, max_events, N):
+def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height, max_events,
+                N):
     """The node records (s, v, friction sign, phase code) and the events (rows: code, time,
     velocity, Zeno accumulation time or NaN) of one run over the grid (exact_grid.build_grid's
-    nodes, h, P.T, Dn, hidx, h_unique), starting at rest on the seat; and a status (OK, or
-    TOO_MANY_EVENTS / NO_PROGRESS: exact.py's RuntimeErrors)."""
+    nodes, h, P.T, Dn, hidx, h_unique; Sb its bounds of the drive's first three derivatives per
+    step, times sw1, sw1^2, sw1^3: a grid in cam angle at the speed sw1), starting at rest on the
+    seat; and a status (OK, or TOO_MANY_EVENTS / NO_PROGRESS: exact.py's RuntimeErrors)."""
     ns = h.size
     nn = ns + 1
+    U = h_unique.size
+    sw2 = sw1 * sw1
+    sw3 = sw2 * sw1
+    grp_H = np.empty(U)
+    grp_q = np.empty(U)
+    grp_inv1q = np.empty(U)
+    grp_H8 = np.empty(U)
     out_s = np.full(nn, np.nan)
     out_v = np.full(nn, np.nan)
     out_sigma = np.ones(nn)
@@ -782,7 +776,6 @@ def solve_nodes(nodes, h, PT, Dn, hidx, h_unique, M, M1, k, c, lash, W0, rate, R
     zeros = np.zeros(4, dtype=np.bool_)
     check = np.zeros(4, dtype=np.bool_)
     clear_row = np.zeros(4, dtype=np.bool_)
-    E0 = np.zeros(4)
     E1 = np.zeros(4)
 
     phase = SEATED
@@ -836,26 +829,49 @@ def solve_nodes(nodes, h, PT, Dn, hidx, h_unique, M, M1, k, c, lash, W0, rate, R
                 else:
                     for q in range(n_ev):
                         zeros[q] = False
+                    # the rows as scalars (padded to 4 with a row that is always -1): the loop
+                    # below is straight-line code on registers
+                    for r in range(nrow, 4):
+                        rows[r, 0], rows[r, 1], rows[r, 2], rows[r, 3], rows[r, 4] = 0.0, 0.0, -1.0, 0.0, 0.0
+                    a0_, b0_, k0_ = rows[0, 0], rows[0, 1], rows[0, 2]
+                    a1_, b1_, k1_ = rows[1, 0], rows[1, 1], rows[1, 2]
+                    a2_, b2_, k2_ = rows[2, 0], rows[2, 1], rows[2, 2]
+                    a3_, b3_, k3_ = rows[3, 0], rows[3, 1], rows[3, 2]
                     i = j + 1
+                    e0a = e0b = e0c = e0d = -1.0
+                    if i < nn:
+                        D0, D1 = Dn[0, i], Dn[1, i]
+                        e0a = a0_ * D0 + b0_ * D1 + k0_
+                        e0b = a1_ * D0 + b1_ * D1 + k1_
+                        e0c = a2_ * D0 + b2_ * D1 + k2_
+                        e0d = a3_ * D0 + b3_ * D1 + k3_
                     while i < ns:
                         out_s[i] = s_star
                         out_v[i] = 0.0
                         out_phase[i] = phase
                         h_i = h[i]
-                        b1, b2, b3 = _step_bounds(PT[i], h_i)
+                        b2 = Sb[1, i] * sw2
+                        b3 = Sb[2, i] * sw3
                         H8 = h_i * h_i / 8.0
+                        D0, D1 = Dn[0, i + 1], Dn[1, i + 1]
+                        e1a = a0_ * D0 + b0_ * D1 + k0_
+                        e1b = a1_ * D0 + b1_ * D1 + k1_
+                        e1c = a2_ * D0 + b2_ * D1 + k2_
+                        e1d = a3_ * D0 + b3_ * D1 + k3_
+                        ca = max(e0a, e1a) + H8 * (abs(a0_) * b2 + abs(b0_) * b3) <= 0.0
+                        cb = max(e0b, e1b) + H8 * (abs(a1_) * b2 + abs(b1_) * b3) <= 0.0
+                        cc = max(e0c, e1c) + H8 * (abs(a2_) * b2 + abs(b2_) * b3) <= 0.0
+                        cd = max(e0d, e1d) + H8 * (abs(a3_) * b2 + abs(b3_) * b3) <= 0.0
+                        e0a, e0b, e0c, e0d = e1a, e1b, e1c, e1d
                         any_open = False
-                        for r in range(nrow):
-                            ea = rows[r, 0] * Dn[0, i] + rows[r, 1] * Dn[1, i] + rows[r, 2]
-                            eb = rows[r, 0] * Dn[0, i + 1] + rows[r, 1] * Dn[1, i + 1] + rows[r, 2]
-                            sag = abs(rows[r, 0]) * b2 + abs(rows[r, 1]) * b3
-                            clear_row[r] = max(ea, eb) + H8 * sag <= 0.0
-                        for q in range(n_ev):
-                            cl = clear_row[ev_r0[q]]
-                            for r in range(ev_r0[q] + 1, ev_r0[q] + ev_nr[q]):
-                                cl = (cl or clear_row[r]) if ev_comb[q] == MIN else (cl and clear_row[r])
-                            check[q] = not cl
-                            any_open = any_open or check[q]
+                        if not (ca and cb and cc and cd):
+                            clear_row[0], clear_row[1], clear_row[2], clear_row[3] = ca, cb, cc, cd
+                            for q in range(n_ev):
+                                cl = clear_row[ev_r0[q]]
+                                for r in range(ev_r0[q] + 1, ev_r0[q] + ev_nr[q]):
+                                    cl = (cl or clear_row[r]) if ev_comb[q] == MIN else (cl and clear_row[r])
+                                check[q] = not cl
+                                any_open = any_open or check[q]
                         if any_open:
                             n_detail += 1
                             _deriv_into(PT[i], 6, h_i, dP)
@@ -943,58 +959,94 @@ def solve_nodes(nodes, h, PT, Dn, hidx, h_unique, M, M1, k, c, lash, W0, rate, R
                 v = _fsum(da, NC)
                 for q in range(n_ev):
                     zeros[q] = False
-                tb = tabs[kind]
+                # per step length: a bound of the steps (a hair above the group's length: the
+                # lengths of a group differ by rounding), the bound's q = H (c + K H) / m and
+                # 1 / (1 - q), H^2 / 8
+                for gi in range(U):
+                    Hq = h_unique[gi] * (1.0 + 1e-9)
+                    grp_H[gi] = Hq
+                    grp_q[gi] = Hq * (c_ + K_ * Hq) / m_
+                    grp_inv1q[gi] = 1.0 / (1.0 - grp_q[gi])
+                    grp_H8[gi] = Hq * Hq / 8.0
+                inv_m = 1.0 / m_
+                # the rows as scalars (padded to 4 with a row that is always -1): the loop below is
+                # straight-line code on registers
+                for r in range(nrow, 4):
+                    rows[r, 0], rows[r, 1], rows[r, 2], rows[r, 3], rows[r, 4] = 0.0, 0.0, -1.0, 0.0, 0.0
+                a0_, b0_, k0_, l0_, m0_ = rows[0, 0], rows[0, 1], rows[0, 2], rows[0, 3], rows[0, 4]
+                a1_, b1_, k1_, l1_, m1_ = rows[1, 0], rows[1, 1], rows[1, 2], rows[1, 3], rows[1, 4]
+                a2_, b2_, k2_, l2_, m2_ = rows[2, 0], rows[2, 1], rows[2, 2], rows[2, 3], rows[2, 4]
+                a3_, b3_, k3_, l3_, m3_ = rows[3, 0], rows[3, 1], rows[3, 2], rows[3, 3], rows[3, 4]
                 i = j + 1
+                S0 = 0.0
+                S10 = 0.0
+                if i < nn:
+                    S0, S10 = Dn[0, i], Dn[1, i]
+                e0a = a0_ * S0 + b0_ * S10 + k0_ + l0_ * s + m0_ * v
+                e0b = a1_ * S0 + b1_ * S10 + k1_ + l1_ * s + m1_ * v
+                e0c = a2_ * S0 + b2_ * S10 + k2_ + l2_ * s + m2_ * v
+                e0d = a3_ * S0 + b3_ * S10 + k3_ + l3_ * s + m3_ * v
                 while i < ns:
                     out_s[i] = s
                     out_v[i] = v
                     out_phase[i] = kind
                     out_sigma[i] = sigma
                     PTi = PT[i]
-                    g = tb[hidx[i]]
-                    s1 = g[0] * s + g[1] * v - Fc * g[4]
-                    v1 = g[2] * s + g[3] * v - Fc * g[5]
+                    gi = hidx[i]
+                    s1 = tabs[kind, gi, 0] * s + tabs[kind, gi, 1] * v - Fc * tabs[kind, gi, 4]
+                    v1 = tabs[kind, gi, 2] * s + tabs[kind, gi, 3] * v - Fc * tabs[kind, gi, 5]
                     for p in range(6):
-                        s1 += g[6 + p] * PTi[p]
-                        v1 += g[12 + p] * PTi[p]
-                    # event values at both nodes; the step is cleared by max(ends) + h^2/8 sup|e''|
-                    S0, S10, Sn, S1n = Dn[0, i], Dn[1, i], Dn[0, i + 1], Dn[1, i + 1]
-                    hit = False
-                    for r in range(nrow):
-                        E0[r] = rows[r, 0] * S0 + rows[r, 1] * S10 + rows[r, 2] + rows[r, 3] * s + rows[r, 4] * v
-                        E1[r] = rows[r, 0] * Sn + rows[r, 1] * S1n + rows[r, 2] + rows[r, 3] * s1 + rows[r, 4] * v1
-                    for q in range(n_ev):
-                        up = E1[ev_r0[q]] > 0.0
-                        for r in range(ev_r0[q] + 1, ev_r0[q] + ev_nr[q]):
-                            up = (up and E1[r] > 0.0) if ev_comb[q] == MIN else (up or E1[r] > 0.0)
-                        hit = hit or up
-                    H = h[i]
-                    q_ = H * (c_ + K_ * H) / m_
-                    any_open = False
-                    if q_ < 0.5 and not hit:
-                        b1, b2, b3 = _step_bounds(PTi, H)
+                        s1 += tabs[kind, gi, 6 + p] * PTi[p]
+                        v1 += tabs[kind, gi, 12 + p] * PTi[p]
+                    # event values at both nodes; the step is cleared by max(ends) + h^2/8 sup|e''|,
+                    # sup|e''| from bounds of |S''|, |S'''| over the step and of |a|, |jerk| from
+                    # the left node and the ODE (exact_phase._scan_window's per-step bound)
+                    Sn, S1n = Dn[0, i + 1], Dn[1, i + 1]
+                    e1a = a0_ * Sn + b0_ * S1n + k0_ + l0_ * s1 + m0_ * v1
+                    e1b = a1_ * Sn + b1_ * S1n + k1_ + l1_ * s1 + m1_ * v1
+                    e1c = a2_ * Sn + b2_ * S1n + k2_ + l2_ * s1 + m2_ * v1
+                    e1d = a3_ * Sn + b3_ * S1n + k3_ + l3_ * s1 + m3_ * v1
+                    q_ = grp_q[gi]
+                    ca = cb = cc = cd = False
+                    if q_ < 0.5:
+                        H = grp_H[gi]
+                        b1 = Sb[0, i] * sw1
+                        b2 = Sb[1, i] * sw2
+                        b3 = Sb[2, i] * sw3
                         Vi = abs(v)
                         Ac = abs(kc_ * S0 + cc_ * S10 - Fc - K_ * s - c_ * v)
                         F1 = kc_ * b1 + cc_ * b2
-                        Ai = (Ac / m_ + H * (F1 + K_ * Vi) / m_) / (1.0 - q_)
-                        Ji = (F1 + c_ * Ai + K_ * (Vi + H * Ai)) / m_
-                        H8 = H * H / 8.0
-                        for r in range(nrow):
-                            sag = (abs(rows[r, 0]) * b2 + abs(rows[r, 1]) * b3 + abs(rows[r, 3]) * Ai
-                                   + abs(rows[r, 4]) * Ji)
-                            clear_row[r] = max(E0[r], E1[r]) + H8 * sag <= 0.0
+                        Ai = (Ac + H * (F1 + K_ * Vi)) * inv_m * grp_inv1q[gi]
+                        Ji = (F1 + c_ * Ai + K_ * (Vi + H * Ai)) * inv_m
+                        H8 = grp_H8[gi]
+                        ca = max(e0a, e1a) + H8 * (abs(a0_) * b2 + abs(b0_) * b3 + abs(l0_) * Ai + abs(m0_) * Ji) <= 0.0
+                        cb = max(e0b, e1b) + H8 * (abs(a1_) * b2 + abs(b1_) * b3 + abs(l1_) * Ai + abs(m1_) * Ji) <= 0.0
+                        cc = max(e0c, e1c) + H8 * (abs(a2_) * b2 + abs(b2_) * b3 + abs(l2_) * Ai + abs(m2_) * Ji) <= 0.0
+                        cd = max(e0d, e1d) + H8 * (abs(a3_) * b2 + abs(b3_) * b3 + abs(l3_) * Ai + abs(m3_) * Ji) <= 0.0
+                    any_open = False
+                    if not (ca and cb and cc and cd):
+                        clear_row[0], clear_row[1], clear_row[2], clear_row[3] = ca, cb, cc, cd
+                        E1[0], E1[1], E1[2], E1[3] = e1a, e1b, e1c, e1d
+                        hit = False
                         for q in range(n_ev):
-                            cl = clear_row[ev_r0[q]]
+                            up = E1[ev_r0[q]] > 0.0
                             for r in range(ev_r0[q] + 1, ev_r0[q] + ev_nr[q]):
-                                cl = (cl or clear_row[r]) if ev_comb[q] == MIN else (cl and clear_row[r])
-                            check[q] = not cl
-                            any_open = any_open or check[q]
-                    else:
-                        for q in range(n_ev):
-                            check[q] = True
-                        any_open = True
+                                up = (up and E1[r] > 0.0) if ev_comb[q] == MIN else (up or E1[r] > 0.0)
+                            hit = hit or up
+                        if q_ < 0.5 and not hit:
+                            for q in range(n_ev):
+                                cl = clear_row[ev_r0[q]]
+                                for r in range(ev_r0[q] + 1, ev_r0[q] + ev_nr[q]):
+                                    cl = (cl or clear_row[r]) if ev_comb[q] == MIN else (cl and clear_row[r])
+                                check[q] = not cl
+                                any_open = any_open or check[q]
+                        else:
+                            for q in range(n_ev):
+                                check[q] = True
+                            any_open = True
                     if any_open:
                         n_detail += 1
+                        H = h[i]
                         _expand(m_, c_, K_, kc_, cc_, PTi, H, s, v, Fc, N, a, f)
                         _deriv_into(a, NC, H, da)
                         _deriv_into(PTi, 6, H, dP)
@@ -1011,6 +1063,8 @@ def solve_nodes(nodes, h, PT, Dn, hidx, h_unique, M, M1, k, c, lash, W0, rate, R
                             break
                     s = s1
                     v = v1
+                    S0, S10 = Sn, S1n
+                    e0a, e0b, e0c, e0d = e1a, e1b, e1c, e1d
                     i += 1
                 if not found:
                     out_s[ns] = s
@@ -1112,7 +1166,7 @@ def _scaled_grid(nodes_th, h_th, Dn_th, h_unique_th, omega):
 
 
 @njit(cache=True)
-def revolution(nodes_th, h_th, PT, Dn_th, hidx, h_unique_th, out_nodes, i0, omega, M, M1, k, c, lash, W0, rate, R, e,
+def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, omega, M, M1, k, c, lash, W0, rate, R, e,
                zeno_height, max_events, N, ratio, preload_closing, take_up_s):
     """One revolution of the elastic effect at the speed omega, on a grid built in cam angle
     (RevolutionGrid: the n output samples from the drive's lowest point, out_nodes their nodes):
@@ -1124,7 +1178,7 @@ def revolution(nodes_th, h_th, PT, Dn_th, hidx, h_unique_th, out_nodes, i0, omeg
     of the run for one period, times modulo the period (effects/elastic.py, elastic_events.py)."""
     nodes, h, Dn, h_unique = _scaled_grid(nodes_th, h_th, Dn_th, h_unique_th, omega)
     out_s, out_v, out_sigma, out_phase, ev, status, n_detail = solve_nodes(
-        nodes, h, PT, Dn, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height, max_events, N)
+        nodes, h, PT, Dn, Sb_th, omega, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height, max_events, N)
     n = out_nodes.size
     fig = np.full(len(FIGURES), np.nan)
     lift = np.empty(n)
@@ -1182,6 +1236,7 @@ def revolution(nodes_th, h_th, PT, Dn_th, hidx, h_unique_th, out_nodes, i0, omeg
     order = np.argsort(rev[:, 1], kind="mergesort")  # (stable: equal instants keep the solver's order)
     rev = rev[order]
     best_bounce = 0.0
+    times = np.empty(0)
     seat_v = np.inf
     delay = np.inf
     for q in range(m):
@@ -1200,10 +1255,12 @@ def revolution(nodes_th, h_th, PT, Dn_th, hidx, h_unique_th, out_nodes, i0, omeg
                     t1 = min(t1, rev[p, 1])
             if t1 == np.inf:
                 t1 = (n - 1) * (2.0 * math.pi / n) / omega + 1.0
-            for i in range(n):
-                ti = i * (2.0 * math.pi / n) / omega
-                if ti > t0 and ti < t1:
-                    best_bounce = max(best_bounce, lift[i])
+            if times.size == 0:  # the output times (the effect's time_s column: theta / omega)
+                times = np.arange(n) * (2.0 * math.pi / n) / omega
+            for i in range(np.searchsorted(times, t0, side="right"), n):
+                if not times[i] < t1:
+                    break
+                best_bounce = max(best_bounce, lift[i])
         elif code == LIFT_OFF and not math.isnan(take_up_s):
             delay = min(delay, np.fmod(rev[q, 1] - take_up_s + period, period))
     fig[6] = delay if delay < np.inf else np.nan
@@ -1262,7 +1319,8 @@ def solve(model: LinkageModel, drive, t: np.ndarray, zeno_height: float = 1e-12,
     g = build_grid(drive, t_req, rho, hmin)
     N = taylor_terms(rho * g.h_max)
     out_s, out_v, out_sigma, out_phase, ev, status, n_detail = solve_nodes(
-        g.nodes, g.h, np.ascontiguousarray(g.PT), g.Dn, g.hidx.astype(np.int64), g.h_unique,
+        g.nodes, g.h, np.ascontiguousarray(g.PT), g.Dn, np.ascontiguousarray(g.Sb), 1.0, g.hidx.astype(np.int64),
+        g.h_unique,
         *model_arguments(model), float(zeno_height), int(max_events), int(N))
     _check(status)
     lins = {CONTACT: LinearPhase(model.oscillating_mass, model.damping, model.stiffness + model.spring_rate,
@@ -1288,6 +1346,7 @@ class RevolutionGrid:
     h: np.ndarray
     PT: np.ndarray
     Dn: np.ndarray
+    Sb: np.ndarray  # bounds of the drive's first three derivatives over each step (exact_grid.Grid.Sb)
     hidx: np.ndarray
     h_unique: np.ndarray
     out_nodes: np.ndarray  # the nodes of the n output samples, in run order
@@ -1312,7 +1371,7 @@ def revolution_grid(lift, ratio: float, n: int, rho_theta: float = 0.0, base: "R
     g = build_grid(drive, run, rho_theta, hmin)
     out = np.nonzero(g.is_out)[0][:n].astype(np.int64)
     return RevolutionGrid(n=n, i0=i0, nodes=g.nodes, h=g.h, PT=np.ascontiguousarray(g.PT), Dn=g.Dn,
-                          hidx=g.hidx.astype(np.int64), h_unique=g.h_unique, out_nodes=out, h_max=g.h_max)
+                          Sb=np.ascontiguousarray(g.Sb), hidx=g.hidx.astype(np.int64), h_unique=g.h_unique, out_nodes=out, h_max=g.h_max)
 
 
 def split_parts(grid: RevolutionGrid, rho_theta: float) -> np.ndarray | None:
@@ -1330,7 +1389,7 @@ def run_revolution(grid: RevolutionGrid, omega: float, model: LinkageModel, rati
     rho = phase_rates(model)
     N = taylor_terms(rho * grid.h_max / omega)
     fig, lift, rev, status = revolution(
-        grid.nodes, grid.h, grid.PT, grid.Dn, grid.hidx, grid.h_unique, grid.out_nodes, grid.i0, float(omega),
+        grid.nodes, grid.h, grid.PT, grid.Dn, grid.Sb, grid.hidx, grid.h_unique, grid.out_nodes, grid.i0, float(omega),
         *model_arguments(model), float(zeno_height), int(max_events), int(N), float(ratio),
         float(model.preload + model.closing_load), float(take_up_s))
     _check(status)
