@@ -45,6 +45,7 @@ MAX_DEPTH = 6  # exact_events.MAX_DEPTH
 SUBDIVISIONS = 8
 MAX_SAME_TIME = 60  # exact.MAX_SAME_TIME
 MAX_RHO_H = 0.5
+BLOCK = 64  # steps a seated valve's bound clears at once
 
 # event codes (records): the first four are model.EVENT_KINDS in order
 LIFT_OFF, SEPARATION, RECONTACT, SEAT, VZERO, UP, DOWN = 0, 1, 2, 3, 4, 5, 6
@@ -745,6 +746,18 @@ def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0
     grp_q = np.empty(U)
     grp_inv1q = np.empty(U)
     grp_H8 = np.empty(U)
+    # per block of BLOCK steps: the largest S and S1 at its nodes and the largest h^2/8 |S2|,
+    # h^2/8 |S3| over its steps (the seated valve's block clearance)
+    nb = ns // BLOCK
+    blk = np.full((4, max(nb, 1)), -np.inf)
+    for bk in range(nb):
+        for i in range(bk * BLOCK, bk * BLOCK + BLOCK + 1):
+            blk[0, bk] = max(blk[0, bk], Dn[0, i])
+            blk[1, bk] = max(blk[1, bk], Dn[1, i])
+        for i in range(bk * BLOCK, bk * BLOCK + BLOCK):
+            hh = h[i] * h[i] / 8.0
+            blk[2, bk] = max(blk[2, bk], hh * Sb[1, i] * sw2)
+            blk[3, bk] = max(blk[3, bk], hh * Sb[2, i] * sw3)
     out_s = np.full(nn, np.nan)
     out_v = np.full(nn, np.nan)
     out_sigma = np.ones(nn)
@@ -845,7 +858,27 @@ def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0
                         e0b = a1_ * D0 + b1_ * D1 + k1_
                         e0c = a2_ * D0 + b2_ * D1 + k2_
                         e0d = a3_ * D0 + b3_ * D1 + k3_
+                    # a valve held only by the "up" event (no "down"): whole blocks of steps are
+                    # cleared at once by the push row's bound over the block (the drive's largest
+                    # S and S1 at its nodes, plus the largest sag k h^2/8 |S2| + c h^2/8 |S3|)
+                    ap_, bp_, kp_ = rows[nrow - 1, 0], rows[nrow - 1, 1], rows[nrow - 1, 2]
+                    blocks_ok = n_ev == 1 and ap_ >= 0.0 and bp_ >= 0.0
                     while i < ns:
+                        if blocks_ok and i % BLOCK == 0 and i + BLOCK <= ns:
+                            bk = i // BLOCK
+                            if ap_ * (blk[0, bk] + blk[2, bk]) + bp_ * (blk[1, bk] + blk[3, bk]) + kp_ <= 0.0:
+                                for q in range(i, i + BLOCK):
+                                    out_s[q] = s_star
+                                    out_v[q] = 0.0
+                                    out_phase[q] = phase
+                                i += BLOCK
+                                if i < nn:
+                                    D0, D1 = Dn[0, i], Dn[1, i]
+                                    e0a = a0_ * D0 + b0_ * D1 + k0_
+                                    e0b = a1_ * D0 + b1_ * D1 + k1_
+                                    e0c = a2_ * D0 + b2_ * D1 + k2_
+                                    e0d = a3_ * D0 + b3_ * D1 + k3_
+                                continue
                         out_s[i] = s_star
                         out_v[i] = 0.0
                         out_phase[i] = phase
@@ -1269,6 +1302,54 @@ def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i
     return fig, lift, rev, status
 
 
+# the columns of a batch's run parameters (revolutions())
+RUN_PARAMETERS = ("omega", "mass", "oscillating_mass", "stiffness", "damping", "lash", "seated_resistance",
+                  "spring_rate", "friction", "restitution", "preload_closing", "take_up_s")
+
+
+@njit(cache=True)
+def _taylor_terms(x):
+    """exact_steps.taylor_terms."""
+    n = 1
+    term = x
+    bound = math.exp(x)
+    while n < 9 or term * bound > 1e-19:
+        n += 1
+        term *= x / n
+        if n > 60:
+            break
+    return n
+
+
+@njit(cache=True)
+def _rate(M, M1, k, c, rate):
+    """exact_phase's rho: the fastest rate of contact and flight (LinearPhase.rho)."""
+    alpha = 0.5 * c / M1
+    w2 = (k + rate) / M1
+    rho = alpha + math.sqrt(alpha * alpha - w2) if alpha * alpha > w2 else math.sqrt(w2)
+    return max(rho, math.sqrt(rate / M))
+
+
+@njit(cache=True)
+def revolutions(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, h_max_th, ratio, runs,
+                zeno_height, max_events):
+    """revolution() for many runs on one grid (runs: one row of RUN_PARAMETERS each): the FIGURES
+    per run and the solver status per run (a batch costs no Python per run)."""
+    R = runs.shape[0]
+    figs = np.empty((R, len(FIGURES)))
+    status = np.empty(R, dtype=np.int64)
+    for r in range(R):
+        p = runs[r]
+        omega = p[0]
+        N = _taylor_terms(_rate(p[1], p[2], p[3], p[4], p[7]) * h_max_th / omega)
+        fig, lift, rev, st = revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, omega,
+                                        p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], zeno_height,
+                                        max_events, N, ratio, p[10], p[11])
+        figs[r] = fig
+        status[r] = st
+    return figs, status
+
+
 # ---------------------------------------------------------------- Python side
 def _check(status: int) -> None:
     if status == TOO_MANY_EVENTS:
@@ -1396,6 +1477,15 @@ def run_revolution(grid: RevolutionGrid, omega: float, model: LinkageModel, rati
     return fig, lift, rev
 
 
+def run_batch(grid: RevolutionGrid, ratio: float, runs: np.ndarray, zeno_height: float = 1e-12,
+              max_events: int = 100_000):
+    """revolutions() on a RevolutionGrid: (FIGURES per run, status per run: OK, or the exact
+    solver's RuntimeErrors as TOO_MANY_EVENTS, NO_PROGRESS)."""
+    return revolutions(grid.nodes, grid.h, grid.PT, grid.Dn, grid.Sb, grid.hidx, grid.h_unique, grid.out_nodes,
+                       grid.i0, grid.h_max, float(ratio), np.ascontiguousarray(runs, dtype=float),
+                       float(zeno_height), int(max_events))
+
+
 def revolution_events(rev: np.ndarray) -> list[dict]:
     """revolution()'s event rows as the elastic effect's event dicts."""
     return [{"kind": EVENT_NAMES[int(code)], "time_s": t, "cam_angle_deg": angle, "velocity_m_s": vel}
@@ -1421,6 +1511,7 @@ def warm() -> None:
     solve(model, Drive(_Lift(), 1.0, omega), t)
     grid = revolution_grid(_Lift(), 1.0, 180)
     run_revolution(grid, omega, model, 1.0, 0.0)
+    run_batch(grid, 1.0, np.array([[omega, *model_arguments(model), 50.0, 0.0]]))
 
 
 if __name__ == "__main__":

@@ -227,6 +227,9 @@ class RowEngine:
     name: str
     accepts: Any
     row: Any
+    # optional: chunk(scenes, names, shared) -> (runs x names) figures with run_failed, all the
+    # runs at once (the compiled engine's batches); None: row by row
+    chunk: Any = None
 
 
 def _kernel_accepts(scene, shared) -> bool:
@@ -251,9 +254,41 @@ def _kernel_row(scene, names, shared) -> dict[str, float]:
     return row
 
 
+def _kernel_chunk(scenes, names, shared) -> np.ndarray:
+    """The rows of many runs: the elastic figures in compiled batches (sweep_kernel.elastic_chunk),
+    the rigid ones (forces, contact) run by run as engine_outputs computes them."""
+    from .sweep_kernel import ELASTIC, elastic_chunk
+
+    names = tuple(names)
+    out = np.full((len(scenes), len(names)), math.nan)
+    fail = names.index("run_failed")
+    failed = np.zeros(len(scenes), bool)
+    rigid = [n for n in names if n not in ELASTIC and n != "run_failed"]
+    if rigid:
+        for i, scene in enumerate(scenes):
+            try:
+                summary, events, columns = engine_outputs(scene, shared, elastic=False)
+            except (InputError, RuntimeError, ValueError, ArithmeticError):
+                failed[i] = True
+                continue
+            row = row_scalars(set(rigid), summary, events, columns)
+            for j, name in enumerate(names):
+                if name in row:
+                    out[i, j] = row[name]
+    if any(n in ELASTIC for n in names):
+        figures, elastic_failed = elastic_chunk(scenes, shared)
+        for j, name in enumerate(ELASTIC):
+            if name in names:
+                out[:, names.index(name)] = figures[:, j]
+        failed |= elastic_failed
+    out[failed] = math.nan
+    out[:, fail] = failed.astype(float)
+    return out
+
+
 ENGINES: tuple[RowEngine, ...] = (
     # the elastic figures from the compiled exact solver (explorer/dynamics/exact_kernel.py)
-    RowEngine("compiled", _kernel_accepts, _kernel_row),
+    RowEngine("compiled", _kernel_accepts, _kernel_row, lambda scenes, names, shared: _kernel_chunk(scenes, names, shared)),
     # the effects' own functions, sharing the lift and the rigid float speed across runs
     RowEngine("shared", lambda scene, shared: _batchable(scene), engine_row),
     # simulate itself (the gears, whose lift or effects are their own)
@@ -276,6 +311,9 @@ def compute_chunk(base, keys, values: np.ndarray, names, shared: _Shared | None 
     fail = names.index("run_failed")
     shared = shared if shared is not None else _Shared()
     engine = engine if engine is not None else engine_for(base, shared)
+    if engine.chunk is not None:
+        scenes = [scene_for(base, keys, row_values) for row_values in np.asarray(values, dtype=float)]
+        return engine.chunk(scenes, names, shared)
     for i, row_values in enumerate(np.asarray(values, dtype=float)):
         scene = scene_for(base, keys, row_values)
         try:

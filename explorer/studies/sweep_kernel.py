@@ -74,6 +74,64 @@ def elastic_run(scene, shared):
     return dict(zip(ELASTIC, fig.tolist())), lift_column, rev
 
 
+def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
+    """The ELASTIC figures (runs x figures) of many runs and which failed (as elastic_run would
+    raise: a speed beyond the step budget, a motion that does not settle), the runs on one grid
+    in one compiled call (exact_kernel.revolutions: no Python per run but its scene's values)."""
+    from ..dynamics import exact_kernel as kernel
+    from ..effects.elastic import MAX_SOLVER_NODES
+    from ..mechanics.kinematics import lash_crossings
+    from .sweep_cache import remember
+
+    lift = shared.lift
+    R = len(scenes)
+    figures = np.full((R, len(ELASTIC)), math.nan)
+    failed = np.zeros(R, bool)
+    params = np.empty((R, len(kernel.RUN_PARAMETERS)))
+    groups: dict = {}
+    for r, scene in enumerate(scenes):
+        v, sp, link = scene.valve, scene.spring, scene.linkage
+        ratio, lash = scene.follower.ratio, v.lash
+        omega = scene.drive.omega
+        M1 = v.oscillating_mass if v.oscillating_mass is not None else v.mass
+        closing = scene.loads.closing_total
+        ups = remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
+        params[r] = (omega, v.mass, M1, link.stiffness, link.damping, lash, sp.preload + closing, sp.rate,
+                     scene.loads.friction, scene.seat.restitution, sp.preload + closing,
+                     ups[0] / omega if len(ups) else math.nan)
+        groups.setdefault((ratio, scene.solver.steps_per_revolution), []).append(r)
+    # the fastest rate of each run: the step budget (effects.elastic.check_resolution) and the split
+    M, M1, k, c, rate = (params[:, i] for i in (1, 2, 3, 4, 7))
+    alpha = 0.5 * c / M1
+    w2 = (k + rate) / M1
+    over = alpha * alpha > w2
+    rho = np.where(over, alpha + np.sqrt(np.where(over, alpha * alpha - w2, 0.0)), np.sqrt(np.abs(w2)))
+    rho = np.maximum(rho, np.sqrt(rate / M))
+    omega = params[:, 0]
+    failed |= ~(rho * (2.0 * math.pi / omega) / 0.5 <= MAX_SOLVER_NODES)
+    for (ratio, n), members in groups.items():
+        base = remember(shared.grids, (ratio, n), lambda: kernel.revolution_grid(lift, ratio, n))
+        members = np.array([m for m in members if not failed[m]], dtype=np.int64)
+        if not members.size:
+            continue
+        rho_theta = rho[members] / omega[members]
+        split = rho_theta * base.h_max / kernel.MAX_RHO_H > 1.0
+        plain = members[~split]
+        if plain.size:
+            figs, status = kernel.run_batch(base, ratio, params[plain])
+            figures[plain] = figs
+            failed[plain] = status != kernel.OK
+        for m, rt in zip(members[split].tolist(), rho_theta[split].tolist()):
+            parts = kernel.split_parts(base, rt)
+            grid = remember(shared.grids, (ratio, n, parts.tobytes()),
+                            lambda: kernel.revolution_grid(lift, ratio, n, rt, base))
+            figs, status = kernel.run_batch(grid, ratio, params[m:m + 1])
+            figures[m] = figs[0]
+            failed[m] = status[0] != kernel.OK
+    figures[failed] = math.nan
+    return figures, failed
+
+
 def kernel_outputs(scene, shared) -> tuple[list[dict], np.ndarray]:
     """For tests: (the revolution's elastic events as the elastic effect lists them, the valve lift
     at the output samples as its valve_lift_m column)."""
