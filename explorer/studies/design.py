@@ -58,7 +58,7 @@ class Evaluation:
 
 
 def _free(options):
-    return [(i, k) for i, st in enumerate(options.stations) for k in range(4) if st.free[k]]
+    return [(i, k) for i, st in enumerate(options.stations) for k in range(len(st.free)) if st.free[k]]
 
 
 class Problem:
@@ -407,7 +407,7 @@ def _event_shape(problem) -> tuple[float, float, float, float]:
 
 
 def report_text(scene, report: DesignReport) -> str:
-    from ..lift.spline import NAMES
+    from ..lift.spline import NAMES, UNITS
 
     unit = {"peak-acceleration": "m/s**2", "peak-jerk": "m/s**3", "jerk-energy": "m**2/s**5",
             "residual-vibration": "m"}[report.objective]
@@ -416,7 +416,7 @@ def report_text(scene, report: DesignReport) -> str:
              f"({'limits met' if report.success else 'FAILED'}; solver: {report.message})",
              f"  optimum {report.value:.6g} {unit} (start {report.start_value:.6g})"]
     for (i, k), value in report.values.items():
-        lines.append(f"  station {i} {NAMES[k]} = {value * w**k:.9g} {('m', 'm/s', 'm/s**2', 'm/s**3')[k]}")
+        lines.append(f"  station {i} {NAMES[k]} = {value * w**k:.9g} {UNITS[k]}")
     lines.append("  constraint slacks (>= 0 met):")
     for name, slack in report.slacks.items():
         lines.append(f"    {name:<16s} {slack:+.4g}")
@@ -432,8 +432,8 @@ def stations_toml(scene, report: DesignReport) -> str:
     from ..lift.spline import NAMES
 
     w = report.options.reference_rpm * TWO_PI / 60.0
-    units = ("mm", "m/s", "m/s**2", "m/s**3")
-    scale = (1e3, 1.0, 1.0, 1.0)
+    units = ("mm", "m/s", "m/s**2", "m/s**3", "m/s**4")
+    scale = (1e3, 1.0, 1.0, 1.0, 1.0)
     out = []
     for st in report.options.stations:
         out.append("[[lift.stations]]")
