@@ -87,6 +87,17 @@ class SplineLift:
                 p = p.deriv()
         return out
 
+    def segment_derivatives(self, segment: int, u: float, order: int) -> np.ndarray:
+        """(order + 1,): derivatives per radian of one segment's polynomial at its local u (its own
+        end at u = 1, where local_derivatives would take the next segment)."""
+        width = self.knots[segment + 1] - self.knots[segment]
+        p = np.polynomial.Polynomial(self.coefficients[segment])
+        out = np.zeros(order + 1)
+        for k in range(order + 1):
+            out[k] = p(u) / width**k
+            p = p.deriv()
+        return out
+
     def derivatives(self, theta) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
         x = np.mod(theta.reshape(-1) - self.start, TWO_PI)
@@ -115,7 +126,8 @@ def solve_spline(stations, continuity: int = 3, start: float = 0.0, file: str = 
     # conditions: (segment, side 0/1, k, value) for a given value; ("cont", i, k) for continuity
     rows: list[tuple] = []
     for i, st in enumerate(stations):
-        for k, value in enumerate(st.values):
+        orders = max(len(st.values), continuity + 1)  # continuity may reach past the orders a station can give
+        for k, value in enumerate(st.values + (None,) * (orders - len(st.values))):
             if value is not None:
                 if i > 0:
                     rows.append(("value", i - 1, 1.0, k, value))

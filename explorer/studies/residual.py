@@ -48,9 +48,8 @@ def reference_lift(scene, lift, theta, order: int = 1) -> np.ndarray:
 def _dwell_start(lift):
     """Cam angle where the dwell after the rise starts (None without a dwell)."""
     w = getattr(lift, "wanted", None)
-    if w is None or not w.dwell > 0.0:
-        return None
-    return (lift.start + w.rise) % TWO_PI
+    start = w.dwell_start() if w is not None else None
+    return None if start is None else (lift.start + start) % TWO_PI
 
 
 def residual_row(scene, lift, rpm: float) -> ResidualRow:
