@@ -11,7 +11,8 @@ and one column the study adds after the sweep, since it is a formula of the spee
 
   residual_closed_form_m the linear closed form of that amplitude for a polydyne cam with a
                          polynomial rise and a dwell (explorer.lift.polydyne.residual_amplitude),
-                         in the runs where the valve never left the cam (separations = 0); NaN
+                         in the runs where the valve stayed on the cam from lift-off to the
+                         dwell (no separation, or the first one after the dwell began); NaN
                          elsewhere.
 
 The cam is the scene's in every run (a polydyne cam keeps its design speed).
@@ -39,7 +40,7 @@ class ResidualRow:
     max_deviation_m: float  # residual_deviation_m
     dwell_amplitude_m: float | None  # residual_amplitude_m (None: no dwell)
     closed_form_m: float | None  # residual_closed_form_m (None: no closed form here)
-    contact_kept: bool  # separations == 0: the valve never left the cam
+    contact_kept: bool  # the valve stayed on the cam through the rise (the closed form applies)
     seating_velocity_m_s: float  # the hardest seat impact (< 0; NaN: none)
 
 
@@ -59,7 +60,19 @@ def residual_scene(scene):
     return scene
 
 
-def closed_forms(scene, rpm: np.ndarray, separations: np.ndarray) -> np.ndarray:
+def contact_through_rise(lift, separations: float, first_separation_deg: float) -> bool:
+    """True when the valve stayed on the cam from lift-off to the dwell: no separation, or the
+    first one (by cam angle from 0, as the table has it) at or after the dwell's start. An event
+    that straddles 0 deg has its return before its rise in that order: only no separation counts."""
+    if separations == 0:
+        return True
+    begin = (lift.start - lift.ramp) % TWO_PI  # the opening ramp starts here
+    if begin + lift.wanted.end + 2.0 * lift.ramp >= TWO_PI or not math.isfinite(first_separation_deg):
+        return False
+    return math.radians(first_separation_deg) - begin >= lift.ramp + lift.wanted.dwell_start()
+
+
+def closed_forms(scene, rpm: np.ndarray, separations: np.ndarray, first_separation_deg: np.ndarray) -> np.ndarray:
     """residual_closed_form_m per run (module doc)."""
     from ..effects.lift import build_lift
     from ..lift.polydyne import RISE_POLYNOMIALS, residual_amplitude
@@ -69,8 +82,8 @@ def closed_forms(scene, rpm: np.ndarray, separations: np.ndarray) -> np.ndarray:
     wanted = getattr(lift, "wanted", None)
     if wanted is None or wanted.dwell_start() is None or getattr(wanted, "rise_law", None) not in RISE_POLYNOMIALS:
         return out
-    for i, (r, n_sep) in enumerate(zip(rpm, separations)):
-        if n_sep == 0:
+    for i, (r, n_sep, first) in enumerate(zip(rpm, separations, first_separation_deg)):
+        if contact_through_rise(lift, float(n_sep), float(first)):
             out[i] = residual_amplitude(lift, float(r))
     return out
 
@@ -89,7 +102,7 @@ def residual_table(scene, rpms, *, workers: int | None = None, progress=None):
     rpm = np.asarray(table.columns["drive_rpm"], dtype=float)
     separations = np.asarray(table.columns["separations"], dtype=float)
     columns = dict(table.columns)
-    columns[CLOSED_FORM] = closed_forms(scene, rpm, separations)
+    columns[CLOSED_FORM] = closed_forms(scene, rpm, separations, np.asarray(table.columns["first_separation_deg"], float))
     design = getattr(scene.lift.options, "design_rpm", None)
     metadata = {**table.metadata, "study": "residual", "design_rpm": design}
     return SweepTable.build(columns, metadata)
@@ -103,7 +116,8 @@ def rows_of(table) -> list[ResidualRow]:
 
     return [ResidualRow(float(c["drive_rpm"][i]), float(c["residual_deviation_m"][i]),
                         maybe(float(c["residual_amplitude_m"][i])), maybe(float(c[CLOSED_FORM][i])),
-                        bool(c["separations"][i] == 0), float(c["seating_velocity_m_s"][i]))
+                        bool(c["separations"][i] == 0 or math.isfinite(float(c[CLOSED_FORM][i]))),
+                        float(c["seating_velocity_m_s"][i]))
             for i in range(len(table))]
 
 
