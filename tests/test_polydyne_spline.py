@@ -17,10 +17,10 @@ import numpy as np
 import pytest
 
 from conftest import SCENES
+from test_polydyne import elastic_follows  # (the wanted lift against simulate, one definition)
 from explorer import cli
 from explorer.core.errors import InputError
 from explorer.effects.lift import build_lift
-from explorer.effects.pipeline import simulate
 from explorer.scene.scene import load_scene, loads_scene
 
 DEMO = SCENES / "polydyne_spline.toml"
@@ -108,15 +108,6 @@ def test_cam_continuous_to_its_acceleration():
         for k in range(3):
             # the step is the next derivative times 2e-10 rad: below 1e-12 m per rad^k here
             assert abs(left[k] - right[k]) <= 1e-12 + 1e-6 * scale[k], (math.degrees(b), k, left, right)
-
-
-def elastic_follows(scene):
-    lift = build_lift(scene)
-    result = simulate(scene)
-    theta = np.radians(result.columns["cam_angle_deg"])
-    wanted = lift.wanted_valve_lift(theta, 1)
-    return (np.abs(result.columns["valve_lift_m"] - wanted[0]).max(),
-            np.abs(result.columns["valve_velocity_m_s"] - scene.omega * wanted[1]).max(), result)
 
 
 CASES = {
