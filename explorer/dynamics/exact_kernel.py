@@ -1179,7 +1179,7 @@ def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0
 # them: explorer/studies/sweep_engine.row_scalars)
 FIGURES = ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
            "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
-           "largest_bounce_m")
+           "largest_bounce_m", "residual_deviation_m", "residual_amplitude_m")
 
 
 @njit(cache=True)
@@ -1200,7 +1200,7 @@ def _scaled_grid(nodes_th, h_th, Dn_th, h_unique_th, omega):
 
 @njit(cache=True)
 def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, omega, M, M1, k, c, lash, W0, rate, R, e,
-               zeno_height, max_events, N, ratio, preload_closing, take_up_s):
+               zeno_height, max_events, N, ratio, preload_closing, take_up_s, ref, dwell):
     """One revolution of the elastic effect at the speed omega, on a grid built in cam angle
     (RevolutionGrid: the n output samples from the drive's lowest point, out_nodes their nodes):
     the FIGURES, the valve lift at the output samples in the order of the cam angle (the effect's
@@ -1208,13 +1208,17 @@ def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i
     velocity, cam angle in degrees; in time order) and the solver status.
     The figures are the elastic effect's summary read as sweep_engine.row_scalars reads it:
     force, deviation from S - lash - W/k, separation on the output samples, events from the start
-    of the run for one period, times modulo the period (effects/elastic.py, elastic_events.py)."""
+    of the run for one period, times modulo the period (effects/elastic.py, elastic_events.py);
+    the residual figures from the lift the cam is made for, ref (2, n: per cam angle, its value
+    and slope per radian; effects/residual.reference_lift) and the dwell's first sample (-1: none;
+    effects/residual.py)."""
     nodes, h, Dn, h_unique = _scaled_grid(nodes_th, h_th, Dn_th, h_unique_th, omega)
     out_s, out_v, out_sigma, out_phase, ev, status, n_detail = solve_nodes(
         nodes, h, PT, Dn, Sb_th, omega, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height, max_events, N)
     n = out_nodes.size
     fig = np.full(len(FIGURES), np.nan)
     lift = np.empty(n)
+    vel = np.empty(n)
     period = 2.0 * math.pi / omega
     # the output samples: force (exact_output.solution's), deviation, separation
     max_dev = 0.0
@@ -1245,6 +1249,7 @@ def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i
             if not force > 0.0:
                 separated += 1
         lift[(r + i0) % n] = s
+        vel[(r + i0) % n] = v
     fig[1] = 0.0
     fig[8] = 0.0
     fig[2] = 360.0 * separated / n / 360.0 * period
@@ -1299,6 +1304,14 @@ def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i
     fig[6] = delay if delay < np.inf else np.nan
     fig[7] = seat_v if fig[8] > 0.0 else np.nan
     fig[9] = best_bounce
+    # residual vibration (effects/residual.residual_figures)
+    worst = 0.0
+    for i in range(n):
+        worst = max(worst, abs(lift[i] - ref[0, i]))
+    fig[10] = worst
+    if dwell >= 0:
+        wn = math.sqrt((k + rate) / M1)
+        fig[11] = math.hypot(lift[dwell] - ref[0, dwell], (vel[dwell] - omega * ref[1, dwell]) / wn)
     return fig, lift, rev, status
 
 
@@ -1332,7 +1345,7 @@ def _rate(M, M1, k, c, rate):
 
 @njit(cache=True)
 def revolutions(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, h_max_th, ratio, runs,
-                zeno_height, max_events):
+                zeno_height, max_events, ref, dwell):
     """revolution() for many runs on one grid (runs: one row of RUN_PARAMETERS each): the FIGURES
     per run and the solver status per run (a batch costs no Python per run)."""
     R = runs.shape[0]
@@ -1344,7 +1357,7 @@ def revolutions(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, 
         N = _taylor_terms(_rate(p[1], p[2], p[3], p[4], p[7]) * h_max_th / omega)
         fig, lift, rev, st = revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, omega,
                                         p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], zeno_height,
-                                        max_events, N, ratio, p[10], p[11])
+                                        max_events, N, ratio, p[10], p[11], ref, dwell)
         figs[r] = fig
         status[r] = st
     return figs, status
@@ -1464,26 +1477,29 @@ def split_parts(grid: RevolutionGrid, rho_theta: float) -> np.ndarray | None:
 
 
 def run_revolution(grid: RevolutionGrid, omega: float, model: LinkageModel, ratio: float, take_up_s: float,
-                   zeno_height: float = 1e-12, max_events: int = 100_000):
+                   ref: np.ndarray, dwell: int, zeno_height: float = 1e-12, max_events: int = 100_000):
     """revolution() on a RevolutionGrid: (FIGURES, valve lift at the output samples, revolution
-    events as the elastic effect lists them). RuntimeError where exact.py raises."""
+    events as the elastic effect lists them). RuntimeError where exact.py raises. ref, dwell:
+    the residual figures' reference lift and dwell sample (revolution())."""
     rho = phase_rates(model)
     N = taylor_terms(rho * grid.h_max / omega)
     fig, lift, rev, status = revolution(
         grid.nodes, grid.h, grid.PT, grid.Dn, grid.Sb, grid.hidx, grid.h_unique, grid.out_nodes, grid.i0, float(omega),
         *model_arguments(model), float(zeno_height), int(max_events), int(N), float(ratio),
-        float(model.preload + model.closing_load), float(take_up_s))
+        float(model.preload + model.closing_load), float(take_up_s), np.ascontiguousarray(ref, dtype=float),
+        int(dwell))
     _check(status)
     return fig, lift, rev
 
 
-def run_batch(grid: RevolutionGrid, ratio: float, runs: np.ndarray, zeno_height: float = 1e-12,
-              max_events: int = 100_000):
+def run_batch(grid: RevolutionGrid, ratio: float, runs: np.ndarray, ref: np.ndarray, dwell: int,
+              zeno_height: float = 1e-12, max_events: int = 100_000):
     """revolutions() on a RevolutionGrid: (FIGURES per run, status per run: OK, or the exact
-    solver's RuntimeErrors as TOO_MANY_EVENTS, NO_PROGRESS)."""
+    solver's RuntimeErrors as TOO_MANY_EVENTS, NO_PROGRESS); ref, dwell: revolution()'s, shared
+    by the runs (one lever ratio and lash)."""
     return revolutions(grid.nodes, grid.h, grid.PT, grid.Dn, grid.Sb, grid.hidx, grid.h_unique, grid.out_nodes,
                        grid.i0, grid.h_max, float(ratio), np.ascontiguousarray(runs, dtype=float),
-                       float(zeno_height), int(max_events))
+                       float(zeno_height), int(max_events), np.ascontiguousarray(ref, dtype=float), int(dwell))
 
 
 def revolution_events(rev: np.ndarray) -> list[dict]:
@@ -1510,8 +1526,9 @@ def warm() -> None:
     t = np.linspace(0.0, 2 * math.pi / omega, 181)
     solve(model, Drive(_Lift(), 1.0, omega), t)
     grid = revolution_grid(_Lift(), 1.0, 180)
-    run_revolution(grid, omega, model, 1.0, 0.0)
-    run_batch(grid, 1.0, np.array([[omega, *model_arguments(model), 50.0, 0.0]]))
+    ref = np.zeros((2, 180))
+    run_revolution(grid, omega, model, 1.0, 0.0, ref, -1)
+    run_batch(grid, 1.0, np.array([[omega, *model_arguments(model), 50.0, 0.0]]), ref, 3)
 
 
 if __name__ == "__main__":

@@ -25,7 +25,21 @@ import numpy as np
 
 ELASTIC = ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
            "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
-           "largest_bounce_m")
+           "largest_bounce_m", "residual_deviation_m", "residual_amplitude_m")  # exact_kernel.FIGURES
+
+
+def _residual_reference(shared, lift, ratio: float, lash: float, n: int):
+    """The residual figures' reference lift at the n output angles (value and slope per radian)
+    and the dwell's first sample (-1: none): effects/residual.py's, per lever ratio and lash."""
+    from ..effects.residual import dwell_sample, reference_lift
+    from .sweep_cache import remember
+
+    def make():
+        theta = np.arange(n) * (2.0 * math.pi / n)
+        i = dwell_sample(lift, theta)
+        return np.ascontiguousarray(reference_lift(lift, ratio, lash, theta, 1)), (-1 if i is None else i)
+
+    return remember(shared.take_ups, ("residual", ratio, lash, n), make)
 
 
 def accepts(scene, shared) -> bool:
@@ -70,7 +84,8 @@ def elastic_run(scene, shared):
         shared.grids, (ratio, n, parts.tobytes()), lambda: kernel.revolution_grid(lift, ratio, n, rho_theta, base))
     ups = _remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
     take_up = ups[0] / omega if len(ups) else math.nan
-    fig, lift_column, rev = kernel.run_revolution(grid, omega, model, ratio, take_up)
+    ref, dwell = _residual_reference(shared, lift, ratio, lash, n)
+    fig, lift_column, rev = kernel.run_revolution(grid, omega, model, ratio, take_up, ref, dwell)
     return dict(zip(ELASTIC, fig.tolist())), lift_column, rev
 
 
@@ -99,7 +114,7 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
         params[r] = (omega, v.mass, M1, link.stiffness, link.damping, lash, sp.preload + closing, sp.rate,
                      scene.loads.friction, scene.seat.restitution, sp.preload + closing,
                      ups[0] / omega if len(ups) else math.nan)
-        groups.setdefault((ratio, scene.solver.steps_per_revolution), []).append(r)
+        groups.setdefault((ratio, scene.solver.steps_per_revolution, lash), []).append(r)
     # the fastest rate of each run: the step budget (effects.elastic.check_resolution) and the split
     M, M1, k, c, rate = (params[:, i] for i in (1, 2, 3, 4, 7))
     alpha = 0.5 * c / M1
@@ -109,8 +124,9 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     rho = np.maximum(rho, np.sqrt(rate / M))
     omega = params[:, 0]
     failed |= ~(rho * (2.0 * math.pi / omega) / 0.5 <= MAX_SOLVER_NODES)
-    for (ratio, n), members in groups.items():
+    for (ratio, n, lash), members in groups.items():
         base = remember(shared.grids, (ratio, n), lambda: kernel.revolution_grid(lift, ratio, n))
+        ref, dwell = _residual_reference(shared, lift, ratio, lash, n)
         members = np.array([m for m in members if not failed[m]], dtype=np.int64)
         if not members.size:
             continue
@@ -118,14 +134,14 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
         split = rho_theta * base.h_max / kernel.MAX_RHO_H > 1.0
         plain = members[~split]
         if plain.size:
-            figs, status = kernel.run_batch(base, ratio, params[plain])
+            figs, status = kernel.run_batch(base, ratio, params[plain], ref, dwell)
             figures[plain] = figs
             failed[plain] = status != kernel.OK
         for m, rt in zip(members[split].tolist(), rho_theta[split].tolist()):
             parts = kernel.split_parts(base, rt)
             grid = remember(shared.grids, (ratio, n, parts.tobytes()),
                             lambda: kernel.revolution_grid(lift, ratio, n, rt, base))
-            figs, status = kernel.run_batch(grid, ratio, params[m:m + 1])
+            figs, status = kernel.run_batch(grid, ratio, params[m:m + 1], ref, dwell)
             figures[m] = figs[0]
             failed[m] = status[0] != kernel.OK
     figures[failed] = math.nan
