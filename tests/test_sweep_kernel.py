@@ -318,3 +318,45 @@ def test_numba_is_imported_by_the_kernel_module_only():
     out = subprocess.run([sys.executable, "-c", code, str(SCENES / "elastic_float.toml")], capture_output=True,
                          text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_a_speed_sweeps_rigid_figures_at_once_equal_simulates():
+    """The compiled path's chunk of a speed sweep computes the rigid figures of all its speeds at
+    once (sweep_rigid.py). Oracle: `simulate` at each speed. The refined minimum contact force is
+    the same floats (the batched zoom repeats min_contact_force's samples row by row), the float
+    speed too; the peak camshaft torque within 1e-9 relative (the same product per sample, its
+    factor formed once). Speeds from 'never floats' to far beyond the float speed."""
+    from explorer.studies.sweep_engine import reference_row
+    from explorer.studies.sweep_rigid import speed_only
+
+    base = load_scene(SCENES / "valve_float_demo.toml")
+    names = result_columns(base)
+    rpms = np.array([150.0, 900.0, 2600.0, 3727.0, 4400.0, 8000.0, 14000.0])
+    values = rpms[:, None]  # (a sweep's values are in the scene file's units: rpm)
+    shared = _Shared()
+    assert engine_for(base, shared).name == "compiled"
+    assert speed_only([scene_for(base, ("drive.rpm",), v) for v in values])
+    got = compute_chunk(base, ("drive.rpm",), values, names, shared)
+    for i, v in enumerate(values):
+        expected = reference_row(scene_for(base, ("drive.rpm",), v), names)
+        row = dict(zip(names, got[i]))
+        assert row["min_contact_force_N"] == expected["min_contact_force_N"]
+        assert row["float_speed_rpm"] == expected["float_speed_rpm"]
+        assert row["max_camshaft_torque_Nm"] == pytest.approx(expected["max_camshaft_torque_Nm"], rel=1e-9)
+    assert got[0, names.index("min_contact_force_N")] > 0 > got[-1, names.index("min_contact_force_N")]
+
+
+def test_runs_that_differ_in_more_than_speed_take_their_rigid_figures_run_by_run():
+    from explorer.studies.sweep_engine import reference_row
+    from explorer.studies.sweep_rigid import speed_only
+
+    base = load_scene(SCENES / "valve_float_demo.toml")
+    names = result_columns(base)
+    keys = ("drive.rpm", "valve.lash")
+    values = np.array([[3000.0, 0.2e-3], [3000.0, 0.4e-3]])
+    assert not speed_only([scene_for(base, keys, v) for v in values])
+    got = compute_chunk(base, keys, values, names)
+    for i, v in enumerate(values):
+        expected = reference_row(scene_for(base, keys, v), names)
+        assert got[i, names.index("min_contact_force_N")] == expected["min_contact_force_N"]
+        assert got[i, names.index("max_camshaft_torque_Nm")] == expected["max_camshaft_torque_Nm"]

@@ -262,12 +262,18 @@ def _kernel_chunk(scenes, names, shared) -> np.ndarray:
     """The rows of many runs: the elastic figures in compiled batches (sweep_kernel.elastic_chunk),
     the rigid ones (forces, contact) run by run as engine_outputs computes them."""
     from .sweep_kernel import ELASTIC, elastic_chunk
+    from .sweep_rigid import RIGID, rigid_over_speeds, speed_only
 
     names = tuple(names)
     out = np.full((len(scenes), len(names)), math.nan)
     fail = names.index("run_failed")
     failed = np.zeros(len(scenes), bool)
     rigid = [n for n in names if n not in ELASTIC and n != "run_failed"]
+    if rigid and len(scenes) > 1 and set(rigid) <= set(RIGID) and speed_only(scenes):
+        # a speed sweep: every speed's rigid figures at once (sweep_rigid.py)
+        for name, values in rigid_over_speeds(scenes, rigid, shared).items():
+            out[:, names.index(name)] = values
+        rigid = []
     if rigid:
         for i, scene in enumerate(scenes):
             try:
