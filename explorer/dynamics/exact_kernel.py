@@ -779,24 +779,17 @@ def _drive_at(PT, Dn, h, ns, j, u, tmp):
 
 
 @njit(cache=True)
-def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height, max_events,
-                N):
-    """The node records (s, v, friction sign, phase code) and the events (rows: code, time,
-    velocity, Zeno accumulation time or NaN) of one run over the grid (exact_grid.build_grid's
-    nodes, h, P.T, Dn, hidx, h_unique; Sb its bounds of the drive's first three derivatives per
-    step, times sw1, sw1^2, sw1^3: a grid in cam angle at the speed sw1), starting at rest on the
-    seat; and a status (OK, or TOO_MANY_EVENTS / NO_PROGRESS: exact.py's RuntimeErrors)."""
+def grid_bounds(h, Dn, Sb):
+    """What the block and window bounds read of a grid, computed once per grid (a sweep's runs
+    share it; solve_nodes scales it to its speed sw1, each entry by a positive factor, under which
+    the largest value stays the largest):
+    blk (per BLOCK steps, the seated valve's block clearance): the largest S and S1 at its nodes
+    and the largest h^2/8 |S2| and h^2/8 |S3| over its steps (at the speed sw1: times 1, sw1, 1,
+    sw1, for h in time is h in angle / sw1);
+    win (per WINDOW steps, the moving valve's window bound): the smallest and largest S and S1 at
+    its nodes and the largest bounds of |S1|, |S2|, |S3| over its steps (times 1, 1, sw1, sw1,
+    sw1, sw1^2, sw1^3)."""
     ns = h.size
-    nn = ns + 1
-    U = h_unique.size
-    sw2 = sw1 * sw1
-    sw3 = sw2 * sw1
-    grp_H = np.empty(U)
-    grp_q = np.empty(U)
-    grp_inv1q = np.empty(U)
-    grp_H8 = np.empty(U)
-    # per block of BLOCK steps: the largest S and S1 at its nodes and the largest h^2/8 |S2|,
-    # h^2/8 |S3| over its steps (the seated valve's block clearance)
     nb = ns // BLOCK
     blk = np.full((4, max(nb, 1)), -np.inf)
     for bk in range(nb):
@@ -805,10 +798,8 @@ def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0
             blk[1, bk] = max(blk[1, bk], Dn[1, i])
         for i in range(bk * BLOCK, bk * BLOCK + BLOCK):
             hh = h[i] * h[i] / 8.0
-            blk[2, bk] = max(blk[2, bk], hh * Sb[1, i] * sw2)
-            blk[3, bk] = max(blk[3, bk], hh * Sb[2, i] * sw3)
-    # per window of WINDOW steps (the moving valve's window bound): the smallest and largest S and
-    # S1 at its nodes, the largest bounds of |S'|, |S''|, |S'''| over its steps
+            blk[2, bk] = max(blk[2, bk], hh * Sb[1, i])
+            blk[3, bk] = max(blk[3, bk], hh * Sb[2, i])
     nw = ns // WINDOW
     win = np.empty((7, max(nw, 1)))
     for wb in range(nw):
@@ -826,7 +817,28 @@ def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0
             b2 = max(b2, Sb[1, q])
             b3 = max(b3, Sb[2, q])
         win[0, wb], win[1, wb], win[2, wb], win[3, wb] = s_lo, s_hi, d_lo, d_hi
-        win[4, wb], win[5, wb], win[6, wb] = b1 * sw1, b2 * sw2, b3 * sw3
+        win[4, wb], win[5, wb], win[6, wb] = b1, b2, b3
+    return blk, win
+
+
+@njit(cache=True)
+def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height, max_events,
+                N, blk, win):
+    """The node records (s, v, friction sign, phase code) and the events (rows: code, time,
+    velocity, Zeno accumulation time or NaN) of one run over the grid (exact_grid.build_grid's
+    nodes, h, P.T, Dn, hidx, h_unique; Sb its bounds of the drive's first three derivatives per
+    step, times sw1, sw1^2, sw1^3: a grid in cam angle at the speed sw1), starting at rest on the
+    seat; and a status (OK, or TOO_MANY_EVENTS / NO_PROGRESS: exact.py's RuntimeErrors).
+    blk, win: grid_bounds of the grid at the speed 1."""
+    ns = h.size
+    nn = ns + 1
+    U = h_unique.size
+    sw2 = sw1 * sw1
+    sw3 = sw2 * sw1
+    grp_H = np.empty(U)
+    grp_q = np.empty(U)
+    grp_inv1q = np.empty(U)
+    grp_H8 = np.empty(U)
     out_s = np.full(nn, np.nan)
     out_v = np.full(nn, np.nan)
     out_sigma = np.ones(nn)
@@ -935,7 +947,7 @@ def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0
                     while i < ns:
                         if blocks_ok and i % BLOCK == 0 and i + BLOCK <= ns:
                             bk = i // BLOCK
-                            if ap_ * (blk[0, bk] + blk[2, bk]) + bp_ * (blk[1, bk] + blk[3, bk]) + kp_ <= 0.0:
+                            if ap_ * (blk[0, bk] + blk[2, bk]) + bp_ * ((blk[1, bk] + blk[3, bk]) * sw1) + kp_ <= 0.0:
                                 for q in range(i, i + BLOCK):
                                     out_s[q] = s_star
                                     out_v[q] = 0.0
@@ -1130,8 +1142,8 @@ def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0
                             v_lo = min(v_lo, vv)
                             v_hi = max(v_hi, vv)
                         wb = i // WINDOW
-                        if _window_clear(win[0, wb], win[1, wb], win[2, wb], win[3, wb], win[4, wb], win[5, wb],
-                                         win[6, wb], s_lo, s_hi, v_lo, v_hi, m_, c_, K_, kc_, cc_, Fc, inv_m, wH,
+                        if _window_clear(win[0, wb], win[1, wb], win[2, wb] * sw1, win[3, wb] * sw1, win[4, wb] * sw1,
+                                         win[5, wb] * sw2, win[6, wb] * sw3, s_lo, s_hi, v_lo, v_hi, m_, c_, K_, kc_, cc_, Fc, inv_m, wH,
                                          wi1q, wH8, rows, ev_r0, ev_nr, ev_comb, n_ev, clear_row):
                             for q in range(i, i + WINDOW):
                                 out_phase[q] = kind
@@ -1331,7 +1343,7 @@ def _scaled_grid(nodes_th, h_th, Dn_th, h_unique_th, omega):
 
 @njit(cache=True)
 def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, omega, M, M1, k, c, lash, W0, rate, R, e,
-               zeno_height, max_events, N, ratio, preload_closing, take_up_s, ref, dwell):
+               zeno_height, max_events, N, ratio, preload_closing, take_up_s, ref, dwell, blk, win):
     """One revolution of the elastic effect at the speed omega, on a grid built in cam angle
     (RevolutionGrid: the n output samples from the drive's lowest point, out_nodes their nodes):
     the FIGURES, the valve lift at the output samples in the order of the cam angle (the effect's
@@ -1342,10 +1354,11 @@ def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i
     of the run for one period, times modulo the period (effects/elastic.py, elastic_events.py);
     the residual figures from the lift the cam is made for, ref (2, n: per cam angle, its value
     and slope per radian; effects/residual.reference_lift) and the dwell's first sample (-1: none;
-    effects/residual.py)."""
+    effects/residual.py); blk, win: grid_bounds of the grid in cam angle."""
     nodes, h, Dn, h_unique = _scaled_grid(nodes_th, h_th, Dn_th, h_unique_th, omega)
     out_s, out_v, out_sigma, out_phase, ev, status, n_detail = solve_nodes(
-        nodes, h, PT, Dn, Sb_th, omega, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height, max_events, N)
+        nodes, h, PT, Dn, Sb_th, omega, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height, max_events, N,
+        blk, win)
     n = out_nodes.size
     fig = np.full(len(FIGURES), np.nan)
     lift = np.empty(n)
@@ -1491,13 +1504,14 @@ def revolutions(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, 
     R = runs.shape[0]
     figs = np.empty((R, len(FIGURES)))
     status = np.empty(R, dtype=np.int64)
+    blk, win = grid_bounds(h_th, Dn_th, Sb_th)  # once for the batch: they do not depend on the speed
     for r in range(R):
         p = runs[r]
         omega = p[0]
         N = _taylor_terms(_rate(p[1], p[2], p[3], p[4], p[7]) * h_max_th / omega)
         fig, lift, rev, st = revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, omega,
                                         p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], zeno_height,
-                                        max_events, N, ratio, p[10], p[11], ref, dwell)
+                                        max_events, N, ratio, p[10], p[11], ref, dwell, blk, win)
         figs[r] = fig
         status[r] = st
     return figs, status
@@ -1552,10 +1566,11 @@ def solve(model: LinkageModel, drive, t: np.ndarray, zeno_height: float = 1e-12,
     rho = phase_rates(model)
     g = build_grid(drive, t_req, rho, hmin)
     N = taylor_terms(rho * g.h_max)
+    Sb = np.ascontiguousarray(g.Sb)
     out_s, out_v, out_sigma, out_phase, ev, status, n_detail = solve_nodes(
-        g.nodes, g.h, np.ascontiguousarray(g.PT), g.Dn, np.ascontiguousarray(g.Sb), 1.0, g.hidx.astype(np.int64),
+        g.nodes, g.h, np.ascontiguousarray(g.PT), g.Dn, Sb, 1.0, g.hidx.astype(np.int64),
         g.h_unique,
-        *model_arguments(model), float(zeno_height), int(max_events), int(N))
+        *model_arguments(model), float(zeno_height), int(max_events), int(N), *grid_bounds(g.h, g.Dn, Sb))
     _check(status)
     lins = {CONTACT: LinearPhase(model.oscillating_mass, model.damping, model.stiffness + model.spring_rate,
                                  model.stiffness, model.damping),
@@ -1627,7 +1642,7 @@ def run_revolution(grid: RevolutionGrid, omega: float, model: LinkageModel, rati
         grid.nodes, grid.h, grid.PT, grid.Dn, grid.Sb, grid.hidx, grid.h_unique, grid.out_nodes, grid.i0, float(omega),
         *model_arguments(model), float(zeno_height), int(max_events), int(N), float(ratio),
         float(model.preload + model.closing_load), float(take_up_s), np.ascontiguousarray(ref, dtype=float),
-        int(dwell))
+        int(dwell), *grid_bounds(grid.h, grid.Dn, grid.Sb))
     _check(status)
     return fig, lift, rev
 
