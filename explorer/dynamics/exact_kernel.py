@@ -1342,6 +1342,42 @@ def _scaled_grid(nodes_th, h_th, Dn_th, h_unique_th, omega):
 
 
 @njit(cache=True)
+def _first_sample(n, omega, t, after):
+    """The first output sample i (of n; n: none) whose time i (2 pi / n) / omega (the effect's
+    time_s column, the same operations as np.arange(n) * (2 pi / n) / omega) is > t (after) or
+    >= t: np.searchsorted without the array of times."""
+    step = 2.0 * math.pi / n
+    lo = 0
+    hi = n
+    while lo < hi:
+        mid = (lo + hi) // 2
+        ti = float(mid) * step / omega
+        if (ti > t) if after else (ti >= t):
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
+@njit(cache=True)
+def _largest(x, lo, hi, init):
+    """max(init, x[lo:hi]) with four running maxima (one is a chain of dependent compares; max is
+    exact in any order)."""
+    m0 = m1 = m2 = m3 = init
+    i = lo
+    while i + 4 <= hi:
+        m0 = max(m0, x[i])
+        m1 = max(m1, x[i + 1])
+        m2 = max(m2, x[i + 2])
+        m3 = max(m3, x[i + 3])
+        i += 4
+    while i < hi:
+        m0 = max(m0, x[i])
+        i += 1
+    return max(max(m0, m1), max(m2, m3))
+
+
+@njit(cache=True)
 def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, omega, M, M1, k, c, lash, W0, rate, R, e,
                zeno_height, max_events, N, ratio, preload_closing, take_up_s, ref, dwell, blk, win):
     """One revolution of the elastic effect at the speed omega, on a grid built in cam angle
@@ -1420,7 +1456,6 @@ def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i
     order = np.argsort(rev[:, 1], kind="mergesort")  # (stable: equal instants keep the solver's order)
     rev = rev[order]
     best_bounce = 0.0
-    times = np.empty(0)
     seat_v = np.inf
     delay = np.inf
     for q in range(m):
@@ -1439,12 +1474,10 @@ def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i
                     t1 = min(t1, rev[p, 1])
             if t1 == np.inf:
                 t1 = (n - 1) * (2.0 * math.pi / n) / omega + 1.0
-            if times.size == 0:  # the output times (the effect's time_s column: theta / omega)
-                times = np.arange(n) * (2.0 * math.pi / n) / omega
-            for i in range(np.searchsorted(times, t0, side="right"), n):
-                if not times[i] < t1:
-                    break
-                best_bounce = max(best_bounce, lift[i])
+            # the samples after t0 and before t1 (the first after t0 up to the first at or after t1)
+            lo = _first_sample(n, omega, t0, True)
+            hi = _first_sample(n, omega, t1, False)
+            best_bounce = _largest(lift, lo, hi, best_bounce)
         elif code == LIFT_OFF and not math.isnan(take_up_s):
             delay = min(delay, np.fmod(rev[q, 1] - take_up_s + period, period))
     fig[6] = delay if delay < np.inf else np.nan
