@@ -1,5 +1,5 @@
 """The compiled exact solver (explorer/dynamics/exact_kernel.py) and the sweep's compiled path
-(explorer/studies/sweep_kernel.py) against the registry's exact solver and `simulate` (issue #14.3).
+(explorer/effects/elastic_batch.py) against the registry's exact solver and `simulate` (issue #14.3).
 
 Oracle: the Python exact solver (dynamics/exact.py) and `simulate` itself, on the same values.
 The kernel solves the same step ODEs with the same closed forms and finds the same events with the
@@ -40,7 +40,7 @@ from explorer.effects.lift import build_lift
 from explorer.effects.pipeline import simulate
 from explorer.scene.scene import load_scene
 from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, engine_for, result_columns, row_scalars
-from explorer.studies.sweep_kernel import ELASTIC, kernel_outputs
+from explorer.effects.elastic_batch import ELASTIC, kernel_outputs
 from explorer.studies.sweep_spec import scene_for
 
 LIFT_TOL_M = 1e-12

@@ -12,11 +12,11 @@ row needs, and shares across runs everything that does not depend on the varied 
 - the forces effect's side figures and loss intervals, which no row holds, are not computed.
 
 Which engine computes a chunk's rows is a registry (ENGINES, the first that accepts the scene):
-- "compiled" (sweep_kernel.py): the elastic figures from the compiled exact solver
+- "compiled" (effects/elastic_batch.py): the elastic figures from the compiled exact solver
   (dynamics/exact_kernel.py), for the scenes whose elastic effect solves the LinkageModel with the
   exact solver and a constant stiffness; equal to simulate's within 1e-12 m of lift, 1e-12 s of
   event time and ~1e-9 relative of a figure (rounding of another order of the same operations;
-  tests/test_sweep_kernel.py);
+  tests/test_effects/elastic_batch.py);
 - "shared": the elastic effect itself (elastic_effect), each row equal to simulate's to the bit
   (tests/test_sweep_engine.py), for the other non-gear scenes (a spring chain, another solver);
 - "simulate": simulate whole (the gears).
@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
-from .sweep_cache import CACHE_ENTRIES, remember as _remember  # noqa: F401 (CACHE_ENTRIES: the tests')
+from ..core.memo import CACHE_ENTRIES, remember as _remember  # noqa: F401 (CACHE_ENTRIES: the tests')
 from .sweep_spec import scene_for
 
 EFFECT_COLUMNS: dict[str, tuple[str, ...]] = {
@@ -145,7 +145,7 @@ class _Shared:
     pieces: dict = field(default_factory=dict)
     jumps: dict = field(default_factory=dict)
     take_ups: dict = field(default_factory=dict)
-    grids: dict = field(default_factory=dict)  # the compiled path's revolution grids (sweep_kernel.py)
+    grids: dict = field(default_factory=dict)  # the compiled path's revolution grids (effects/elastic_batch.py)
 
 
 def _batchable(scene) -> bool:
@@ -237,15 +237,15 @@ class RowEngine:
 
 
 def _kernel_accepts(scene, shared) -> bool:
-    from .sweep_kernel import accepts
+    from ..effects.elastic_batch import accepts
 
     return accepts(scene, shared)
 
 
 def _kernel_row(scene, names, shared) -> dict[str, float]:
-    """The row of one run: the elastic figures compiled (sweep_kernel.elastic_run), the rigid ones
+    """The row of one run: the elastic figures compiled (elastic_batch.elastic_run), the rigid ones
     (forces, contact) as engine_outputs computes them."""
-    from .sweep_kernel import ELASTIC, elastic_run
+    from ..effects.elastic_batch import ELASTIC, elastic_run
 
     names = set(names)
     row: dict[str, float] = {}
@@ -259,9 +259,9 @@ def _kernel_row(scene, names, shared) -> dict[str, float]:
 
 
 def _kernel_chunk(scenes, names, shared) -> np.ndarray:
-    """The rows of many runs: the elastic figures in compiled batches (sweep_kernel.elastic_chunk),
+    """The rows of many runs: the elastic figures in compiled batches (elastic_batch.elastic_chunk),
     the rigid ones (forces, contact) run by run as engine_outputs computes them."""
-    from .sweep_kernel import ELASTIC, elastic_chunk
+    from ..effects.elastic_batch import ELASTIC, elastic_chunk
     from .sweep_rigid import RIGID, rigid_over_speeds, speed_only
 
     names = tuple(names)

@@ -39,7 +39,7 @@ def rigid_over_speeds(scenes, names, shared) -> dict[str, np.ndarray]:
     from ..effects.lift import build_lift
     from ..effects.pipeline import Context, effect_function
     from ..mechanics.forces import TrainLoads, float_speed, grid_load_parts, min_contact_forces, smooth_pieces
-    from .sweep_cache import remember
+    from ..core.memo import remember
 
     scene = scenes[0]
     if shared.lift is None:
