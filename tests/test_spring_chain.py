@@ -15,6 +15,7 @@ from explorer import load_scene, loads_scene, simulate
 from explorer.dynamics import chain_reference
 from explorer.dynamics.chain import ChainModel, chain_frequencies, continuous_frequencies
 from explorer.dynamics.chain_exact import phase_modes, phi_functions, solve
+from explorer.dynamics.chain_kernels import phi_into
 from explorer.dynamics.model import Drive, LinkageModel
 from explorer.dynamics.model import solve as solve_massless
 from explorer.core.errors import InputError
@@ -87,9 +88,14 @@ def test_phi_functions_against_their_integral():
     nodes, weights = np.polynomial.legendre.leggauss(60)
     s, w = 0.5 * (nodes + 1.0), 0.5 * weights
     F = phi_functions(xs)
+    # the compiled copy the solver's inner loops use (chain_kernels.py), same oracle
+    Fc = np.empty((7, xs.size), dtype=complex)
+    phi_into(xs.astype(complex), Fc)
     for j in range(1, 7):
         ref = (np.exp(np.outer(xs, 1.0 - s)) * s ** (j - 1) / math.factorial(j - 1)) @ w
         np.testing.assert_allclose(F[j], ref, rtol=1e-13, atol=1e-16)
+        np.testing.assert_allclose(Fc[j], ref, rtol=1e-13, atol=1e-16)
+    np.testing.assert_allclose(Fc[0], np.exp(xs), rtol=1e-15)
 
 
 def test_undamped_phase_eigenvalues_are_imaginary_and_match_eigh():
@@ -103,10 +109,14 @@ def test_undamped_phase_eigenvalues_are_imaginary_and_match_eigh():
 
 # -- the exact solver against its oracles ------------------------------------------------------
 
-@pytest.mark.parametrize("rpm, N", [(3000, 8), (2300, 4)])
-def test_exact_matches_scipy_reference(rpm, N):
+@pytest.mark.parametrize("rpm, N, changes", [
+    (3000, 8, {}), (2300, 4, {}), (5000, 1, {}),
+    # coil clash events (the same-phase event that disarms its function until it comes back)
+    (3000, 8, {"clash_compression": 0.94e-3}),
+])
+def test_exact_matches_scipy_reference(rpm, N, changes):
     # same model, same events; scipy DOP853 rtol 1e-10 atol 1e-13 is good to ~1e-11 m here
-    m = _model(elements=N)
+    m = _model(elements=N, **changes)
     drive, t = _drive(rpm), _grid(rpm)
     ex = solve(m, drive, t)
     ref = chain_reference.solve(m, drive, t)

@@ -41,6 +41,7 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
     i_next = 1
     nfev = 0
     last_guard = None
+    clashed: set[int] = set()
     while i_next < t.size:
         A, B, rho = modes(key)
         contact, seat = key
@@ -76,8 +77,11 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
         last_guard = None
         if math.isfinite(model.clash_compression):
             for j in range(n):
-                add(f"coil-clash:{j}", (lambda tt, yy, j=j: yy[j] - (yy[j + 1] if j + 1 < n else 0.0)
-                                        - model.clash_compression), 1.0)
+                # an element that has clashed waits until it comes back below the clash
+                # compression (a restart there), as the exact solver disarms its function
+                add(f"guard-unclash:{j}" if j in clashed else f"coil-clash:{j}",
+                    (lambda tt, yy, j=j: yy[j] - (yy[j + 1] if j + 1 < n else 0.0) - model.clash_compression),
+                    -1.0 if j in clashed else 1.0)
         t_eval = t[i_next:]
         sol = solve_ivp(rhs, (t_now, float(t[-1])), y, method=scipy_method, t_eval=t_eval, events=funcs,
                         rtol=rtol, atol=atol, max_step=max_step_fraction * 2.0 * math.pi / rho)
@@ -94,11 +98,16 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
         y = sol.y_events[k][0].copy()
         kind = kinds[k]
         if kind.startswith("guard"):
+            if kind.startswith("guard-unclash"):
+                clashed.discard(int(kind.split(":")[1]))
             t_now, last_guard = t_ev, kind
             continue
         item = {"kind": kind.split(":")[0], "time_s": t_ev}
         if kind == "seat":
             item["velocity_m_s"] = float(y[n])
+        if kind.startswith("coil-clash"):
+            item["element"] = int(kind.split(":")[1])
+            clashed.add(item["element"])
         events.append(item)
         if len(events) > max_events:
             raise RuntimeError(f"more than {max_events} events in one run")
