@@ -94,13 +94,15 @@ class PhaseModes:
     mB: np.ndarray  # (2n, 3): modal forcing per unit S, S', 1
     A: np.ndarray  # (2n, 2n) physical state matrix
     B: np.ndarray  # (2n, 3)
+    mode: int = 1  # the valve moving up (+1: friction -R) or down (-1), or held by friction (0)
 
 
-def phase_modes(model: ChainModel, contact: bool, seat: bool) -> PhaseModes:
-    n = model.n
-    M = model.masses
+def _decompose(M: np.ndarray, K: np.ndarray, C: np.ndarray):
+    """(lam, phys, inv) of y' = A y (y = [x, x'], M x'' + C x' + K x = 0, K positive definite) in
+    mass-normalised coordinates Y = [K~^(1/2) q, q'] (q = M^(1/2) x), where the undamped A is
+    skew-symmetric and its eigenvectors orthogonal: y = phys @ z, z = inv @ y."""
+    n = M.size
     mh, ms = 1.0 / np.sqrt(M), np.sqrt(M)
-    K, C = model.phase_matrices(contact, seat)
     Kt = mh[:, None] * K * mh[None, :]
     Ct = mh[:, None] * C * mh[None, :]
     w2, Q = np.linalg.eigh(0.5 * (Kt + Kt.T))
@@ -116,13 +118,48 @@ def phase_modes(model: ChainModel, contact: bool, seat: bool) -> PhaseModes:
     Ti = np.zeros((2 * n, 2 * n))
     Ti[:n, :n] = Sq * ms[None, :]
     Ti[n:, n:] = np.diag(ms)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K / M[:, None], -C / M[:, None]]])
-    B = np.zeros((2 * n, 3))
-    B[n:] = model.forcing_vectors(contact) / M[:, None]
-    inv = Vi @ Ti
     # a purely imaginary pair must not drift into the right half plane by rounding
     lam = np.where(lam.real > 0.0, 1j * lam.imag, lam)
-    return PhaseModes(contact, seat, lam, T @ V, inv, inv @ B, A, B)
+    return lam, T @ V, Vi @ Ti
+
+
+def phase_modes(model: ChainModel, contact: bool, seat: bool, mode: int = 1) -> PhaseModes:
+    """The phase type's state matrix and its decomposition. mode +1/-1: the valve moves (its
+    friction -mode R in the forcing). mode 0: the valve is held by friction at its height s*
+    (v = 0) while the coils move: s and v are states of eigenvalue 0, the coils' motion about
+    their static shape with the valve at s* is decomposed as the chain with both ends held."""
+    n = model.n
+    M = model.masses
+    K, C = model.phase_matrices(contact, seat)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K / M[:, None], -C / M[:, None]]])
+    B = np.zeros((2 * n, 3))
+    if mode != 0:
+        lam, phys, inv = _decompose(M, K, C)
+        B[n:] = model.forcing_vectors(contact, float(mode)) / M[:, None]
+        return PhaseModes(contact, seat, lam, phys, inv, inv @ B, A, B, mode)
+    # held valve: the rows of s and v are 0 (s' = 0, v' = 0: s stays s*, v stays 0); the coils
+    # u = G s + w with G the static shape (K_cc G = -K_c0), w the chain with held ends
+    A[0] = 0.0
+    A[n] = 0.0
+    A[:, n] = 0.0  # v = 0: its damping couplings do not act (and e_v is then a mode of eigenvalue 0)
+    m = n - 1
+    cs = np.r_[1:n, n + 1:2 * n]  # the coils' rows of y
+    z = np.zeros((2 * n, 2 * n), dtype=complex)
+    phys = z.copy()
+    inv = z.copy()
+    lam = np.zeros(2 * n, dtype=complex)
+    if m:
+        lc, pc, ic = _decompose(M[1:], K[1:, 1:], C[1:, 1:])
+        G = -np.linalg.solve(K[1:, 1:], K[1:, 0])
+        lam[:2 * m] = lc
+        phys[np.ix_(cs, np.arange(2 * m))] = pc
+        inv[np.ix_(np.arange(2 * m), cs)] = ic
+        # y_u = G s + w: the s column of phys adds G; z_w = ic [u - G s; u']
+        phys[1:n, 2 * m] = G
+        inv[:2 * m, 0] = -ic[:, :m] @ G
+    phys[0, 2 * m] = phys[n, 2 * m + 1] = 1.0
+    inv[2 * m, 0] = inv[2 * m + 1, n] = 1.0
+    return PhaseModes(contact, seat, lam, phys, inv, np.zeros((2 * n, 3), dtype=complex), A, B, 0)
 
 
 class _Event:
@@ -205,7 +242,7 @@ class ChainSolver:
         self.h_group = np.array(means)
 
     # ------------------------------------------------------------------ phases
-    def modes(self, key: tuple[bool, bool]) -> PhaseModes:
+    def modes(self, key: tuple[bool, bool, int]) -> PhaseModes:
         md = self._modes.get(key)
         if md is None:
             md = self._modes[key] = phase_modes(self.model, *key)
@@ -229,7 +266,7 @@ class ChainSolver:
     # ------------------------------------------------------------------ events
     def _make_event_functions(self, key) -> list[_Event]:
         m, n = self.model, self.n
-        contact, seat = key
+        contact, seat, mode = key
         ev = []
         e_s = np.zeros(2 * n)
         e_s[0] = 1.0
@@ -240,10 +277,18 @@ class ChainSolver:
                              -m.stiffness * m.lash, -1.0))
         else:  # the gap S - lash - s closes
             ev.append(_Event("re-contact", -e_s, 1.0, 0.0, -m.lash, +1.0))
-        if seat:
+        if mode == 0:
+            # held by friction: released when the net force leaves the band [-R, R] (the seat's
+            # state cannot change while the valve stands)
+            coef, alpha, beta, const = m.net_force_row(contact, seat)
+            ev.append(_Event("release", coef, alpha, beta, const - m.friction, +1.0, index=+1))
+            ev.append(_Event("release", coef, alpha, beta, const + m.friction, -1.0, index=-1))
+        elif seat:
             ev.append(_Event("lift-off", e_s, 0.0, 0.0, 0.0, +1.0))
         else:
             ev.append(_Event("seat", e_s, 0.0, 0.0, 0.0, -1.0))
+        if mode != 0 and m.friction > 0.0:  # the velocity reaches 0: the valve sticks or turns
+            ev.append(_Event("velocity-zero", -mode * e_v, 0.0, 0.0, 0.0, +1.0))
         if math.isfinite(m.clash_compression):
             for j in range(n):  # element j: x_j - x_(j+1) reaches the clash compression
                 c = np.zeros(2 * n)
@@ -327,23 +372,39 @@ class ChainSolver:
         hj = float(self.h[j])
         z = kernels.advance_to(pd.modes.lam, pd.mB, z0, self.PT[j], u0, u, hj)
         y = (pd.modes.phys @ z).real
-        item = {"kind": e.kind, "time_s": float(self.nodes[j]) + u * hj}
-        if e.kind == "seat":
+        kind = e.kind
+        contact, seat, mode = key
+        if kind == "velocity-zero":
+            S, S1, _, _ = kernels.drive_at(self.PT[j], hj, u)
+            kind, mode = stick_or_turn(self.model, y, S, S1, contact, seat)
+            y[self.n] = 0.0  # (a rounding away from 0)
+        elif kind == "release":
+            mode = e.index
+        item = {"kind": kind, "time_s": float(self.nodes[j]) + u * hj}
+        if kind == "seat":
             item["velocity_m_s"] = float(y[self.n])
-        if e.kind == "coil-clash":
+        if kind == "coil-clash":
             item["element"] = e.index
         self.events.append(item)
         if len(self.events) > self.max_events:
             raise RuntimeError(f"more than {self.max_events} events in one run")
-        contact, seat = key
-        contact = {"separation": False, "re-contact": True}.get(e.kind, contact)
-        seat = {"lift-off": False, "seat": True}.get(e.kind, seat)
-        new = (contact, seat)
+        contact = {"separation": False, "re-contact": True}.get(kind, contact)
+        seat = {"lift-off": False, "seat": True}.get(kind, seat)
+        new = (contact, seat, mode)
         if new == key:  # a clash: that function waits until it has come back
             armed = self._arm(pd, z, j, u)
             armed[i] = False
             return key, z, u, armed
-        return new, self.modes(new).inv @ y, u, None
+        pd_new = self.data(new)
+        z = pd_new.modes.inv @ y
+        if kind in ("release", "turn"):
+            # the valve starts from v = 0 with an acceleration that may be a rounding of 0 (the net
+            # force has just left the band): its velocity-zero function waits until the valve has
+            # moved in its direction, or a rounding would read as a stop at once
+            armed = self._arm(pd_new, z, j, u)
+            armed[[e.kind == "velocity-zero" for e in pd_new.events]] = False
+            return new, z, u, armed
+        return new, z, u, None
 
 
 _NONE = np.zeros(0, bool)  # "no previous flags" for the compiled arm
@@ -357,18 +418,33 @@ class ChainSolution(DynamicsSolution):
 
 
 def start_state(model: ChainModel, drive, t0: float):
-    """(x0, v0, phase key): at rest in static equilibrium with the drive at t0."""
+    """(x0, v0, phase key): at rest in static equilibrium with the drive at t0 (with friction
+    held there: the net force, 0, is within the band)."""
     D = np.asarray(drive(np.array([t0])), dtype=float)[:, 0]
     x, contact, seat = static_equilibrium(model, float(D[0]), float(D[1]))
-    return x, np.zeros_like(x), (contact, seat)
+    return x, np.zeros_like(x), (contact, seat, 0 if model.friction > 0.0 else 1)
 
 
-# phase types (linkage loaded, seat engaged) by their code 2 * contact + seat
-KEYS = ((False, False), (False, True), (True, False), (True, True))
+def stick_or_turn(model: ChainModel, y: np.ndarray, S: float, S1: float, contact: bool, seat: bool):
+    """The valve's velocity has reached 0 (with friction R): ("stick", 0) when the net force is
+    within [-R, R], else ("turn", its sign), as phases.velocity_zero for the massless valve."""
+    coef, alpha, beta, const = model.net_force_row(contact, seat)
+    yy = y.copy()
+    yy[model.n] = 0.0
+    net = float(coef @ yy) + alpha * S + beta * S1 + const
+    if abs(net) <= model.friction:
+        return "stick", 0
+    return "turn", (1 if net > 0.0 else -1)
+
+
+# phase types (linkage loaded, seat engaged, valve mode) by their code: 2 * contact + seat +
+# 4 * (0 moving up or without friction, 1 moving down, 2 held by friction)
+MODE_INDEX = {1: 0, -1: 1, 0: 2}
+KEYS = tuple((c, s, m) for m in (1, -1, 0) for c in (False, True) for s in (False, True))
 
 
 def key_code(key) -> int:
-    return 2 * int(key[0]) + int(key[1])
+    return 2 * int(key[0]) + int(key[1]) + 4 * MODE_INDEX[key[2]]
 
 
 def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes: np.ndarray, events, stats,
@@ -379,8 +455,9 @@ def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes:
     if D is None:
         D = np.asarray(drive(t), dtype=float)
     codes = np.asarray(codes)
-    contact = codes >= 2
+    contact = (codes % 4) >= 2
     seat = (codes % 2) == 1
+    held = codes >= 8
     yd = np.empty_like(y)
     ydd = np.empty_like(y)
     for code in np.unique(codes).tolist():
@@ -393,7 +470,8 @@ def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes:
     s, v = y[0], y[n]
     force = np.where(contact, model.stiffness * (D[0] - model.lash - s) + model.damping * (D[1] - v), 0.0)
     force = np.maximum(force, 0.0)
-    phase = np.where(seat, 0, np.where(contact, 1, 2))
+    # PHASE_CODES of the massless model: seated, contact, flight, stuck (held above the seat)
+    phase = np.where(seat, 0, np.where(held, 3, np.where(contact, 1, 2)))
     seat_force = np.where(seat, -model.seat_stiffness * s - model.seat_damping * v, 0.0)
     return ChainSolution(
         t=t, s=s, v=v, a=yd[n], linkage_force=force, contact=contact, events=tuple(events), stats=stats,

@@ -373,6 +373,10 @@ def _first_crossing(lam, mB, rows, absrows, absmB, ev, e, armed, z0, P, u0, u1, 
         zb[:] = zb_s[top]
         local(lam, mB, rows, ev, za, P, hj, a, g, g1, dda)
         ga, g1a = g[e] * sign, g1[e] * sign
+        if not armed and ga < 0.0 and abs(ga) > 1e-9 * abs(g1a) * hj:
+            # on the near side, by more than a rounding (armed_from's rule): armed from here on
+            # (the intervals come in time order)
+            armed = True
         local(lam, mB, rows, ev, zb, P, hj, b, g, g1, dd)
         gb, g1b = g[e] * sign, g1[e] * sign
         width = (b - a) * hj

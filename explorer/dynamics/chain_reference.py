@@ -15,7 +15,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from .chain import ChainModel
-from .chain_exact import chain_outputs, key_code, phase_modes, start_state
+from .chain_exact import chain_outputs, key_code, phase_modes, start_state, stick_or_turn
 
 
 def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float = 1e-10,
@@ -44,7 +44,7 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
     clashed: set[int] = set()
     while i_next < t.size:
         A, B, rho = modes(key)
-        contact, seat = key
+        contact, seat, mode = key
 
         def rhs(tt, yy, A=A, B=B):
             D = drive(np.array([tt]))
@@ -61,16 +61,27 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
             add("separation", lambda tt, yy: _link_force(model, drive, tt, yy), -1.0)
         else:
             add("re-contact", lambda tt, yy: float(drive(np.array([tt]))[0, 0]) - model.lash - yy[0], 1.0)
-        if seat:
+        if mode == 0:  # held by friction: released when the net force leaves [-R, R]
+            coef, alpha, beta, const = model.net_force_row(contact, seat)
+
+            def net(tt, yy, coef=coef, alpha=alpha, beta=beta, const=const):
+                D = drive(np.array([tt]))
+                return float(coef @ yy) + alpha * float(D[0, 0]) + beta * float(D[1, 0]) + const
+
+            add("release:1", lambda tt, yy: net(tt, yy) - model.friction, 1.0)
+            add("release:-1", lambda tt, yy: net(tt, yy) + model.friction, -1.0)
+        elif seat:
             add("lift-off", lambda tt, yy: yy[0], 1.0)
         else:
             add("seat", lambda tt, yy: yy[0], -1.0)
+        if mode != 0 and model.friction > 0.0:
+            add("velocity-zero", lambda tt, yy: yy[n], -float(mode))
         # guards: solve_ivp sees a crossing only between its steps, and a hop of the valve off its
         # seat (or a touch of the linkage) shorter than a step goes unseen. A restart at the
         # extremum in between (the valve's apex, the gap's minimum) splits such a pair
         # (not right after a guard's restart: it is 0 there and would fire again at once, and on
         # the base circle, S' = 0, both are 0 at the valve's apex)
-        if not seat and last_guard is None:
+        if not seat and mode != 0 and last_guard is None:
             add("guard-apex", lambda tt, yy: yy[n], -1.0)
         if not contact and last_guard is None:
             add("guard-gap", lambda tt, yy: float(drive(np.array([tt]))[1, 0]) - yy[n], 1.0)
@@ -102,6 +113,12 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
                 clashed.discard(int(kind.split(":")[1]))
             t_now, last_guard = t_ev, kind
             continue
+        if kind == "velocity-zero":
+            D = drive(np.array([t_ev]))
+            kind, mode = stick_or_turn(model, y, float(D[0, 0]), float(D[1, 0]), contact, seat)
+            y[n] = 0.0
+        elif kind.startswith("release"):
+            mode = int(kind.split(":")[1])
         item = {"kind": kind.split(":")[0], "time_s": t_ev}
         if kind == "seat":
             item["velocity_m_s"] = float(y[n])
@@ -112,7 +129,7 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
         if len(events) > max_events:
             raise RuntimeError(f"more than {max_events} events in one run")
         key = ({"separation": False, "re-contact": True}.get(kind, contact),
-               {"lift-off": False, "seat": True}.get(kind, seat))
+               {"lift-off": False, "seat": True}.get(kind, seat), mode)
         t_now = t_ev
     stats = {"rhs_evaluations": int(nfev), "events": len(events)}
     codes = np.array([key_code(k) for k in keys])
