@@ -103,7 +103,7 @@ def main() -> None:
         peaks.append(tracemalloc.get_traced_memory()[1])
         tracemalloc.stop()
     growth = (peaks[1] - peaks[0]) / 1500
-    rows.append(["table bytes per row (float demo, 16 columns) / peak growth per run (forces sweep)",
+    rows.append([f"table bytes per row (float demo, {len(full.columns)} columns) / peak growth per run (forces sweep)",
                  f"{per_row} B", f"{growth:.0f} B/run", "", f"10^6 runs: ~{growth * 1e6 / 2**20:.0f} MB"])
 
     # 4. the first sweep in a fresh process, imports included

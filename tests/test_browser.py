@@ -525,3 +525,34 @@ def test_speed_sweep_plot_appears_and_choosing_a_speed_updates_the_rpm(tmp_path)
             rpm_field = _row_input(page, "Camshaft rpm")
             page.wait_for_function("([e, v]) => Math.abs(parseFloat(e.value) - v) < 1e-6",
                                    arg=[rpm_field.element_handle(), chosen], timeout=WAIT_MS)
+
+
+def test_elastic_speed_sweep_figures_each_get_their_own_plot_in_the_page(tmp_path):
+    """The elastic figures of the speed sweep fill in and are drawn in three plots, each with
+    its own unit on its own axis (no scaled series sharing one). Set EXPLORER_UPDATE_SCREENSHOT=1
+    to copy the picture to docs/speed_sweep.png (the README's)."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+    with _running_explorer(ROOT / "assets" / "scenes" / "valve_float_demo.toml") as (server, app):
+        assert app.wait_applied(WAIT_S)
+        _wait_until(lambda: app.sweep is not None and app.sweep.elastic_done == app.sweep.elastic_total > 0,
+                    "the elastic speeds of the sweep were not all computed")
+        total = app.sweep.elastic_total
+        with _connected_page(sync_api, tmp_path, server, width=1400, height=1500) as page:
+            expected = {f"Speed sweep (elastic first separation, {total}/{total} speeds)": "first separation [°]",
+                        f"Speed sweep (elastic seating velocity, {total}/{total} speeds)": "seating velocity [m/s]",
+                        f"Speed sweep (elastic deviation, {total}/{total} speeds)":
+                            "largest deviation from the rigid lift [mm]"}
+            for title, label in expected.items():
+                heading = page.locator(".uplot .u-title", has_text=title)
+                heading.wait_for(timeout=WAIT_MS)
+                plot = heading.locator("xpath=ancestor::div[contains(@class,'uplot')][1]")
+                legend = plot.locator(".u-legend .u-label").all_inner_texts()
+                # one figure per plot (uPlot draws the axis titles on its canvas: the legend names it)
+                assert legend == ["camshaft speed [rpm]", label, "current speed", "rigid float speed"], legend
+            heading.scroll_into_view_if_needed()
+            page.evaluate(TWO_FRAMES)
+            shot = tmp_path / "speed_sweep.png"
+            page.screenshot(path=str(shot), clip={"x": 0, "y": 0, "width": 450, "height": 1500}, timeout=WAIT_MS)
+    if os.environ.get("EXPLORER_UPDATE_SCREENSHOT"):
+        shutil.copyfile(shot, ROOT / "docs" / "speed_sweep.png")

@@ -175,13 +175,54 @@ def test_missing_sections_and_ramp(tmp_path):
         loads_scene(no_ramp, "x.toml")
 
 
-def test_residual_command_writes_table_and_plot(tmp_path):
-    table, plot = tmp_path / "r.csv", tmp_path / "r.png"
-    assert cli.main(["residual", str(DEMO), "--rpm", "1500,2000,2200", "-o", str(table), "--plot", str(plot)]) == 0
-    lines = table.read_text().splitlines()
-    assert lines[1].startswith("rpm,max_deviation_m,dwell_amplitude_m,closed_form_m")
-    assert len(lines) == 5
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_residual_command_writes_table_and_plot(tmp_path, suffix):
+    """The residual table is a sweep table of drive.rpm: read back by the sweep's reader, with its
+    metadata, the residual columns and the closed form."""
+    from explorer.studies.sweep_table import read_table
+
+    table, plot = tmp_path / f"r{suffix}", tmp_path / "r.png"
+    assert cli.main(["residual", str(DEMO), "--rpm", "1500,2000,2200", "-o", str(table), "--plot", str(plot),
+                     "--workers", "1"]) == 0
+    back = read_table(table)
+    assert back.metadata["keys"] == ["drive.rpm"] and back.metadata["study"] == "residual" and back.complete
+    assert list(back.columns["drive_rpm"]) == [1500.0, 2000.0, 2200.0]
+    for name in ("residual_deviation_m", "residual_amplitude_m", "residual_closed_form_m", "separations", "run_failed"):
+        assert name in back.columns, name
+    assert back.columns["residual_deviation_m"][1] < 1e-9 < back.columns["residual_deviation_m"][0]
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_residual_columns_in_any_speed_sweep():
+    """explorer.sweep over drive.rpm holds the residual columns (the elastic effect computes them);
+    they equal the residual study's, and the largest deviation equals |s - s_wanted| read off
+    simulate's own columns at each speed (an independent evaluation of the wanted lift)."""
+    import explorer
+    from explorer.studies.residual import residual_table
+
+    scene = load_scene(DEMO)
+    speeds = [1200.0, 2000.0, 2300.0]
+    swept = explorer.sweep(scene, vary={"drive.rpm": speeds}, workers=1)
+    study = residual_table(scene, speeds, workers=1)
+    for name in ("residual_deviation_m", "residual_amplitude_m"):
+        np.testing.assert_array_equal(swept.columns[name], study.columns[name])
+    lift = build_lift(scene)
+    for rpm, got in zip(speeds, swept.columns["residual_deviation_m"]):
+        deviation, _, _ = elastic_follows(load_scene(DEMO, [f"drive.rpm={rpm}"]), lift)
+        assert got == pytest.approx(deviation, rel=1e-12, abs=1e-18)
+
+
+def test_residual_needs_the_massless_spring():
+    """The spring chain's effect computes no residual columns: refused, not a table of NaN."""
+    from dataclasses import replace
+
+    from explorer.studies.residual import residual_table
+
+    scene = load_scene(DEMO)
+    chain = replace(scene, spring=replace(scene.spring, elements=4, mass=0.05))
+    with pytest.raises(InputError) as info:
+        residual_table(chain, [1500.0, 2000.0], workers=1)
+    assert info.value.key == "spring.elements"
 
 
 @pytest.mark.parametrize("rpm", ["0:100:5", "a,b", "100:200:0", "-5", "1:2:1e9"])
@@ -216,3 +257,17 @@ def test_follows_the_wanted_lift_for_any_train(stiffness, mass, preload, rate, l
             assume(False)
         raise
     assert deviation <= 1e-9
+
+
+def test_closed_form_only_while_the_rise_keeps_contact():
+    """At 2500 rpm the valve leaves the cam once, after the dwell began (on the return): the dwell
+    amplitude still has its closed form, and agrees. At 2600 rpm the linkage unloads during the
+    rise: no closed form (NaN), though the solver's amplitude is there."""
+    from explorer.studies.residual import residual_table
+
+    table = residual_table(load_scene(DEMO), [2500.0, 2600.0], workers=1)
+    c = table.columns
+    assert list(c["separations"]) == [1, 2]
+    assert 130.0 < c["first_separation_deg"][0] and c["first_separation_deg"][1] < 130.0  # the dwell starts at 130 deg
+    assert abs(c["residual_amplitude_m"][0] - c["residual_closed_form_m"][0]) <= 1e-8 * c["residual_closed_form_m"][0]
+    assert math.isnan(c["residual_closed_form_m"][1]) and c["residual_amplitude_m"][1] > 1e-6

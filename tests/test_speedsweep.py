@@ -91,8 +91,9 @@ def test_the_markers_stand_at_the_exact_speeds_and_the_curves_are_unchanged():
     sweep = ss.start_sweep(scene, lift, serial=1)
     plots = {}
     for rpm in (500.0, 1234.5, 2900.0):
-        rigid, elastic = ss.sweep_plots(sweep, rpm)
-        for title, _, x, series, (now, floating), (lo, hi) in (rigid, elastic):
+        rigid, *elastic = ss.sweep_plots(sweep, rpm)
+        assert len(elastic) == 3  # first separation, seating velocity, deviation: each on its own axis
+        for title, _, x, series, (now, floating), (lo, hi) in (rigid, *elastic):
             assert np.all(np.diff(x) > 0)
             assert now.sum() == 1.0 and x[np.argmax(now)] == rpm  # where the speed is, not the nearest sample
             assert floating.sum() == 1.0 and x[np.argmax(floating)] == sweep.float_rpm
@@ -111,11 +112,17 @@ def test_not_yet_computed_elastic_speeds_stay_gaps():
     scene, lift = _scene()
     sweep = ss.start_sweep(scene, lift, serial=1)
     sweep = ss.with_elastic(ss.with_elastic(sweep, (10.0, -0.5, 1e-4)), (20.0, -0.7, 2e-4))
-    _, _, x, series, _, (lo, hi) = ss.sweep_plots(sweep, 1000.0)[-1]
-    deviation = series[1][1]
+    plots = {title.split(",")[0]: (y_label, x, series, lim) for title, y_label, x, series, _, lim in ss.sweep_plots(sweep, 1000.0)}
+    y_label, x, series, (lo, hi) = plots["Speed sweep (elastic deviation"]
+    assert y_label == "Δs [mm]" and len(series) == 1
+    deviation = series[0][1]
     done = x <= sweep.elastic_rpm[1]
     assert np.isfinite(deviation[done]).all() and np.isnan(deviation[~done]).all()
-    assert lo <= -0.7 and hi >= 0.2  # the figures computed so far are in view
+    assert lo <= 0.1 and hi >= 0.2  # the figures computed so far are in view (mm)
+    _, _, seat, (lo, hi) = plots["Speed sweep (elastic seating velocity"]
+    assert lo <= -0.7 and hi >= -0.5 and hi < 0.0  # its own axis: not stretched to the other figures
+    _, _, sep, (lo, hi) = plots["Speed sweep (elastic first separation"]
+    assert lo <= 10.0 and hi >= 20.0 and sep[0][0] == "first separation [°]"  # degrees, unscaled
 
 
 def test_a_scene_without_forces_has_no_sweep():
@@ -174,7 +181,7 @@ def test_choosing_a_speed_under_the_sweep_sets_the_requests_rpm():
         while (app.sweep is None or app.sweep_rpm.value != app.current.scene.drive.rpm) and time.monotonic() < deadline:
             time.sleep(0.01)
         assert app.sweep is not None and app.sweep_rpm.value == app.current.scene.drive.rpm
-        assert len(app._sweep_handles) == 3 and not app.sweep_rpm.disabled  # forces, torque, elastic
+        assert len(app._sweep_handles) == 5 and not app.sweep_rpm.disabled  # forces, torque, 3 elastic figures
         before = np.asarray(app._sweep_handles[0].data[-2])
         app.sweep_rpm.value = 1800.0  # as a page's slider would
         assert app.wait_applied(WAIT_S)

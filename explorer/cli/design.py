@@ -13,6 +13,8 @@ the scene's speed, subject to limits (scipy.optimize SLSQP, on a grid of the eve
   --objective peak-acceleration | peak-jerk | jerk-energy | residual-vibration (over --band)
   --max-pressure-angle A, --radius-margin L (convex pitch radius >= roller radius + L),
   --contact-margin F with --contact-rpm N (rigid contact force >= F at every speed up to N)
+  --open-area keep | AREA: hold the valve's open area (lift over cam angle, e.g. "1500 mm*deg")
+    at the starting lift's or at AREA (the duration is always held: the stations do not move)
 Prints the optimum, each constraint's slack (relative, >= 0 met) and the standard laws on the
 same event; --toml prints the optimised [[lift.stations]] to paste into the scene.
 """
@@ -31,6 +33,9 @@ def register(sub) -> None:
     p.add_argument("--contact-margin", metavar="FORCE")
     p.add_argument("--contact-rpm", type=float, metavar="RPM")
     p.add_argument("--band", metavar="A:B", help="speed band of the residual-vibration objective, rpm")
+    p.add_argument("--open-area", metavar="keep|AREA",
+                   help='hold the valve open area (integral of the valve lift over cam angle): "keep" the '
+                        'starting lift\'s, or a value such as "1500 mm*deg"')
     p.add_argument("--toml", action="store_true", help="print only the optimised stations")
     p.set_defaults(run=run)
 
@@ -66,8 +71,21 @@ def run(args) -> int:
         band = (lo, hi)
     if args.contact_rpm is not None and not 0.0 < args.contact_rpm <= 100_000.0:
         raise InputError("<command line>", "--contact-rpm", "must lie in (0, 100000] rpm")
+    area = args.open_area
+    if area is not None and area.strip() != "keep":
+        # mm*deg has the dimension of a length (deg is a number); its SI value is in m*rad
+        try:
+            area = _quantity(area, "length", "--open-area")
+        except InputError:
+            raise InputError("<command line>", "--open-area",
+                             f"expected keep or an area of lift over cam angle such as '1500 mm*deg', got {area[:40]!r}") from None
+        if area == 0.0:
+            raise InputError("<command line>", "--open-area", "must be positive (or keep)")
+    elif area is not None:
+        area = "keep"
     limits = DesignLimits(angle, _quantity(args.radius_margin, "length", "--radius-margin"),
-                          _quantity(args.contact_margin, "force", "--contact-margin"), args.contact_rpm, band)
+                          _quantity(args.contact_margin, "force", "--contact-margin"), args.contact_rpm, band,
+                          open_area=area)
     scene = scene_from_args(args)
     if sys.stderr.isatty():
         print("optimising ...", file=sys.stderr)

@@ -7,11 +7,14 @@ import sys
 
 
 HELP = """\
-Run the scene's elastic linkage at each speed and compare the valve with the lift the cam is made
-for (a polydyne cam's wanted lift, else the rigid valve lift): the largest deviation over the
-revolution, the vibration amplitude where the dwell after the rise starts, and for a polydyne cam
-with a polynomial rise its closed form while the valve stays in contact. The cam is not changed:
-a polydyne cam keeps its design speed. Table as CSV (stdout without -o), chart as PNG.
+A sweep of drive.rpm (the engine and table of `explorer sweep`) with the elastic effect's residual
+columns: residual_deviation_m, the largest distance of the valve from the lift the cam is made
+for (a polydyne cam's wanted lift, else the rigid valve lift) over the revolution;
+residual_amplitude_m, the vibration amplitude in the dwell after the rise; and, for a polydyne
+cam with a polynomial rise, residual_closed_form_m, the linear closed form of that amplitude in
+the runs where the valve never leaves the cam. The cam is not changed: a polydyne cam keeps its
+design speed. The table as CSV (stdout without -o) or Parquet (-o X.parquet), with the sweep's
+'# key: value' metadata lines; the chart as PNG.
 """
 
 
@@ -23,24 +26,38 @@ def register(sub) -> None:
                        description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--rpm", required=True, metavar="A:B:N|A,B,...", help="speeds: N from A to B rpm, or a list")
-    p.add_argument("-o", "--output", metavar="TABLE.csv", help="write the table here (default: stdout)")
+    p.add_argument("-o", "--output", metavar="TABLE.csv|TABLE.parquet", help="write the table here (default: stdout, CSV)")
     p.add_argument("--plot", metavar="CHART.png", help="write the chart here")
+    p.add_argument("--workers", type=int, help="local worker processes (default: every core; 1: this process)")
     p.set_defaults(run=run)
 
 
 def run(args) -> int:
-    from ..studies.bench import ProgressBar
-    from .simulate import scene_from_args
+    from ..core.errors import InputError
     from ..core.outputs import check_output, write_checked
-    from ..studies.residual import chart_png, parse_speeds, residual_sweep, table_text
+    from ..studies.residual import chart_png, parse_speeds, residual_table
+    from ..studies.sweep_table import table_format
+    from .simulate import scene_from_args
+    from .sweep import Progress
 
     speeds = parse_speeds(args.rpm)
     scene = scene_from_args(args)
-    table_out = check_output(args.output, "--output") if args.output else check_output("-", "--output")
+    if args.output:
+        kind = table_format(args.output)
+        table_out = check_output(args.output, "--output")
+    else:
+        kind, table_out = ".csv", check_output("-", "--output")
     plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot else None
-    progress = ProgressBar(sys.stderr) if speeds.size > 4 and sys.stderr.isatty() else None
-    rows = residual_sweep(scene, speeds, progress)
-    write_checked(table_out, table_text(scene, rows))
+    if args.workers is not None and args.workers < 1:
+        raise InputError("--workers", str(args.workers), "at least 1")
+    progress = Progress(sys.stderr)
+    try:
+        table = residual_table(scene, speeds, workers=args.workers, progress=progress)
+    finally:
+        progress.end()
+    if not table.complete:
+        return 130
+    write_checked(table_out, table.parquet_bytes() if kind == ".parquet" else table.csv_text())
     if plot_out is not None:
-        write_checked(plot_out, chart_png(scene, rows))
+        write_checked(plot_out, chart_png(scene, table))
     return 0

@@ -31,6 +31,7 @@ DIMENSIONS: dict[str, tuple[str, str, str]] = {
     "velocity": ("[length]/[time]", "m/s", "m/s"),
     "acceleration": ("[length]/[time]**2", "m/s**2", "m/s**2"),
     "jerk": ("[length]/[time]**3", "m/s**3", "m/s**3"),
+    "snap": ("[length]/[time]**4", "m/s**4", "m/s**4"),  # the fourth derivative (a polydyne's wanted spline)
     "torque": ("[force]*[length]", "N*m", "N*m"),
     "density": ("[mass]/[length]**3", "kg/m**3", "kg/m**3"),
     "dimensionless": ("", "", ""),

@@ -36,6 +36,7 @@ from ..core.errors import InputError
 from ..result import EffectOutput
 from ..dynamics import solvers as registry
 from .elastic_events import revolution_events, valve_motion_summary
+from .residual import residual_figures
 from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, StiffnessProfile, solve
 
 
@@ -204,6 +205,7 @@ def elastic_effect(ctx) -> EffectOutput:
         "peak_camshaft_back_pressure_N": float(back_pressure.max()),
         "separated_angle_deg": float(360.0 * np.count_nonzero(separated) / n),
         **valve_motion_summary(s, v, a, events, EVENT_KINDS),
+        **residual_figures(ctx.lift, ratio, model.lash, omega, _contact_wn(model), ctx.theta, s, v),
         "elastic_solver": stats,
     }
     columns = {
@@ -219,6 +221,11 @@ def elastic_effect(ctx) -> EffectOutput:
     if phase is not None:
         columns["valve_phase"] = phase.astype(float)
     return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
+
+
+def _contact_wn(model: LinkageModel) -> float:
+    """Undamped natural frequency in contact (rad/s): sqrt((k + rate) / M1), k its largest value."""
+    return math.sqrt((model.stiffness + model.spring_rate) / model.oscillating_mass)
 
 
 def _stiffness_at_lift_off(model: LinkageModel, events) -> float:

@@ -25,6 +25,16 @@ corner, and is refused naming that derivative. The linkage must push throughout
 valve's reversal and would step the cam by 2 R / k) or a damper (then S follows from a differential
 equation): both are refused.
 
+The wanted lift may also be a spline (`wanted_law = "spline"` with [[lift.stations]] as for the
+spline law, explorer.lift.spline): then no closed form is smooth enough by itself, so the spline
+must ask for it. `continuity` (default 4, at least 4) makes s to its fourth derivative (snap)
+continuous at every interior station, so that the cam's acceleration
+L_theta_theta = [s_theta_theta (1 + rate/k) + (M1 w_d^2/k) s^(4)] / ratio has no step; and
+s, v, a, j, snap = 0 at the first and last station join the event to the take-up ramps as
+smoothly (at the ramps' ends the cam's slope and acceleration are 0). Either shortfall is refused
+naming the derivative, as for a rough law. The spline's polynomials are exact to any order, so
+the cam's jerk (from s^(5)) comes from them too.
+
 Off the design speed the valve deviates: with e = s - s_wanted, in contact
 M1 e'' + (k + rate) e = M1 (w_d^2 - w^2) s_theta_theta(w t), a linear oscillator whose residual
 vibration after a rise has the closed form in `residual_amplitude`.
@@ -40,10 +50,18 @@ import numpy as np
 
 from ..core.errors import InputError
 from .laws import HIGH_ORDER_LAWS, LAWS, law_derivatives
+from .spline import MAX_CONTINUITY, SplineLift, SplineOptions, check_spline_shape, parse_stations
 
 TWO_PI = 2.0 * math.pi
 OPTION_KEYS = ("wanted_law", "design_rpm", "ramp")
-DERIVATIVE_NAMES = ("lift", "velocity", "acceleration", "jerk")
+SPLINE = "spline"  # wanted_law: the wanted lift through [[lift.stations]]
+SPLINE_KEYS = ("stations", "continuity", "reference_rpm")  # [lift] keys of the wanted spline only
+SHAPE_KEYS = ("height", "rise", "dwell", "return", "return_law")  # [lift] keys of a closed-form wanted law only
+MIN_SPLINE_CONTINUITY = 4  # s^(4) continuous: the cam's acceleration has no step
+DERIVATIVE_NAMES = ("lift", "velocity", "acceleration", "jerk", "snap (fourth derivative)")
+DERIVATIVE_UNITS = ("m", "m/s", "m/s**2", "m/s**3", "m/s**4")
+CONSEQUENCES = ("a step in the cam", "a step in the cam", "a step in the cam",
+                "a corner in the cam (its slope would jump)", "a step in the cam's acceleration")
 JUMP_TOLERANCE = 1e-9  # relative to h / beta^k: rounding of the closed forms is ~1e-15
 MIN_RAMP = math.radians(0.1)
 RAMP_LAW = "cycloidal"  # zero slope and curvature at both ends of the take-up ramp
@@ -55,6 +73,7 @@ class PolydyneOptions:
     return_law: str
     design_rpm: float  # rev/min
     ramp: float  # rad
+    spline: SplineOptions | None = None  # the wanted spline's stations (wanted_law = "spline")
 
 
 @dataclass(frozen=True)
@@ -85,10 +104,26 @@ class WantedLift:
     ret: float
     rise_law: str
     return_law: str
+    # derivatives checked for jumps at the joints: to the jerk (L and L' continuous); the closed
+    # forms' snap jumps at their ends (a step in the cam's acceleration, as a cycloidal cam has)
+    checked = 4
+    advice = "use a law continuous to the jerk, such as polynomial-4567"
 
     @property
     def end(self) -> float:
         return self.rise + self.dwell + self.ret
+
+    @property
+    def closed_form_laws(self) -> set[str]:
+        return {self.rise_law, self.return_law}
+
+    def marks(self) -> list[float]:
+        """Event angles where a derivative may jump."""
+        return [0.0, self.rise, self.rise + self.dwell, self.end]
+
+    def dwell_start(self) -> float | None:
+        """Event angle where the dwell after the rise starts (None without a dwell)."""
+        return self.rise if self.dwell > 0.0 else None
 
     def derivatives(self, x, order: int = 5) -> np.ndarray:
         """(order + 1, N): s and its derivatives per radian at event angles x."""
@@ -134,10 +169,50 @@ class WantedLift:
 
 
 @dataclass(frozen=True)
+class SplineWanted:
+    """The wanted valve lift as a spline (explorer.lift.spline) in event coordinates; 0 outside."""
+
+    spline: SplineLift  # start 0: knots are event angles
+    height: float  # largest lift (scale of the jump tolerance)
+    rise_law = SPLINE
+    return_law = SPLINE
+    checked = 5  # to the snap: see the module doc
+    advice = ("give s, v, a, j and snap = 0 at the first and last station and continuity = "
+              f"{MIN_SPLINE_CONTINUITY} or more")
+    closed_form_laws = frozenset()  # the polynomials give every derivative exactly
+
+    @property
+    def end(self) -> float:
+        return float(self.spline.knots[-1])
+
+    def derivatives(self, x, order: int = 5) -> np.ndarray:
+        return self.spline.local_derivatives(x, order)
+
+    def marks(self) -> list[float]:
+        return [float(k) for k in self.spline.knots]
+
+    def dwell_start(self) -> None:
+        return None  # a spline names no dwell
+
+    def joints(self) -> list[tuple[str, np.ndarray, np.ndarray, str, float, str]]:
+        """Every station: the derivatives to the snap from the polynomial on each side (0 off the
+        event), evaluated at the segment's own end rather than near it."""
+        knots, n = self.spline.knots, len(self.spline.coefficients)
+        out = []
+        for i in range(n + 1):
+            before = self.spline.segment_derivatives(i - 1, 1.0, self.checked - 1) if i > 0 else np.zeros(self.checked)
+            after = self.spline.segment_derivatives(i, 0.0, self.checked - 1) if i < n else np.zeros(self.checked)
+            beta = float(min(knots[j + 1] - knots[j] for j in (i - 1, i) if 0 <= j < n))
+            where = f"station {i} ({math.degrees(knots[i]):.6g} deg after the start)"
+            out.append((where, before, after, SPLINE, beta, f"lift.stations[{i}]"))
+        return out
+
+
+@dataclass(frozen=True)
 class PolydyneLift:
     """The polydyne cam's follower lift (LiftCurve): ramp, event, ramp; base circle elsewhere."""
 
-    wanted: WantedLift
+    wanted: WantedLift | SplineWanted
     train: Train
     start: float  # rad, cam angle where the valve starts to lift
     ramp: float  # rad
@@ -187,7 +262,7 @@ class PolydyneLift:
 
     def breakpoints(self) -> np.ndarray:
         w = self.wanted
-        marks = [-self.ramp, 0.0, w.rise, w.rise + w.dwell, w.end, w.end + self.ramp]
+        marks = [-self.ramp, *w.marks(), w.end + self.ramp]
         return np.array(sorted({(m + self.start) % TWO_PI for m in marks}))
 
     @property
@@ -221,12 +296,20 @@ def parse_polydyne_options(table, fields: dict[str, Any]) -> PolydyneOptions:
                          "differential equation, not from the wanted lift); set it to 0 for the design")
     if fields["follower"].type != "translating-roller":
         raise InputError(file, "lift.law", "the polydyne law is for the translating-roller follower")
-    wanted_law = table.string("wanted_law", choices=tuple(LAWS))
-    return_law = table.string("return_law", wanted_law, choices=tuple(LAWS)) if table.has("return_law") else wanted_law
+    wanted_law = table.string("wanted_law", choices=(*LAWS, SPLINE))
     if table.has("design_rpm"):
         omega = table.quantity("design_rpm", "speed", positive=True)
     else:
         omega = fields["drive"].omega
+    spline = None
+    if wanted_law == SPLINE:
+        spline = _parse_wanted_spline(table, omega)
+        return_law = SPLINE
+    else:
+        for name in SPLINE_KEYS:
+            if table.has(name):
+                raise table.error(name, "only with wanted_law = \"spline\" (the wanted lift through [[lift.stations]])")
+        return_law = table.string("return_law", wanted_law, choices=tuple(LAWS)) if table.has("return_law") else wanted_law
     if not table.has("ramp"):
         raise table.error("ramp", "the polydyne cam needs a take-up ramp angle (lash plus the linkage's preload "
                           "deflection are taken up over it), such as \"15 deg\"")
@@ -234,12 +317,38 @@ def parse_polydyne_options(table, fields: dict[str, Any]) -> PolydyneOptions:
     if ramp < MIN_RAMP:
         raise table.error("ramp", f"must be at least {math.degrees(MIN_RAMP):g} deg")
     spec = fields["lift"]
-    total = spec.rise + spec.dwell + spec.ret + 2.0 * ramp
+    event = spline.stations[-1].angle if spline is not None else spec.rise + spec.dwell + spec.ret
+    total = event + 2.0 * ramp
     if total > TWO_PI * (1.0 + 1e-12):
-        raise table.error("ramp", f"two ramps + rise + dwell + return = {math.degrees(total):.6g} deg exceed 360 deg")
-    options = PolydyneOptions(wanted_law, return_law, omega * 60.0 / TWO_PI, ramp)
+        what = "the stations' event" if spline is not None else "rise + dwell + return"
+        raise table.error("ramp", f"two ramps + {what} = {math.degrees(total):.6g} deg exceed 360 deg")
+    options = PolydyneOptions(wanted_law, return_law, omega * 60.0 / TWO_PI, ramp, spline)
     lift = polydyne_lift(spec, options, fields["valve"], fields["spring"], fields["loads"], fields["linkage"], fields["follower"])
     check_polydyne(lift, file)
+    return options
+
+
+def _parse_wanted_spline(table, design_omega: float) -> SplineOptions:
+    """[[lift.stations]] of the wanted valve lift; values in time units at reference_rpm (default
+    the design speed). The continuity asked for must reach the snap (module doc)."""
+    for name in SHAPE_KEYS:
+        if table.has(name):
+            raise table.error(name, "not used with wanted_law = \"spline\" (the stations give the wanted lift); remove it")
+    continuity = int(table.number("continuity", MIN_SPLINE_CONTINUITY, integer=True, minimum=0, maximum=MAX_CONTINUITY))
+    if continuity < MIN_SPLINE_CONTINUITY:
+        raise table.error("continuity", f"'spline' with continuity = {continuity} is too rough for a polydyne cam: the "
+                          f"cam lift S = s + (M w^2 s'' + W)/k needs the wanted valve {DERIVATIVE_NAMES[continuity + 1]} "
+                          f"continuous at every station, which continuity = {continuity} does not ask for, and a jump "
+                          f"makes {CONSEQUENCES[continuity + 1]}; set continuity = {MIN_SPLINE_CONTINUITY} or more")
+    omega = table.quantity("reference_rpm", "speed", positive=True) if table.has("reference_rpm") else design_omega
+    options, lift = parse_stations(table, continuity, omega)
+    for i, st in enumerate(options.stations):
+        if any(st.free):
+            name = ("s", "v", "a", "j")[st.free.index(True)]
+            raise InputError(table.file, f"{table.key('stations')}[{i}].{name}", "a polydyne's wanted spline has no "
+                             "\"free\" values: explorer design optimises a law = \"spline\" lift; design the wanted lift "
+                             "there (continuity = 4) and give its stations here")
+    check_spline_shape(table, lift)
     return options
 
 
@@ -248,16 +357,14 @@ def check_polydyne(lift: PolydyneLift, file: str) -> None:
     w = lift.wanted
     omega = lift.design_omega
     for where, before, after, law_name, beta, key in w.joints():
-        for k in range(4):
+        for k in range(w.checked):
             jump = after[k] - before[k]
             if abs(jump) > JUMP_TOLERANCE * w.height / beta**k:
-                units = ("m", "m/s", "m/s**2", "m/s**3")[k]
-                consequence = "a step in the cam" if k <= 2 else "a corner in the cam (its slope would jump)"
                 raise InputError(file, key, f"{law_name!r} is too rough for a polydyne cam: the cam lift "
                                  f"S = s + (M w^2 s'' + W)/k needs the wanted valve {DERIVATIVE_NAMES[k]} continuous, and it "
-                                 f"jumps by {jump * omega**k:.4g} {units} at {where} (at {omega * 60 / TWO_PI:g} rpm), "
-                                 f"which makes {consequence}; use a law continuous to the jerk, such as polynomial-4567")
-    for name in {w.rise_law, w.return_law}:
+                                 f"jumps by {jump * omega**k:.4g} {DERIVATIVE_UNITS[k]} at {where} (at "
+                                 f"{omega * 60 / TWO_PI:g} rpm), which makes {CONSEQUENCES[k]}; {w.advice}")
+    for name in sorted(w.closed_form_laws):
         if name not in HIGH_ORDER_LAWS:
             raise InputError(file, "lift.wanted_law", f"{name!r} has no closed-form fourth and fifth derivative, which "
                              "the polydyne cam's acceleration and jerk need")
@@ -274,7 +381,15 @@ def check_polydyne(lift: PolydyneLift, file: str) -> None:
 
 
 def polydyne_lift(spec, options: PolydyneOptions, valve, spring, loads, linkage, follower) -> PolydyneLift:
-    wanted = WantedLift(spec.height, spec.rise, spec.dwell, spec.ret, options.wanted_law, options.return_law)
+    if options.spline is not None:
+        from .spline import solve_spline
+
+        o = options.spline
+        spline = solve_spline(o.stations, o.continuity, 0.0)
+        height = float(spline.local_derivatives(np.linspace(0.0, spline.knots[-1], 2001), 0)[0].max())
+        wanted = SplineWanted(spline, height)
+    else:
+        wanted = WantedLift(spec.height, spec.rise, spec.dwell, spec.ret, options.wanted_law, options.return_law)
     train = Train.from_fields(valve, spring, loads, linkage, follower)
     return PolydyneLift(wanted, train, spec.start, options.ramp, options.design_rpm * TWO_PI / 60.0)
 

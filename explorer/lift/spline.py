@@ -1,11 +1,12 @@
-"""`spline` law: a lift through stations with conditions on s, v, a, j (Norton's SVAJ design).
+"""`spline` law: a lift through stations with conditions on s, v, a, j (Norton's SVAJ design) and
+the fourth derivative `snap` (the wanted lift of a polydyne cam needs it: explorer.lift.polydyne).
 
 The event runs from the first station (at lift.start) to the last; between consecutive stations
 the lift is one polynomial. The conditions:
 
-- at a station, each value given (s, v, a or j) holds for the polynomials on both sides;
-- at an interior station, every derivative up to `continuity` (default 3, the jerk) that is not
-  given is continuous.
+- at a station, each value given (s, v, a, j or snap) holds for the polynomials on both sides;
+- at an interior station, every derivative up to `continuity` (default 3, the jerk; at most
+  MAX_CONTINUITY) that is not given is continuous.
 
 Each condition is one linear equation in the polynomials' coefficients. The degrees follow from
 the count (Norton: one coefficient per condition): with C conditions on n segments the segments
@@ -13,8 +14,9 @@ get C // n coefficients, the longest C mod n one more. The square system is solv
 (a singular one is an error naming the stations). With s, v, a given at both ends of one segment
 this is the 3-4-5 polynomial, with s, v, a, j the 4-5-6-7 (tests).
 
-Velocity, acceleration and jerk are given in time units at `reference_rpm` (default drive.rpm)
-and stored per radian (v/w, a/w^2, j/w^3), so the cam does not change when the speed is swept.
+Velocity, acceleration, jerk and snap are given in time units at `reference_rpm` (default
+drive.rpm) and stored per radian (v/w, a/w^2, j/w^3, snap/w^4), so the cam does not change when
+the speed is swept.
 The event must start and end on the base circle: s = 0 given at the first and last station.
 Outside the event the lift is 0. Derivatives come from the polynomials, exactly, to any order.
 
@@ -33,8 +35,11 @@ import numpy as np
 from ..core.errors import InputError
 
 TWO_PI = 2.0 * math.pi
-NAMES = ("s", "v", "a", "j")
-DIMENSIONS = ("length", "velocity", "acceleration", "jerk")
+NAMES = ("s", "v", "a", "j", "snap")
+DIMENSIONS = ("length", "velocity", "acceleration", "jerk", "snap")
+UNITS = ("m", "m/s", "m/s**2", "m/s**3", "m/s**4")
+MAX_CONTINUITY = 6  # C6 needs >= 14 coefficients a segment: beyond, the monomial system loses digits
+FREE_ORDERS = 4  # s, v, a, j may be "free" (explorer design); snap is given or left to continuity
 OPTION_KEYS = ("stations", "continuity", "reference_rpm")
 UNUSED_KEYS = ("height", "rise", "dwell", "return", "return_law")
 MAX_STATIONS = 64
@@ -44,8 +49,8 @@ FREE = "free"
 @dataclass(frozen=True)
 class Station:
     angle: float  # rad since lift.start
-    values: tuple  # per derivative k = 0..3: value per rad^k, or None (not given)
-    free: tuple = (False, False, False, False)  # values the designer may move
+    values: tuple  # per derivative k = 0..4 (NAMES): value per rad^k, or None (not given)
+    free: tuple = (False,) * len(NAMES)  # values the designer may move
 
 
 @dataclass(frozen=True)
@@ -82,6 +87,17 @@ class SplineLift:
                 p = p.deriv()
         return out
 
+    def segment_derivatives(self, segment: int, u: float, order: int) -> np.ndarray:
+        """(order + 1,): derivatives per radian of one segment's polynomial at its local u (its own
+        end at u = 1, where local_derivatives would take the next segment)."""
+        width = self.knots[segment + 1] - self.knots[segment]
+        p = np.polynomial.Polynomial(self.coefficients[segment])
+        out = np.zeros(order + 1)
+        for k in range(order + 1):
+            out[k] = p(u) / width**k
+            p = p.deriv()
+        return out
+
     def derivatives(self, theta) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
         x = np.mod(theta.reshape(-1) - self.start, TWO_PI)
@@ -110,7 +126,8 @@ def solve_spline(stations, continuity: int = 3, start: float = 0.0, file: str = 
     # conditions: (segment, side 0/1, k, value) for a given value; ("cont", i, k) for continuity
     rows: list[tuple] = []
     for i, st in enumerate(stations):
-        for k, value in enumerate(st.values):
+        orders = max(len(st.values), continuity + 1)  # continuity may reach past the orders a station can give
+        for k, value in enumerate(st.values + (None,) * (orders - len(st.values))):
             if value is not None:
                 if i > 0:
                     rows.append(("value", i - 1, 1.0, k, value))
@@ -162,26 +179,35 @@ def build_spline_lift(scene) -> SplineLift:
 
 def parse_spline_options(table, fields: dict[str, Any]) -> SplineOptions:
     """[lift] keys of the spline law; solves once at load so that a bad set of conditions fails here."""
-    from ..core.units import to_si
-
     for name in UNUSED_KEYS:
         if table.has(name):
             raise table.error(name, "not used by law 'spline' (the stations give the lift); remove it")
-    continuity = int(table.number("continuity", 3, integer=True, minimum=0, maximum=3))
+    continuity = int(table.number("continuity", 3, integer=True, minimum=0, maximum=MAX_CONTINUITY))
     if table.has("reference_rpm"):
         omega = table.quantity("reference_rpm", "speed", positive=True)
     else:
         omega = fields["drive"].omega
+    options, lift = parse_stations(table, continuity, omega)
+    check_spline_shape(table, lift)
+    return options
+
+
+def parse_stations(table, continuity: int, omega: float) -> tuple[SplineOptions, SplineLift]:
+    """The [[lift.stations]] (values per radian at reference speed omega) and their lift (event
+    coordinates: start 0), solved at load so that a bad set of conditions fails there; shared with
+    the polydyne law's wanted spline."""
+    from ..core.units import to_si
+
     raw = table.raw("stations")
     where = table.key("stations")
     if not isinstance(raw, list) or not 2 <= len(raw) <= MAX_STATIONS or not all(isinstance(r, dict) for r in raw):
-        raise table.error("stations", f"expected 2 to {MAX_STATIONS} [[lift.stations]] tables (angle, and any of s, v, a, j)")
+        raise table.error("stations", f"expected 2 to {MAX_STATIONS} [[lift.stations]] tables (angle, and any of s, v, a, j, snap)")
     stations = []
     for n_st, item in enumerate(raw):
         key = f"{where}[{n_st}]"
         unknown = set(item) - {"angle", *NAMES}
         if unknown:
-            raise InputError(table.file, f"{key}.{sorted(unknown)[0]}", "unknown key; a station takes angle, s, v, a, j")
+            raise InputError(table.file, f"{key}.{sorted(unknown)[0]}", "unknown key; a station takes angle, s, v, a, j, snap")
         if "angle" not in item:
             raise InputError(table.file, f"{key}.angle", "missing key")
         angle = to_si(item["angle"], "angle", file=table.file, key=f"{key}.angle")
@@ -192,6 +218,9 @@ def parse_spline_options(table, fields: dict[str, Any]) -> SplineOptions:
                 values.append(None)
                 free.append(False)
             elif value == FREE:
+                if k >= FREE_ORDERS:
+                    raise InputError(table.file, f"{key}.{name}", "only s, v, a and j can be \"free\"; give snap a value "
+                                     "or leave it out (then continuity decides it)")
                 values.append(None)  # placeholder: see _initial_free_values
                 free.append(True)
             else:
@@ -214,8 +243,13 @@ def parse_spline_options(table, fields: dict[str, Any]) -> SplineOptions:
                              "at the first and last station")
     stations = _initial_free_values(stations, continuity, table.file, where)
     options = SplineOptions(tuple(stations), continuity, omega * 60.0 / TWO_PI)
-    lift = solve_spline(options.stations, continuity, 0.0, table.file, where)
-    x = np.linspace(0.0, angles[-1], 20001)
+    return options, solve_spline(options.stations, continuity, 0.0, table.file, where)
+
+
+def check_spline_shape(table, lift: SplineLift) -> None:
+    """The lift through the stations stays on or above the base circle, leaves it, and is < 1 m."""
+    where = table.key("stations")
+    x = np.linspace(0.0, lift.knots[-1], 20001)
     s = lift.local_derivatives(x, 0)[0]
     if not np.all(np.isfinite(s)) or np.max(np.abs(s)) > 1.0:
         raise InputError(table.file, where, "the lift through these stations exceeds 1 m: check the units")
@@ -225,7 +259,6 @@ def parse_spline_options(table, fields: dict[str, Any]) -> SplineOptions:
         i = int(np.argmin(s))
         raise InputError(table.file, where, f"the lift through these stations dips below the base circle "
                          f"({s[i] * 1e3:.4g} mm at {math.degrees(x[i]):.2f} deg after the start); add conditions")
-    return options
 
 
 def _initial_free_values(stations, continuity: int, file: str, key: str) -> list:
@@ -247,7 +280,8 @@ def _initial_free_values(stations, continuity: int, file: str, key: str) -> list
     for st in stations:
         if any(st.free):
             d = law.derivatives(np.array([st.angle]))[:, 0] if law is not None else np.zeros(4)
-            st = replace(st, values=tuple(float(d[k]) if st.free[k] else st.values[k] for k in range(4)))
+            st = replace(st, values=tuple(float(d[k]) if st.free[k] else st.values[k] for k in range(FREE_ORDERS))
+                         + st.values[FREE_ORDERS:])
         out.append(st)
     return out
 

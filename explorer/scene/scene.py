@@ -62,11 +62,13 @@ LAW_OPTION_PARSERS: dict[str, str] = {
 LAW_OPTION_KEYS: dict[str, tuple[str, ...]] = {
     "table": ("file", "angle_unit", "lift_unit", "smoothing"),
     "acceleration": ("points", "angle_unit", "acceleration_unit", "interpolation", "reference_rpm"),
-    "polydyne": ("wanted_law", "design_rpm", "ramp"),
+    "polydyne": ("wanted_law", "design_rpm", "ramp", "stations", "continuity", "reference_rpm"),
     "spline": ("stations", "continuity", "reference_rpm"),
 }
 # laws whose [lift] height, rise and return shape an event as for the closed-form laws
 SHAPED_LAWS = (*LAWS, "polydyne")
+# ... unless a [lift] key has this value, and then the law's own keys give the event: law -> (key, value)
+SHAPED_UNLESS: dict[str, tuple[str, str]] = {"polydyne": ("wanted_law", "spline")}  # the wanted lift through stations
 
 
 @dataclass(frozen=True)
@@ -379,18 +381,20 @@ def _parse_lift(t: Table, file: str) -> LiftSpec:
     t.reject_unknown(common + LAW_OPTION_KEYS.get(law, ()))
     if law == "contour":
         return LiftSpec(law=law)
-    height = t.quantity("height", "length", positive=True) if law in SHAPED_LAWS else t.quantity("height", "length", 0.0, nonnegative=True)
+    unless = SHAPED_UNLESS.get(law)
+    shaped = law in SHAPED_LAWS and not (unless is not None and t.has(unless[0]) and t.raw(unless[0]) == unless[1])
+    height = t.quantity("height", "length", positive=True) if shaped else t.quantity("height", "length", 0.0, nonnegative=True)
     start = t.quantity("start", "angle", 0.0)
     if not 0.0 <= start < 2.0 * math.pi:
         raise t.error("start", "must lie in [0 deg, 360 deg)")
     if height > MAX_LIFT:
         raise t.error("height", f"more than {MAX_LIFT:g} m of lift is outside any valve gear, got {t.raw('height')!r}")
-    rise = t.quantity("rise", "angle", positive=True) if law in SHAPED_LAWS else t.quantity("rise", "angle", 0.0, nonnegative=True)
+    rise = t.quantity("rise", "angle", positive=True) if shaped else t.quantity("rise", "angle", 0.0, nonnegative=True)
     dwell = t.quantity("dwell", "angle", 0.0, nonnegative=True)
-    ret = t.quantity("return", "angle", rise, positive=True) if law in SHAPED_LAWS else t.quantity("return", "angle", 0.0, nonnegative=True)
+    ret = t.quantity("return", "angle", rise, positive=True) if shaped else t.quantity("return", "angle", 0.0, nonnegative=True)
     return_law = t.string("return_law", None, choices=LAWS) if t.has("return_law") else None
     for key, angle in (("rise", rise), ("return", ret)):
-        if law in SHAPED_LAWS and angle < MIN_EVENT_ANGLE:
+        if shaped and angle < MIN_EVENT_ANGLE:
             raise t.error(key, f"must be at least {math.degrees(MIN_EVENT_ANGLE):g} deg, got {angle:.3g} rad")
     if rise + dwell + ret > 2.0 * math.pi * (1.0 + 1e-12):
         total = math.degrees(rise + dwell + ret)

@@ -14,7 +14,10 @@ event refined at the stations:
   (written as curvature * (r + margin) <= 1, smooth through straight stretches); rigid contact
   force >= contact_margin at every speed up to contact_rpm (F = w^2 A + G is linear in w^2, so
   the ends of the range suffice); lift >= 0 (no dip below the base circle). The duration is
-  fixed: the stations do not move.
+  fixed: the stations do not move. Optionally the valve's open area (the integral of the valve
+  lift max(ratio L - lash, 0) over cam angle, the "lift area" that sets how much the valve
+  passes; trapezoid rule on the event grid) is held at a given value or at the starting lift's
+  ("keep"): an equality, met when within 1e-9 of it, reported as minus its deviation.
 
 The same objective and constraints are evaluated for the standard laws on the same event (same
 height, rise, dwell, return) for the comparison table.
@@ -49,6 +52,7 @@ class DesignLimits:
     contact_rpm: float | None = None  # rev/min
     band: tuple[float, float] | None = None  # rpm, residual-vibration objective
     band_points: int = 11
+    open_area: float | str | None = None  # m*rad of valve lift over cam angle, or "keep" (the start's)
 
 
 @dataclass
@@ -57,8 +61,25 @@ class Evaluation:
     constraints: dict = field(default_factory=dict)  # name -> slack (>= 0 met)
 
 
+AREA_TOLERANCE = 1e-9  # relative: SLSQP meets the equality (linear while the lift stays open) to ~1e-12
+
+
+def open_area(scene, d0, weights) -> float:
+    """Valve open area (m*rad): sum of weights * max(ratio L - lash, 0) at the quadrature nodes
+    where d0 = L was taken (area_nodes: Gauss-Legendre between the lift's breakpoints, exact for a
+    spline's polynomials while the valve lift has no kink at the lash inside an interval)."""
+    lash = scene.valve.lash if scene.valve is not None else 0.0
+    return float(np.dot(weights, np.maximum(scene.follower.ratio * np.asarray(d0) - lash, 0.0)))
+
+
+def area_slack(area: float, target: float) -> float:
+    """Minus the deviation from the held area in mm*deg; 0 when within the tolerance."""
+    deviation = abs(area - target)
+    return 0.0 if deviation <= AREA_TOLERANCE * abs(target) else -1e3 * math.degrees(deviation)
+
+
 def _free(options):
-    return [(i, k) for i, st in enumerate(options.stations) for k in range(4) if st.free[k]]
+    return [(i, k) for i, st in enumerate(options.stations) for k in range(len(st.free)) if st.free[k]]
 
 
 class Problem:
@@ -112,13 +133,16 @@ class Problem:
         return np.array([self.options.stations[i].values[k] for i, k in self.free]) / self.scale
 
 
-def evaluate(scene, lift, objective: str, limits: DesignLimits, x=None) -> tuple[float, dict, dict]:
+def evaluate(scene, lift, objective: str, limits: DesignLimits, x=None, area=None) -> tuple[float, dict, dict]:
     """(objective value, {name: per-sample slack arrays, scaled for the optimiser}, {name: smallest
     slack in its unit}) of any lift curve on the scene's event (x: event angles since lift.start;
-    default a grid over one revolution)."""
+    default a grid over one revolution); area: the open area to hold (m*rad), if any."""
     x = np.linspace(0.0, TWO_PI, 3 * GRID, endpoint=False) if x is None else x
     d = lift.derivatives(scene.lift.start + x)
     arrays, slacks = constraint_arrays(scene, d, limits)
+    if area is not None:
+        xq, wq = _residual_nodes(scene, lift)
+        slacks["open area [mm*deg]"] = area_slack(open_area(scene, lift.derivatives(scene.lift.start + xq)[0], wq), area)
     return objective_value(scene, lift, d, objective, limits), arrays, slacks
 
 
@@ -254,6 +278,7 @@ class DesignReport:
     message: str
     options: object  # the optimised SplineOptions
     method: str = "SLSQP"
+    open_area: float | None = None  # m*rad held, if any
 
 
 def _peak_by_linear_programme(scene, problem, row: int, factor: float, limits: DesignLimits):
@@ -313,11 +338,30 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> D
     def limits_of(z):
         return np.concatenate(list(constraint_arrays(scene, problem.derivatives(z), limits)[0].values()))
 
+    target, held = None, []  # the open area, an equality (relative to the target)
+    if limits.open_area is not None:
+        xa, wa = _residual_nodes(scene, problem.lift(z0))  # the knots do not move: nodes for every z
+        a_base = problem.lift(np.zeros(len(problem.free))).derivatives(scene.lift.start + xa)[0]
+        a_cols = np.stack([problem.lift(np.eye(len(problem.free))[i]).derivatives(scene.lift.start + xa)[0] - a_base
+                           for i in range(len(problem.free))], axis=1)
+
+        def area_of(z):
+            return open_area(scene, a_base + a_cols @ z, wa)
+
+        target = area_of(z0) if limits.open_area == "keep" else float(limits.open_area)
+        if not target > 0.0:
+            raise InputError("<command line>", "--open-area", "the valve never opens: no area to hold")
+        held = [{"type": "eq", "fun": lambda y, n=len(problem.free): area_of(y[:n]) / target - 1.0}]
+
+    def area_met(z) -> bool:
+        return target is None or area_slack(area_of(z), target) == 0.0
+
     method = "SLSQP"
     if peak:
         # The LP without the nonlinear limits (HiGHS) gives a start near the optimum; SLSQP then
         # minimises with every limit, in epigraph form; the better of the two feasible points wins.
-        z_lp = _peak_by_linear_programme(scene, problem, row, factor, limits)
+        # (the LP knows no area; with one held, SLSQP starts from the scene's values)
+        z_lp = _peak_by_linear_programme(scene, problem, row, factor, limits) if target is None else None
         gain = factor / norm * problem.basis[:, row, :].T  # d(column)/dz, (samples, free)
         n_free = len(problem.free)
 
@@ -333,13 +377,14 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> D
             return np.vstack([np.hstack([-gain, ones]), np.hstack([gain, ones])])
 
         cons = [{"type": "ineq", "fun": epigraph, "jac": epigraph_jac},
-                {"type": "ineq", "fun": lambda y: limits_of(y[:-1])}]
+                {"type": "ineq", "fun": lambda y: limits_of(y[:-1])}] + held
         first = z0 if z_lp is None else z_lp
         y0 = np.append(first, np.max(np.abs(column(first))))
         result = minimize(lambda y: y[-1], y0, jac=lambda y: np.append(np.zeros(n_free), 1.0), method="SLSQP",
                           constraints=cons, options={"maxiter": maxiter, "ftol": 1e-12})
         candidates = [(result.x[:-1], "SLSQP")] + ([(z_lp, "HiGHS")] if z_lp is not None else [])
-        feasible = [(np.max(np.abs(column(z))), z, name) for z, name in candidates if np.all(limits_of(z) >= -1e-9)]
+        feasible = [(np.max(np.abs(column(z))), z, name) for z, name in candidates
+                    if np.all(limits_of(z) >= -1e-9) and area_met(z)]
         z, method = (min(feasible, key=lambda item: item[0])[1:] if feasible else (result.x[:-1], "SLSQP"))
         method = ("HiGHS (LP start), then SLSQP" if z_lp is not None else "SLSQP") + f"; best: {method}"
         success, message, iterations = bool(feasible), str(result.message), int(result.nit)
@@ -365,7 +410,7 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> D
             return np.hstack([dz, np.ones((len(amp), 1))])
 
         cons = [{"type": "ineq", "fun": squared, "jac": squared_jac},
-                {"type": "ineq", "fun": lambda y: limits_of(y[:-1])}]
+                {"type": "ineq", "fun": lambda y: limits_of(y[:-1])}] + held
         y0 = np.append(z0, 1.0)
         result = minimize(lambda y: y[-1], y0, jac=lambda y: np.append(np.zeros(n_free), 1.0), method="SLSQP",
                           constraints=cons, options={"maxiter": maxiter, "ftol": 1e-16})
@@ -373,27 +418,29 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> D
         success, message, iterations = bool(result.success), str(result.message), int(result.nit)
     else:
         fun = lambda z: objective_value(scene, problem.lift(z), problem.derivatives(z), objective, limits) / norm  # noqa: E731
-        cons = [{"type": "ineq", "fun": limits_of}]
+        cons = [{"type": "ineq", "fun": limits_of}] + held
         result = minimize(fun, z0, method="SLSQP", constraints=cons, options={"maxiter": maxiter, "ftol": 1e-14})
         z = result.x
         success, message, iterations = bool(result.success), str(result.message), int(result.nit)
     lift = problem.lift(z)
-    value, _, slacks = evaluate(scene, lift, objective, limits, problem.x)
+    value, _, slacks = evaluate(scene, lift, objective, limits, problem.x, target)
     values = {key: float(zi * si) for key, zi, si in zip(problem.free, z, problem.scale)}
     comparison = {}
     height, rise, dwell, ret = _event_shape(problem)
     for law_name in STANDARD_LAWS:
         std = LawLift(height=height, start=scene.lift.start, rise=rise, dwell=dwell, ret=ret,
                       rise_law=law_name, return_law=law_name)
-        comparison[law_name] = evaluate(scene, std, objective, limits, problem.x)[::2]
+        comparison[law_name] = evaluate(scene, std, objective, limits, problem.x, target)[::2]
     from ..lift.spline import with_values
 
     # SLSQP often ends a nonsmooth (peak) problem with "positive directional derivative for
-    # linesearch" at its optimum: the result counts when every limit is met and it improved
-    met = all(v >= -1e-9 for v in slacks.values()) and value <= start_value
+    # linesearch" at its optimum: the result counts when every limit is met and it improved on a
+    # start that met them too (a start off the held area may have to get worse to reach it)
+    start_met = all(v >= -1e-9 for v in evaluate(scene, problem.lift(z0), objective, limits, problem.x, target)[2].values())
+    met = all(v >= -1e-9 for v in slacks.values()) and (value <= start_value or not start_met)
     return DesignReport(objective, value, start_value, values, slacks, comparison, iterations,
                         met, message if met else message + "; a limit is violated or nothing improved",
-                        with_values(problem.options, values), method)
+                        with_values(problem.options, values), method, target)
 
 
 def _event_shape(problem) -> tuple[float, float, float, float]:
@@ -407,7 +454,7 @@ def _event_shape(problem) -> tuple[float, float, float, float]:
 
 
 def report_text(scene, report: DesignReport) -> str:
-    from ..lift.spline import NAMES
+    from ..lift.spline import NAMES, UNITS
 
     unit = {"peak-acceleration": "m/s**2", "peak-jerk": "m/s**3", "jerk-energy": "m**2/s**5",
             "residual-vibration": "m"}[report.objective]
@@ -415,8 +462,10 @@ def report_text(scene, report: DesignReport) -> str:
     lines = [f"{scene.name}: minimise {report.objective} with {report.method}, {report.iterations} iterations "
              f"({'limits met' if report.success else 'FAILED'}; solver: {report.message})",
              f"  optimum {report.value:.6g} {unit} (start {report.start_value:.6g})"]
+    if report.open_area is not None:
+        lines.append(f"  open area held at {1e3 * math.degrees(report.open_area):.6g} mm*deg")
     for (i, k), value in report.values.items():
-        lines.append(f"  station {i} {NAMES[k]} = {value * w**k:.9g} {('m', 'm/s', 'm/s**2', 'm/s**3')[k]}")
+        lines.append(f"  station {i} {NAMES[k]} = {value * w**k:.9g} {UNITS[k]}")
     lines.append("  constraint slacks (>= 0 met):")
     for name, slack in report.slacks.items():
         lines.append(f"    {name:<16s} {slack:+.4g}")
@@ -432,8 +481,8 @@ def stations_toml(scene, report: DesignReport) -> str:
     from ..lift.spline import NAMES
 
     w = report.options.reference_rpm * TWO_PI / 60.0
-    units = ("mm", "m/s", "m/s**2", "m/s**3")
-    scale = (1e3, 1.0, 1.0, 1.0)
+    units = ("mm", "m/s", "m/s**2", "m/s**3", "m/s**4")
+    scale = (1e3, 1.0, 1.0, 1.0, 1.0)
     out = []
     for st in report.options.stations:
         out.append("[[lift.stations]]")

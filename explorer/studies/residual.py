@@ -1,16 +1,25 @@
-"""Residual vibration over a speed range: how far the elastic valve strays from the lift it should
-have, speed by speed, with the scene's own solver (exact by default).
+"""Residual vibration over a speed range: a sweep of drive.rpm (explorer.studies.sweep_run, the
+same engine, table and conventions as `explorer sweep`) whose rows carry the elastic effect's
+residual columns (explorer.effects.residual):
 
-The reference lift is the one the cam was made for: a polydyne cam's wanted valve lift (then
-the deviation vanishes at the design speed), else the rigid valve lift ratio * L - lash. For a
-polydyne cam with a polynomial rise followed by a dwell, the vibration amplitude during the
-dwell has a closed form while the valve stays in contact (explorer.lift.polydyne.residual_amplitude);
-the table carries it beside the solver's value.
+  residual_deviation_m   largest |s - s_ref| over the revolution, s_ref the lift the cam is made
+                         for (a polydyne cam's wanted valve lift: then ~0 at the design speed;
+                         else the rigid valve lift)
+  residual_amplitude_m   the vibration amplitude in the dwell after the rise (NaN: no dwell)
+
+and one column the study adds after the sweep, since it is a formula of the speed alone:
+
+  residual_closed_form_m the linear closed form of that amplitude for a polydyne cam with a
+                         polynomial rise and a dwell (explorer.lift.polydyne.residual_amplitude),
+                         in the runs where the valve stayed on the cam from lift-off to the
+                         dwell (no separation, or the first one after the dwell began); NaN
+                         elsewhere.
+
+The cam is the scene's in every run (a polydyne cam keeps its design speed).
 """
 
 from __future__ import annotations
 
-import io
 import math
 from dataclasses import dataclass, replace
 
@@ -20,131 +29,124 @@ from ..core.errors import InputError
 
 TWO_PI = 2.0 * math.pi
 MAX_SPEEDS = 2000
+CLOSED_FORM = "residual_closed_form_m"
 
 
 @dataclass(frozen=True)
 class ResidualRow:
+    """One speed of the table, by name (the tests' and the chart's view of it)."""
+
     rpm: float
-    max_deviation_m: float  # largest |s - reference| over the revolution
-    dwell_amplitude_m: float | None  # sqrt(e^2 + (e'/wn)^2) where the dwell after the rise starts
-    closed_form_m: float | None  # the linear closed form of that amplitude (polydyne, polynomial rise)
-    contact_kept: bool  # the linkage stayed loaded from lift-off to the end of the rise
-    min_linkage_force_N: float  # smallest linkage force while the valve is open
-    seat_velocity_m_s: float  # the fastest landing on the seat (<= 0)
+    max_deviation_m: float  # residual_deviation_m
+    dwell_amplitude_m: float | None  # residual_amplitude_m (None: no dwell)
+    closed_form_m: float | None  # residual_closed_form_m (None: no closed form here)
+    contact_kept: bool  # the valve stayed on the cam through the rise (the closed form applies)
+    seating_velocity_m_s: float  # the hardest seat impact (< 0; NaN: none)
 
 
-def reference_lift(scene, lift, theta, order: int = 1) -> np.ndarray:
-    """(order + 1, N) valve lift the cam is meant to give, per radian, at cam angles theta."""
-    wanted = getattr(lift, "wanted_valve_lift", None)
-    if wanted is not None:
-        return wanted(theta, order)
-    d = lift.derivatives(theta)[: order + 1] * scene.follower.ratio
-    lash = scene.valve.lash
-    is_open = d[0] - lash > 0.0
-    d[0] -= lash
-    return np.where(is_open, d, 0.0)
-
-
-def _dwell_start(lift):
-    """Cam angle where the dwell after the rise starts (None without a dwell)."""
-    w = getattr(lift, "wanted", None)
-    if w is None or not w.dwell > 0.0:
-        return None
-    return (lift.start + w.rise) % TWO_PI
-
-
-def residual_row(scene, lift, rpm: float) -> ResidualRow:
-    from ..effects.elastic import linkage_model, solve_reporting, solver_options
-    from ..dynamics.model import Drive
-
-    omega = rpm * TWO_PI / 60.0
-    model = linkage_model(scene, lift, omega)
-    drive = Drive(lift, scene.follower.ratio, omega)
-    n = scene.solver.steps_per_revolution
-    period = TWO_PI / omega
-    grid = np.arange(n + 1) * (period / n)
-    d0 = drive(grid)[0]
-    t0 = grid[int(np.argmin(d0))]  # the valve rests on its seat where the drive is lowest
-    t = t0 + grid
-    dwell = _dwell_start(lift)
-    t_dwell = None
-    if dwell is not None:
-        t_dwell = t0 + ((dwell - omega * t0) % TWO_PI) / omega
-        t = np.unique(np.append(t, t_dwell))
-    sol, _ = solve_reporting(model, drive, t, scene.solver.method, solver_options(scene), scene.source)
-    ref = reference_lift(scene, lift, omega * t, 1)
-    e, e_dot = sol.s - ref[0], sol.v - omega * ref[1]
-    is_open = (sol.s > 0.0) | (ref[0] > 0.0)
-    amplitude = closed = None
-    contact_kept = True
-    if t_dwell is not None:
-        i = int(np.searchsorted(t, t_dwell))
-        wn = math.sqrt((model.stiffness + model.spring_rate) / model.oscillating_mass)
-        amplitude = math.hypot(e[i], e_dot[i] / wn)
-        rising = (t <= t_dwell) & (ref[0] > 0.0)
-        contact_kept = bool(np.all(sol.contact[rising]))
-        from ..lift.polydyne import RISE_POLYNOMIALS, residual_amplitude
-
-        if lift.wanted.rise_law in RISE_POLYNOMIALS and contact_kept:
-            closed = residual_amplitude(lift, rpm)
-    seats = [ev.get("velocity_m_s", 0.0) for ev in sol.events if ev["kind"] == "seat"]
-    force = sol.linkage_force[is_open] if np.any(is_open) else np.zeros(1)
-    return ResidualRow(rpm, float(np.max(np.abs(e))), amplitude, closed, contact_kept,
-                       float(force.min()), float(min(seats, default=0.0)))
-
-
-def residual_sweep(scene, rpms, progress=None) -> list[ResidualRow]:
-    """One row per speed (rev/min); the cam stays the scene's (a polydyne cam keeps its design)."""
-    from ..effects.lift import build_lift
-
-    rpms = np.asarray(rpms, dtype=float).ravel()
+def residual_scene(scene):
+    """The scene checked for a residual sweep, with the elastic effect on."""
     if scene.valve is None or scene.spring is None or scene.linkage is None:
         missing = [s for s in ("valve", "spring", "linkage") if getattr(scene, s) is None]
         raise InputError(scene.source, missing[0], "missing section: the residual vibration needs the elastic linkage "
                          "([valve], [spring], [linkage])")
     if scene.follower.type != "translating-roller":
         raise InputError(scene.source, "follower.type", "residual vibration sweeps are for translating-roller cams")
+    if scene.spring.elements > 0:
+        raise InputError(scene.source, "spring.elements", "residual vibration sweeps are for the massless spring "
+                         "(the spring chain's effect computes no residual columns)")
+    if "elastic" not in scene.effects:
+        scene = replace(scene, effects=(*scene.effects, "elastic"))
+    return scene
+
+
+def contact_through_rise(lift, separations: float, first_separation_deg: float) -> bool:
+    """True when the valve stayed on the cam from lift-off to the dwell: no separation, or the
+    first one (by cam angle from 0, as the table has it) at or after the dwell's start. An event
+    that straddles 0 deg has its return before its rise in that order: only no separation counts."""
+    if separations == 0:
+        return True
+    begin = (lift.start - lift.ramp) % TWO_PI  # the opening ramp starts here
+    if begin + lift.wanted.end + 2.0 * lift.ramp >= TWO_PI or not math.isfinite(first_separation_deg):
+        return False
+    return math.radians(first_separation_deg) - begin >= lift.ramp + lift.wanted.dwell_start()
+
+
+def closed_forms(scene, rpm: np.ndarray, separations: np.ndarray, first_separation_deg: np.ndarray) -> np.ndarray:
+    """residual_closed_form_m per run (module doc)."""
+    from ..effects.lift import build_lift
+    from ..lift.polydyne import RISE_POLYNOMIALS, residual_amplitude
+
+    out = np.full(rpm.shape, math.nan)
     lift = build_lift(scene)
-    rows = []
-    for i, rpm in enumerate(rpms):
-        rows.append(residual_row(replace(scene, drive=replace(scene.drive, rpm=float(rpm))), lift, float(rpm)))
-        if progress is not None:
-            progress(i + 1, rpms.size, f"{rpm:g} rpm")
-    return rows
+    wanted = getattr(lift, "wanted", None)
+    if wanted is None or wanted.dwell_start() is None or getattr(wanted, "rise_law", None) not in RISE_POLYNOMIALS:
+        return out
+    for i, (r, n_sep, first) in enumerate(zip(rpm, separations, first_separation_deg)):
+        if contact_through_rise(lift, float(n_sep), float(first)):
+            out[i] = residual_amplitude(lift, float(r))
+    return out
 
 
-def table_text(scene, rows) -> str:
-    out = io.StringIO()
-    out.write(f"# {scene.name}: the elastic valve against the lift the cam is made for, one revolution per speed\n")
-    out.write("rpm,max_deviation_m,dwell_amplitude_m,closed_form_m,contact_kept,min_linkage_force_N,seat_velocity_m_s\n")
-    for r in rows:
-        cells = [f"{r.rpm:.10g}", f"{r.max_deviation_m:.6e}",
-                 "" if r.dwell_amplitude_m is None else f"{r.dwell_amplitude_m:.6e}",
-                 "" if r.closed_form_m is None else f"{r.closed_form_m:.6e}",
-                 str(int(r.contact_kept)), f"{r.min_linkage_force_N:.6g}", f"{r.seat_velocity_m_s:.6g}"]
-        out.write(",".join(cells) + "\n")
-    return out.getvalue()
+def residual_table(scene, rpms, *, workers: int | None = None, progress=None):
+    """The sweep table over the speeds `rpms` (rev/min) with the closed-form column added."""
+    from .sweep_run import run_plan
+    from .sweep_spec import check_scene, make_plan, parse_axis
+    from .sweep_table import SweepTable
+
+    scene = residual_scene(scene)
+    plan = make_plan([parse_axis("drive.rpm", [float(r) for r in np.asarray(rpms, dtype=float).ravel()], file="--rpm")],
+                     file="--rpm")
+    check_scene(scene, plan)
+    table = run_plan(scene, plan, workers=workers, progress=progress)
+    rpm = np.asarray(table.columns["drive_rpm"], dtype=float)
+    separations = np.asarray(table.columns["separations"], dtype=float)
+    columns = dict(table.columns)
+    columns[CLOSED_FORM] = closed_forms(scene, rpm, separations, np.asarray(table.columns["first_separation_deg"], float))
+    design = getattr(scene.lift.options, "design_rpm", None)
+    metadata = {**table.metadata, "study": "residual", "design_rpm": design}
+    return SweepTable.build(columns, metadata)
 
 
-def chart_png(scene, rows) -> bytes:
+def rows_of(table) -> list[ResidualRow]:
+    c = table.columns
+
+    def maybe(x) -> float | None:
+        return None if not math.isfinite(x) else float(x)
+
+    return [ResidualRow(float(c["drive_rpm"][i]), float(c["residual_deviation_m"][i]),
+                        maybe(float(c["residual_amplitude_m"][i])), maybe(float(c[CLOSED_FORM][i])),
+                        bool(c["separations"][i] == 0 or math.isfinite(float(c[CLOSED_FORM][i]))),
+                        float(c["seating_velocity_m_s"][i]))
+            for i in range(len(table))]
+
+
+def residual_sweep(scene, rpms, progress=None, workers: int | None = 1) -> list[ResidualRow]:
+    """One row per speed (rev/min), from residual_table."""
+    return rows_of(residual_table(scene, rpms, workers=workers, progress=progress))
+
+
+def chart_png(scene, table) -> bytes:
     """Deviation (and the dwell amplitude with its closed form) against speed, log scale."""
     from .charts import figure, png
 
-    rpm = np.array([r.rpm for r in rows])
+    c = table.columns
+    rpm = np.asarray(c["drive_rpm"], float)
     floor = 1e-16
     with figure(figsize=(8.0, 4.8), dpi=110) as (fig, ax):
-        ax.semilogy(rpm, np.maximum([r.max_deviation_m for r in rows], floor), "o-", label="largest deviation over the revolution")
-        if any(r.dwell_amplitude_m is not None for r in rows):
-            amp = [np.nan if r.dwell_amplitude_m is None else max(r.dwell_amplitude_m, floor) for r in rows]
-            ax.semilogy(rpm, amp, "s--", label="vibration amplitude in the dwell (solver)")
-        if any(r.closed_form_m is not None for r in rows):
-            cf = [np.nan if r.closed_form_m is None else max(r.closed_form_m, floor) for r in rows]
-            ax.semilogy(rpm, cf, "k:", label="closed form (linear, in contact)")
-        design = getattr(getattr(scene, "lift", None), "options", None)
-        if design is not None and hasattr(design, "design_rpm"):
-            ax.axvline(design.design_rpm, color="grey", lw=0.8)
-            ax.text(design.design_rpm, ax.get_ylim()[1], " design", va="top", color="grey")
-        ax.set_xlabel("camshaft speed [rpm]")
+        ax.semilogy(rpm, np.maximum(np.asarray(c["residual_deviation_m"], float), floor), "o-",
+                    label="residual_deviation_m (largest over the revolution)")
+        amp = np.asarray(c["residual_amplitude_m"], float)
+        if np.isfinite(amp).any():
+            ax.semilogy(rpm, np.maximum(amp, floor), "s--", label="residual_amplitude_m (in the dwell, solver)")
+        closed = np.asarray(c[CLOSED_FORM], float)
+        if np.isfinite(closed).any():
+            ax.semilogy(rpm, np.maximum(closed, floor), "k:", label=f"{CLOSED_FORM} (linear, in contact)")
+        design = table.metadata.get("design_rpm")
+        if design is not None:
+            ax.axvline(design, color="grey", lw=0.8)
+            ax.text(design, ax.get_ylim()[1], " design", va="top", color="grey")
+        ax.set_xlabel("drive_rpm")
         ax.set_ylabel("valve deviation [m]")
         ax.set_title(f"{scene.name}: residual vibration")
         ax.grid(True, which="both", alpha=0.3)

@@ -24,7 +24,9 @@ Columns (SI units in the names, as in `simulate`'s CSV), by effect:
            peak_linkage_force_N, peak_camshaft_back_pressure_N, lift_off_delay_s (from the lash
            take-up to the valve's lift-off: Schenker's t0), seating_velocity_m_s (the hardest seat
            impact, < 0; NaN: none), seat_impacts, largest_bounce_m (highest rise after a seat
-           impact before the next event, on the output grid; 0: none)
+           impact before the next event, on the output grid; 0: none), residual_deviation_m and
+           residual_amplitude_m (from the lift the cam is made for: explorer.effects.residual; NaN
+           where the effect does not compute them, the spring chain's)
 and always run_failed (1: the run raised; its figures NaN) after the varied inputs.
 """
 
@@ -45,7 +47,7 @@ EFFECT_COLUMNS: dict[str, tuple[str, ...]] = {
     "contact": ("max_camshaft_torque_Nm",),
     "elastic": ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
                 "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
-                "largest_bounce_m"),
+                "largest_bounce_m", "residual_deviation_m", "residual_amplitude_m"),
 }
 
 
@@ -99,6 +101,8 @@ def row_scalars(names, summary, events, columns) -> dict[str, float]:
         row["seating_velocity_m_s"] = min(float(e["velocity_m_s"]) for e in seats) if seats else math.nan
         row["seat_impacts"] = float(len(seats))
         row["largest_bounce_m"] = _largest_bounce(elastic, seats, columns)
+        for name in ("residual_deviation_m", "residual_amplitude_m"):  # the elastic effect's (effects/residual.py)
+            row[name] = _nan_none(summary.get(name))
     return row
 
 

@@ -285,10 +285,15 @@ def sweep_plots(sweep: SpeedSweep, current_rpm: float) -> list[tuple]:
         specs.append(("Speed sweep (rigid camshaft torque)", "T [N·m]", sweep.rpm,
                       [("peak camshaft torque", sweep.peak_torque, "#17a589")]))
     if sweep.elastic_total:
-        specs.append((f"Speed sweep (elastic, {sweep.elastic_done}/{sweep.elastic_total} speeds)", "", sweep.elastic_rpm,
-                      [("seating velocity [m/s]", sweep.seating_velocity, "#8e44ad"),
-                       ("largest deviation [mm]", sweep.max_deviation * 1e3, "#27ae60"),
-                       ("first separation [°/100]", sweep.first_separation_deg / 100.0, "#d68910")]))
+        # one plot per figure: three units on one axis would need a scaled series ([°/100]) that
+        # reads wrong under the pointer
+        done = f"{sweep.elastic_done}/{sweep.elastic_total} speeds"
+        specs += [(f"Speed sweep (elastic first separation, {done})", "θ [°]", sweep.elastic_rpm,
+                   [("first separation [°]", sweep.first_separation_deg, "#d68910")]),
+                  (f"Speed sweep (elastic seating velocity, {done})", "v [m/s]", sweep.elastic_rpm,
+                   [("seating velocity [m/s]", sweep.seating_velocity, "#8e44ad")]),
+                  (f"Speed sweep (elastic deviation, {done})", "Δs [mm]", sweep.elastic_rpm,
+                   [("largest deviation from the rigid lift [mm]", sweep.max_deviation * 1e3, "#27ae60")])]
     out = []
     for title, y_label, x, series in specs:
         xs, ys, markers = with_markers(x, [v for _, v, _ in series], [current_rpm, sweep.float_rpm])
