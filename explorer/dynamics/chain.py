@@ -19,9 +19,16 @@ The spring's own damping: modal damping ratio zeta on the chain's modes relative
 quasi-static shape (u_j = s (1 - j/(N+1))), so the quasi-static compression is not damped and
 each mode of the chain with its ends held has exactly the ratio zeta.
 
-Each combination (linkage loaded or not) x (seat engaged or not) is a linear phase with constant
-coefficients; chain_exact.py solves it with the eigen-decomposition of the phase's state matrix
-(once per phase type and speed), chain_reference.py with scipy.
+Coulomb friction R on the valve (optional): moving, the valve feels -sign(v) R (a constant in
+the forcing, so each direction is its own phase type); where v reaches 0 it sticks if the net
+force on it (net_force_row) is within [-R, R], else turns; held, s stays fixed and v = 0 while
+the coils go on moving, until the net force leaves the band (a phase type whose valve rows are
+0). The coils' contact after a clash and a rigid (restitution) seat are not modelled.
+
+Each combination (linkage loaded or not) x (seat engaged or not) x (valve moving up, down, or
+held) is a linear phase with constant coefficients; chain_exact.py solves it with the
+eigen-decomposition of the phase's state matrix (once per phase type and speed),
+chain_reference.py with scipy.
 """
 
 from __future__ import annotations

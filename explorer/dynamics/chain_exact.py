@@ -1,7 +1,8 @@
 """The exact solver of the spring-chain model (chain.py): each phase's linear ODE solved in
 closed form through the eigen-decomposition of its state matrix.
 
-Method. A phase (linkage loaded or not, seat engaged or not) is y' = A y + B [S, S', 1] with
+Method. A phase (linkage loaded or not, seat engaged or not, the valve moving up or down with
+its friction, or held by it) is y' = A y + B [S, S', 1] with
 y = [x, x']. A is decomposed once per phase type (and speed: the model is fixed in a run) in
 mass-normalised coordinates Y = [K~^(1/2) q, q'] (q = M^(1/2) x), where the undamped A is
 skew-symmetric and its eigenvectors are orthogonal (well conditioned even for a 1e12 N/m seat):
@@ -13,7 +14,8 @@ with the phi functions of exponential integrators (series for |lambda h| < 1, th
 beyond). A run of steps is the affine recurrence z_(j+1) = E_j z_j + Q_j (|E| <= 1, so no
 growth), E and the phi tables once per phase type and step length.
 
-Events (separation, re-contact, lift-off, seat, coil clash) are zero crossings of functions
+Events (separation, re-contact, lift-off, seat, coil clash; with friction the valve's velocity
+reaching 0 and the held valve's release) are zero crossings of functions
 linear in y and the drive, g = a.y + alpha S + beta S' + g0. A step is certified free of a
 crossing by bounds: g(tau) >= g(0) + g'(0) tau - M2 tau^2 / 2 from the left and the same from the
 right, with M2 >= |g''| over the step from |z_i''(tau)| <= |z_i''(0)| + tau max|Gamma_i''|

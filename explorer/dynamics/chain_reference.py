@@ -5,7 +5,9 @@ its step polynomials), integrated by solve_ivp (DOP853 by default) with the phas
 functions; at an event the phase switches and the integration restarts there. The step is
 bounded by a quarter of the fastest period of the phase, and the integration restarts at the
 valve's apex in flight and at the gap's minimum while the linkage is unloaded (solve_ivp sees
-crossings only between its steps: a hop shorter than a step would go unseen)."""
+crossings only between its steps: a hop shorter than a step would go unseen). With friction:
+the valve's velocity reaching 0 (stick or turn by chain_exact.stick_or_turn) and the held
+valve's release by its net force, the held phase's state matrix that of chain_exact."""
 
 from __future__ import annotations
 
