@@ -98,6 +98,15 @@ def test_phi_functions_against_their_integral():
     np.testing.assert_allclose(Fc[0], np.exp(xs), rtol=1e-15)
 
 
+def test_warm_up_run_reaches_every_kernel():
+    # the install step's warm-up (chain_exact.warm) must call each compiled kernel once: the
+    # scan between events, the search and the arming (at lift-off, seat, separation, clash)
+    from explorer.dynamics.chain_exact import warm
+
+    kinds = warm()
+    assert {"lift-off", "seat", "separation", "coil-clash"} <= set(kinds)
+
+
 def test_undamped_phase_eigenvalues_are_imaginary_and_match_eigh():
     m = _model(damping=0.0, seat_damping=0.0, damping_ratio=0.0)
     md = phase_modes(m, True, False)

@@ -519,7 +519,7 @@ def warm() -> int:
     """Compile (or load from numba's disk cache) every kernel the solver calls: one revolution of
     a 2-element chain with lift-off, seat, separation and a coil clash. For the install step
     (`python -c "from explorer.dynamics.chain_exact import warm; warm()"`), so that the first run
-    does not pay numba's compilation (~10 s). Returns the number of events."""
+    does not pay numba's compilation (~10 s). Returns the kinds of its events."""
     from .model import Drive
 
     model = ChainModel(valve_mass=0.08, spring_mass=0.04, elements=2, spring_rate=30e3, preload=200.0,
@@ -527,8 +527,8 @@ def warm() -> int:
                        clash_compression=2e-3)
     omega = 600.0
     sol = solve(model, Drive(_CosineLift(4e-3), 1.0, omega), np.linspace(0.0, 2.0 * math.pi / omega, 721))
-    return len(sol.events)
+    return [e["kind"] for e in sol.events]
 
 
 if __name__ == "__main__":
-    print(f"chain kernels ready ({warm()} events in the warm-up run)")
+    print(f"chain kernels ready ({len(warm())} events in the warm-up run)")
