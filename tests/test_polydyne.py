@@ -209,7 +209,10 @@ def test_residual_columns_in_any_speed_sweep():
     lift = build_lift(scene)
     for rpm, got in zip(speeds, swept.columns["residual_deviation_m"]):
         deviation, _, _ = elastic_follows(load_scene(DEMO, [f"drive.rpm={rpm}"]), lift)
-        assert got == pytest.approx(deviation, rel=1e-12, abs=1e-18)
+        # the sweep's compiled engine steps the same closed forms in another order: its lift
+        # differs from simulate's by rounding, ~1e-16 m here (tests/test_sweep_kernel.py), which is
+        # all there is of the deviation at the design speed (8e-17 m)
+        assert got == pytest.approx(deviation, rel=1e-12, abs=1e-15)
 
 
 def test_residual_needs_the_massless_spring():

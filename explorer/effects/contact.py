@@ -128,3 +128,47 @@ def contact_effect(ctx) -> EffectOutput:
             f"cam width {spec.width * 1e3:.4g} mm is below the width rule b = P/(k D) = {required_width * 1e3:.4g} mm"
         )
     return EffectOutput(columns=columns, summary=summary, warnings=tuple(warnings))
+
+
+# --- the peak camshaft torque at many speeds at once -------------------------------------------
+
+BLOCK_CELLS = 2_000_000  # speeds x samples per block (16 MB of float64)
+
+
+def torque_factors(ctx) -> tuple[np.ndarray, np.ndarray]:
+    """(c_push, c_pull) per sample of ctx.theta: the rigid camshaft torque is T = c F with c = c_push
+    where the valve-side contact force F > 0, c_pull where F < 0, from this effect's own geometry
+    and laws (explorer.mechanics.contact.contact_loads: T = N arm, N = ratio F / (cos a - mu sin a
+    sign v) when pushing, ratio F / cos a when pulling; inf: self-locked). The geometry and the
+    sign of the follower's velocity do not depend on the speed (ctx: the kinematics' columns at any
+    one speed)."""
+    geometry = contact_geometry(ctx)
+    spec = ctx.scene.contact if ctx.scene.contact is not None else ContactSpec()
+    alpha = np.abs(np.asarray(geometry.pressure_angle, dtype=float))
+    v = np.sign(np.asarray(ctx.columns["follower_velocity_m_s"], dtype=float))
+    arm = np.asarray(geometry.ratio, dtype=float) * np.asarray(geometry.torque_arm, dtype=float)
+    denominator = np.cos(alpha) - math.tan(spec.friction_angle) * np.sin(alpha) * v
+    with np.errstate(divide="ignore", invalid="ignore"):
+        push = np.where(denominator > 0.0, arm / denominator, np.inf)
+        pull = arm / np.cos(alpha)
+    return push, pull
+
+
+def peak_torques(a_coef, g_part, is_open, push, pull, omegas) -> np.ndarray:
+    """max_camshaft_torque_Nm (N m) at each speed of `omegas` (rad/s) from F = w^2 A + G on the
+    scene's grid (explorer.mechanics.forces.grid_load_parts) and the torque factors: the largest
+    finite torque (closed samples carry no force: 0 there; NaN where none is finite)."""
+    w2 = np.asarray(omegas, dtype=float).ravel() ** 2
+    a_coef, g_part, push, pull = a_coef[is_open], g_part[is_open], push[is_open], pull[is_open]
+    if a_coef.size == 0:
+        return np.zeros(w2.size)
+    out = np.full(w2.size, 0.0 if not is_open.all() else -np.inf)
+    block = max(1, BLOCK_CELLS // a_coef.size)
+    for start in range(0, w2.size, block):
+        end = min(w2.size, start + block)
+        forces = w2[start:end, None] * a_coef[None, :] + g_part[None, :]
+        with np.errstate(invalid="ignore"):
+            torque = forces * np.where(forces > 0.0, push[None, :], pull[None, :])
+        torque = np.where(np.isfinite(torque), torque, -np.inf)  # self-locked samples: no finite torque
+        out[start:end] = np.maximum(out[start:end], torque.max(axis=1))
+    return np.where(np.isfinite(out), out, np.nan)

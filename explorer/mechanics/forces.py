@@ -352,6 +352,82 @@ def min_contact_force(lift, loads: TrainLoads, omega: float, ratio: float = 1.0,
     return minimise_on_pieces(lift, pieces, force, n_grid=n_grid)
 
 
+def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash: float = 0.0,
+                       pieces: Pieces | None = None, n_grid: int = 4096) -> tuple[np.ndarray, np.ndarray]:
+    """min_contact_force at every speed of `omegas` at once: (values, angles), each speed's the
+    same floats as min_contact_force's. The samples, the lift there and A, G of F = w^2 A + G are
+    shared by all speeds; the zoom of every speed's candidate pieces runs as one batch, one lift
+    evaluation a round for all of them (minimise_on_pieces and _zoom_minimum, row by row)."""
+    pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
+    w2 = np.asarray(omegas, dtype=float).ravel() ** 2
+    values_out, theta_out = np.full(w2.size, math.inf), np.full(w2.size, math.nan)
+    theta, direction, owner, chosen = sample_pieces(pieces, None, n_grid)
+    if chosen.size == 0 or w2.size == 0:
+        return values_out, theta_out
+    a_coef, g_part, _ = load_parts(lift.derivatives(np.mod(theta, TWO_PI)), direction, loads, ratio, lash)
+    counts = np.bincount(owner, minlength=chosen.size)
+    offsets = np.concatenate([[0], np.cumsum(counts)])
+    rows, los, his, dirs = [], [], [], []
+    for s, w2s in enumerate(w2):
+        values = w2s * a_coef + g_part  # min_contact_force's force(): omega**2 * A + G
+        grid_min = np.minimum.reduceat(values, offsets[:-1])
+        floor = np.nanmin(grid_min)
+        slack = 1e-3 * abs(floor) + 1e-9
+        best_value, best_theta = math.inf, math.nan
+        for k in np.argsort(grid_min):
+            seg = values[offsets[k]: offsets[k + 1]]
+            j = int(np.argmin(seg))
+            if grid_min[k] < best_value:
+                best_value, best_theta = float(grid_min[k]), float(theta[offsets[k] + j])
+            if grid_min[k] > floor + slack:
+                continue
+            ts = theta[offsets[k]: offsets[k + 1]]
+            lo, hi = ts[max(j - 1, 0)], ts[min(j + 1, ts.size - 1)]
+            if hi > lo:
+                rows.append(s), los.append(float(lo)), his.append(float(hi)), dirs.append(pieces.direction[chosen[k]])
+        values_out[s], theta_out[s] = best_value, best_theta
+    if rows:
+        rows_a = np.asarray(rows)
+        zoom_value, zoom_theta = _zoom_minima(lift, loads, w2[rows_a], ratio, lash, np.asarray(dirs, dtype=float),
+                                              np.asarray(los), np.asarray(his))
+        # in each speed's own order of its pieces: a strictly smaller zoom value replaces the best
+        for r, s in enumerate(rows):
+            if zoom_value[r] < values_out[s]:
+                values_out[s], theta_out[s] = zoom_value[r], zoom_theta[r]
+    return values_out, np.mod(theta_out, TWO_PI)
+
+
+def _zoom_minima(lift, loads, w2, ratio, lash, direction, lo, hi, xatol: float = 1e-10):
+    """_zoom_minimum of the contact force for many (speed, bracket) rows at once: each row the
+    same samples (np.linspace's floats), the same narrowing and the same stop as on its own."""
+    n = lo.size
+    best_value, best_theta = np.full(n, math.inf), lo.copy()
+    active = np.ones(n, bool)
+    steps = np.arange(ZOOM_POINTS, dtype=float)
+    for _ in range(60):
+        idx = np.nonzero(active)[0]
+        if idx.size == 0:
+            break
+        a, b = lo[idx], hi[idx]
+        ts = steps[None, :] * ((b - a) / (ZOOM_POINTS - 1))[:, None] + a[:, None]  # np.linspace(a, b, 33)
+        ts[:, -1] = b
+        d = lift.derivatives(np.mod(ts.ravel(), TWO_PI))
+        a_coef, g_part, _ = load_parts(d, np.repeat(direction[idx], ZOOM_POINTS), loads, ratio, lash)
+        values = (np.repeat(w2[idx], ZOOM_POINTS) * a_coef + g_part).reshape(idx.size, ZOOM_POINTS)
+        values = np.where(np.isfinite(values), values, np.inf)
+        j = np.argmin(values, axis=1)
+        v = values[np.arange(idx.size), j]
+        better = v < best_value[idx]
+        best_value[idx[better]] = v[better]
+        best_theta[idx[better]] = ts[np.arange(idx.size), j][better]
+        done = (b - a) <= xatol
+        active[idx[done]] = False
+        go = ~done
+        lo[idx[go]] = ts[np.arange(idx.size), np.maximum(j - 1, 0)][go]
+        hi[idx[go]] = ts[np.arange(idx.size), np.minimum(j + 1, ZOOM_POINTS - 1)][go]
+    return best_value, best_theta
+
+
 def side_extremes(lift, loads: TrainLoads, omega: float, ratio: float, lash: float, pieces: Pieces,
                   n_grid: int = 4096) -> dict:
     """Schenker's figures per side: largest deceleration p1 (opening, v > 0) and p2 (closing, v < 0)

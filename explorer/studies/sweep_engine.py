@@ -11,10 +11,15 @@ row needs, and shares across runs everything that does not depend on the varied 
   loads, not on the speed: cached per distinct set of those), the lash take-up angles (per lash);
 - the forces effect's side figures and loss intervals, which no row holds, are not computed.
 
-The elastic motion of every run is the registry's `exact` solver through the elastic effect
-itself (elastic_effect), so each row equals `simulate` on the same values to the bit: lift,
-events and every scalar (tests/test_sweep_engine.py). What this does not do yet is the compiled
-or vectorised form of the solver's stepping across runs (README, "Sweeps": what remains).
+Which engine computes a chunk's rows is a registry (ENGINES, the first that accepts the scene):
+- "compiled" (sweep_kernel.py): the elastic figures from the compiled exact solver
+  (dynamics/exact_kernel.py), for the scenes whose elastic effect solves the LinkageModel with the
+  exact solver and a constant stiffness; equal to simulate's within 1e-12 m of lift, 1e-12 s of
+  event time and ~1e-9 relative of a figure (rounding of another order of the same operations;
+  tests/test_sweep_kernel.py);
+- "shared": the elastic effect itself (elastic_effect), each row equal to simulate's to the bit
+  (tests/test_sweep_engine.py), for the other non-gear scenes (a spring chain, another solver);
+- "simulate": simulate whole (the gears).
 
 Columns (SI units in the names, as in `simulate`'s CSV), by effect:
   forces   min_contact_force_N (rigid, refined), float_speed_rpm (rigid; NaN: never floats)
@@ -40,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
+from .sweep_cache import CACHE_ENTRIES, remember as _remember  # noqa: F401 (CACHE_ENTRIES: the tests')
 from .sweep_spec import scene_for
 
 EFFECT_COLUMNS: dict[str, tuple[str, ...]] = {
@@ -131,21 +137,6 @@ def reference_row(scene, names) -> dict[str, float]:
     return row_scalars(names, result.summary, result.summary["events"], result.columns)
 
 
-CACHE_ENTRIES = 16  # per cache: a tolerance study draws a new lash every run; memory must not grow with runs
-
-
-def _remember(cache: dict, key, make):
-    """cache[key], made on first use; the oldest entry goes when the cache is full."""
-    try:
-        return cache[key]
-    except KeyError:
-        pass
-    if len(cache) >= CACHE_ENTRIES:
-        del cache[next(iter(cache))]
-    value = cache[key] = make()
-    return value
-
-
 @dataclass
 class _Shared:
     """What the runs of one chunk share (built on first use)."""
@@ -154,6 +145,7 @@ class _Shared:
     pieces: dict = field(default_factory=dict)
     jumps: dict = field(default_factory=dict)
     take_ups: dict = field(default_factory=dict)
+    grids: dict = field(default_factory=dict)  # the compiled path's revolution grids (sweep_kernel.py)
 
 
 def _batchable(scene) -> bool:
@@ -169,8 +161,9 @@ def engine_row(scene, names, shared: _Shared) -> dict[str, float]:
     return row_scalars(set(names), summary, events, columns)
 
 
-def engine_outputs(scene, shared: _Shared) -> tuple[dict, list, dict]:
-    """(summary, elastic events, columns) of one run: what the rows are read from."""
+def engine_outputs(scene, shared: _Shared, elastic: bool = True) -> tuple[dict, list, dict]:
+    """(summary, elastic events, columns) of one run: what the rows are read from (elastic=False:
+    the rigid effects only, for the compiled path, which computes the elastic figures itself)."""
     from ..effects.pipeline import Context, effect_function, resolve
     from ..effects.lift import build_lift
 
@@ -198,7 +191,7 @@ def engine_outputs(scene, shared: _Shared) -> tuple[dict, list, dict]:
     if "contact" in effects:
         out = effect_function("contact", scene.follower.type)(ctx())
         summary["max_camshaft_torque_Nm"] = out.summary.get("max_camshaft_torque_Nm")
-    if "elastic" in effects:
+    if elastic and "elastic" in effects:
         ratio, lash = scene.follower.ratio, scene.valve.lash
         from ..mechanics.kinematics import lash_crossings
 
@@ -229,7 +222,97 @@ def _forces_scalars(scene, lift, omega, shared: _Shared, columns) -> dict:
             "jump_speed_rpm": jump.rpm if math.isfinite(jump.omega) else None}
 
 
-def compute_chunk(base, keys, values: np.ndarray, names, shared: _Shared | None = None) -> np.ndarray:
+@dataclass(frozen=True)
+class RowEngine:
+    """One way to compute a run's row: `accepts(base scene, shared)` says whether it takes the
+    runs of that scene, `row(scene, names, shared)` computes one. compute_chunk takes the first
+    engine of ENGINES that accepts the chunk's scene."""
+
+    name: str
+    accepts: Any
+    row: Any
+    # optional: chunk(scenes, names, shared) -> (runs x names) figures with run_failed, all the
+    # runs at once (the compiled engine's batches); None: row by row
+    chunk: Any = None
+
+
+def _kernel_accepts(scene, shared) -> bool:
+    from .sweep_kernel import accepts
+
+    return accepts(scene, shared)
+
+
+def _kernel_row(scene, names, shared) -> dict[str, float]:
+    """The row of one run: the elastic figures compiled (sweep_kernel.elastic_run), the rigid ones
+    (forces, contact) as engine_outputs computes them."""
+    from .sweep_kernel import ELASTIC, elastic_run
+
+    names = set(names)
+    row: dict[str, float] = {}
+    rigid = names - set(ELASTIC) - {"run_failed"}
+    if rigid:
+        summary, events, columns = engine_outputs(scene, shared, elastic=False)
+        row.update(row_scalars(rigid, summary, events, columns))
+    figures, _, _ = elastic_run(scene, shared)
+    row.update(figures)
+    return row
+
+
+def _kernel_chunk(scenes, names, shared) -> np.ndarray:
+    """The rows of many runs: the elastic figures in compiled batches (sweep_kernel.elastic_chunk),
+    the rigid ones (forces, contact) run by run as engine_outputs computes them."""
+    from .sweep_kernel import ELASTIC, elastic_chunk
+    from .sweep_rigid import RIGID, rigid_over_speeds, speed_only
+
+    names = tuple(names)
+    out = np.full((len(scenes), len(names)), math.nan)
+    fail = names.index("run_failed")
+    failed = np.zeros(len(scenes), bool)
+    rigid = [n for n in names if n not in ELASTIC and n != "run_failed"]
+    if rigid and len(scenes) > 1 and set(rigid) <= set(RIGID) and speed_only(scenes):
+        # a speed sweep: every speed's rigid figures at once (sweep_rigid.py)
+        for name, values in rigid_over_speeds(scenes, rigid, shared).items():
+            out[:, names.index(name)] = values
+        rigid = []
+    if rigid:
+        for i, scene in enumerate(scenes):
+            try:
+                summary, events, columns = engine_outputs(scene, shared, elastic=False)
+            except (InputError, RuntimeError, ValueError, ArithmeticError):
+                failed[i] = True
+                continue
+            row = row_scalars(set(rigid), summary, events, columns)
+            for j, name in enumerate(names):
+                if name in row:
+                    out[i, j] = row[name]
+    if any(n in ELASTIC for n in names):
+        figures, elastic_failed = elastic_chunk(scenes, shared)
+        for j, name in enumerate(ELASTIC):
+            if name in names:
+                out[:, names.index(name)] = figures[:, j]
+        failed |= elastic_failed
+    out[failed] = math.nan
+    out[:, fail] = failed.astype(float)
+    return out
+
+
+ENGINES: tuple[RowEngine, ...] = (
+    # the elastic figures from the compiled exact solver (explorer/dynamics/exact_kernel.py)
+    RowEngine("compiled", _kernel_accepts, _kernel_row, lambda scenes, names, shared: _kernel_chunk(scenes, names, shared)),
+    # the effects' own functions, sharing the lift and the rigid float speed across runs
+    RowEngine("shared", lambda scene, shared: _batchable(scene), engine_row),
+    # simulate itself (the gears, whose lift or effects are their own)
+    RowEngine("simulate", lambda scene, shared: True, lambda scene, names, shared: reference_row(scene, names)),
+)
+
+
+def engine_for(base, shared: _Shared) -> RowEngine:
+    """The first engine of ENGINES that takes the runs of the scene `base`."""
+    return next(engine for engine in ENGINES if engine.accepts(base, shared))
+
+
+def compute_chunk(base, keys, values: np.ndarray, names, shared: _Shared | None = None,
+                  engine: RowEngine | None = None) -> np.ndarray:
     """The figures (runs x names, float64) of the runs `values` (runs x keys, SI) of scene `base`.
     A run that raises (a speed too slow for the solver's step budget, a motion that does not
     settle) gets NaN and run_failed = 1; the others are unaffected."""
@@ -237,11 +320,14 @@ def compute_chunk(base, keys, values: np.ndarray, names, shared: _Shared | None 
     out = np.full((values.shape[0], len(names)), math.nan)
     fail = names.index("run_failed")
     shared = shared if shared is not None else _Shared()
-    batch = _batchable(base)
+    engine = engine if engine is not None else engine_for(base, shared)
+    if engine.chunk is not None:
+        scenes = [scene_for(base, keys, row_values) for row_values in np.asarray(values, dtype=float)]
+        return engine.chunk(scenes, names, shared)
     for i, row_values in enumerate(np.asarray(values, dtype=float)):
         scene = scene_for(base, keys, row_values)
         try:
-            row = engine_row(scene, names, shared) if batch else reference_row(scene, names)
+            row = engine.row(scene, names, shared)
         except (InputError, RuntimeError, ValueError, ArithmeticError):
             out[i, fail] = 1.0
             continue

@@ -89,57 +89,22 @@ def speed_parts(scene, lift, open_mask: bool = False):
     return a_coef[is_open], g_part[is_open]
 
 
-def torque_factors(scene, lift, result, is_open):
-    """(c_push, c_pull) on the open samples: the rigid camshaft torque is T = c F with c = c_push
-    where the valve-side contact force F > 0, c_pull where F < 0, from the contact effect's own
-    geometry and laws (explorer.mechanics.contact.contact_loads: T = N arm, N = ratio F / (cos a
-    - mu sin a sign v) when pushing, ratio F / cos a when pulling; inf: self-locked). The geometry
-    and the sign of the follower's velocity do not depend on the speed."""
+def torque_sweep(scene, lift, result, rpms) -> np.ndarray:
+    """Peak rigid camshaft torque [N m] at each speed of `rpms` (the contact effect's
+    max_camshaft_torque_Nm, explorer.effects.contact.peak_torques), its geometry from `result`'s
+    kinematics columns (a simulate result of this scene at any speed)."""
     from types import MappingProxyType
 
-    from ...effects.contact import contact_geometry
+    from ...effects.contact import peak_torques, torque_factors
     from ...effects.pipeline import Context
-    from ...mechanics.contact import ContactSpec
+    from ...mechanics.forces import RPM_PER_RAD_S, grid_load_parts
 
-    n = scene.solver.steps_per_revolution
-    theta = np.arange(n) * (2.0 * math.pi / n)
+    theta, a_coef, g_part, is_open = grid_load_parts(scene, lift)
     cols = result.columns
     ctx = Context(scene, theta, np.asarray(cols["time_s"]), lift, MappingProxyType(dict(cols)),
                   MappingProxyType(dict(result.summary)))
-    geometry = contact_geometry(ctx)
-    spec = scene.contact if scene.contact is not None else ContactSpec()
-    alpha = np.abs(np.asarray(geometry.pressure_angle, dtype=float))
-    v = np.sign(np.asarray(cols["follower_velocity_m_s"], dtype=float))
-    arm = np.asarray(geometry.ratio, dtype=float) * np.asarray(geometry.torque_arm, dtype=float)
-    denominator = np.cos(alpha) - math.tan(spec.friction_angle) * np.sin(alpha) * v
-    with np.errstate(divide="ignore", invalid="ignore"):
-        push = np.where(denominator > 0.0, arm / denominator, np.inf)
-        pull = arm / np.cos(alpha)
-    return push[is_open], pull[is_open]
-
-
-def torque_sweep(scene, lift, result, rpms) -> np.ndarray:
-    """Peak rigid camshaft torque [N m] at each speed of `rpms` (the contact effect's
-    max_camshaft_torque_Nm: the largest finite value; closed samples carry no force)."""
-    from ...mechanics.forces import RPM_PER_RAD_S
-
-    rpm = np.asarray(rpms, dtype=float).ravel()
-    a_coef, g_part, is_open = speed_parts(scene, lift, open_mask=True)
-    push, pull = torque_factors(scene, lift, result, is_open)
-    floor = 0.0 if not is_open.all() else -np.inf
-    out = np.full(rpm.size, floor)
-    if a_coef.size == 0:
-        return np.zeros(rpm.size)
-    w2 = (rpm / RPM_PER_RAD_S) ** 2
-    block = max(1, _BLOCK_CELLS // a_coef.size)
-    for start in range(0, rpm.size, block):
-        end = min(rpm.size, start + block)
-        forces = w2[start:end, None] * a_coef[None, :] + g_part[None, :]
-        with np.errstate(invalid="ignore"):
-            torque = forces * np.where(forces > 0.0, push[None, :], pull[None, :])
-        torque = np.where(np.isfinite(torque), torque, -np.inf)  # self-locked samples: no finite torque
-        out[start:end] = np.maximum(out[start:end], torque.max(axis=1))
-    return np.where(np.isfinite(out), out, np.nan)
+    push, pull = torque_factors(ctx)
+    return peak_torques(a_coef, g_part, is_open, push, pull, np.asarray(rpms, dtype=float) / RPM_PER_RAD_S)
 
 
 def has_contact(scene) -> bool:

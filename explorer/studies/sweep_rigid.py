@@ -1,0 +1,67 @@
+"""The rigid figures of a sweep's runs (forces: min_contact_force_N, float_speed_rpm; contact:
+max_camshaft_torque_Nm) for many speeds at once.
+
+When the runs of a chunk differ in the camshaft speed only (a speed sweep, or the speed axis of a
+map), everything but w^2 is shared: the lift at the samples of its smooth pieces and on the
+scene's grid, A and G of the rigid contact force F = w^2 A + G, the float speed, the contact
+geometry and the torque factors. Then
+- the refined minimum contact force of every speed is explorer.mechanics.forces.min_contact_forces
+  (the same floats as min_contact_force run by run, which `simulate`'s forces effect calls);
+- the peak camshaft torque of every speed is explorer.effects.contact.peak_torques (the contact
+  effect's per-sample product T = c(F) F, equal to its max_camshaft_torque_Nm to 1e-9 relative:
+  the factor c is formed once instead of per speed).
+Runs that differ in anything else go run by run (sweep_engine.engine_outputs).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from types import MappingProxyType
+
+import numpy as np
+
+RIGID = ("min_contact_force_N", "float_speed_rpm", "max_camshaft_torque_Nm")
+
+
+def speed_only(scenes) -> bool:
+    """True when the scenes are equal but for drive.rpm (a scene holding arrays compares False)."""
+    first = scenes[0]
+    try:
+        return all(dataclasses.replace(s, drive=first.drive) == first for s in scenes[1:])
+    except (ValueError, TypeError):  # an array inside a scene: no truth value for ==
+        return False
+
+
+def rigid_over_speeds(scenes, names, shared) -> dict[str, np.ndarray]:
+    """{name: value per run} of the rigid names asked for, for scenes that differ in speed only."""
+    from ..effects.contact import peak_torques, torque_factors
+    from ..effects.lift import build_lift
+    from ..effects.pipeline import Context, effect_function
+    from ..mechanics.forces import TrainLoads, float_speed, grid_load_parts, min_contact_forces, smooth_pieces
+    from .sweep_cache import remember
+
+    scene = scenes[0]
+    if shared.lift is None:
+        shared.lift = build_lift(scene)
+    lift = shared.lift
+    omegas = np.array([s.drive.omega for s in scenes])
+    out: dict[str, np.ndarray] = {}
+    ratio, lash = scene.follower.ratio, scene.valve.lash
+    if "min_contact_force_N" in names or "float_speed_rpm" in names:
+        loads = TrainLoads.from_scene(scene)
+        n_grid = max(4096, scene.solver.steps_per_revolution)
+        pieces = remember(shared.pieces, (ratio, lash, n_grid), lambda: smooth_pieces(lift, ratio, lash, n_grid))
+        f_min, _ = min_contact_forces(lift, loads, omegas, ratio, lash, pieces, n_grid)
+        out["min_contact_force_N"] = f_min  # +inf: the valve never opens, as row_scalars writes it
+        jump = remember(shared.jumps, (ratio, lash, n_grid, loads), lambda: float_speed(lift, loads, ratio, lash, pieces, n_grid))
+        out["float_speed_rpm"] = np.full(omegas.size, jump.rpm if math.isfinite(jump.omega) else math.nan)
+    if "max_camshaft_torque_Nm" in names:
+        theta, a_coef, g_part, is_open = grid_load_parts(scene, lift)
+        # the kinematics' geometry columns at the first speed: the factors do not depend on it
+        ctx = Context(scene, theta, theta / omegas[0], lift, MappingProxyType({}), MappingProxyType({}))
+        columns = dict(effect_function("kinematics", scene.follower.type)(ctx).columns)
+        ctx = dataclasses.replace(ctx, columns=MappingProxyType(columns))
+        push, pull = torque_factors(ctx)
+        out["max_camshaft_torque_Nm"] = peak_torques(a_coef, g_part, is_open, push, pull, omegas)
+    return out
