@@ -29,7 +29,7 @@ import numpy as np
 
 RIGID_SPEEDS = 500
 ELASTIC_SPEEDS = 24  # one simulate per speed (the scenes the compiled solver does not take)
-ELASTIC_BATCH_SPEEDS = 250  # in one compiled call
+ELASTIC_BATCH_SPEEDS = 500  # in one compiled call, as many as the rigid figures
 _BLOCK_CELLS = 2_000_000  # speeds x samples per block (16 MB of float64)
 
 
