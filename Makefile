@@ -8,11 +8,12 @@ export OPENBLAS_NUM_THREADS ?= 1
 TEST_STAMP := $(VENV)/.installed-test
 # Pinned versions of every dependency (`make lock` refreshes them).
 CONSTRAINTS := constraints.txt
-# The sweep's compiled solver (numba, cache=True): compiled once here, after install and whenever
-# its source changes, into explorer/dynamics/__pycache__, so that no sweep (and no test worker)
-# pays the ~30 s compilation; numba replaces its cache files atomically, so concurrent test
-# workers that find it stale each compile and none breaks.
-KERNEL := explorer/dynamics/exact_kernel.py
+# The compiled solvers (numba, cache=True): the sweep's exact solver and the spring chain's
+# kernels, compiled once here, after install and whenever their source changes, into
+# explorer/dynamics/__pycache__, so that no sweep, chain scene or test worker pays the ~30 s and
+# ~10 s of compilation; numba replaces its cache files atomically, so concurrent test workers
+# that find it stale each compile and none breaks.
+KERNEL := explorer/dynamics/exact_kernel.py explorer/dynamics/chain_kernels.py
 KERNEL_STAMP := $(VENV)/.kernel-compiled
 
 .PHONY: run test bench lock clean
@@ -31,6 +32,7 @@ $(TEST_STAMP): pyproject.toml $(CONSTRAINTS) | $(BIN)/python
 
 $(KERNEL_STAMP): $(KERNEL) $(STAMP)
 	$(BIN)/python -m explorer.dynamics.exact_kernel --warm
+	$(BIN)/python -m explorer.dynamics.chain_exact
 	touch $@
 
 run: $(STAMP) $(KERNEL_STAMP)

@@ -109,8 +109,9 @@ def test_the_markers_stand_at_the_exact_speeds_and_the_curves_are_unchanged():
 
 
 def test_not_yet_computed_elastic_speeds_stay_gaps():
-    scene, lift = _scene()
+    scene, lift = _scene(FLOAT, 'solver.method="taylor"')  # not the compiled solver's: one speed at a time
     sweep = ss.start_sweep(scene, lift, serial=1)
+    assert not sweep.batched and sweep.elastic_total == ss.ELASTIC_SPEEDS
     sweep = ss.with_elastic(ss.with_elastic(sweep, (10.0, -0.5, 1e-4)), (20.0, -0.7, 2e-4))
     plots = {title.split(",")[0]: (y_label, x, series, lim) for title, y_label, x, series, _, lim in ss.sweep_plots(sweep, 1000.0)}
     y_label, x, series, (lo, hi) = plots["Speed sweep (elastic deviation"]
@@ -131,9 +132,9 @@ def test_a_scene_without_forces_has_no_sweep():
     assert ss.start_sweep(scene, lift, serial=1) is None
 
 
-def test_the_worker_fills_the_elastic_sweep_in_progressively_and_the_newest_wins():
-    """In the compute child, between requests: the rigid sweep first, then one elastic speed at a
-    time; a new request in the middle starts the newer result's sweep and the old one stops."""
+def _worker_sweeps(first_overrides, second_overrides, started):
+    """The (serial, sweep) the compute worker hands on: request 1, then request 2 once `started`
+    holds for a sweep of request 1; waits until both are idle."""
     from explorer.view.browser.compute import ComputeWorker
     from explorer.view.browser.model import Request
 
@@ -141,17 +142,27 @@ def test_the_worker_fills_the_elastic_sweep_in_progressively_and_the_newest_wins
     worker = ComputeWorker(on_ready=lambda p: None, on_error=lambda r, m: sweeps.append(("error", m)),
                            on_sweep=lambda serial, s: sweeps.append((serial, s))).start()
     try:
-        worker.submit(Request(str(FLOAT), serial=1))
+        worker.submit(Request(str(FLOAT), first_overrides, serial=1))
         deadline = time.monotonic() + 4 * WAIT_S
-        while not any(s is not None and s.elastic_done >= 2 for _, s in sweeps[1:]) and time.monotonic() < deadline:
+        while not any(s is not None and started(s) for _, s in sweeps[1:]) and time.monotonic() < deadline:
             time.sleep(0.01)
-        worker.submit(Request(str(FLOAT), ("drive.rpm=1500",), serial=2))
+        worker.submit(Request(str(FLOAT), second_overrides, serial=2))
         assert worker.wait_idle(WAIT_S)
         while not worker.sweep_idle() and time.monotonic() < deadline:
             time.sleep(0.05)
         assert worker.sweep_idle()
     finally:
         worker.stop()
+    assert not any(serial == "error" for serial, _ in sweeps), sweeps
+    return sweeps
+
+
+def test_the_worker_fills_the_elastic_sweep_in_progressively_and_the_newest_wins():
+    """In the compute child, between requests: the rigid sweep first, then (for a scene the
+    compiled solver does not take) one elastic speed at a time; a new request in the middle starts
+    the newer result's sweep and the old one stops."""
+    taylor = 'solver.method="taylor"'
+    sweeps = _worker_sweeps((taylor,), (taylor, "drive.rpm=1500"), lambda s: s.elastic_done >= 2)
     first = [s for serial, s in sweeps if serial == 1]
     done = [s.elastic_done for s in first]
     assert done[:3] == [0, 1, 2] and done == sorted(done)  # progressive, in order
@@ -161,11 +172,30 @@ def test_the_worker_fills_the_elastic_sweep_in_progressively_and_the_newest_wins
     assert last.span == first[0].span  # same scene file, 1500 rpm inside: the plot keeps its scale
     assert np.isfinite(last.max_deviation).all()
     # the filled-in figures are simulate's at those speeds
-    scene, lift = _scene(FLOAT, "drive.rpm=1500")
+    scene, lift = _scene(FLOAT, taylor, "drive.rpm=1500")
     k = ss.ELASTIC_SPEEDS // 2
     expected = ss.elastic_figures(scene, lift, last.elastic_rpm[k])
     got = (last.first_separation_deg[k], last.seating_velocity[k], last.max_deviation[k])
     assert all((math.isnan(e) and math.isnan(g)) or e == g for e, g in zip(expected, got))
+
+
+def test_the_compiled_solver_fills_every_elastic_speed_in_one_step():
+    """A scene the compiled exact solver takes (the float demo): after the rigid step, one step
+    computes all ELASTIC_BATCH_SPEEDS elastic speeds. Oracle: simulate at those speeds (the
+    compiled solver's rows equal it within rounding, tests/test_sweep_kernel.py: here 1e-9
+    relative on the figures, 1e-9 deg on the separation angle)."""
+    sweeps = _worker_sweeps((), ("drive.rpm=1500",), lambda s: True)
+    last = sweeps[-1][1]
+    assert sweeps[-1][0] == 2 and last.batched and last.elastic_total == ss.ELASTIC_BATCH_SPEEDS
+    assert [s.elastic_done for serial, s in sweeps if serial == 2] == [0, ss.ELASTIC_BATCH_SPEEDS]
+    scene, lift = _scene(FLOAT, "drive.rpm=1500")
+    for k in (0, ss.ELASTIC_BATCH_SPEEDS // 3, ss.ELASTIC_BATCH_SPEEDS - 1):
+        sep, seat, dev = ss.elastic_figures(scene, lift, last.elastic_rpm[k])
+        assert (math.isnan(sep) and math.isnan(last.first_separation_deg[k])) or \
+            last.first_separation_deg[k] == pytest.approx(sep, abs=1e-9)
+        assert last.seating_velocity[k] == pytest.approx(seat, rel=1e-9, abs=1e-12)
+        assert last.max_deviation[k] == pytest.approx(dev, rel=1e-9, abs=1e-12)
+    assert np.isfinite(last.first_separation_deg[-1])  # the top speed floats
 
 
 def test_choosing_a_speed_under_the_sweep_sets_the_requests_rpm():

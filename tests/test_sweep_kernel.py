@@ -1,5 +1,5 @@
 """The compiled exact solver (explorer/dynamics/exact_kernel.py) and the sweep's compiled path
-(explorer/studies/sweep_kernel.py) against the registry's exact solver and `simulate` (issue #14.3).
+(explorer/effects/elastic_batch.py) against the registry's exact solver and `simulate` (issue #14.3).
 
 Oracle: the Python exact solver (dynamics/exact.py) and `simulate` itself, on the same values.
 The kernel solves the same step ODEs with the same closed forms and finds the same events with the
@@ -40,7 +40,7 @@ from explorer.effects.lift import build_lift
 from explorer.effects.pipeline import simulate
 from explorer.scene.scene import load_scene
 from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, engine_for, result_columns, row_scalars
-from explorer.studies.sweep_kernel import ELASTIC, kernel_outputs
+from explorer.effects.elastic_batch import ELASTIC, kernel_outputs
 from explorer.studies.sweep_spec import scene_for
 
 LIFT_TOL_M = 1e-12
@@ -298,7 +298,9 @@ def test_failing_runs_are_marked_on_the_compiled_path():
 
 def test_numba_is_imported_by_the_kernel_module_only():
     """numba (~0.3 s to import) only in explorer/dynamics/exact_kernel.py, which only the sweep's
-    compiled path imports: `import explorer`, loading and simulating a scene leave it out."""
+    compiled path imports, and in dynamics/chain_kernels.py, which only the spring chain's exact
+    solver imports (scenes with spring.elements > 0): `import explorer`, loading and simulating a
+    massless scene leave it out."""
     import ast
     import subprocess
     import sys
@@ -312,7 +314,7 @@ def test_numba_is_imported_by_the_kernel_module_only():
                      else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
             if any(n.split(".")[0] == "numba" for n in names):
                 users.add(path.relative_to(package).as_posix())
-    assert users == {"dynamics/exact_kernel.py"}
+    assert users == {"dynamics/exact_kernel.py", "dynamics/chain_kernels.py"}
     code = ("import sys, explorer; explorer.simulate(explorer.load_scene(sys.argv[1])); "
             "print('numba' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code, str(SCENES / "elastic_float.toml")], capture_output=True,
@@ -326,8 +328,7 @@ def test_a_speed_sweeps_rigid_figures_at_once_equal_simulates():
     the same floats (the batched zoom repeats min_contact_force's samples row by row), the float
     speed too; the peak camshaft torque within 1e-9 relative (the same product per sample, its
     factor formed once). Speeds from 'never floats' to far beyond the float speed."""
-    from explorer.studies.sweep_engine import reference_row
-    from explorer.studies.sweep_rigid import speed_only
+    from explorer.studies.sweep_engine import reference_row, speed_groups
 
     base = load_scene(SCENES / "valve_float_demo.toml")
     names = result_columns(base)
@@ -335,7 +336,7 @@ def test_a_speed_sweeps_rigid_figures_at_once_equal_simulates():
     values = rpms[:, None]  # (a sweep's values are in the scene file's units: rpm)
     shared = _Shared()
     assert engine_for(base, shared).name == "compiled"
-    assert speed_only([scene_for(base, ("drive.rpm",), v) for v in values])
+    assert [g.tolist() for g in speed_groups(("drive.rpm",), values)] == [list(range(len(rpms)))]  # one group
     got = compute_chunk(base, ("drive.rpm",), values, names, shared)
     for i, v in enumerate(values):
         expected = reference_row(scene_for(base, ("drive.rpm",), v), names)
@@ -346,17 +347,23 @@ def test_a_speed_sweeps_rigid_figures_at_once_equal_simulates():
     assert got[0, names.index("min_contact_force_N")] > 0 > got[-1, names.index("min_contact_force_N")]
 
 
-def test_runs_that_differ_in_more_than_speed_take_their_rigid_figures_run_by_run():
-    from explorer.studies.sweep_engine import reference_row
-    from explorer.studies.sweep_rigid import speed_only
+def test_rigid_figures_do_not_depend_on_how_the_runs_are_chunked():
+    """A map rpm x lash: runs group by lash (speed_groups); each run's rigid figures are the same
+    floats whether its chunk holds its whole group, part of it, or it alone (the cluster's table
+    equals the serial one bit for bit), and equal simulate's (torque to 1e-9 relative)."""
+    from explorer.studies.sweep_engine import reference_row, speed_groups
 
     base = load_scene(SCENES / "valve_float_demo.toml")
     names = result_columns(base)
     keys = ("drive.rpm", "valve.lash")
-    values = np.array([[3000.0, 0.2e-3], [3000.0, 0.4e-3]])
-    assert not speed_only([scene_for(base, keys, v) for v in values])
-    got = compute_chunk(base, keys, values, names)
+    values = np.array([[r, lash] for lash in (0.2e-3, 0.4e-3) for r in (1500.0, 3000.0, 4500.0)])
+    assert [g.tolist() for g in speed_groups(keys, values)] == [[0, 1, 2], [3, 4, 5]]
+    whole = compute_chunk(base, keys, values, names)
+    pieces = np.concatenate([compute_chunk(base, keys, values[i:i + 1], names) for i in range(len(values))])
+    halves = np.concatenate([compute_chunk(base, keys, values[:4], names), compute_chunk(base, keys, values[4:], names)])
+    np.testing.assert_array_equal(whole, pieces)
+    np.testing.assert_array_equal(whole, halves)
     for i, v in enumerate(values):
         expected = reference_row(scene_for(base, keys, v), names)
-        assert got[i, names.index("min_contact_force_N")] == expected["min_contact_force_N"]
-        assert got[i, names.index("max_camshaft_torque_Nm")] == expected["max_camshaft_torque_Nm"]
+        assert whole[i, names.index("min_contact_force_N")] == expected["min_contact_force_N"]
+        assert whole[i, names.index("max_camshaft_torque_Nm")] == pytest.approx(expected["max_camshaft_torque_Nm"], rel=1e-9)

@@ -19,9 +19,16 @@ The spring's own damping: modal damping ratio zeta on the chain's modes relative
 quasi-static shape (u_j = s (1 - j/(N+1))), so the quasi-static compression is not damped and
 each mode of the chain with its ends held has exactly the ratio zeta.
 
-Each combination (linkage loaded or not) x (seat engaged or not) is a linear phase with constant
-coefficients; chain_exact.py solves it with the eigen-decomposition of the phase's state matrix
-(once per phase type and speed), chain_reference.py with scipy.
+Coulomb friction R on the valve (optional): moving, the valve feels -sign(v) R (a constant in
+the forcing, so each direction is its own phase type); where v reaches 0 it sticks if the net
+force on it (net_force_row) is within [-R, R], else turns; held, s stays fixed and v = 0 while
+the coils go on moving, until the net force leaves the band (a phase type whose valve rows are
+0). The coils' contact after a clash and a rigid (restitution) seat are not modelled.
+
+Each combination (linkage loaded or not) x (seat engaged or not) x (valve moving up, down, or
+held) is a linear phase with constant coefficients; chain_exact.py solves it with the
+eigen-decomposition of the phase's state matrix (once per phase type and speed),
+chain_reference.py with scipy.
 """
 
 from __future__ import annotations
@@ -34,6 +41,9 @@ import numpy as np
 
 # events of the chain model: those of the massless model and the spring reaching solid length
 CHAIN_EVENT_KINDS = ("lift-off", "separation", "re-contact", "seat", "coil-clash")
+# with friction the valve also stops: it sticks (held by friction at v = 0), turns (its velocity
+# changes sign), or is released (its net force leaves the friction band)
+FRICTION_EVENT_KINDS = ("stick", "turn", "release")
 
 
 @dataclass(frozen=True)
@@ -53,6 +63,7 @@ class ChainModel:
     # compression of one element (beyond its installed state) at which its coils touch: inf when
     # the spring's lengths are not given
     clash_compression: float = math.inf
+    friction: float = 0.0  # N, Coulomb, on the valve (its stem in the guide), opposes its motion
 
     @staticmethod
     def from_scene(scene) -> "ChainModel":
@@ -65,6 +76,7 @@ class ChainModel:
             preload=sp.preload, stiffness=scene.linkage.stiffness, damping=scene.linkage.damping,
             lash=v.lash, closing_load=scene.loads.closing_total, seat_stiffness=scene.seat.stiffness,
             seat_damping=scene.seat.damping, damping_ratio=sp.damping_ratio, clash_compression=clash,
+            friction=scene.loads.friction,
         )
 
     # -- the chain --------------------------------------------------------------------------
@@ -134,15 +146,35 @@ class ChainModel:
             C[0, 0] += self.seat_damping
         return K, C
 
-    def forcing_vectors(self, contact: bool) -> np.ndarray:
-        """(n, 3): f = F[:, 0] S + F[:, 1] S' + F[:, 2] (forces on the degrees of freedom)."""
+    def forcing_vectors(self, contact: bool, sigma: float = 1.0) -> np.ndarray:
+        """(n, 3): f = F[:, 0] S + F[:, 1] S' + F[:, 2] (forces on the degrees of freedom), the
+        valve moving in the direction sigma (its friction -sigma R; without friction the same
+        numbers for either sign)."""
         F = np.zeros((self.n, 3))
-        F[0, 2] = -self.preload - self.closing_load
+        F[0, 2] = -self.preload - self.closing_load - sigma * self.friction
         if contact:
             F[0, 0] = self.stiffness
             F[0, 1] = self.damping
             F[0, 2] -= self.stiffness * self.lash
         return F
+
+    def net_force_row(self, contact: bool, seat: bool) -> tuple[np.ndarray, float, float, float]:
+        """The force on the valve other than friction, linear in the state y = [x, x'] and the
+        drive: (coef (2n,), alpha, beta, const) with force = coef . y + alpha S + beta S' + const:
+        the linkage (contact), the seat (seat), the spring's end element, preload and loads.
+        A valve at rest (v = 0) sticks while |force| <= friction."""
+        n = self.n
+        coef = np.concatenate([-self.spring_stiffness_matrix[0], -self.spring_damping_matrix[0]])
+        alpha = beta = 0.0
+        const = -self.preload - self.closing_load
+        if contact:
+            coef[0] -= self.stiffness
+            coef[n] -= self.damping
+            alpha, beta, const = self.stiffness, self.damping, const - self.stiffness * self.lash
+        if seat:
+            coef[0] -= self.seat_stiffness
+            coef[n] -= self.seat_damping
+        return coef, alpha, beta, const
 
     # -- what is reported ---------------------------------------------------------------------
     def spring_modal_frequencies(self) -> np.ndarray:
@@ -184,7 +216,7 @@ def static_equilibrium(model: ChainModel, S: float, S1: float = 0.0) -> tuple[np
     displacement; the damper's c S' is a force): the first consistent phase."""
     for contact, seat in ((False, True), (True, True), (True, False), (False, False)):
         K, _ = model.phase_matrices(contact, seat)
-        F = model.forcing_vectors(contact)
+        F = model.forcing_vectors(contact, 0.0)  # at rest: no friction force
         x = np.linalg.solve(K, F[:, 0] * S + F[:, 1] * S1 + F[:, 2])
         s = x[0]
         gap = S - model.lash - s

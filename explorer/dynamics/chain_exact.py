@@ -1,7 +1,8 @@
 """The exact solver of the spring-chain model (chain.py): each phase's linear ODE solved in
 closed form through the eigen-decomposition of its state matrix.
 
-Method. A phase (linkage loaded or not, seat engaged or not) is y' = A y + B [S, S', 1] with
+Method. A phase (linkage loaded or not, seat engaged or not, the valve moving up or down with
+its friction, or held by it) is y' = A y + B [S, S', 1] with
 y = [x, x']. A is decomposed once per phase type (and speed: the model is fixed in a run) in
 mass-normalised coordinates Y = [K~^(1/2) q, q'] (q = M^(1/2) x), where the undamped A is
 skew-symmetric and its eigenvectors are orthogonal (well conditioned even for a 1e12 N/m seat):
@@ -10,17 +11,24 @@ is the quintic Hermite polynomial through S, S', S'' at both ends (as in exact.p
 modal forcing is a polynomial sum_k Gamma_k u^k (u = tau/h) and the step is exact:
     z(h) = e^(lambda h) z(0) + sum_k Gamma_k h k! phi_(k+1)(lambda h)
 with the phi functions of exponential integrators (series for |lambda h| < 1, their recurrence
-beyond). A run of steps is the affine recurrence z_(j+1) = E_j z_j + Q_j, evaluated for a whole
-window at once by a doubling scan (log2(window) passes; |E| <= 1, so no growth).
+beyond). A run of steps is the affine recurrence z_(j+1) = E_j z_j + Q_j (|E| <= 1, so no
+growth), E and the phi tables once per phase type and step length.
 
-Events (separation, re-contact, lift-off, seat, coil clash) are zero crossings of functions
+Events (separation, re-contact, lift-off, seat, coil clash; with friction the valve's velocity
+reaching 0 and the held valve's release) are zero crossings of functions
 linear in y and the drive, g = a.y + alpha S + beta S' + g0. A step is certified free of a
 crossing by bounds: g(tau) >= g(0) + g'(0) tau - M2 tau^2 / 2 from the left and the same from the
 right, with M2 >= |g''| over the step from |z_i''(tau)| <= |z_i''(0)| + tau max|Gamma_i''|
-(Re lambda <= 0), for all event functions of a window of steps at once. A step that is not
-certified is bisected; a sign change with a certified monotone g is located by Newton's method
-with the analytic slope on the closed form (started at the root of the cubic Hermite
-interpolant, kept inside the bracket), to 1e-13 of the step.
+(Re lambda <= 0), for all event functions at each step. A step that is not certified is
+bisected; a sign change with a certified monotone g is located by Newton's method with the
+analytic slope on the closed form (started at the root of the cubic Hermite interpolant, kept
+inside the bracket), to 1e-13 of the step.
+
+Cost. The recurrence, the certification and the event search are loops over a few dozen modes
+compiled with numba (chain_kernels.py, cached on disk): the recurrence runs from one event to the
+first step that is not certified, the search of that step runs whole in one call. This module
+keeps the per-phase-type set-up (eigen-decomposition, phi tables, event functions) and the
+events' bookkeeping in numpy and Python: a few dozen calls per revolution, not per step.
 """
 
 from __future__ import annotations
@@ -30,14 +38,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import chain_kernels as kernels
 from .chain import ChainModel, static_equilibrium
 from .model import DynamicsSolution
 from .series import hermite5, taylor_shift
 
 FACT = np.array([math.factorial(k) for k in range(7)], dtype=float)
 EPS = np.finfo(float).eps
-WINDOW = 512  # most steps scanned at once between events
-WINDOW_MIN = 16  # steps scanned at once after an event
 
 
 # phi_j(x) = sum_n x^n / (n + j)!, j = 1..6, as x^n (n < 24) times this table: 1/(24+j)! < 1e-24
@@ -89,13 +96,15 @@ class PhaseModes:
     mB: np.ndarray  # (2n, 3): modal forcing per unit S, S', 1
     A: np.ndarray  # (2n, 2n) physical state matrix
     B: np.ndarray  # (2n, 3)
+    mode: int = 1  # the valve moving up (+1: friction -R) or down (-1), or held by friction (0)
 
 
-def phase_modes(model: ChainModel, contact: bool, seat: bool) -> PhaseModes:
-    n = model.n
-    M = model.masses
+def _decompose(M: np.ndarray, K: np.ndarray, C: np.ndarray):
+    """(lam, phys, inv) of y' = A y (y = [x, x'], M x'' + C x' + K x = 0, K positive definite) in
+    mass-normalised coordinates Y = [K~^(1/2) q, q'] (q = M^(1/2) x), where the undamped A is
+    skew-symmetric and its eigenvectors orthogonal: y = phys @ z, z = inv @ y."""
+    n = M.size
     mh, ms = 1.0 / np.sqrt(M), np.sqrt(M)
-    K, C = model.phase_matrices(contact, seat)
     Kt = mh[:, None] * K * mh[None, :]
     Ct = mh[:, None] * C * mh[None, :]
     w2, Q = np.linalg.eigh(0.5 * (Kt + Kt.T))
@@ -111,30 +120,48 @@ def phase_modes(model: ChainModel, contact: bool, seat: bool) -> PhaseModes:
     Ti = np.zeros((2 * n, 2 * n))
     Ti[:n, :n] = Sq * ms[None, :]
     Ti[n:, n:] = np.diag(ms)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K / M[:, None], -C / M[:, None]]])
-    B = np.zeros((2 * n, 3))
-    B[n:] = model.forcing_vectors(contact) / M[:, None]
-    inv = Vi @ Ti
     # a purely imaginary pair must not drift into the right half plane by rounding
     lam = np.where(lam.real > 0.0, 1j * lam.imag, lam)
-    return PhaseModes(contact, seat, lam, T @ V, inv, inv @ B, A, B)
+    return lam, T @ V, Vi @ Ti
 
 
-def _sub_poly(P, a: float, b: float) -> list:
-    """Coefficients of P(a + (b - a) u') in u' (P in u over its step, 0 <= a < b <= 1): a Taylor
-    shift by a (synthetic division), then the scaling by (b - a)^i."""
-    c = [float(x) for x in P]
-    if a != 0.0:
-        for i in range(5):
-            for k in range(4, i - 1, -1):
-                c[k] += a * c[k + 1]
-    d = b - a
-    if d != 1.0:
-        f = 1.0
-        for i in range(1, 6):
-            f *= d
-            c[i] *= f
-    return c
+def phase_modes(model: ChainModel, contact: bool, seat: bool, mode: int = 1) -> PhaseModes:
+    """The phase type's state matrix and its decomposition. mode +1/-1: the valve moves (its
+    friction -mode R in the forcing). mode 0: the valve is held by friction at its height s*
+    (v = 0) while the coils move: s and v are states of eigenvalue 0, the coils' motion about
+    their static shape with the valve at s* is decomposed as the chain with both ends held."""
+    n = model.n
+    M = model.masses
+    K, C = model.phase_matrices(contact, seat)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K / M[:, None], -C / M[:, None]]])
+    B = np.zeros((2 * n, 3))
+    if mode != 0:
+        lam, phys, inv = _decompose(M, K, C)
+        B[n:] = model.forcing_vectors(contact, float(mode)) / M[:, None]
+        return PhaseModes(contact, seat, lam, phys, inv, inv @ B, A, B, mode)
+    # held valve: the rows of s and v are 0 (s' = 0, v' = 0: s stays s*, v stays 0); the coils
+    # u = G s + w with G the static shape (K_cc G = -K_c0), w the chain with held ends
+    A[0] = 0.0
+    A[n] = 0.0
+    A[:, n] = 0.0  # v = 0: its damping couplings do not act (and e_v is then a mode of eigenvalue 0)
+    m = n - 1
+    cs = np.r_[1:n, n + 1:2 * n]  # the coils' rows of y
+    z = np.zeros((2 * n, 2 * n), dtype=complex)
+    phys = z.copy()
+    inv = z.copy()
+    lam = np.zeros(2 * n, dtype=complex)
+    if m:
+        lc, pc, ic = _decompose(M[1:], K[1:, 1:], C[1:, 1:])
+        G = -np.linalg.solve(K[1:, 1:], K[1:, 0])
+        lam[:2 * m] = lc
+        phys[np.ix_(cs, np.arange(2 * m))] = pc
+        inv[np.ix_(np.arange(2 * m), cs)] = ic
+        # y_u = G s + w: the s column of phys adds G; z_w = ic [u - G s; u']
+        phys[1:n, 2 * m] = G
+        inv[:2 * m, 0] = -ic[:, :m] @ G
+    phys[0, 2 * m] = phys[n, 2 * m + 1] = 1.0
+    inv[2 * m, 0] = inv[2 * m + 1, n] = 1.0
+    return PhaseModes(contact, seat, lam, phys, inv, np.zeros((2 * n, 3), dtype=complex), A, B, 0)
 
 
 class _Event:
@@ -146,13 +173,25 @@ class _Event:
         self.sign, self.index = sign, index
 
 
+@dataclass(frozen=True)
+class _PhaseData:
+    """What the compiled loops need of one phase type, as contiguous arrays (built once)."""
+    modes: PhaseModes
+    events: tuple
+    mB: np.ndarray  # (3, 2n) complex: modal forcing per unit S, S', 1
+    rows: np.ndarray  # (E, 2n) complex: event function e = Re(rows[e] . z) + ...
+    absrows: np.ndarray  # (E, 2n)
+    absmB: np.ndarray  # (2, 2n): |mB| of S and S' (the bound of the forcing's second derivative)
+    ev: np.ndarray  # (4, E): alpha, beta, const, sign of each event function
+    W: np.ndarray  # (6, G, 2n) complex: hh k! phi_(k+1)(lambda hh) per group of equal steps
+    E0: np.ndarray  # (G, 2n) complex: e^(lambda hh)
+
+
 class ChainSolver:
     def __init__(self, model: ChainModel, drive, t: np.ndarray, max_events: int = 10_000):
         self.model, self.drive, self.max_events = model, drive, max_events
         self._modes: dict = {}
-        self._tables: dict = {}
-        self._ev_cache: dict = {}
-        self._ev_funcs: dict = {}
+        self._data: dict = {}
         self._build_grid(drive, t)
         self.events: list[dict] = []
         self.n = model.n
@@ -189,6 +228,8 @@ class ChainSolver:
         # |S''| and |S'''| over each step, bounded by the polynomial's coefficients
         self.S2b = (k * (k - 1) * np.abs(self.P)).sum(0) / h**2
         self.S3b = (k * (k - 1) * (k - 2) * np.abs(self.P)).sum(0) / h**3
+        # the compiled loops read a step's polynomial as a column: one contiguous copy per step
+        self.PT = np.ascontiguousarray(self.P.T)
         # steps of (nearly) equal length share one set of phi functions: a time warp of the
         # drive by the roundings of the node times (exact.py does the same)
         tolh = max(1e-11 * float(h.max()), 8.0 * EPS * max(abs(t0), abs(t1)))
@@ -202,85 +243,32 @@ class ChainSolver:
             means.append(float(hs[a:b].sum()) / (b - a))
         self.h_group = np.array(means)
 
-    def _drive_poly_at(self, P: np.ndarray, hh: float, u: float) -> tuple[float, float, float, float]:
-        """S, S', S'', S''' of the step polynomial at u."""
-        S = S1 = S2 = S3 = 0.0
-        for k in range(5, -1, -1):
-            S = S * u + P[k]
-        for k in range(5, 0, -1):
-            S1 = S1 * u + k * P[k]
-        for k in range(5, 1, -1):
-            S2 = S2 * u + k * (k - 1) * P[k]
-        for k in range(5, 2, -1):
-            S3 = S3 * u + k * (k - 1) * (k - 2) * P[k]
-        return S, S1 / hh, S2 / hh**2, S3 / hh**3
-
     # ------------------------------------------------------------------ phases
-    def modes(self, key: tuple[bool, bool]) -> PhaseModes:
+    def modes(self, key: tuple[bool, bool, int]) -> PhaseModes:
         md = self._modes.get(key)
         if md is None:
             md = self._modes[key] = phase_modes(self.model, *key)
         return md
 
-    def tables(self, key):
-        """(W (6, G, 2n), E (G, 2n)) of the phase type for each group of equal step lengths:
-        z_(j+1) = E z_j + sum_k Gamma_jk W_k (once per phase type; window_tables applies them)."""
-        tb = self._tables.get(key)
-        if tb is None:
+    def data(self, key) -> _PhaseData:
+        """The phase type's arrays for the compiled loops (once per phase type and run)."""
+        pd = self._data.get(key)
+        if pd is None:
             md = self.modes(key)
+            events = tuple(self._make_event_functions(key))
+            rows = np.ascontiguousarray(np.array([e.coef @ md.phys for e in events]))  # (E, 2n)
+            ev = np.array([[getattr(e, f) for e in events] for f in ("alpha", "beta", "const", "sign")])
             F = phi_functions(md.lam[None, :] * self.h_group[:, None])  # (7, G, 2n)
-            W = F[1:] * (self.h_group[None, :, None] * FACT[:6, None, None])
-            W = np.ascontiguousarray(W)
-            tb = self._tables[key] = (W, W.real.copy(), W.imag.copy(), np.ascontiguousarray(F[0]))
-        return tb
-
-    def window_tables(self, key, j: int, L: int):
-        """(E, Q) (L, 2n) of the steps j .. j+L-1 in the phase type."""
-        md = self.modes(key)
-        W, Wr, Wi, E0 = self.tables(key)
-        P = self.P[:, j:j + L]
-        h = self.h[j:j + L]
-        D = np.zeros_like(P)
-        D[:5] = np.arange(1, 6)[:, None] * P[1:] / h
-        groups = self.group[j:j + L]
-        g0 = int(groups[0])
-        E = np.empty((L, md.lam.size), dtype=complex)
-        Q = np.empty((L, md.lam.size), dtype=complex)
-        uniform = bool(np.all(groups == g0))
-        for g in ([g0] if uniform else np.unique(groups).tolist()):
-            idx = slice(None) if uniform else (groups == g)
-            PT = np.ascontiguousarray(P[:, idx].T)
-            DT = np.ascontiguousarray(D[:, idx].T)
-            # real drive coefficients times complex tables, as two real products (numpy's mixed
-            # real-complex matmul takes a slow path)
-            qp = (PT @ Wr[:, g]) + 1j * (PT @ Wi[:, g])
-            qd = (DT @ Wr[:, g]) + 1j * (DT @ Wi[:, g])
-            Q[idx] = qp * md.mB[:, 0] + qd * md.mB[:, 1] + W[0, g] * md.mB[:, 2]
-            E[idx] = E0[g]
-        return E, Q
-
-    def advance(self, md: PhaseModes, z0: np.ndarray, Pc, hh: float) -> np.ndarray:
-        """Modal state after hh from z0, the drive polynomial Pc (in u = tau/hh, 6 floats)."""
-        if hh <= 0.0:
-            return z0
-        F = phi_functions(md.lam * hh)
-        c = [hh * FACT[k] for k in range(6)]
-        # Gamma_k = mB0 P_k + mB1 (k+1) P_(k+1) / hh + mB2 [k = 0]; z = e z0 + sum_k Gamma_k c_k phi_(k+1)
-        wp = np.array([Pc[k] * c[k] for k in range(6)], dtype=complex)
-        wd = np.array([(k + 1) * Pc[k + 1] / hh * c[k] for k in range(5)] + [0.0], dtype=complex)
-        Fk = F[1:]
-        return F[0] * z0 + md.mB[:, 0] * (wp @ Fk) + md.mB[:, 1] * (wd @ Fk) + md.mB[:, 2] * (c[0] * F[1])
+            W = np.ascontiguousarray(F[1:] * (self.h_group[None, :, None] * FACT[:6, None, None]))
+            mB = np.ascontiguousarray(md.mB.T)
+            pd = self._data[key] = _PhaseData(md, events, mB, rows, np.abs(rows), np.abs(mB[:2]), ev, W,
+                                              np.ascontiguousarray(F[0]))
+        return pd
 
     # ------------------------------------------------------------------ events
-    def event_functions(self, key) -> list[_Event]:
-        funcs = self._ev_funcs.get(key)
-        if funcs is None:
-            funcs = self._ev_funcs[key] = self._make_event_functions(key)
-        return funcs
-
     def _make_event_functions(self, key) -> list[_Event]:
         m, n = self.model, self.n
-        contact, seat = key
+        contact, seat, mode = key
         ev = []
         e_s = np.zeros(2 * n)
         e_s[0] = 1.0
@@ -291,10 +279,18 @@ class ChainSolver:
                              -m.stiffness * m.lash, -1.0))
         else:  # the gap S - lash - s closes
             ev.append(_Event("re-contact", -e_s, 1.0, 0.0, -m.lash, +1.0))
-        if seat:
+        if mode == 0:
+            # held by friction: released when the net force leaves the band [-R, R] (the seat's
+            # state cannot change while the valve stands)
+            coef, alpha, beta, const = m.net_force_row(contact, seat)
+            ev.append(_Event("release", coef, alpha, beta, const - m.friction, +1.0, index=+1))
+            ev.append(_Event("release", coef, alpha, beta, const + m.friction, -1.0, index=-1))
+        elif seat:
             ev.append(_Event("lift-off", e_s, 0.0, 0.0, 0.0, +1.0))
         else:
             ev.append(_Event("seat", e_s, 0.0, 0.0, 0.0, -1.0))
+        if mode != 0 and m.friction > 0.0:  # the velocity reaches 0: the valve sticks or turns
+            ev.append(_Event("velocity-zero", -mode * e_v, 0.0, 0.0, 0.0, +1.0))
         if math.isfinite(m.clash_compression):
             for j in range(n):  # element j: x_j - x_(j+1) reaches the clash compression
                 c = np.zeros(2 * n)
@@ -304,60 +300,23 @@ class ChainSolver:
                 ev.append(_Event("coil-clash", c, 0.0, 0.0, -m.clash_compression, +1.0, index=j))
         return ev
 
-    def _event_data(self, key, events):
-        """(modes, rows a.Phys (E, 2n)) of the phase's event functions, once per phase type;
-        their alpha, beta, const and sign as arrays in self._ev_arrays[key]."""
-        cached = self._ev_cache.get(key)
-        if cached is None:
-            md = self.modes(key)
-            rows = np.array([e.coef @ md.phys for e in events])  # (E, 2n)
-            arrays = tuple(np.array([getattr(e, f) for e in events]) for f in ("alpha", "beta", "const", "sign"))
-            cached = self._ev_cache[key] = (md, rows, arrays, md.mB.real.copy(), md.mB.imag.copy(), np.abs(rows),
-                                            (np.abs(md.mB[:, 0]), np.abs(md.mB[:, 1])))
-        return cached[0], cached[1]
+    def _arm(self, pd: _PhaseData, z, j: int, u: float, previous=None) -> np.ndarray:
+        """An event function is armed while it is on the near side of its crossing; right after
+        an event its value is a rounding away from 0 and moving out: not armed until it has
+        come back (a value within rounding counts by its slope)."""
+        if j >= self.h.size:
+            return np.ones(len(pd.events), bool)
+        out = np.empty(len(pd.events), bool)
+        kernels.arm(pd.modes.lam, pd.mB, pd.rows, pd.ev, z, self.PT[j], float(self.h[j]), u,
+                    _NONE if previous is None else previous, out)
+        return out
 
-    def _local(self, md, rows, events, z: np.ndarray, P: np.ndarray, hh: float, u: float):
-        """g, g', |g''| at u of a step (z: modal state there): arrays over the events. Also
-        z'' magnitudes for the bound."""
-        S, S1, S2, S3 = self._drive_poly_at(P, hh, u)
-        mB = md.mB
-        gam = mB[:, 0] * S + mB[:, 1] * S1 + mB[:, 2]
-        gam1 = mB[:, 0] * S1 + mB[:, 1] * S2
-        gam2 = mB[:, 0] * S2 + mB[:, 1] * S3
-        dz = md.lam * z + gam
-        ddz = md.lam * dz + gam1
-        alpha, beta, const, _ = self._ev_cache[(md.contact, md.seat)][2]
-        g = (rows @ z).real + alpha * S + beta * S1 + const
-        g1 = (rows @ dz).real + alpha * S1 + beta * S2
-        return g, g1, np.abs(ddz), gam2
-
-    def _bound2(self, md, rows, events, ddz_abs, hh: float, j: int):
-        """M2 >= |g''| over a (sub)step of length hh from its start's |z''|."""
-        alpha = np.abs([e.alpha for e in events])
-        beta = np.abs([e.beta for e in events])
-        S2b, S3b = self.S2b[j], self.S3b[j]
-        mb = np.abs(md.mB[:, 0]) * S2b + np.abs(md.mB[:, 1]) * S3b
-        return np.abs(rows) @ (ddz_abs + hh * mb) + alpha * S2b + beta * S3b
-
-    def _bound1(self, md, i, rows, events, ddz_abs, hh: float, j: int) -> float:
-        """_bound2 for event function i alone."""
-        e = events[i]
-        S2b, S3b = float(self.S2b[j]), float(self.S3b[j])
-        arow = self._ev_cache[(md.contact, md.seat)][5][i]
-        mb = self._ev_cache[(md.contact, md.seat)][6]
-        return float(arow @ (ddz_abs + hh * (mb[0] * S2b + mb[1] * S3b))) + abs(e.alpha) * S2b + abs(e.beta) * S3b
-
-    @staticmethod
-    def _excluded(g0, g1a, gb, g1b, M2, hh):
-        """True where g keeps its sign over [0, hh] (certified by the two parabola bounds)."""
-        same = (g0 * gb > 0.0)
-        s = np.sign(g0)
-        a0, sa, b0, sb = s * g0, s * g1a, s * gb, -s * g1b  # distance to 0 and its slope away
-        M = M2 * (1.0 + 1e-9) + 1e-300
-        with np.errstate(all="ignore"):
-            tl = (sa + np.sqrt(sa * sa + 2.0 * M * a0)) / M
-            tr = (sb + np.sqrt(sb * sb + 2.0 * M * b0)) / M
-        return same & (tl + tr > hh * (1.0 + 1e-12))
+    def _search(self, pd: _PhaseData, armed, z, j: int, u0: float):
+        """The first crossing of an armed function in (u0, 1] of step j: (u, index) or None."""
+        u, i = kernels.search_step(pd.modes.lam, pd.mB, pd.rows, pd.absrows, pd.absmB, pd.ev, armed, z, self.PT[j],
+                                   float(self.h[j]), float(self.S2b[j]), float(self.S3b[j]), float(self.nodes[j]),
+                                   u0, 1.0)
+        return None if i < 0 else (u, i)
 
     # ------------------------------------------------------------------ the run
     def run(self, x0: np.ndarray, v0: np.ndarray, key) -> None:
@@ -365,305 +324,92 @@ class ChainSolver:
         steps = h.size
         self.z_nodes = np.empty((nodes.size, 2 * self.n), dtype=complex)
         self.key_nodes = np.empty(nodes.size, dtype=np.int8)
-        md = self.modes(key)
-        z = md.inv @ np.concatenate([x0, v0])
+        pd = self.data(key)
+        z = pd.modes.inv @ np.concatenate([x0, v0])
         self._store(0, z, key)
         armed = None
-        window = WINDOW_MIN
         j, u = 0, 0.0  # the state z is at node j + u of its step
         while j < steps:
-            events = self.event_functions(key)
-            md, rows = self._event_data(key, events)
+            pd = self.data(key)
+            lam = pd.modes.lam
             if armed is None:
-                armed = self._arm(md, rows, events, z, j, u)
+                armed = self._arm(pd, z, j, u)
             if u > 0.0:  # the rest of a step after an event
-                hit = self._search_step(md, rows, events, armed, z, j, u, 1.0)
+                hit = self._search(pd, armed, z, j, u)
                 if hit is None:
-                    z = self.advance(md, z, _sub_poly(self.P[:, j], u, 1.0), (1.0 - u) * h[j])
+                    z = kernels.advance_to(lam, pd.mB, z, self.PT[j], u, 1.0, float(h[j]))
                     j, u = j + 1, 0.0
                     self._store(j, z, key)
-                    armed = self._arm(md, rows, events, z, j, 0.0, previous=armed)
+                    armed = self._arm(pd, z, j, 0.0, previous=armed)
                     continue
-                key, z, u, armed = self._apply(hit, md, events, key, j, z, u)
+                key, z, u, armed = self._apply(hit, pd, key, j, z, u)
                 continue
-            # short windows right after an event (events come in clusters: seat bounces),
-            # doubling while the steps stay clear
-            L = min(window, steps - j)
-            E, Q = self.window_tables(key, j, L)
-            Z = _affine_scan(E, Q, z)  # states at nodes j+1 .. j+L
-            Zall = np.vstack([z[None, :], Z])
-            ok, gb, g1b = self._window_clear(md, rows, events, Zall, j, L)
-            bad = (~ok).nonzero()[0]
-            done = L if bad.size == 0 else int(bad[0])
-            self.z_nodes[j + 1:j + done + 1] = Zall[1:done + 1]
-            self.key_nodes[j + 1:j + done + 1] = key_code(key)
+            # step on while every step is certified free of events (the compiled recurrence)
+            done, zend = kernels.scan(j, z, steps, lam, pd.mB, pd.rows, pd.absrows, pd.absmB, pd.ev, pd.W, pd.E0,
+                                      self.group, self.P, h, self.S2b, self.S3b, self.z_nodes, armed)
             if done:
+                self.key_nodes[j + 1:j + done + 1] = key_code(key)
                 j += done
-                z = Zall[done]
-                # (the functions' values at the window's last clear node, from the window)
-                armed = self._armed_from(md, gb[:, done - 1], g1b[:, done - 1], float(h[j - 1]), previous=armed)
-            if bad.size == 0:
-                window = min(2 * window, WINDOW)
-                continue
-            window = WINDOW_MIN
-            hit = self._search_step(md, rows, events, armed, z, j, 0.0, 1.0)
+                z = self.z_nodes[j]
+            if j >= steps:
+                break
+            hit = self._search(pd, armed, z, j, 0.0)
             if hit is None:
-                z = Zall[done + 1]
+                z = zend
                 j += 1
                 self._store(j, z, key)
-                armed = self._arm(md, rows, events, z, j, 0.0, previous=armed)
+                armed = self._arm(pd, z, j, 0.0, previous=armed)
                 continue
-            key, z, u, armed = self._apply(hit, md, events, key, j, z, 0.0)
+            key, z, u, armed = self._apply(hit, pd, key, j, z, 0.0)
 
     def _store(self, i: int, z, key) -> None:
         self.z_nodes[i] = z
         self.key_nodes[i] = key_code(key)
 
-    def _arm(self, md, rows, events, z, j, u, previous=None):
-        """An event function is armed while it is on the near side of its crossing; right after
-        an event its value is a rounding away from 0 and moving out: not armed until it has
-        come back (a value within rounding counts by its slope)."""
-        if j >= self.h.size:
-            return np.ones(len(events), bool)
-        g, g1, _, _ = self._local(md, rows, events, z, self.P[:, j], self.h[j], u)
-        return self._armed_from(md, g, g1, float(self.h[j]), previous)
-
-    def _armed_from(self, md, g, g1, hstep: float, previous=None):
-        sign = self._ev_cache[(md.contact, md.seat)][2][3]
-        sg, sg1 = sign * g, sign * g1
-        scale = np.abs(g1) * hstep + 1e-300
-        tiny = np.abs(g) <= 1e-9 * scale
-        armed = (sg < 0.0) | (tiny & (sg1 < 0.0))
-        if previous is not None:
-            armed = armed | previous & (sg < 0.0)
-        return armed
-
-    def _window_clear(self, md, rows, events, Zall, j, L):
-        """Per step of the window: certified free of any crossing of an armed function (and of
-        the return of an unarmed one)."""
-        h = self.h[j:j + L]
-        # drive at the step starts and ends (from the step polynomials)
-        Pw = self.P[:, j:j + L]
-        k = np.arange(6)[:, None]
-        S0, S10, S20 = Pw[0], Pw[1] / h, 2.0 * Pw[2] / h**2
-        S1e = (k * Pw).sum(0) / h
-        S2e = (k * (k - 1) * Pw).sum(0) / h**2
-        Se = Pw.sum(0)
-        Za, Zb = Zall[:-1], Zall[1:]
-        alpha, beta, const, _ = (x[:, None] for x in self._ev_cache[(md.contact, md.seat)][2])
-        lam, mB = md.lam, md.mB
-        gam_a = mB[:, 0][None] * S0[:, None] + mB[:, 1][None] * S10[:, None] + mB[:, 2][None]
-        gam_b = mB[:, 0][None] * Se[:, None] + mB[:, 1][None] * S1e[:, None] + mB[:, 2][None]
-        gam1_a = mB[:, 0][None] * S10[:, None] + mB[:, 1][None] * S20[:, None]
-        dza = lam * Za + gam_a
-        dzb = lam * Zb + gam_b
-        ddza = lam * dza + gam1_a
-        ga = (rows @ Za.T).real + alpha * S0 + beta * S10 + const
-        gb = (rows @ Zb.T).real + alpha * Se + beta * S1e + const
-        g1a = (rows @ dza.T).real + alpha * S10 + beta * S20
-        g1b = (rows @ dzb.T).real + alpha * S1e + beta * S2e
-        S2b, S3b = self.S2b[j:j + L], self.S3b[j:j + L]
-        mb = np.abs(mB[:, 0])[None] * S2b[:, None] + np.abs(mB[:, 1])[None] * S3b[:, None]
-        M2 = np.abs(rows) @ (np.abs(ddza) + h[:, None] * mb).T + np.abs(alpha) * S2b + np.abs(beta) * S3b
-        # a step is clear when no function can change sign in it (an unarmed one that has come
-        # back is armed at the next node by _arm)
-        return np.all(self._excluded(ga, g1a, gb, g1b, M2, h[None, :]), axis=0), gb, g1b
-
-    def _search_step(self, md, rows, events, armed, z, j, u0, u1):
-        """The first crossing of an armed function in (u0, u1] of step j: (u, event index) or None.
-        Unarmed functions arm where they cross back."""
-        hj = float(self.h[j])
-        P = self.P[:, j]
-        armed_local = armed.copy()
-
-        cache = {u0: z}
-
-        def state(u):  # the closed form at u, shared by the event functions
-            zz = cache.get(u)
-            if zz is None:
-                zz = cache[u] = self.advance(md, z, _sub_poly(P, u0, u), (u - u0) * hj)
-            return zz
-
-        gcache = {}
-
-        def gvals(u, zz):  # g, g', |z''| at u: all event functions at once, shared
-            r = gcache.get(u)
-            if r is None:
-                r = gcache[u] = self._local(md, rows, events, zz, P, hj, u)
-            return r
-
-        # all functions at once over the whole interval first: only those not certified free of a
-        # sign change go through the search
-        ga, g1a, ddza, _ = gvals(u0, z)
-        gb, g1b, _, _ = gvals(u1, state(u1))
-        M2 = self._bound2(md, rows, events, ddza, (u1 - u0) * hj, j)
-        free = self._excluded(ga, g1a, gb, g1b, M2, (u1 - u0) * hj)
-        roots = []
-        for i, e in enumerate(events):
-            if free[i]:
-                continue
-            r = self._first_crossing(i, e, armed_local[i], u0, u1, z, state, gvals, md, rows, events, hj, j)
-            if r is not None:
-                roots.append((r, i))
-        if not roots:
-            return None
-        return min(roots)
-
-    def _first_crossing(self, i, e, armed, u0, u1, z0, state, gvals, md, rows, events, hj, j):
-        """First u in (u0, u1] where event i crosses in its direction while armed."""
-        stack = [(u0, z0, u1, None)]
-        while stack:
-            a, za, b, zb = stack.pop()
-            if zb is None:
-                zb = state(b)
-            ga, g1a, ddza, _ = gvals(a, za)
-            gb, g1b, _, _ = gvals(b, zb)
-            ga, g1a, gb, g1b = ga[i] * e.sign, g1a[i] * e.sign, gb[i] * e.sign, g1b[i] * e.sign
-            M2 = self._bound1(md, i, rows, events, ddza, (b - a) * hj, j)
-            width = (b - a) * hj
-            if not armed:
-                if ga >= 0.0 and gb > 0.0 and _excluded1(ga, g1a, gb, g1b, M2, width):
-                    continue
-            elif ga < 0.0 and gb < 0.0 and _excluded1(ga, g1a, gb, g1b, M2, width):
-                continue
-            if (ga < 0.0) != (gb < 0.0) and (abs(g1a) - M2 * width > 0.0) and g1a * g1b > 0.0:
-                if not armed and gb < 0.0:
-                    # one monotone crossing back to the near side: armed from there on, and no
-                    # crossing out again in this interval
-                    armed = True
-                    continue
-                # one monotone crossing: locate it on the closed form, from the root of the
-                # cubic Hermite interpolant of g (values and slopes at both ends)
-                r = _newton_bracketed(lambda u: tuple(x[i] * e.sign for x in gvals(u, state(u))[:2]),
-                                      a, b, ga, gb, hj, _hermite_root(a, b, ga, gb, g1a * hj, g1b * hj))
-                if armed and gb > 0.0:
-                    return r
-                if not armed and gb < 0.0:
-                    armed = True
-                    # continue after the arming point: the rest of the interval
-                    rest = min(r + 1e-15, b)
-                    if rest < b:
-                        stack.append((rest, state(rest), b, zb))
-                    continue
-                continue
-            if width < 1e-15 * max(1.0, abs(float(self.nodes[j]))):
-                if armed and gb > 0.0:
-                    return b
-                continue
-            mid = 0.5 * (a + b)
-            zm = state(mid)
-            stack.append((mid, zm, b, zb))  # right half later
-            stack.append((a, za, mid, zm))  # left half first
-        return None
-
-    def _apply(self, hit, md, events, key, j, z0, u0):
+    def _apply(self, hit, pd: _PhaseData, key, j, z0, u0):
         """The event `hit` = (u, function index) in step j (state z0 at u0): record it, switch
         the phase, and return (phase, modal state, u, armed flags)."""
         u, i = hit
-        e = events[i]
+        e = pd.events[i]
         hj = float(self.h[j])
-        z = self.advance(md, z0, _sub_poly(self.P[:, j], u0, u), (u - u0) * hj)
-        y = (md.phys @ z).real
-        item = {"kind": e.kind, "time_s": float(self.nodes[j]) + u * hj}
-        if e.kind == "seat":
+        z = kernels.advance_to(pd.modes.lam, pd.mB, z0, self.PT[j], u0, u, hj)
+        y = (pd.modes.phys @ z).real
+        kind = e.kind
+        contact, seat, mode = key
+        if kind == "velocity-zero":
+            S, S1, _, _ = kernels.drive_at(self.PT[j], hj, u)
+            kind, mode = stick_or_turn(self.model, y, S, S1, contact, seat)
+            y[self.n] = 0.0  # (a rounding away from 0)
+        elif kind == "release":
+            mode = e.index
+        item = {"kind": kind, "time_s": float(self.nodes[j]) + u * hj}
+        if kind == "seat":
             item["velocity_m_s"] = float(y[self.n])
-        if e.kind == "coil-clash":
+        if kind == "coil-clash":
             item["element"] = e.index
         self.events.append(item)
         if len(self.events) > self.max_events:
             raise RuntimeError(f"more than {self.max_events} events in one run")
-        contact, seat = key
-        contact = {"separation": False, "re-contact": True}.get(e.kind, contact)
-        seat = {"lift-off": False, "seat": True}.get(e.kind, seat)
-        new = (contact, seat)
+        contact = {"separation": False, "re-contact": True}.get(kind, contact)
+        seat = {"lift-off": False, "seat": True}.get(kind, seat)
+        new = (contact, seat, mode)
         if new == key:  # a clash: that function waits until it has come back
-            armed = self._arm(md, self._event_data(key, events)[1], events, z, j, u)
+            armed = self._arm(pd, z, j, u)
             armed[i] = False
             return key, z, u, armed
-        return new, self.modes(new).inv @ y, u, None
+        pd_new = self.data(new)
+        z = pd_new.modes.inv @ y
+        if kind in ("release", "turn"):
+            # the valve starts from v = 0 with an acceleration that may be a rounding of 0 (the net
+            # force has just left the band): its velocity-zero function waits until the valve has
+            # moved in its direction, or a rounding would read as a stop at once
+            armed = self._arm(pd_new, z, j, u)
+            armed[[e.kind == "velocity-zero" for e in pd_new.events]] = False
+            return new, z, u, armed
+        return new, z, u, None
 
 
-def _excluded1(g0: float, g1a: float, gb: float, g1b: float, M2: float, hh: float) -> bool:
-    """ChainSolver._excluded for one function, in plain floats."""
-    if not g0 * gb > 0.0:
-        return False
-    sgn = 1.0 if g0 > 0.0 else -1.0
-    a0, sa, b0, sb = sgn * g0, sgn * g1a, sgn * gb, -sgn * g1b
-    M = M2 * (1.0 + 1e-9) + 1e-300
-    tl = (sa + math.sqrt(sa * sa + 2.0 * M * a0)) / M
-    tr = (sb + math.sqrt(sb * sb + 2.0 * M * b0)) / M
-    return tl + tr > hh * (1.0 + 1e-12)
-
-
-def _hermite_root(a: float, b: float, fa: float, fb: float, da: float, db: float) -> float:
-    """The root in (a, b) of the cubic through f and df/du at both ends (f(a), f(b) of opposite
-    signs): a start for Newton on the closed form, within O((b - a)^4) of the root."""
-    w = b - a
-    # in x = (u - a) / w: p(x) = fa h00 + w da h10 + fb h01 + w db h11
-    c0, c1 = fa, w * da
-    c2 = 3.0 * (fb - fa) - w * (2.0 * da + db)
-    c3 = 2.0 * (fa - fb) + w * (da + db)
-    lo, hi = 0.0, 1.0
-    x = fa / (fa - fb)
-    for _ in range(8):
-        p = ((c3 * x + c2) * x + c1) * x + c0
-        if (p < 0.0) == (fa < 0.0):
-            lo = x
-        else:
-            hi = x
-        dp = (3.0 * c3 * x + 2.0 * c2) * x + c1
-        xn = x - p / dp if dp != 0.0 else 0.5 * (lo + hi)
-        if not lo < xn < hi:
-            xn = 0.5 * (lo + hi)
-        if abs(xn - x) < 1e-15:
-            break
-        x = xn
-    return a + w * x
-
-
-def _newton_bracketed(fg, a: float, b: float, fa: float, fb: float, h: float, start: float | None = None) -> float:
-    """The root of a monotone f in [a, b] (f(a), f(b) of opposite signs): Newton steps with the
-    analytic slope (f, df/dt) = fg(u), u = t/h, kept inside the shrinking bracket (bisection when
-    a step leaves it), to a bracket of a few ulp."""
-    if fa == 0.0:
-        return a
-    if fb == 0.0:
-        return b
-    u = start if start is not None and a < start < b else a + (b - a) * fa / (fa - fb)
-    for _ in range(100):
-        f, df = fg(u)
-        if f == 0.0:
-            return u
-        if (f < 0.0) == (fa < 0.0):
-            a, fa = u, f
-        else:
-            b, fb = u, f
-        if b - a <= 4.0 * EPS * max(abs(a), abs(b), 1e-300):
-            break
-        step = f / (df * h) if df != 0.0 else math.inf
-        un = u - step
-        if not a < un < b:
-            un = 0.5 * (a + b)
-        if abs(un - u) <= 1e-13:
-            # converged: u is a fraction of the step, 1e-13 of it is far below the times' rounding
-            # of events (~1e-18 s at these steps), and g's own rounding stops Newton there
-            return un
-        u = un
-    return b if (fb > 0.0) else a
-
-
-def _affine_scan(E: np.ndarray, Q: np.ndarray, z0: np.ndarray) -> np.ndarray:
-    """z_(j+1) = E_j z_j + Q_j for a window (L, m): all z_1..z_L (doubling scan)."""
-    A = E.copy()
-    X = Q.copy()
-    L = E.shape[0]
-    d = 1
-    while d < L:
-        X[d:] = X[d:] + A[d:] * X[:-d]
-        A[d:] = A[d:] * A[:-d]
-        d *= 2
-    return X + A * z0[None, :]
-
+_NONE = np.zeros(0, bool)  # "no previous flags" for the compiled arm
 
 @dataclass(frozen=True)
 class ChainSolution(DynamicsSolution):
@@ -674,18 +420,33 @@ class ChainSolution(DynamicsSolution):
 
 
 def start_state(model: ChainModel, drive, t0: float):
-    """(x0, v0, phase key): at rest in static equilibrium with the drive at t0."""
+    """(x0, v0, phase key): at rest in static equilibrium with the drive at t0 (with friction
+    held there: the net force, 0, is within the band)."""
     D = np.asarray(drive(np.array([t0])), dtype=float)[:, 0]
     x, contact, seat = static_equilibrium(model, float(D[0]), float(D[1]))
-    return x, np.zeros_like(x), (contact, seat)
+    return x, np.zeros_like(x), (contact, seat, 0 if model.friction > 0.0 else 1)
 
 
-# phase types (linkage loaded, seat engaged) by their code 2 * contact + seat
-KEYS = ((False, False), (False, True), (True, False), (True, True))
+def stick_or_turn(model: ChainModel, y: np.ndarray, S: float, S1: float, contact: bool, seat: bool):
+    """The valve's velocity has reached 0 (with friction R): ("stick", 0) when the net force is
+    within [-R, R], else ("turn", its sign), as phases.velocity_zero for the massless valve."""
+    coef, alpha, beta, const = model.net_force_row(contact, seat)
+    yy = y.copy()
+    yy[model.n] = 0.0
+    net = float(coef @ yy) + alpha * S + beta * S1 + const
+    if abs(net) <= model.friction:
+        return "stick", 0
+    return "turn", (1 if net > 0.0 else -1)
+
+
+# phase types (linkage loaded, seat engaged, valve mode) by their code: 2 * contact + seat +
+# 4 * (0 moving up or without friction, 1 moving down, 2 held by friction)
+MODE_INDEX = {1: 0, -1: 1, 0: 2}
+KEYS = tuple((c, s, m) for m in (1, -1, 0) for c in (False, True) for s in (False, True))
 
 
 def key_code(key) -> int:
-    return 2 * int(key[0]) + int(key[1])
+    return 2 * int(key[0]) + int(key[1]) + 4 * MODE_INDEX[key[2]]
 
 
 def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes: np.ndarray, events, stats,
@@ -696,8 +457,9 @@ def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes:
     if D is None:
         D = np.asarray(drive(t), dtype=float)
     codes = np.asarray(codes)
-    contact = codes >= 2
+    contact = (codes % 4) >= 2
     seat = (codes % 2) == 1
+    held = codes >= 8
     yd = np.empty_like(y)
     ydd = np.empty_like(y)
     for code in np.unique(codes).tolist():
@@ -710,7 +472,8 @@ def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes:
     s, v = y[0], y[n]
     force = np.where(contact, model.stiffness * (D[0] - model.lash - s) + model.damping * (D[1] - v), 0.0)
     force = np.maximum(force, 0.0)
-    phase = np.where(seat, 0, np.where(contact, 1, 2))
+    # PHASE_CODES of the massless model: seated, contact, flight, stuck (held above the seat)
+    phase = np.where(seat, 0, np.where(held, 3, np.where(contact, 1, 2)))
     seat_force = np.where(seat, -model.seat_stiffness * s - model.seat_damping * v, 0.0)
     return ChainSolution(
         t=t, s=s, v=v, a=yd[n], linkage_force=force, contact=contact, events=tuple(events), stats=stats,
@@ -736,3 +499,36 @@ def solve(model: ChainModel, drive, t: np.ndarray, initial_state=None, max_event
     stats = {"steps": int(solver.h.size), "events": len(solver.events), "phase_types": len(solver._modes)}
     return chain_outputs(model, drive, t, y, codes, solver.events, stats,
                          lambda key: (solver.modes(key).A, solver.modes(key).B), D=solver.D_nodes[:, out])
+
+
+class _CosineLift:
+    """L(theta) = a (1 - cos theta): a smooth lift for warm(), no joints."""
+
+    def __init__(self, a: float):
+        self.a = a
+
+    def derivatives(self, theta):
+        c, s = np.cos(theta), np.sin(theta)
+        return np.stack([self.a * (1.0 - c), self.a * s, self.a * c, -self.a * s])
+
+    def breakpoints(self):
+        return np.zeros(0)
+
+
+def warm() -> int:
+    """Compile (or load from numba's disk cache) every kernel the solver calls: one revolution of
+    a 2-element chain with lift-off, seat, separation and a coil clash. For the install step
+    (`python -c "from explorer.dynamics.chain_exact import warm; warm()"`), so that the first run
+    does not pay numba's compilation (~10 s). Returns the kinds of its events."""
+    from .model import Drive
+
+    model = ChainModel(valve_mass=0.08, spring_mass=0.04, elements=2, spring_rate=30e3, preload=200.0,
+                       stiffness=3e6, seat_stiffness=2e8, damping=8.0, seat_damping=400.0, damping_ratio=0.02,
+                       clash_compression=2e-3)
+    omega = 600.0
+    sol = solve(model, Drive(_CosineLift(4e-3), 1.0, omega), np.linspace(0.0, 2.0 * math.pi / omega, 721))
+    return [e["kind"] for e in sol.events]
+
+
+if __name__ == "__main__":
+    print(f"chain kernels ready ({len(warm())} events in the warm-up run)")

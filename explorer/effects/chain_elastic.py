@@ -25,7 +25,7 @@ import numpy as np
 from ..dynamics import solvers as registry
 from ..core.errors import InputError
 from ..result import EffectOutput
-from ..dynamics.chain import CHAIN_EVENT_KINDS, ChainModel, solid_travel
+from ..dynamics.chain import CHAIN_EVENT_KINDS, FRICTION_EVENT_KINDS, ChainModel, solid_travel
 from ..dynamics.model import Drive
 from .elastic_events import revolution_events, valve_motion_summary
 
@@ -102,7 +102,9 @@ def chain_elastic_effect(ctx) -> EffectOutput:
     separated = open_valve & ~contact
 
     warnings = []
-    events = revolution_events(sol.events, CHAIN_EVENT_KINDS, float(t_run[0]), period, omega)
+    # with friction the valve's stops (stick, turn, release) are listed and counted too
+    kinds = CHAIN_EVENT_KINDS + (FRICTION_EVENT_KINDS if model.friction > 0.0 else ())
+    events = revolution_events(sol.events, kinds, float(t_run[0]), period, omega)
     clashes = [e for e in events if e["kind"] == "coil-clash"]
     if clashes:
         warnings.append(f"coil clash: the spring reaches its solid height {len(clashes)} time(s), first at "
@@ -111,7 +113,8 @@ def chain_elastic_effect(ctx) -> EffectOutput:
     freqs = model.spring_modal_frequencies()
     summary = {
         "elastic_method": scene.solver.method,
-        "elastic_model": f"valve + spring of {model.elements} masses, elastic seat",
+        "elastic_model": f"valve + spring of {model.elements} masses, elastic seat"
+                         + (f", Coulomb friction {model.friction:g} N" if model.friction > 0.0 else ""),
         "spring_mass_kg": model.spring_mass,
         "spring_elements": model.elements,
         "spring_modal_frequencies_Hz": [float(f) for f in freqs[:5]],
@@ -123,7 +126,7 @@ def chain_elastic_effect(ctx) -> EffectOutput:
         "peak_linkage_force_N": float(force.max()),
         "peak_camshaft_back_pressure_N": float((ratio * force).max()),
         "separated_angle_deg": float(360.0 * np.count_nonzero(separated) / n),
-        **valve_motion_summary(s, v, a, events, CHAIN_EVENT_KINDS),
+        **valve_motion_summary(s, v, a, events, kinds),
         "elastic_solver": dict(sol.stats),
     }
     columns = {

@@ -501,9 +501,6 @@ def _check_spring_chain(spring: Spring, valve, seat: Seat, loads, file: str) -> 
     if valve is not None and valve.oscillating_mass is not None:
         raise InputError(file, "valve.oscillating_mass", "with spring.elements > 0 the spring's mass is modelled "
                          "itself: give valve.mass without the spring's share, and no oscillating_mass")
-    if loads.friction > 0.0:
-        raise InputError(file, "loads.friction", "not yet supported with spring.elements > 0 (the valve's "
-                         "sticking would need its own phase); set it to 0 or spring.elements = 0")
 
 
 def _parse_loads(t: Table | None, file: str) -> Loads:

@@ -12,11 +12,11 @@ row needs, and shares across runs everything that does not depend on the varied 
 - the forces effect's side figures and loss intervals, which no row holds, are not computed.
 
 Which engine computes a chunk's rows is a registry (ENGINES, the first that accepts the scene):
-- "compiled" (sweep_kernel.py): the elastic figures from the compiled exact solver
+- "compiled" (effects/elastic_batch.py): the elastic figures from the compiled exact solver
   (dynamics/exact_kernel.py), for the scenes whose elastic effect solves the LinkageModel with the
   exact solver and a constant stiffness; equal to simulate's within 1e-12 m of lift, 1e-12 s of
   event time and ~1e-9 relative of a figure (rounding of another order of the same operations;
-  tests/test_sweep_kernel.py);
+  tests/test_effects/elastic_batch.py);
 - "shared": the elastic effect itself (elastic_effect), each row equal to simulate's to the bit
   (tests/test_sweep_engine.py), for the other non-gear scenes (a spring chain, another solver);
 - "simulate": simulate whole (the gears).
@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
-from .sweep_cache import CACHE_ENTRIES, remember as _remember  # noqa: F401 (CACHE_ENTRIES: the tests')
+from ..core.memo import CACHE_ENTRIES, remember as _remember  # noqa: F401 (CACHE_ENTRIES: the tests')
 from .sweep_spec import scene_for
 
 EFFECT_COLUMNS: dict[str, tuple[str, ...]] = {
@@ -145,7 +145,7 @@ class _Shared:
     pieces: dict = field(default_factory=dict)
     jumps: dict = field(default_factory=dict)
     take_ups: dict = field(default_factory=dict)
-    grids: dict = field(default_factory=dict)  # the compiled path's revolution grids (sweep_kernel.py)
+    grids: dict = field(default_factory=dict)  # the compiled path's revolution grids (effects/elastic_batch.py)
 
 
 def _batchable(scene) -> bool:
@@ -231,60 +231,72 @@ class RowEngine:
     name: str
     accepts: Any
     row: Any
-    # optional: chunk(scenes, names, shared) -> (runs x names) figures with run_failed, all the
-    # runs at once (the compiled engine's batches); None: row by row
+    # optional: chunk(scenes, names, shared, groups) -> (runs x names) figures with run_failed, all
+    # the runs at once (the compiled engine's batches; groups: speed_groups); None: row by row
     chunk: Any = None
+    # fewest runs for which a local pool of processes beats one process: a worker pays its start
+    # (fork, and for the compiled engine ~1.3 s to import numba and load the compiled solver)
+    pool_min_runs: int = 1
 
 
 def _kernel_accepts(scene, shared) -> bool:
-    from .sweep_kernel import accepts
+    from ..effects.elastic_batch import accepts
 
     return accepts(scene, shared)
 
 
+def speed_groups(keys, values) -> list[np.ndarray]:
+    """The rows of `values` (runs x keys) grouped by every key but drive.rpm: the runs of a group
+    are the same scene at different speeds (scene_for builds each from the base and its values)."""
+    other = [j for j, key in enumerate(keys) if key != "drive.rpm"]
+    if not other:
+        return [np.arange(len(values))]
+    groups: dict[tuple, list[int]] = {}
+    for i, row in enumerate(np.asarray(values, dtype=float)[:, other].tolist()):
+        groups.setdefault(tuple(row), []).append(i)
+    return [np.asarray(g) for g in groups.values()]
+
+
 def _kernel_row(scene, names, shared) -> dict[str, float]:
-    """The row of one run: the elastic figures compiled (sweep_kernel.elastic_run), the rigid ones
-    (forces, contact) as engine_outputs computes them."""
-    from .sweep_kernel import ELASTIC, elastic_run
+    """The row of one run: the elastic figures compiled (elastic_batch.elastic_run), the rigid ones
+    (forces, contact) as the compiled chunk computes them (sweep_rigid.py, a group of one)."""
+    from ..effects.elastic_batch import ELASTIC, elastic_run
 
     names = set(names)
     row: dict[str, float] = {}
     rigid = names - set(ELASTIC) - {"run_failed"}
     if rigid:
-        summary, events, columns = engine_outputs(scene, shared, elastic=False)
-        row.update(row_scalars(rigid, summary, events, columns))
+        from .sweep_rigid import rigid_over_speeds
+
+        row.update({name: float(v[0]) for name, v in rigid_over_speeds([scene], rigid, shared).items()})
     figures, _, _ = elastic_run(scene, shared)
     row.update(figures)
     return row
 
 
-def _kernel_chunk(scenes, names, shared) -> np.ndarray:
-    """The rows of many runs: the elastic figures in compiled batches (sweep_kernel.elastic_chunk),
-    the rigid ones (forces, contact) run by run as engine_outputs computes them."""
-    from .sweep_kernel import ELASTIC, elastic_chunk
-    from .sweep_rigid import RIGID, rigid_over_speeds, speed_only
+def _kernel_chunk(scenes, names, shared, groups=None) -> np.ndarray:
+    """The rows of many runs: the elastic figures in compiled batches (elastic_batch.elastic_chunk),
+    the rigid ones (forces, contact) per group of runs that differ in speed only, all its speeds at
+    once (sweep_rigid.py; groups: index arrays, default each run alone). Every run's rigid figures
+    take the same arithmetic whatever else its chunk holds, so a table does not depend on how it
+    was cut into chunks (the cluster's equals the serial one bit for bit)."""
+    from ..effects.elastic_batch import ELASTIC, elastic_chunk
+    from .sweep_rigid import rigid_over_speeds
 
     names = tuple(names)
     out = np.full((len(scenes), len(names)), math.nan)
     fail = names.index("run_failed")
     failed = np.zeros(len(scenes), bool)
     rigid = [n for n in names if n not in ELASTIC and n != "run_failed"]
-    if rigid and len(scenes) > 1 and set(rigid) <= set(RIGID) and speed_only(scenes):
-        # a speed sweep: every speed's rigid figures at once (sweep_rigid.py)
-        for name, values in rigid_over_speeds(scenes, rigid, shared).items():
-            out[:, names.index(name)] = values
-        rigid = []
     if rigid:
-        for i, scene in enumerate(scenes):
+        for group in (groups if groups is not None else [np.array([i]) for i in range(len(scenes))]):
             try:
-                summary, events, columns = engine_outputs(scene, shared, elastic=False)
+                figures = rigid_over_speeds([scenes[i] for i in group], rigid, shared)
             except (InputError, RuntimeError, ValueError, ArithmeticError):
-                failed[i] = True
+                failed[group] = True
                 continue
-            row = row_scalars(set(rigid), summary, events, columns)
-            for j, name in enumerate(names):
-                if name in row:
-                    out[i, j] = row[name]
+            for name, values in figures.items():
+                out[group, names.index(name)] = values
     if any(n in ELASTIC for n in names):
         figures, elastic_failed = elastic_chunk(scenes, shared)
         for j, name in enumerate(ELASTIC):
@@ -298,7 +310,8 @@ def _kernel_chunk(scenes, names, shared) -> np.ndarray:
 
 ENGINES: tuple[RowEngine, ...] = (
     # the elastic figures from the compiled exact solver (explorer/dynamics/exact_kernel.py)
-    RowEngine("compiled", _kernel_accepts, _kernel_row, lambda scenes, names, shared: _kernel_chunk(scenes, names, shared)),
+    # (~0.5-1 ms a run with the rigid effects, ~0.15 ms without: a pool pays off from ~10^4 runs)
+    RowEngine("compiled", _kernel_accepts, _kernel_row, _kernel_chunk, pool_min_runs=10_000),
     # the effects' own functions, sharing the lift and the rigid float speed across runs
     RowEngine("shared", lambda scene, shared: _batchable(scene), engine_row),
     # simulate itself (the gears, whose lift or effects are their own)
@@ -323,7 +336,7 @@ def compute_chunk(base, keys, values: np.ndarray, names, shared: _Shared | None 
     engine = engine if engine is not None else engine_for(base, shared)
     if engine.chunk is not None:
         scenes = [scene_for(base, keys, row_values) for row_values in np.asarray(values, dtype=float)]
-        return engine.chunk(scenes, names, shared)
+        return engine.chunk(scenes, names, shared, speed_groups(keys, values))
     for i, row_values in enumerate(np.asarray(values, dtype=float)):
         scene = scene_for(base, keys, row_values)
         try:

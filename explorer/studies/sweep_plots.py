@@ -21,7 +21,8 @@ from .sweep_spec import SWEEP_KEYS
 # what a designer looks at first, in this order (those the table has are drawn)
 FIGURES = ("seating_velocity_m_s", "peak_linkage_force_N", "max_deviation_m", "separations", "flight_time_s",
            "first_separation_deg", "peak_camshaft_back_pressure_N", "largest_bounce_m", "lift_off_delay_s",
-           "seat_impacts", "min_contact_force_N", "max_camshaft_torque_Nm")
+           "seat_impacts", "min_contact_force_N", "max_camshaft_torque_Nm", "residual_deviation_m",
+           "residual_amplitude_m")
 HEATMAPS = ("seating_velocity_m_s", "peak_linkage_force_N", "max_deviation_m", "min_contact_force_N")
 
 

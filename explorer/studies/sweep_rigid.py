@@ -10,7 +10,8 @@ geometry and the torque factors. Then
 - the peak camshaft torque of every speed is explorer.effects.contact.peak_torques (the contact
   effect's per-sample product T = c(F) F, equal to its max_camshaft_torque_Nm to 1e-9 relative:
   the factor c is formed once instead of per speed).
-Runs that differ in anything else go run by run (sweep_engine.engine_outputs).
+The caller groups the runs (sweep_engine.speed_groups: equal in every varied key but the speed); a
+run alone is a group of one, computed the same way.
 """
 
 from __future__ import annotations
@@ -24,22 +25,13 @@ import numpy as np
 RIGID = ("min_contact_force_N", "float_speed_rpm", "max_camshaft_torque_Nm")
 
 
-def speed_only(scenes) -> bool:
-    """True when the scenes are equal but for drive.rpm (a scene holding arrays compares False)."""
-    first = scenes[0]
-    try:
-        return all(dataclasses.replace(s, drive=first.drive) == first for s in scenes[1:])
-    except (ValueError, TypeError):  # an array inside a scene: no truth value for ==
-        return False
-
-
 def rigid_over_speeds(scenes, names, shared) -> dict[str, np.ndarray]:
     """{name: value per run} of the rigid names asked for, for scenes that differ in speed only."""
     from ..effects.contact import peak_torques, torque_factors
     from ..effects.lift import build_lift
     from ..effects.pipeline import Context, effect_function
     from ..mechanics.forces import TrainLoads, float_speed, grid_load_parts, min_contact_forces, smooth_pieces
-    from .sweep_cache import remember
+    from ..core.memo import remember
 
     scene = scenes[0]
     if shared.lift is None:

@@ -29,7 +29,7 @@ from typing import Callable
 import numpy as np
 
 from ..core.pickling import dumps as dumps_scene
-from .sweep_engine import _Shared, compute_chunk, result_columns
+from .sweep_engine import _Shared, compute_chunk, engine_for, result_columns
 from .sweep_spec import SWEEP_KEYS, Plan
 from .sweep_table import SweepTable
 
@@ -120,7 +120,7 @@ def run_plan(scene, plan: Plan, *, workers: int | None = None, scheduler: str | 
     try:
         if scheduler is not None:
             _run_dask(scene, plan, names, starts, size, scheduler, done)
-        elif workers == 1 or len(starts) <= 2:
+        elif workers == 1 or len(starts) <= 2 or plan.runs < engine_for(scene, _Shared()).pool_min_runs:
             shared = _Shared()
             for start in starts:
                 done(start, compute_chunk(scene, plan.keys, plan.values[start:start + size], names, shared))

@@ -224,6 +224,8 @@ class ComputeWorker:
 
         if isinstance(sweep, SweepTask):
             task = sweep
+        elif sweep.batched:
+            task = SweepTask(sweep.serial, rpms=tuple(sweep.elastic_rpm.tolist()))
         else:
             task = SweepTask(sweep.serial, sweep.next_elastic())
 

@@ -8,8 +8,11 @@ as `simulate`'s contact_force_N column at that speed (tests/test_speedsweep.py);
 marked is the exact one (explorer.mechanics.forces.float_speed).
 
 Elastic figures (first separation, seating velocity, largest deviation from the rigid lift) need
-the elastic solver at each speed: `elastic_figures` runs `simulate` at one speed; the compute
-thread asks the compute child for them one speed at a time while it has nothing newer to do
+the elastic solver at each speed. Where the compiled exact solver takes the scene
+(explorer.effects.elastic_batch: the translating roller with the `exact` solver, the sweep's
+compiled path), `elastic_batch` computes ELASTIC_BATCH_SPEEDS speeds in one call (tens of ms);
+otherwise `elastic_figures` runs `simulate` at one speed and the compute thread asks the compute
+child for them one speed at a time while it has nothing newer to do
 (explorer.view.browser.compute), so a parameter change waits at most one such run.
 
 This lives in view/ rather than reusing explorer.studies.sweeps: view/ and studies/ must not
@@ -25,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 RIGID_SPEEDS = 500
-ELASTIC_SPEEDS = 24
+ELASTIC_SPEEDS = 24  # one simulate per speed (the scenes the compiled solver does not take)
+ELASTIC_BATCH_SPEEDS = 500  # in one compiled call, as many as the rigid figures
 _BLOCK_CELLS = 2_000_000  # speeds x samples per block (16 MB of float64)
 
 
@@ -46,6 +50,7 @@ class SpeedSweep:
     peak_torque: np.ndarray | None = None  # N m, rigid camshaft torque peak (None: no contact effect)
     elastic_done: int = 0  # how many elastic speeds are computed (in order)
     note: str = ""  # why a part is missing
+    batched: bool = False  # the elastic speeds come all at once (elastic_batch), not one by one
 
     @property
     def elastic_total(self) -> int:
@@ -158,10 +163,33 @@ def start_sweep(scene, lift, serial: int, previous: tuple[float, float] | None =
         torque = torque_sweep(scene, lift, result, rpm) if result is not None and has_contact(scene) else None
     except (InputError, ValueError, AttributeError):
         return None
-    elastic = np.linspace(span[1] / ELASTIC_SPEEDS, span[1], ELASTIC_SPEEDS) if has_elastic(scene) else np.empty(0)
+    batched = has_elastic(scene) and batch_accepts(scene, lift)
+    count = ELASTIC_BATCH_SPEEDS if batched else ELASTIC_SPEEDS
+    elastic = np.linspace(span[1] / count, span[1], count) if has_elastic(scene) else np.empty(0)
     nan = np.full(elastic.shape, np.nan)
     return SpeedSweep(serial, rpm, low, high, float_rpm, span, elastic, nan, nan.copy(), nan.copy(), peak_torque=torque,
-                      note="" if elastic.size else "no elastic effect: rigid figures only")
+                      note="" if elastic.size else "no elastic effect: rigid figures only", batched=batched)
+
+
+def batch_accepts(scene, lift) -> bool:
+    """Whether the compiled exact solver takes this scene's elastic runs."""
+    from ...effects.elastic_batch import BatchCache, accepts
+
+    try:
+        return accepts(scene, BatchCache(lift))
+    except (AttributeError, ValueError):
+        return False
+
+
+def elastic_batch(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """elastic_figures at every speed of `rpms` in one compiled call (effects.elastic_batch, the
+    sweep's compiled path: each equal to simulate's within rounding, tests/test_sweep_kernel.py);
+    NaN where there is none or the run fails."""
+    from ...effects.elastic_batch import ELASTIC, BatchCache, elastic_chunk
+
+    figures, _ = elastic_chunk([at_speed(scene, r) for r in rpms], BatchCache(lift))
+    column = {name: figures[:, i] for i, name in enumerate(ELASTIC)}
+    return column["first_separation_deg"], column["seating_velocity_m_s"], column["max_deviation_m"]
 
 
 def at_speed(scene, rpm: float):
@@ -187,8 +215,13 @@ def elastic_figures(scene, lift, rpm: float) -> tuple[float, float, float]:
             math.nan if deviation is None else float(deviation))
 
 
-def with_elastic(sweep: SpeedSweep, figures: tuple[float, float, float]) -> SpeedSweep:
-    """The sweep with the next elastic speed's figures filled in."""
+def with_elastic(sweep: SpeedSweep, figures: tuple) -> SpeedSweep:
+    """The sweep with the next elastic speed's figures filled in (a batched sweep: every speed's,
+    three arrays)."""
+    if sweep.batched:
+        sep, seat, dev = (np.asarray(f, dtype=float).copy() for f in figures)
+        return dataclasses.replace(sweep, first_separation_deg=sep, seating_velocity=seat, max_deviation=dev,
+                                   elastic_done=sweep.elastic_total)
     k = sweep.elastic_done
     sep, seat, dev = sweep.first_separation_deg.copy(), sweep.seating_velocity.copy(), sweep.max_deviation.copy()
     sep[k], seat[k], dev[k] = figures
@@ -275,10 +308,13 @@ class SweepTask:
     serial: int
     rpm: float | None = None
     span: tuple[float, float] | None = None
+    rpms: tuple[float, ...] | None = None  # every elastic speed at once (a batched sweep)
 
 
 def run_task(task: SweepTask, scene, lift, result=None):
     """What the child answers a SweepTask with, for the scene and lift of that result."""
+    if task.rpms is not None:
+        return elastic_batch(scene, lift, task.rpms)
     if task.rpm is None:
         return start_sweep(scene, lift, task.serial, task.span, result)
     return elastic_figures(scene, lift, task.rpm)

@@ -1,8 +1,10 @@
-"""The compiled path of the sweep's batch engine: the elastic figures of a run from the compiled
+"""The elastic effect's figures for many runs of one scene (a sweep's compiled path, the browser's
+elastic speed sweep): the elastic figures of a run from the compiled
 exact solver (explorer/dynamics/exact_kernel.py), sharing across runs what does not depend on the
 varied values.
 
-Shared per chunk (sweep_engine._Shared): the lift curve; the grid of one revolution in cam angle
+Shared per chunk (`shared`: an object with lift, grids and take_ups, e.g. studies.sweep_engine._Shared or
+BatchCache below): the lift curve; the grid of one revolution in cam angle
 (exact_kernel.RevolutionGrid: the drive's step polynomials in u = tau/h are the same at every
 speed, S' and S'' scale with omega and omega^2, the times with 1/omega), one per lever ratio and
 steps per revolution, and the split grids of stiff linkages (per the split they need; bounded
@@ -20,6 +22,8 @@ numba is imported (with exact_kernel) only when a run takes this path.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -28,11 +32,21 @@ ELASTIC = ("first_separation_deg", "separations", "flight_time_s", "max_deviatio
            "largest_bounce_m", "residual_deviation_m", "residual_amplitude_m")  # exact_kernel.FIGURES
 
 
+@dataclass
+class BatchCache:
+    """What the runs of a batch share (the sweep engine's _Shared holds the same and more): the
+    lift curve, the revolution grids, the lash take-up angles and residual references."""
+
+    lift: Any = None
+    grids: dict = field(default_factory=dict)
+    take_ups: dict = field(default_factory=dict)
+
+
 def _residual_reference(shared, lift, ratio: float, lash: float, n: int):
     """The residual figures' reference lift at the n output angles (value and slope per radian)
     and the dwell's first sample (-1: none): effects/residual.py's, per lever ratio and lash."""
-    from ..effects.residual import dwell_sample, reference_lift
-    from .sweep_cache import remember
+    from .residual import dwell_sample, reference_lift
+    from ..core.memo import remember
 
     def make():
         theta = np.arange(n) * (2.0 * math.pi / n)
@@ -44,7 +58,7 @@ def _residual_reference(shared, lift, ratio: float, lash: float, n: int):
 
 def accepts(scene, shared) -> bool:
     """The elastic effect of this scene is the compiled kernel's model and method."""
-    from ..effects.pipeline import resolve
+    from .pipeline import resolve
     from ..gears.registry import GEARS
 
     if scene.follower.type in GEARS:  # a gear builds its own lift and may bring its own effects
@@ -54,7 +68,7 @@ def accepts(scene, shared) -> bool:
     if scene.spring.elements > 0 or scene.solver.method != "exact":
         return False
     if shared.lift is None:
-        from ..effects.lift import build_lift
+        from .lift import build_lift
 
         shared.lift = build_lift(scene)
     return getattr(shared.lift, "linkage_stiffness", None) is None
@@ -66,9 +80,9 @@ def elastic_run(scene, shared):
     effect); RuntimeError: a motion that does not settle (as the exact solver)."""
     from ..dynamics import exact_kernel as kernel
     from ..dynamics.model import LinkageModel
-    from ..effects.elastic import check_resolution
+    from .elastic import check_resolution
     from ..mechanics.kinematics import lash_crossings
-    from .sweep_cache import remember as _remember
+    from ..core.memo import remember as _remember
 
     lift = shared.lift
     ratio, lash = scene.follower.ratio, scene.valve.lash
@@ -94,9 +108,9 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     raise: a speed beyond the step budget, a motion that does not settle), the runs on one grid
     in one compiled call (exact_kernel.revolutions: no Python per run but its scene's values)."""
     from ..dynamics import exact_kernel as kernel
-    from ..effects.elastic import MAX_SOLVER_NODES
+    from .elastic import MAX_SOLVER_NODES
     from ..mechanics.kinematics import lash_crossings
-    from .sweep_cache import remember
+    from ..core.memo import remember
 
     lift = shared.lift
     R = len(scenes)

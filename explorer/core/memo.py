@@ -1,4 +1,4 @@
-"""The bounded caches a sweep's chunk shares across its runs (sweep_engine._Shared's)."""
+"""Bounded caches shared across the runs of a batch (a sweep's chunk, the browser's speed sweep)."""
 
 from __future__ import annotations
 
