@@ -19,6 +19,11 @@ x[i+1] = Phi(h) x[i] + W_P P[i] - Fc g1 (the unit responses' end values; the tab
 for each step length), not by modal.py's closed form over a window. Both are the exact solution of
 the same step ODE; they differ by rounding (~1e-16 relative per step, a few 1e-15 over a revolution:
 tests/test_sweep_kernel.py holds every row to simulate's within 1e-12 m and 1e-12 s).
+The steps are cleared in groups before the per-step bound: a seated valve's BLOCK steps by its
+push row's bound over the block, a moving valve's WINDOW steps (their states propagated first)
+by each event's rows bounded over the window from the ranges of S, S1, s, v at its nodes; each
+term of those bounds is at least the per-step bound's, so they change which steps are looked at,
+never the states or the events (tests/test_sweep_kernel.py).
 
 The LinkageModel without stiffness_profile only (constant coefficients): `supports(model)`.
 
