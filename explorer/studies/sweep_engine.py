@@ -237,6 +237,9 @@ class RowEngine:
     # fewest runs for which a local pool of processes beats one process: a worker pays its start
     # (fork, and for the compiled engine ~1.3 s to import numba and load the compiled solver)
     pool_min_runs: int = 1
+    # most runs in one chunk (one task of a pool or a cluster): a task should be well above a
+    # round trip's ~1-5 ms, yet short enough for progress, Ctrl-C and load balance
+    max_chunk: int = 64
 
 
 def _kernel_accepts(scene, shared) -> bool:
@@ -311,7 +314,7 @@ def _kernel_chunk(scenes, names, shared, groups=None) -> np.ndarray:
 ENGINES: tuple[RowEngine, ...] = (
     # the elastic figures from the compiled exact solver (explorer/dynamics/exact_kernel.py)
     # (~0.5-1 ms a run with the rigid effects, ~0.15 ms without: a pool pays off from ~10^4 runs)
-    RowEngine("compiled", _kernel_accepts, _kernel_row, _kernel_chunk, pool_min_runs=10_000),
+    RowEngine("compiled", _kernel_accepts, _kernel_row, _kernel_chunk, pool_min_runs=10_000, max_chunk=4096),
     # the effects' own functions, sharing the lift and the rigid float speed across runs
     RowEngine("shared", lambda scene, shared: _batchable(scene), engine_row),
     # simulate itself (the gears, whose lift or effects are their own)

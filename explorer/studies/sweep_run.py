@@ -34,9 +34,9 @@ from .sweep_spec import SWEEP_KEYS, Plan
 from .sweep_table import SweepTable
 
 # Runs per chunk: enough that a task's overhead (pickling, a round trip; ~1-5 ms locally, more
-# on a cluster) is small against its runs (~5-50 ms each with the elastic effect), few enough
-# that progress and an interrupt come often and the cores stay busy to the end.
-MAX_CHUNK = 64
+# on a cluster) is small against its runs, few enough that progress and an interrupt come often
+# and the cores stay busy to the end. The engine says how many (RowEngine.max_chunk: 64 runs of
+# ~5-50 ms each through the effects, 4096 of ~0.1-0.2 ms each through the compiled solver).
 
 
 
@@ -51,9 +51,9 @@ def local_cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def chunk_size(runs: int, workers: int) -> int:
-    """About four chunks per worker, at most MAX_CHUNK runs each."""
-    return max(1, min(MAX_CHUNK, math.ceil(runs / (4 * max(1, workers)))))
+def chunk_size(runs: int, workers: int, max_chunk: int = 64) -> int:
+    """About four chunks per worker, at most max_chunk runs each."""
+    return max(1, min(max_chunk, math.ceil(runs / (4 * max(1, workers)))))
 
 
 # ------------------------------------------------------------------ worker side
@@ -105,7 +105,8 @@ def run_plan(scene, plan: Plan, *, workers: int | None = None, scheduler: str | 
     is called as chunks finish."""
     names = result_columns(scene)
     workers = local_cores() if workers is None else max(1, int(workers))
-    size = chunk or chunk_size(plan.runs, workers if scheduler is None else 8)
+    engine = engine_for(scene, _Shared())
+    size = chunk or chunk_size(plan.runs, workers if scheduler is None else 8, engine.max_chunk)
     starts = list(range(0, plan.runs, size))
     results: dict[int, np.ndarray] = {}
     started = time.perf_counter()
@@ -120,7 +121,7 @@ def run_plan(scene, plan: Plan, *, workers: int | None = None, scheduler: str | 
     try:
         if scheduler is not None:
             _run_dask(scene, plan, names, starts, size, scheduler, done)
-        elif workers == 1 or len(starts) <= 2 or plan.runs < engine_for(scene, _Shared()).pool_min_runs:
+        elif workers == 1 or len(starts) <= 2 or plan.runs < engine.pool_min_runs:
             shared = _Shared()
             for start in starts:
                 done(start, compute_chunk(scene, plan.keys, plan.values[start:start + size], names, shared))
