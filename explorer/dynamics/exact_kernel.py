@@ -720,6 +720,20 @@ def _span(x, lo, hi):
 
 
 @njit(cache=True)
+def _step(tabs, kind, g, PTq, Fc, s, v):
+    """The state one step later: x1 = Phi x + (drive part - Fc g). The drive's and the constant
+    force's part does not depend on the state: summed first, so that the chain carried from step
+    to step (s, v -> s1, v1) is one multiply and two adds long, not nine operations (the adds are
+    not reassociated for us: no fastmath)."""
+    ds = -Fc * tabs[kind, g, 4]
+    dv = -Fc * tabs[kind, g, 5]
+    for p in range(6):
+        ds += tabs[kind, g, 6 + p] * PTq[p]
+        dv += tabs[kind, g, 12 + p] * PTq[p]
+    return (tabs[kind, g, 0] * s + tabs[kind, g, 1] * v) + ds, (tabs[kind, g, 2] * s + tabs[kind, g, 3] * v) + dv
+
+
+@njit(cache=True)
 def _window_clear(S_lo, S_hi, D_lo, D_hi, b1, b2, b3, s_lo, s_hi, v_lo, v_hi, m, c, K, kc, cc, Fc, inv_m, H, inv1q,
                   H8, rows, ev_r0, ev_nr, ev_comb, n_ev, clear_row):
     """Every event of a moving phase cleared over a window of steps: each row's bound
@@ -1131,17 +1145,7 @@ def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0
                         for q in range(i, i + WINDOW):
                             out_s[q] = ss
                             out_v[q] = vv
-                            PTq = PT[q]
-                            gq = hidx[q]
-                            ds = -Fc * tabs[kind, gq, 4]
-                            dv = -Fc * tabs[kind, gq, 5]
-                            for p in range(6):
-                                ds += tabs[kind, gq, 6 + p] * PTq[p]
-                                dv += tabs[kind, gq, 12 + p] * PTq[p]
-                            s1 = (tabs[kind, gq, 0] * ss + tabs[kind, gq, 1] * vv) + ds
-                            v1 = (tabs[kind, gq, 2] * ss + tabs[kind, gq, 3] * vv) + dv
-                            ss = s1
-                            vv = v1
+                            ss, vv = _step(tabs, kind, hidx[q], PT[q], Fc, ss, vv)
                             s_lo = min(s_lo, ss)
                             s_hi = max(s_hi, ss)
                             v_lo = min(v_lo, vv)
@@ -1168,17 +1172,7 @@ def solve_nodes(nodes, h, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0
                     out_sigma[i] = sigma
                     PTi = PT[i]
                     gi = hidx[i]
-                    # the drive's and the constant force's part of the end state does not depend on
-                    # the state: summed first, so that the chain carried from step to step (s, v ->
-                    # s1, v1) is one multiply and two adds long, not nine operations (the adds are
-                    # not reassociated for us: no fastmath)
-                    ds = -Fc * tabs[kind, gi, 4]
-                    dv = -Fc * tabs[kind, gi, 5]
-                    for p in range(6):
-                        ds += tabs[kind, gi, 6 + p] * PTi[p]
-                        dv += tabs[kind, gi, 12 + p] * PTi[p]
-                    s1 = (tabs[kind, gi, 0] * s + tabs[kind, gi, 1] * v) + ds
-                    v1 = (tabs[kind, gi, 2] * s + tabs[kind, gi, 3] * v) + dv
+                    s1, v1 = _step(tabs, kind, gi, PTi, Fc, s, v)
                     # event values at both nodes; the step is cleared by max(ends) + h^2/8 sup|e''|,
                     # sup|e''| from bounds of |S''|, |S'''| over the step and of |a|, |jerk| from
                     # the left node and the ODE (exact_phase._scan_window's per-step bound)
