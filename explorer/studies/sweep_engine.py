@@ -46,6 +46,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.memo import CACHE_ENTRIES, remember as _remember  # noqa: F401 (CACHE_ENTRIES: the tests')
+from ..effects.elastic_batch import BatchCache
 from .sweep_spec import scene_for
 
 EFFECT_COLUMNS: dict[str, tuple[str, ...]] = {
@@ -138,14 +139,13 @@ def reference_row(scene, names) -> dict[str, float]:
 
 
 @dataclass
-class _Shared:
-    """What the runs of one chunk share (built on first use)."""
+class _Shared(BatchCache):
+    """What the runs of one chunk share (built on first use): the compiled path's (lift, revolution
+    grids, take-up angles: effects/elastic_batch.py) and the rigid figures' smooth pieces and
+    float speeds."""
 
-    lift: Any = None
     pieces: dict = field(default_factory=dict)
     jumps: dict = field(default_factory=dict)
-    take_ups: dict = field(default_factory=dict)
-    grids: dict = field(default_factory=dict)  # the compiled path's revolution grids (effects/elastic_batch.py)
 
 
 def _batchable(scene) -> bool:
@@ -161,9 +161,8 @@ def engine_row(scene, names, shared: _Shared) -> dict[str, float]:
     return row_scalars(set(names), summary, events, columns)
 
 
-def engine_outputs(scene, shared: _Shared, elastic: bool = True) -> tuple[dict, list, dict]:
-    """(summary, elastic events, columns) of one run: what the rows are read from (elastic=False:
-    the rigid effects only, for the compiled path, which computes the elastic figures itself)."""
+def engine_outputs(scene, shared: _Shared) -> tuple[dict, list, dict]:
+    """(summary, elastic events, columns) of one run: what the rows are read from."""
     from ..effects.pipeline import Context, effect_function, resolve
     from ..effects.lift import build_lift
 
@@ -191,7 +190,7 @@ def engine_outputs(scene, shared: _Shared, elastic: bool = True) -> tuple[dict, 
     if "contact" in effects:
         out = effect_function("contact", scene.follower.type)(ctx())
         summary["max_camshaft_torque_Nm"] = out.summary.get("max_camshaft_torque_Nm")
-    if elastic and "elastic" in effects:
+    if "elastic" in effects:
         ratio, lash = scene.follower.ratio, scene.valve.lash
         from ..mechanics.kinematics import lash_crossings
 
