@@ -27,7 +27,7 @@ from ..core.errors import InputError
 from ..result import EffectOutput
 from ..dynamics.chain import CHAIN_EVENT_KINDS, FRICTION_EVENT_KINDS, ChainModel, solid_travel
 from ..dynamics.model import Drive
-from .elastic_events import revolution_events, valve_motion_summary
+from .elastic_events import linkage_outputs, output_order, revolution_events
 
 
 def chain_solver(method: str, file: str):
@@ -83,12 +83,7 @@ def chain_elastic_effect(ctx) -> EffectOutput:
     i0 = int(np.argmin(D[0]))
     t_run = np.concatenate([ctx.time[i0:], ctx.time[:i0] + period])
     sol = solve(model, drive, t_run, **options)
-    back = (np.arange(n) + i0) % n
-
-    def rotate(values) -> np.ndarray:
-        out = np.empty(n)
-        out[back] = np.asarray(values, dtype=float)[:n]
-        return out
+    rotate, _ = output_order(n, i0)
 
     s, v, a, jerk = rotate(sol.s), rotate(sol.v), rotate(sol.a), rotate(sol.jerk)
     force = rotate(sol.linkage_force)
@@ -110,6 +105,7 @@ def chain_elastic_effect(ctx) -> EffectOutput:
         warnings.append(f"coil clash: the spring reaches its solid height {len(clashes)} time(s), first at "
                         f"{clashes[0]['cam_angle_deg']:.2f} deg (the model goes on without the coils' contact)")
     separations = [e["cam_angle_deg"] for e in events if e["kind"] == "separation"]
+    motion, columns = linkage_outputs(s, v, a, jerk, force, ratio * force, deviation, contact, separated, events, kinds)
     freqs = model.spring_modal_frequencies()
     summary = {
         "elastic_method": scene.solver.method,
@@ -122,28 +118,16 @@ def chain_elastic_effect(ctx) -> EffectOutput:
         "surge_amplitude_N": float(np.max(np.abs(retainer - static))),
         "peak_spring_force_retainer_N": float(retainer.max()),
         "first_separation_deg": separations[0] if separations else None,
-        "max_deviation_m": float(np.abs(deviation).max()),
-        "peak_linkage_force_N": float(force.max()),
-        "peak_camshaft_back_pressure_N": float((ratio * force).max()),
-        "separated_angle_deg": float(360.0 * np.count_nonzero(separated) / n),
-        **valve_motion_summary(s, v, a, events, kinds),
+        **motion,
         "elastic_solver": dict(sol.stats),
     }
-    columns = {
-        "valve_lift_m": s,
-        "valve_velocity_m_s": v,
-        "valve_accel_m_s2": a,
-        "valve_jerk_m_s3": jerk,
-        "linkage_force_N": force,
-        "camshaft_back_pressure_N": ratio * force,
-        "deviation_from_drive_m": deviation,
-        "valve_in_contact": contact.astype(float),
+    columns.update({
         "valve_phase": phase,
         "spring_force_retainer_N": retainer,
         "spring_force_static_N": static,
         "surge_force_N": retainer - static,
         "seat_force_N": rotate(sol.seat_force),
-    }
+    })
     for j in range(model.elements):
         columns[f"coil_{j + 1}_displacement_m"] = rotate(sol.coils[j])
     return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))

@@ -35,7 +35,7 @@ import numpy as np
 from ..core.errors import InputError
 from ..result import EffectOutput
 from ..dynamics import solvers as registry
-from .elastic_events import revolution_events, valve_motion_summary
+from .elastic_events import linkage_outputs, output_order, revolution_events
 from .residual import residual_figures
 from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, StiffnessProfile, solve
 
@@ -159,12 +159,7 @@ def elastic_effect(ctx) -> EffectOutput:
     sol, warnings = _solve(model, drive, t_run, method, _solver_options(scene), scene.source)
     warnings.extend(sol.stats.get("warnings", []))
 
-    back = (np.arange(n) + i0) % n  # output index of each run sample
-
-    def rotate(values) -> np.ndarray:
-        out = np.empty(n)
-        out[back] = np.asarray(values, dtype=float)[:n]
-        return out
+    rotate, back = output_order(n, i0)
 
     s, v, a = rotate(sol.s), rotate(sol.v), rotate(sol.a)
     force = rotate(sol.linkage_force)
@@ -191,6 +186,8 @@ def elastic_effect(ctx) -> EffectOutput:
     separated = open_valve & ~contact
 
     events = revolution_events(sol.events, EVENT_KINDS, float(t_run[0]), period, omega)
+    motion, columns = linkage_outputs(s, v, a, jerk, force, back_pressure, deviation, contact, separated, events,
+                                      EVENT_KINDS)
 
     stats = {k: v for k, v in sol.stats.items() if k != "warnings"}
     if model.stiffness_profile is not None:
@@ -200,23 +197,9 @@ def elastic_effect(ctx) -> EffectOutput:
         "elastic_natural_period_s": model.natural_period(),
         "elastic_steps_per_natural_period": model.natural_period() / (period / n),
         "lift_off_compression_m": (model.seated_resistance + model.friction) / _stiffness_at_lift_off(model, events),
-        "max_deviation_m": float(np.abs(deviation).max()),
-        "peak_linkage_force_N": float(force.max()),
-        "peak_camshaft_back_pressure_N": float(back_pressure.max()),
-        "separated_angle_deg": float(360.0 * np.count_nonzero(separated) / n),
-        **valve_motion_summary(s, v, a, events, EVENT_KINDS),
+        **motion,
         **residual_figures(ctx.lift, ratio, model.lash, omega, _contact_wn(model), ctx.theta, s, v),
         "elastic_solver": stats,
-    }
-    columns = {
-        "valve_lift_m": s,
-        "valve_velocity_m_s": v,
-        "valve_accel_m_s2": a,
-        "valve_jerk_m_s3": jerk,
-        "linkage_force_N": force,
-        "camshaft_back_pressure_N": back_pressure,
-        "deviation_from_drive_m": deviation,
-        "valve_in_contact": contact.astype(float),
     }
     if phase is not None:
         columns["valve_phase"] = phase.astype(float)

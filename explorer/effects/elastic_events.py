@@ -1,8 +1,24 @@
-"""The elastic solvers' events as the summary lists them (the massless linkage and the spring chain)."""
+"""What the elastic effects (the massless linkage and the spring chain) report alike: the events as
+the summary lists them, the valve's motion figures and columns, the run put back in output order."""
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
+
+
+def output_order(n: int, i0: int):
+    """(rotate, back) for a run that started at output sample i0: rotate(values) puts its first n
+    values in output order (floats); back[i] is the output index of run sample i."""
+    back = (np.arange(n) + i0) % n  # output index of each run sample
+
+    def rotate(values) -> np.ndarray:
+        out = np.empty(n)
+        out[back] = np.asarray(values, dtype=float)[:n]
+        return out
+
+    return rotate, back
 
 
 def revolution_events(solver_events, kinds, t_start: float, period: float, omega: float) -> list[dict]:
@@ -31,3 +47,26 @@ def valve_motion_summary(s, v, a, events: list[dict], kinds) -> dict:
         "elastic_min_valve_accel_m_s2": float(a.min()),
         "elastic_event_counts": {kind: sum(e["kind"] == kind for e in events) for kind in kinds},
     }
+
+
+def linkage_outputs(s, v, a, jerk, force, back_pressure, deviation, contact, separated, events, kinds):
+    """(summary entries, columns) of the valve's motion and the linkage's force over the output
+    samples, as both elastic effects report them."""
+    summary = {
+        "max_deviation_m": float(np.abs(deviation).max()),
+        "peak_linkage_force_N": float(force.max()),
+        "peak_camshaft_back_pressure_N": float(back_pressure.max()),
+        "separated_angle_deg": float(360.0 * np.count_nonzero(separated) / s.size),
+        **valve_motion_summary(s, v, a, events, kinds),
+    }
+    columns = {
+        "valve_lift_m": s,
+        "valve_velocity_m_s": v,
+        "valve_accel_m_s2": a,
+        "valve_jerk_m_s3": jerk,
+        "linkage_force_N": force,
+        "camshaft_back_pressure_N": back_pressure,
+        "deviation_from_drive_m": deviation,
+        "valve_in_contact": contact.astype(float),
+    }
+    return summary, columns
