@@ -263,43 +263,19 @@ def _zoom_minimum(lift, fun, direction: float, lo: float, hi: float, xatol: floa
     f'' xatol^2 / 2 of a smooth minimum, |f'| xatol of one at a kink: far below anything measured
     for 1e-10 rad). One vectorised lift
     evaluation a round instead of Brent's one per point: a gear's lift (jets through a linkage,
-    a Newton solve for the cam contact) costs nearly the same for 33 angles as for one.
-    (_zoom_minima with one bracket.)"""
+    a Newton solve for the cam contact) costs nearly the same for 33 angles as for one."""
+    best_value, best_theta = math.inf, lo
     dirn = np.full(ZOOM_POINTS, direction)
-    value, theta = _zoom_minima(lift, lambda d, rows: fun(d, dirn), np.array([lo]), np.array([hi]), xatol)
-    return float(value[0]), float(theta[0])
-
-
-def _zoom_minima(lift, values_of, lo: np.ndarray, hi: np.ndarray, xatol: float = 1e-10):
-    """_zoom_minimum of many brackets at once (one lift evaluation a round for all):
-    values_of(d, rows) gives the function at the lift derivatives d of the brackets `rows`'
-    ZOOM_POINTS samples each (row-major). Each bracket's samples are np.linspace's floats, its
-    narrowing and its stop are those it would have on its own."""
-    lo, hi = np.array(lo, dtype=float), np.array(hi, dtype=float)
-    best_value, best_theta = np.full(lo.size, math.inf), lo.copy()
-    active = np.ones(lo.size, bool)
-    steps = np.arange(ZOOM_POINTS, dtype=float)
     for _ in range(60):
-        idx = np.nonzero(active)[0]
-        if idx.size == 0:
-            break
-        a, b = lo[idx], hi[idx]
-        ts = steps[None, :] * ((b - a) / (ZOOM_POINTS - 1))[:, None] + a[:, None]  # np.linspace(a, b, 33)
-        ts[:, -1] = b
-        values = np.asarray(values_of(lift.derivatives(np.mod(ts.ravel(), TWO_PI)), idx), dtype=float)
-        values = values.reshape(idx.size, ZOOM_POINTS)
+        ts = np.linspace(lo, hi, ZOOM_POINTS)
+        values = np.asarray(fun(lift.derivatives(np.mod(ts, TWO_PI)), dirn), dtype=float)
         values = np.where(np.isfinite(values), values, np.inf)
-        j = np.argmin(values, axis=1)
-        rows = np.arange(idx.size)
-        v = values[rows, j]
-        better = v < best_value[idx]
-        best_value[idx[better]] = v[better]
-        best_theta[idx[better]] = ts[rows, j][better]
-        done = (b - a) <= xatol
-        active[idx[done]] = False
-        go = ~done
-        lo[idx[go]] = ts[rows, np.maximum(j - 1, 0)][go]
-        hi[idx[go]] = ts[rows, np.minimum(j + 1, ZOOM_POINTS - 1)][go]
+        j = int(np.argmin(values))
+        if values[j] < best_value:
+            best_value, best_theta = float(values[j]), float(ts[j])
+        if hi - lo <= xatol:
+            break
+        lo, hi = float(ts[max(j - 1, 0)]), float(ts[min(j + 1, ZOOM_POINTS - 1)])
     return best_value, best_theta
 
 
@@ -366,18 +342,22 @@ def float_speed(lift, loads: TrainLoads, ratio: float = 1.0, lash: float = 0.0, 
 
 def min_contact_force(lift, loads: TrainLoads, omega: float, ratio: float = 1.0, lash: float = 0.0,
                       pieces: Pieces | None = None, n_grid: int = 4096) -> tuple[float, float]:
-    """(smallest rigid contact force over the open stretches, its cam angle), refined on the analytic
-    lift (min_contact_forces at one speed: one code for simulate and the sweeps)."""
-    value, theta = min_contact_forces(lift, loads, [omega], ratio, lash, pieces, n_grid)
-    return float(value[0]), float(theta[0])
+    """(smallest rigid contact force over the open stretches, its cam angle), refined on the analytic lift."""
+    pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
+
+    def force(d, direction):
+        a_coef, g_part, _ = load_parts(d, direction, loads, ratio, lash)
+        return omega**2 * a_coef + g_part
+
+    return minimise_on_pieces(lift, pieces, force, n_grid=n_grid)
 
 
 def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash: float = 0.0,
                        pieces: Pieces | None = None, n_grid: int = 4096) -> tuple[np.ndarray, np.ndarray]:
-    """The smallest rigid contact force and its angle at every speed of `omegas` at once:
-    minimise_on_pieces of F = w^2 A + G row by row (the same floats), with the samples, the lift
-    there and A, G shared by all speeds, and the zoom of every speed's candidate pieces one batch
-    (_zoom_minima: one lift evaluation a round for all of them)."""
+    """min_contact_force at every speed of `omegas` at once: (values, angles), each speed's the
+    same floats as min_contact_force's. The samples, the lift there and A, G of F = w^2 A + G are
+    shared by all speeds; the zoom of every speed's candidate pieces runs as one batch, one lift
+    evaluation a round for all of them (minimise_on_pieces and _zoom_minimum, row by row)."""
     pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
     w2 = np.asarray(omegas, dtype=float).ravel() ** 2
     values_out, theta_out = np.full(w2.size, math.inf), np.full(w2.size, math.nan)
@@ -391,14 +371,10 @@ def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash
     for s, w2s in enumerate(w2):
         values = w2s * a_coef + g_part  # min_contact_force's force(): omega**2 * A + G
         grid_min = np.minimum.reduceat(values, offsets[:-1])
-        if not np.isfinite(grid_min).any():
-            continue
         floor = np.nanmin(grid_min)
         slack = 1e-3 * abs(floor) + 1e-9
         best_value, best_theta = math.inf, math.nan
         for k in np.argsort(grid_min):
-            if not np.isfinite(grid_min[k]):
-                break
             seg = values[offsets[k]: offsets[k + 1]]
             j = int(np.argmin(seg))
             if grid_min[k] < best_value:
@@ -412,18 +388,44 @@ def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash
         values_out[s], theta_out[s] = best_value, best_theta
     if rows:
         rows_a = np.asarray(rows)
-        w2_rows, dir_rows = w2[rows_a], np.asarray(dirs, dtype=float)
-
-        def force(d, rows):  # each bracket's own speed and friction direction
-            a_coef, g_part, _ = load_parts(d, np.repeat(dir_rows[rows], ZOOM_POINTS), loads, ratio, lash)
-            return np.repeat(w2_rows[rows], ZOOM_POINTS) * a_coef + g_part
-
-        zoom_value, zoom_theta = _zoom_minima(lift, force, np.asarray(los), np.asarray(his))
+        zoom_value, zoom_theta = _zoom_minima(lift, loads, w2[rows_a], ratio, lash, np.asarray(dirs, dtype=float),
+                                              np.asarray(los), np.asarray(his))
         # in each speed's own order of its pieces: a strictly smaller zoom value replaces the best
         for r, s in enumerate(rows):
             if zoom_value[r] < values_out[s]:
                 values_out[s], theta_out[s] = zoom_value[r], zoom_theta[r]
     return values_out, np.mod(theta_out, TWO_PI)
+
+
+def _zoom_minima(lift, loads, w2, ratio, lash, direction, lo, hi, xatol: float = 1e-10):
+    """_zoom_minimum of the contact force for many (speed, bracket) rows at once: each row the
+    same samples (np.linspace's floats), the same narrowing and the same stop as on its own."""
+    n = lo.size
+    best_value, best_theta = np.full(n, math.inf), lo.copy()
+    active = np.ones(n, bool)
+    steps = np.arange(ZOOM_POINTS, dtype=float)
+    for _ in range(60):
+        idx = np.nonzero(active)[0]
+        if idx.size == 0:
+            break
+        a, b = lo[idx], hi[idx]
+        ts = steps[None, :] * ((b - a) / (ZOOM_POINTS - 1))[:, None] + a[:, None]  # np.linspace(a, b, 33)
+        ts[:, -1] = b
+        d = lift.derivatives(np.mod(ts.ravel(), TWO_PI))
+        a_coef, g_part, _ = load_parts(d, np.repeat(direction[idx], ZOOM_POINTS), loads, ratio, lash)
+        values = (np.repeat(w2[idx], ZOOM_POINTS) * a_coef + g_part).reshape(idx.size, ZOOM_POINTS)
+        values = np.where(np.isfinite(values), values, np.inf)
+        j = np.argmin(values, axis=1)
+        v = values[np.arange(idx.size), j]
+        better = v < best_value[idx]
+        best_value[idx[better]] = v[better]
+        best_theta[idx[better]] = ts[np.arange(idx.size), j][better]
+        done = (b - a) <= xatol
+        active[idx[done]] = False
+        go = ~done
+        lo[idx[go]] = ts[np.arange(idx.size), np.maximum(j - 1, 0)][go]
+        hi[idx[go]] = ts[np.arange(idx.size), np.minimum(j + 1, ZOOM_POINTS - 1)][go]
+    return best_value, best_theta
 
 
 def side_extremes(lift, loads: TrainLoads, omega: float, ratio: float, lash: float, pieces: Pieces,
