@@ -13,7 +13,7 @@ CONSTRAINTS := constraints.txt
 # explorer/dynamics/__pycache__, so that no sweep, chain scene or test worker pays the ~30 s and
 # ~10 s of compilation; numba replaces its cache files atomically, so concurrent test workers
 # that find it stale each compile and none breaks.
-KERNEL := explorer/dynamics/exact_kernel.py explorer/dynamics/chain_kernels.py
+KERNEL := explorer/dynamics/exact_kernel.py explorer/dynamics/free_vibration.py explorer/dynamics/chain_kernels.py
 KERNEL_STAMP := $(VENV)/.kernel-compiled
 
 .PHONY: run test bench lock clean

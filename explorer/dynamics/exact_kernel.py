@@ -41,6 +41,7 @@ from numba import njit
 
 from .exact_grid import build_grid
 from .exact_steps import LinearPhase, taylor_terms
+from .free_vibration import free_amplitude
 from .model import DynamicsSolution, LinkageModel
 from .phases import CONTACT, FLIGHT, SEATED, STUCK
 
@@ -60,6 +61,8 @@ EVENT_NAMES = ("lift-off", "separation", "re-contact", "seat")
 ONE, MIN, MAX = 0, 1, 2  # how an event's components combine
 # kernel status
 OK, TOO_MANY_EVENTS, NO_PROGRESS = 0, 1, 2
+
+_free_amplitude = njit(cache=True)(free_amplitude)  # the elastic effect's residual amplitude, compiled
 
 _INV_PAIR = np.array([1.0 / ((n + 1) * (n + 2)) for n in range(64)])
 
@@ -1378,7 +1381,7 @@ def _largest(x, lo, hi, init):
 
 @njit(cache=True)
 def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, omega, M, M1, k, c, lash, W0, rate, R, e,
-               zeno_height, max_events, N, ratio, preload_closing, take_up_s, ref, dwell, blk, win):
+               zeno_height, max_events, N, ratio, preload_closing, take_up_s, ref, dwell, S_dwell, blk, win):
     """One revolution of the elastic effect at the speed omega, on a grid built in cam angle
     (RevolutionGrid: the n output samples from the drive's lowest point, out_nodes their nodes):
     the FIGURES, the valve lift at the output samples in the order of the cam angle (the effect's
@@ -1387,9 +1390,9 @@ def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i
     The figures are the elastic effect's summary read as sweep_engine.row_scalars reads it:
     force, deviation from S - lash - W/k, separation on the output samples, events from the start
     of the run for one period, times modulo the period (effects/elastic.py, elastic_events.py);
-    the residual figures from the lift the cam is made for, ref (2, n: per cam angle, its value
-    and slope per radian; effects/residual.reference_lift) and the dwell's first sample (-1: none;
-    effects/residual.py); blk, win: grid_bounds of the grid in cam angle."""
+    the residual figures from the lift the cam is made for at the output angles, ref, the dwell's
+    first sample (-1: none) and the valve-referred drive there, S_dwell
+    (effects/residual.residual_reference); blk, win: grid_bounds of the grid in cam angle."""
     nodes, h, Dn, h_unique = _scaled_grid(nodes_th, h_th, Dn_th, h_unique_th, omega)
     out_s, out_v, out_sigma, out_phase, ev, status, n_detail = solve_nodes(
         nodes, h, PT, Dn, Sb_th, omega, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height, max_events, N,
@@ -1487,16 +1490,15 @@ def revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i
     w0 = w1 = w2 = w3 = 0.0
     n4 = n - n % 4
     for i in range(0, n4, 4):
-        w0 = max(w0, abs(lift[i] - ref[0, i]))
-        w1 = max(w1, abs(lift[i + 1] - ref[0, i + 1]))
-        w2 = max(w2, abs(lift[i + 2] - ref[0, i + 2]))
-        w3 = max(w3, abs(lift[i + 3] - ref[0, i + 3]))
+        w0 = max(w0, abs(lift[i] - ref[i]))
+        w1 = max(w1, abs(lift[i + 1] - ref[i + 1]))
+        w2 = max(w2, abs(lift[i + 2] - ref[i + 2]))
+        w3 = max(w3, abs(lift[i + 3] - ref[i + 3]))
     for i in range(n4, n):
-        w0 = max(w0, abs(lift[i] - ref[0, i]))
+        w0 = max(w0, abs(lift[i] - ref[i]))
     fig[10] = max(max(w0, w1), max(w2, w3))
     if dwell >= 0:
-        wn = math.sqrt((k + rate) / M1)
-        fig[11] = math.hypot(lift[dwell] - ref[0, dwell], (vel[dwell] - omega * ref[1, dwell]) / wn)
+        fig[11] = _free_amplitude(lift[dwell], vel[dwell], S_dwell, k, lash, W0, rate, R, M1)
     return fig, lift, rev, status
 
 
@@ -1530,7 +1532,7 @@ def _rate(M, M1, k, c, rate):
 
 @njit(cache=True)
 def revolutions(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, h_max_th, ratio, runs,
-                zeno_height, max_events, ref, dwell):
+                zeno_height, max_events, ref, dwell, S_dwell):
     """revolution() for many runs on one grid (runs: one row of RUN_PARAMETERS each): the FIGURES
     per run and the solver status per run (a batch costs no Python per run)."""
     R = runs.shape[0]
@@ -1543,7 +1545,7 @@ def revolutions(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, 
         N = _taylor_terms(_rate(p[1], p[2], p[3], p[4], p[7]) * h_max_th / omega)
         fig, lift, rev, st = revolution(nodes_th, h_th, PT, Dn_th, Sb_th, hidx, h_unique_th, out_nodes, i0, omega,
                                         p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], zeno_height,
-                                        max_events, N, ratio, p[10], p[11], ref, dwell, blk, win)
+                                        max_events, N, ratio, p[10], p[11], ref, dwell, S_dwell, blk, win)
         figs[r] = fig
         status[r] = st
     return figs, status
@@ -1664,29 +1666,30 @@ def split_parts(grid: RevolutionGrid, rho_theta: float) -> np.ndarray | None:
 
 
 def run_revolution(grid: RevolutionGrid, omega: float, model: LinkageModel, ratio: float, take_up_s: float,
-                   ref: np.ndarray, dwell: int, zeno_height: float = 1e-12, max_events: int = 100_000):
+                   ref: np.ndarray, dwell: int, S_dwell: float, zeno_height: float = 1e-12, max_events: int = 100_000):
     """revolution() on a RevolutionGrid: (FIGURES, valve lift at the output samples, revolution
-    events as the elastic effect lists them). RuntimeError where exact.py raises. ref, dwell:
-    the residual figures' reference lift and dwell sample (revolution())."""
+    events as the elastic effect lists them). RuntimeError where exact.py raises. ref, dwell,
+    S_dwell: the residual figures' (revolution())."""
     rho = phase_rates(model)
     N = taylor_terms(rho * grid.h_max / omega)
     fig, lift, rev, status = revolution(
         grid.nodes, grid.h, grid.PT, grid.Dn, grid.Sb, grid.hidx, grid.h_unique, grid.out_nodes, grid.i0, float(omega),
         *model_arguments(model), float(zeno_height), int(max_events), int(N), float(ratio),
         float(model.preload + model.closing_load), float(take_up_s), np.ascontiguousarray(ref, dtype=float),
-        int(dwell), *grid_bounds(grid.h, grid.Dn, grid.Sb))
+        int(dwell), float(S_dwell), *grid_bounds(grid.h, grid.Dn, grid.Sb))
     _check(status)
     return fig, lift, rev
 
 
-def run_batch(grid: RevolutionGrid, ratio: float, runs: np.ndarray, ref: np.ndarray, dwell: int,
+def run_batch(grid: RevolutionGrid, ratio: float, runs: np.ndarray, ref: np.ndarray, dwell: int, S_dwell: float,
               zeno_height: float = 1e-12, max_events: int = 100_000):
     """revolutions() on a RevolutionGrid: (FIGURES per run, status per run: OK, or the exact
-    solver's RuntimeErrors as TOO_MANY_EVENTS, NO_PROGRESS); ref, dwell: revolution()'s, shared
-    by the runs (one lever ratio and lash)."""
+    solver's RuntimeErrors as TOO_MANY_EVENTS, NO_PROGRESS); ref, dwell, S_dwell: revolution()'s,
+    shared by the runs (one lever ratio and lash)."""
     return revolutions(grid.nodes, grid.h, grid.PT, grid.Dn, grid.Sb, grid.hidx, grid.h_unique, grid.out_nodes,
                        grid.i0, grid.h_max, float(ratio), np.ascontiguousarray(runs, dtype=float),
-                       float(zeno_height), int(max_events), np.ascontiguousarray(ref, dtype=float), int(dwell))
+                       float(zeno_height), int(max_events), np.ascontiguousarray(ref, dtype=float), int(dwell),
+                       float(S_dwell))
 
 
 def revolution_events(rev: np.ndarray) -> list[dict]:
@@ -1713,9 +1716,9 @@ def warm() -> None:
     t = np.linspace(0.0, 2 * math.pi / omega, 181)
     solve(model, Drive(_Lift(), 1.0, omega), t)
     grid = revolution_grid(_Lift(), 1.0, 180)
-    ref = np.zeros((2, 180))
-    run_revolution(grid, omega, model, 1.0, 0.0, ref, -1)
-    run_batch(grid, 1.0, np.array([[omega, *model_arguments(model), 50.0, 0.0]]), ref, 3)
+    ref = np.zeros(180)
+    run_revolution(grid, omega, model, 1.0, 0.0, ref, -1, math.nan)
+    run_batch(grid, 1.0, np.array([[omega, *model_arguments(model), 50.0, 0.0]]), ref, 3, 1e-3)
 
 
 if __name__ == "__main__":

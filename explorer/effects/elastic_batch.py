@@ -43,17 +43,13 @@ class BatchCache:
 
 
 def _residual_reference(shared, lift, ratio: float, lash: float, n: int):
-    """The residual figures' reference lift at the n output angles (value and slope per radian)
-    and the dwell's first sample (-1: none): effects/residual.py's, per lever ratio and lash."""
-    from .residual import dwell_sample, reference_lift
+    """The residual figures' reference lift at the n output angles, the dwell's first sample (-1:
+    none) and the drive there: effects/residual.residual_reference, per lever ratio and lash."""
+    from .residual import residual_reference
     from ..core.memo import remember
 
-    def make():
-        theta = np.arange(n) * (2.0 * math.pi / n)
-        i = dwell_sample(lift, theta)
-        return np.ascontiguousarray(reference_lift(lift, ratio, lash, theta, 1)), (-1 if i is None else i)
-
-    return remember(shared.take_ups, ("residual", ratio, lash, n), make)
+    return remember(shared.take_ups, ("residual", ratio, lash, n),
+                    lambda: residual_reference(lift, ratio, lash, np.arange(n) * (2.0 * math.pi / n)))
 
 
 def accepts(scene, shared) -> bool:
@@ -98,8 +94,8 @@ def elastic_run(scene, shared):
         shared.grids, (ratio, n, parts.tobytes()), lambda: kernel.revolution_grid(lift, ratio, n, rho_theta, base))
     ups = _remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
     take_up = ups[0] / omega if len(ups) else math.nan
-    ref, dwell = _residual_reference(shared, lift, ratio, lash, n)
-    fig, lift_column, rev = kernel.run_revolution(grid, omega, model, ratio, take_up, ref, dwell)
+    ref, dwell, S_dwell = _residual_reference(shared, lift, ratio, lash, n)
+    fig, lift_column, rev = kernel.run_revolution(grid, omega, model, ratio, take_up, ref, dwell, S_dwell)
     return dict(zip(ELASTIC, fig.tolist())), lift_column, rev
 
 
@@ -140,7 +136,7 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     failed |= ~(rho * (2.0 * math.pi / omega) / 0.5 <= MAX_SOLVER_NODES)
     for (ratio, n, lash), members in groups.items():
         base = remember(shared.grids, (ratio, n), lambda: kernel.revolution_grid(lift, ratio, n))
-        ref, dwell = _residual_reference(shared, lift, ratio, lash, n)
+        ref, dwell, S_dwell = _residual_reference(shared, lift, ratio, lash, n)
         members = np.array([m for m in members if not failed[m]], dtype=np.int64)
         if not members.size:
             continue
@@ -148,14 +144,14 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
         split = rho_theta * base.h_max / kernel.MAX_RHO_H > 1.0
         plain = members[~split]
         if plain.size:
-            figs, status = kernel.run_batch(base, ratio, params[plain], ref, dwell)
+            figs, status = kernel.run_batch(base, ratio, params[plain], ref, dwell, S_dwell)
             figures[plain] = figs
             failed[plain] = status != kernel.OK
         for m, rt in zip(members[split].tolist(), rho_theta[split].tolist()):
             parts = kernel.split_parts(base, rt)
             grid = remember(shared.grids, (ratio, n, parts.tobytes()),
                             lambda: kernel.revolution_grid(lift, ratio, n, rt, base))
-            figs, status = kernel.run_batch(grid, ratio, params[m:m + 1], ref, dwell)
+            figs, status = kernel.run_batch(grid, ratio, params[m:m + 1], ref, dwell, S_dwell)
             figures[m] = figs[0]
             failed[m] = status[0] != kernel.OK
     figures[failed] = math.nan
