@@ -23,7 +23,7 @@ import pytest
 
 import explorer
 from conftest import SCENES
-from explorer.dynamics import exact_kernel
+from explorer.dynamics import kernel_figures
 from explorer.dynamics.free_vibration import free_amplitude
 from explorer.effects.lift import build_lift
 from explorer.effects.pipeline import simulate
@@ -147,7 +147,7 @@ def test_sweeps_and_the_residual_study_give_the_closed_form(tmp_path, law):
 
 
 def test_the_compiled_figure_is_the_effects_formula_to_the_bit():
-    """exact_kernel compiles explorer.dynamics.free_vibration.free_amplitude itself: on the same
+    """The compiled solver (kernel_figures) compiles explorer.dynamics.free_vibration.free_amplitude itself: on the same
     inputs (random, seated and open dwells, both signs of v and v = 0, with and without friction)
     the two give the same float."""
     rng = np.random.default_rng(7)
@@ -158,7 +158,7 @@ def test_the_compiled_figure_is_the_effects_formula_to_the_bit():
         s = rng.uniform(0, 1.2e-2)
         v = rng.choice([0.0, rng.normal(0, 2)])
         args = (s, v, S, k, lash, W0, rate, R, rng.uniform(0.03, 0.3))
-        assert exact_kernel._free_amplitude(*args) == free_amplitude(*args), args
+        assert kernel_figures._free_amplitude(*args) == free_amplitude(*args), args
 
 
 def test_free_amplitude_is_the_harmonic_amplitude_about_the_equilibrium():

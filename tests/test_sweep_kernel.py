@@ -297,10 +297,10 @@ def test_failing_runs_are_marked_on_the_compiled_path():
 
 
 def test_numba_is_imported_by_the_kernel_module_only():
-    """numba (~0.3 s to import) only in explorer/dynamics/exact_kernel.py, which only the sweep's
-    compiled path imports, and in dynamics/chain_kernels.py, which only the spring chain's exact
-    solver imports (scenes with spring.elements > 0): `import explorer`, loading and simulating a
-    massless scene leave it out."""
+    """numba (~0.3 s to import) only in the compiled exact solver's modules (dynamics/kernel_*.py,
+    imported only by dynamics/exact_kernel.py, which only the sweep's compiled path imports), and
+    in dynamics/chain_kernels.py, which only the spring chain's exact solver imports (scenes with
+    spring.elements > 0): `import explorer`, loading and simulating a massless scene leave it out."""
     import ast
     import subprocess
     import sys
@@ -314,7 +314,14 @@ def test_numba_is_imported_by_the_kernel_module_only():
                      else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
             if any(n.split(".")[0] == "numba" for n in names):
                 users.add(path.relative_to(package).as_posix())
-    assert users == {"dynamics/exact_kernel.py", "dynamics/chain_kernels.py"}
+    kernel = {f"dynamics/kernel_{part}.py" for part in ("steps", "events", "grid", "phase", "figures")}
+    assert users == kernel | {"dynamics/chain_kernels.py"}
+    importers = set()
+    for path in package.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[-1].startswith("kernel_"):
+                importers.add(path.relative_to(package).as_posix())
+    assert importers <= kernel | {"dynamics/exact_kernel.py"}
     code = ("import sys, explorer; explorer.simulate(explorer.load_scene(sys.argv[1])); "
             "print('numba' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code, str(SCENES / "elastic_float.toml")], capture_output=True,
