@@ -128,15 +128,14 @@ def run_revolution(grid: RevolutionGrid, omega: float, model: LinkageModel, rati
     S_dwell: the residual figures' (revolution())."""
     rho = phase_rates(model)
     N = taylor_terms(rho * grid.h_max / omega)
-    lift, vel = np.empty(grid.n), np.empty(grid.n)
+    buffers = run_buffers(grid.nodes.size, int(N), grid.h_unique.size)
     fig, rev, status = revolution(
         grid.nodes, grid.h, grid.PT, grid.Dn, grid.Sb, grid.hidx, grid.h_unique, grid.out_nodes, grid.i0, float(omega),
         *model_arguments(model), float(zeno_height), int(max_events), int(N), float(ratio),
         float(model.preload + model.closing_load), float(take_up_s), np.ascontiguousarray(ref, dtype=float),
-        int(dwell), float(S_dwell), *grid_bounds(grid.h, grid.Dn, grid.Sb),
-        run_buffers(grid.nodes.size, int(N), grid.h_unique.size), lift, vel)
+        int(dwell), float(S_dwell), *grid_bounds(grid.h, grid.Dn, grid.Sb), buffers, np.empty(6))
     _check(status)
-    return fig, lift, rev
+    return fig, np.roll(buffers[0][grid.out_nodes], grid.i0), rev  # output column (r + i0) mod n: run sample r
 
 
 def run_batch(grid: RevolutionGrid, ratio: float, runs: np.ndarray, ref: np.ndarray, dwell: int, S_dwell: float,

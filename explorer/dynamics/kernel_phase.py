@@ -18,7 +18,9 @@ change which steps are looked at, never the states or the events (tests/test_swe
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from . import kernel_stamp  # noqa: F401 (the cache is stale when a source it depends on changed)
 from .exact import LAST_U, MAX_SAME_TIME
@@ -33,6 +35,38 @@ from .phases import CONTACT, FLIGHT, SEATED, STUCK
 OK, TOO_MANY_EVENTS, NO_PROGRESS = 0, 1, 2  # a run's status (exact.py's RuntimeErrors)
 GROUP_MARGIN = 1e-9  # a step group's length bound lies this fraction above its length (the lengths of
 # a group differ by rounding)
+
+
+@intrinsic
+def borrowed(typingctx, arr):
+    """The array without its reference count (its meminfo and parent NULL): numba counts a
+    reference at every binding of an array (each argument of each call, each variable a tuple is
+    unpacked into), with an atomic operation, about 1 in 9 of a run's time when some thirty arrays
+    reach each phase of a run. A borrowed array's counts are no-ops; it must not outlive the array
+    it borrows from (the batch's buffers and grid, held by revolutions() throughout)."""
+    if not isinstance(arr, types.Array):
+        return None
+
+    def codegen(context, builder, signature, args):
+        out = context.make_array(signature.return_type)(context, builder, value=args[0])
+        out.meminfo = cgutils.get_null_value(out.meminfo.type)
+        out.parent = cgutils.get_null_value(out.parent.type)
+        return out._getvalue()
+
+    return arr(arr), codegen
+
+
+@njit(cache=True)
+def borrowed_buffers(buffers):
+    """run_buffers' arrays borrowed (borrowed())."""
+    out_s, out_v, out_sigma, out_phase, ev, tabs, ws = buffers
+    a, da, f, Pw, dP, zero6, rows, E, zr, clear_row, ev_kind, ev_r0, ev_nr, ev_comb, zeros, check, grp, hu, top, \
+        tmp, stack = ws
+    return (borrowed(out_s), borrowed(out_v), borrowed(out_sigma), borrowed(out_phase), borrowed(ev), borrowed(tabs),
+            (borrowed(a), borrowed(da), borrowed(f), borrowed(Pw), borrowed(dP), borrowed(zero6), borrowed(rows),
+             borrowed(E), borrowed(zr), borrowed(clear_row), borrowed(ev_kind), borrowed(ev_r0), borrowed(ev_nr),
+             borrowed(ev_comb), borrowed(zeros), borrowed(check), borrowed(grp), borrowed(hu), borrowed(top),
+             borrowed(tmp), borrowed(stack)))
 
 
 @njit(cache=True, inline="always")
@@ -233,6 +267,66 @@ def _rest_phase(phase, s_star, j, u, nodes, h, inv, PT, Dn, Sb, sw1, k, c, lash,
 
 
 @njit(cache=True, inline="always")
+def _window_contact(PT, Dn, hidx, tab, out_s, out_v, i, s, v, Fc, sw1, k0, l0, m0, m2, K, kc, cc, vzero, ta, tb, tc,
+                    acm):
+    """The window's states (written from node i on) and, over its nodes, the largest values of the
+    contact phase's rows (moving_table: separation -(k S + c S' ) + k lash + k s + c v, the seat -s,
+    velocity zero -sigma v when there is friction) and of |m a| = |k S + c S' - Fc - K s - c v|
+    and |v|. The rows are moving_table's, evaluated without their zero terms (the same floats:
+    adding or multiplying into an exact zero changes no value)."""
+    ss = s
+    vv = v
+    Vm = abs(v)
+    q = i
+    while q < i + WINDOW:
+        out_s[q] = ss
+        out_v[q] = vv
+        ss, vv = step(tab, hidx[q], PT, q, Fc, ss, vv)
+        P = kc * Dn[0, q + 1] + cc * (Dn[1, q + 1] * sw1)
+        cv = m0 * vv
+        ta = max(ta, ((-P + k0) + l0 * ss) + cv)
+        tb = max(tb, -ss)
+        if vzero:
+            tc = max(tc, m2 * vv)
+        acm = max(acm, abs(((P - Fc) - K * ss) - cv))
+        Vm = max(Vm, abs(vv))
+        q += 1
+    return ss, vv, ta, tb, tc, acm, Vm
+
+
+@njit(cache=True, inline="always")
+def _window_flight(PT, Dn, hidx, tab, out_s, out_v, i, s, v, Fc, sw1, a0, k0, l0, b1, m1, m2, m3, K, force_row, nrow,
+                   ta, tb, tc, td, acm):
+    """_window_contact for the flight phase (moving_table: the gap k S - k lash - k s, with damping
+    also the force k S + c S' - k lash - k s - c v, the seat -s, velocity zero -sigma v; |m a| =
+    |-Fc - K s|)."""
+    ss = s
+    vv = v
+    Vm = abs(v)
+    q = i
+    while q < i + WINDOW:
+        out_s[q] = ss
+        out_v[q] = vv
+        ss, vv = step(tab, hidx[q], PT, q, Fc, ss, vv)
+        kS = a0 * Dn[0, q + 1]
+        ks = l0 * ss
+        ta = max(ta, (kS + k0) + ks)
+        if force_row:
+            tb = max(tb, ((kS + b1 * (Dn[1, q + 1] * sw1)) + k0) + ks + m1 * vv)
+            tc = max(tc, -ss)
+            if nrow > 3:
+                td = max(td, m3 * vv)
+        else:
+            tb = max(tb, -ss)
+            if nrow > 2:
+                tc = max(tc, m2 * vv)
+        acm = max(acm, abs(-Fc - K * ss))
+        Vm = max(Vm, abs(vv))
+        q += 1
+    return ss, vv, ta, tb, tc, td, acm, Vm
+
+
+@njit(cache=True, inline="always")
 def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, sw1, hidx, lin, tabs, k, c, lash, W0,
                   R, N, win, out_s, out_v, out_sigma, out_phase, ws):
     """A moving valve (contact or flight) from (j, u) with state (s, v) and friction sign sigma
@@ -327,22 +421,16 @@ def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, s
             # at its nodes with them, then every event cleared at once by _window_clear. A window
             # not cleared is done again step by step from its first node (the outputs written
             # here are written again, or by the phases that follow).
-            ss = s
-            vv = v
-            ta, tb, tc, td = e0a, e0b, e0c, e0d
-            acm = abs(kc_ * S0 + cc_ * S10 - Fc - K_ * s - c_ * v)
-            Vm = abs(v)
-            for q in range(i, i + WINDOW):
-                out_s[q] = ss
-                out_v[q] = vv
-                ss, vv = step(tabs, kind, hidx[q], PT[q], Fc, ss, vv)
-                Sq, S1q = Dn[0, q + 1], Dn[1, q + 1] * sw1
-                ta = max(ta, a0_ * Sq + b0_ * S1q + k0_ + l0_ * ss + m0_ * vv)
-                tb = max(tb, a1_ * Sq + b1_ * S1q + k1_ + l1_ * ss + m1_ * vv)
-                tc = max(tc, a2_ * Sq + b2_ * S1q + k2_ + l2_ * ss + m2_ * vv)
-                td = max(td, a3_ * Sq + b3_ * S1q + k3_ + l3_ * ss + m3_ * vv)
-                acm = max(acm, abs(kc_ * Sq + cc_ * S1q - Fc - K_ * ss - c_ * vv))
-                Vm = max(Vm, abs(vv))
+            acm0 = abs(kc_ * S0 + cc_ * S10 - Fc - K_ * s - c_ * v)
+            if kind == CONTACT:
+                ss, vv, ta, tb, tc, acm, Vm = _window_contact(
+                    PT, Dn, hidx, tabs[CONTACT], out_s, out_v, i, s, v, Fc, sw1, k0_, l0_, m0_, m2_, K_, kc_, cc_,
+                    nrow > 2, e0a, e0b, e0c, acm0)
+                td = e0d
+            else:
+                ss, vv, ta, tb, tc, td, acm, Vm = _window_flight(
+                    PT, Dn, hidx, tabs[FLIGHT], out_s, out_v, i, s, v, Fc, sw1, a0_, k0_, l0_, b1_, m1_, m2_, m3_,
+                    K_, c > 0.0, nrow, e0a, e0b, e0c, e0d, acm0)
             wb = i // WINDOW
             top[0], top[1], top[2], top[3] = ta, tb, tc, td
             if _window_clear(top, acm, Vm, win[0, wb] * sw1, win[1, wb] * sw2, win[2, wb] * sw3, c_, K_, kc_, cc_,
@@ -365,7 +453,7 @@ def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, s
         out_sigma[i] = sigma
         PTi = PT[i]
         gi = hidx[i]
-        s1, v1 = step(tabs, kind, gi, PTi, Fc, s, v)
+        s1, v1 = step(tabs[kind], gi, PT, i, Fc, s, v)
         # event values at both nodes; the step is cleared by max(ends) + h^2/8 sup|e''|, sup|e''|
         # from bounds of |S''|, |S'''| over the step and of |a|, |jerk| from the left node and the
         # ODE (exact_phase._scan_window's per-step bound)

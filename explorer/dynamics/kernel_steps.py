@@ -171,17 +171,18 @@ def step_tables(m, c, K, kc, cc, h_unique, N):
 
 
 @njit(cache=True, inline="always")
-def step(tabs, kind, g, PTq, Fc, s, v):
-    """The state one step later: x1 = Phi x + (drive part - Fc g). The drive's and the constant
-    force's part does not depend on the state: summed first, so that the chain carried from step
-    to step (s, v -> s1, v1) is one multiply and two adds long, not nine operations (the adds are
-    not reassociated for us: no fastmath)."""
-    ds = -Fc * tabs[kind, g, 4]
-    dv = -Fc * tabs[kind, g, 5]
+def step(tab, g, PT, q, Fc, s, v):
+    """The state one step later: x1 = Phi x + (drive part - Fc g), with the tables tab[g] of the
+    step's length and the drive PT[q]. The drive's and the constant force's part does not depend
+    on the state: summed first, so that the chain carried from step to step (s, v -> s1, v1) is
+    one multiply and two adds long, not nine operations (the adds are not reassociated for us: no
+    fastmath)."""
+    ds = -Fc * tab[g, 4]
+    dv = -Fc * tab[g, 5]
     for p in range(6):
-        ds += tabs[kind, g, 6 + p] * PTq[p]
-        dv += tabs[kind, g, 12 + p] * PTq[p]
-    return (tabs[kind, g, 0] * s + tabs[kind, g, 1] * v) + ds, (tabs[kind, g, 2] * s + tabs[kind, g, 3] * v) + dv
+        ds += tab[g, 6 + p] * PT[q, p]
+        dv += tab[g, 12 + p] * PT[q, p]
+    return (tab[g, 0] * s + tab[g, 1] * v) + ds, (tab[g, 2] * s + tab[g, 3] * v) + dv
 
 
 @njit(cache=True)
