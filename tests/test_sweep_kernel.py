@@ -374,3 +374,15 @@ def test_rigid_figures_do_not_depend_on_how_the_runs_are_chunked():
         expected = reference_row(scene_for(base, keys, v), names)
         assert whole[i, names.index("min_contact_force_N")] == expected["min_contact_force_N"]
         assert whole[i, names.index("max_camshaft_torque_Nm")] == pytest.approx(expected["max_camshaft_torque_Nm"], rel=1e-9)
+
+
+def test_every_sweep_key_sets_a_run_parameter_of_the_compiled_path():
+    """The compiled path builds its runs' parameters from the sweep keys' values (no scene per
+    run): every sweepable key has its column, and a key without one is refused, not ignored."""
+    from explorer.effects.elastic_batch import KEY_PARAMETERS, BatchCache, elastic_chunk_values
+    from explorer.studies.sweep_spec import SWEEP_KEYS
+
+    assert set(KEY_PARAMETERS) == set(SWEEP_KEYS)
+    base = load_scene(SCENES / "elastic_float.toml")
+    with pytest.raises(ValueError, match="follower.ratio"):
+        elastic_chunk_values(base, ("follower.ratio",), np.ones((1, 1)), BatchCache())

@@ -103,28 +103,87 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     """The ELASTIC figures (runs x figures) of many runs and which failed (as elastic_run would
     raise: a speed beyond the step budget, a motion that does not settle), the runs on one grid
     in one compiled call (exact_kernel.revolutions: no Python per run but its scene's values)."""
+    from ..dynamics.exact_kernel import RUN_PARAMETERS
+
+    params = np.empty((len(scenes), len(RUN_PARAMETERS)))
+    group = np.empty((len(scenes), 2))  # per run: lever ratio, steps per revolution
+    for r, scene in enumerate(scenes):
+        v, sp, link = scene.valve, scene.spring, scene.linkage
+        M1 = v.oscillating_mass if v.oscillating_mass is not None else v.mass
+        closing = scene.loads.closing_total
+        params[r, :11] = (scene.drive.omega, v.mass, M1, link.stiffness, link.damping, v.lash, sp.preload + closing,
+                          sp.rate, scene.loads.friction, scene.seat.restitution, sp.preload + closing)
+        group[r] = scene.follower.ratio, scene.solver.steps_per_revolution
+    return _chunk(params, group, shared)
+
+
+# the run parameters a sweep key sets (studies.sweep_spec.SWEEP_KEYS; drive.rpm sets omega, and
+# spring.preload both columns that add the closing loads to it)
+KEY_PARAMETERS = {"drive.rpm": "omega", "valve.mass": "mass", "valve.oscillating_mass": "oscillating_mass",
+                  "linkage.stiffness": "stiffness", "linkage.damping": "damping", "valve.lash": "lash",
+                  "spring.preload": "seated_resistance", "spring.rate": "spring_rate", "loads.friction": "friction",
+                  "seat.restitution": "restitution"}
+
+
+def elastic_chunk_values(base, keys, values, shared) -> tuple[np.ndarray, np.ndarray]:
+    """elastic_chunk of the runs of the scene `base` with `values` (runs x keys, SI) in place of
+    its own (studies.sweep_spec.scene_for's runs), the run parameters built column by column
+    with the same arithmetic as elastic_chunk's per scene, no scene built per run. keys: sweep keys
+    (KEY_PARAMETERS)."""
+    from ..dynamics.exact_kernel import RUN_PARAMETERS
+
+    unknown = [key for key in keys if key not in KEY_PARAMETERS]
+    if unknown:  # a key this table does not map would be silently left at the base scene's value
+        raise ValueError(f"elastic_chunk_values: no run parameter for the sweep keys {unknown}")
+    values = np.asarray(values, dtype=float)
+    R = values.shape[0]
+    col = {key: values[:, j] for j, key in enumerate(keys)}
+    v, sp, link = base.valve, base.spring, base.linkage
+
+    def column(key, default):
+        return col[key] if key in col else np.full(R, float(default))
+
+    closing = base.loads.closing_total
+    params = np.empty((R, len(RUN_PARAMETERS)))
+    params[:, 0] = column("drive.rpm", base.drive.rpm) * 2.0 * math.pi / 60.0  # (Drive.omega's operations)
+    params[:, 1] = column("valve.mass", v.mass)
+    if "valve.oscillating_mass" in col or v.oscillating_mass is not None:
+        params[:, 2] = column("valve.oscillating_mass", v.oscillating_mass)
+    else:
+        params[:, 2] = params[:, 1]
+    params[:, 3] = column("linkage.stiffness", link.stiffness)
+    params[:, 4] = column("linkage.damping", link.damping)
+    params[:, 5] = column("valve.lash", v.lash)
+    params[:, 6] = column("spring.preload", sp.preload) + closing
+    params[:, 7] = column("spring.rate", sp.rate)
+    params[:, 8] = column("loads.friction", base.loads.friction)
+    params[:, 9] = column("seat.restitution", base.seat.restitution)
+    params[:, 10] = params[:, 6]
+    group = np.empty((R, 2))
+    group[:, 0] = base.follower.ratio
+    group[:, 1] = base.solver.steps_per_revolution
+    return _chunk(params, group, shared)
+
+
+def _chunk(params, group, shared) -> tuple[np.ndarray, np.ndarray]:
+    """elastic_chunk from the run parameters (RUN_PARAMETERS but take_up_s, filled here) and per
+    run its lever ratio and steps per revolution: the runs of one grid and lash in one call."""
     from ..dynamics import exact_kernel as kernel
     from .elastic import MAX_SOLVER_NODES
     from ..mechanics.kinematics import lash_crossings
     from ..core.memo import remember
 
     lift = shared.lift
-    R = len(scenes)
+    R = params.shape[0]
     figures = np.full((R, len(ELASTIC)), math.nan)
     failed = np.zeros(R, bool)
-    params = np.empty((R, len(kernel.RUN_PARAMETERS)))
     groups: dict = {}
-    for r, scene in enumerate(scenes):
-        v, sp, link = scene.valve, scene.spring, scene.linkage
-        ratio, lash = scene.follower.ratio, v.lash
-        omega = scene.drive.omega
-        M1 = v.oscillating_mass if v.oscillating_mass is not None else v.mass
-        closing = scene.loads.closing_total
+    for r, (ratio, n, lash) in enumerate(zip(group[:, 0].tolist(), group[:, 1].tolist(), params[:, 5].tolist())):
+        groups.setdefault((ratio, int(n), lash), []).append(r)
+    omega = params[:, 0]
+    for (ratio, n, lash), members in groups.items():
         ups = remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
-        params[r] = (omega, v.mass, M1, link.stiffness, link.damping, lash, sp.preload + closing, sp.rate,
-                     scene.loads.friction, scene.seat.restitution, sp.preload + closing,
-                     ups[0] / omega if len(ups) else math.nan)
-        groups.setdefault((ratio, scene.solver.steps_per_revolution, lash), []).append(r)
+        params[members, 11] = ups[0] / omega[members] if len(ups) else math.nan
     # the fastest rate of each run: the step budget (effects.elastic.check_resolution) and the split
     M, M1, k, c, rate = (params[:, i] for i in (1, 2, 3, 4, 7))
     alpha = 0.5 * c / M1
@@ -132,7 +191,6 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     over = alpha * alpha > w2
     rho = np.where(over, alpha + np.sqrt(np.where(over, alpha * alpha - w2, 0.0)), np.sqrt(np.abs(w2)))
     rho = np.maximum(rho, np.sqrt(rate / M))
-    omega = params[:, 0]
     failed |= ~(rho * (2.0 * math.pi / omega) / 0.5 <= MAX_SOLVER_NODES)
     for (ratio, n, lash), members in groups.items():
         base = remember(shared.grids, (ratio, n), lambda: kernel.revolution_grid(lift, ratio, n))
