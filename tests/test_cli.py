@@ -172,7 +172,7 @@ import sys
 from explorer import load_scene, simulate
 result = simulate(load_scene({str(DEMO)!r}))
 assert result.columns["valve_lift_m"].size == 3600
-registry = ("explorer.dynamics", "explorer.dynamics.solvers")  # solver names, read by the scene loader
+registry = ("explorer.dynamics", "explorer.dynamics.solvers", "explorer.dynamics.solver_base")  # the solver table, read by the scene loader
 heavy = [m for m in sys.modules if m.startswith(("explorer.dynamics", "viser", "rerun", "matplotlib", "trimesh"))
          and m not in registry]
 print(",".join(heavy))

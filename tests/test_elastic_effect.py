@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from explorer.effects.elastic import elastic_jerk
-from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
+from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel
+from explorer.dynamics.solvers import solve
 from explorer.effects.pipeline import simulate
 from explorer.effects.lift import build_lift
 from explorer.scene.scene import loads_scene
@@ -149,7 +150,7 @@ def test_a_kinematics_only_scene_never_loads_a_dynamics_solver(tmp_path):
         f"r = simulate(load_scene({str(scene)!r}))\n"
         "assert 'elastic' not in r.summary['effects']\n"
         # the registry of solver names (standard library only) is read by the scene loader
-        "registry = ('explorer.dynamics', 'explorer.dynamics.solvers')\n"
+        "registry = ('explorer.dynamics', 'explorer.dynamics.solvers', 'explorer.dynamics.solver_base')\n"
         "loaded = [m for m in sys.modules if m.startswith('explorer.dynamics') and m not in registry]\n"
         "assert not loaded, loaded\n"
     )

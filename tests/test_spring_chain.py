@@ -17,7 +17,7 @@ from explorer.dynamics.chain import ChainModel, chain_frequencies, continuous_fr
 from explorer.dynamics.chain_exact import phase_modes, phi_functions, solve
 from explorer.dynamics.chain_kernels import phi_into
 from explorer.dynamics.model import Drive, LinkageModel
-from explorer.dynamics.model import solve as solve_massless
+from explorer.dynamics.solvers import solve as solve_massless
 from explorer.core.errors import InputError
 from explorer.effects.lift import build_lift
 from explorer.scene.builtin import scenes_dir

@@ -4,10 +4,10 @@ modules are light to import (viser and rerun load only inside the command that r
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 
 from ..core.errors import InputError
+from ..core.plugins import resolve
 
 COMMAND_MODULES = [
     "explorer.cli.simulate",
@@ -68,7 +68,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
-        importlib.import_module(name).register(sub)
+        resolve(f"{name}:register")(sub)
     return parser
 
 

@@ -79,7 +79,7 @@ def chain_elastic_effect(ctx) -> EffectOutput:
     D = drive(ctx.time)
     check_solid(scene, float(D[0].max()))
     solve = chain_solver(scene.solver.method, scene.source)
-    options = {name: getattr(scene.solver, name) for name in registry.solver(scene.solver.method).scene_options}
+    options = dict(scene.solver.options)
     i0 = int(np.argmin(D[0]))
     t_run = np.concatenate([ctx.time[i0:], ctx.time[:i0] + period])
     sol = solve(model, drive, t_run, **options)

@@ -12,11 +12,12 @@ cache); the lash take-up angles per lash. A run then costs its scene's values, o
 (the stepping, the events and the figures) and, when the scene has them, the rigid effects
 (forces, contact) as sweep_engine computes them.
 
-The compiled path takes a run when the elastic effect would solve the LinkageModel with the
-registry's `exact` solver and a constant stiffness (no spring chain, no stiffness carried by the
-lift, a lift shared by all runs): `accepts`. Otherwise sweep_engine's other paths do.
+The compiled path takes a run when the elastic effect would solve the LinkageModel with a solver
+that has a compiled batch module (explorer/dynamics/solvers.py: batch_entry, the exact solver's
+exact_kernel) and a constant stiffness (no spring chain, no stiffness carried by the lift, a lift
+shared by all runs): `accepts`. Otherwise sweep_engine's other paths do.
 
-numba is imported (with exact_kernel) only when a run takes this path.
+numba is imported (with the batch module) only when a run takes this path.
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+
+from ..dynamics import solvers
 
 ELASTIC = ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
            "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
@@ -65,7 +68,7 @@ def accepts(scene, shared) -> bool:
         return False
     if "elastic" not in resolve(scene.effects):
         return False
-    if scene.spring.elements > 0 or scene.solver.method != "exact":
+    if scene.spring.elements > 0 or solvers.solver(scene.solver.method).batch_entry is None:
         return False
     if shared.lift is None:
         from .lift import build_lift
@@ -78,7 +81,6 @@ def elastic_run(scene, shared):
     """(figures as a dict of ELASTIC, valve lift at the output samples, the revolution's elastic
     events) of one run. InputError: a speed beyond the solver's step budget (as the elastic
     effect); RuntimeError: a motion that does not settle (as the exact solver)."""
-    from ..dynamics import exact_kernel as kernel
     from ..dynamics.model import LinkageModel
     from .elastic import check_resolution
     from ..mechanics.kinematics import lash_crossings
@@ -90,7 +92,8 @@ def elastic_run(scene, shared):
     omega = scene.drive.omega
     model = LinkageModel.from_scene(scene)
     period = 2.0 * math.pi / omega
-    check_resolution(model, np.array([0.0, period]), "exact", scene.source)
+    kernel = solvers.solver(scene.solver.method).batch_module()
+    check_resolution(model, np.array([0.0, period]), scene.solver.method, scene.source)
     base = _remember(shared.grids, (ratio, n), lambda: kernel.revolution_grid(lift, ratio, n))
     rho_theta = kernel.phase_rates(model) / omega
     parts = kernel.split_parts(base, rho_theta)
@@ -107,12 +110,12 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     """The ELASTIC figures (runs x figures) of many runs and which failed (as elastic_run would
     raise: a speed beyond the step budget, a motion that does not settle), the runs on one grid
     in one compiled call (exact_kernel.revolutions: no Python per run but its scene's values)."""
-    from ..dynamics import exact_kernel as kernel
     from .elastic import MAX_SOLVER_NODES
     from ..mechanics.kinematics import lash_crossings
     from ..core.memo import remember
 
     lift = shared.lift
+    kernel = solvers.solver(scenes[0].solver.method).batch_module()
     R = len(scenes)
     figures = np.full((R, len(ELASTIC)), math.nan)
     failed = np.zeros(R, bool)
@@ -165,7 +168,5 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
 def kernel_outputs(scene, shared) -> tuple[list[dict], np.ndarray]:
     """For tests: (the revolution's elastic events as the elastic effect lists them, the valve lift
     at the output samples as its valve_lift_m column)."""
-    from ..dynamics.exact_kernel import revolution_events
-
     _, lift_column, rev = elastic_run(scene, shared)
-    return revolution_events(rev), lift_column
+    return solvers.solver(scene.solver.method).batch_module().revolution_events(rev), lift_column

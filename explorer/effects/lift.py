@@ -7,8 +7,7 @@ other law is a closed-form LawLift.
 
 from __future__ import annotations
 
-import importlib
-
+from ..core.plugins import resolve
 from ..gears.registry import lift_builder
 from ..lift.curves import LawLift, LiftCurve
 
@@ -32,8 +31,7 @@ def build_lift(scene) -> LiftCurve:
     if gear_lift is not None:
         return gear_lift(scene)
     if spec.law in LIFT_BUILDERS:
-        module, _, attr = LIFT_BUILDERS[spec.law].partition(":")
-        return getattr(importlib.import_module(module), attr)(scene)
+        return resolve(LIFT_BUILDERS[spec.law])(scene)
     return LawLift(
         height=spec.height,
         start=spec.start,

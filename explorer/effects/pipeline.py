@@ -7,7 +7,6 @@ earlier ones of the same name, which is how `valve_*` always holds the most deta
 
 from __future__ import annotations
 
-import importlib
 import math
 import time
 from dataclasses import dataclass
@@ -17,6 +16,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..core.errors import InputError
+from ..core import plugins
 from ..gears.registry import effect_variant
 from ..result import EffectOutput, Result
 from ..scene.scene import EFFECT_DEPENDENCIES, Scene
@@ -76,11 +76,6 @@ def resolve(effects) -> list[str]:
     return order
 
 
-def _resolve(target: str):
-    module, _, attr = target.partition(":")
-    return getattr(importlib.import_module(module), attr)
-
-
 # Results are checked behind the valid ranges: NaN (inf - inf, 0 / 0: an overflow inside an
 # effect) is refused except in the columns that mark with NaN where they are not defined (no
 # contact, valve not carried); infinity is a result for forces (a self-locking cam needs an
@@ -95,8 +90,8 @@ def effect_function(name: str, follower_type: str | None = None) -> Callable[[Co
     registry entry has one, else the generic effect (with the sections' summary blocks)."""
     variant = effect_variant(follower_type, name) if follower_type is not None else None
     if variant is not None:
-        return _resolve(variant)
-    function = _resolve(EFFECT_FUNCTIONS[name])
+        return plugins.resolve(variant)
+    function = plugins.resolve(EFFECT_FUNCTIONS[name])
     sections = SECTION_SUMMARIES.get(name)
     return function if not sections else _with_sections(function, sections)
 
@@ -107,7 +102,7 @@ def _with_sections(function, sections):
         for section, target in sections:
             if getattr(ctx.scene, section, None) is None:
                 continue
-            block, extra_warnings = _resolve(target)(ctx.scene, ctx.lift)
+            block, extra_warnings = plugins.resolve(target)(ctx.scene, ctx.lift)
             out = EffectOutput(columns=out.columns, summary={**out.summary, section: block}, events=out.events,
                                warnings=tuple(out.warnings) + tuple(extra_warnings))
         return out

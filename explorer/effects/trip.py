@@ -506,14 +506,13 @@ def elastic_trip_motion(scene, lift, theta, method: str = "exact", options: dict
 
 
 def trip_elastic_effect(ctx) -> EffectOutput:
-    from .elastic import solver_options
     from ..dynamics.model import EVENT_KINDS, LinkageModel
     from ..mechanics.forces import TrainLoads
 
     scene, w = ctx.scene, ctx.omega
     lift = trip_lift_of(ctx)
     method = scene.solver.method
-    motion = elastic_trip_motion(scene, lift, ctx.theta, method, solver_options(scene))
+    motion = elastic_trip_motion(scene, lift, ctx.theta, method, dict(scene.solver.options))
     c = motion.columns
     model = LinkageModel.from_scene(scene)
     n = ctx.theta.size

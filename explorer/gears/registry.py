@@ -15,10 +15,11 @@ imported when used.
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, Callable, Mapping
+from typing import Callable, Mapping
+
+from ..core.plugins import resolve
 
 _NONE: Mapping[str, str] = MappingProxyType({})
 
@@ -51,12 +52,6 @@ GEARS: Mapping[str, GearEntry] = MappingProxyType({
 })
 
 
-def resolve(target: str) -> Any:
-    """The object a "module:name" string names (imported now)."""
-    module, _, attr = target.partition(":")
-    return getattr(importlib.import_module(module), attr)
-
-
 def gear(follower_type: str) -> GearEntry | None:
     """The registry entry of a follower type; None when it is not a gear."""
     return GEARS.get(follower_type)
@@ -75,4 +70,4 @@ def lift_builder(follower_type: str) -> Callable | None:
 
 def meshes_module(follower_type: str):
     entry = GEARS.get(follower_type)
-    return None if entry is None else importlib.import_module(entry.meshes)
+    return None if entry is None else resolve(entry.meshes + ":")

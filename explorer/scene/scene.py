@@ -8,7 +8,6 @@ those modules' `parse_*` functions, called from here so that all validation happ
 
 from __future__ import annotations
 
-import importlib
 import math
 import os
 import tomllib
@@ -18,9 +17,11 @@ from types import MappingProxyType
 from typing import Any, Mapping
 
 from ..core.errors import InputError
+from ..core.plugins import resolve
 from ..gears import GEAR_TYPES
 from ..lift.laws import LAWS
 from ..core.reader import Table
+from ..dynamics import solvers
 
 # effect name -> effects it needs (resolved by effects.resolve); kept here, free of heavy imports,
 # so that a scene can be validated without importing any solver.
@@ -147,11 +148,11 @@ class Seat:
 
 @dataclass(frozen=True)
 class Solver:
-    method: str = "exact"
+    method: str = solvers.DEFAULT
     steps_per_revolution: int = 3600
-    scipy_method: str = "DOP853"
-    rtol: float = 1e-10
-    atol: float = 1e-13
+    # the method's own [solver] options (explorer/dynamics/solvers.py: scene_options), each given
+    # or at its default
+    options: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
 
 
 @dataclass(frozen=True)
@@ -278,11 +279,6 @@ def apply_overrides(data: dict, overrides, file: str) -> dict:
     return data
 
 
-def _import(target: str):
-    module, _, name = target.partition(":")
-    return getattr(importlib.import_module(module), name)
-
-
 def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     top = Table(data, file, "")
     top.reject_unknown(TOP_KEYS)
@@ -334,9 +330,9 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     )
     for section, target in OWNED_SECTIONS.items():
         table = top.table(section, required=False)
-        fields[section] = _import(target)(table, fields) if table is not None or section in needs else None
+        fields[section] = resolve(target)(table, fields) if table is not None or section in needs else None
     if lift.law in LAW_OPTION_PARSERS:
-        options = _import(LAW_OPTION_PARSERS[lift.law])(top.table("lift"), fields)
+        options = resolve(LAW_OPTION_PARSERS[lift.law])(top.table("lift"), fields)
         fields["lift"] = replace(lift, options=options)
     if lift.law == "contour" and fields.get("cam") is None:
         raise InputError(file, "cam", "missing section: lift.law = 'contour' takes the lift from [cam]")
@@ -526,29 +522,22 @@ def _parse_linkage(t: Table | None) -> Linkage | None:
     )
 
 
-def __getattr__(name: str):
-    """SOLVER_METHODS, the [solver] method choices (one per entry of explorer/dynamics/solvers.py), read
-    from the registry when asked: `import explorer` does not load it."""
-    if name == "SOLVER_METHODS":
-        from ..dynamics.solvers import names
-
-        return names()
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 def _parse_solver(t: Table) -> Solver:
-    from ..dynamics import solvers as solver_registry  # (the registry: on the first [solver] table)
-
-    t.reject_unknown(("method", "steps_per_revolution", *solver_registry.scene_options()))
+    known = solvers.scene_options()
+    t.reject_unknown(("method", "steps_per_revolution", *known))
     steps = t.number("steps_per_revolution", 3600, integer=True)
     if steps < MIN_STEPS:
         raise t.error("steps_per_revolution", f"too few steps: {steps:.6g} (at least {MIN_STEPS})")
     if steps > MAX_STEPS:
         raise t.error("steps_per_revolution", f"too many steps: {steps:.6g} (at most {MAX_STEPS})")
-    return Solver(
-        method=t.string("method", "exact", choices=solver_registry.names()),
-        steps_per_revolution=int(steps),
-        scipy_method=t.string("scipy_method", "DOP853", choices=solver_registry.SCIPY_METHODS),
-        rtol=t.number("rtol", 1e-10, minimum=1e-14, maximum=1e-1),
-        atol=t.number("atol", 1e-13, minimum=1e-20, maximum=1e-1),
-    )
+    method = t.string("method", solvers.DEFAULT, choices=solvers.names())
+    # every option given is checked (by the first solver that has it), the method's own are kept
+    values = {name: _solver_option(t, option) for name, option in known.items() if t.has(name)}
+    own = {option.name: values.get(option.name, option.default) for option in solvers.solver(method).scene_options}
+    return Solver(method=method, steps_per_revolution=int(steps), options=MappingProxyType(own))
+
+
+def _solver_option(t: Table, option) -> Any:
+    if option.choices:
+        return t.string(option.name, option.default, choices=option.choices)
+    return t.number(option.name, option.default, minimum=option.minimum, maximum=option.maximum)

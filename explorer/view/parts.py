@@ -31,12 +31,12 @@ adjusting screw slides in the lever to show the magnified gap. With m = 1 every 
 from __future__ import annotations
 
 import math
-import importlib
 from dataclasses import dataclass
 
 import numpy as np
 import trimesh
 
+from ..core.plugins import resolve
 from ..gears import GEAR_PART_COLORS
 from ..gears.registry import meshes_module
 
@@ -189,8 +189,7 @@ def _external_contour(scene, lift, n: int):
     if getattr(scene, "cam", None) is None:
         return None
     for target in CONTOUR_FUNCTIONS:
-        module, _, attr = target.partition(":")
-        out = getattr(importlib.import_module(module), attr)(scene, lift, n)
+        out = resolve(target)(scene, lift, n)
         out = getattr(out, "contour", out)
         return np.asarray(out, dtype=float)
     return None
