@@ -69,7 +69,7 @@ def test_python_api_matches_csv_columns(tmp_path):
     assert header == list(result.columns)
     for i, name in enumerate(header):
         assert body[:, i] == pytest.approx(result.columns[name], rel=1e-15, abs=0)  # repr round-trips
-    assert json.loads(result.json_text()).keys() == dict(result.summary).keys()
+    assert json.loads(result.json_text()).keys() == result.report().keys() == {*result.summary, "effects", "events", "warnings"}
 
 
 def test_summary_to_stdout_without_files(capsys):

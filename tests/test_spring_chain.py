@@ -361,7 +361,7 @@ def test_coil_clash_is_an_event_with_a_warning():
     result = simulate(scene)
     kinds = [e["kind"] for e in result.events]
     assert "coil-clash" in kinds
-    assert any("coil clash" in w for w in result.summary["warnings"])
+    assert any("coil clash" in w for w in result.warnings)
 
 
 def test_surge_scene_separates_below_the_rigid_float_speed():

@@ -82,9 +82,9 @@ def test_engine_rows_lift_and_events_equal_simulate(scene_file, overrides, runs,
         lift = np.asarray(columns["valve_lift_m"])
         assert np.max(np.abs(lift - result.columns["valve_lift_m"])) <= LIFT_TOL_M, i
         assert [(e["kind"], float(e["time_s"]), e.get("velocity_m_s")) for e in events] \
-            == _elastic_events(result.summary["events"]), i
+            == _elastic_events(result.events), i
         # the row: every figure as read from simulate's result
-        expected = row_scalars(names, result.summary, result.summary["events"], result.columns)
+        expected = row_scalars(names, result.summary, result.events, result.columns)
         got = dict(zip(names, table[i]))
         assert got["run_failed"] == 0.0
         for name, value in expected.items():
@@ -119,7 +119,7 @@ def test_gear_scenes_take_the_simulate_path_and_agree():
     table = compute_chunk(base, ("drive.rpm",), values, names)
     for i, r in enumerate(values):
         result = simulate(scene_for(base, ("drive.rpm",), r))
-        expected = row_scalars(names, result.summary, result.summary["events"], result.columns)
+        expected = row_scalars(names, result.summary, result.events, result.columns)
         for name, value in expected.items():
             got = table[i, names.index(name)]
             assert got == value or (math.isnan(got) and math.isnan(value)), name

@@ -208,7 +208,7 @@ def _scene_inputs(scene) -> dict:
 def _simulated(scene, name, value):
     """simulate's elastic lift and events with one input changed."""
     result = simulate(scene_for(scene, (_SCENE_FIELDS[name],), (value,)))
-    return result.columns["valve_lift_m"], [e for e in result.summary["events"] if e.get("effect") == "elastic"]
+    return result.columns["valve_lift_m"], [e for e in result.events if e.get("effect") == "elastic"]
 
 
 CASES = [
@@ -238,7 +238,7 @@ def test_compiled_rows_equal_simulate(scene_file, overrides, runs, rpm, k_max):
             assert table[i, names.index("run_failed")] == 1.0, i
             continue
         events, lift = kernel_outputs(scene, shared)
-        elastic = [e for e in result.summary["events"] if e.get("effect") == "elastic"]
+        elastic = [e for e in result.events if e.get("effect") == "elastic"]
         _same_kinds(events, elastic)
         d = _differences(lift, events, result.columns["valve_lift_m"], elastic)
         tol = Tolerance()
@@ -248,7 +248,7 @@ def test_compiled_rows_equal_simulate(scene_file, overrides, runs, rpm, k_max):
                                      "events": elastic})
             assert _within(d, tol, elastic), (i, d, tol)
             spread += 1
-        expected = row_scalars(names, result.summary, result.summary["events"], result.columns)
+        expected = row_scalars(names, result.summary, result.events, result.columns)
         got = dict(zip(names, table[i]))
         assert got["run_failed"] == 0.0
         for name, value in expected.items():

@@ -221,7 +221,7 @@ def test_summary_has_latch_impact_and_trinks():
     assert t["required_spring_force_N"] == pytest.approx(
         (2 * t["lift_m"] / t["closing_time_s"] ** 2 / TRINKS_G - 1) * t["valve_weight_N"] + 20.0, rel=1e-12)
     assert g["seating_velocity_m_s"] == pytest.approx(result.summary["impact_velocity_closing_m_s"], rel=1e-9)
-    kinds = [e["kind"] for e in result.summary["events"]]
+    kinds = [e["kind"] for e in result.events]
     assert kinds.index("lash-take-up") < kinds.index("trip") < kinds.index("dashpot-entry") < kinds.index("seat")
 
 
@@ -352,7 +352,7 @@ def test_latch_throws_the_valve_off_above_the_throw_off_speed():
 
     scene = load_scene(SCENE, ["drive.rpm=1100", 'gear.trip.angle="170 deg"',
                                'effects=["kinematics", "lash", "forces", "contact"]'])
-    s = simulate(scene).summary
+    s = simulate(scene).report()
     w = scene.omega
     assert s["min_contact_force_N"] < 0.0 and s["valve_floats"] and not s["latch"]["valve_stays_on_latch"]
     assert s["min_contact_force_N"] == pytest.approx(hand_latch_force(math.radians(170.0), w), rel=1e-9)
@@ -445,7 +445,7 @@ def test_elastic_valve_lags_the_latch_by_the_linkage_compression(full):
     after = np.asarray(c["cam_angle_deg"]) >= 100.0
     assert np.all(c["linkage_force_N"][after] == 0.0) and np.all(c["valve_in_contact"][after] == 0.0)
     assert t["closing_time_s"] > 0.0 and t["seating_velocity_m_s"] > 0.0
-    kinds = [e["kind"] for e in result.summary["events"] if e["effect"] == "elastic"]
+    kinds = [e["kind"] for e in result.events if e["effect"] == "elastic"]
     assert kinds.index("lift-off") < kinds.index("separation") < kinds.index("release") < kinds.index("seat")
 
 
@@ -462,7 +462,7 @@ def test_lift_off_angle_of_the_seated_valve_by_hand(full):
 
     pick = math.acos(1.0 - S_O / E_LATCH)
     th = brentq(excess, pick, pick + 0.1, xtol=1e-15)
-    lift_off = [e for e in result.summary["events"] if e["kind"] == "lift-off"]
+    lift_off = [e for e in result.events if e["kind"] == "lift-off"]
     assert len(lift_off) == 1 and lift_off[0]["cam_angle_deg"] == pytest.approx(math.degrees(th), abs=1e-9)
 
 
@@ -656,7 +656,7 @@ def test_orifice_pocket_sucks_on_the_latched_lift(full):
         assert c["contact_force_N"][i] == pytest.approx(hand_latch_force(th, w) - b, rel=1e-9)
     i = int(np.argmin(np.abs(deg - 80.0)))
     assert c["latch_buffer_force_N"][i] == 0.0  # open above the stroke
-    s = result.summary
+    s = result.report()
     b_open = (air.pressure(rho(opens)) - air.ambient_pressure) * air.area
     latch = s["latch"]
     assert latch["buffer_inlet"] == "orifice"
@@ -763,7 +763,7 @@ def test_check_valve_pocket_pushes_when_the_latch_lowers_the_valve_into_it():
         f = M * w**2 * E_LATCH * math.cos(th) + F0 + RATE * (E_LATCH * (1 - math.cos(th)) - S_O) + D_CLOSE - R_FRIC
         assert v < 0.0 and c["contact_force_N"][i] == pytest.approx(f - b, rel=1e-9)
     assert lift.closing.segments[0].y0[2] == pytest.approx(float(rho(trip)), rel=1e-9)
-    s = result.summary
+    s = result.report()
     assert s["elastic_event_counts"]["lift-off"] == 1 and s["elastic_trip"]["lift_at_trip_m"] == 0.0
     assert any("set it down again before the trip" in m for m in s["warnings"])
     assert not any("never lifted" in m for m in s["warnings"])
@@ -775,7 +775,7 @@ def test_peak_linkage_force_counts_the_force_at_a_trip_inside_one_grid_cell():
     trip's). The elastic valve has not lifted yet: 'never lifted'."""
     from explorer.effects.pipeline import simulate
 
-    s = simulate(load_scene(SCENE, ['gear.trip.angle="30 deg"'])).summary
+    s = simulate(load_scene(SCENE, ['gear.trip.angle="30 deg"'])).report()
     f_trip = s["elastic_trip"]["linkage_force_at_trip_N"]
     assert f_trip > 0.0
     assert s["peak_linkage_force_N"] == f_trip and s["peak_camshaft_back_pressure_N"] == f_trip

@@ -478,7 +478,7 @@ def test_plots_follow_a_new_result_that_arrives_with_a_magnification_change(app)
     assert app.worker.wait_idle(60)
     app.tick(0.0)
     assert app.error_text == "" and app.current.request.magnification == 10.0
-    assert not app.current.new_result and "elastic" in app.current.result.summary["effects"]
+    assert not app.current.new_result and "elastic" in app.current.result.timings
     assert app._plot_signature == [(p.title, tuple(label for label, _, _ in p.series)) for p in app.current.plots]
     assert "rigid" in app._plot_signature[0][1]
     assert app.readout.content == app.current.readout
@@ -491,7 +491,7 @@ def test_effect_checkbox_adds_the_force_effect(app):
     assert app.wait_applied(60)
     assert app.error_text == ""
     assert "forces" in app.current.scene.effects
-    assert "forces" in app.current.result.summary["effects"]
+    assert "forces" in app.current.result.timings
     labels = [label for _, labels in app._plot_signature for label in labels]
     assert any(label.endswith("force") for label in labels)
 
@@ -623,13 +623,13 @@ def test_readout_lists_every_effect_event_and_warning():
         pytest.skip("valve_float_demo.toml not shipped")
     result = simulate(load_scene(path))
     text = model.readout_markdown(result)
-    for name, info in result.summary["effects"].items():
-        assert f"| {name} | {1e3 * info['compute_time_s']:.2f} ms |" in text
-    for warning in result.summary["warnings"]:
+    for name, timing in result.timings.items():
+        assert f"| {name} | {1e3 * timing.compute_time_s:.2f} ms |" in text
+    for warning in result.warnings:
         assert f"- ⚠ {warning}" in text
     assert text.index("**Warnings**") < text.index("**Key figures**")
     # every event (#13.5: there were "… 11 more"), in the scrolling table and in "Go to event"
-    events = result.summary["events"]
+    events = result.events
     assert len(events) > 14
     table = model.events_html(result)
     choices = model.event_choices(result)
@@ -1024,7 +1024,7 @@ def test_go_to_event_and_the_slider_under_the_plots_scrub(app):
     """Issue #13.5/#13.4: choosing an event in "Go to event" pauses the animation at the event's
     cam angle (the summary's figure); the slider under the plots scrubs like the one in Playback,
     and both sliders then show the angle."""
-    events = app.current.result.summary["events"]
+    events = app.current.result.events
     assert events and app.event_jump.options[0] == "—" and len(app.event_jump.options) == len(events) + 1
     for label, event in zip(app.event_jump.options[1:], events):
         app.play.value = True

@@ -139,8 +139,7 @@ def run(args) -> int:
             yield Run(label=label, result=result) if args.no_parts else _with_parts_or_warn(label, result)
 
     def written(r) -> None:
-        s = r.result.summary
-        done.append((r.label, len(r.result.columns["time_s"]), len(s.get("events", [])), len(s.get("warnings", []))))
+        done.append((r.label, len(r.result.columns["time_s"]), len(r.result.events), len(r.result.warnings)))
 
     try:
         write_recordings(out, runs(), on_run=written)

@@ -71,8 +71,8 @@ def run(args) -> int:
 def _print_brief(result, stream) -> None:
     s = result.summary
     parts = [f"{s['scene']}: {s['steps_per_revolution']} steps at {s['rpm']:g} rpm"]
-    for name, info in s["effects"].items():
-        parts.append(f"  {name:<11s} {1e3 * info['compute_time_s']:9.3f} ms")
-    for w in s.get("warnings", []):
+    for name, timing in result.timings.items():
+        parts.append(f"  {name:<11s} {1e3 * timing.compute_time_s:9.3f} ms")
+    for w in result.warnings:
         parts.append(f"  warning: {w}")
     print("\n".join(parts), file=stream)

@@ -100,11 +100,11 @@ def chain_elastic_effect(ctx) -> EffectOutput:
     # with friction the valve's stops (stick, turn, release) are listed and counted too
     kinds = CHAIN_EVENT_KINDS + (FRICTION_EVENT_KINDS if model.friction > 0.0 else ())
     events = revolution_events(sol.events, kinds, float(t_run[0]), period, omega)
-    clashes = [e for e in events if e["kind"] == "coil-clash"]
+    clashes = [e for e in events if e.kind == "coil-clash"]
     if clashes:
         warnings.append(f"coil clash: the spring reaches its solid height {len(clashes)} time(s), first at "
                         f"{clashes[0]['cam_angle_deg']:.2f} deg (the model goes on without the coils' contact)")
-    separations = [e["cam_angle_deg"] for e in events if e["kind"] == "separation"]
+    separations = [e.cam_angle_deg for e in events if e.kind == "separation"]
     motion, columns = linkage_outputs(s, v, a, jerk, force, ratio * force, deviation, contact, separated, events, kinds)
     freqs = model.spring_modal_frequencies()
     summary = {

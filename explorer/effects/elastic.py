@@ -199,5 +199,5 @@ def _stiffness_at_lift_off(model: LinkageModel, events) -> float:
     """k where the valve lifts (the first lift-off; the constant k, or k(t) there)."""
     if model.stiffness_profile is None:
         return model.stiffness
-    lift_offs = [e["time_s"] for e in events if e["kind"] == "lift-off"]
+    lift_offs = [e.time_s for e in events if e.kind == "lift-off"]
     return float(model.stiffness_at(np.array(lift_offs[:1] or [0.0]))[0])

@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 
+from ..result import Event
+
 
 def output_order(n: int, i0: int):
     """(rotate, back) for a run that started at output sample i0: rotate(values) puts its first n
@@ -21,23 +23,21 @@ def output_order(n: int, i0: int):
     return rotate, back
 
 
-def revolution_events(solver_events, kinds, t_start: float, period: float, omega: float) -> list[dict]:
+def revolution_events(solver_events, kinds, t_start: float, period: float, omega: float) -> list[Event]:
     """The solver's events of the reported revolution (from t_start), in time order, as the
-    summary lists them: time within the revolution, cam angle, and the impact speed where known."""
+    result lists them: time within the revolution, cam angle, and the impact speed where known."""
     events = []
     for ev in solver_events:
         if ev["kind"] not in kinds or ev["time_s"] >= t_start + period:
             continue
         t_ev = math.fmod(ev["time_s"], period)
-        item = {"kind": ev["kind"], "time_s": t_ev, "cam_angle_deg": math.degrees(omega * t_ev) % 360.0}
-        if "velocity_m_s" in ev:
-            item["velocity_m_s"] = float(ev["velocity_m_s"])
-        events.append(item)
-    events.sort(key=lambda e: e["time_s"])
+        values = {"velocity_m_s": float(ev["velocity_m_s"])} if "velocity_m_s" in ev else {}
+        events.append(Event(ev["kind"], t_ev, math.degrees(omega * t_ev) % 360.0, values))
+    events.sort(key=lambda e: e.time_s)
     return events
 
 
-def valve_motion_summary(s, v, a, events: list[dict], kinds) -> dict:
+def valve_motion_summary(s, v, a, events: list[Event], kinds) -> dict:
     """The elastic valve's extremes over the revolution and how many events of each kind."""
     return {
         "elastic_max_valve_lift_m": float(s.max()),
@@ -45,7 +45,7 @@ def valve_motion_summary(s, v, a, events: list[dict], kinds) -> dict:
         "elastic_min_valve_velocity_m_s": float(v.min()),
         "elastic_max_valve_accel_m_s2": float(a.max()),
         "elastic_min_valve_accel_m_s2": float(a.min()),
-        "elastic_event_counts": {kind: sum(e["kind"] == kind for e in events) for kind in kinds},
+        "elastic_event_counts": {kind: sum(e.kind == kind for e in events) for kind in kinds},
     }
 
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from ..mechanics.forces import TrainLoads, contact_loss_intervals, float_speed, loss_report, min_contact_force, rigid_train_forces, side_extremes, smooth_pieces
-from ..result import EffectOutput
+from ..result import EffectOutput, Event
 
 
 def forces_effect(ctx) -> EffectOutput:
@@ -51,7 +51,7 @@ def forces_effect(ctx) -> EffectOutput:
     summary["wasted_spring_force_N"] = abs(f2 - f1) if f1 is not None and f2 is not None else None
 
     warnings: list[str] = []
-    events: list[dict] = []
+    events: list[Event] = []
     if jump.static_loss:
         warnings.append(
             f"valve float at any speed: the spring and closing loads do not hold the valve on the cam "
@@ -60,7 +60,7 @@ def forces_effect(ctx) -> EffectOutput:
     intervals = contact_loss_intervals(ctx.lift, loads, w, ratio, lash, pieces, n_grid) if f_min < 0.0 else []
     summary["contact_loss_cam_angles_deg"] = [[math.degrees(a), math.degrees(b)] for a, b in intervals]
     loss_events, phrase = loss_report(intervals, w, f_min, f_theta)
-    events.extend(loss_events)
+    events.extend(Event.of(e) for e in loss_events)
     if not jump.static_loss and summary["valve_floats"]:
         # one set of angles, those of this speed; the float speed's own angle is named as such
         warnings.append(

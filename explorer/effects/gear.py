@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from ..result import EffectOutput
+from ..result import EffectOutput, Event
 
 TWO_PI = 2.0 * math.pi
 
@@ -40,7 +40,8 @@ def gear_effect(ctx) -> EffectOutput:
     handler = {"pivoted-roller": _pivoted, "rocking-cam": _rocking, "rolling-lever": _rolling, "trip": _trip}[spec.type]
     columns, summary, events, warnings = handler(ctx, lift)
     summary = {"type": spec.type, **summary}
-    return EffectOutput(columns=columns, summary={"gear": summary}, events=tuple(events), warnings=tuple(warnings))
+    return EffectOutput(columns=columns, summary={"gear": summary}, events=tuple(Event.of(e) for e in events),
+                        warnings=tuple(warnings))
 
 
 # --------------------------------------------------------------------------------------------

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ..mechanics.kinematics import lash_crossings
-from ..result import EffectOutput
+from ..result import EffectOutput, Event
 
 
 def kinematics_effect(ctx) -> EffectOutput:
@@ -69,9 +69,9 @@ def lash_effect(ctx) -> EffectOutput:
     v_up = ratio * w * ctx.lift.derivatives(ups)[1]
     v_down = ratio * w * ctx.lift.derivatives(downs)[1] if downs.size else np.zeros(0)
     for th, v in zip(ups, v_up):
-        events.append({"kind": "lash-take-up", "time_s": th / w, "cam_angle_deg": math.degrees(th), "velocity_m_s": float(v)})
+        events.append(Event("lash-take-up", th / w, math.degrees(th), {"velocity_m_s": float(v)}))
     for th, v in zip(downs, v_down):
-        events.append({"kind": "seat", "time_s": th / w, "cam_angle_deg": math.degrees(th), "velocity_m_s": float(v)})
+        events.append(Event("seat", th / w, math.degrees(th), {"velocity_m_s": float(v)}))
     # Speeds (>= 0) with which the follower meets the valve and the valve meets its seat.
     summary.update(
         impact_velocity_opening_m_s=float(np.max(np.abs(v_up))),

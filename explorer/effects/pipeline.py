@@ -18,7 +18,7 @@ import numpy as np
 from ..core.errors import InputError
 from ..core import plugins
 from ..gears.registry import effect_variant
-from ..result import EffectOutput, Result
+from ..result import EffectOutput, EffectTiming, Event, Result
 from ..scene.scene import EFFECT_DEPENDENCIES, Scene
 
 # effect -> "module:function"; imported only when the effect runs, so a kinematics-only scene
@@ -128,8 +128,8 @@ def simulate(scene: Scene, lift=None) -> Result:
         "steps_per_revolution": n,
         "revolution_time_s": 2.0 * math.pi / scene.drive.omega,
     }
-    effect_info: dict[str, Any] = {}
-    events: list[dict] = []
+    timings: dict[str, EffectTiming] = {}
+    events: list[Event] = []
     warnings: list[str] = []
     for name in resolve(scene.effects):
         ctx = Context(scene, theta, t_time, lift_curve, MappingProxyType(columns), MappingProxyType(summary))
@@ -151,10 +151,7 @@ def simulate(scene: Scene, lift=None) -> Result:
                                  "the scene's values are beyond what the model can compute")
             columns[column] = values
         summary.update(out.summary)
-        events.extend(dict(e, effect=name) for e in out.events)
+        events.extend(e.with_effect(name) for e in out.events)
         warnings.extend(out.warnings)
-        effect_info[name] = {"compute_time_s": seconds, "requested": name in scene.effects}
-    summary["effects"] = effect_info
-    summary["events"] = sorted(events, key=lambda e: e["time_s"])
-    summary["warnings"] = warnings
-    return Result.build(scene, columns, summary)
+        timings[name] = EffectTiming(compute_time_s=seconds, requested=name in scene.effects)
+    return Result.build(scene, columns, summary, sorted(events, key=lambda e: e.time_s), warnings, timings)

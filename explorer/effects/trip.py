@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from ..result import EffectOutput
+from ..result import EffectOutput, Event
 
 TWO_PI = 2.0 * math.pi
 GAUSS_NODES = 32  # per smooth piece: the latch laws are trigonometric/polynomial, 32 nodes reach rounding
@@ -340,7 +340,8 @@ def trip_forces_effect(ctx) -> EffectOutput:
     intervals = loss_intervals(lift, loads, w, pieces, n_grid) if f_min < 0.0 else []
     summary["contact_loss_cam_angles_deg"] = [[math.degrees(a), math.degrees(b)] for a, b in intervals]
     events.extend(loss_report(intervals, w, f_min, th_min)[0])
-    return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
+    return EffectOutput(columns=columns, summary=summary, events=tuple(Event.of(e) for e in events),
+                        warnings=tuple(warnings))
 
 
 # --------------------------------------------------------------------------------------------
@@ -609,4 +610,5 @@ def trip_elastic_effect(ctx) -> EffectOutput:
         "valve_in_contact": c["contact"].astype(float),
         "valve_phase": c["phase"].astype(float),
     }
-    return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
+    return EffectOutput(columns=columns, summary=summary, events=tuple(Event.of(e) for e in events),
+                        warnings=tuple(warnings))

@@ -135,7 +135,7 @@ def reference_row(scene, names) -> dict[str, float]:
     from ..effects.pipeline import simulate
 
     result = simulate(scene)
-    return row_scalars(names, result.summary, result.summary["events"], result.columns)
+    return row_scalars(names, result.summary, result.events, result.columns)
 
 
 @dataclass
@@ -199,8 +199,8 @@ def engine_outputs(scene, shared: _Shared) -> tuple[dict, list, dict]:
         out = effect_function("elastic", scene.follower.type)(ctx())
         columns.update(out.columns)
         summary.update(out.summary)
-        events.extend(dict(e, effect="elastic") for e in out.events)
-        events.sort(key=lambda e: e["time_s"])
+        events.extend(e.with_effect("elastic") for e in out.events)
+        events.sort(key=lambda e: e.time_s)
     return summary, events, columns
 
 

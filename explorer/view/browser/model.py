@@ -235,7 +235,7 @@ def event_choices(result) -> list[tuple[str, float]]:
     the entries of the explorer's "Go to event" list. Labels are numbered, so equal kinds at
     different angles stay distinct."""
     out = []
-    for k, e in enumerate(result.summary.get("events", []), start=1):
+    for k, e in enumerate(result.events, start=1):
         angle = e.get("cam_angle_deg")
         if not isinstance(angle, (int, float)) or not math.isfinite(float(angle)):
             continue
@@ -252,7 +252,7 @@ def events_html(result) -> str:
     """All events as a table that scrolls within EVENTS_HEIGHT_PX (no "… 11 more")."""
     import html
 
-    events = list(result.summary.get("events", []))
+    events = list(result.events)
     if not events:
         return "<div style='font-size:0.85em'>no events</div>"
     rows = []
@@ -295,12 +295,12 @@ def readout_markdown(result, label: str = "") -> str:
     if label:
         lines.append(f"<small>{label}</small>")
     # warnings first: undercut, self-locking, float... are what a designer must not miss
-    warnings = list(s.get("warnings", []))
+    warnings = list(result.warnings)
     lines += ["", f"**Warnings** ({len(warnings)})", ""]
     lines += [f"- ⚠ {w}" for w in warnings] or ["none"]
     lines += ["", "| effect | compute |", "|---|---:|"]
-    for name, info in s.get("effects", {}).items():
-        lines.append(f"| {name} | {1e3 * info['compute_time_s']:.2f} ms |")
+    for name, timing in result.timings.items():
+        lines.append(f"| {name} | {1e3 * timing.compute_time_s:.2f} ms |")
     # the events are a table of their own beside this text (events_html) with "Go to event"
     lines += spring_advice_lines(s)
     figures = []

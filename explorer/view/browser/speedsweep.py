@@ -207,7 +207,7 @@ def elastic_figures(scene, lift, rpm: float) -> tuple[float, float, float]:
         result = simulate(at_speed(scene, rpm), lift=lift)
     except (InputError, RuntimeError, ValueError, ArithmeticError):
         return (math.nan, math.nan, math.nan)
-    events = [e for e in result.summary.get("events", []) if e.get("effect", "elastic") == "elastic"]
+    events = [e for e in result.events if e.effect == "elastic"]
     seps = [float(e["cam_angle_deg"]) for e in events if e.get("kind") == "separation"]
     seats = [float(e["velocity_m_s"]) for e in events if e.get("kind") == "seat"]
     deviation = result.summary.get("max_deviation_m")

@@ -96,10 +96,9 @@ def check_port(port: int) -> int:
 
 def session_line(name: str, result) -> str:
     """One line per recording in the session index: label, speed, events, warnings."""
-    s = result.summary
-    parts = [name, f"{s.get('rpm', float('nan')):g} rpm", f"{len(s.get('events', []))} events"]
-    if s.get("warnings"):
-        parts.append(f"{len(s['warnings'])} warnings")
+    parts = [name, f"{result.summary.get('rpm', float('nan')):g} rpm", f"{len(result.events)} events"]
+    if result.warnings:
+        parts.append(f"{len(result.warnings)} warnings")
     return " | ".join(parts)
 
 

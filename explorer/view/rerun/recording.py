@@ -43,7 +43,7 @@ Other entities:
                   /parts carries the z-up view coordinates.
 - /__properties/scene   label, scene name, source file, rpm, steps per revolution.
 - /events         TextLog entries at the events' exact instants (lift-off, separation, re-contact,
-                  seat, lash-take-up, … from result.summary["events"]) at level INFO, and the
+                  seat, lash-take-up, … from result.events) at level INFO, and the
                   result's warnings at level WARN at t = 0.
 - /summary        TextDocument (static, markdown): scene, label, peaks, effect timings, warnings.
 
@@ -298,8 +298,8 @@ def event_text(event: Mapping) -> str:
 
 
 def _log_events(rec, rr, result, index: Mapping[str, np.ndarray]) -> None:
-    events = list(result.summary.get("events", []))
-    warnings = list(result.summary.get("warnings", []))
+    events = list(result.events)
+    warnings = list(result.warnings)
     n = index[TIMELINE_STEP].size
     texts, levels, t, step, degrees = [], [], [], [], []
     for message in warnings:  # a warning belongs to the whole run: show it at the start
@@ -336,16 +336,15 @@ def summary_markdown(result, label: str) -> str:
         lines += [f"scene file: `{source}`", ""]
     lines += ["| quantity | value |", "|---|---|"]
     for key, value in s.items():
-        if key in ("effects", "events", "warnings") or isinstance(value, (dict, list, tuple)):
+        if isinstance(value, (dict, list, tuple)):
             continue
         if isinstance(value, (float, np.floating)):
             value = f"{float(value):.6g}"
         lines.append(f"| {key} | {value} |")
-    effects = s.get("effects", {})
-    if effects:
+    if result.timings:
         lines += ["", "| effect | compute time |", "|---|---|"]
-        lines += [f"| {name} | {1e3 * info['compute_time_s']:.3f} ms |" for name, info in effects.items()]
-    warnings = list(s.get("warnings", []))
+        lines += [f"| {name} | {1e3 * t.compute_time_s:.3f} ms |" for name, t in result.timings.items()]
+    warnings = list(result.warnings)
     if warnings:
         lines += ["", "**warnings**", ""] + [f"- {w}" for w in warnings]
     return "\n".join(lines) + "\n"
