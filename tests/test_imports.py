@@ -60,10 +60,13 @@ def test_registry_entries_name_real_functions():
     """The tables that name plug-ins as "module:function" (imported when used) stay resolvable."""
     from explorer.effects.pipeline import EFFECT_FUNCTIONS, SECTION_SUMMARIES
     from explorer.gears.registry import GEARS
-    from explorer.effects.lift import LIFT_BUILDERS
+    from explorer.lift.registry import LAWS
     from explorer.view.parts import CONTOUR_FUNCTIONS
 
-    targets = list(EFFECT_FUNCTIONS.values()) + list(LIFT_BUILDERS.values()) + list(CONTOUR_FUNCTIONS)
+    targets = list(EFFECT_FUNCTIONS.values()) + list(CONTOUR_FUNCTIONS)
+    for law in LAWS.entries():
+        targets += [t for t in (law.builder, law.parser) if t is not None]
+        assert law.closed_form or law.builder is not None or law.gear_made, law.name
     targets += [target for entries in SECTION_SUMMARIES.values() for _, target in entries]
     for entry in GEARS.values():
         targets += [entry.lift, *entry.effects.values()]

@@ -992,9 +992,8 @@ def test_law_dropdown_offers_only_laws_the_scene_can_take(app):
     """Issue #13.6: the law dropdown lists exactly the laws with which this scene file loads and
     builds its lift (oracle: load each law of the full list directly), and every law offered
     computes without an error in the explorer."""
-    from explorer.lift.laws import LAWS
     from explorer.effects.lift import build_lift
-    from explorer.scene.scene import SPECIAL_LAWS
+    from explorer.lift.registry import names as law_names
 
     def loads(path, law):
         try:
@@ -1008,7 +1007,7 @@ def test_law_dropdown_offers_only_laws_the_scene_can_take(app):
         app.scene.value = scene
         assert app.wait_applied(60)
         offered = tuple(app.fields["lift.law"].options)
-        expected = tuple(law for law in (*LAWS, *SPECIAL_LAWS) if law == load_scene(path).lift.law or loads(path, law))
+        expected = tuple(law for law in law_names() if law == load_scene(path).lift.law or loads(path, law))
         assert offered == expected, scene
         assert "contour" not in offered  # none of these has a [cam] contour
         assert app.fields["lift.law"].value == load_scene(path).lift.law

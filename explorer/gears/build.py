@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
+from ..lift.curves import law_lift
 from .jet import Jet
 from .linkage import EccentricDrive, RockerDrive, RodLeverDrive, side_sign
 
@@ -23,13 +24,6 @@ TWO_PI = 2.0 * math.pi
 
 def _get(source, name):
     return source.get(name) if isinstance(source, dict) else getattr(source, name)
-
-
-def law_lift(lift_spec):
-    from ..lift.curves import LawLift
-
-    return LawLift(height=lift_spec.height, start=lift_spec.start, rise=lift_spec.rise, dwell=lift_spec.dwell,
-                   ret=lift_spec.ret, rise_law=lift_spec.law, return_law=lift_spec.return_law or lift_spec.law)
 
 
 # --------------------------------------------------------------------------------------------

@@ -40,7 +40,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..core.errors import InputError
-from ..lift.laws import law as normalised_law
+from ..lift.registry import normalised as normalised_law
 from . import jet as J
 from .jet import Jet
 from .linkage import circle_intersection, polar, polar_curvature, wrap

@@ -53,7 +53,7 @@ from types import MappingProxyType
 from typing import Any, Mapping
 
 from ..core.errors import InputError
-from ..lift.laws import LAWS
+from ..lift import registry as laws
 from ..core.ranges import AMBIENT_TEMPERATURE, OIL_DENSITY
 from ..core.reader import Table
 from . import GEAR_TYPES
@@ -156,7 +156,7 @@ def _rocking_cam(t: Table) -> dict:
         "rise": t.quantity("rise", "length", positive=True),
         "lift_start": t.quantity("lift_start", "angle", nonnegative=True),
         "flank": t.quantity("flank", "angle", positive=True),
-        "law": t.string("law", "cycloidal", choices=tuple(LAWS)),
+        "law": t.string("law", "cycloidal", choices=laws.closed_form_names()),
         "opens": t.string("opens", "ccw", choices=SENSES),
     }
     return out
@@ -313,10 +313,10 @@ def _check_scene(spec: GearSpec, fields: dict) -> None:
                          f"{'lift' if kind == 'pivoted-roller' else 'latch motion'})")
     if kind == "pivoted-roller" and lift.law == "contour":
         raise InputError(file, "lift.law", "a pivoted roller lever synthesises its cam from a lift law, not from [cam]")
-    if kind == "pivoted-roller" and lift.law not in LAWS:
+    if kind == "pivoted-roller" and not laws.law_spec(lift.law).closed_form:
         # its cam is synthesised through the closed-form law's jets (gears/pivoted.py)
         raise InputError(file, "lift.law", f"a pivoted roller lever synthesises its cam from one of the laws "
-                         f"{', '.join(LAWS)}, not from law \"{lift.law}\"")
+                         f"{', '.join(laws.closed_form_names())}, not from law \"{lift.law}\"")
     if kind in ("pivoted-roller", "rocking-cam") and follower.roller_radius <= 0.0:
         raise InputError(file, "follower.roller_radius", f"the {kind} gear needs a roller (roller_radius > 0)")
     if kind == "rolling-lever" and "elastic" in effects:
@@ -330,8 +330,8 @@ def _check_scene(spec: GearSpec, fields: dict) -> None:
                              "stiffness, but the rolling lever's (lever_stiffness, rod_stiffness) changes with its ratio "
                              "along the lift: use method = " + " or ".join(f'"{m}"' for m in varying))
     if kind == "trip":
-        if lift.law not in LAWS:
-            raise InputError(file, "lift.law", f"the trip gear's latch follows one of the laws: {', '.join(LAWS)}")
+        if not laws.law_spec(lift.law).closed_form:
+            raise InputError(file, "lift.law", f"the trip gear's latch follows one of the laws: {', '.join(laws.closed_form_names())}")
         if fields.get("valve") is None or fields.get("spring") is None:
             raise InputError(file, "valve" if fields.get("valve") is None else "spring",
                              "missing section: the trip gear's closing needs [valve] mass and [spring]")

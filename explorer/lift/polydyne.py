@@ -53,7 +53,6 @@ from .laws import HIGH_ORDER_LAWS, LAWS, law_derivatives
 from .spline import MAX_CONTINUITY, SplineLift, SplineOptions, check_spline_shape, parse_stations
 
 TWO_PI = 2.0 * math.pi
-OPTION_KEYS = ("wanted_law", "design_rpm", "ramp")
 SPLINE = "spline"  # wanted_law: the wanted lift through [[lift.stations]]
 SPLINE_KEYS = ("stations", "continuity", "reference_rpm")  # [lift] keys of the wanted spline only
 SHAPE_KEYS = ("height", "rise", "dwell", "return", "return_law")  # [lift] keys of a closed-form wanted law only

@@ -40,7 +40,6 @@ DIMENSIONS = ("length", "velocity", "acceleration", "jerk", "snap")
 UNITS = ("m", "m/s", "m/s**2", "m/s**3", "m/s**4")
 MAX_CONTINUITY = 6  # C6 needs >= 14 coefficients a segment: beyond, the monomial system loses digits
 FREE_ORDERS = 4  # s, v, a, j may be "free" (explorer design); snap is given or left to continuity
-OPTION_KEYS = ("stations", "continuity", "reference_rpm")
 UNUSED_KEYS = ("height", "rise", "dwell", "return", "return_law")
 MAX_STATIONS = 64
 FREE = "free"

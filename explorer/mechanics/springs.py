@@ -34,6 +34,8 @@ import numpy as np
 from ..core.errors import InputError
 from .forces import TWO_PI, RPM_PER_RAD_S, TrainLoads
 from ..core.units import KGF
+from ..lift.curves import LawLift
+from ..lift.registry import normalised
 
 TRINKS_G = 9.81  # m/s^2, the g of Trinks' formula as printed in seed 003
 
@@ -233,13 +235,10 @@ def balanced_split(lift, loads: TrainLoads, omega: float, ratio: float) -> tuple
     with c_d = max f_return''. None when the lift is not a law-based event."""
     from scipy.optimize import brentq
 
-    from ..lift.laws import law
-    from ..lift.curves import LawLift
-
     if not isinstance(lift, LawLift) or omega <= 0.0:
         return None
-    c_r = -_law_extreme(law(lift.rise_law), -1.0)
-    c_d = _law_extreme(law(lift.return_law), 1.0)
+    c_r = -_law_extreme(normalised(lift.rise_law), -1.0)
+    c_d = _law_extreme(normalised(lift.return_law), 1.0)
     if c_r <= 0.0 or c_d <= 0.0:
         return None
     total = lift.rise + lift.ret

@@ -19,7 +19,7 @@ from typing import Any, Mapping
 from ..core.errors import InputError
 from ..core.plugins import resolve
 from ..gears import GEAR_TYPES
-from ..lift.laws import LAWS
+from ..lift import registry as laws
 from ..core.reader import Table
 from ..dynamics import solvers
 
@@ -34,7 +34,6 @@ EFFECT_DEPENDENCIES: dict[str, tuple[str, ...]] = {
     "gear": ("kinematics",),  # explorer.gears: what is particular to the lever, eccentric and trip gears
 }
 
-SPECIAL_LAWS = ("table", "acceleration", "contour", "gear", "polydyne", "spline")  # "gear": the gear's geometry makes the lift
 FOLLOWER_TYPES = ("translating-roller", *GEAR_TYPES)
 MIN_STEPS = 36
 # Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
@@ -53,25 +52,6 @@ OWNED_SECTIONS: dict[str, str] = {
     "spring_design": "explorer.mechanics.springs:parse_spring_design_section",
     "gear": "explorer.gears.spec:parse_gear_section",
 }
-# Law-specific [lift] keys, parsed by the module of the law: law -> "module:function".
-LAW_OPTION_PARSERS: dict[str, str] = {
-    "table": "explorer.lift.table:parse_table_options",
-    "acceleration": "explorer.lift.acceleration:parse_acceleration_options",
-    "polydyne": "explorer.lift.polydyne:parse_polydyne_options",
-    "spline": "explorer.lift.spline:parse_spline_options",
-}
-LAW_OPTION_KEYS: dict[str, tuple[str, ...]] = {
-    "table": ("file", "angle_unit", "lift_unit", "smoothing"),
-    "acceleration": ("points", "angle_unit", "acceleration_unit", "interpolation", "reference_rpm"),
-    "polydyne": ("wanted_law", "design_rpm", "ramp", "stations", "continuity", "reference_rpm"),
-    "spline": ("stations", "continuity", "reference_rpm"),
-}
-# laws whose [lift] height, rise and return shape an event as for the closed-form laws
-SHAPED_LAWS = (*LAWS, "polydyne")
-# ... unless a [lift] key has this value, and then the law's own keys give the event: law -> (key, value)
-SHAPED_UNLESS: dict[str, tuple[str, str]] = {"polydyne": ("wanted_law", "spline")}  # the wanted lift through stations
-
-
 @dataclass(frozen=True)
 class Drive:
     rpm: float  # rev/min, > 0
@@ -331,11 +311,12 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     for section, target in OWNED_SECTIONS.items():
         table = top.table(section, required=False)
         fields[section] = resolve(target)(table, fields) if table is not None or section in needs else None
-    if lift.law in LAW_OPTION_PARSERS:
-        options = resolve(LAW_OPTION_PARSERS[lift.law])(top.table("lift"), fields)
-        fields["lift"] = replace(lift, options=options)
-    if lift.law == "contour" and fields.get("cam") is None:
-        raise InputError(file, "cam", "missing section: lift.law = 'contour' takes the lift from [cam]")
+    law = laws.law_spec(lift.law)
+    if law.parser is not None:
+        fields["lift"] = replace(lift, options=law.parse(top.table("lift"), fields))
+    for section in law.sections:
+        if fields.get(section) is None:
+            raise InputError(file, section, f"missing section: lift.law = '{law.name}' takes the lift from [{section}]")
     if follower.type in GEAR_TYPES and fields.get("gear") is None:
         raise InputError(file, "gear", f"missing section: follower.type '{follower.type}' needs [gear]")
     if lift.law == "gear" and follower.type not in ("rocking-cam", "rolling-lever"):
@@ -371,14 +352,13 @@ def _parse_follower(t: Table | None, file: str) -> Follower:
 
 
 def _parse_lift(t: Table, file: str) -> LiftSpec:
-    laws = (*LAWS, *SPECIAL_LAWS)
-    law = t.string("law", choices=laws)
-    common = ("law", "height", "start", "rise", "dwell", "return", "return_law")
-    t.reject_unknown(common + LAW_OPTION_KEYS.get(law, ()))
-    if law == "contour":
+    spec = laws.law_spec(t.string("law", choices=laws.names()))
+    law = spec.name
+    t.reject_unknown(laws.COMMON_KEYS + spec.keys)
+    if not spec.event_keys:
         return LiftSpec(law=law)
-    unless = SHAPED_UNLESS.get(law)
-    shaped = law in SHAPED_LAWS and not (unless is not None and t.has(unless[0]) and t.raw(unless[0]) == unless[1])
+    unless = spec.shaped_unless
+    shaped = spec.shaped and not (unless is not None and t.has(unless[0]) and t.raw(unless[0]) == unless[1])
     height = t.quantity("height", "length", positive=True) if shaped else t.quantity("height", "length", 0.0, nonnegative=True)
     start = t.quantity("start", "angle", 0.0)
     if not 0.0 <= start < 2.0 * math.pi:
@@ -388,7 +368,7 @@ def _parse_lift(t: Table, file: str) -> LiftSpec:
     rise = t.quantity("rise", "angle", positive=True) if shaped else t.quantity("rise", "angle", 0.0, nonnegative=True)
     dwell = t.quantity("dwell", "angle", 0.0, nonnegative=True)
     ret = t.quantity("return", "angle", rise, positive=True) if shaped else t.quantity("return", "angle", 0.0, nonnegative=True)
-    return_law = t.string("return_law", None, choices=LAWS) if t.has("return_law") else None
+    return_law = t.string("return_law", None, choices=laws.closed_form_names()) if t.has("return_law") else None
     for key, angle in (("rise", rise), ("return", ret)):
         if shaped and angle < MIN_EVENT_ANGLE:
             raise t.error(key, f"must be at least {math.degrees(MIN_EVENT_ANGLE):g} deg, got {angle:.3g} rad")

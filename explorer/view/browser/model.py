@@ -370,13 +370,13 @@ def offered_laws(path: str, overrides=(), current: str | None = None) -> tuple[s
     builds a lift with (a table law needs its table, a contour its [cam], "gear" a gear...).
     Any failure, not only bad input, leaves the law out: the dropdown must not offer what cannot
     be computed. The current law is always offered. Tens of milliseconds, once per scene file."""
-    from ...lift.laws import LAWS
+    from ...lift import registry as laws
     from ...effects.lift import build_lift
-    from ...scene.scene import SPECIAL_LAWS, load_scene
+    from ...scene.scene import load_scene
 
     others = [o for o in overrides if not o.startswith("lift.law=")]
     offered = []
-    for law in (*LAWS, *SPECIAL_LAWS):
+    for law in laws.names():
         if law == current:
             offered.append(law)
             continue
