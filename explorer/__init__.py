@@ -16,6 +16,8 @@ __all__ = ["InputError", "Scene", "load_scene", "loads_scene", "simulate", "swee
 
 def simulate(scene):
     """Compute the scene's effects over one revolution; returns a Result (.columns, .summary)."""
+    # imported when first called: `import explorer` loads the scene loader and its tables only
+    # (the effects, the sweep engine and its process pool machinery are not needed to read a scene)
     from .effects.pipeline import simulate as _simulate
 
     return _simulate(scene)

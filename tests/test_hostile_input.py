@@ -403,13 +403,13 @@ def test_non_finite_results_are_refused(monkeypatch):
 
     real = effects.effect_function
 
-    def overflowing(name, follower_type=None):
-        if name != "lash":
-            return real(name, follower_type)
+    def overflowing(name, gear=None):
+        if name != "kinematics":
+            return real(name, gear)
         return lambda ctx: EffectOutput(columns={"valve_lift_m": np.full(ctx.theta.shape, np.nan)}, summary={},
                                         events=(), warnings=())
 
     monkeypatch.setattr(effects, "effect_function", overflowing)
     with pytest.raises(InputError) as info:
         effects.simulate(load_scene(SCENES / DEMO))
-    assert info.value.key == "lash" and "not finite" in info.value.reason
+    assert info.value.key == "kinematics" and "not finite" in info.value.reason

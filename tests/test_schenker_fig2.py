@@ -214,3 +214,14 @@ def test_readme_reproduces_f1_f2_and_the_3600_step_figures():
     assert (round(default["min_valve_accel_m_s2"], 2), round(default["max_valve_accel_m_s2"], 2)) == (-115.88, 158.72)
     assert default["opening_side"]["required_spring_force_N"] / kgf == pytest.approx(-23.5, abs=0.05)
     assert default["closing_side"]["required_spring_force_N"] / kgf == pytest.approx(244.3, abs=0.05)
+
+
+def test_the_scene_file_holds_the_arcs_the_design_gives():
+    """assets/scenes/schenker1902_fig2.toml's [[cam.arcs]] are toml_arcs() of the paper's design,
+    verbatim (centres to 1e-9 mm): the file is the design, not a copy that can drift."""
+    from pathlib import Path
+
+    from explorer.lift.contours.schenker_fig2 import toml_arcs
+
+    scene = Path(__file__).resolve().parents[1] / "assets" / "scenes" / "schenker1902_fig2.toml"
+    assert toml_arcs().strip() in scene.read_text()

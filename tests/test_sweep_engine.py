@@ -21,7 +21,8 @@ from conftest import SCENES
 from explorer.effects.pipeline import simulate
 from explorer.core.errors import InputError
 from explorer.scene.scene import load_scene
-from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, engine_outputs, result_columns, row_scalars
+from explorer.effects.pipeline import figures
+from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, result_columns, row_figures
 from explorer.studies.sweep_spec import scene_for
 
 KEYS = ("drive.rpm", "linkage.stiffness", "valve.mass", "spring.preload", "valve.lash", "linkage.damping",
@@ -77,14 +78,13 @@ def test_engine_rows_lift_and_events_equal_simulate(scene_file, overrides, runs,
         except (InputError, RuntimeError):
             assert table[i, names.index("run_failed")] == 1.0, i
             continue
-        summary, events, columns = engine_outputs(scene, shared)
+        run = figures(scene, shared)  # the engine's run: the pipeline's figures-only run
         # the motion: lift within 1e-12 m, the same events in the same order at the same instants
-        lift = np.asarray(columns["valve_lift_m"])
+        lift = np.asarray(run.columns["valve_lift_m"])
         assert np.max(np.abs(lift - result.columns["valve_lift_m"])) <= LIFT_TOL_M, i
-        assert [(e["kind"], float(e["time_s"]), e.get("velocity_m_s")) for e in events] \
-            == _elastic_events(result.events), i
+        assert _elastic_events(run.events) == _elastic_events(result.events), i
         # the row: every figure as read from simulate's result
-        expected = row_scalars(names, result.summary, result.events, result.columns)
+        expected = row_figures(names, result)
         got = dict(zip(names, table[i]))
         assert got["run_failed"] == 0.0
         for name, value in expected.items():
@@ -119,7 +119,7 @@ def test_gear_scenes_take_the_simulate_path_and_agree():
     table = compute_chunk(base, ("drive.rpm",), values, names)
     for i, r in enumerate(values):
         result = simulate(scene_for(base, ("drive.rpm",), r))
-        expected = row_scalars(names, result.summary, result.events, result.columns)
+        expected = row_figures(names, result)
         for name, value in expected.items():
             got = table[i, names.index(name)]
             assert got == value or (math.isnan(got) and math.isnan(value)), name
@@ -135,7 +135,7 @@ def test_shared_caches_stay_bounded_in_a_tolerance_study():
     lash = np.random.default_rng(5).uniform(2e-4, 3e-4, CACHE_ENTRIES + 8)[:, None]
     shared = _Shared()
     table = compute_chunk(base, ("valve.lash",), lash, names, shared)
-    assert len(shared.pieces) <= CACHE_ENTRIES and len(shared.jumps) <= CACHE_ENTRIES
+    assert len(shared.of("forces pieces")) <= CACHE_ENTRIES and len(shared.of("forces jumps")) <= CACHE_ENTRIES
     # and an evicted entry, made again, gives the same figures (the cache holds pure results)
     again = compute_chunk(base, ("valve.lash",), lash[:2], names, shared)
     assert np.array_equal(again, table[:2])

@@ -39,7 +39,7 @@ from explorer.dynamics.model import Drive, LinkageModel
 from explorer.effects.lift import build_lift
 from explorer.effects.pipeline import simulate
 from explorer.scene.scene import load_scene
-from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, engine_for, result_columns, row_scalars
+from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, engine_for, result_columns, row_figures
 from explorer.effects.elastic_batch import ELASTIC, kernel_outputs
 from explorer.studies.sweep_spec import scene_for
 
@@ -248,7 +248,7 @@ def test_compiled_rows_equal_simulate(scene_file, overrides, runs, rpm, k_max):
                                      "events": elastic})
             assert _within(d, tol, elastic), (i, d, tol)
             spread += 1
-        expected = row_scalars(names, result.summary, result.events, result.columns)
+        expected = row_figures(names, result)
         got = dict(zip(names, table[i]))
         assert got["run_failed"] == 0.0
         for name, value in expected.items():

@@ -471,7 +471,7 @@ def test_stiff_linkage_converges_to_the_rigid_trip_gear():
     state at the trip tends to the rigid latch's, s_e = s_r - F/k + c dF/dt / k^2 (quasi-static
     lag and its first correction) and v_e = v_r - dF/dt / k; the closing from that state tends to
     the rigid closing (time and seating velocity errors O(1/k): a decade of k, a decade less)."""
-    from explorer.effects.trip import elastic_trip_motion
+    from explorer.gears.trip_latched import elastic_trip_motion
 
     base = load_scene(SCENE)
     rigid = build_lift(base).closing
@@ -502,7 +502,7 @@ def test_elastic_energy_balance_of_the_latched_phase():
     spring's and the closing loads' work, the friction's R x path, and the strain energy left in
     the linkage at the trip. Trapezoid on 40 000 samples of the window (about 1400 per natural
     period): quadrature error ~1e-7 relative; tolerance 1e-6."""
-    from explorer.effects.trip import elastic_trip_motion
+    from explorer.gears.trip_latched import elastic_trip_motion
 
     scene = load_scene(SCENE, ['linkage.damping="0 N*s/m"'])
     lift = build_lift(scene)
@@ -528,7 +528,7 @@ def test_hand_over_to_the_free_closing_is_continuous():
     it exactly; just before and after the trip (1e-7 rad, 1.6e-9 s at 100 rpm) s and v agree to
     first order (|ds| <= |v| dt + a dt^2, |dv| <= max |a| dt); the acceleration jumps as the latch
     lets go (the linkage force drops to 0)."""
-    from explorer.effects.trip import elastic_trip_motion
+    from explorer.gears.trip_latched import elastic_trip_motion
 
     scene = load_scene(SCENE)
     lift = build_lift(scene)

@@ -18,6 +18,7 @@ import pytest
 
 from explorer import load_scene
 from explorer.view import parts as meshes
+from explorer.view import translating_roller as stock
 from explorer.effects.pipeline import simulate
 from explorer.effects.lift import build_lift
 from explorer.view.browser import model
@@ -381,7 +382,7 @@ def test_the_roller_turns_on_smoothly_when_the_revolution_loops(name):
     if scene.follower.type == "translating-roller":
         # oracle: explorer.view.parts.roller_spin (tested against the cam's perimeter in test_meshes)
         theta = np.radians(result.columns["cam_angle_deg"])
-        exact = meshes.roller_spin(scene, build_lift(scene), np.append(theta, 2.0 * math.pi))
+        exact = stock.roller_spin(scene, build_lift(scene), np.append(theta, 2.0 * math.pi))
         total = exact[-1]
         factor = -steps / np.diff(exact[:-1])  # drawn quat_about_y(-spin)
         np.testing.assert_allclose(factor, factor[0], rtol=1e-9)  # one scale for the whole revolution

@@ -3,9 +3,10 @@ kind of plug-in is listed in (gears, effects, lift laws, solvers, gear views).
 
 A table maps a name to an entry. Built-in entries that would import much (a solver, numba, a
 gear's geometry) are written as references, "explorer.dynamics.exact:solve" ("module:" for a
-module), imported on first use; cheap ones are plain objects. `Registry.register` adds one more (a plug-in written outside
-the package, or a test's toy) with one call; the returned `Registration` undoes it, directly or as
-a context manager, so a test leaves the table as it found it.
+module), imported on first use; cheap ones are plain objects. `Registry.register` adds one more
+(a plug-in written outside the package, or a test's toy) with one call; the returned
+`Registration` undoes it, directly or as a context manager, so a test leaves the table as it found
+it.
 
 The layer and cycle tests (tests/test_layers.py, tests/test_imports.py) read the reference
 strings as imports (tests/import_cycles.py, named=True): a table may name only modules of its own
@@ -44,11 +45,19 @@ class Registration:
     def __init__(self, registry: "Registry", name: str, previous: Any, had: bool):
         self._registry, self._name, self._previous, self._had = registry, name, previous, had
         self._done = False
+        self._also: list = []
+
+    def also(self, undo) -> "Registration":
+        """One more step for `undo` (a table that keeps a second store, such as the closed forms)."""
+        self._also.append(undo)
+        return self
 
     def undo(self) -> None:
         if self._done:
             return
         self._done = True
+        for step in reversed(self._also):
+            step()
         entries = self._registry._entries
         entries.pop(self._name, None)
         self._registry._cache.pop(self._name, None)

@@ -114,14 +114,6 @@ class Table:
                 raise self.error(name, f"unknown value {value!r}; choose one of: {', '.join(options)}")
         return value
 
-    def boolean(self, name: str, default: Any = ...) -> bool:
-        value, present = self._lookup(name, default)
-        if not present:
-            return value
-        if not isinstance(value, bool):
-            raise self.error(name, f"expected true or false, got {value!r}")
-        return value
-
     def reject_unknown(self, known: Iterable[str]) -> None:
         """Typos in optional keys must not pass silently."""
         known = set(known)

@@ -339,12 +339,6 @@ def _fast_to_si(text: str, dimension: str) -> float | None:
     return value if math.isfinite(value) else None
 
 
-def from_si(number: float, unit: str) -> float:
-    """SI float -> the given unit (for reports in the seeds' units, e.g. kgf)."""
-    ureg = registry()
-    return float(ureg.Quantity(number, _si_unit_for(unit, ureg)).to(unit).magnitude)
-
-
 def _si_unit_for(unit: str, ureg) -> str:
     dims = ureg.Quantity(1.0, unit).dimensionality
     for dim, _bare, si in DIMENSIONS.values():

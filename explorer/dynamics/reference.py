@@ -26,6 +26,7 @@ from scipy.optimize import brentq
 
 from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel
 from .phases import phase_of_state, rebound_rest_speed, seat_speed, touching, velocity_zero
+from .tabulated import TabulatedDrive
 
 REST, CONTACT, FLIGHT = "rest", "contact", "flight"
 IMPLICIT_METHODS = ("Radau", "BDF", "LSODA")
@@ -382,8 +383,6 @@ def solve(
     if tabulate is None:
         tabulate = 4 if varying else 0
     if tabulate:
-        from .tabulated import TabulatedDrive
-
         spacing = min(float(np.min(np.diff(t))) if n > 1 else max_step, max_step) / tabulate
         cache = TabulatedDrive(drive, model.stiffness_profile, float(t[0]), t_end, spacing)
     else:

@@ -22,11 +22,11 @@ import math
 
 import numpy as np
 
-from ..dynamics import solvers as registry
 from ..core.errors import InputError
-from ..result import EffectOutput
+from ..dynamics import solvers as registry
 from ..dynamics.chain import CHAIN_EVENT_KINDS, FRICTION_EVENT_KINDS, ChainModel, solid_travel
 from ..dynamics.model import Drive
+from ..result import EffectOutput
 from .elastic_events import linkage_outputs, output_order, revolution_events
 
 

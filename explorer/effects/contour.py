@@ -13,13 +13,12 @@ import math
 import numpy as np
 
 from ..lift.contours.translating import find_undercut, pitch_geometry, translating_profile, undercut_error
+from .lift import build_lift
 
 
 def _profile(scene, lift, n: int):
     """The scene's translating-roller profile at cam angles 0, 2 pi / n, ... (its own lift unless given)."""
     if lift is None:
-        from .lift import build_lift
-
         lift = build_lift(scene)
     f = scene.follower
     theta = np.arange(int(n)) * (2.0 * math.pi / int(n))

@@ -33,12 +33,13 @@ from dataclasses import replace
 import numpy as np
 
 from ..core.errors import InputError
-from ..result import EffectOutput
 from ..dynamics import solvers as registry
-from .elastic_events import linkage_outputs, output_order, revolution_events
-from .residual import residual_figures
 from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, StiffnessProfile
 from ..dynamics.solvers import solve
+from ..result import EffectOutput
+from .chain_elastic import chain_elastic_effect
+from .elastic_events import linkage_outputs, output_order, revolution_events
+from .residual import residual_figures
 
 
 # The exact and taylor solvers split every output step into pieces of at most 0.5 / rho (rho the
@@ -124,8 +125,6 @@ def linkage_model(scene, lift, omega: float) -> LinkageModel:
 def elastic_effect(ctx) -> EffectOutput:
     scene = ctx.scene
     if scene.spring.elements > 0:  # the spring as a body: its own model and solvers (issue #15)
-        from .chain_elastic import chain_elastic_effect
-
         return chain_elastic_effect(ctx)
     omega = ctx.omega
     model = linkage_model(scene, ctx.lift, omega)

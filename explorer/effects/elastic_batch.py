@@ -61,19 +61,16 @@ def _residual_reference(shared, lift, ratio: float, lash: float, n: int):
 
 def accepts(scene, shared) -> bool:
     """The elastic effect of this scene is the compiled kernel's model and method."""
-    from .pipeline import resolve
-    from ..gears.registry import GEARS
+    from .registry import order
 
-    if scene.follower.type in GEARS:  # a gear builds its own lift and may bring its own effects
+    if not scene.gear_plugin.batch_sweeps:  # a gear whose runs do not share one lift, or its own effects
         return False
-    if "elastic" not in resolve(scene.effects):
+    if "elastic" not in order(scene.effects):
         return False
     if scene.spring.elements > 0 or solvers.solver(scene.solver.method).batch_entry is None:
         return False
     if shared.lift is None:
-        from .lift import build_lift
-
-        shared.lift = build_lift(scene)
+        shared.lift = scene.gear_plugin.build_lift(scene)
     return getattr(shared.lift, "linkage_stiffness", None) is None
 
 

@@ -1,19 +1,11 @@
-"""The lift curve of a scene: the one place that assembles it.
-
-A gear follower asks the gear registry for its builder; any other scene's lift is its [lift]
-law's (explorer/lift/registry.py: the law's builder, or a closed-form LawLift).
-"""
+"""The lift curve of a scene: its gear's (explorer.gears.base.Gear.build_lift: the [lift] law's for
+most gears, the gear's own geometry for the others). The one place every run, view and study asks."""
 
 from __future__ import annotations
 
-from ..gears.registry import lift_builder
-from ..lift.curves import LiftCurve, scene_lift
+from ..lift.curves import LiftCurve
 
 
 def build_lift(scene) -> LiftCurve:
-    """The lift curve a validated scene describes: the one place that assembles it, from the gear
-    registry (a gear follower) or the law table."""
-    gear_lift = lift_builder(scene.follower.type)
-    if gear_lift is not None:
-        return gear_lift(scene)
-    return scene_lift(scene)
+    """The lift curve a validated scene describes."""
+    return scene.gear_plugin.build_lift(scene)

@@ -10,8 +10,12 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.units import G0, KGF
-from ..mechanics.forces import RPM_PER_RAD_S, TWO_PI, TrainLoads, min_contact_force, piece_direction, sample_pieces, side_extremes, smooth_pieces
-from ..mechanics.springs import OBJECTIVES, ReversedLift, SpringAdvice, SpringDesign, _upper_hull, balanced_split, historic_preload, trinks_closing_force
+from ..lift.curves import LawLift
+from ..mechanics.forces import (RPM_PER_RAD_S, TWO_PI, TrainLoads, min_contact_force, piece_direction, sample_pieces,
+                                side_extremes, smooth_pieces)
+from ..mechanics.springs import (OBJECTIVES, ReversedLift, SpringAdvice, SpringDesign, _upper_hull, balanced_split,
+                                 historic_preload, trinks_closing_force)
+from .lift import build_lift
 
 
 def advise_spring(scene, rpm: float | None = None, safety_margin: float = 0.0, lift=None,
@@ -30,7 +34,6 @@ def advise_spring(scene, rpm: float | None = None, safety_margin: float = 0.0, l
     """
     from scipy.optimize import linprog
 
-    from .lift import build_lift
 
     if scene.valve is None or scene.spring is None:
         TrainLoads.from_scene(scene)  # raises the one-line InputError for the missing section
@@ -136,9 +139,6 @@ def compare_events(scene, rpm: float | None = None, safety_margin: float = 0.0, 
 
     Each variant is judged two ways: Schenker's constant-force measure max(F1, F2) (the spring force
     needed at the worse side) and the advisor's smallest spring (its largest force P0 + k s_max)."""
-    from ..lift.curves import LawLift
-    from .lift import build_lift
-
     lift = lift if lift is not None else build_lift(scene)
     loads = TrainLoads.from_scene(scene)
     rpm = scene.drive.rpm if rpm is None else rpm

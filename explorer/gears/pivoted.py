@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
+from ..mechanics.contact import ContactGeometry
 from . import jet as J
 from .jet import Jet
 from .linkage import circle_intersection, polar
@@ -129,8 +130,6 @@ class PivotedRollerGear:
         """explorer.mechanics.contact's view of the cam-roller contact: pressure angle referred to the lever,
         ratio |ds/dpsi| / a (valve travel per roller-centre travel), and the torque arm R x n of
         the normal through the roller centre about the camshaft."""
-        from ..mechanics.contact import ContactGeometry
-
         g = self.geometry(theta)
         r, n = g.roller_centre, g.normal_ground
         arm = r[:, 0] * n[:, 1] - r[:, 1] * n[:, 0]

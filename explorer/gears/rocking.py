@@ -41,6 +41,7 @@ from scipy.optimize import brentq
 
 from ..core.errors import InputError
 from ..lift.registry import normalised as normalised_law
+from ..mechanics.contact import ContactGeometry
 from . import jet as J
 from .jet import Jet
 from .linkage import circle_intersection, polar, polar_curvature, wrap
@@ -224,8 +225,6 @@ class RockingCamGear:
         lever, ratio |ds/dpsi| / a, the normal's moment arm (R - C) x n about the rocking cam's pivot
         C, carried to the eccentric shaft by the four-bar's dchi/dtheta (massless rod: T = M_C chi'),
         and the contour radius at the contact (pitch-curve radius less the roller's)."""
-        from ..mechanics.contact import ContactGeometry
-
         d = self.contact_details(theta)
         r = self.roller_radius
         n = d["normal"]

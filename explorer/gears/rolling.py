@@ -34,8 +34,10 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..core.errors import InputError
+from ..mechanics.contact import ContactGeometry
 from . import jet as J
 from .jet import Jet
+from .linkage import polar_curvature
 
 TWO_PI = 2.0 * math.pi
 
@@ -204,10 +206,6 @@ class RollingLeverGear:
         the valve lever's travel) is atan(rho / k): circular faces (k = 0) could drive only by
         friction. Radii of both faces from their polar forms about their own pivots (convex > 0).
         Before pick-up (no contact, no force) the values are those of the faces' meeting point."""
-        from ..mechanics.contact import ContactGeometry
-        from . import jet as J
-        from .linkage import polar_curvature
-
         theta = np.asarray(theta, dtype=float)
         swing = self.rolling_swing(theta)
         w = Jet.variable(np.maximum(swing.c[0], 0.0))  # jets in the rolling swing

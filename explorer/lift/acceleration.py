@@ -35,7 +35,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.reader import Table
-from ..core.units import plain_number, short_repr, to_si
+from ..core.units import plain_number, registry, short_repr, to_si
 
 TWO_PI = 2.0 * math.pi
 INTERPOLATIONS = ("linear", "step")
@@ -112,7 +112,6 @@ def _acceleration_scale(table: Table, unit: str) -> tuple[float, bool]:
         ) from None
     # pint treats angles as dimensionless, so mm/deg and mm would pass as lengths: insist on
     # exactly angle**-2 to catch a missing square.
-    from ..core.units import registry
 
     exponent = sum(p for name, p in registry().parse_units(unit)._units.items() if name in ANGLE_UNITS)
     if exponent != -2:

@@ -14,8 +14,7 @@ from typing import Protocol
 
 import numpy as np
 
-from ..core.plugins import resolve
-from .registry import law_spec, normalised as normalised_law
+from .laws import law as normalised_law
 
 TWO_PI = 2.0 * math.pi
 
@@ -77,18 +76,6 @@ def law_lift(spec) -> LawLift:
     the laws of the rise and the return)."""
     return LawLift(height=spec.height, start=spec.start, rise=spec.rise, dwell=spec.dwell, ret=spec.ret,
                    rise_law=spec.law, return_law=spec.return_law or spec.law)
-
-
-def scene_lift(scene) -> LiftCurve:
-    """The lift curve of the scene's [lift] law (explorer/lift/registry.py): its builder's, or a
-    LawLift for a closed form. A law that the gear's geometry makes ("gear") has neither: the
-    gear builds that lift (explorer.gears)."""
-    spec = law_spec(scene.lift.law)
-    if spec.closed_form:
-        return law_lift(scene.lift)
-    if spec.builder is None:
-        raise TypeError(f"law {spec.name!r} has no builder: the gear's geometry makes this lift")
-    return resolve(spec.builder)(scene)
 
 
 def _wrap(x: np.ndarray) -> np.ndarray:

@@ -293,8 +293,6 @@ def parse_polydyne_options(table, fields: dict[str, Any]) -> PolydyneOptions:
     if fields["linkage"].damping != 0.0:
         raise InputError(file, "linkage.damping", "the polydyne formula has no damper term (the cam would follow from a "
                          "differential equation, not from the wanted lift); set it to 0 for the design")
-    if fields["follower"].type != "translating-roller":
-        raise InputError(file, "lift.law", "the polydyne law is for the translating-roller follower")
     wanted_law = table.string("wanted_law", choices=(*LAWS, SPLINE))
     if table.has("design_rpm"):
         omega = table.quantity("design_rpm", "speed", positive=True)

@@ -10,10 +10,11 @@ scene uses the law. Adding a law: its module and one line of LAWS (or `register_
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 from ..core.plugins import Registration, Registry, resolve
 from . import laws as closed_forms
+from .curves import LiftCurve, law_lift
 
 # [lift] keys every law reads (those with event_keys) or lets through
 COMMON_KEYS = ("law", "height", "start", "rise", "dwell", "return", "return_law")
@@ -30,7 +31,7 @@ class LawSpec:
        rise and return of explorer.lift.curves.LawLift, and of the gears that synthesise a cam through
        the law's jets). Any other law gives `builder`, "module:function" (scene) -> LiftCurve
        (explorer.lift.curves.LiftCurve: derivatives(theta) -> L, L', L'', L''' analytic, and
-       breakpoints()); explorer.lift.curves.scene_lift builds either.
+       breakpoints()); `scene_lift` builds either.
     2. List its own [lift] keys (`keys`), those of them without a default (`required`), and name
        its `parser`, "module:function" (reader.Table of [lift], the partial scene fields) -> a
        frozen options object (scene.lift.options), which validates every key at load time (one
@@ -38,8 +39,10 @@ class LawSpec:
     3. Say how it reads the common keys: `shaped` (height, rise and return make its event and are
        required, as for the closed forms) unless [lift] `shaped_unless` = (key, value); without
        `event_keys` the common keys are not read at all (the lift comes from elsewhere).
-    4. Name the scene sections it reads (`sections`: a [cam] contour) and whether the gear's
-       own geometry makes the lift (`gear_made`: only the gears that make their lift take it).
+    4. Name the scene sections it reads (`sections`), whether the lift is the follower's on the
+       [cam] contour (`from_contour`: the gear analyses it, explorer.gears.base.Gear.contour_lift)
+       and whether the gear's own geometry makes the lift (`gear_made`: only the gears that make
+       their lift take it).
     5. State `smoothness`: the highest derivative of the lift that stays continuous where the
        law meets a dwell (1: the acceleration jumps; 2: the jerk does), None when it depends on
        the law's data (tests check the closed forms').
@@ -56,6 +59,7 @@ class LawSpec:
     shaped_unless: tuple[str, Any] | None = None
     event_keys: bool = True
     sections: tuple[str, ...] = ()  # item 4
+    from_contour: bool = False
     gear_made: bool = False
     smoothness: int | None = None  # item 5
     description: str = ""
@@ -73,6 +77,18 @@ class LawSpec:
     def parse(self, table, fields) -> Any:
         """The law's options from [lift] (None for a law without its own keys)."""
         return None if self.parser is None else resolve(self.parser)(table, fields)
+
+    def fits(self, lift: Mapping[str, Any], sections) -> bool:
+        """Whether a scene whose raw [lift] table is `lift` (and whose top-level sections are
+        `sections`) can take this law, as far as the table tells (items 2 to 4): no key of another
+        law (the loader refuses them), its required keys, height and rise for a shaped event, its
+        sections. The law's parser may still refuse a value."""
+        keys = set(lift) - {"law"}
+        if not keys - set(COMMON_KEYS) <= set(self.keys) or not set(self.required) <= keys:
+            return False
+        unless = self.shaped_unless
+        shaped = self.shaped and not (unless is not None and lift.get(unless[0]) == unless[1])
+        return (not shaped or {"height", "rise"} <= keys) and set(self.sections) <= set(sections)
 
 
 def _closed(name: str, smoothness: int, description: str) -> LawSpec:
@@ -93,8 +109,8 @@ LAWS: Registry[LawSpec] = Registry("law", {spec.name: spec for spec in (
             parser="explorer.lift.acceleration:parse_acceleration_options",
             keys=("points", "angle_unit", "acceleration_unit", "interpolation", "reference_rpm"), required=("points",),
             description="an acceleration curve integrated twice"),
-    LawSpec("contour", builder="explorer.lift.contours.lift_from_contour:build_contour_lift", event_keys=False,
-            sections=("cam",), description="the lift of a follower on the cam contour in [cam]"),
+    LawSpec("contour", event_keys=False, sections=("cam",), from_contour=True,
+            description="the lift of the follower on the cam contour in [cam]"),
     LawSpec("gear", gear_made=True, description="the gear's own geometry makes the lift"),
     LawSpec("polydyne", builder="explorer.lift.polydyne:build_polydyne_lift",
             parser="explorer.lift.polydyne:parse_polydyne_options",
@@ -108,8 +124,15 @@ LAWS: Registry[LawSpec] = Registry("law", {spec.name: spec for spec in (
 
 
 def register_law(spec: LawSpec, *, replace: bool = False) -> Registration:
-    """Add a law to the table (one call; `.undo()` removes it again)."""
-    return LAWS.register(spec.name, spec, replace=replace)
+    """Add a law to the table (one call; `.undo()` removes it again). A closed form's function is
+    also put where LawLift evaluates the closed forms (explorer.lift.laws.LAWS)."""
+    registration = LAWS.register(spec.name, spec, replace=replace)
+    if spec.closed_form:
+        store = closed_forms.LAWS
+        had, previous = spec.name in store, store.get(spec.name)
+        store[spec.name] = spec.function()
+        registration.also(lambda: store.__setitem__(spec.name, previous) if had else store.pop(spec.name, None))
+    return registration
 
 
 def law_spec(name: str) -> LawSpec:
@@ -128,3 +151,15 @@ def closed_form_names() -> tuple[str, ...]:
 def normalised(name: str) -> Callable:
     """The normalised closed form of law `name` (KeyError: no such law)."""
     return LAWS[name].function()
+
+
+def scene_lift(scene) -> LiftCurve:
+    """The lift curve of the scene's [lift] law: its builder's, or a LawLift for a closed form. The
+    laws that the gear's geometry makes ("gear") or that follow a [cam] contour ("contour") have
+    neither: the gear builds those lifts (explorer.gears.base.Gear.build_lift)."""
+    spec = law_spec(scene.lift.law)
+    if spec.closed_form:
+        return law_lift(scene.lift)
+    if spec.builder is None:
+        raise TypeError(f"law {spec.name!r} has no builder: the follower's gear makes this lift")
+    return resolve(spec.builder)(scene)

@@ -25,7 +25,7 @@ they load the linkage (act to close the valve) for the loads. Friction at rest t
 the valve is about to move (sign of the acceleration): its one-sided limit right after the instant.
 
 The trip gear's latch drives the valve only from the pick-up to the trip; its forces are those
-of that window (explorer.effects.trip, its variant of this effect in the gear registry),
+of that window (explorer.gears.trip_latched, its variant of this effect in its gear),
 not of the free closing after it.
 """
 

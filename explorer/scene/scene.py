@@ -8,33 +8,31 @@ those modules' `parse_*` functions, called from here so that all validation happ
 
 from __future__ import annotations
 
+import copy
 import math
 import os
 import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 from ..core.errors import InputError
+from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
 from ..core.plugins import resolve
-from ..gears import GEAR_TYPES
-from ..lift import registry as laws
 from ..core.reader import Table
 from ..dynamics import solvers
+from ..effects import registry as effect_table
+from ..gears import registry as gear_table
+from ..gears.base import Gear, GearSpec
+from ..lift import registry as laws
+from .builtin import find_scene
 
-# effect name -> effects it needs (resolved by effects.resolve); kept here, free of heavy imports,
-# so that a scene can be validated without importing any solver.
-EFFECT_DEPENDENCIES: dict[str, tuple[str, ...]] = {
-    "kinematics": (),
-    "lash": ("kinematics",),
-    "forces": ("kinematics", "lash"),
-    "contact": ("kinematics", "lash", "forces"),
-    "elastic": ("kinematics", "lash"),
-    "gear": ("kinematics",),  # explorer.gears: what is particular to the lever, eccentric and trip gears
-}
+if TYPE_CHECKING:
+    from ..lift.contours.spec import CamSpec
+    from ..mechanics.contact import ContactSpec
+    from ..mechanics.springs import SpringDesign
 
-FOLLOWER_TYPES = ("translating-roller", *GEAR_TYPES)
 MIN_STEPS = 36
 # Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
 # w^3 L''' must not overflow) and catch unit slips such as "10 m" for "10 mm".
@@ -50,8 +48,9 @@ OWNED_SECTIONS: dict[str, str] = {
     "cam": "explorer.lift.contours.spec:parse_cam_section",
     "contact": "explorer.scene.contact_section:parse_contact_section",
     "spring_design": "explorer.mechanics.springs:parse_spring_design_section",
-    "gear": "explorer.gears.spec:parse_gear_section",
 }
+# what a section needs, for the message when an effect requires a scene without it
+SECTION_KEYS = {"valve": "mass", "spring": "preload and rate", "linkage": "stiffness"}
 @dataclass(frozen=True)
 class Drive:
     rpm: float  # rev/min, > 0
@@ -76,7 +75,7 @@ class LiftSpec:
 
 @dataclass(frozen=True)
 class Follower:
-    type: str = "translating-roller"
+    type: str = gear_table.DEFAULT  # the gear (explorer/gears/registry.py)
     base_radius: float = 0.03  # m, base circle of the cam contour
     roller_radius: float = 0.0  # m
     offset: float = 0.0  # m, follower axis offset from the cam centre
@@ -150,10 +149,16 @@ class Scene:
     solver: Solver
     source: str = "<memory>"  # file the scene came from, for messages and relative paths
     description: str = ""
-    cam: Any = None  # owned by explorer.lift.contours.spec
-    contact: Any = None  # owned by explorer.mechanics.contact
-    spring_design: Any = None  # owned by explorer.mechanics.springs (optional advice and historic rules)
-    gear: Any = None  # owned by explorer.gears.spec (pivoted lever, rocking cam, rolling lever, trip gear)
+    cam: CamSpec | None = None  # owned by explorer.lift.contours.spec
+    contact: ContactSpec | None = None  # owned by explorer.scene.contact_section
+    spring_design: SpringDesign | None = None  # owned by explorer.mechanics.springs (advice and historic rules)
+    gear: GearSpec | None = None  # the [gear] section, owned by the follower's gear
+
+    @property
+    def gear_plugin(self) -> Gear:
+        """The follower type's gear (explorer/gears/registry.py): what the effects, the sweep engine,
+        the exports and the views ask instead of testing follower.type."""
+        return gear_table.gear(self.follower.type)
 
     @property
     def directory(self) -> Path:
@@ -170,23 +175,25 @@ class Scene:
 
 TOP_KEYS = (
     "name", "description", "effects", "drive", "lift", "follower", "valve", "spring", "loads",
-    "linkage", "seat", "solver", *OWNED_SECTIONS,
+    "linkage", "seat", "solver", *OWNED_SECTIONS, "gear",
 )
 
 
 def load_scene(path: str | os.PathLike, overrides: list[str] | tuple[str, ...] = ()) -> Scene:
     """Read and validate a scene file; `overrides` are "section.key=value" strings (TOML values)."""
-    from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
+    return scene_from_dict(read_scene_data(path, overrides), str(path))
 
-    from .builtin import find_scene
 
+def read_scene_data(path: str | os.PathLike, overrides=()) -> dict:
+    """A scene file's TOML tables, overrides applied, not yet validated (InputError: the file
+    cannot be read or is no TOML)."""
     file = str(path)  # errors name the file as the user gave it
     data = read_regular(find_scene(path), file=file, key="-", limit=MAX_SCENE_FILE_BYTES)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
         raise InputError(file, "-", "not a UTF-8 text file") from None
-    return loads_scene(text, file, overrides)
+    return _toml_data(text, file, overrides)
 
 
 # tomllib and copy.deepcopy recurse once per level of nesting: a few thousand nested arrays or
@@ -195,6 +202,10 @@ MAX_NESTING = 32
 
 
 def loads_scene(text: str, source: str = "<memory>", overrides=()) -> Scene:
+    return scene_from_dict(_toml_data(text, source, overrides), source)
+
+
+def _toml_data(text: str, source: str, overrides) -> dict:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -202,7 +213,7 @@ def loads_scene(text: str, source: str = "<memory>", overrides=()) -> Scene:
     except RecursionError:
         raise InputError(source, "-", f"malformed TOML: nested too deeply (at most {MAX_NESTING} levels)") from None
     _check_nesting(data, source, "-")
-    return scene_from_dict(apply_overrides(data, overrides, source), source)
+    return apply_overrides(data, overrides, source)
 
 
 def _first_line(text: str) -> str:
@@ -226,8 +237,6 @@ def apply_overrides(data: dict, overrides, file: str) -> dict:
     """Apply "a.b.c=value" overrides to a copy of the raw TOML dict. Values are TOML when they
     parse as TOML (numbers, booleans, quoted strings, arrays), otherwise taken as plain strings,
     so `--set lift.height="12 mm"` and `--set lift.height=12mm` both work."""
-    import copy
-
     data = copy.deepcopy(data)
     for item in overrides:
         if "=" not in item:
@@ -269,8 +278,8 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     if not isinstance(effects_raw, list) or not all(isinstance(e, str) for e in effects_raw):
         raise top.error("effects", "expected a list of effect names, such as [\"kinematics\", \"lash\"]")
     for effect in effects_raw:
-        if effect not in EFFECT_DEPENDENCIES:
-            raise top.error("effects", f"unknown effect {effect!r}; known: {', '.join(EFFECT_DEPENDENCIES)}")
+        if effect not in effect_table.EFFECTS:
+            raise top.error("effects", f"unknown effect {effect!r}; known: {', '.join(effect_table.names())}")
     effects = tuple(dict.fromkeys(effects_raw))
     if not effects:
         raise top.error("effects", "list at least one effect")
@@ -294,13 +303,12 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     seat = _parse_seat(top.table("seat", required=False) or Table({}, file, "seat"))
     solver = _parse_solver(top.table("solver", required=False) or Table({}, file, "solver"))
 
-    needs = _closure(effects)
-    if ("forces" in needs or "elastic" in needs) and valve is None:
-        raise InputError(file, "valve", "missing section: effects 'forces' and 'elastic' need [valve] mass")
-    if ("forces" in needs or "elastic" in needs) and spring is None:
-        raise InputError(file, "spring", "missing section: effects 'forces' and 'elastic' need [spring] preload and rate")
-    if "elastic" in needs and linkage is None:
-        raise InputError(file, "linkage", "missing section: effect 'elastic' needs [linkage] stiffness")
+    needs = set(effect_table.order(effects))
+    for section, given in (("valve", valve), ("spring", spring), ("linkage", linkage)):
+        if given is None and any(section in effect_table.effect_spec(e).requires for e in needs):
+            users = [f"'{name}'" for name, spec in effect_table.EFFECTS.items() if section in spec.requires]
+            who = f"effect {users[0]} needs" if len(users) == 1 else f"effects {', '.join(users[:-1])} and {users[-1]} need"
+            raise InputError(file, section, f"missing section: {who} [{section}] {SECTION_KEYS[section]}")
     if spring is not None and spring.elements > 0:
         _check_spring_chain(spring, valve, seat, loads, file)
 
@@ -311,28 +319,27 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     for section, target in OWNED_SECTIONS.items():
         table = top.table(section, required=False)
         fields[section] = resolve(target)(table, fields) if table is not None or section in needs else None
+    fields["gear"] = _parse_gear(top.table("gear", required=False), fields)
     law = laws.law_spec(lift.law)
     if law.parser is not None:
         fields["lift"] = replace(lift, options=law.parse(top.table("lift"), fields))
     for section in law.sections:
         if fields.get(section) is None:
             raise InputError(file, section, f"missing section: lift.law = '{law.name}' takes the lift from [{section}]")
-    if follower.type in GEAR_TYPES and fields.get("gear") is None:
-        raise InputError(file, "gear", f"missing section: follower.type '{follower.type}' needs [gear]")
-    if lift.law == "gear" and follower.type not in ("rocking-cam", "rolling-lever"):
-        raise InputError(file, "lift.law", "lift.law = 'gear' is for the rocking-cam and rolling-lever gears")
+    if law.gear_made and not gear_table.gear(follower.type).makes_lift:
+        makers = [name for name, gear in gear_table.GEARS.items() if gear.makes_lift]
+        raise InputError(file, "lift.law", f"lift.law = 'gear' is for the {' and '.join(makers)} gears")
     return Scene(**fields)
 
 
-def _closure(effects) -> set[str]:
-    out: set[str] = set()
-    stack = list(effects)
-    while stack:
-        effect = stack.pop()
-        if effect not in out:
-            out.add(effect)
-            stack.extend(EFFECT_DEPENDENCIES[effect])
-    return out
+def _parse_gear(table: Table | None, fields: dict) -> GearSpec | None:
+    """[gear] through the follower's gear (its keys, checks and geometry, at load time)."""
+    gear = gear_table.gear(fields["follower"].type)
+    if table is not None and not gear.parts:
+        owners = [name for name, other in gear_table.GEARS.items() if other.parts]
+        raise InputError(fields["source"], "gear", f"[gear] describes the gears {', '.join(owners)}; follower.type is "
+                         f"{gear.type!r}")
+    return gear.parse(table, fields)
 
 
 def _parse_follower(t: Table | None, file: str) -> Follower:
@@ -340,7 +347,7 @@ def _parse_follower(t: Table | None, file: str) -> Follower:
         return Follower()
     t.reject_unknown(("type", "base_radius", "roller_radius", "offset", "ratio"))
     follower = Follower(
-        type=t.string("type", "translating-roller", choices=FOLLOWER_TYPES),
+        type=t.string("type", gear_table.DEFAULT, choices=gear_table.gear_types()),
         base_radius=t.quantity("base_radius", "length", 0.03, positive=True),
         roller_radius=t.quantity("roller_radius", "length", 0.0, nonnegative=True),
         offset=t.quantity("offset", "length", 0.0),

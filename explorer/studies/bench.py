@@ -35,9 +35,14 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..dynamics import solvers as solver_registry
-from .charts import figure, png
 from ..core.errors import InputError
+from ..dynamics import solvers as solver_registry
+from ..dynamics.model import Drive
+from ..dynamics.solvers import solve
+from ..effects.elastic import linkage_model
+from ..effects.lift import build_lift
+from .accuracy import differentiation_study
+from .charts import figure, png
 
 STEPS = (90, 360, 900, 3600, 9000, 36_000, 90_000, 360_000)
 VARYING_MAX_STEPS = 36_000
@@ -167,14 +172,10 @@ def _csv_cell(value) -> str:
 
 def model_and_drive(scene):
     """The LinkageModel and Drive of a scene (needs [valve], [spring] and [linkage])."""
-    from ..dynamics.model import Drive, LinkageModel
-    from ..effects.lift import build_lift
 
     for section in ("valve", "spring", "linkage"):
         if getattr(scene, section) is None:
             raise InputError(scene.source, section, f"missing section: explorer bench times the elastic model, which needs [{section}]")
-    from ..effects.elastic import linkage_model
-
     lift = build_lift(scene)  # a gear's own elasticity (k(t)) is part of the model, as in the elastic effect
     return linkage_model(scene, lift, scene.drive.omega), Drive(lift, scene.follower.ratio, scene.drive.omega)
 
@@ -201,8 +202,6 @@ def run_bench(
     differentiation: bool = True,
 ) -> BenchReport:
     """Time every method and resolution on the scene; see the module docstring."""
-    from ..dynamics.solvers import solve
-
     model, drive = model_and_drive(scene)
     varying = model.stiffness_profile is not None
     revolution = 2.0 * math.pi / drive.omega
@@ -321,14 +320,8 @@ def run_bench(
     study = None
     if differentiation:
         tick("differentiating a measured lift (samples x noise)")
-        try:
-            from ..effects.lift import build_lift
-            from .accuracy import differentiation_study
-        except ImportError:  # the study lives in another module of the project; bench works without it
-            notes.append("differentiation study not available (explorer.studies.accuracy missing)")
-        else:
-            options = DIFF_QUICK if quick else {}
-            study = differentiation_study(lift=build_lift(scene), rpm=scene.drive.rpm, reference=f"{scene.name} lift", **options)
+        options = DIFF_QUICK if quick else {}
+        study = differentiation_study(lift=build_lift(scene), rpm=scene.drive.rpm, reference=f"{scene.name} lift", **options)
     if progress is not None:
         progress(total, total, "done")
 
@@ -350,8 +343,6 @@ def speed_ratio(model, drive, t: np.ndarray, reference: np.ndarray, repeats: int
     at rtol 1e-10 (atol 1e-13, events, step bounded) on the grid t, alternating the two `repeats`
     times in this process; median CPU times and lift errors (`method` against `reference`, the
     reference solver against `reference_for_scipy`, default the same)."""
-    from ..dynamics.solvers import solve
-
     ref_info = solver_registry.reference()
 
     def exact():

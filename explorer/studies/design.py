@@ -32,11 +32,15 @@ optimiser finds it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..core.errors import InputError
+from ..lift.contours.translating import pitch_geometry
+from ..lift.curves import LawLift
+from ..lift.spline import NAMES, UNITS, solve_spline, with_values
+from ..mechanics.forces import TrainLoads, friction_direction, load_parts
 
 TWO_PI = 2.0 * math.pi
 OBJECTIVES = ("peak-acceleration", "peak-jerk", "jerk-energy", "residual-vibration")
@@ -53,12 +57,6 @@ class DesignLimits:
     band: tuple[float, float] | None = None  # rpm, residual-vibration objective
     band_points: int = 11
     open_area: float | str | None = None  # m*rad of valve lift over cam angle, or "keep" (the start's)
-
-
-@dataclass
-class Evaluation:
-    objective: float
-    constraints: dict = field(default_factory=dict)  # name -> slack (>= 0 met)
 
 
 AREA_TOLERANCE = 1e-9  # relative: SLSQP meets the equality (linear while the lift stays open) to ~1e-12
@@ -89,8 +87,6 @@ class Problem:
     value, then every evaluation is a matrix product."""
 
     def __init__(self, scene, objective: str, limits: DesignLimits):
-        from ..lift.spline import solve_spline
-
         if scene.lift.law != "spline":
             raise InputError(scene.source, "lift.law", "explorer design works on a spline lift (law = \"spline\")")
         if objective not in OBJECTIVES:
@@ -120,8 +116,6 @@ class Problem:
                                for i in range(len(self.free))])
 
     def lift(self, z):
-        from ..lift.spline import with_values
-
         values = {key: float(zi * si) for key, zi, si in zip(self.free, z, self.scale)}
         options = with_values(self.options, values)
         return self.solve(options.stations, options.continuity, self.scene.lift.start, self.scene.source)
@@ -177,8 +171,6 @@ def _jumps(lift, k: int) -> bool:
 def constraint_arrays(scene, d, limits: DesignLimits) -> tuple[dict, dict]:
     """Per-sample slacks scaled to order 1 with fixed scales (a scale that moved with the lift
     would bend the optimiser's linearisation), and the smallest slack of each in its unit."""
-    from ..lift.contours.translating import pitch_geometry
-
     f = scene.follower
     ratio = f.ratio
     arrays: dict = {"lift >= 0": d[0] / (f.base_radius + f.roller_radius)}
@@ -194,8 +186,6 @@ def constraint_arrays(scene, d, limits: DesignLimits) -> tuple[dict, dict]:
         smallest = float(np.min(1.0 / kappa[convex])) if np.any(convex) else math.inf
         slacks["convex radius [mm]"] = 1e3 * (smallest - f.roller_radius - limits.radius_margin)
     if limits.contact_margin is not None:
-        from ..mechanics.forces import TrainLoads, friction_direction, load_parts
-
         loads = TrainLoads.from_scene(scene)
         a_coef, g_part, is_open = load_parts(d, friction_direction(d[1], d[2]), loads, ratio, scene.valve.lash)
         wc = (limits.contact_rpm or scene.drive.rpm) * TWO_PI / 60.0
@@ -287,7 +277,6 @@ def _peak_by_linear_programme(scene, problem, row: int, factor: float, limits: D
     in (z, t) solved exactly by HiGHS. None if HiGHS fails."""
     from scipy.optimize import linprog
 
-    from ..mechanics.forces import TrainLoads, friction_direction
 
     n = len(problem.free)
     # in units of the largest starting value: HiGHS's tolerances are absolute (a jerk in m/s**3
@@ -325,7 +314,6 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> D
     linear in the variables and get their exact Jacobian from the basis."""
     from scipy.optimize import minimize
 
-    from ..lift.curves import LawLift
 
     problem = Problem(scene, objective, limits)
     z0 = problem.start()
@@ -431,7 +419,6 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> D
         std = LawLift(height=height, start=scene.lift.start, rise=rise, dwell=dwell, ret=ret,
                       rise_law=law_name, return_law=law_name)
         comparison[law_name] = evaluate(scene, std, objective, limits, problem.x, target)[::2]
-    from ..lift.spline import with_values
 
     # SLSQP often ends a nonsmooth (peak) problem with "positive directional derivative for
     # linesearch" at its optimum: the result counts when every limit is met and it improved on a
@@ -454,8 +441,6 @@ def _event_shape(problem) -> tuple[float, float, float, float]:
 
 
 def report_text(scene, report: DesignReport) -> str:
-    from ..lift.spline import NAMES, UNITS
-
     unit = {"peak-acceleration": "m/s**2", "peak-jerk": "m/s**3", "jerk-energy": "m**2/s**5",
             "residual-vibration": "m"}[report.objective]
     w = scene.omega
@@ -478,8 +463,6 @@ def report_text(scene, report: DesignReport) -> str:
 
 def stations_toml(scene, report: DesignReport) -> str:
     """The optimised [[lift.stations]] in scene syntax."""
-    from ..lift.spline import NAMES
-
     w = report.options.reference_rpm * TWO_PI / 60.0
     units = ("mm", "m/s", "m/s**2", "m/s**3", "m/s**4")
     scale = (1e3, 1.0, 1.0, 1.0, 1.0)

@@ -26,6 +26,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..core.errors import InputError
+from ..effects.lift import build_lift
+from ..gears.registry import GEARS
+from ..lift.polydyne import RISE_POLYNOMIALS, residual_amplitude
+from .charts import figure, png
+from .sweep_run import run_plan
+from .sweep_spec import check_scene, make_plan, parse_axis
+from .sweep_table import SweepTable
 
 TWO_PI = 2.0 * math.pi
 MAX_SPEEDS = 2000
@@ -50,8 +57,9 @@ def residual_scene(scene):
         missing = [s for s in ("valve", "spring", "linkage") if getattr(scene, s) is None]
         raise InputError(scene.source, missing[0], "missing section: the residual vibration needs the elastic linkage "
                          "([valve], [spring], [linkage])")
-    if scene.follower.type != "translating-roller":
-        raise InputError(scene.source, "follower.type", "residual vibration sweeps are for translating-roller cams")
+    if not scene.gear_plugin.batch_sweeps:  # the cam must be the same at every speed
+        makers = [name for name, gear in GEARS.items() if gear.batch_sweeps]
+        raise InputError(scene.source, "follower.type", f"residual vibration sweeps are for {', '.join(makers)} cams")
     if scene.spring.elements > 0:
         raise InputError(scene.source, "spring.elements", "residual vibration sweeps are for the massless spring "
                          "(the spring chain's effect computes no residual columns)")
@@ -74,9 +82,6 @@ def contact_through_rise(lift, separations: float, first_separation_deg: float) 
 
 def closed_forms(scene, rpm: np.ndarray, separations: np.ndarray, first_separation_deg: np.ndarray) -> np.ndarray:
     """residual_closed_form_m per run (module doc)."""
-    from ..effects.lift import build_lift
-    from ..lift.polydyne import RISE_POLYNOMIALS, residual_amplitude
-
     out = np.full(rpm.shape, math.nan)
     lift = build_lift(scene)
     wanted = getattr(lift, "wanted", None)
@@ -90,10 +95,6 @@ def closed_forms(scene, rpm: np.ndarray, separations: np.ndarray, first_separati
 
 def residual_table(scene, rpms, *, workers: int | None = None, progress=None):
     """The sweep table over the speeds `rpms` (rev/min) with the closed-form column added."""
-    from .sweep_run import run_plan
-    from .sweep_spec import check_scene, make_plan, parse_axis
-    from .sweep_table import SweepTable
-
     scene = residual_scene(scene)
     plan = make_plan([parse_axis("drive.rpm", [float(r) for r in np.asarray(rpms, dtype=float).ravel()], file="--rpm")],
                      file="--rpm")
@@ -128,8 +129,6 @@ def residual_sweep(scene, rpms, progress=None, workers: int | None = 1) -> list[
 
 def chart_png(scene, table) -> bytes:
     """Deviation (and the dwell amplitude with its closed form) against speed, log scale."""
-    from .charts import figure, png
-
     c = table.columns
     rpm = np.asarray(c["drive_rpm"], float)
     floor = 1e-16

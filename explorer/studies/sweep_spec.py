@@ -18,6 +18,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..core.errors import InputError
+from ..core.ranges import check_range
+from ..core.units import to_si
+from ..scene.scene import MAX_RPM
 
 # more runs than this need --yes (yes=True): 10^7 rows are ~1 GB of table and hours of CPU
 MAX_RUNS_UNASKED = 10_000_000
@@ -105,8 +108,6 @@ def sweep_key(key: str, file: str = "--vary") -> SweepKey:
 
 def quantity(text, info: SweepKey, file: str) -> float:
     """One value of a key in SI (drive.rpm in rev/min), by the scene files' rules."""
-    from ..core.units import to_si
-
     if isinstance(text, str):
         text = text.strip()
         try:  # a bare number, as in a scene file: the key's own unit for bare numbers
@@ -136,16 +137,12 @@ def quantity(text, info: SweepKey, file: str) -> float:
 def check_values(info: SweepKey, values: np.ndarray, file: str, what: str = "value") -> None:
     """The key's valid range (the scene loader's, explorer.core.ranges) for every value; a sampled
     distribution that reaches outside it is refused with the share of bad draws."""
-    from ..core.ranges import check_range
-
     values = np.asarray(values, dtype=float)
     bad = ~np.isfinite(values)
     bad |= values <= 0.0 if info.positive else values < 0.0
     if info.upper is not None:
         bad |= values >= info.upper
     if info.key == "drive.rpm":
-        from ..scene.scene import MAX_RPM
-
         bad |= values > MAX_RPM
     if bad.any():
         first = float(values[bad][0])

@@ -39,9 +39,11 @@ from typing import Any
 import numpy as np
 
 from ...core.errors import InputError
+from ...core.files import read_text
 from ...core.reader import Table
 from ...core.units import plain_number, to_si
 from .arcs import Arc, ArcContour, ContourError, build_arc_contour
+from .parametric import SplineContour
 
 # Arcs below a micron or centres beyond 10 m are no valve-gear cam; they also push the tangency
 # arithmetic into subnormal or overflowing floats, so they are refused at load time.
@@ -81,8 +83,6 @@ class CamSpec:
 
     @cached_property
     def _spline(self):
-        from .parametric import SplineContour
-
         return SplineContour(self.points, self.spline_degree)
 
 
@@ -108,12 +108,7 @@ def parse_cam_section(table: Table | None, fields: dict) -> CamSpec | None:
         if table.has("tolerance"):
             raise table.error("tolerance", "applies to arcs only")
         spec = _parse_points(table, rotation, fields)
-    follower = fields.get("follower")
-    if follower is not None:
-        from .lift_from_contour import contour_lift
-
-        contour_lift(spec, follower, file)  # every follower-dependent check, at load time
-    return spec
+    return spec  # the follower-dependent checks are its gear's (contour_lift), at load time too
 
 
 def _parse_arcs(table: Table, rotation: float) -> CamSpec:
@@ -152,7 +147,6 @@ _SPLIT = re.compile(r"[,;\s]+")
 def _read_points_file(path: Path, file: str, key: str) -> np.ndarray:
     if not path.exists():
         raise InputError(file, key, f"point file {str(path)!r} not found")
-    from ...core.files import read_text
 
     text = read_text(path, file=file, key=key, prefix=f"point file {path.name}: ")
     rows = []
@@ -221,7 +215,6 @@ def _parse_points(table: Table, rotation: float, fields: dict) -> CamSpec:
     step = np.mod(np.roll(ang, -1) - ang + math.pi, 2.0 * math.pi) - math.pi
     if not (np.all(step < 0.0) or np.all(step > 0.0)) or abs(abs(step.sum()) - 2.0 * math.pi) > 1e-6:
         raise InputError(file, key, "the points must go once around the cam centre, in order (every ray from the centre meeting the contour once)")
-    from .parametric import SplineContour
 
     contour = SplineContour(pts, int(degree))
     t = np.arange(16 * len(pts)) * contour.period / (16 * len(pts))  # spacing ~ chord/16: min found to ~(h/16)^2 kappa

@@ -30,7 +30,7 @@ import numpy as np
 
 from .. import parts as meshes
 from ...lift import registry as laws
-from ...scene.scene import EFFECT_DEPENDENCIES
+from ...effects import registry as effect_table
 from . import origin
 from .compute import ComputeWorker
 from .model import (
@@ -337,7 +337,7 @@ class ExplorerApp:
                 self._field_shown[key] = handle.value
             self.effects: dict[str, Any] = {}
             with gui.add_folder("Effects"):
-                for name in EFFECT_DEPENDENCIES:
+                for name in effect_table.names():
                     handle = gui.add_checkbox(name, initial_value=name == "kinematics")
                     handle.on_update(self._effects_changed)
                     self.effects[name] = handle

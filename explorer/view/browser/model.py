@@ -393,7 +393,6 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
     Reuses the previous simulation when only the magnification changed."""
     from .. import parts as meshes
     from ...effects.pipeline import simulate
-    from ...gears import GEAR_TYPES
     from ...effects.lift import build_lift
     from ...scene.scene import load_scene
 
@@ -412,12 +411,12 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
         lay = meshes.layout(scene, result)
         # only the cam depends on more than the layout: keep the other meshes when it is unchanged,
         # and the cam too when its lift and geometry are (an edit of speed, lash, springs...).
-        # Another kind of gear has other parts; the seeds' other gears (explorer.gears) draw
-        # levers and links from their own geometry, so they keep parts only with the same cam.
+        # Another kind of gear has other parts; a gear whose levers and links are drawn from its
+        # own geometry (its view's parts_follow_cam) keeps parts only with the same cam.
         keep = previous is not None and previous.scene.follower.type == scene.follower.type \
             and previous.layout == lay
         keep_cam = keep and _same_cam(previous.scene, scene)
-        if keep and not keep_cam and scene.follower.type in GEAR_TYPES:
+        if keep and not keep_cam and meshes.parts_follow_cam(scene):
             keep = False
         built = meshes.build_parts(scene, result, lay=lay, lift=lift, only=() if keep_cam else ("cam",) if keep else None)
         parts = dict(previous.meshes) if keep else {}

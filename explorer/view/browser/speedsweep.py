@@ -113,9 +113,9 @@ def torque_sweep(scene, lift, result, rpms) -> np.ndarray:
 
 
 def has_contact(scene) -> bool:
-    from ...effects.pipeline import resolve
+    from ...effects.registry import order
 
-    return "contact" in resolve(scene.effects)
+    return "contact" in order(scene.effects)
 
 
 def rigid_sweep(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray]:
@@ -140,9 +140,9 @@ def rigid_sweep(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray]:
 
 
 def has_elastic(scene) -> bool:
-    from ...effects.pipeline import resolve
+    from ...effects.registry import order
 
-    return "elastic" in resolve(scene.effects)
+    return "elastic" in order(scene.effects)
 
 
 def start_sweep(scene, lift, serial: int, previous: tuple[float, float] | None = None, result=None) -> SpeedSweep | None:

@@ -21,6 +21,7 @@ import os
 import subprocess
 import threading
 from dataclasses import replace
+from multiprocessing.connection import Connection
 from types import SimpleNamespace
 from typing import Mapping
 
@@ -74,8 +75,6 @@ class RecordingWorker:
         self._jobs = 0
 
     def _start(self) -> None:
-        from multiprocessing.connection import Connection
-
         # own session (Ctrl-C in the terminal is the explorer's to handle), dies with the thread that
         # started it (and exits when its pipe closes)
         proc = spawn_python(HELPER_MAIN, stdin=subprocess.PIPE, stdout=subprocess.PIPE)

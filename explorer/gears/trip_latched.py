@@ -1,4 +1,5 @@
-"""The trip gear's latched phase in the effects 'forces', 'contact' and 'elastic'.
+"""The trip gear's latched phase in the effects 'forces', 'contact' and 'elastic' (its variants of
+those effects: explorer.gears.trip_gear.TripGear.effects).
 
 While the latch carries the valve - from the pick-up, where the latch has run through its
 over-travel s_o (valve.lash), to the trip - the gear is a positive drive: the latch lift X(theta)
@@ -58,7 +59,14 @@ from typing import Any
 
 import numpy as np
 
+from ..dynamics import solvers
+from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel
+from ..effects.elastic import elastic_jerk, solve_reporting
+from ..mechanics.forces import (Pieces, TrainLoads, float_speed, friction_direction, load_parts, loss_report,
+                                minimise_on_pieces, velocity_zeros)
+from ..mechanics.forces import loss_intervals as intervals_of
 from ..result import EffectOutput, Event
+from .trip import simulate_closing
 
 TWO_PI = 2.0 * math.pi
 GAUSS_NODES = 32  # per smooth piece: the latch laws are trigonometric/polynomial, 32 nodes reach rounding
@@ -67,12 +75,7 @@ _INSIDE = 1e-11  # rad: one-sided limits at the pick-up and the trip (as forces.
 
 def trip_lift_of(ctx):
     """The TripLift of a trip scene (the pipeline's, or built from the scene)."""
-    lift = ctx.lift
-    if not hasattr(lift, "closing"):
-        from ..gears.build import build_gear_lift
-
-        lift = build_gear_lift(ctx.scene)
-    return lift
+    return ctx.lift if hasattr(ctx.lift, "closing") else ctx.gear.build_lift(ctx.scene)
 
 
 def carried(lift, theta) -> np.ndarray:
@@ -107,8 +110,6 @@ def carried_pieces(lift, n_grid: int = 4096):
     """forces.Pieces of one revolution: the carried window split where the latch law, the
     friction direction or the buffer's state changes (is_open True), and the rest of the
     revolution as one piece (is_open False: the latch carries nothing there)."""
-    from ..mechanics.forces import Pieces, friction_direction, velocity_zeros
-
     latch = lift.latch
     latched = getattr(lift, "latched", None)
     buffer_cuts = latched.cuts() if latched is not None else np.zeros(0)
@@ -126,8 +127,6 @@ def carried_pieces(lift, n_grid: int = 4096):
 def _force(lift, d, direction, loads, omega):
     """(latch force F = w^2 A + G - B, its inertia part w^2 A) for derivatives d; a fifth row of d,
     if present, is the buffer force B (_LatchAndBuffer)."""
-    from ..mechanics.forces import load_parts
-
     a_coef, g_part, _ = load_parts(d, direction, loads, 1.0, lift.overtravel)
     force = omega**2 * a_coef + g_part
     if d.shape[0] > 4:
@@ -139,8 +138,6 @@ def latch_force(lift, theta, loads, omega: float) -> dict[str, np.ndarray]:
     """Per sample: the rigid latch force F, its inertia, friction and buffer (B, upward on the
     valve) parts, the camshaft torque T = F dX/dtheta, and the carried mask; all 0 where the latch
     does not carry the valve."""
-    from ..mechanics.forces import friction_direction
-
     theta = np.asarray(theta, dtype=float)
     d = _LatchAndBuffer(lift).derivatives(theta)
     direction = friction_direction(d[1], d[2])
@@ -188,8 +185,6 @@ def latch_force_extremes(lift, loads, omega: float, pieces, n_grid: int = 4096) 
     """Smallest and largest latch force over the carried window with their cam angles (rad),
     refined on the analytic law and the buffer's dense solution (forces.minimise_on_pieces): the
     one source of the forces effect's and the gear effect's extremes."""
-    from ..mechanics.forces import minimise_on_pieces
-
     drive = _LatchAndBuffer(lift)
 
     def force(d, direction):
@@ -203,8 +198,6 @@ def latch_force_extremes(lift, loads, omega: float, pieces, n_grid: int = 4096) 
 def buffer_extremes(lift, pieces, n_grid: int = 4096) -> dict:
     """Smallest (most suction) and largest buffer force B over the carried window, with cam angles
     (rad; None where the buffer exerts nothing)."""
-    from ..mechanics.forces import minimise_on_pieces
-
     drive = _LatchAndBuffer(lift)
     b_min, th_min = minimise_on_pieces(drive, pieces, lambda d, direction: d[4], n_grid=n_grid)
     neg_max, th_max = minimise_on_pieces(drive, pieces, lambda d, direction: -d[4], n_grid=n_grid)
@@ -217,8 +210,6 @@ def loss_intervals(lift, loads, omega: float, pieces, n_grid: int = 4096) -> lis
     """Where the latch force (buffer included) is <= 0 in the carried window: (loss, regain) cam
     angles, by the one definition of explorer.mechanics.forces.loss_intervals (the pick-up counts as the
     valve having been seated, the trip as its end)."""
-    from ..mechanics.forces import loss_intervals as intervals_of
-
     drive = _LatchAndBuffer(lift)
 
     def force_of(t, direction):
@@ -233,8 +224,6 @@ def loss_intervals(lift, loads, omega: float, pieces, n_grid: int = 4096) -> lis
 
 
 def trip_forces_effect(ctx) -> EffectOutput:
-    from ..mechanics.forces import TrainLoads, float_speed, loss_report
-
     scene, w = ctx.scene, ctx.omega
     lift = trip_lift_of(ctx)
     loads = TrainLoads.from_scene(scene)
@@ -350,8 +339,6 @@ def trip_forces_effect(ctx) -> EffectOutput:
 
 
 def trip_contact_effect(ctx) -> EffectOutput:
-    from ..mechanics.forces import TrainLoads
-
     scene, w = ctx.scene, ctx.omega
     lift = trip_lift_of(ctx)
     trip = scene.gear.part("trip")
@@ -365,7 +352,7 @@ def trip_contact_effect(ctx) -> EffectOutput:
     f_max = max(float(ctx.summary["max_contact_force_N"]), 0.0)
     columns = {"latch_release_friction_N": mu * bearing}
     summary: dict[str, Any] = {
-        "contact_follower_type": "trip",
+        "contact_follower_type": scene.follower.type,
         "latch_friction_coefficient": mu,
         "latch_force_at_trip_N": f_trip,
         "latch_release_friction_force_N": mu * max(f_trip, 0.0),
@@ -407,14 +394,10 @@ class TripElasticMotion:
     warnings: tuple
 
 
-def elastic_trip_motion(scene, lift, theta, method: str = "exact", options: dict | None = None) -> TripElasticMotion:
+def elastic_trip_motion(scene, lift, theta, method: str = solvers.DEFAULT, options: dict | None = None) -> TripElasticMotion:
     """Elastic valve motion of a trip gear at the cam angles theta (any order): the linkage model
     driven by the latch from its lowest point (valve at rest on the seat) to the trip instant, then
     the free closing from the elastic state there."""
-    from .elastic import elastic_jerk, solve_reporting
-    from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel
-    from ..gears.trip import simulate_closing
-
     w = scene.drive.omega
     period = TWO_PI / w
     model = LinkageModel.from_scene(scene)
@@ -507,9 +490,6 @@ def elastic_trip_motion(scene, lift, theta, method: str = "exact", options: dict
 
 
 def trip_elastic_effect(ctx) -> EffectOutput:
-    from ..dynamics.model import EVENT_KINDS, LinkageModel
-    from ..mechanics.forces import TrainLoads
-
     scene, w = ctx.scene, ctx.omega
     lift = trip_lift_of(ctx)
     method = scene.solver.method
