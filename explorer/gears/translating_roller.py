@@ -16,13 +16,18 @@ from types import MappingProxyType
 
 import numpy as np
 
-from ..effects.contour import geometry_columns
-from ..lift.contours.cam_profile import TranslatingCam, angles_with
-from ..lift.contours.lift_from_contour import contour_lift
-from ..lift.contours.translating import find_undercut, profile_from_derivatives, undercut_error
+from ..core.plugins import resolve
 from ..lift.registry import law_spec, scene_lift
 from ..mechanics.contact import ContactGeometry, camshaft_torque, contact_point_radius
 from .base import Gear
+
+# The cam's geometry, imported when first used (core.plugins.resolve): a scene loads without the
+# contour analysis, the curvature columns and the exports' cam, which a run or an export needs
+# (arcs, parametric and the closed forms are the better part of a scene load's imports).
+_CONTOUR_LIFT = "explorer.lift.contours.lift_from_contour:contour_lift"
+_GEOMETRY_COLUMNS = "explorer.effects.contour:geometry_columns"
+_TRANSLATING = "explorer.lift.contours.translating:"
+_CAM_PROFILE = "explorer.lift.contours.cam_profile:"
 
 
 class TranslatingRoller(Gear):
@@ -44,7 +49,7 @@ class TranslatingRoller(Gear):
         return law.closed_form or law.builder is not None or (law.from_contour and self.analyses_contours)
 
     def contour_lift(self, cam, follower, file: str):
-        return contour_lift(cam, follower, file)
+        return resolve(_CONTOUR_LIFT)(cam, follower, file)
 
     def build_lift(self, scene):
         if law_spec(scene.lift.law).from_contour:
@@ -53,7 +58,7 @@ class TranslatingRoller(Gear):
 
     def kinematics(self, ctx, d) -> tuple[dict, dict]:
         """Pressure angle and radii of curvature (closed forms); InputError on undercut."""
-        return geometry_columns(ctx.scene, ctx.theta, d)
+        return resolve(_GEOMETRY_COLUMNS)(ctx.scene, ctx.theta, d)
 
     def contact_geometry(self, ctx) -> ContactGeometry:
         """The kinematics' geometry columns when the cam provides them, otherwise the exact closed
@@ -62,8 +67,8 @@ class TranslatingRoller(Gear):
         if "pressure_angle_deg" in c and "contour_radius_m" in c:
             alpha, contour_radius, reused = np.radians(c["pressure_angle_deg"]), np.asarray(c["contour_radius_m"]), True
         else:
-            profile = profile_from_derivatives(ctx.theta, ctx.lift.derivatives(ctx.theta), f.base_radius,
-                                               f.roller_radius, f.offset)
+            profile = resolve(_TRANSLATING).profile_from_derivatives(ctx.theta, ctx.lift.derivatives(ctx.theta),
+                                                                     f.base_radius, f.roller_radius, f.offset)
             alpha, contour_radius, reused = profile.pressure_angle, profile.contour_radius, False
         lift = np.asarray(c["follower_lift_m"])
         arm = camshaft_torque(1.0, alpha, lift, f.base_radius, f.roller_radius, f.offset)
@@ -74,18 +79,20 @@ class TranslatingRoller(Gear):
             from_columns=reused,
         )
 
-    def cam_profile(self, scene, lift=None) -> TranslatingCam:
-        """The cam to make; InputError for an undercut cam (its contour folds: nothing to make)."""
+    def cam_profile(self, scene, lift=None):
+        """The cam to make (a TranslatingCam); InputError for an undercut cam (its contour folds:
+        nothing to make)."""
         f = scene.follower
-        src = TranslatingCam(lift if lift is not None else self.build_lift(scene), f.base_radius, f.roller_radius,
-                             f.offset, scene.name, scene.source)
-        theta = angles_with(7200, src.breakpoints())
+        cam, translating = resolve(_CAM_PROFILE), resolve(_TRANSLATING)
+        src = cam.TranslatingCam(lift if lift is not None else self.build_lift(scene), f.base_radius, f.roller_radius,
+                                 f.offset, scene.name, scene.source)
+        theta = cam.angles_with(7200, src.breakpoints())
         g = src.at(theta)
         with np.errstate(divide="ignore"):
             rho = 1.0 / g.pitch_curvature
-        i = find_undercut(rho, f.roller_radius)
+        i = translating.find_undercut(rho, f.roller_radius)
         if i is not None:
-            raise undercut_error(float(theta[i]), float(rho[i]), f.roller_radius, scene.source)
+            raise translating.undercut_error(float(theta[i]), float(rho[i]), f.roller_radius, scene.source)
         return src
 
 
