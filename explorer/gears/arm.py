@@ -37,8 +37,8 @@ normal_ratio  valve velocity per velocity of the follower along the contact norm
               ds/dpsi / (n . J (X - O1)): the cam's normal force per newton at the valve without
               friction (virtual work), N / F.
 Pressure angle: between the contact normal and the direction in which the follower's point on the
-normal travels when it lifts: the circle's centre for a roller or a curved pad, the contact point
-itself for a flat pad.
+normal travels when it lifts: the roller's centre, or for a pad (curved or flat: the same limit)
+the arm's point at the contact itself.
 """
 
 from __future__ import annotations
@@ -54,12 +54,15 @@ from . import jet as J
 from .contour_follow import as_parametric, contour_jets, contour_sign, make_contour_motion
 from .envelope import (
     CamSurface,
+    EnvelopeContour,
     SurfaceVelocities,
     cam_velocity,
     check_no_cusp,
     check_no_undercut,
+    circle_contact,
     circle_envelope,
     first_crossing,
+    line_contact,
     line_envelope,
     surface_velocities,
 )
@@ -112,7 +115,7 @@ class Arm:
     base_radius: float
     pivot: tuple[float, float]
     cam_side: CamSide
-    branch: int  # circle: its centre left (+1) / right (-1) of O1 -> O; flat pad: which tangent line
+    branch: int  # the circle's centre (a flat pad: its contact) left (+1) / right (-1) of the line O1 -> O
     rest: float  # psi0, rad
     lifting: float  # +1 if psi grows as the cam lifts the arm, else -1
     file: str = "<memory>"
@@ -167,7 +170,14 @@ def make_arm(*, base_radius: float, pivot, cam_side: CamSide, branch: int, file:
         if abs(cos_arg) >= 1.0 - DEAD_POINT_MARGIN:
             raise InputError(file, f"{key}.arm", "the flat pad cannot lie on the base circle from this pivot (move the "
                              "pivot, or change the arm or the pad's face angle)")
-        phi0 = math.atan2(pivot[1], pivot[0]) + branch * math.acos(cos_arg)
+        # of the two tangent lines, the one whose contact (Rb n on the base circle) lies on the
+        # `branch` side of the line from the pivot towards the cam centre, as for a circle's centre
+        phi_o = math.atan2(pivot[1], pivot[0])
+        for sign in (1.0, -1.0):
+            phi0 = phi_o + sign * math.acos(cos_arg)
+            contact = base_radius * np.array([math.cos(phi0), math.sin(phi0)])
+            if np.sign(-pivot[0] * (contact[1] - pivot[1]) + pivot[1] * (contact[0] - pivot[0])) == branch:
+                break
         rest = phi0 - side.face_angle
         lifting = float(np.sign(-pivot[0] * math.sin(phi0) + pivot[1] * math.cos(phi0)))  # dh / dpsi
     if lifting == 0.0:
@@ -222,6 +232,19 @@ class ArmGear:
             return self.law.derivatives(np.asarray(theta, dtype=float))
         return self.valve.travel(self.arm_angle(theta)).c
 
+    def contact_jets(self, theta) -> tuple[Jet, Jet]:
+        """The cam contact (ground frame) as jets in theta, to the second derivative."""
+        psi = self.arm_angle(theta)
+        side = self.arm.cam_side
+        if side.circular:
+            cx, cy = self.arm.circle_centre(psi)
+            return circle_contact(theta, cx, cy, side.radius)
+        phi, h = self.arm.face(psi)
+        return line_contact(theta, phi, h)
+
+    def synthesised_contour(self) -> EnvelopeContour:
+        return EnvelopeContour(self.contact_jets)
+
     def surface(self, theta, psi: Jet | None = None) -> CamSurface:
         psi = self.arm_angle(theta) if psi is None else psi
         side = self.arm.cam_side
@@ -243,9 +266,7 @@ class ArmGear:
         if side.circular:
             cx, cy = arm.circle_centre(psi)
             centre = np.column_stack([cx.c[0], cy.c[0]])
-            travel = arm.lifting * point_velocity_about(arm.pivot, centre)
-        else:
-            travel = arm.lifting * jac
+        travel = arm.lifting * (point_velocity_about(arm.pivot, centre) if side.kind == ROLLER else jac)
         travel = travel / np.hypot(travel[:, 0], travel[:, 1])[:, None]
         n = surface.normal
         pressure = np.arctan2(travel[:, 0] * n[:, 1] - travel[:, 1] * n[:, 0], np.einsum("ij,ij->i", travel, n))
@@ -274,7 +295,9 @@ class ArmGear:
         theta = np.linspace(0.0, TWO_PI, n, endpoint=False)
         k = self.kinematics(theta)
         arm, side = self.arm, self.arm.cam_side
-        if side.kind == ROLLER:
+        if self.contour is not None:
+            pass  # a given contour: its analysis found the working surface's contact running round it steadily
+        elif side.kind == ROLLER:
             check_no_undercut(k.surface, side.radius, arm.file, f"{arm.key}.roller_radius",
                               "use a smaller roller, a larger base circle or a longer event")
         elif side.circular:
@@ -295,8 +318,9 @@ class ArmGear:
 
     def body_segments(self, k: ArmKinematics) -> list[tuple[np.ndarray, np.ndarray]]:
         """The arm's centre line as segments (start (N, 2), end (N, 2)), kept off the working
-        surfaces themselves: from the pivot to the roller's rim (or to a point just inside the
-        pad) and from there to the valve pad's centre."""
+        surfaces themselves: from the pivot to the roller's rim (for a pad: to the end of the pad's
+        used stretch nearer the pivot, just inside the arm) and from the far side (rim, or the
+        used stretch's other end) to the valve pad's centre."""
         arm, side = self.arm, self.arm.cam_side
         psi = k.arm_angle[0]
         o = np.tile(np.asarray(arm.pivot, dtype=float), (len(psi), 1))
@@ -305,9 +329,23 @@ class ArmGear:
             near = o + (side.arm - side.radius) * e
             far = o + (side.arm + side.radius) * e
         else:
-            inside = 0.02 * side.arm  # a point of the arm just behind the pad's face
-            na = np.column_stack([np.cos(psi + side.face_angle), np.sin(psi + side.face_angle)])
-            near = far = o + side.arm * e + inside * na
+            # the contacts in the arm's frame; their extreme ends, moved into the arm by 2 % of it
+            c, s_ = np.cos(psi), np.sin(psi)
+            rel = k.surface.contact - o
+            local = np.column_stack([c * rel[:, 0] + s_ * rel[:, 1], -s_ * rel[:, 0] + c * rel[:, 1]])
+            distance = np.hypot(local[:, 0], local[:, 1])
+            if side.circular:
+                a, delta = side.centre_polar()
+                inward = a * np.array([math.cos(delta), math.sin(delta)]) - local
+                inward /= np.hypot(inward[:, 0], inward[:, 1])[:, None]
+            else:
+                inward = np.tile([math.cos(side.face_angle), math.sin(side.face_angle)], (len(psi), 1))
+            depth = 0.02 * side.arm
+            ends = []
+            for i in (int(np.argmin(distance)), int(np.argmax(distance))):
+                p = local[i] + depth * inward[i]
+                ends.append(o + np.column_stack([c * p[0] - s_ * p[1], s_ * p[0] + c * p[1]]))
+            near, far = ends
         cx, cy = self.valve.centre(psi)
         pad = np.column_stack([cx, cy])
         return [(o, near), (far, pad)]

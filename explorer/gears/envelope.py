@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -62,35 +63,54 @@ def _rotate_to_cam(theta, xy: np.ndarray) -> np.ndarray:
     return np.column_stack([c * xy[:, 0] + s * xy[:, 1], -s * xy[:, 0] + c * xy[:, 1]])
 
 
+def line_contact(theta, normal_angle: Jet, support: Jet) -> tuple[Jet, Jet]:
+    """The contact point (x, y) of a flat working surface, ground frame, as jets in theta (valid to
+    the second derivative): X = h n(phi) + w t(phi), w = h_beta = h' / beta'."""
+    beta = normal_angle - Jet.variable(np.asarray(theta, dtype=float))
+    w = support.shift() / beta.shift()  # h_beta as a jet in theta (known to the 2nd derivative)
+    c, s = J.cos(normal_angle), J.sin(normal_angle)
+    return support * c - w * s, support * s + w * c
+
+
 def line_envelope(theta, normal_angle: Jet, support: Jet) -> CamSurface:
     """Cam of a flat working surface: the envelope of the lines n(phi) . X = h (module docstring).
 
     normal_angle phi and support h are jets in theta. The contact's distance along the face from
     the foot of the perpendicular through the cam centre is w = h_beta = h' / beta'."""
     theta = np.asarray(theta, dtype=float)
+    x, y = line_contact(theta, normal_angle, support)
     beta = normal_angle - Jet.variable(theta)
-    w = support.shift() / beta.shift()  # h_beta as a jet in theta (known to the 2nd derivative)
-    n = (J.cos(normal_angle), J.sin(normal_angle))
-    x = support * n[0] - w * n[1]
-    y = support * n[1] + w * n[0]
     h_beta = J.reparametrize(support, beta)  # h, h_beta, h_beta_beta, ...
     radius = h_beta.c[0] + h_beta.c[2]
     contact = np.column_stack([x.c[0], y.c[0]])
+    n = normal_angle.c[0]
     return CamSurface(
         theta=theta, contour=_rotate_to_cam(theta, contact), radius=radius, contact=contact,
-        contact_rate=np.column_stack([x.c[1], y.c[1]]), normal=np.column_stack([n[0].c[0], n[1].c[0]]),
+        contact_rate=np.column_stack([x.c[1], y.c[1]]), normal=np.column_stack([np.cos(n), np.sin(n)]),
     )
+
+
+def _circle_normal(cx: Jet, cy: Jet) -> tuple[Jet, Jet, Jet, Jet, Jet]:
+    """D = C' - J C (the pitch curve's tangent in the ground frame), its length and the outward
+    unit normal J D / |D| (the cam turns ccw: the pitch curve runs clockwise in the cam frame)."""
+    dx = cx.shift() + cy
+    dy = cy.shift() - cx
+    speed = J.hypot(dx, dy)
+    return dx, dy, speed, -dy / speed, dx / speed
+
+
+def circle_contact(theta, cx: Jet, cy: Jet, radius: float) -> tuple[Jet, Jet]:
+    """The contact point (x, y) of a circular working surface, ground frame, as jets in theta
+    (valid to the second derivative): the centre moved by the radius towards the cam."""
+    _dx, _dy, _speed, nx, ny = _circle_normal(cx, cy)
+    return cx - radius * nx, cy - radius * ny
 
 
 def circle_envelope(theta, cx: Jet, cy: Jet, radius: float) -> CamSurface:
     """Cam of a circular working surface of `radius` about the ground point (cx, cy)(theta): the
     pitch curve moved by the radius towards the cam (the envelope of the circles)."""
     theta = np.asarray(theta, dtype=float)
-    # D = C' - J C: the pitch curve's tangent turned into the ground frame (module docstring)
-    dx = cx.shift() + cy
-    dy = cy.shift() - cx
-    speed = J.hypot(dx, dy)
-    nx, ny = -dy / speed, dx / speed  # cam turns ccw: the pitch curve runs clockwise, outward = J D
+    dx, dy, speed, nx, ny = _circle_normal(cx, cy)
     bx = cx.c[2] + 2.0 * cy.c[1] - cx.c[0]  # C'' - 2 J C' - C
     by = cy.c[2] - 2.0 * cx.c[1] - cy.c[0]
     cross = dx.c[0] * by - dy.c[0] * bx
@@ -103,6 +123,26 @@ def circle_envelope(theta, cx: Jet, cy: Jet, radius: float) -> CamSurface:
         theta=theta, contour=_rotate_to_cam(theta, contact), radius=pitch_radius - radius, contact=contact,
         contact_rate=np.column_stack([x.c[1], y.c[1]]), normal=np.column_stack([nx.c[0], ny.c[0]]),
     )
+
+
+@dataclass(frozen=True)
+class EnvelopeContour:
+    """A synthesised cam as a parametric contour (explorer.lift.contours.parametric's protocol),
+    the parameter being the synthesis cam angle: the contact point turned into the cam frame,
+    X(t) = Rot(-t) X_ground(t), exact to the second derivative. For exports at any density and for
+    the analysis round trip (synthesis -> contour -> analysis)."""
+
+    contact: Callable[[np.ndarray], tuple[Jet, Jet]]  # theta -> ground contact point jets
+    period: float = TWO_PI
+    order: int = 2
+
+    def jets(self, t, rows: int) -> np.ndarray:
+        t = np.asarray(t, dtype=float).reshape(-1)
+        x, y = self.contact(t)
+        tj = Jet.variable(t)
+        c, s = J.cos(tj), J.sin(tj)
+        cam_x, cam_y = c * x + s * y, c * y - s * x
+        return np.stack([cam_x.c[:rows], cam_y.c[:rows]], axis=1)
 
 
 # --------------------------------------------------------------------------------------------

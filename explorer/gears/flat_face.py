@@ -44,7 +44,7 @@ over a contour is the roller analysis of explorer.lift.contours with roller radi
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -54,11 +54,12 @@ from . import jet as J
 from .contour_follow import as_parametric, contour_jets, contour_sign, make_contour_motion
 from .envelope import (
     CamSurface,
+    EnvelopeContour,
     SurfaceVelocities,
     _rotate_to_cam,
     cam_velocity,
     check_no_cusp,
-    check_no_undercut,
+    line_contact,
     line_envelope,
     surface_velocities,
 )
@@ -118,29 +119,37 @@ class TappetKinematics:
         return np.ones_like(self.theta)
 
 
-def _flat_surface(theta, s: Jet, base_radius: float) -> CamSurface:
-    return line_envelope(theta, Jet.constant(np.full(np.shape(theta), 0.5 * math.pi)), s + base_radius)
+def flat_face_surface(theta, s: Jet, base_radius: float) -> CamSurface:
+    surface = line_envelope(theta, Jet.constant(np.full(np.shape(theta), 0.5 * math.pi)), s + base_radius)
+    # the face's normal is the tappet's axis itself (cos 90 deg is 6e-17 in floats, not 0)
+    return replace(surface, normal=np.tile(AXIS, (len(surface.theta), 1)))
 
 
-def _crowned_surface(theta, s: Jet, base_radius: float, face_radius: float) -> CamSurface:
-    """The crown's closed forms (module docstring), free of the cancellation of rho_pitch - Rf."""
+def crowned_contact(s: Jet, base_radius: float, face_radius: float) -> tuple[Jet, Jet]:
+    """The crown's contact point (ground frame) as jets in theta: Rf s'/|T| off the axis, at
+    height y (|T| - Rf)/|T|, |T| - Rf written as a + s'^2/(|T| + y) (no cancellation)."""
     rf = face_radius
     a = s + base_radius
     y = a + rf  # the crown's centre height
     s1 = s.shift()
     length = J.hypot(y, s1)
-    x_c = rf * s1 / length
-    y_c = y * (a + s1 * s1 / (length + y)) / length  # y (|T| - Rf) / |T|
-    yv, av, d1, d2 = y.c[0], a.c[0], s.c[1], s.c[2]
+    return rf * s1 / length, y * (a + s1 * s1 / (length + y)) / length
+
+
+def crowned_face_surface(theta, s: Jet, base_radius: float, face_radius: float) -> CamSurface:
+    """The crown's closed forms (module docstring), free of the cancellation of rho_pitch - Rf."""
+    x_c, y_c = crowned_contact(s, base_radius, face_radius)
+    yv = s.c[0] + base_radius + face_radius
+    av, d1, d2 = s.c[0] + base_radius, s.c[1], s.c[2]
     big_e = np.expm1(1.5 * np.log1p((d1 / yv) ** 2))
     numerator = yv * yv * (av + d2) + yv * (yv * yv * big_e - 2.0 * d1 * d1) + av * (2.0 * d1 * d1 - yv * d2)
     with np.errstate(divide="ignore", invalid="ignore"):
         radius = numerator / (yv * yv + 2.0 * d1 * d1 - yv * d2)
+    length = np.hypot(yv, d1)
     contact = np.column_stack([x_c.c[0], y_c.c[0]])
     return CamSurface(
         theta=np.asarray(theta, dtype=float), contour=_rotate_to_cam(theta, contact), radius=radius, contact=contact,
-        contact_rate=np.column_stack([x_c.c[1], y_c.c[1]]),
-        normal=np.column_stack([-d1 / length.c[0], yv / length.c[0]]),
+        contact_rate=np.column_stack([x_c.c[1], y_c.c[1]]), normal=np.column_stack([-d1 / length, yv / length]),
     )
 
 
@@ -159,15 +168,27 @@ class BucketTappetGear:
     def surface(self, theta) -> CamSurface:
         s = self.lift_jet(theta)
         if self.tappet.crowned:
-            return _crowned_surface(theta, s, self.tappet.base_radius, self.tappet.face_radius)
-        return _flat_surface(theta, s, self.tappet.base_radius)
+            return crowned_face_surface(theta, s, self.tappet.base_radius, self.tappet.face_radius)
+        return flat_face_surface(theta, s, self.tappet.base_radius)
+
+    def contact_jets(self, theta) -> tuple[Jet, Jet]:
+        """The contact point (ground frame) as jets in theta, to the second derivative."""
+        s = self.lift_jet(theta)
+        t = self.tappet
+        if t.crowned:
+            return crowned_contact(s, t.base_radius, t.face_radius)
+        return line_contact(theta, Jet.constant(np.full(np.shape(theta), 0.5 * math.pi)), s + t.base_radius)
+
+    def synthesised_contour(self) -> EnvelopeContour:
+        """The cam as an exact parametric contour (explorer.gears.envelope.EnvelopeContour)."""
+        return EnvelopeContour(self.contact_jets)
 
     def kinematics(self, theta) -> TappetKinematics:
         theta = np.asarray(theta, dtype=float)
         s = self.lift_jet(theta)
         t = self.tappet
-        surface = (_crowned_surface(theta, s, t.base_radius, t.face_radius) if t.crowned
-                   else _flat_surface(theta, s, t.base_radius))
+        surface = (crowned_face_surface(theta, s, t.base_radius, t.face_radius) if t.crowned
+                   else flat_face_surface(theta, s, t.base_radius))
         tappet_velocity = np.column_stack([np.zeros_like(theta), s.c[1]])
         velocities = surface_velocities(surface.tangent, surface.contact_rate, cam_velocity(surface.contact), tappet_velocity)
         pressure = np.arctan2(-surface.normal[:, 0], surface.normal[:, 1])
@@ -186,15 +207,18 @@ class BucketTappetGear:
         return 2.0 * float(reach[i]) + t.face_margin, float(k.theta[i])
 
     def check(self, n: int = 3600) -> TappetKinematics:
-        """Cusp (rho <= 0) and the face's diameter over a revolution: one-line InputErrors."""
+        """Cusp (rho <= 0) and the face's diameter over a revolution: one-line InputErrors. A given
+        contour's convexity was checked by its analysis (the face's contact must run round it
+        steadily), where the contour's derivatives may not reach rho."""
         t = self.tappet
         t.validate()
         theta = np.linspace(0.0, TWO_PI, n, endpoint=False)
         k = self.kinematics(theta)
-        worst = float(np.min(k.surface.radius))
-        remedy = (f"enlarge follower.base_radius by more than {max(-worst, 0.0) * 1e3:.3g} mm, or soften the lift's "
-                  "negative acceleration there")
-        check_no_cusp(k.surface, t.file, "follower.base_radius", remedy)
+        if self.contour is None:
+            worst = float(np.min(k.surface.radius))
+            remedy = (f"enlarge follower.base_radius by more than {max(-worst, 0.0) * 1e3:.3g} mm, or soften the lift's "
+                      "negative acceleration there")
+            check_no_cusp(k.surface, t.file, "follower.base_radius", remedy)
         if t.face_diameter is not None:
             need, at = self.face_diameter_needed(k)
             if need > t.face_diameter:
@@ -220,21 +244,34 @@ class BucketTappetGear:
         """Peak contact pressure (Pa). Flat face on the cam: a line contact of the lobe's width with
         the cam's radius (explorer.mechanics.contact.hertz_line_stress). Crown on the cam: the
         elliptical point contact of the sphere Rf on the cam (rho in the plane, straight across;
-        explorer.mechanics.hertz.point_contact); where its ellipse would be longer than the lobe
-        is wide, the line contact of the crown's section over the width (which it then is)."""
+        explorer.mechanics.hertz.point_contact); `contact_ellipse` tells where its ellipse would
+        run over the lobe's edges (then the real pressure is higher at the edges: a crown is
+        chosen to keep the ellipse on the lobe)."""
         from ..mechanics.contact import hertz_line_stress
-        from ..mechanics.hertz import point_contact
 
         t = self.tappet
+        if t.crowned:
+            return self.contact_ellipse(k, normal_force, e_star).peak_pressure
         b = width if width is not None else t.cam_width
         if b is None:
             raise InputError(t.file, f"{t.key}.cam_width", "the contact stress needs the lobe's width")
-        rho = k.surface.radius
-        if not t.crowned:
-            return hertz_line_stress(normal_force, b, math.inf, rho, e_star)
-        point = point_contact(normal_force, 1.0 / t.face_radius + 1.0 / rho, np.full_like(rho, 1.0 / t.face_radius), e_star)
-        line = hertz_line_stress(normal_force, b, t.face_radius, rho, e_star)
-        return np.where(point.semi_major <= 0.5 * b, point.peak_pressure, line)
+        return hertz_line_stress(normal_force, b, math.inf, k.surface.radius, e_star)
+
+    def contact_ellipse(self, k: TappetKinematics, normal_force, e_star: float):
+        """The crown's Hertz ellipse (explorer.mechanics.hertz.PointContact); its semi-major axis
+        runs along the camshaft, to be compared with half the lobe's width (edge loading)."""
+        from ..mechanics.hertz import point_contact
+
+        rf = self.tappet.face_radius
+        across = np.full(len(k.theta), 1.0 / rf)
+        return point_contact(normal_force, 1.0 / rf + 1.0 / k.surface.radius, across, e_star)
+
+    def edge_loaded(self, k: TappetKinematics, normal_force, e_star: float) -> np.ndarray:
+        """Crown only: where the contact ellipse would be longer than the lobe is wide."""
+        t = self.tappet
+        if t.cam_width is None:
+            raise InputError(t.file, f"{t.key}.cam_width", "the edge-loading check needs the lobe's width")
+        return self.contact_ellipse(k, normal_force, e_star).semi_major > 0.5 * t.cam_width
 
 
 # --------------------------------------------------------------------------------------------

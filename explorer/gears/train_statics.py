@@ -59,6 +59,10 @@ def cam_forces(valve_force, *, contact: np.ndarray, normal: np.ndarray, tangent:
     (opening direction) and V_t = valve_jacobian (u . V_t = ds/dq); the tip's tangent and
     sliding, if the valve is pushed through a sliding pad."""
     f = np.broadcast_to(np.asarray(valve_force, dtype=float), (len(contact),))
+    # the coordinate's direction that opens the valve: both sides of the balance turned to it
+    way = np.where(_dot(valve_axis, valve_jacobian) < 0.0, -1.0, 1.0)[:, None]
+    cam_jacobian = way * cam_jacobian
+    valve_jacobian = way * valve_jacobian
     sigma_c = np.sign(cam_sliding)
     drive = _dot(normal, cam_jacobian) + cam_friction * sigma_c * _dot(tangent, cam_jacobian)
     free_drive = _dot(normal, cam_jacobian)
