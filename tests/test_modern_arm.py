@@ -160,7 +160,7 @@ def _circle_loop(arm, c, radius, th, psi):
         jac = np.column_stack([jmat(centre), -r_th @ (reach * jmat(e(phi)))])
         step = np.linalg.solve(jac, f)
         psi, phi = psi - step[0], phi - step[1]
-        if np.max(np.abs(step)) < 1e-16:
+        if np.max(np.abs(step)) < 1e-13:  # quadratic convergence: the error is now ~1e-26, below rounding
             break
     if np.max(np.abs(arm.o1 + rot(psi) @ arm.centre_local - r_th @ (c + reach * e(phi)))) > 1e-14:
         return None
@@ -182,7 +182,7 @@ def _flat_loop(arm, c, radius, th, psi):
         df = jmat(n) @ (r_th_c - arm.o1)
         step = f / df
         psi -= step
-        if abs(step) < 1e-16:
+        if abs(step) < 1e-13:
             break
     n = e(psi + gamma)
     if abs(n @ (r_th_c - arm.o1) + radius - d) > 1e-15:
@@ -205,13 +205,10 @@ def test_analysis_over_an_arc_cam_matches_the_vector_loop(name):
     contour = arc_cam()
     gear = GEARS[name](law=None, contour=contour, check=False)
     arm = LoopArm(gear)
-    k = gear.kinematics(TH)
-    delta = 0.0
-    if gear.arm.cam_side.circular:
-        delta = math.atan2(arm.centre_local[1], arm.centre_local[0])
-    psi, rate = loop_on_arcs(arm, contour, TH, gear.arm.rest)
+    probe = TH[::2]
+    k = gear.kinematics(probe)
+    psi, rate = loop_on_arcs(arm, contour, probe, gear.arm.rest)
     psi = psi + 2.0 * math.pi * np.round((k.arm_angle[0] - psi) / (2.0 * math.pi))
-    assert delta is not None
     assert np.max(np.abs(k.arm_angle[0] - psi)) < 1e-12
     travel = np.array([arm.travel(p) for p in psi])
     scale = np.abs(travel).max()

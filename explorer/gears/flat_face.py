@@ -92,6 +92,11 @@ class Tappet:
             raise InputError(self.file, "follower.base_radius", f"must be greater than zero, got {self.base_radius!r}")
         if not self.face_radius > 0.0:
             raise InputError(self.file, f"{self.key}.face_radius", f"must be greater than zero, got {self.face_radius!r}")
+        for name, value in (("face_diameter", self.face_diameter), ("cam_width", self.cam_width)):
+            if value is not None and not value > 0.0:
+                raise InputError(self.file, f"{self.key}.{name}", f"must be greater than zero, got {value!r}")
+        if not self.face_margin >= 0.0:
+            raise InputError(self.file, f"{self.key}.face_margin", f"must not be negative, got {self.face_margin!r}")
         if self.crowned and self.cam_width is not None and abs(self.offset) >= 0.5 * self.cam_width:
             raise InputError(self.file, f"{self.key}.offset",
                              f"a crowned face touches the cam on the tappet axis, but the lobe ({self.cam_width * 1e3:.4g} mm "

@@ -125,7 +125,7 @@ class PushrodTrain:
             by = np.asarray(by, dtype=float)
             bx = np.full(by.shape, bx)
         x, y = closure_or_error((bx, by), self.pushrod_length, self.rocker_pivot, self.rocker_arm, self.branch,
-                                file=self.file, key=f"{self.key}.pushrod.length", what="the pushrod and rocker",
+                                file=self.file, key=f"{self.key}.pushrod.length", what="the loop of pushrod and rocker",
                                 theta=theta)
         psi = J.atan2(y - self.rocker_pivot[1], x - self.rocker_pivot[0])
         return psi + 2.0 * math.pi * np.round((self.rest - J.value(psi)) / (2.0 * math.pi))
@@ -219,7 +219,9 @@ class PushrodTrain:
         theta = np.linspace(0.0, TWO_PI, n, endpoint=False)
         k = self.kinematics(theta)
         f = self.lifter
-        if f.kind == "roller":
+        if self.contour is not None:
+            pass  # a given contour: its analysis found the lifter's contact running round it steadily
+        elif f.kind == "roller":
             check_no_undercut(k.surface, f.radius, self.file, f"{self.key}.lifter.roller_radius",
                               "use a smaller roller, a larger base circle or a longer event")
         else:

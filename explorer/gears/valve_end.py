@@ -131,8 +131,11 @@ def make_valve_end(*, pivot, rest: float, lifting: float, arm: float, angle: flo
     """The valve end for an arm at rest angle `rest` whose angle grows (lifting = +1) or falls
     (-1) as the cam lifts it. Default axis: the way the pad's centre moves when the arm lifts;
     default axis point: through the contact at rest (no scrub offset at the closed valve)."""
-    if not pad_radius > 0.0:
-        raise InputError(file, f"{key}.radius", f"must be greater than zero, got {pad_radius!r}")
+    for name, value in (("arm", arm), ("radius", pad_radius)):
+        if not (math.isfinite(value) and value > 0.0):
+            raise InputError(file, f"{key}.{name}", f"must be greater than zero, got {value!r}")
+    if tip_radius is not None and not tip_radius > 0.0:
+        raise InputError(file, f"{key}.tip_radius", f"must be greater than zero, got {tip_radius!r}")
     direction = rest + angle + 0.5 * math.pi  # d C / d psi
     dx, dy = lifting * math.cos(direction), lifting * math.sin(direction)
     if axis is None:
