@@ -256,8 +256,12 @@ class ArmGear:
 
     def kinematics(self, theta) -> ArmKinematics:
         theta = np.asarray(theta, dtype=float)
-        psi = self.arm_angle(theta)
-        s = self.valve.travel(psi) if self.law is None else Jet(self.law.derivatives(theta))
+        if self.law is not None:
+            s = Jet(self.law.derivatives(theta))
+            psi = self.valve.inverse(s)
+        else:
+            psi = self.arm_angle(theta)
+            s = self.valve.travel(psi)
         arm, side = self.arm, self.arm.cam_side
         surface = self.surface(theta, psi)
         x = surface.contact

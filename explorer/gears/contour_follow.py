@@ -10,7 +10,7 @@ C(t) is the contact and what its own coordinate q(t) is then (a `Relation`): the
 function for a flat face (the face touches where the contour's normal is the face's). For a cam
 angle theta* the parameter solves theta(t) = theta* (mod 2 pi): a table of theta(t) gives the
 start, Newton's method (theta'(t) exact from the jets) polishes it to rounding; q and its
-derivatives with respect to theta follow by the inverse-function rule (jets.reparametrize).
+derivatives with respect to theta follow by the inverse-function rule (envelope.derivatives_along).
 explorer.lift.contours.parametric.ParametricLift does the same for the translating roller.
 
 A follower that cannot follow the contour (a flat face on a concave stretch, a roller in a hollow
@@ -25,10 +25,10 @@ from typing import Callable
 
 import numpy as np
 
-from ..core import jets
 from ..core.errors import InputError
 from ..lift.contours.parametric import orientation
 from . import jet as J
+from .envelope import derivatives_along
 from .jet import Jet
 
 TWO_PI = 2.0 * math.pi
@@ -139,7 +139,7 @@ class ContourMotion:
         theta = np.asarray(theta, dtype=float)
         t = self.parameter(theta)
         th, q = self.relation(t)
-        out = jets.reparametrize(q.c, th.c)
+        out = derivatives_along(q.c, th.c)
         return out.reshape((4,) + theta.shape)
 
 

@@ -33,6 +33,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..core import jets
 from ..core.errors import InputError
 from . import jet as J
 from .jet import Jet
@@ -63,6 +64,17 @@ def _rotate_to_cam(theta, xy: np.ndarray) -> np.ndarray:
     return np.column_stack([c * xy[:, 0] + s * xy[:, 1], -s * xy[:, 0] + c * xy[:, 1]])
 
 
+def derivatives_along(y: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """explorer.core.jets.reparametrize(y, x) taken along increasing x: where x' < 0 the jets are
+    turned to -x and the odd rows turned back (multiplying by -1 is exact). The same numbers,
+    but numpy's float power of a negative base (x'^3 in the inverse-function rule) takes the
+    C library's slow path, about a hundred times slower than of a positive one."""
+    sign = np.where(x[1] < 0.0, -1.0, 1.0)
+    out = jets.reparametrize(y, x * sign)
+    out[1::2] *= sign
+    return out
+
+
 def line_contact(theta, normal_angle: Jet, support: Jet) -> tuple[Jet, Jet]:
     """The contact point (x, y) of a flat working surface, ground frame, as jets in theta (valid to
     the second derivative): X = h n(phi) + w t(phi), w = h_beta = h' / beta'."""
@@ -80,8 +92,8 @@ def line_envelope(theta, normal_angle: Jet, support: Jet) -> CamSurface:
     theta = np.asarray(theta, dtype=float)
     x, y = line_contact(theta, normal_angle, support)
     beta = normal_angle - Jet.variable(theta)
-    h_beta = J.reparametrize(support, beta)  # h, h_beta, h_beta_beta, ...
-    radius = h_beta.c[0] + h_beta.c[2]
+    h_beta = derivatives_along(support.c, beta.c)  # h, h_beta, h_beta_beta, ...
+    radius = h_beta[0] + h_beta[2]
     contact = np.column_stack([x.c[0], y.c[0]])
     n = normal_angle.c[0]
     return CamSurface(

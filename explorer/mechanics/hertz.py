@@ -28,7 +28,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import ellipe, ellipk, ellipkm1
+from scipy.special import ellipe, ellipkm1
 
 # bracket of log(1 - e^2): from a circle (0) to an ellipse 1e13 times longer than wide (-60):
 # B/A there is ~1e24, beyond any contact of finite bodies
