@@ -427,3 +427,23 @@ def test_a_valve_axis_that_would_close_the_valve():
     with pytest.raises(InputError) as info:
         finger(valve_axis=0.5 * math.pi)
     assert "reverse the axis" in one_line(info, "gear.valve.axis")
+
+
+@pytest.mark.parametrize("name", ["finger roller", "rocker curved pad"])
+def test_the_ratio_jet_is_the_ratio_and_its_derivatives(name):
+    """Rows 1-3 of the ratio's jet against central differences of rows 0-2 on a fine grid."""
+    gear = GEARS[name]()
+    fine = np.linspace(0.0, 2.0 * math.pi, 40_000, endpoint=False)
+    k = gear.kinematics(fine)
+    assert np.array_equal(k.ratio_jet[0], k.ratio) or np.max(np.abs(k.ratio_jet[0] - k.ratio)) < 1e-15
+    h = fine[1] - fine[0]
+    for row in (1, 2, 3):
+        diff = (np.roll(k.ratio_jet[row - 1], -1) - np.roll(k.ratio_jet[row - 1], 1)) / (2.0 * h)
+        scale = np.abs(k.ratio_jet[row]).max()
+        smooth = away_from(gear.law.breakpoints(), fine, 3.0 * h)  # the law's derivatives jump there
+        assert np.max(np.abs(diff - k.ratio_jet[row])[smooth]) < 1e-6 * scale, row
+
+
+def away_from(marks, theta, distance):
+    gap = np.abs(np.mod(theta[:, None] - np.asarray(marks)[None, :] + math.pi, 2.0 * math.pi) - math.pi)
+    return np.all(gap > distance, axis=1)

@@ -60,6 +60,18 @@ def test_flat_face_contour_radius_and_offset_match_the_textbook_closed_forms():
     assert np.array_equal(k.lift, LIFT.derivatives(TH))  # the valve moves by the law itself
 
 
+def test_the_flat_face_is_the_general_line_envelope_at_90_deg():
+    """flat_face_surface writes out what explorer.gears.envelope.line_envelope gives for the lines
+    y = Rb + s (normal angle 90 deg): the same cam, to rounding."""
+    from explorer.gears.envelope import line_envelope
+
+    s = Jet(LIFT.derivatives(TH))
+    general = line_envelope(TH, Jet.constant(np.full(TH.size, 0.5 * math.pi)), s + RB)
+    flat_face = flat().surface(TH)
+    for name in ("contour", "radius", "contact", "contact_rate", "normal"):
+        assert np.max(np.abs(getattr(general, name) - getattr(flat_face, name))) < 1e-16 * 1e3 * RB, name
+
+
 def test_every_face_line_supports_the_whole_contour():
     """Brute force, sharing nothing with the envelope formula: the cam drawn as a polygon of
     40 000 contour points; at each cam angle its highest point along the tappet's axis (the

@@ -240,3 +240,21 @@ def test_pushrod_and_rocker_in_line_at_rest():
     with pytest.raises(InputError) as info:
         train(cup=cup)
     one_line(info, "gear.rocker.cup")
+
+
+def test_the_ratio_jet_is_the_ratio_and_its_derivatives():
+    gear = train("roller")
+    fine = np.linspace(0.0, 2.0 * math.pi, 40_000, endpoint=False)
+    k = gear.kinematics(fine)
+    assert np.max(np.abs(k.ratio_jet[0] - k.ratio)) < 1e-15
+    h = fine[1] - fine[0]
+    for row in (1, 2, 3):
+        diff = (np.roll(k.ratio_jet[row - 1], -1) - np.roll(k.ratio_jet[row - 1], 1)) / (2.0 * h)
+        scale = np.abs(k.ratio_jet[row]).max()
+        smooth = away_from(gear.law.breakpoints(), fine, 3.0 * h)  # the law's derivatives jump there
+        assert np.max(np.abs(diff - k.ratio_jet[row])[smooth]) < 1e-6 * scale, row
+
+
+def away_from(marks, theta, distance):
+    gap = np.abs(np.mod(theta[:, None] - np.asarray(marks)[None, :] + math.pi, 2.0 * math.pi) - math.pi)
+    return np.all(gap > distance, axis=1)

@@ -197,6 +197,7 @@ class ArmKinematics:
     centre: np.ndarray | None  # (N, 2) ground: the circle's centre (roller axle, pad centre of curvature)
     pressure_angle: np.ndarray  # rad (module docstring)
     ratio: np.ndarray  # |ds/dpsi| / arm
+    ratio_jet: np.ndarray  # (4, N): the ratio and its derivatives in theta (exact, jets)
     normal_ratio: np.ndarray  # N / F without friction
     cam_jacobian: np.ndarray  # (N, 2): the arm's velocity at the cam contact per unit dpsi, J (X - O1)
     cam_velocities: SurfaceVelocities  # cam (first), arm surface (second), m/rad; a roller rolls: equal
@@ -274,8 +275,10 @@ class ArmGear:
         travel = travel / np.hypot(travel[:, 0], travel[:, 1])[:, None]
         n = surface.normal
         pressure = np.arctan2(travel[:, 0] * n[:, 1] - travel[:, 1] * n[:, 0], np.einsum("ij,ij->i", travel, n))
-        tip = self.valve.contact(psi)
+        pad = self.valve.centre(psi)
+        tip = self.valve.contact(psi, pad)
         ds_dpsi = tip.valve_per_arm
+        ratio_jet = self.valve.valve_per_arm(psi, pad).c * (arm.lifting / side.arm)
         normal_arm = np.einsum("ij,ij->i", n, jac)
         rate = psi.c[1]
         velocities = surface_velocities(surface.tangent, surface.contact_rate, cam_velocity(x), rate[:, None] * jac)
@@ -289,7 +292,7 @@ class ArmGear:
             normal_ratio = ds_dpsi / normal_arm
         return ArmKinematics(
             theta=theta, lift=s.c, arm_angle=psi.c, surface=surface, centre=centre, pressure_angle=pressure,
-            ratio=np.abs(ds_dpsi) / side.arm, normal_ratio=normal_ratio, cam_jacobian=jac, cam_velocities=velocities,
+            ratio=np.abs(ds_dpsi) / side.arm, ratio_jet=ratio_jet, normal_ratio=normal_ratio, cam_jacobian=jac, cam_velocities=velocities,
             roller_rate=roller_rate, tip=tip,
         )
 

@@ -44,7 +44,7 @@ over a contour is the roller analysis of explorer.lift.contours with roller radi
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -60,7 +60,6 @@ from .envelope import (
     cam_velocity,
     check_no_cusp,
     line_contact,
-    line_envelope,
     surface_velocities,
 )
 from .jet import Jet
@@ -123,11 +122,26 @@ class TappetKinematics:
     def ratio(self) -> np.ndarray:
         return np.ones_like(self.theta)
 
+    @property
+    def ratio_jet(self) -> np.ndarray:
+        """(4, N): the tappet sits on the valve, ratio 1 and no derivatives."""
+        out = np.zeros((4, len(self.theta)))
+        out[0] = 1.0
+        return out
+
 
 def flat_face_surface(theta, s: Jet, base_radius: float) -> CamSurface:
-    surface = line_envelope(theta, Jet.constant(np.full(np.shape(theta), 0.5 * math.pi)), s + base_radius)
-    # the face's normal is the tappet's axis itself (cos 90 deg is 6e-17 in floats, not 0)
-    return replace(surface, normal=np.tile(AXIS, (len(surface.theta), 1)))
+    """The flat face's cam: line_envelope with phi = 90 deg and h = Rb + s, written out (the
+    tests check the two against each other): contact (s', Rb + s), its rate (s'', s'),
+    rho = Rb + s + s'', the normal the tappet's axis itself."""
+    theta = np.asarray(theta, dtype=float)
+    c = s.c
+    height = c[0] + base_radius
+    contact = np.column_stack([c[1], height])
+    return CamSurface(
+        theta=theta, contour=_rotate_to_cam(theta, contact), radius=height + c[2], contact=contact,
+        contact_rate=np.column_stack([c[2], c[1]]), normal=np.tile(AXIS, (len(theta), 1)),
+    )
 
 
 def crowned_contact(s: Jet, base_radius: float, face_radius: float) -> tuple[Jet, Jet]:

@@ -86,6 +86,7 @@ class PushrodKinematics:
     lifter_pressure_angle: np.ndarray  # rad: the cam's normal vs the lifter's axis
     pushrod_angle: np.ndarray  # rad: the pushrod vs the lifter's axis
     ratio: np.ndarray  # ds/dL
+    ratio_jet: np.ndarray  # (4, N): ds/dL and its derivatives in theta (exact, jets)
     rocker_ratio: np.ndarray  # |ds/dpsi| / a
     cam_velocities: SurfaceVelocities  # cam (first), lifter (second), m/rad
     roller_rate: np.ndarray | None  # rad/rad, the lifter roller's spin per radian of cam angle
@@ -203,14 +204,19 @@ class PushrodTrain:
         rod = upper - lower
         pushrod_angle = np.arctan2(rod[:, 0], rod[:, 1])
         # dpsi/dL from the closure |B_R - B_L| = l differentiated (not psi'/L', which is 0/0 on the
-        # base circle): rod . (J (B_R - O_r) dpsi - e_y dL) = 0
-        swing = np.column_stack([-(upper[:, 1] - o[1]), upper[:, 0] - o[0]])
-        psi_per_lift = rod[:, 1] / np.einsum("ij,ij->i", rod, swing)
-        tip = self.valve.contact(psi)
+        # base circle): rod . (J (B_R - O_r) dpsi - e_y dL) = 0; on jets, for the ratio's derivatives
+        ux, uy = o[0] + a * J.cos(psi), o[1] + a * J.sin(psi)
+        rx, ry = ux - bx, uy - (L + self.lifter.rest_height(self.base_radius))
+        per_lift = ry / (rx * (o[1] - uy) + ry * (ux - o[0]))
+        pad = self.valve.centre(psi)
+        ratio_jet = (self.valve.valve_per_arm(psi, pad) * per_lift).c
+        psi_per_lift = per_lift.c[0]
+        tip = self.valve.contact(psi, pad)
         ds_dpsi = tip.valve_per_arm
         return PushrodKinematics(
             theta=theta, lift=s.c, lifter_lift=L.c, rocker_angle=psi.c, surface=surface, lifter_pressure_angle=pressure,
-            pushrod_angle=pushrod_angle, ratio=ds_dpsi * psi_per_lift, rocker_ratio=np.abs(ds_dpsi) / a,
+            pushrod_angle=pushrod_angle, ratio=ds_dpsi * psi_per_lift, ratio_jet=ratio_jet,
+            rocker_ratio=np.abs(ds_dpsi) / a,
             cam_velocities=velocities, roller_rate=roller_rate, lower_ball=lower, upper_ball=upper,
             rocker_per_lift=psi_per_lift, tip=tip,
         )

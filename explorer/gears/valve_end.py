@@ -84,15 +84,24 @@ class ValveEnd:
         """psi(s) on the rest branch (closed form); InputError when the pad passes its dead point."""
         return self.drive.inverse(s)
 
+    def valve_per_arm(self, psi, centre=None):
+        """ds/dpsi = u . J (C - O) as a function of psi (a jet in theta if psi is one): its
+        derivatives are the ratio's. `centre`: C(psi) if already at hand."""
+        u = self.axis
+        cx, cy = self.centre(psi) if centre is None else centre
+        o = self.pivot
+        return u[1] * (cx - o[0]) - u[0] * (cy - o[1])
+
     def rest_contact(self) -> np.ndarray:
         cx, cy = self.centre(self.drive.rest)
         return np.array([float(cx), float(cy)]) + self.pad_radius * self.axis
 
-    def contact(self, psi: Jet) -> TipContact:
-        """The tip contact for arm angles given as a jet in the cam angle."""
+    def contact(self, psi: Jet, centre=None) -> TipContact:
+        """The tip contact for arm angles given as a jet in the cam angle (`centre`: the pad's
+        centre C(psi) as jets, if already at hand)."""
         u = self.axis
         t = np.array([-u[1], u[0]])
-        cx, cy = self.centre(psi)
+        cx, cy = self.centre(psi) if centre is None else centre
         x = cx.c[0] + self.pad_radius * u[0]
         y = cy.c[0] + self.pad_radius * u[1]
         point = np.column_stack([x, y])
