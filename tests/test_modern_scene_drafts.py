@@ -111,3 +111,14 @@ def test_a_draft_with_a_short_face_names_the_key():
     with pytest.raises(InputError) as info:
         build_modern_gear("bucket-tappet", parts, base_radius=0.018, roller_radius=0.0, lift=law, file="b.toml")
     assert info.value.key == "gear.tappet.face_diameter" and info.value.file == "b.toml"
+
+
+def test_a_finger_roller_undercut_names_the_follower_key():
+    """In a scene the finger's roller radius is follower.roller_radius: its undercut says so."""
+    data = tomllib.loads((DRAFTS / "finger_follower.toml").read_text())
+    parts = parse_parts(Table(data["gear"], "f.toml", "gear"), "finger-follower")
+    sharp = LawLift(height=0.0093, start=0.5, rise=math.radians(30), dwell=0.0, ret=math.radians(30),
+                    rise_law="cycloidal", return_law="cycloidal")
+    with pytest.raises(InputError) as info:
+        build_modern_gear("finger-follower", parts, base_radius=0.018, roller_radius=0.012, lift=sharp, file="f.toml")
+    assert info.value.key == "follower.roller_radius" and "undercut" in info.value.reason

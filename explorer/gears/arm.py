@@ -120,6 +120,11 @@ class Arm:
     lifting: float  # +1 if psi grows as the cam lifts the arm, else -1
     file: str = "<memory>"
     key: str = "gear.arm"
+    radius_key: str = ""  # the key of the roller's or pad's radius ("": <key>.roller_radius / pad_radius)
+
+    @property
+    def radius_name(self) -> str:
+        return self.radius_key or f"{self.key}.{'roller_radius' if self.cam_side.kind == ROLLER else 'pad_radius'}"
 
     def circle_centre(self, psi):
         a, delta = self.cam_side.centre_polar()
@@ -136,15 +141,17 @@ class Arm:
 
 
 def make_arm(*, base_radius: float, pivot, cam_side: CamSide, branch: int, file: str = "<memory>",
-             key: str = "gear.arm") -> Arm:
-    """The arm's rest angle on the base circle, with one-line errors naming the key."""
+             key: str = "gear.arm", radius_key: str = "") -> Arm:
+    """The arm's rest angle on the base circle, with one-line errors naming the key (`radius_key`:
+    where the roller's or pad's radius was given, if not under `key`; a roller's is
+    follower.roller_radius in a scene)."""
     pivot = (float(pivot[0]), float(pivot[1]))
     distance = math.hypot(*pivot)
     side = cam_side
     if not side.arm > 0.0:
         raise InputError(file, f"{key}.arm", f"must be greater than zero, got {side.arm!r}")
     if not side.radius > 0.0:
-        raise InputError(file, f"{key}.{'roller_radius' if side.kind == ROLLER else 'pad_radius'}",
+        raise InputError(file, radius_key or f"{key}.{'roller_radius' if side.kind == ROLLER else 'pad_radius'}",
                          f"must be greater than zero, got {side.radius!r}")
     if distance <= base_radius:
         raise InputError(file, f"{key}.pivot", f"the pivot lies inside the cam's base circle ({base_radius * 1e3:.4g} mm)")
@@ -183,7 +190,7 @@ def make_arm(*, base_radius: float, pivot, cam_side: CamSide, branch: int, file:
     if lifting == 0.0:
         raise InputError(file, f"{key}.pivot", "the arm's working surface moves along the cam's surface at rest: it would not lift")
     return Arm(base_radius=base_radius, pivot=pivot, cam_side=cam_side, branch=branch, rest=float(wrap(rest)),
-               lifting=lifting, file=file, key=key)
+               lifting=lifting, file=file, key=key, radius_key=radius_key)
 
 
 @dataclass(frozen=True)
@@ -305,10 +312,10 @@ class ArmGear:
         if self.contour is not None:
             pass  # a given contour: its analysis found the working surface's contact running round it steadily
         elif side.kind == ROLLER:
-            check_no_undercut(k.surface, side.radius, arm.file, f"{arm.key}.roller_radius",
+            check_no_undercut(k.surface, side.radius, arm.file, arm.radius_name,
                               "use a smaller roller, a larger base circle or a longer event")
         elif side.circular:
-            check_no_undercut(k.surface, side.radius, arm.file, f"{arm.key}.pad_radius",
+            check_no_undercut(k.surface, side.radius, arm.file, arm.radius_name,
                               "use a smaller pad radius, a larger base circle or a longer event", what="pad")
         else:
             worst = float(np.min(k.surface.radius))
@@ -418,14 +425,16 @@ def make_arm_gear(*, base_radius: float, pivot, cam_side: CamSide, branch: int, 
                   valve_angle: float, valve_pad_radius: float, valve_axis: float | None = None,
                   valve_axis_point=None, tip_radius: float | None = None, law=None, contour=None,
                   kind: str = "finger-follower", file: str = "<memory>", arm_key: str = "gear.arm",
-                  pad_key: str = "gear.valve_pad", check: bool = True, n: int = 3600) -> ArmGear:
+                  pad_key: str = "gear.valve_pad", radius_key: str = "", check: bool = True,
+                  n: int = 3600) -> ArmGear:
     """The arm gear from its geometry and either a valve-lift law (synthesis) or a contour
     (analysis: ArcContour or parametric), checked over a revolution."""
     if kind not in KINDS:
         raise ValueError(kind)
     if (law is None) == (contour is None):
         raise ValueError("give either a lift law (synthesis) or a contour (analysis)")
-    arm = make_arm(base_radius=base_radius, pivot=pivot, cam_side=cam_side, branch=branch, file=file, key=arm_key)
+    arm = make_arm(base_radius=base_radius, pivot=pivot, cam_side=cam_side, branch=branch, file=file, key=arm_key,
+                   radius_key=radius_key)
     valve = make_valve_end(pivot=arm.pivot, rest=arm.rest, lifting=arm.lifting, arm=valve_arm, angle=valve_angle,
                            pad_radius=valve_pad_radius, axis=valve_axis, axis_point=valve_axis_point,
                            tip_radius=tip_radius, file=file, key=pad_key)

@@ -184,6 +184,10 @@ class BucketTappetGear:
     def lift_jet(self, theta) -> Jet:
         return Jet(self.lift.derivatives(np.asarray(theta, dtype=float)))
 
+    def valve_lift(self, theta) -> np.ndarray:
+        """(4, N): the valve's (= the tappet's) lift and its derivatives."""
+        return self.lift.derivatives(np.asarray(theta, dtype=float))
+
     def surface(self, theta) -> CamSurface:
         s = self.lift_jet(theta)
         if self.tappet.crowned:

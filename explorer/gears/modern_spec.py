@@ -195,6 +195,7 @@ def build_modern_gear(kind: str, parts: Mapping[str, Mapping[str, Any]], *, base
         side = CamSide("roller", a["arm"], roller_radius, width=a["width"])
     else:
         side = CamSide("pad", a["arm"], a["pad_radius"] or math.inf, face_angle=a["face_angle"], width=a["width"])
+    radius_key = "follower.roller_radius" if a["cam_side"] == "roller" else f"gear.{name}.pad_radius"
     return make_arm_gear(base_radius=base_radius, pivot=a["pivot"], cam_side=side, branch=SIDES[a["side"]],
                          valve_arm=valve_pad["arm"], valve_angle=valve_pad["angle"], kind=kind,
-                         arm_key=f"gear.{name}", pad_key="gear.valve_pad", **common)
+                         arm_key=f"gear.{name}", pad_key="gear.valve_pad", radius_key=radius_key, **common)
