@@ -115,6 +115,8 @@ class ContourMotion:
     table_theta: np.ndarray  # ... against unwrapped, increasing cam angle
     kinks: np.ndarray
     iterations: int = 40
+    file: str = "<memory>"
+    key: str = "cam"
 
     def breakpoints(self) -> np.ndarray:
         return np.asarray(self.kinks, dtype=float)
@@ -132,7 +134,11 @@ class ContourMotion:
             # quadratic convergence from the table's start: a miss of 1e-12 rad before this step
             # leaves ~1e-24 after it, far below rounding
             if np.max(np.abs(miss)) < 1e-12:
-                break
+                return t
+        worst = int(np.nanargmax(np.where(np.isfinite(miss), np.abs(miss), np.inf)))
+        if not abs(miss[worst]) < 1e-9:  # bounded: a contact not found is said, never returned
+            raise InputError(self.file, self.key, f"the follower's contact on the contour was not found near cam angle "
+                             f"{math.degrees(float(theta[worst])) % 360.0:.2f} deg (miss {abs(miss[worst]):.2g} rad)")
         return t
 
     def derivatives(self, theta) -> np.ndarray:
@@ -174,7 +180,7 @@ def make_contour_motion(relation: Relation, contour, *, file: str, key: str, wha
     elif hasattr(contour, "spline") and getattr(contour, "degree", 5) == 3:
         knots = np.unique(np.mod(contour.spline.t, contour.period))
         kinks = np.unique(np.mod(relation(knots)[0].c[0], TWO_PI))
-    return ContourMotion(relation, contour.period, t, theta, kinks)
+    return ContourMotion(relation, contour.period, t, theta, kinks, file=file, key=key)
 
 
 def contour_sign(contour) -> float:
