@@ -49,7 +49,7 @@ MODERN_PART_COLORS: dict[str, tuple[int, int, int]] = {
     "cam_contact": (240, 220, 40),
     "tip_contact": (240, 220, 40),
 }
-STATIC = ("lash_adjuster",)
+STATIC_PARTS = ("lash_adjuster",)  # parts that never move (their pose is the same at every step)
 
 
 @dataclass(frozen=True)
