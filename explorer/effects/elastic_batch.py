@@ -48,10 +48,21 @@ def _residual_reference(shared, lift, ratio: float, lash: float, n: int):
     from .residual import dwell_sample, reference_lift
     from ..core.memo import remember
 
-    def make():
+    def base():  # what does not depend on the lash (a tolerance study draws a new lash every run)
         theta = np.arange(n) * (2.0 * math.pi / n)
         i = dwell_sample(lift, theta)
-        return np.ascontiguousarray(reference_lift(lift, ratio, lash, theta, 1)), (-1 if i is None else i)
+        if getattr(lift, "wanted_valve_lift", None) is not None:  # a polydyne's wanted lift: no lash in it
+            return np.ascontiguousarray(reference_lift(lift, ratio, lash, theta, 1)), (-1 if i is None else i), True
+        return lift.derivatives(theta)[:2] * ratio, (-1 if i is None else i), False
+
+    def make():
+        d, i, fixed = remember(shared.grids, ("residual", ratio, n), base)
+        if fixed:
+            return d, i
+        d = d.copy()  # reference_lift's arithmetic on its lift derivatives: the same floats
+        is_open = d[0] - lash > 0.0
+        d[0] -= lash
+        return np.ascontiguousarray(np.where(is_open, d, 0.0)), i
 
     return remember(shared.take_ups, ("residual", ratio, lash, n), make)
 
@@ -118,13 +129,16 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     failed = np.zeros(R, bool)
     params = np.empty((R, len(kernel.RUN_PARAMETERS)))
     groups: dict = {}
+    ups_of = _take_ups(scenes, shared)
     for r, scene in enumerate(scenes):
         v, sp, link = scene.valve, scene.spring, scene.linkage
         ratio, lash = scene.follower.ratio, v.lash
         omega = scene.drive.omega
         M1 = v.oscillating_mass if v.oscillating_mass is not None else v.mass
         closing = scene.loads.closing_total
-        ups = remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
+        ups = ups_of.get((ratio, lash))
+        if ups is None:
+            ups = remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
         params[r] = (omega, v.mass, M1, link.stiffness, link.damping, lash, sp.preload + closing, sp.rate,
                      scene.loads.friction, scene.seat.restitution, sp.preload + closing,
                      ups[0] / omega if len(ups) else math.nan)
@@ -160,6 +174,28 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
             failed[m] = status[0] != kernel.OK
     figures[failed] = math.nan
     return figures, failed
+
+
+def _take_ups(scenes, shared) -> dict:
+    """{(ratio, lash): first take-up angle as lash_crossings gives it} for the lashes of a chunk
+    that are not in the cache yet, found together (mechanics.kinematics.lash_take_ups): a
+    tolerance study's runs each draw their own lash, and one search per lash would cost ten
+    times the compiled revolution."""
+    from ..mechanics.kinematics import lash_take_ups
+
+    wanted: dict[float, set] = {}
+    for scene in scenes:
+        key = (scene.follower.ratio, scene.valve.lash)
+        if key not in shared.take_ups:
+            wanted.setdefault(key[0], set()).add(key[1])
+    out: dict = {}
+    for ratio, lashes in wanted.items():
+        if len(lashes) < 2:  # one lash: the same search as the single run's
+            continue
+        values = np.array(sorted(lashes))
+        for lash, up in zip(values.tolist(), lash_take_ups(shared.lift, ratio, values).tolist()):
+            out[(ratio, lash)] = np.array([up]) if math.isfinite(up) else np.zeros(0)
+    return out
 
 
 def kernel_outputs(scene, shared) -> tuple[list[dict], np.ndarray]:
