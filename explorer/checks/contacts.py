@@ -1,6 +1,6 @@
 """How each follower type supplies its cam contact to the rules: one line per type in CONTACTS,
 naming a provider `(scene, lift, theta) -> GearContact` (explorer.mechanics.gear_contact, the
-narrow interface). A type without a line has no cam contact the rules can judge (the contact and
+narrow interface) as "module:function" (or the function itself). A type without a line has no cam contact the rules can judge (the contact and
 tribology rules then say so); a new gear adds its line, its provider may live in its own module.
 
 The providers below build each existing gear's contact from its public geometry (the same
@@ -41,6 +41,8 @@ def gear_contact(scene, lift, theta) -> GearContact:
     if target is None:
         raise NotApplicable(f"follower type {scene.follower.type!r} has no cam contact the rules judge "
                             "(its own rules judge it)")
+    if callable(target):  # a provider given as the function itself
+        return target(scene, lift, theta)
     module, _, name = target.partition(":")
     return getattr(importlib.import_module(module), name)(scene, lift, theta)
 

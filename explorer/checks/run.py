@@ -47,10 +47,12 @@ def operating_speeds(scene, rpm=None) -> tuple[np.ndarray, str]:
 
 
 def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | None = None, rules=None,
-          workers: int | None = None, progress: Callable | None = None, yes: bool = False) -> CheckReport:
+          workers: int | None = None, progress: Callable | None = None, yes: bool = False,
+          only=None) -> CheckReport:
     """Check a design (a Scene or a scene file's path); see the module docstring. `sample`:
-    {key: "normal(MEAN, SD)" | "uniform(LOW, HIGH)"}; `rules`: a --rules file's path. Bad input
-    raises InputError before any work."""
+    {key: "normal(MEAN, SD)" | "uniform(LOW, HIGH)"}; `rules`: a --rules file's path; `only`:
+    the names of the rules to judge (the others are reported "off"). Bad input raises
+    InputError before any work."""
     from ..studies.sweep_spec import check_scene, make_plan, parse_sample
     from .settings import load_rules_file, resolve
 
@@ -61,6 +63,11 @@ def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | 
         scene = load_scene(scene)
     speeds, range_from = operating_speeds(scene, rpm)
     settings, off = resolve([scene.checks, load_rules_file(rules) if rules is not None else None])
+    if only is not None:
+        unknown = [name for name in only if name not in settings]
+        if unknown:
+            raise InputError("<arguments>", "only", f"unknown rule {unknown[0]!r}; known: {', '.join(settings)}")
+        off = tuple(name for name in settings if name in off or name not in only)
     draws = None
     if sample:
         samples = [parse_sample(k, v) for k, v in sample.items()]

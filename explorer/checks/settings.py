@@ -121,9 +121,10 @@ def _check_order(spec: RuleSpec, settings: Settings, sources) -> None:
     wrong = warn > fail if spec.sense == "max" else warn < fail
     if wrong:
         where = settings.origin.get("warn")
-        if where == "default":
-            where = settings.origin.get("fail")
-        file, key = where if isinstance(where, tuple) else ("-", f"{spec.name}.warn")
+        if where == "default":  # a fail limit set beyond the default warning: the warning goes
+            settings["warn"] = None
+            return
+        file, key = where
         side = "below" if spec.sense == "max" else "above"
         raise InputError(file, key, f"the warn limit must lie {side} the fail limit of rule {spec.name!r} "
                          f"(it warns before the rule fails)")

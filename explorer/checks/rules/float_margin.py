@@ -17,6 +17,7 @@ from ..case import RPM
 from ..rule import Measure
 
 BISECTIONS = 12  # ~(grid step) / 4096: well under an rpm on any range
+MAX_BEYOND = 8  # speeds above the range, up to the highest speed + 1.5 margins
 
 
 def measure(case, settings) -> Measure:
@@ -39,7 +40,8 @@ def measure(case, settings) -> Measure:
                           note="draws run at the nominal first-separation speed and at the highest speed + margin")
     grid = np.asarray(case.speeds, dtype=float)
     step = float(np.median(np.diff(grid))) if grid.size > 1 else max(1.0, 0.02 * high)
-    beyond = np.arange(high + step, reach + 0.5 * step, step) if reach > high else np.zeros(0)
+    count = int(min(MAX_BEYOND, max(1, math.ceil((reach - high) / step)))) if reach > high else 0
+    beyond = np.linspace(high, reach, count + 1)[1:]  # the speeds above the range up to the margin's reach
     speeds = np.unique(np.concatenate([grid, beyond, [reach]]))
     fig = case.elastic(speeds)
     sep = fig["separations"][0] > 0

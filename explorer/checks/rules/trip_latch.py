@@ -22,7 +22,7 @@ def measure(case, settings) -> Measure:
     if case.scene.valve is None or case.scene.spring is None:
         return Measure.not_applicable("needs [valve] and [spring]")
     summary = simulate(case.scene.with_changes(effects=("forces",))).summary
-    if "valve_stays_on_latch" not in summary:
+    if not isinstance(summary.get("latch"), dict):
         return Measure.not_applicable("the gear has no latch")
     jump = summary.get("jump_speed_rpm")
     high = float(case.speeds.max())
