@@ -120,7 +120,6 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     in one compiled call (exact_kernel.revolutions: no Python per run but its scene's values)."""
     from ..dynamics import exact_kernel as kernel
     from .elastic import MAX_SOLVER_NODES
-    from ..mechanics.kinematics import lash_crossings
     from ..core.memo import remember
 
     lift = shared.lift
@@ -136,9 +135,7 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
         omega = scene.drive.omega
         M1 = v.oscillating_mass if v.oscillating_mass is not None else v.mass
         closing = scene.loads.closing_total
-        ups = ups_of.get((ratio, lash))
-        if ups is None:
-            ups = remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
+        ups = ups_of[(ratio, lash)]
         params[r] = (omega, v.mass, M1, link.stiffness, link.damping, lash, sp.preload + closing, sp.rate,
                      scene.loads.friction, scene.seat.restitution, sp.preload + closing,
                      ups[0] / omega if len(ups) else math.nan)
@@ -177,24 +174,29 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _take_ups(scenes, shared) -> dict:
-    """{(ratio, lash): first take-up angle as lash_crossings gives it} for the lashes of a chunk
-    that are not in the cache yet, found together (mechanics.kinematics.lash_take_ups): a
-    tolerance study's runs each draw their own lash, and one search per lash would cost ten
-    times the compiled revolution."""
+    """{(ratio, lash): [first take-up angle]} of a chunk's runs, the lashes found together
+    (mechanics.kinematics.lash_take_ups: lash_crossings' root to brentq's tolerance): a tolerance
+    study's runs each draw their own lash, and one Brent search per lash cost ten times the
+    compiled revolution. Every lash takes this one search whatever else its chunk holds, so a table
+    does not depend on how it was cut into chunks (each lane of the search is elementwise)."""
+    from ..core.memo import remember
     from ..mechanics.kinematics import lash_take_ups
 
+    out: dict = {}
     wanted: dict[float, set] = {}
     for scene in scenes:
-        key = (scene.follower.ratio, scene.valve.lash)
-        if key not in shared.take_ups:
-            wanted.setdefault(key[0], set()).add(key[1])
-    out: dict = {}
+        ratio, lash = scene.follower.ratio, scene.valve.lash
+        cached = shared.take_ups.get(("batched", ratio, lash))
+        if cached is not None:
+            out[(ratio, lash)] = cached
+        else:
+            wanted.setdefault(ratio, set()).add(lash)
     for ratio, lashes in wanted.items():
-        if len(lashes) < 2:  # one lash: the same search as the single run's
-            continue
         values = np.array(sorted(lashes))
         for lash, up in zip(values.tolist(), lash_take_ups(shared.lift, ratio, values).tolist()):
-            out[(ratio, lash)] = np.array([up]) if math.isfinite(up) else np.zeros(0)
+            ups = np.array([up]) if math.isfinite(up) else np.zeros(0)
+            out[(ratio, lash)] = ups
+            remember(shared.take_ups, ("batched", ratio, lash), lambda ups=ups: ups)
     return out
 
 
