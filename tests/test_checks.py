@@ -691,3 +691,61 @@ def test_check_is_lazy_in_import_explorer():
     code = "import sys, explorer; print(any(m.startswith('explorer.checks') for m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
+
+
+@pytest.mark.parametrize("path, overrides", [(FLOAT, ()), ("assets/scenes/schenker1902_fig2.toml", ()),
+                                             ("assets/scenes/cycloidal_demo.toml", ('lift.start="350 deg"',)),
+                                             ("assets/scenes/polydyne_demo.toml", ())])
+def test_batched_take_ups_equal_brents(path, overrides):
+    """mechanics.kinematics.lash_take_ups (the compiled sweep path's, for many lashes at once)
+    against lash_crossings' Brent root, lash by lash: the same root to brentq's tolerance, NaN
+    where the valve never opens; a lift open at 0 deg (the last case) takes the dense search."""
+    from explorer.effects.lift import build_lift
+    from explorer.mechanics.kinematics import lash_crossings, lash_take_ups
+
+    s = load_scene(path, list(overrides))
+    lift, ratio = build_lift(s), s.follower.ratio
+    top = ratio * float(np.max(lift.derivatives(np.linspace(0, 2 * math.pi, 7200))[0]))
+    lashes = np.concatenate([np.random.default_rng(5).uniform(0.0, 1.2 * top, 60), [0.0, 1e-6, top * 1.5]])
+    batched = lash_take_ups(lift, ratio, lashes)
+    for lash, got in zip(lashes, batched):
+        ups = lash_crossings(lift, ratio, lash)[0]
+        if ups.size == 0:
+            assert math.isnan(got)
+        elif abs(got - ups[0]) > 2e-13:
+            # an ill-conditioned root (lash 0 at the start of a ramp rising as (theta - theta0)^5):
+            # the lift is zero to rounding over ~1e-9 rad and both are roots of it
+            f = ratio * lift.derivatives(np.array([got, ups[0]]))[0] - lash
+            assert np.all(np.abs(f) <= 1e-18) and abs(got - ups[0]) < 1e-8, (lash, got, ups[0], f)
+
+
+RULE_NAMES_AND_JUNK = [s.name for s in RULES] + ["bogus"]
+
+
+def test_any_setting_is_taken_or_refused_in_one_line():
+    """Hypothesis: whatever a rules file holds -- any rule or none, any setting name, any TOML value
+    -- resolving it gives settings or one InputError naming the file, never another exception."""
+    from hypothesis import given, settings as hsettings, strategies as st
+
+    from explorer.checks.settings import resolve
+    from explorer.scene.checks_section import ChecksSpec, freeze_settings
+
+    values = st.one_of(st.text(max_size=24), st.integers(min_value=-10**30, max_value=10**30),
+                       st.floats(allow_nan=True, allow_infinity=True), st.booleans(),
+                       st.lists(st.integers(), max_size=2), st.dictionaries(st.text(max_size=3), st.integers(), max_size=1),
+                       st.sampled_from(["30 deg", "1 m/s", "-5 rpm", "2 MPa", "1e999 m", "nan deg", "0.002 in/deg",
+                                        "100 degC", "chrome-silicon", "scene"]))
+    names = st.sampled_from(["fail", "warn", "enabled", "wire", "material", "peened", "min_height", "strength",
+                             "modes", "correction", "fail_translating", "x"])
+
+    @hsettings(max_examples=300, deadline=None)
+    @given(rule=st.sampled_from(RULE_NAMES_AND_JUNK), entry=st.one_of(st.booleans(), values,
+                                                                     st.dictionaries(names, values, max_size=3)))
+    def run(rule, entry):
+        try:
+            spec = ChecksSpec(freeze_settings({rule: entry}, "rules.toml", ""), "rules.toml", "")
+            resolve([spec])
+        except InputError as exc:
+            assert exc.file == "rules.toml" and "\n" not in str(exc)
+
+    run()

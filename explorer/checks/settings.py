@@ -21,8 +21,8 @@ import tomllib
 from typing import Any, Mapping
 
 from ..core.errors import InputError
-from ..core.units import plain_number, to_si
-from ..scene.checks_section import ChecksSpec, freeze_settings
+from ..core.units import plain_number, short_repr, to_si
+from ..scene.checks_section import ChecksSpec, freeze_settings, shown_key
 from .registry import RULE_NAMES, RULES
 from .rule import RuleSpec, Setting, Settings
 
@@ -56,7 +56,7 @@ def resolve(sources: list[ChecksSpec | None]) -> tuple[dict[str, Settings], tupl
         if source is None:
             continue
         for name, entry in source.settings.items():
-            key = f"{source.prefix}.{name}" if source.prefix else name
+            key = f"{source.prefix}.{shown_key(name)}" if source.prefix else shown_key(name)
             if name not in enabled:
                 raise InputError(source.file, key, f"unknown rule; known: {', '.join(RULE_NAMES)}")
             spec = next(r for r in RULES if r.name == name)
@@ -66,13 +66,13 @@ def resolve(sources: list[ChecksSpec | None]) -> tuple[dict[str, Settings], tupl
             for setting_name, raw in entry.items():
                 if setting_name == "enabled":
                     if not isinstance(raw, bool):
-                        raise InputError(source.file, f"{key}.enabled", f"expected true or false, got {raw!r}")
+                        raise InputError(source.file, f"{key}.enabled", f"expected true or false, got {short_repr(raw)}")
                     enabled[name] = raw
                     continue
                 setting = spec.setting(setting_name)
                 if setting is None:
                     known = ", ".join(["enabled", *(s.name for s in spec.settings)])
-                    raise InputError(source.file, f"{key}.{setting_name}", f"unknown setting of rule {name!r}; "
+                    raise InputError(source.file, f"{key}.{shown_key(setting_name)}", f"unknown setting of rule {name!r}; "
                                      f"known: {known}")
                 values[name][setting_name] = parse_setting(setting, raw, source.file, f"{key}.{setting_name}")
                 origin[name][setting_name] = (source.file, f"{key}.{setting_name}")
@@ -86,30 +86,30 @@ def parse_setting(setting: Setting, raw, file: str, key: str):
     """A setting's value in SI from a TOML value, or InputError."""
     if setting.dimension == "bool":
         if not isinstance(raw, bool):
-            raise InputError(file, key, f"expected true or false, got {raw!r}")
+            raise InputError(file, key, f"expected true or false, got {short_repr(raw)}")
         return raw
     if setting.dimension == "choice":
         if not isinstance(raw, str) or raw not in setting.choices:
-            raise InputError(file, key, f"unknown value {raw!r}; choose one of: {', '.join(setting.choices)}")
+            raise InputError(file, key, f"unknown value {short_repr(raw)}; choose one of: {', '.join(setting.choices)}")
         return raw
     if setting.dimension == "number":
         if isinstance(raw, bool) or not isinstance(raw, (int, float)):
-            raise InputError(file, key, f"expected a plain number, got {raw!r}"[:200])
+            raise InputError(file, key, f"expected a plain number, got {short_repr(raw)}"[:200])
         value = plain_number(raw, file=file, key=key)
     else:
         if isinstance(raw, bool) or not isinstance(raw, (int, float, str)):
-            raise InputError(file, key, f"expected a quantity such as '1 {setting.unit or 'm'}', got {raw!r}"[:200])
+            raise InputError(file, key, f"expected a quantity such as '1 {setting.unit or 'm'}', got {short_repr(raw)}"[:200])
         if setting.dimension == "lift_rate" and isinstance(raw, str) and not any(a in raw for a in ("deg", "rad")):
-            raise InputError(file, key, f"{raw!r} is not a lift per cam angle: write it per degree or radian, "
+            raise InputError(file, key, f"{short_repr(raw)} is not a lift per cam angle: write it per degree or radian, "
                              "such as '0.002 in/deg'")
         value = to_si(raw, setting.dimension, file=file, key=key)
     if not math.isfinite(value):
-        raise InputError(file, key, f"value must be finite, got {raw!r}")
+        raise InputError(file, key, f"value must be finite, got {short_repr(raw)}")
     if setting.minimum is not None and value < setting.minimum:
         if setting.minimum == 0.0:
             raise InputError(file, key, f"must not be negative (a limit or margin below zero means nothing here), "
-                             f"got {raw!r}")
-        raise InputError(file, key, f"must be at least {setting.minimum:g}, got {raw!r}")
+                             f"got {short_repr(raw)}")
+        raise InputError(file, key, f"must be at least {setting.minimum:g}, got {short_repr(raw)}")
     return value
 
 

@@ -77,14 +77,22 @@ def lash_take_ups(lift, ratio: float, lashes, n_grid: int = 4096) -> np.ndarray:
         extra = [brentq(slope, grid[i], grid[i + 1], xtol=1e-15, maxiter=200) for i in peaks]
         grid = np.unique(np.concatenate([grid, extra]))
         d = lift.derivatives(grid)
-    g = ratio * d[0][None, :] - lashes[:, None]
-    is_open = g > 0.0
-    up = ~is_open[:, :-1] & is_open[:, 1:]
-    has = up.any(axis=1)
-    i = np.argmax(up, axis=1)
-    rows = np.arange(lashes.size)
+    level = ratio * d[0]
+    # the first grid point above each lash (the running maximum is sorted); the take-up is the
+    # interval before it -- unless the valve is open at 0 already, then the first rise after a
+    # closed point (searched densely, for those lashes only)
+    j = np.searchsorted(np.maximum.accumulate(level), lashes, side="right")
+    i = j - 1
+    has = j < level.size
+    dense = has & (j == 0)
+    if dense.any():
+        g = level[None, :] - lashes[dense][:, None]
+        up = (g[:, :-1] <= 0.0) & (g[:, 1:] > 0.0)
+        i[dense] = np.where(up.any(axis=1), np.argmax(up, axis=1), -1)
+        has[dense] = up.any(axis=1)
+    i = np.where(has, i, 0)
     a, b = grid[i], grid[i + 1]
-    at_a = g[rows, i] == 0.0
+    at_a = (level[i] - lashes) == 0.0
     lo, hi = a.copy(), b.copy()
     todo = has & ~at_a
     for _ in range(80):  # bounded: 2^-80 of a grid cell is far below the tolerance
@@ -93,7 +101,7 @@ def lash_take_ups(lift, ratio: float, lashes, n_grid: int = 4096) -> np.ndarray:
         if not active.any():
             break
         mid = 0.5 * (lo + hi)
-        f = ratio * lift.derivatives(mid[active])[0] - lashes[active]
+        f = ratio * lift.derivatives(mid[active])[0] - lashes[active]  # as lash_crossings' f
         idx = np.nonzero(active)[0]
         right = f > 0.0
         hi[idx[right]] = mid[active][right]

@@ -23,17 +23,24 @@ class ChecksSpec:
     prefix: str = "checks"  # the dotted path of the settings in `file` ("" for a --rules file)
 
 
+def shown_key(name) -> str:
+    """A TOML key as an error names it: itself, or its repr when it holds anything but printable
+    characters (a quoted key may hold a newline; an error is one line)."""
+    text = str(name)
+    return text if text.isprintable() and len(text) <= 60 else repr(text)[:60]
+
+
 def freeze_settings(data: Mapping, file: str, prefix: str) -> Mapping[str, Any]:
     """The rules' entries, shape-checked and read-only: RULE = bool | {NAME = value}."""
     out: dict[str, Any] = {}
     for rule, entry in data.items():
-        key = f"{prefix}.{rule}" if prefix else str(rule)
+        key = f"{prefix}.{shown_key(rule)}" if prefix else shown_key(rule)
         if isinstance(entry, bool):
             out[rule] = entry
         elif isinstance(entry, Mapping):
             for name, value in entry.items():
                 if isinstance(value, (Mapping, list)):
-                    raise InputError(file, f"{key}.{name}", "expected a value (a quantity such as \"30 deg\", a "
+                    raise InputError(file, f"{key}.{shown_key(name)}", "expected a value (a quantity such as \"30 deg\", a "
                                      "number, a string or true/false), not a table or a list")
             out[rule] = MappingProxyType(dict(entry))
         else:

@@ -21,9 +21,11 @@ def geometry(case) -> tuple[float, float]:
 
 def full_lift(case) -> tuple[np.ndarray, float]:
     """(the valve's largest lift per draw (N,), the cam angle in degrees where it is reached)."""
-    x = case.valve_lift() if case.scene.valve is not None else case.scene.follower.ratio * case.derivs[0][None, :]
-    i = int(np.argmax(x[0]))
-    return np.maximum(x[:, i], 0.0), float(case.theta_deg[i])
+    top = case.scene.follower.ratio * case.derivs[0]
+    i = int(np.argmax(top))  # the same angle for every lash: the lash only shifts the lift
+    lash = case.param("valve.lash") if case.scene.valve is not None else 0.0
+    lift = np.ravel(top[i] - np.asarray(lash, dtype=float))
+    return np.maximum(lift, 0.0), float(case.theta_deg[i])
 
 
 def forces(case) -> tuple[np.ndarray, np.ndarray, float]:

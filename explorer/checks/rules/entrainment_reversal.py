@@ -25,11 +25,13 @@ def measure(case, settings) -> Measure:
     nxt = np.roll(rate, -1)
     crossing = np.sign(rate) * np.sign(nxt) < 0.0  # as zero_crossings counts them
     idx = np.nonzero(crossing)[0]
-    is_open = case.valve_lift() > 0.0  # (N or 1, n)
-    inside = is_open[:, idx] & is_open[:, (idx + 1) % rate.size]
+    level = case.scene.follower.ratio * case.derivs[0]
+    lash = np.atleast_2d(np.asarray(case.param("valve.lash"), dtype=float))  # (N or 1, 1)
+    inside = (level[idx][None, :] - lash > 0.0) & (level[(idx + 1) % rate.size][None, :] - lash > 0.0)
     count = inside.sum(axis=1).astype(float)
     count = np.broadcast_to(count, (case.n,)) if count.size == 1 else count
-    angles = zero_crossings(case.theta_deg, rate, mask=is_open[0]).tolist()
+    nominal = level - (case.scene.valve.lash if case.scene.valve is not None else 0.0) > 0.0
+    angles = zero_crossings(case.theta_deg, rate, mask=nominal).tolist()
     first = angles[0] if angles else np.nan
     details = (f"entrainment velocity passes through zero at cam angles {', '.join(f'{a:.2f}' for a in angles)} deg",) \
         if angles else ()
