@@ -749,3 +749,14 @@ def test_any_setting_is_taken_or_refused_in_one_line():
             assert exc.file == "rules.toml" and "\n" not in str(exc)
 
     run()
+
+
+def test_the_guide_holds_the_rule_table():
+    from pathlib import Path
+
+    from explorer.checks.registry import rules_markdown
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "checks.md").read_text()
+    start = page.index("<!-- rules table:")
+    body = page[page.index("\n", start) + 1:page.index("<!-- end of the rules table -->")]
+    assert body == rules_markdown(), "regenerate: python -m explorer.checks"

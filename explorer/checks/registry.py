@@ -1,6 +1,6 @@
 """The design rules: one line each (explorer.checks.rule.RuleSpec: the contract), with every
-default limit, its source and how firm it is. docs/guide/checks.md is generated from this table
-(`python -m explorer.checks.registry`).
+default limit, its source and how firm it is. docs/guide/checks.md's rule table is generated from
+this table (`python -m explorer.checks`; tests/test_checks.py holds the page to it).
 
 Import-light: names and numbers only; a rule's measure is imported when a design is checked.
 """
@@ -215,13 +215,9 @@ def rules_markdown() -> str:
             else:
                 default = f"{show(s.default, s.unit):.6g} {s.unit}".strip()
             judged = f"`{spec.name}`" if first else ""
-            what = f"{spec.title}: {spec.quantity} ({spec.sense} {'at most' if spec.sense == 'max' else 'at least'})" \
-                if first else ""
-            lines.append(f"| {judged} | {what.replace('max at most', 'at most').replace('min at least', 'at least')} "
-                         f"| {s.name} | {default} | {s.source} | {s.firmness} |")
+            what = f"{spec.title}: {spec.quantity} ({'at most' if spec.sense == 'max' else 'at least'})" if first else ""
+            cells = [judged, what, s.name, default, s.source, s.firmness]
+            lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
             first = False
     return "\n".join(lines) + "\n"
 
-
-if __name__ == "__main__":
-    print(rules_markdown(), end="")
