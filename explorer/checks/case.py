@@ -62,13 +62,16 @@ class Case:
     def n(self) -> int:
         return 1 if self.draws is None else int(self.draws.values.shape[0])
 
-    def rule_speeds(self, rule: str, extra=()) -> np.ndarray:
+    def rule_speeds(self, rule: str, extra=(), ends: bool = False) -> np.ndarray:
         """The speeds a speed-dependent rule judges: the operating range; with tolerance draws the
-        speeds where the nominal design was worst for that rule (and `extra`)."""
+        speed where the nominal design was worst for that rule, `extra`, and with `ends` the
+        range's ends (cheap for the rigid rules; where a quantity that grows with the contact
+        force F = w^2 A + G peaks over a range of speeds, at each angle)."""
         if not self.sampling:
             return self.speeds
         base = np.asarray(self.focus.get(rule, self.speeds[-1:]), dtype=float).ravel()
-        return np.unique(np.concatenate([base, np.asarray(extra, dtype=float).ravel()]))
+        parts = [base, np.asarray(extra, dtype=float).ravel()] + ([self.speeds] if ends else [])
+        return np.unique(np.concatenate(parts))
 
     def param(self, key: str):
         """A sweep key's value per draw as an (N, 1) array, or the scene's value (float)."""

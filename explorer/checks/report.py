@@ -103,7 +103,7 @@ class CheckReport:
     def to_csv(self) -> str:
         buf = io.StringIO()
         buf.write(f"# scene: {self.scene}\n# speeds: {min(self.speeds_rpm):g}..{max(self.speeds_rpm):g} rpm, "
-                  f"{len(self.speeds_rpm)} speeds ({self.range_from})\n")
+                  f"{len(self.speeds_rpm)} (from {self.range_from})\n")
         if self.samples:
             buf.write(f"# samples: {'; '.join(self.samples)}; {self.runs} draws, seed {self.seed}; {self.interval}\n")
         w = csv.writer(buf, lineterminator="\n")
@@ -118,8 +118,9 @@ class CheckReport:
         return buf.getvalue()
 
     def table_text(self) -> str:
+        count = len(self.speeds_rpm)
         lines = [f"{self.scene}: design checks over {min(self.speeds_rpm):g}..{max(self.speeds_rpm):g} rpm "
-                 f"({len(self.speeds_rpm)} speeds, {self.range_from})"]
+                 f"({count} speed{'s' if count != 1 else ''}; from {self.range_from})"]
         if self.samples:
             lines.append(f"tolerances: {'; '.join(self.samples)}; {self.runs} draws (seed {self.seed}); probability "
                          f"of failing with its {self.interval}")

@@ -43,7 +43,7 @@ def operating_speeds(scene, rpm=None) -> tuple[np.ndarray, str]:
     if scene.drive.operating_range is not None:
         lo, hi = scene.drive.operating_range
         return np.linspace(lo, hi, DEFAULT_SPEEDS), "[drive] operating_range"
-    return np.array([scene.drive.rpm]), "the scene's speed (no operating range: give [drive] operating_range or --rpm)"
+    return np.array([scene.drive.rpm]), "the scene's own speed: give [drive] operating_range or --rpm for a range"
 
 
 def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | None = None, rules=None,

@@ -48,7 +48,7 @@ def measure(case, settings) -> Measure:
     sigma = composite_roughness(lub.cam_roughness, lub.follower_roughness)
     ep = e_prime(case)
     mean_rate = contact.motion.entrainment(1.0)
-    speeds = case.rule_speeds("film_parameter")
+    speeds = case.rule_speeds("film_parameter", ends=True)
     u = (speeds * RPM)[:, None] * mean_rate[None, :]  # (S, n)
     value = np.empty((case.n, speeds.size))
     angle = np.empty_like(value)

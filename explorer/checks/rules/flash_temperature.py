@@ -23,7 +23,7 @@ def measure(case, settings) -> Measure:
     width, how = case.width
     radius = np.broadcast_to(reduced_radius(g.counter_radius, g.contour_radius), case.theta.shape)
     ep = e_prime(case)
-    speeds = case.rule_speeds("flash_temperature")
+    speeds = case.rule_speeds("flash_temperature", ends=True)
     omega = (speeds * RPM)[:, None]
     u1 = omega * contact.motion.cam_rate[None, :]
     u2 = omega * contact.motion.follower_rate[None, :]

@@ -46,7 +46,7 @@ def measure(case, settings) -> Measure:
     with np.errstate(divide="ignore"):
         curvature = 1.0 / np.asarray(g.counter_radius, dtype=float) + 1.0 / np.asarray(g.contour_radius, dtype=float)
     curvature = np.broadcast_to(curvature, case.theta.shape)
-    speeds = case.rule_speeds("hertz_stress")
+    speeds = case.rule_speeds("hertz_stress", ends=True)
     value = np.empty((case.n, speeds.size))
     angle = np.empty_like(value)
     for rows, force, _ in case.blocks(speeds):
