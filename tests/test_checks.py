@@ -501,6 +501,14 @@ def test_gears_take_every_contact_rule(path):
         assert r.verdict in ("pass", "warn", "fail"), (name, r)
         assert r.value is not None and not math.isnan(r.value)
     assert report.result("pressure_angle").fail == pytest.approx(math.radians(35.0))  # levers: oscillating
+    # at the scene's own speed the rules' statics are the contact effect's
+    summary = explorer.simulate(load_scene(path)).summary
+    assert report.result("hertz_stress").value == pytest.approx(summary["max_hertz_stress_Pa"], rel=1e-12)
+    assert math.degrees(report.result("pressure_angle").value) == pytest.approx(summary["max_pressure_angle_deg"],
+                                                                                 rel=1e-12)
+    # the rule takes the smallest margin while the cam lifts, the effect over the whole revolution
+    margin = math.degrees(report.result("self_locking").value)
+    assert summary["min_self_locking_margin_deg"] - 1e-9 <= margin < summary["min_self_locking_margin_deg"] + 1e-3
 
 
 def test_trip_gear_has_no_cam_contact():
