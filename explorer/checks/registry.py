@@ -10,9 +10,9 @@ from __future__ import annotations
 import importlib
 import math
 from types import MappingProxyType
-from typing import Callable, Mapping
+from typing import Mapping
 
-from .rule import RuleSpec, Setting
+from .rule import Rule, RuleSpec, Setting  # noqa: F401 (Rule: the type measure_function returns)
 
 _R = "explorer.checks.rules"
 DEG = math.pi / 180.0
@@ -191,7 +191,7 @@ def rule(name: str) -> RuleSpec:
     return _BY_NAME[name]
 
 
-def measure_function(spec: RuleSpec) -> Callable:
+def measure_function(spec: RuleSpec) -> "Rule":
     module, _, attr = spec.measure.partition(":")
     return getattr(importlib.import_module(module), attr)
 

@@ -1,47 +1,55 @@
-"""A design rule: its table line (RuleSpec), its settings (Setting) and what it measures (Measure).
-
-Implementing a rule -- what a rule provides (the checks machinery does the rest: the settings'
-defaults and overrides, the operating range, the tolerance samples, the verdicts, the report):
-
-1. A module under explorer/checks/rules/ with one function `measure(case, settings) -> Measure`.
-   `case` (explorer.checks.case.Case) holds the scene and the runs to judge -- the speeds of the
-   operating range, or draws of the tolerances (N) at a few speeds (S) -- and the quantities the
-   rules share, computed once and cached: the lift and its derivatives on the grid, the gear's
-   contact (GearContact), the rigid contact forces, the elastic figures from the sweep engine.
-   `settings` maps each Setting's name to its value (SI; the user's overrides applied).
-2. The Measure: per run, the rule's value at the run's worst cam angle (`value`, shape (N, S')),
-   that angle (`angle`, degrees, NaN where none) and the speeds the columns are at (`speeds`,
-   rpm; None for a figure that does not depend on the speed: S' = 1), the fail and warn limits it
-   judged against (normally `settings["fail"]`, `settings["warn"]`; a rule may choose, such as the
-   pressure angle's 30 deg for a straight guide and 35 deg for a lever), and a note (the model,
-   the approximations). Not judgeable: `Measure.not_applicable(reason)` (no roller, no spring
-   geometry, no [lubricant], ...). Pure: read the case, write nothing; no exceptions but
-   InputError for a setting the rule cannot use.
-3. One line of RULES (explorer/checks/registry.py): a RuleSpec with the rule's name (the key of
-   [checks] and --rules files), the "module:function" of its measure, its title, the quantity
-   and the unit it is shown in, its sense ("max": the value must stay at or below the limits, a
-   stress; "min": at or above, a margin) and its settings.
-4. Each Setting: a name ("fail" and "warn" are the limits; others are options: a margin, a
-   band, a material), its default in SI (None: off unless given), its dimension for parsing
-   (explorer.core.units; "number" for a plain number, "choice" with `choices`, "bool"), the unit
-   it is shown in, the source of the default (book, paper or standard with page or table; or a
-   trade source) and how firm it is. `minimum` bounds a setting from below (a margin cannot be
-   negative).
-
-The verdict of a run: "fail" beyond the fail limit, "warn" beyond the warn limit, else "pass"
-(beyond: above for sense "max", below for "min"; a NaN value is no verdict).
-"""
+"""A design rule: the contract a rule implements (Rule), its table line (RuleSpec), its settings
+(Setting), what it measures (Measure), and the verdict and interval arithmetic they share."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
 VERDICTS = ("pass", "warn", "fail")  # in order of severity
 NOT_APPLICABLE = "n/a"
+
+
+class Rule(Protocol):
+    """The base of the design rules: what a rule is to the checks machinery.
+
+    Implementing a rule -- what a rule provides (the checks machinery does the rest: the settings'
+    defaults and overrides, the operating range, the tolerance samples, the verdicts, the report):
+
+    1. A module under explorer/checks/rules/ with one function `measure(case, settings) -> Measure`.
+       `case` (explorer.checks.case.Case) holds the scene and the runs to judge -- the speeds of the
+       operating range, or draws of the tolerances (N) at a few speeds (S) -- and the quantities the
+       rules share, computed once and cached: the lift and its derivatives on the grid, the gear's
+       contact (GearContact), the rigid contact forces, the elastic figures from the sweep engine.
+       `settings` maps each Setting's name to its value (SI; the user's overrides applied).
+    2. The Measure: per run, the rule's value at the run's worst cam angle (`value`, shape (N, S')),
+       that angle (`angle`, degrees, NaN where none) and the speeds the columns are at (`speeds`,
+       rpm; None for a figure that does not depend on the speed: S' = 1), the fail and warn limits it
+       judged against (normally `settings["fail"]`, `settings["warn"]`; a rule may choose, such as the
+       pressure angle's 30 deg for a straight guide and 35 deg for a lever), and a note (the model,
+       the approximations). Not judgeable: `Measure.not_applicable(reason)` (no roller, no spring
+       geometry, no [lubricant], ...). Pure: read the case, write nothing; no exceptions but
+       InputError for a setting the rule cannot use.
+    3. One line of RULES (explorer/checks/registry.py): a RuleSpec with the rule's name (the key of
+       [checks] and --rules files), the "module:function" of its measure, its title, the quantity
+       and the unit it is shown in, its sense ("max": the value must stay at or below the limits, a
+       stress; "min": at or above, a margin) and its settings.
+    4. Each Setting: a name ("fail" and "warn" are the limits; others are options: a margin, a
+       band, a material), its default in SI (None: off unless given), its dimension for parsing
+       (explorer.core.units; "number" for a plain number, "choice" with `choices`, "bool"), the unit
+       it is shown in, the source of the default (book, paper or standard with page or table; or a
+       trade source) and how firm it is. `minimum` bounds a setting from below (a margin cannot be
+       negative).
+
+    The verdict of a run: "fail" beyond the fail limit, "warn" beyond the warn limit, else "pass"
+    (beyond: above for sense "max", below for "min"; a NaN value is no verdict).
+    """
+
+    def __call__(self, case, settings: "Settings") -> "Measure":  # the rule's `measure` function
+        ...
 
 
 @dataclass(frozen=True)
