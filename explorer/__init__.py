@@ -11,7 +11,7 @@ from .core.errors import InputError
 from .core.version import __version__
 from .scene.scene import Scene, load_scene, loads_scene
 
-__all__ = ["InputError", "Scene", "load_scene", "loads_scene", "simulate", "sweep", "__version__"]
+__all__ = ["InputError", "Scene", "check", "load_scene", "loads_scene", "simulate", "sweep", "__version__"]
 
 
 def simulate(scene):
@@ -27,3 +27,12 @@ def sweep(scene, vary=None, sample=None, **options):
     from .studies.sweep_run import sweep as _sweep
 
     return _sweep(scene, vary, sample, **options)
+
+
+def check(scene, rpm=None, sample=None, **options):
+    """Design checks over the operating range and the tolerances (explorer.checks.run.check); a
+    CheckReport (.results, .verdict, .to_json(), .to_csv(), .table_text()):
+    explorer.check("assets/scenes/valve_float_demo.toml", rpm="800:6500:200")"""
+    from .checks.run import check as _check
+
+    return _check(scene, rpm, sample, **options)

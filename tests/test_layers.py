@@ -14,6 +14,7 @@ bottom up:
     result     what a simulation returns (columns, summary, events)
     effects    the pipeline, the lift of a scene, one module per effect and gear variant
     view | studies   3D parts, browser, rerun  |  bench, sweeps, accuracy studies, gear figures
+    checks     design rules over the operating range and the tolerances (runs the sweep engine)
     cli        the `explorer` command
 
 view and studies stand side by side: neither imports the other. The package's own __init__ (the
@@ -38,6 +39,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("result",),
     ("effects",),
     ("view", "studies"),
+    ("checks",),
     ("cli",),
     ("__init__", "__main__"),
 )

@@ -21,6 +21,7 @@ COMMAND_MODULES = [
     "explorer.cli.residual",
     "explorer.cli.design",
     "explorer.cli.spectrum",
+    "explorer.cli.check",
 ]
 
 DESCRIPTION = """\
@@ -51,6 +52,7 @@ examples:
   explorer residual assets/scenes/polydyne_demo.toml --rpm 1000:3000:21 --plot r.png   (vibration vs speed)
   explorer design assets/scenes/spline_demo.toml --objective peak-acceleration --max-pressure-angle 30   (spline lift)
   explorer spectrum SCENE --orders 60 --plot s.png   (harmonics of the valve acceleration vs cam order)
+  explorer check SCENE --rpm 800:6500:200 -o report.json   (is the design acceptable? rules, limits, sources)
   explorer <command> --help            details of one command
 
 Quantities in scene files carry units ("20 mm", "385 kgf", "2.9 kgf*s**2/m"); a bare number

@@ -39,6 +39,10 @@ RANGES: dict[str, tuple[float, float]] = {
     "acceleration": (1e-9, 1e9),  # m/s**2
     "jerk": (1e-9, 1e14),  # m/s**3
     "torque": (1e-6, 1e10),  # N*m (and N*m/rad: a lever's rotational stiffness)
+    "viscosity": (1e-6, 1e4),  # Pa*s: a gas to a bitumen
+    "pressure_viscosity": (1e-12, 1e-6),  # 1/Pa: mineral oils ~2e-8
+    "temperature": (1.0, 2000.0),  # K
+    "lift_rate": (1e-12, 10.0),  # m/rad
 }
 SHOWN_UNITS: dict[str, tuple[str, float]] = {
     "angle": ("deg", 180.0 / math.pi),
@@ -46,6 +50,8 @@ SHOWN_UNITS: dict[str, tuple[str, float]] = {
     "length": ("m", 1.0), "mass": ("kg", 1.0), "force": ("N", 1.0), "stiffness": ("N/m", 1.0),
     "damping": ("N*s/m", 1.0), "pressure": ("Pa", 1.0), "time": ("s", 1.0), "area": ("m**2", 1.0),
     "velocity": ("m/s", 1.0), "acceleration": ("m/s**2", 1.0), "jerk": ("m/s**3", 1.0), "torque": ("N*m", 1.0),
+    "viscosity": ("Pa*s", 1.0), "pressure_viscosity": ("1/Pa", 1.0), "temperature": ("K", 1.0),
+    "lift_rate": ("m/rad", 1.0),
 }
 # dotted key (glob) -> (smallest non-zero size, largest size) in SI, narrower than the dimension's
 KEY_RANGES: dict[str, tuple[float, float]] = {

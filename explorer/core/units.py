@@ -34,6 +34,11 @@ DIMENSIONS: dict[str, tuple[str, str, str]] = {
     "snap": ("[length]/[time]**4", "m/s**4", "m/s**4"),  # the fourth derivative (a polydyne's wanted spline)
     "torque": ("[force]*[length]", "N*m", "N*m"),
     "density": ("[mass]/[length]**3", "kg/m**3", "kg/m**3"),
+    # a lubricant and its surfaces ([lubricant]) and the design rules' thresholds ([checks])
+    "viscosity": ("[pressure]*[time]", "Pa*s", "Pa*s"),
+    "pressure_viscosity": ("1/[pressure]", "1/Pa", "1/Pa"),
+    "temperature": ("[temperature]", "K", "K"),  # absolute: "90 degC" is 363.15 K
+    "lift_rate": ("[length]", "m/rad", "m/rad"),  # lift per cam angle ("0.002 in/deg"); pint counts angles as 1
     "dimensionless": ("", "", ""),
 }
 

@@ -51,6 +51,8 @@ OWNED_SECTIONS: dict[str, str] = {
     "contact": "explorer.scene.contact_section:parse_contact_section",
     "spring_design": "explorer.mechanics.springs:parse_spring_design_section",
     "gear": "explorer.gears.spec:parse_gear_section",
+    "lubricant": "explorer.mechanics.tribology:parse_lubricant_section",
+    "checks": "explorer.scene.checks_section:parse_checks_section",
 }
 # Law-specific [lift] keys, parsed by the module of the law: law -> "module:function".
 LAW_OPTION_PARSERS: dict[str, str] = {
@@ -74,6 +76,7 @@ SHAPED_UNLESS: dict[str, tuple[str, str]] = {"polydyne": ("wanted_law", "spline"
 @dataclass(frozen=True)
 class Drive:
     rpm: float  # rev/min, > 0
+    operating_range: tuple[float, float] | None = None  # rev/min, lowest and highest (explorer check)
 
     @property
     def omega(self) -> float:
@@ -120,6 +123,10 @@ class Spring:
     damping_ratio: float = 0.0
     free_length: float | None = None  # m
     solid_height: float | None = None  # m
+    # the wire geometry when the scene gives it (the design rules' stresses: explorer.checks)
+    wire_diameter: float | None = None  # m
+    coil_diameter: float | None = None  # m, mean
+    active_coils: float | None = None
 
 
 @dataclass(frozen=True)
@@ -173,6 +180,8 @@ class Scene:
     contact: Any = None  # owned by explorer.mechanics.contact
     spring_design: Any = None  # owned by explorer.mechanics.springs (optional advice and historic rules)
     gear: Any = None  # owned by explorer.gears.spec (pivoted lever, rocking cam, rolling lever, trip gear)
+    lubricant: Any = None  # owned by explorer.mechanics.tribology (the design rules' film and flash temperature)
+    checks: Any = None  # owned by explorer.scene.checks_section (design-rule settings, read by explorer.checks)
 
     @property
     def directory(self) -> Path:
@@ -300,14 +309,14 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
         raise top.error("effects", "list at least one effect")
 
     drive_t = top.table("drive")
-    drive_t.reject_unknown(("rpm",))
+    drive_t.reject_unknown(("rpm", "operating_range"))
     rpm_si = drive_t.quantity("rpm", "speed", positive=True)
     raw_rpm = drive_t.raw("rpm")
     # a bare number is rev/min already: keep it exact rather than round-tripping through rad/s
     rpm = float(raw_rpm) if isinstance(raw_rpm, (int, float)) else rpm_si * 60.0 / (2.0 * math.pi)
     if rpm > MAX_RPM:
         raise drive_t.error("rpm", f"more than {MAX_RPM:g} rpm is outside any valve gear, got {raw_rpm!r}")
-    drive = Drive(rpm=rpm)
+    drive = Drive(rpm=rpm, operating_range=_operating_range(drive_t))
 
     follower = _parse_follower(top.table("follower", required=False), file)
     lift = _parse_lift(top.table("lift"), file)
@@ -345,6 +354,24 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     if lift.law == "gear" and follower.type not in ("rocking-cam", "rolling-lever"):
         raise InputError(file, "lift.law", "lift.law = 'gear' is for the rocking-cam and rolling-lever gears")
     return Scene(**fields)
+
+
+def _operating_range(t: Table) -> tuple[float, float] | None:
+    """[drive] operating_range = [LOWEST, HIGHEST] speeds (bare numbers rev/min), or None."""
+    if not t.has("operating_range"):
+        return None
+    raw = t.raw("operating_range")
+    if not isinstance(raw, list) or len(raw) != 2:
+        raise t.error("operating_range", "expected [LOWEST, HIGHEST], such as [\"800 rpm\", \"6500 rpm\"]")
+    ends = []
+    for i, value in enumerate(raw):
+        item = Table({"v": value}, t.file, t.key(f"operating_range[{i}]"))
+        si = item.quantity("v", "speed", positive=True)
+        ends.append(float(value) if isinstance(value, (int, float)) and not isinstance(value, bool)
+                    else float(f"{si * 60.0 / (2.0 * math.pi):.12g}"))  # "800 rpm" is 800, not 799.99...
+    if not ends[0] < ends[1] <= MAX_RPM:
+        raise t.error("operating_range", f"needs LOWEST < HIGHEST <= {MAX_RPM:g} rpm, got {raw!r}")
+    return ends[0], ends[1]
 
 
 def _closure(effects) -> set[str]:
@@ -426,6 +453,7 @@ def _parse_spring(t: Table | None) -> Spring | None:
     preload = t.quantity("preload", "force", nonnegative=True)
     geometry = [name for name in SPRING_GEOMETRY if t.has(name)]
     rate = mass = None
+    d = D = n = None
     if geometry:
         missing = [name for name in SPRING_GEOMETRY if not t.has(name)]
         if missing:
@@ -453,7 +481,7 @@ def _parse_spring(t: Table | None) -> Spring | None:
     return Spring(
         preload=preload, rate=rate, mass=mass, elements=elements,
         damping_ratio=t.number("damping_ratio", 0.0, minimum=0.0, maximum=1.0, open_maximum=True),
-        free_length=free, solid_height=solid,
+        free_length=free, solid_height=solid, wire_diameter=d, coil_diameter=D, active_coils=n,
     )
 
 
