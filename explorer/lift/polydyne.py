@@ -409,7 +409,7 @@ def impossible_cam(lift: PolydyneLift, follower, fault, file: str) -> InputError
     rigid = fault_with(stiffness=k_max)
     if rigid is not None:
         return computed_error(rigid, file, "lift", f"the polydyne cam even with a rigid linkage ({k_max:g} N/m: the "
-                              "wanted lift plus the lash)", f"change the wanted lift ({rigid.advice.strip('()')})")
+                              "wanted lift plus the lash)", f"change the wanted lift or the follower: {rigid.advice.strip('()')}")
     lo, hi = t.stiffness, k_max  # fails, passes
     for _ in range(ADVICE_ITERATIONS):
         if hi / lo <= ADVICE_RATIO:
@@ -419,7 +419,7 @@ def impossible_cam(lift: PolydyneLift, follower, fault, file: str) -> InputError
     theta = lift.start + np.linspace(0.0, lift.wanted.end, 4001)
     deflection = float(np.max(lift.linkage_force(theta))) / t.stiffness
     remedy = (f"the linkage deflection (M w^2 s'' + W)/k it adds to the wanted {_length(lift.wanted.height)} "
-              f"lift reaches {_length(deflection)}: stiffen the linkage (at {_round_up(hi):.3g} N/m the cam passes)")
+              f"lift reaches {_length(deflection)}: stiffen the linkage (at {_round(hi, math.ceil):.3g} N/m the cam passes)")
     if valid(omega=0.0):
         slow, fast = 0.0, lift.design_omega  # passes, fails
         for _ in range(ADVICE_ITERATIONS):
@@ -427,7 +427,7 @@ def impossible_cam(lift: PolydyneLift, follower, fault, file: str) -> InputError
                 break
             mid = 0.5 * (slow + fast)
             slow, fast = (mid, fast) if valid(omega=mid) else (slow, mid)
-        remedy += f" or lower lift.design_rpm (at {slow * 60.0 / TWO_PI:.4g} rpm it passes)"
+        remedy += f" or lower lift.design_rpm (at {_round(slow * 60.0 / TWO_PI, math.floor, 4):.4g} rpm it passes)"
     else:
         remedy += (f"; no lower design speed helps: the cam fails at rest too, where its take-up ramp rises "
                    f"lash + W(0)/k = {_length(lift.ramp_height / t.ratio)} over lift.ramp = {math.degrees(lift.ramp):.4g} deg")
@@ -439,10 +439,11 @@ def _length(x: float) -> str:
     return f"{x * 1e3:.4g} mm" if abs(x) < 1.0 else f"{x:.4g} m"
 
 
-def _round_up(x: float) -> float:
-    """x rounded up to three significant digits (a stiffness to quote that still passes)."""
-    step = 10.0 ** (math.floor(math.log10(x)) - 2)
-    return math.ceil(x / step) * step
+def _round(x: float, direction, digits: int = 3) -> float:
+    """x rounded to `digits` significant digits in `direction` (math.ceil for a stiffness to quote
+    that still passes, math.floor for a speed)."""
+    step = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
+    return direction(x / step) * step
 
 
 def polydyne_lift(spec, options: PolydyneOptions, valve, spring, loads, linkage, follower) -> PolydyneLift:

@@ -188,7 +188,7 @@ def parse_spline_options(table, fields: dict[str, Any]) -> SplineOptions:
     else:
         omega = fields["drive"].omega
     options, lift = parse_stations(table, continuity, omega)
-    check_spline_shape(table, lift, fields["follower"])
+    check_spline_shape(table, lift, fields["follower"], fields["lift"].start)
     return options
 
 
@@ -246,11 +246,11 @@ def parse_stations(table, continuity: int, omega: float) -> tuple[SplineOptions,
     return options, solve_spline(options.stations, continuity, 0.0, table.file, where)
 
 
-def check_spline_shape(table, lift: SplineLift, follower=None) -> None:
+def check_spline_shape(table, lift: SplineLift, follower=None, start: float = 0.0) -> None:
     """The lift through the stations leaves the base circle and passes the checks every cam passes
     (explorer.lift.validity: finite, lift range; with the follower's geometry when `follower` is
-    given: pressure angle and undercut). A polydyne's wanted spline, a valve lift and no cam, is
-    checked without a follower."""
+    given: pressure angle and undercut, with the lift placed at cam angle `start`). A polydyne's
+    wanted spline, a valve lift and no cam, is checked without a follower."""
     from .validity import cam_fault, computed_error, lift_fault
 
     where = table.key("stations")
@@ -259,7 +259,7 @@ def check_spline_shape(table, lift: SplineLift, follower=None) -> None:
         jet = lift.local_derivatives(x, 3)
     fault = cam_fault(x, jet, where="{} after the start")
     if fault is None and follower is not None:
-        fault = lift_fault(lift, follower)
+        fault = lift_fault(replace(lift, start=start), follower)
     if fault is not None:
         remedy = {"undercut": "reduce the roller, enlarge the base circle or move the stations apart",
                   "lift range": "check the units, or add conditions (such as v and a at the top)",

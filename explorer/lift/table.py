@@ -128,7 +128,9 @@ def read_lift_csv(path, angle_scale: float, lift_scale: float, *, file: str, key
     rows: list[tuple[float, float]] = []
     lines: list[int] = []  # the file's line of each row
     header_allowed = True
-    unreadable = None  # (line, reason) of the first line that is no row: rows before it are checked first
+    # (line, reason) of the first line that is no row; reading goes on, so that the noise allowance
+    # of the range check comes from the whole file, and a bad row before it is reported instead
+    unreadable = None
     for number, line in enumerate(text.splitlines(), start=1):
         line = line.strip().lstrip("\ufeff")
         if not line or line.startswith("#"):
@@ -140,12 +142,12 @@ def read_lift_csv(path, angle_scale: float, lift_scale: float, *, file: str, key
             if header_allowed:  # one header line such as "angle_deg,lift_mm"
                 header_allowed = False
                 continue
-            unreadable = (number, "cannot read it as two numbers (angle, lift)")
-            break
+            unreadable = unreadable or (number, "cannot read it as two numbers (angle, lift)")
+            continue
         header_allowed = False
         if len(values) != 2:
-            unreadable = (number, f"expected 2 columns (angle, lift), got {len(values)}")
-            break
+            unreadable = unreadable or (number, f"expected 2 columns (angle, lift), got {len(values)}")
+            continue
         rows.append((values[0], values[1]))
         lines.append(number)
         if len(rows) > MAX_ROWS:
