@@ -260,6 +260,13 @@ def test_design_optimum_is_checked():
     assert "more than 1 m" in line and "--open-area" in line
 
 
+def test_fitted_rocking_cam_is_checked_like_the_written_one(tmp_path):
+    """explorer fit's contour goes through the one path of written contours (make_rocking_gear, the
+    one check); a target it cannot meet names gear.target and what to change."""
+    line = refused(["fit", SCENES / "rocking_cam.toml", "--lift", "60 mm"], tmp_path, "gear.target")
+    assert "the fitted contour" in line and "undercut" in line and "lower gear.target.lift" in line
+
+
 # --- item 3: data files in their physical range -----------------------------------------------
 
 
