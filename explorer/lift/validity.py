@@ -43,8 +43,9 @@ CHECKS = ("finite", "lift range", "pressure angle", "undercut")
 
 @dataclass(frozen=True)
 class CamFault:
-    """The first check a cam fails: which (one of CHECKS), where, and what is wrong, in words with
-    numbers (no advice: the caller knows what to change)."""
+    """The first check a cam fails: which (one of CHECKS), where, what is wrong (text, with
+    numbers), and for a cam entered as it is what to change and which key to name; the maker of a
+    computed cam replaces those two with what made the cam and what to change there."""
 
     check: str
     angle: float  # rad, where (a cam angle; the flank angle for a rocking cam's curvature)
