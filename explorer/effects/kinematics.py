@@ -43,10 +43,11 @@ def kinematics_effect(ctx) -> EffectOutput:
         "valve_open_angle_deg": float(360.0 * np.count_nonzero(is_open) / is_open.size),
     }
     if scene.follower.type == "translating-roller":
-        # pressure angle and radii of curvature (closed forms); raises InputError on undercut
+        # pressure angle and radii of curvature (closed forms); InputError when the cam fails the
+        # validity checks of every cam (explorer.lift.validity)
         from .contour import geometry_columns
 
-        geo_columns, geo_summary = geometry_columns(scene, ctx.theta, d)
+        geo_columns, geo_summary = geometry_columns(scene, ctx.theta, d, getattr(ctx.lift, "dip_allowance", 0.0))
         columns.update(geo_columns)
         summary.update(geo_summary)
     # laws that check themselves (table fit, acceleration closure) carry a report and warnings

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..gears.registry import effect_variant
-from ..result import EffectOutput, Result
+from ..result import NAN_MEANINGS, EffectOutput, Result
 from ..scene.scene import EFFECT_DEPENDENCIES, Scene
 
 # effect -> "module:function"; imported only when the effect runs, so a kinematics-only scene
@@ -82,10 +82,10 @@ def _resolve(target: str):
 
 
 # Results are checked behind the valid ranges: NaN (inf - inf, 0 / 0: an overflow inside an
-# effect) is refused except in the columns that mark with NaN where they are not defined (no
-# contact, valve not carried); infinity is a result for forces (a self-locking cam needs an
-# infinite push), never for the motion.
-NAN_WHERE_UNDEFINED = frozenset({"valve_referred_stiffness_N_m", "required_spring_force_N", "spring_margin_N"})
+# effect) is refused except in the columns that mark with NaN where they are not defined, each with
+# its documented meaning (result.NAN_MEANINGS); infinity is a result for forces (a self-locking cam
+# needs an infinite push), never for the motion.
+NAN_WHERE_UNDEFINED = frozenset(NAN_MEANINGS)
 MOTION_PREFIXES = ("cam_angle", "time_", "follower_", "valve_lift", "valve_velocity", "valve_accel", "valve_jerk",
                    "rigid_valve_")
 

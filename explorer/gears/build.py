@@ -202,22 +202,30 @@ def rocking_target(spec, source):
         fitted = make_rocking_gear(spec, source, lift_start=fit.lift_start, rise=fit.rise)
     except InputError as exc:
         raise InputError(spec.file, "gear.target", f"the fitted contour (lift_start "
-                         f"{math.degrees(fit.lift_start):.4g} deg, rise {fit.rise * 1e3:.4g} mm) fails: {exc.reason}") from None
+                         f"{math.degrees(fit.lift_start):.4g} deg, rise {fit.rise * 1e3:.4g} mm) fails: {exc.reason}; "
+                         "for this target lower gear.target.lift, lengthen gear.target.open_angle or give a longer "
+                         "gear.rocking_cam.flank") from None
     return given, fit, fitted
 
 
 def check_rocking_contour(gear, n: int = 721) -> None:
-    """Undercut of the rocking cam: a convex stretch of the pitch curve sharper than the roller."""
+    """The checks every cam passes (explorer.lift.validity), on the rocking cam as written or as
+    fitted: its valve-referred lift over the shaft's turn (finite, in range), the pressure angle at
+    the roller, and undercut -- a convex stretch of the flank's pitch curve sharper than the roller."""
+    from ..lift.validity import cam_fault, entered_error
+
     c = gear.contour
     w = np.linspace(c.lift_start, c.lift_start + c.flank, n)
     curvature = c.pitch_curvature(c.reference - c.sense * w)
     with np.errstate(divide="ignore"):
         radius = 1.0 / curvature
-    bad = (radius > 0.0) & (radius <= gear.roller_radius)
-    if np.any(bad):
-        raise InputError(gear.file, "follower.roller_radius",
-                         f"undercut: the rocking cam's flank is sharper ({np.min(radius[bad]) * 1e3:.4g} mm) than the roller")
-    gear.lift_jet(np.linspace(0.0, TWO_PI, 721))  # the roller keeps the cam all round
+    theta = np.linspace(0.0, TWO_PI, 721)
+    lift = gear.lift_jet(theta).c  # the roller keeps the cam all round (else the gear raises)
+    fault = cam_fault(theta, lift, pressure_angle=gear.contact_details(theta)["pressure_angle"], pitch_radius=radius,
+                      roller_radius=gear.roller_radius, curvature_angle=w, where="shaft angle {}",
+                      curvature_where="flank angle {}")
+    if fault is not None:
+        raise entered_error(fault, gear.file)
 
 
 def make_buffer(spec, which: str):

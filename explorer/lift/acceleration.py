@@ -36,12 +36,12 @@ import numpy as np
 from ..core.errors import InputError
 from ..core.reader import Table
 from ..core.units import plain_number, short_repr, to_si
+from .validity import MAX_LIFT, check_computed  # MAX_LIFT: a bigger result means wrong units; it guards overflow
 
 TWO_PI = 2.0 * math.pi
 INTERPOLATIONS = ("linear", "step")
 CLOSURE_WARN = 1e-6  # relative residual: rounding of hand-typed points beyond ~6 digits
 CLOSURE_ERROR = 1e-2  # relative residual: the curve does not describe a closed event
-MAX_LIFT = 1.0  # m; no valve gear lifts more: a bigger result means wrong units, and it guards overflow
 UNUSED_KEYS = ("height", "rise", "dwell", "return", "return_law")
 ANGLE_UNITS = {"radian", "degree", "turn", "revolution", "arcminute", "arcsecond", "gradian", "milliradian"}
 
@@ -319,6 +319,12 @@ class AccelerationLift:
         }
 
     @property
+    def dip_allowance(self) -> float:
+        """m below the base circle that the closure check allows (CLOSURE_ERROR of the peak lift):
+        the validity checks of every cam (explorer.lift.validity) take the same allowance."""
+        return CLOSURE_ERROR * max(self.closure_check().peak_lift, 0.0)
+
+    @property
     def warnings(self) -> tuple[str, ...]:
         c = self.closure_check()
         if c.worst > CLOSURE_WARN:
@@ -343,4 +349,8 @@ def _signed_areas(accel) -> tuple[float, float]:
 
 
 def build_acceleration_lift(scene) -> AccelerationLift:
-    return AccelerationLift.from_options(scene.lift.options, scene.lift.start, omega=scene.drive.omega)
+    lift = AccelerationLift.from_options(scene.lift.options, scene.lift.start, omega=scene.drive.omega)
+    # the integrated lift is a computed cam: the checks of every cam (explorer.lift.validity)
+    check_computed(lift, scene.follower, scene.source, "lift.points", "the lift integrated from these accelerations",
+                   "check acceleration_unit, reference_rpm and the points, or enlarge the base circle")
+    return lift

@@ -423,6 +423,14 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> D
         z = result.x
         success, message, iterations = bool(result.success), str(result.message), int(result.nit)
     lift = problem.lift(z)
+    # the optimum is a computed cam: the checks of every cam (explorer.lift.validity) before it is reported
+    from ..lift.validity import check_computed
+
+    check_computed(lift, scene.follower, scene.source, "lift.stations", f"the optimised lift (--objective {objective})",
+                   {"undercut": "keep its curvature with --radius-margin (0 or more)",
+                    "pressure angle": "limit it with --max-pressure-angle",
+                    "lift range": "hold a smaller --open-area, or give fewer station lifts s as \"free\"",
+                    "": "check the scene's units"})
     value, _, slacks = evaluate(scene, lift, objective, limits, problem.x, target)
     values = {key: float(zi * si) for key, zi, si in zip(problem.free, z, problem.scale)}
     comparison = {}

@@ -116,9 +116,9 @@ class CamSource:
 
 
 def cam_source(scene, lift=None) -> CamSource:
-    """The scene's cam; InputError for gears whose cam is not a translating-roller cam, and for an
-    undercut cam (its contour folds: nothing to make)."""
-    from ..lift.contours.translating import find_undercut, undercut_error
+    """The scene's cam; InputError for gears whose cam is not a translating-roller cam, and for a cam
+    that fails the validity checks of every cam (an undercut one folds: nothing to make)."""
+    from ..lift.validity import entered_error, lift_fault
     from ..effects.lift import build_lift
 
     f = scene.follower
@@ -127,13 +127,9 @@ def cam_source(scene, lift=None) -> CamSource:
                          f"exports are for translating-roller cams; this scene's follower is {f.type!r}")
     src = CamSource(lift if lift is not None else build_lift(scene), f.base_radius, f.roller_radius,
                     f.offset, scene.name, scene.source)
-    theta = angles_with(7200, src.breakpoints())
-    g = src.at(theta)
-    with np.errstate(divide="ignore"):
-        rho = 1.0 / g.pitch_curvature
-    i = find_undercut(rho, f.roller_radius)
-    if i is not None:
-        raise undercut_error(float(theta[i]), float(rho[i]), f.roller_radius, scene.source)
+    fault = lift_fault(src.lift, f)  # the checks every cam passes (explorer.lift.validity)
+    if fault is not None:
+        raise entered_error(fault, scene.source)
     return src
 
 
