@@ -7,7 +7,7 @@ import argparse
 import importlib
 import sys
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 
 COMMAND_MODULES = [
     "explorer.cli.simulate",
@@ -59,8 +59,31 @@ Bad input ends with one line 'error: FILE: KEY: reason' and exit status 2; nothi
 """
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse with the program's one-line errors: `error: <command line>: OPTION: reason`, exit
+    status 2, the value cut to a readable length (argparse prints its usage and the whole value)."""
+
+    def error(self, message: str):
+        message = message.replace("\n", " ")
+        option = "-"
+        if message.startswith("argument "):  # "argument --seed: invalid int value: '...'"
+            option, _, message = message[len("argument "):].partition(": ")
+            option = option.split("/")[-1]
+        value = None
+        if ": '" in message and message.endswith("'"):  # the value argparse quotes last, cut by echo
+            message, _, value = message.partition(": '")
+            value = value[:-1]
+        reason = message if value is None else f"{message}: {echo(value)}"
+        raise SystemExit(_one_line(InputError("<command line>", option, f"{reason} (see {self.prog} --help)")))
+
+
+def _one_line(exc: InputError) -> int:
+    print(f"error: {exc}", file=sys.stderr)
+    return 2
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="explorer", description=DESCRIPTION, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     from ..core.version import __version__

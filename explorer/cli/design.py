@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 
 HELP = """\
 Choose the "free" station values of a spline lift (law = "spline") to minimise an objective at
@@ -47,7 +47,7 @@ def _quantity(text, dimension, option):
         return None
     value = to_si(text, dimension, file="<command line>", key=option)
     if value < 0.0:
-        raise InputError("<command line>", option, f"must not be negative, got {text!r}")
+        raise InputError("<command line>", option, f"must not be negative, got {echo(text)}")
     return value
 
 
@@ -65,7 +65,7 @@ def run(args) -> int:
         try:
             lo, hi = (float(v) for v in args.band.split(":"))
         except ValueError:
-            raise InputError("<command line>", "--band", f"expected A:B in rpm, got {args.band[:40]!r}") from None
+            raise InputError("<command line>", "--band", f"expected A:B in rpm, got {echo(args.band)}") from None
         if not (0.0 < lo <= hi <= 100_000.0):
             raise InputError("<command line>", "--band", "expected 0 < A <= B <= 100000 rpm")
         band = (lo, hi)
@@ -78,7 +78,7 @@ def run(args) -> int:
             area = _quantity(area, "length", "--open-area")
         except InputError:
             raise InputError("<command line>", "--open-area",
-                             f"expected keep or an area of lift over cam angle such as '1500 mm*deg', got {area[:40]!r}") from None
+                             f"expected keep or an area of lift over cam angle such as '1500 mm*deg', got {echo(area)}") from None
         if area == 0.0:
             raise InputError("<command line>", "--open-area", "must be positive (or keep)")
     elif area is not None:

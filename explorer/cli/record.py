@@ -7,7 +7,7 @@ import itertools
 import math
 import sys
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 
 # Each recording costs ~0.1-0.3 s and ~1-4 MB of the file at 3600 steps with the parts: a thousand
 # is minutes and gigabytes, and a viewer that shows them side by side. Wider sweeps are a typo
@@ -77,7 +77,7 @@ def parse_sweep(text: str) -> tuple[str, list[str]]:
         raise InputError("--sweep", key or text, "sweep key must be dotted, such as drive.rpm")
     values = [v.strip() for v in values_text.split(",")]
     if not values or any(not v for v in values):
-        raise InputError("--sweep", key, f"empty value in {values_text!r}; give v1,v2,...")
+        raise InputError("--sweep", key, f"empty value in {echo(values_text)}; give v1,v2,...")
     return key, values
 
 

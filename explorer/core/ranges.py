@@ -16,7 +16,7 @@ import fnmatch
 import math
 import sys
 
-from .errors import InputError
+from .errors import InputError, echo
 
 _TURN = 2.0 * math.pi
 _RPM = _TURN / 60.0  # rad/s per rev/min
@@ -90,5 +90,4 @@ def check_range(number: float, dimension: str, *, file: str, key: str, shown, ze
 
 
 def _short(value) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:40] + f"... ({len(text)} characters)"
+    return echo(value)

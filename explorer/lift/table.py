@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.reader import Table
 from ..core.files import read_text
 from ..core.units import to_si
@@ -75,9 +75,9 @@ def parse_table_options(table: Table, fields: dict[str, Any]) -> TableOptions:
     angle_scale = to_si(f"1 {angle_unit}", "angle", file=table.file, key=table.key("angle_unit"))
     lift_scale = to_si(f"1 {lift_unit}", "length", file=table.file, key=table.key("lift_unit"))
     if not angle_scale > 0.0:
-        raise table.error("angle_unit", f"{angle_unit!r} is not a usable angle unit")
+        raise table.error("angle_unit", f"{echo(angle_unit)} is not a usable angle unit")
     if not lift_scale > 0.0:
-        raise table.error("lift_unit", f"{lift_unit!r} is not a usable length unit")
+        raise table.error("lift_unit", f"{echo(lift_unit)} is not a usable length unit")
     smoothing = table.raw("smoothing", "auto")
     if smoothing == "auto":
         noise = None

@@ -37,7 +37,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 
 
 TWO_PI = 2.0 * math.pi
@@ -68,9 +68,9 @@ class TrainLoads:
         )
         for key, value, ok, reason in checks:
             if not math.isfinite(value):
-                raise InputError(self.source, key, f"value must be finite, got {value!r}")
+                raise InputError(self.source, key, f"value must be finite, got {echo(value)}")
             if not ok:
-                raise InputError(self.source, key, f"{reason}, got {value!r}")
+                raise InputError(self.source, key, f"{reason}, got {echo(value)}")
 
     @staticmethod
     def from_scene(scene) -> "TrainLoads":

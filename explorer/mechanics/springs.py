@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from .forces import TWO_PI, RPM_PER_RAD_S, TrainLoads
 from ..core.units import KGF
 
@@ -74,12 +74,12 @@ def optimum_deceleration_difference(friction: float, mass: float) -> float:
 
 def _check_positive(value: float, key: str) -> None:
     if not (math.isfinite(value) and value > 0.0):
-        raise InputError("<arguments>", key, f"must be greater than zero, got {value!r}")
+        raise InputError("<arguments>", key, f"must be greater than zero, got {echo(value)}")
 
 
 def _check_nonnegative(value: float, key: str) -> None:
     if not (math.isfinite(value) and value >= 0.0):
-        raise InputError("<arguments>", key, f"must not be negative, got {value!r}")
+        raise InputError("<arguments>", key, f"must not be negative, got {echo(value)}")
 
 
 # --- seed 003: historic rules -------------------------------------------------------------------
@@ -93,7 +93,7 @@ def historic_preload(bore: float, cylinder: str = "high-pressure") -> tuple[floa
     bore_mm/22 to bore_mm/17 kgf for low-pressure cylinders (seed 003)."""
     _check_positive(bore, "cylinder_bore")
     if cylinder not in _PRELOAD_DIVISORS:
-        raise InputError("<arguments>", "cylinder", f"unknown value {cylinder!r}; choose one of: {', '.join(CYLINDERS)}")
+        raise InputError("<arguments>", "cylinder", f"unknown value {echo(cylinder)}; choose one of: {', '.join(CYLINDERS)}")
     bore_mm = bore * 1e3
     lo_div, hi_div = _PRELOAD_DIVISORS[cylinder]
     return bore_mm / lo_div * KGF, bore_mm / hi_div * KGF

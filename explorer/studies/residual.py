@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 
 TWO_PI = 2.0 * math.pi
 MAX_SPEEDS = 2000
@@ -167,7 +167,7 @@ def parse_speeds(text: str) -> np.ndarray:
         else:
             speeds = np.array([float(x) for x in text.split(",")])
     except ValueError:
-        raise InputError("<command line>", key, f"expected A:B:N or A,B,C in rpm, got {text[:40]!r}") from None
+        raise InputError("<command line>", key, f"expected A:B:N or A,B,C in rpm, got {echo(text)}") from None
     if speeds.size > MAX_SPEEDS:
         raise InputError("<command line>", key, f"at most {MAX_SPEEDS} speeds, got {speeds.size}")
     if not np.all(np.isfinite(speeds)) or np.any(speeds <= 0.0) or np.any(speeds > 100_000.0):

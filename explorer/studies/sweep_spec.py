@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 
 # more runs than this need --yes (yes=True): 10^7 rows are ~1 GB of table and hours of CPU
 MAX_RUNS_UNASKED = 10_000_000
@@ -115,16 +115,16 @@ def quantity(text, info: SweepKey, file: str) -> float:
             value = text
         else:
             if not math.isfinite(value):
-                raise InputError(file, info.key, f"value must be finite, got {text!r}")
+                raise InputError(file, info.key, f"value must be finite, got {echo(text)}")
     else:
         value = text
     if info.dimension == "dimensionless":
         try:
             number = float(value)
         except (TypeError, ValueError):
-            raise InputError(file, info.key, f"expected a plain number, got {str(value)[:40]!r}") from None
+            raise InputError(file, info.key, f"expected a plain number, got {echo(value)}") from None
         if not math.isfinite(number):
-            raise InputError(file, info.key, f"value must be finite, got {str(value)[:40]!r}")
+            raise InputError(file, info.key, f"value must be finite, got {echo(value)}")
         return number
     number = to_si(value, info.dimension, file=file, key=info.key)
     if info.key == "drive.rpm":
@@ -192,10 +192,10 @@ def parse_axis(key: str, spec, log: bool = False, file: str = "--vary") -> Axis:
     m = _GRID.match(text)
     if m is None:
         if ":" in text:
-            raise InputError(file, info.key, f"cannot read {text[:60]!r}: a range is START:STOP:COUNT[:log]")
+            raise InputError(file, info.key, f"cannot read {echo(text)}: a range is START:STOP:COUNT[:log]")
         parts = [p.strip() for p in text.split(",")]
         if any(not p for p in parts):
-            raise InputError(file, info.key, f"empty value in {text[:60]!r}; give V1,V2,...")
+            raise InputError(file, info.key, f"empty value in {echo(text)}; give V1,V2,...")
         return parse_axis(info.key, parts, file=file)
     log = log or m.group("log") == "log"
     a_text, b_text = _split_units(m.group("a"), m.group("b"))
@@ -203,7 +203,7 @@ def parse_axis(key: str, spec, log: bool = False, file: str = "--vary") -> Axis:
     try:
         count = int(m.group("n").strip())
     except ValueError:
-        raise InputError(file, info.key, f"the number of points must be a whole number, got {m.group('n')!r}") from None
+        raise InputError(file, info.key, f"the number of points must be a whole number, got {echo(m.group('n'))}") from None
     if count < 1:
         raise InputError(file, info.key, f"zero steps: the number of points must be at least 2, got {count}")
     if count == 1:
@@ -234,24 +234,24 @@ def parse_sample(key: str, spec: str, file: str = "--sample") -> Sample:
     text = str(spec).strip()
     m = _DIST.match(text)
     if m is None:
-        raise InputError(file, info.key, f"cannot read {text[:60]!r}: write normal(MEAN, SD) or uniform(LOW, HIGH)")
+        raise InputError(file, info.key, f"cannot read {echo(text)}: write normal(MEAN, SD) or uniform(LOW, HIGH)")
     name = m.group("name").lower()
     if name not in DISTRIBUTIONS:
-        raise InputError(file, info.key, f"unknown distribution {m.group('name')!r}; known: {', '.join(DISTRIBUTIONS)}")
+        raise InputError(file, info.key, f"unknown distribution {echo(m.group('name'))}; known: {', '.join(DISTRIBUTIONS)}")
     args = [x.strip() for x in m.group("args").split(",")]
     if len(args) != 2 or not all(args):
-        raise InputError(file, info.key, f"{name}() takes two values, got {m.group('args')!r}")
+        raise InputError(file, info.key, f"{name}() takes two values, got {echo(m.group('args'))}")
     a_text, b_text = _split_units(*args)
     a = quantity(a_text, info, file)
     if name == "normal":
         b = quantity(b_text, SweepKey(info.key, info.dimension, info.column, False), file) \
             if not b_text.lstrip().startswith("-") else -1.0
         if b < 0.0:
-            raise InputError(file, info.key, f"negative standard deviation {args[1]!r}")
+            raise InputError(file, info.key, f"negative standard deviation {echo(args[1])}")
     else:
         b = quantity(b_text, info, file)
         if b <= a:
-            raise InputError(file, info.key, f"uniform(LOW, HIGH) needs LOW < HIGH, got {args[0]!r}, {args[1]!r}")
+            raise InputError(file, info.key, f"uniform(LOW, HIGH) needs LOW < HIGH, got {echo(args[0])}, {echo(args[1])}")
     return Sample(info.key, name, a, b, text)
 
 

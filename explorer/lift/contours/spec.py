@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from ...core.errors import InputError
+from ...core.errors import InputError, echo
 from ...core.reader import Table
 from ...core.units import plain_number, to_si
 from .arcs import Arc, ArcContour, ContourError, build_arc_contour
@@ -92,7 +92,7 @@ def parse_cam_section(table: Table | None, fields: dict) -> CamSpec | None:
     file = table.file
     lift = fields.get("lift")
     if lift is not None and lift.law != "contour":
-        raise InputError(file, table.prefix, f"[cam] describes a contour, used only with [lift] law = \"contour\" (law is {lift.law!r})")
+        raise InputError(file, table.prefix, f"[cam] describes a contour, used only with [lift] law = \"contour\" (law is {echo(lift.law)})")
     table.reject_unknown(("rotation", "tolerance", "arcs", "points", "file", "unit", "spline_degree"))
     rotation = table.quantity("rotation", "angle", 0.0)
     given = [k for k in ("arcs", "points", "file") if table.has(k)]
@@ -178,7 +178,7 @@ def _parse_points(table: Table, rotation: float, fields: dict) -> CamSpec:
     unit_text = table.string("unit", "m")
     scale = to_si(f"1 {unit_text}", "length", file=file, key=table.key("unit"))
     if not scale > 0.0:
-        raise table.error("unit", f"not a length unit: {unit_text!r}")
+        raise table.error("unit", f"not a length unit: {echo(unit_text)}")
     degree = table.number("spline_degree", 5, integer=True)
     if degree not in (3, 5):
         raise table.error("spline_degree", f"must be 3 or 5, got {degree}")
