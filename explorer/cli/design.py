@@ -12,7 +12,8 @@ Choose the "free" station values of a spline lift (law = "spline") to minimise a
 the scene's speed, subject to limits (scipy.optimize SLSQP, on a grid of the event):
   --objective peak-acceleration | peak-jerk | jerk-energy | residual-vibration (over --band)
   --max-pressure-angle A, --radius-margin L (convex pitch radius >= roller radius + L),
-  --contact-margin F with --contact-rpm N (rigid contact force >= F at every speed up to N)
+  --contact-margin F with --contact-rpm N (rigid contact force >= F at every speed up to N;
+    without --contact-rpm up to the scene's drive.rpm, printed with the result)
   --open-area keep | AREA: hold the valve's open area (lift over cam angle, e.g. "1500 mm*deg")
     at the starting lift's or at AREA (the duration is always held: the stations do not move)
 Prints the optimum, each constraint's slack (relative, >= 0 met) and the standard laws on the
@@ -31,8 +32,10 @@ def register(sub) -> None:
     p.add_argument("--max-pressure-angle", metavar="ANGLE")
     p.add_argument("--radius-margin", metavar="LENGTH")
     p.add_argument("--contact-margin", metavar="FORCE")
-    p.add_argument("--contact-rpm", type=float, metavar="RPM")
-    p.add_argument("--band", metavar="A:B", help="speed band of the residual-vibration objective, rpm")
+    p.add_argument("--contact-rpm", metavar="RPM",
+                   help="the contact margin holds at every speed up to this (default: drive.rpm); needs --contact-margin")
+    p.add_argument("--band", metavar="A:B", help="speed band of the residual-vibration objective, rpm (default: "
+                   "drive.rpm alone); the range grammar of every command (explorer.core.grids)")
     p.add_argument("--open-area", metavar="keep|AREA",
                    help='hold the valve open area (integral of the valve lift over cam angle): "keep" the '
                         'starting lift\'s, or a value such as "1500 mm*deg"')
@@ -51,6 +54,22 @@ def _quantity(text, dimension, option):
     return value
 
 
+def _speeds(text: str, option: str, interval: bool = False):
+    """Speeds in rev/min (a bare number) or with a unit, each in drive.rpm's valid range: one
+    speed, or an interval A:B in the range grammar of every command."""
+    from ..core import grids
+    from ..studies.sweep_spec import SWEEP_KEYS, check_values, quantity
+
+    info = SWEEP_KEYS["drive.rpm"]
+    if interval:
+        shape = grids.read(text, file=option, key=info.key, max_points=2, interval=True)
+    else:
+        shape = grids.Listed((str(text),))
+    values = grids.values(shape, lambda value: quantity(value, info, option), file=option, key=info.key)
+    check_values(info, values, option)
+    return values
+
+
 def run(args) -> int:
     import math
 
@@ -62,15 +81,15 @@ def run(args) -> int:
         raise InputError("<command line>", "--max-pressure-angle", "must lie between 0 and 90 deg")
     band = None
     if args.band is not None:
-        try:
-            lo, hi = (float(v) for v in args.band.split(":"))
-        except ValueError:
-            raise InputError("<command line>", "--band", f"expected A:B in rpm, got {echo(args.band)}") from None
-        if not (0.0 < lo <= hi <= 100_000.0):
-            raise InputError("<command line>", "--band", "expected 0 < A <= B <= 100000 rpm")
-        band = (lo, hi)
-    if args.contact_rpm is not None and not 0.0 < args.contact_rpm <= 100_000.0:
-        raise InputError("<command line>", "--contact-rpm", "must lie in (0, 100000] rpm")
+        if args.objective != "residual-vibration":
+            raise InputError("<command line>", "--band", "only the residual-vibration objective has a speed band")
+        band = tuple(float(x) for x in _speeds(args.band, "--band", interval=True))
+    contact_rpm = None
+    if args.contact_rpm is not None:
+        if args.contact_margin is None:
+            raise InputError("<command line>", "--contact-rpm", "sets the speed range of --contact-margin: give "
+                             "--contact-margin too")
+        contact_rpm = float(_speeds(args.contact_rpm, "--contact-rpm")[0])
     area = args.open_area
     if area is not None and area.strip() != "keep":
         # mm*deg has the dimension of a length (deg is a number); its SI value is in m*rad
@@ -84,7 +103,7 @@ def run(args) -> int:
     elif area is not None:
         area = "keep"
     limits = DesignLimits(angle, _quantity(args.radius_margin, "length", "--radius-margin"),
-                          _quantity(args.contact_margin, "force", "--contact-margin"), args.contact_rpm, band,
+                          _quantity(args.contact_margin, "force", "--contact-margin"), contact_rpm, band,
                           open_area=area)
     scene = scene_from_args(args)
     if sys.stderr.isatty():

@@ -7,7 +7,7 @@ import itertools
 import math
 import sys
 
-from ..core.errors import InputError, echo
+from ..core.errors import InputError
 
 # Each recording costs ~0.1-0.3 s and ~1-4 MB of the file at 3600 steps with the parts: a thousand
 # is minutes and gigabytes, and a viewer that shows them side by side. Wider sweeps are a typo
@@ -59,7 +59,7 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--sweep", action="append", default=[], metavar="SECTION.KEY=V1,V2,...",
-        help="one recording per value (repeatable: every combination of the sweeps)",
+        help="one recording per value, V1,V2,... or START:STOP:COUNT[:log] (repeatable: every combination)",
     )
     p.add_argument("--no-parts", action="store_true", help="leave out the 3D parts (series and events only)")
     p.set_defaults(run=run)
@@ -67,18 +67,20 @@ def register(sub) -> None:
 
 
 def parse_sweep(text: str) -> tuple[str, list[str]]:
-    """'drive.rpm=100,200' -> ('drive.rpm', ['100', '200'])."""
+    """'drive.rpm=100,200' -> ('drive.rpm', ['100', '200']); 'drive.rpm=100:300:3' -> ('drive.rpm',
+    ['100', '200', '300']): the range grammar of every command (explorer.core.grids), each value
+    in the unit it was written in, checked by the scene loader."""
+    from ..core import grids
+
     if "=" not in text:
-        raise InputError("--sweep", text, "a sweep must look like section.key=v1,v2,...")
+        raise InputError("--sweep", text, "a sweep must look like section.key=v1,v2,... or section.key=START:STOP:COUNT")
     key, _, values_text = text.partition("=")
     key = key.strip()
     parts = key.split(".")
     if not key or len(parts) < 2 or any(not p for p in parts):
         raise InputError("--sweep", key or text, "sweep key must be dotted, such as drive.rpm")
-    values = [v.strip() for v in values_text.split(",")]
-    if not values or any(not v for v in values):
-        raise InputError("--sweep", key, f"empty value in {echo(values_text)}; give v1,v2,...")
-    return key, values
+    shape = grids.read(values_text, file="--sweep", key=key, max_points=MAX_RUNS)
+    return key, grids.texts(shape, file="--sweep", key=key)
 
 
 def plan_runs(scene_paths: list[str], overrides: list[str], sweeps: list[str]):

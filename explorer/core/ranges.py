@@ -50,6 +50,10 @@ SHOWN_UNITS: dict[str, tuple[str, float]] = {
 # dotted key (glob) -> (smallest non-zero size, largest size) in SI, narrower than the dimension's
 KEY_RANGES: dict[str, tuple[float, float]] = {
     "gear.air_dashpot.ambient_pressure": (1.0, 1e8),  # Pa: an ambient pressure, not a modulus
+    # a rocking cam's contour is one polar curve about its pivot: its flank, and the swing before
+    # it, lie within one turn of the body (lift_start + flank < 360 deg is checked with the section)
+    "gear.rocking_cam.flank": (RANGES["angle"][0], _TURN),
+    "gear.rocking_cam.lift_start": (RANGES["angle"][0], _TURN),
 }
 # plain numbers (no unit): key -> (minimum, maximum), checked by the key's parser
 AMBIENT_TEMPERATURE = (1.0, 2000.0)  # K

@@ -534,6 +534,9 @@ def _fit_target(gear, target_lift, target_open_angle, lash) -> ContourFit:
         raise InputError(file, KEY_OPEN, f"{math.degrees(target_open_angle):.4g} deg is too short for "
                          f"{target_lift * 1e3:.4g} mm of lift: the flank would have to rise more steeply than "
                          "the roller lever can follow; lengthen open_angle or lower the lift")
+    from .spec import check_one_turn
+
+    check_one_turn(float(ws), flank, file)  # the fitted contour is checked as a written one
     return ContourFit(lift_start=float(ws), rise=float(h), open_swing=float(w_o),
                       full_lift_dwell=trial(ws, h).full_lift_dwell(), max_open_angle=float(max_open),
                       full_flank_open_angle=full_open)

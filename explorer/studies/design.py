@@ -279,6 +279,7 @@ class DesignReport:
     options: object  # the optimised SplineOptions
     method: str = "SLSQP"
     open_area: float | None = None  # m*rad held, if any
+    limits: DesignLimits | None = None  # as asked (for the report's statement of the speeds)
 
 
 def _peak_by_linear_programme(scene, problem, row: int, factor: float, limits: DesignLimits):
@@ -440,7 +441,7 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> D
     met = all(v >= -1e-9 for v in slacks.values()) and (value <= start_value or not start_met)
     return DesignReport(objective, value, start_value, values, slacks, comparison, iterations,
                         met, message if met else message + "; a limit is violated or nothing improved",
-                        with_values(problem.options, values), method, target)
+                        with_values(problem.options, values), method, target, limits)
 
 
 def _event_shape(problem) -> tuple[float, float, float, float]:
@@ -464,6 +465,7 @@ def report_text(scene, report: DesignReport) -> str:
              f"  optimum {report.value:.6g} {unit} (start {report.start_value:.6g})"]
     if report.open_area is not None:
         lines.append(f"  open area held at {1e3 * math.degrees(report.open_area):.6g} mm*deg")
+    lines += speed_notes(scene, report.objective, report.limits)
     for (i, k), value in report.values.items():
         lines.append(f"  station {i} {NAMES[k]} = {value * w**k:.9g} {UNITS[k]}")
     lines.append("  constraint slacks (>= 0 met):")
@@ -474,6 +476,21 @@ def report_text(scene, report: DesignReport) -> str:
         cells = "  ".join(f"{name.split(' [')[0]} {slack:+.4g}" for name, slack in slacks.items())
         lines.append(f"    {law_name:<20s} {value:11.6g} {unit}   {cells}{'  VIOLATES' if min(slacks.values()) < 0 else ''}")
     return "\n".join(lines) + "\n"
+
+
+def speed_notes(scene, objective: str, limits: DesignLimits | None) -> list[str]:
+    """The speeds the limits and the objective hold at, defaults named: a default that shapes the
+    result is printed with it."""
+    lines = []
+    if limits is not None and limits.contact_margin is not None:
+        upto = (f"{limits.contact_rpm:g} rpm (--contact-rpm)" if limits.contact_rpm is not None
+                else f"{scene.drive.rpm:g} rpm (drive.rpm: the default without --contact-rpm)")
+        lines.append(f"  contact margin {limits.contact_margin:g} N held at every speed up to {upto}")
+    if objective == "residual-vibration":
+        band = limits.band if limits is not None else None
+        lines.append(f"  residual vibration over {band[0]:g} to {band[1]:g} rpm (--band)" if band is not None
+                     else f"  residual vibration at {scene.drive.rpm:g} rpm (drive.rpm: the default without --band)")
+    return lines
 
 
 def stations_toml(scene, report: DesignReport) -> str:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..core.errors import InputError, echo
+from ..core import grids
 
 # more runs than this need --yes (yes=True): 10^7 rows are ~1 GB of table and hours of CPU
 MAX_RUNS_UNASKED = 10_000_000
@@ -161,68 +162,26 @@ def check_values(info: SweepKey, values: np.ndarray, file: str, what: str = "val
             check_range(v, info.dimension, file=file, key=info.key, shown=v, zero_allowed=not info.positive)
 
 
-_GRID = re.compile(r"^(?P<a>[^:]+):(?P<b>[^:]+):(?P<n>[^:]+?)(?::(?P<log>log|lin))?$")
-
-
-def _split_units(a: str, b: str) -> tuple[str, str]:
-    """'0.1' and '0.5 mm': the unit written once applies to both ends ('0.1:0.5 mm:5')."""
-    unit_a = re.sub(r"^[\s+\-0-9.eE]*", "", a).strip()
-    unit_b = re.sub(r"^[\s+\-0-9.eE]*", "", b).strip()
-    if unit_b and not unit_a:
-        a = f"{a.strip()} {unit_b}"
-    elif unit_a and not unit_b:
-        b = f"{b.strip()} {unit_a}"
-    return a, b
-
-
 def parse_axis(key: str, spec, log: bool = False, file: str = "--vary") -> Axis:
-    """A grid: "START:STOP:COUNT" (COUNT points, ends included; ":log" or log=True for geometric
-    spacing), "V1,V2,..." (the values as given), or a sequence of values."""
+    """A grid in the grammar of explorer.core.grids: "START:STOP:COUNT" (COUNT points, ends
+    included; ":log" or log=True for geometric spacing), "V1,V2,..." (the values as given), or a
+    sequence of values."""
     info = sweep_key(key, file)
     if isinstance(spec, (list, tuple, np.ndarray)):
         parts = list(spec)
         if not parts:
             raise InputError(file, info.key, "empty list of values")
+        if len(parts) > MAX_GRID_POINTS:
+            raise InputError(file, info.key, f"at most {MAX_GRID_POINTS:g} values per key, got {len(parts)}")
         values = np.array([quantity(p, info, file) for p in parts], dtype=float)
         check_values(info, values, file)
         return Axis(info.key, values, False)
-    text = str(spec).strip()
-    if not text:
-        raise InputError(file, info.key, "empty range; write START:STOP:COUNT or V1,V2,...")
-    m = _GRID.match(text)
-    if m is None:
-        if ":" in text:
-            raise InputError(file, info.key, f"cannot read {echo(text)}: a range is START:STOP:COUNT[:log]")
-        parts = [p.strip() for p in text.split(",")]
-        if any(not p for p in parts):
-            raise InputError(file, info.key, f"empty value in {echo(text)}; give V1,V2,...")
-        return parse_axis(info.key, parts, file=file)
-    log = log or m.group("log") == "log"
-    a_text, b_text = _split_units(m.group("a"), m.group("b"))
-    start, stop = quantity(a_text, info, file), quantity(b_text, info, file)
-    try:
-        count = int(m.group("n").strip())
-    except ValueError:
-        raise InputError(file, info.key, f"the number of points must be a whole number, got {echo(m.group('n'))}") from None
-    if count < 1:
-        raise InputError(file, info.key, f"zero steps: the number of points must be at least 2, got {count}")
-    if count == 1:
-        raise InputError(file, info.key, "a range of 1 point: give at least 2 points, or the value with --set")
-    if count > MAX_GRID_POINTS:
-        raise InputError(file, info.key, f"at most {MAX_GRID_POINTS:g} points per key, got {count}")
-    if start == stop:
-        raise InputError(file, info.key, f"empty range: start equals stop ({start:g})")
-    if stop < start:
-        raise InputError(file, info.key, f"backwards range: stop {stop:g} is below start {start:g}")
-    if log:
-        if start <= 0.0:
-            raise InputError(file, info.key, f"a log range needs a start > 0, got {start:g}")
-        values = np.geomspace(start, stop, count)
-    else:
-        values = np.linspace(start, stop, count)
-    values[0], values[-1] = start, stop  # the ends exactly as given
+    shape = grids.read(spec, file=file, key=info.key, max_points=MAX_GRID_POINTS)
+    if log and isinstance(shape, grids.Listed):
+        raise InputError(file, info.key, "--log spaces a START:STOP:COUNT range; a list V1,V2,... keeps its values")
+    values = grids.values(shape, lambda text: quantity(text, info, file), file=file, key=info.key, log=log)
     check_values(info, values, file)
-    return Axis(info.key, values, log)
+    return Axis(info.key, values, isinstance(shape, grids.Span) and (log or shape.log))
 
 
 _DIST = re.compile(r"^\s*(?P<name>[A-Za-z_]+)\s*\((?P<args>.*)\)\s*$", re.DOTALL)
@@ -241,7 +200,7 @@ def parse_sample(key: str, spec: str, file: str = "--sample") -> Sample:
     args = [x.strip() for x in m.group("args").split(",")]
     if len(args) != 2 or not all(args):
         raise InputError(file, info.key, f"{name}() takes two values, got {echo(m.group('args'))}")
-    a_text, b_text = _split_units(*args)
+    a_text, b_text = grids.share_unit(*args)
     a = quantity(a_text, info, file)
     if name == "normal":
         b = quantity(b_text, SweepKey(info.key, info.dimension, info.column, False), file) \
