@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 
 from ..core.errors import InputError, echo
@@ -64,17 +65,16 @@ class Parser(argparse.ArgumentParser):
     status 2, the value cut to a readable length (argparse prints its usage and the whole value)."""
 
     def error(self, message: str):
-        message = message.replace("\n", " ")
         option = "-"
         if message.startswith("argument "):  # "argument --seed: invalid int value: '...'"
             option, _, message = message[len("argument "):].partition(": ")
             option = option.split("/")[-1]
-        value = None
-        if ": '" in message and message.endswith("'"):  # the value argparse quotes last, cut by echo
-            message, _, value = message.partition(": '")
-            value = value[:-1]
-        reason = message if value is None else f"{message}: {echo(value)}"
+        # the values argparse quotes ('...'), each cut by echo; the rest of its message kept
+        reason = _QUOTED.sub(lambda m: echo(m.group(1)), message.replace("\n", " "))
         raise SystemExit(_one_line(InputError("<command line>", option, f"{reason} (see {self.prog} --help)")))
+
+
+_QUOTED = re.compile(r"'((?:[^'\\]|\\.)*)'", re.DOTALL)
 
 
 def _one_line(exc: InputError) -> int:
