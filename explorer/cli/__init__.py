@@ -101,8 +101,14 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "run", None):
         parser.print_help()
         return 0
+    from ..core.processes import Stopped, stop_signals_raise
+
     try:
-        return int(args.run(args) or 0)
+        with stop_signals_raise():  # SIGTERM/SIGHUP unwind like Ctrl-C: temporaries go, workers end
+            return int(args.run(args) or 0)
+    except Stopped as exc:
+        print(f"stopped by {exc}", file=sys.stderr)
+        return 128 + exc.signum
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -18,15 +18,19 @@ the scene's speed, subject to limits (scipy.optimize SLSQP, on a grid of the eve
     at the starting lift's or at AREA (the duration is always held: the stations do not move)
 Prints the optimum, each constraint's slack (relative, >= 0 met) and the standard laws on the
 same event; --toml prints the optimised [[lift.stations]] to paste into the scene.
+Limits no lift of the event can meet (a contact margin above the seat force at rest, or one the
+deceleration of the rise and return rules out at --contact-rpm; an open area beyond 1 m of lift)
+are refused at once, in one line. The optimisation stops after {budget} evaluations (the result
+is then reported as not met, exit status 1); from the first second a line on stderr shows them.
 """
 
 
 def register(sub) -> None:
     from .simulate import add_scene_arguments
-    from ..studies.design import OBJECTIVES
+    from ..studies.design import MAX_EVALUATIONS, OBJECTIVES
 
     p = sub.add_parser("design", help="optimise a spline lift (peak acceleration, jerk, residual vibration)",
-                       description=HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=HELP.format(budget=MAX_EVALUATIONS), formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--objective", required=True, choices=OBJECTIVES)
     p.add_argument("--max-pressure-angle", metavar="ANGLE")
@@ -41,6 +45,27 @@ def register(sub) -> None:
                         'starting lift\'s, or a value such as "1500 mm*deg"')
     p.add_argument("--toml", action="store_true", help="print only the optimised stations")
     p.set_defaults(run=run)
+
+
+class EvaluationProgress:
+    """A line on stderr from the first second on: evaluations spent of the budget, time."""
+
+    def __init__(self, stream, budget: int):
+        self.stream, self.budget = stream, budget
+        self.shown, self.last = False, 0.0
+
+    def __call__(self, evaluations: int, seconds: float) -> None:
+        if seconds < 1.0 or seconds - self.last < 0.2:
+            return
+        self.last = seconds
+        self.stream.write(f"\roptimising: {evaluations} of at most {self.budget} evaluations, {seconds:5.1f} s")
+        self.stream.flush()
+        self.shown = True
+
+    def end(self) -> None:
+        if self.shown:
+            self.stream.write("\n")
+            self.stream.flush()
 
 
 def _quantity(text, dimension, option):
@@ -74,7 +99,7 @@ def run(args) -> int:
     import math
 
     from .simulate import scene_from_args
-    from ..studies.design import DesignLimits, design, report_text, stations_toml
+    from ..studies.design import MAX_EVALUATIONS, DesignLimits, design, report_text, stations_toml
 
     angle = _quantity(args.max_pressure_angle, "angle", "--max-pressure-angle")
     if angle is not None and not 0.0 < angle < math.pi / 2:
@@ -106,8 +131,10 @@ def run(args) -> int:
                           _quantity(args.contact_margin, "force", "--contact-margin"), contact_rpm, band,
                           open_area=area)
     scene = scene_from_args(args)
-    if sys.stderr.isatty():
-        print("optimising ...", file=sys.stderr)
-    report = design(scene, args.objective, limits)
+    progress = EvaluationProgress(sys.stderr, MAX_EVALUATIONS)
+    try:
+        report = design(scene, args.objective, limits, progress=progress)
+    finally:
+        progress.end()
     sys.stdout.write(stations_toml(scene, report) if args.toml else report_text(scene, report))
     return 0 if report.success else 1

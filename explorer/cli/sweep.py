@@ -112,8 +112,26 @@ class Progress:
             self.stream.flush()
 
 
+def check_workers(workers: int | None, scheduler: str | None = None) -> int | None:
+    """--workers: at least 1, at most the usable cores (capped, with a note on stderr); not with
+    --scheduler (the cluster has its own)."""
+    from ..studies.sweep_run import worker_count
+
+    if workers is None:
+        return None
+    if scheduler is not None:
+        raise InputError("<command line>", "--workers", "sets local worker processes; with --scheduler the cluster's "
+                         "workers run the sweep")
+    if workers < 1:
+        raise InputError("<command line>", "--workers", f"at least 1, got {workers}")
+    count, note = worker_count(workers)
+    if note is not None:
+        print(f"note: {note}", file=sys.stderr)
+    return count
+
+
 def run(args) -> int:
-    from ..core.outputs import check_output
+    from ..core.outputs import all_or_none, check_output
     from ..scene.scene import load_scene
     from ..scene.builtin import default_scene
     from ..studies.sweep_run import SweepResult, plan_from, run_plan
@@ -142,21 +160,24 @@ def run(args) -> int:
     out = check_output(args.output, "--output")
     plot_out = check_output(args.plot, "--plot", ".png") if args.plot else None
     record_out = check_output(args.record, "--record", ".rrd") if args.record else None
-    if args.workers is not None and args.workers < 1:
-        raise InputError("--workers", str(args.workers), "at least 1")
+    workers = check_workers(args.workers, args.scheduler)
     report = sys.stderr if out.is_stdout() else sys.stdout
     progress = Progress(sys.stderr)
     started = time.perf_counter()
     try:
-        table = run_plan(scene, plan, workers=args.workers, scheduler=args.scheduler, progress=progress)
+        table = run_plan(scene, plan, workers=workers, scheduler=args.scheduler, progress=progress)
     finally:
         progress.end()
     result = SweepResult(table)
-    result.write(out)
-    if plot_out is not None:
-        result.plot(plot_out)
-    if record_out is not None:
-        result.record(record_out)
+    with all_or_none():  # the table, its picture and its recording, or none of them
+        try:
+            result.write(out)
+            if plot_out is not None:
+                result.plot(plot_out)
+            if record_out is not None:
+                result.record(record_out)
+        except OSError as exc:  # a full disk while writing a temporary
+            raise InputError(getattr(exc, "filename", None) or out.name, "-", f"cannot write: {exc.strerror or exc}") from None
     seconds = time.perf_counter() - started
     failed = int(sum(table.columns["run_failed"])) if len(table) else 0
     state = "" if table.complete else f" (INCOMPLETE: interrupted, {len(table)} of {plan.runs} runs kept)"

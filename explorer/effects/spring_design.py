@@ -164,8 +164,11 @@ def compare_events(scene, rpm: float | None = None, safety_margin: float = 0.0, 
         "asymmetric_saves_N": None,
         "asymmetric_saves_max_spring_force_N": None,
     }
-    split = balanced_split(lift, loads, omega, scene.follower.ratio)
-    if split is not None:
+    found = balanced_split(lift, loads, omega, scene.follower.ratio)
+    if found is not None and found.angles is None:
+        result["asymmetric_note"] = found.reason
+    if found is not None and found.angles is not None:
+        split = found.angles
         balanced = replace(lift, rise=split[0], ret=split[1])
         assert isinstance(balanced, LawLift)
         asym = judge(balanced)
@@ -188,6 +191,9 @@ def spring_design_summary(scene, lift) -> tuple[dict, list[str]]:
     rpm = design.target_rpm or scene.drive.rpm
     comparison = compare_events(scene, rpm, design.safety_margin, lift=lift)
     out: dict = {"advice": comparison["current"], "event_comparison": comparison}
+    if "asymmetric_note" in comparison:  # the speed is the input that rules the balance out
+        speed_key = "spring_design.target_rpm" if design.target_rpm else "drive.rpm"
+        warnings.append(f"{speed_key}: {comparison['asymmetric_note']}")
     if design.cylinder_bore is not None:
         lo, hi = historic_preload(design.cylinder_bore, design.cylinder)
         computed = comparison["current"]["preload_for_current_rate_N"]

@@ -189,7 +189,9 @@ def fit_periodic_spline(angles, values, noise: float | None = None, knots: int |
     then the spline nearly interpolates)."""
     from scipy import linalg, sparse
     from scipy.interpolate import BSpline
-    from scipy.optimize import brentq, minimize_scalar
+    from scipy.optimize import minimize_scalar
+
+    from ..core.roots import root_in
 
     x = np.mod(np.asarray(angles, dtype=float), TWO_PI)
     y = np.asarray(values, dtype=float)
@@ -252,7 +254,7 @@ def fit_periodic_spline(angles, values, noise: float | None = None, knots: int |
         elif rss(10.0**hi) <= target:
             log_lam = hi
         else:
-            log_lam = brentq(lambda g: rss(10.0**g) - target, lo, hi, xtol=1e-6)
+            log_lam = root_in(lambda g: rss(10.0**g) - target, lo, hi, xtol=1e-6)  # the ends' signs checked above
     lam = 10.0**log_lam
 
     # coefficients in the same stable form: c = L^-T U D^-1 z

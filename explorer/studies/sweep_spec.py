@@ -220,10 +220,33 @@ def draw(sample: Sample, rng: np.random.Generator, n: int) -> np.ndarray:
     return rng.uniform(sample.a, sample.b, n)
 
 
+MAX_SEED = 2**128  # numpy's SeedSequence takes any whole number >= 0; 128 bits are all its entropy
+TABLE_COPIES = 3  # the plan's values, the gathered figures and the table's columns, at once at the end
+
+
+def plan_bytes(runs: int, keys: int, figures: int) -> float:
+    """Memory a sweep of `runs` rows holds at its end: TABLE_COPIES float64 copies of a row of
+    the run index, the keys and the figures (as float: the count may be astronomical)."""
+    return float(TABLE_COPIES) * float(runs) * 8.0 * (1 + keys + figures)
+
+
+def check_seed(seed, samples) -> None:
+    if seed is None:
+        return
+    if not samples:
+        raise InputError("<command line>", "--seed", "seeds the random draws: give --sample too")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= int(seed) < MAX_SEED:
+        raise InputError("<command line>", "--seed", f"must be a whole number from 0 to 2**128 - 1, got {echo(seed)}")
+
+
 def make_plan(axes=(), samples=(), runs: int | None = None, seed: int | None = None, yes: bool = False,
-              file: str = "--vary") -> Plan:
+              file: str = "--vary", figures: int = 0) -> Plan:
     """The runs: the product of the axes (the first key varies slowest), each grid point repeated
-    `runs` times with fresh draws of the samples (runs defaults to 1 without samples)."""
+    `runs` times with fresh draws of the samples (runs defaults to 1 without samples). `figures`:
+    the columns each run adds to the table, for the memory check (a plan whose table would not
+    fit in the available memory is refused before anything is allocated, --yes or not)."""
+    from ..core.memory import available_bytes, size_text
+
     axes, samples = tuple(axes), tuple(samples)
     keys = [a.key for a in axes] + [s.key for s in samples]
     if not keys:
@@ -237,11 +260,17 @@ def make_plan(axes=(), samples=(), runs: int | None = None, seed: int | None = N
         raise InputError("--runs", str(runs), "--runs sets the number of random draws: give --sample too")
     if samples and runs is None:
         raise InputError("--runs", "-", "a --sample needs --runs N (how many draws)")
+    check_seed(seed, samples)
     reps = int(runs) if samples else 1
     grid = math.prod(a.values.size for a in axes)
     total = grid * reps
     if total > MAX_RUNS_UNASKED and not yes:
-        raise InputError(file, ", ".join(keys), f"{total:.4g} runs; more than {MAX_RUNS_UNASKED:g} need --yes")
+        raise InputError(file, ", ".join(keys), f"{float(total):.4g} runs; more than {MAX_RUNS_UNASKED:g} need --yes")
+    need, room = plan_bytes(total, len(keys), figures), available_bytes()
+    if need > room:
+        raise InputError("--runs" if samples else file, ", ".join(keys), f"{float(total):.4g} runs: the table needs about {size_text(need)} of "
+                         f"memory ({TABLE_COPIES} copies of {8 * (1 + len(keys) + figures)} bytes per run), "
+                         f"{size_text(room)} are available; sweep fewer runs, or in parts")
     values = np.empty((total, len(keys)))
     if axes:
         mesh = np.meshgrid(*[a.values for a in axes], indexing="ij")
