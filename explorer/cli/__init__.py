@@ -113,8 +113,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:  # a file or port the user named cannot be used: one line, no traceback
-        print(f"error: {exc.filename or '-'}: -: {exc.strerror or exc}", file=sys.stderr)
-        return 2
+        return _one_line(InputError(exc.filename or "-", "-", exc.strerror or exc))  # cut like any message
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

@@ -53,6 +53,9 @@ def run(args) -> int:
     if args.repeats < 1:
         raise InputError("<command line>", "--repeats", f"must be at least 1, got {args.repeats}")
     scene = scene_from_args(args)
+    from ..core.files import check_path
+
+    check_path(args.output_dir, file="<command line>", key="--output-dir")
     out_dir = Path(args.output_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise InputError(str(out_dir), "--output-dir", "exists and is not a directory")

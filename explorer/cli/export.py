@@ -94,7 +94,7 @@ def run(args) -> int:
 
     tolerance, width, wheel, points = _check_options(args)
     scene = scene_from_args(args)
-    name = args.output or f"{Path(scene.source).stem if scene.source != '<memory>' else 'cam'}{EXTENSIONS[args.format]}"
+    name = args.output if args.output is not None else f"{Path(scene.source).stem if scene.source != '<memory>' else 'cam'}{EXTENSIONS[args.format]}"
     out = check_output(name, "--output")
     src = exports.cam_source(scene)
     if args.format == "csv":

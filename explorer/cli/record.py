@@ -148,7 +148,7 @@ def run(args) -> int:
         write_recordings(out, runs(), on_run=written)
     except (OSError, RuntimeError) as exc:  # disk full, rerun CLI missing: not the user's input
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
-        print(f"error: {out.name}: --output: writing failed: {reason}", file=sys.stderr)
+        print(f"error: {InputError(out.name, '--output', f'writing failed: {reason}')}", file=sys.stderr)
         return 1
     report = sys.stderr if out.is_stdout() else sys.stdout  # stdout may be the file itself
     steps = sum(d[1] for d in done)

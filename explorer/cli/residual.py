@@ -41,12 +41,12 @@ def run(args) -> int:
 
     speeds = parse_speeds(args.rpm)
     scene = scene_from_args(args)
-    if args.output:
+    if args.output is not None:
         kind = table_format(args.output)
         table_out = check_output(args.output, "--output")
     else:
         kind, table_out = ".csv", check_output("-", "--output")
-    plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot else None
+    plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot is not None else None
     workers = check_workers(args.workers)
     progress = Progress(sys.stderr)
     try:

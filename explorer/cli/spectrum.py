@@ -35,8 +35,8 @@ def run(args) -> int:
     if not 1 <= args.orders <= MAX_ORDERS:
         raise InputError("<command line>", "--orders", f"must be between 1 and {MAX_ORDERS}, got {args.orders}")
     scene = scene_from_args(args)
-    table_out = check_output(args.output or "-", "--output")
-    plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot else None
+    table_out = check_output("-" if args.output is None else args.output, "--output")
+    plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot is not None else None
     spectrum = acceleration_spectrum(scene, build_lift(scene), args.orders)
     with all_or_none():  # the table and its chart, or neither
         write_checked(table_out, table_text(scene, spectrum))

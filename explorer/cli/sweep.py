@@ -139,7 +139,7 @@ def run(args) -> int:
 
     if getattr(args, "stray_log", False):
         raise InputError("--log", "-", "--log follows the --vary it applies to")
-    scene = load_scene(args.scene or str(default_scene()), args.overrides)
+    scene = load_scene(str(default_scene()) if args.scene is None else args.scene, args.overrides)
     vary, log = {}, []
     for text, is_log in args.grids or []:
         key, value = _split(text, "--vary")
@@ -158,8 +158,8 @@ def run(args) -> int:
     # every output checked before any work
     table_format(args.output)
     out = check_output(args.output, "--output")
-    plot_out = check_output(args.plot, "--plot", ".png") if args.plot else None
-    record_out = check_output(args.record, "--record", ".rrd") if args.record else None
+    plot_out = check_output(args.plot, "--plot", ".png") if args.plot is not None else None
+    record_out = check_output(args.record, "--record", ".rrd") if args.record is not None else None
     workers = check_workers(args.workers, args.scheduler)
     report = sys.stderr if out.is_stdout() else sys.stdout
     progress = Progress(sys.stderr)

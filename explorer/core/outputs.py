@@ -127,6 +127,8 @@ def check_output(path: str | os.PathLike, option: str, suffix: str | None = None
     name = os.fspath(path)
     if not name:
         raise InputError("<command line>", option, "empty file name")
+    if "\x00" in name:
+        raise InputError("<command line>", option, "a file name cannot contain a NUL byte")
     if name == "-" or _through_fd_link(name):
         where = "/dev/stdout" if name == "-" else name  # "-": standard output, as for most tools
         out = Output(name, option, Path(where), direct=True)

@@ -109,6 +109,15 @@ def check_magnitude(number: float, shown, *, file: str, key: str) -> float:
     return number
 
 
+def unit_scale(unit: str, dimension: str, *, file: str, key: str) -> float:
+    """The SI size of one `unit` (a unit key's value: angle_unit, lift_unit, ...). A blank unit is
+    refused: "1 " would be a bare number, read silently as the dimension's SI unit (degrees for
+    an angle)."""
+    if not str(unit).strip():
+        raise InputError(file, key, "empty unit: write one, such as mm, deg or m/s**2")
+    return to_si(f"1 {unit}", dimension, file=file, key=key)
+
+
 def short_repr(value) -> str:
     """repr of a value for a message, cut so that a hostile value cannot flood the terminal."""
     return echo(value)

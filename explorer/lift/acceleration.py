@@ -35,7 +35,7 @@ import numpy as np
 
 from ..core.errors import InputError, echo
 from ..core.reader import Table
-from ..core.units import plain_number, short_repr, to_si
+from ..core.units import plain_number, short_repr, to_si, unit_scale
 
 TWO_PI = 2.0 * math.pi
 INTERPOLATIONS = ("linear", "step")
@@ -62,7 +62,7 @@ def parse_acceleration_options(table: Table, fields: dict[str, Any]) -> Accelera
         if table.has(name):
             raise table.error(name, "not used by law 'acceleration' (the lift follows from the points); remove it")
     angle_unit = table.string("angle_unit", "deg")
-    angle_scale = to_si(f"1 {angle_unit}", "angle", file=table.file, key=table.key("angle_unit"))
+    angle_scale = unit_scale(angle_unit, "angle", file=table.file, key=table.key("angle_unit"))
     if not angle_scale > 0.0:
         raise table.error("angle_unit", f"{echo(angle_unit)} is not a usable angle unit")
     unit = table.string("acceleration_unit", "m/s**2")
@@ -100,11 +100,11 @@ def _acceleration_scale(table: Table, unit: str) -> tuple[float, bool]:
     """SI factor of `unit` and whether it is per time squared (True) or per angle squared."""
     key = table.key("acceleration_unit")
     try:
-        return to_si(f"1 {unit}", "acceleration", file=table.file, key=key), True
+        return unit_scale(unit, "acceleration", file=table.file, key=key), True
     except InputError:
         pass
     try:
-        scale = to_si(f"1 {unit}", "length", file=table.file, key=key)
+        scale = unit_scale(unit, "length", file=table.file, key=key)
     except InputError:
         raise table.error(
             "acceleration_unit",

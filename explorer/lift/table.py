@@ -35,7 +35,7 @@ import numpy as np
 from ..core.errors import InputError, echo
 from ..core.reader import Table
 from ..core.files import read_text
-from ..core.units import to_si
+from ..core.units import to_si, unit_scale
 
 TWO_PI = 2.0 * math.pi
 DEGREE = 5  # quintic: L''' continuous
@@ -72,8 +72,8 @@ def parse_table_options(table: Table, fields: dict[str, Any]) -> TableOptions:
     path = (base / name).resolve() if not Path(name).is_absolute() else Path(name)
     angle_unit = table.string("angle_unit", "deg")
     lift_unit = table.string("lift_unit", "mm")
-    angle_scale = to_si(f"1 {angle_unit}", "angle", file=table.file, key=table.key("angle_unit"))
-    lift_scale = to_si(f"1 {lift_unit}", "length", file=table.file, key=table.key("lift_unit"))
+    angle_scale = unit_scale(angle_unit, "angle", file=table.file, key=table.key("angle_unit"))
+    lift_scale = unit_scale(lift_unit, "length", file=table.file, key=table.key("lift_unit"))
     if not angle_scale > 0.0:
         raise table.error("angle_unit", f"{echo(angle_unit)} is not a usable angle unit")
     if not lift_scale > 0.0:

@@ -40,7 +40,7 @@ import numpy as np
 
 from ...core.errors import InputError, echo
 from ...core.reader import Table
-from ...core.units import plain_number, to_si
+from ...core.units import plain_number, to_si, unit_scale
 from .arcs import Arc, ArcContour, ContourError, build_arc_contour
 
 # Arcs below a micron or centres beyond 10 m are no valve-gear cam; they also push the tangency
@@ -176,7 +176,7 @@ def _read_points_file(path: Path, file: str, key: str) -> np.ndarray:
 def _parse_points(table: Table, rotation: float, fields: dict) -> CamSpec:
     file = table.file
     unit_text = table.string("unit", "m")
-    scale = to_si(f"1 {unit_text}", "length", file=file, key=table.key("unit"))
+    scale = unit_scale(unit_text, "length", file=file, key=table.key("unit"))
     if not scale > 0.0:
         raise table.error("unit", f"not a length unit: {echo(unit_text)}")
     degree = table.number("spline_degree", 5, integer=True)
