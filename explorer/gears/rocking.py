@@ -330,6 +330,14 @@ class RockingCamGear:
         return np.arctan2(by, bx)
 
 
+def check_one_turn(lift_start: float, flank: float, file: str) -> None:
+    """A rocking cam's contour is one polar curve about its pivot: the dwell before the flank and
+    the flank itself must fit in one turn of the body, or the contour overlaps itself."""
+    if lift_start + flank >= TWO_PI:
+        raise InputError(file, "gear.rocking_cam.flank", f"lift_start + flank = {math.degrees(lift_start + flank):.6g} "
+                         "deg: the contour would overlap itself (it must fit in one turn of the rocking cam, < 360 deg)")
+
+
 def build_rocking_gear(*, drive, cam_pivot, contour: RockingContour, roller_radius, lever_pivot, lever_arm,
                        roller_branch, make_valve, file="<memory>") -> RockingCamGear:
     """Assemble a rocking-cam gear: finds the swing's ends, the rest roller position and the body
@@ -538,8 +546,6 @@ def _fit_target(gear, target_lift, target_open_angle, lash) -> ContourFit:
         raise InputError(file, KEY_OPEN, f"{math.degrees(target_open_angle):.4g} deg is too short for "
                          f"{target_lift * 1e3:.4g} mm of lift: the flank would have to rise more steeply than "
                          "the roller lever can follow; lengthen open_angle or lower the lift")
-    from .spec import check_one_turn
-
     check_one_turn(float(ws), flank, file)  # the fitted contour is checked as a written one
     return ContourFit(lift_start=float(ws), rise=float(h), open_swing=float(w_o),
                       full_lift_dwell=trial(ws, h).full_lift_dwell(), max_open_angle=float(max_open),

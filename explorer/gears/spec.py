@@ -159,16 +159,10 @@ def _rocking_cam(t: Table) -> dict:
         "law": t.string("law", "cycloidal", choices=tuple(LAWS)),
         "opens": t.string("opens", "ccw", choices=SENSES),
     }
+    from .rocking import check_one_turn
+
     check_one_turn(out["lift_start"], out["flank"], t.file)
     return out
-
-
-def check_one_turn(lift_start: float, flank: float, file: str) -> None:
-    """A rocking cam's contour is one polar curve about its pivot: the dwell before the flank and
-    the flank itself must fit in one turn of the body, or the contour overlaps itself."""
-    if lift_start + flank >= 2.0 * math.pi:
-        raise InputError(file, "gear.rocking_cam.flank", f"lift_start + flank = {math.degrees(lift_start + flank):.6g} "
-                         "deg: the contour would overlap itself (it must fit in one turn of the rocking cam, < 360 deg)")
 
 
 TARGET_USES = ("given", "fitted")
