@@ -462,14 +462,16 @@ def test_the_infeasibility_bound_is_a_proof_a_feasible_margin_passes():
     problem = Problem(scene, "peak-acceleration", limits)
     assert infeasible(scene, problem, limits) is None
     height, rise, dwell, ret = _event_shape(problem)
+    refusals = {}
     for rpm in (2000.0, 8000.0, 30000.0):
         limits = DesignLimits(contact_margin=1.0, contact_rpm=rpm)
-        refused = infeasible(scene, problem, limits) is not None
+        refused = refusals[rpm] = infeasible(scene, problem, limits) is not None
         for name in STANDARD_LAWS:
             std = LawLift(height=height, start=scene.lift.start, rise=rise, dwell=dwell, ret=ret,
                           rise_law=name, return_law=name)
             margin = evaluate(scene, std, "peak-acceleration", limits, problem.x)[2]["contact margin [N]"]
             assert not (refused and margin >= 0.0), (rpm, name, margin)  # a law meeting it: no proof of none
+    assert refusals == {2000.0: False, 8000.0: True, 30000.0: True}  # the laws meet 1 N at 2000 rpm, none at 8000
     assert math.isfinite(loads.preload)
 
 
