@@ -25,8 +25,10 @@ Sweepable keys: {keys}.
 
 The table (-o, .parquet or .csv) is written when the sweep ends, atomically; Ctrl-C stops it and
 writes the runs finished so far, marked incomplete (Parquet metadata explorer.complete = false;
-CSV: a '# complete: false' line). Runs use every core here by default (--workers), or a Dask
-cluster (--scheduler tcp://HOST:8786, needs the `cluster` extra). More than 10^7 runs need --yes.
+CSV: a '# complete: false' line); SIGTERM stops it and writes nothing. Runs use every core here by
+default (--workers, at most the usable cores), or a Dask cluster (--scheduler tcp://HOST:8786, needs
+the `cluster` extra). More than 10^7 runs need --yes; a plan whose table would not fit in the
+available memory is refused, --yes or not (docs/reference/bad-input.md).
 """
 
 EPILOG = """\
@@ -68,11 +70,12 @@ def register(sub) -> None:
     p.add_argument("--sample", action="append", default=[], metavar='KEY="normal(MEAN, SD)"',
                    help="a random draw per run: normal(MEAN, SD) or uniform(LOW, HIGH) (repeatable)")
     p.add_argument("--runs", type=int, help="draws per grid point (with --sample)")
-    p.add_argument("--seed", type=int, help="seed of the random draws (default: fresh)")
+    p.add_argument("--seed", type=int, help="seed of the random draws, 0 to 2**128 - 1 (default: fresh)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.parquet|OUT.csv", help="the table")
     p.add_argument("--plot", metavar="OUT.png", help="a picture: lines (1 key), heat maps (2), histograms (samples)")
     p.add_argument("--record", metavar="OUT.rrd", help="a rerun recording with the swept keys as timelines")
-    p.add_argument("--workers", type=int, help="local worker processes (default: every core; 1: this process)")
+    p.add_argument("--workers", type=int, help="local worker processes (default: every core; 1: this process; "
+                   "more than the usable cores are capped)")
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on this Dask distributed scheduler")
     p.add_argument("--yes", action="store_true", help="allow more than 10^7 runs")
     p.set_defaults(run=run, grids=None)
