@@ -7,7 +7,7 @@ import json
 import math
 import sys
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 
 HELP = """\
 Choose the contour of a rocking cam (follower.type = "rocking-cam", seed 004 "Schwingdaumen")
@@ -66,15 +66,14 @@ def register(sub) -> None:
 def _follower_type(path: str, overrides: list[str]):
     """follower.type as written (after --set), or None when the file cannot tell: then loading
     the scene reports what is wrong with it."""
-    import tomllib
-
     from ..scene.scene import apply_overrides
 
     from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
+    from ..core.reader import toml_loads
 
     try:
         text = read_regular(path, file=path, key="-", limit=MAX_SCENE_FILE_BYTES).decode("utf-8")
-        data = apply_overrides(tomllib.loads(text), overrides, path)
+        data = apply_overrides(toml_loads(text, path), overrides, path)
         return data["follower"]["type"]
     except Exception:  # noqa: BLE001 - any failure here is load_scene's to report, with its key
         return None
@@ -87,7 +86,7 @@ def load_target_scene(args):
     kind = _follower_type(args.scene, args.overrides)
     if kind is not None and kind != "rocking-cam":
         raise InputError(args.scene, "follower.type", f"explorer fit chooses a rocking cam's contour; this scene's "
-                         f"follower.type is {kind!r}, not \"rocking-cam\"")
+                         f"follower.type is {echo(kind)}, not \"rocking-cam\"")
     overrides = list(args.overrides)
     for key, value in (("lift", args.lift), ("open_angle", args.open_angle),
                        ("max_pressure_angle", args.max_pressure_angle)):

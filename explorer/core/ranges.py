@@ -16,7 +16,7 @@ import fnmatch
 import math
 import sys
 
-from .errors import InputError
+from .errors import InputError, echo
 
 _TURN = 2.0 * math.pi
 _RPM = _TURN / 60.0  # rad/s per rev/min
@@ -56,6 +56,10 @@ SHOWN_UNITS: dict[str, tuple[str, float]] = {
 # dotted key (glob) -> (smallest non-zero size, largest size) in SI, narrower than the dimension's
 KEY_RANGES: dict[str, tuple[float, float]] = {
     "gear.air_dashpot.ambient_pressure": (1.0, 1e8),  # Pa: an ambient pressure, not a modulus
+    # a rocking cam's contour is one polar curve about its pivot: its flank, and the swing before
+    # it, lie within one turn of the body (lift_start + flank < 360 deg is checked with the section)
+    "gear.rocking_cam.flank": (RANGES["angle"][0], _TURN),
+    "gear.rocking_cam.lift_start": (RANGES["angle"][0], _TURN),
 }
 # plain numbers (no unit): key -> (minimum, maximum), checked by the key's parser
 AMBIENT_TEMPERATURE = (1.0, 2000.0)  # K
@@ -96,5 +100,4 @@ def check_range(number: float, dimension: str, *, file: str, key: str, shown, ze
 
 
 def _short(value) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:40] + f"... ({len(text)} characters)"
+    return echo(value)

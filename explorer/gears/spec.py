@@ -52,7 +52,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Mapping
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..lift.laws import LAWS
 from ..core.ranges import AMBIENT_TEMPERATURE, OIL_DENSITY
 from ..core.reader import Table
@@ -159,6 +159,9 @@ def _rocking_cam(t: Table) -> dict:
         "law": t.string("law", "cycloidal", choices=tuple(LAWS)),
         "opens": t.string("opens", "ccw", choices=SENSES),
     }
+    from .rocking import check_one_turn
+
+    check_one_turn(out["lift_start"], out["flank"], t.file)
     return out
 
 
@@ -275,7 +278,7 @@ def parse_gear_section(table: Table | None, fields: dict) -> GearSpec | None:
     if follower.type not in GEAR_TYPES:
         if table is not None:
             raise InputError(file, "gear", f"[gear] describes the gears {', '.join(GEAR_TYPES)}; follower.type is "
-                             f"{follower.type!r}")
+                             f"{echo(follower.type)}")
         return None
     if table is None:
         raise InputError(file, "gear", f"missing section: follower.type '{follower.type}' needs [gear]")

@@ -48,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.ranges import RANGES
 from .laws import HIGH_ORDER_LAWS, LAWS, law_derivatives
 from .validity import computed_error, lift_fault
@@ -363,13 +363,13 @@ def check_polydyne(lift: PolydyneLift, file: str, follower=None) -> None:
         for k in range(w.checked):
             jump = after[k] - before[k]
             if abs(jump) > JUMP_TOLERANCE * w.height / beta**k:
-                raise InputError(file, key, f"{law_name!r} is too rough for a polydyne cam: the cam lift "
+                raise InputError(file, key, f"{echo(law_name)} is too rough for a polydyne cam: the cam lift "
                                  f"S = s + (M w^2 s'' + W)/k needs the wanted valve {DERIVATIVE_NAMES[k]} continuous, and it "
                                  f"jumps by {jump * omega**k:.4g} {DERIVATIVE_UNITS[k]} at {where} (at "
                                  f"{omega * 60 / TWO_PI:g} rpm), which makes {CONSEQUENCES[k]}; {w.advice}")
     for name in sorted(w.closed_form_laws):
         if name not in HIGH_ORDER_LAWS:
-            raise InputError(file, "lift.wanted_law", f"{name!r} has no closed-form fourth and fifth derivative, which "
+            raise InputError(file, "lift.wanted_law", f"{echo(name)} has no closed-form fourth and fifth derivative, which "
                              "the polydyne cam's acceleration and jerk need")
     theta = lift.start + np.linspace(0.0, w.end, 20001)[1:-1]
     force = lift.linkage_force(theta)

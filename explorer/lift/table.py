@@ -39,11 +39,11 @@ from typing import Any
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.reader import Table
 from ..core.files import read_text
 from ..core.ranges import RANGES
-from ..core.units import to_si
+from ..core.units import to_si, unit_scale
 from .validity import MAX_LIFT, check_computed
 
 TWO_PI = 2.0 * math.pi
@@ -83,12 +83,12 @@ def parse_table_options(table: Table, fields: dict[str, Any]) -> TableOptions:
     path = (base / name).resolve() if not Path(name).is_absolute() else Path(name)
     angle_unit = table.string("angle_unit", "deg")
     lift_unit = table.string("lift_unit", "mm")
-    angle_scale = to_si(f"1 {angle_unit}", "angle", file=table.file, key=table.key("angle_unit"))
-    lift_scale = to_si(f"1 {lift_unit}", "length", file=table.file, key=table.key("lift_unit"))
+    angle_scale = unit_scale(angle_unit, "angle", file=table.file, key=table.key("angle_unit"))
+    lift_scale = unit_scale(lift_unit, "length", file=table.file, key=table.key("lift_unit"))
     if not angle_scale > 0.0:
-        raise table.error("angle_unit", f"{angle_unit!r} is not a usable angle unit")
+        raise table.error("angle_unit", f"{echo(angle_unit)} is not a usable angle unit")
     if not lift_scale > 0.0:
-        raise table.error("lift_unit", f"{lift_unit!r} is not a usable length unit")
+        raise table.error("lift_unit", f"{echo(lift_unit)} is not a usable length unit")
     smoothing = table.raw("smoothing", "auto")
     if smoothing == "auto":
         noise = None
@@ -238,7 +238,9 @@ def fit_periodic_spline(angles, values, noise: float | None = None, knots: int |
     then the spline nearly interpolates)."""
     from scipy import linalg, sparse
     from scipy.interpolate import BSpline
-    from scipy.optimize import brentq, minimize_scalar
+    from scipy.optimize import minimize_scalar
+
+    from ..core.roots import root_in
 
     x = np.mod(np.asarray(angles, dtype=float), TWO_PI)
     y = np.asarray(values, dtype=float)
@@ -301,7 +303,7 @@ def fit_periodic_spline(angles, values, noise: float | None = None, knots: int |
         elif rss(10.0**hi) <= target:
             log_lam = hi
         else:
-            log_lam = brentq(lambda g: rss(10.0**g) - target, lo, hi, xtol=1e-6)
+            log_lam = root_in(lambda g: rss(10.0**g) - target, lo, hi, xtol=1e-6)  # the ends' signs checked above
     lam = 10.0**log_lam
 
     # coefficients in the same stable form: c = L^-T U D^-1 z

@@ -11,7 +11,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
+
+from ..core.roots import root_in
 
 
 
@@ -36,7 +37,8 @@ def lash_crossings(lift, ratio: float, lash: float, n_grid: int = 4096) -> tuple
 
     hidden = np.nonzero((d[1][:-1] > 0.0) & (d[1][1:] < 0.0) & (g[:-1] <= 0.0) & (g[1:] <= 0.0))[0]
     if hidden.size:
-        peaks = [brentq(slope, grid[i], grid[i + 1], xtol=1e-15, maxiter=200) for i in hidden]
+        peaks = [root_in(slope, grid[i], grid[i + 1], fa=d[1][i], fb=d[1][i + 1], xtol=1e-15, maxiter=200)
+                 for i in hidden]
         grid = np.unique(np.concatenate([grid, peaks]))
         g = ratio * lift.derivatives(grid)[0] - lash
 
@@ -50,7 +52,7 @@ def lash_crossings(lift, ratio: float, lash: float, n_grid: int = 4096) -> tuple
         if g[i] == 0.0 or g[i + 1] == 0.0:
             root = a if g[i] == 0.0 else b
         else:
-            root = brentq(f, a, b, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+            root = root_in(f, a, b, fa=g[i], fb=g[i + 1], xtol=1e-15, maxiter=200)
         (ups if is_open[i + 1] else downs).append(math.fmod(root, 2.0 * math.pi))
     return np.unique(ups), np.unique(downs)
 
@@ -74,7 +76,7 @@ def lash_take_ups(lift, ratio: float, lashes, n_grid: int = 4096) -> np.ndarray:
 
     peaks = np.nonzero((d[1][:-1] > 0.0) & (d[1][1:] < 0.0))[0]
     if peaks.size:
-        extra = [brentq(slope, grid[i], grid[i + 1], xtol=1e-15, maxiter=200) for i in peaks]
+        extra = [root_in(slope, grid[i], grid[i + 1], fa=d[1][i], fb=d[1][i + 1], xtol=1e-15) for i in peaks]
         grid = np.unique(np.concatenate([grid, extra]))
         d = lift.derivatives(grid)
     level = ratio * d[0]

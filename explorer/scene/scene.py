@@ -17,10 +17,10 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..gears import GEAR_TYPES
 from ..lift.laws import LAWS
-from ..core.reader import Table
+from ..core.reader import Table, toml_loads
 
 # effect name -> effects it needs (resolved by effects.resolve); kept here, free of heavy imports,
 # so that a scene can be validated without importing any solver.
@@ -224,7 +224,7 @@ MAX_NESTING = 32
 
 def loads_scene(text: str, source: str = "<memory>", overrides=()) -> Scene:
     try:
-        data = tomllib.loads(text)
+        data = toml_loads(text, source)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(source, "-", f"malformed TOML: {_first_line(str(exc))}") from None
     except RecursionError:
@@ -268,7 +268,7 @@ def apply_overrides(data: dict, overrides, file: str) -> dict:
         if len(parts) > MAX_NESTING:
             raise InputError(file, dotted[:60], f"override key nested too deeply (at most {MAX_NESTING} levels)")
         try:
-            value = tomllib.loads(f"v = {text}")["v"]
+            value = toml_loads(f"v = {text}", file, dotted)["v"]
         except tomllib.TOMLDecodeError:
             value = text.strip()
         except RecursionError:
@@ -303,7 +303,7 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
         raise top.error("effects", "expected a list of effect names, such as [\"kinematics\", \"lash\"]")
     for effect in effects_raw:
         if effect not in EFFECT_DEPENDENCIES:
-            raise top.error("effects", f"unknown effect {effect!r}; known: {', '.join(EFFECT_DEPENDENCIES)}")
+            raise top.error("effects", f"unknown effect {echo(effect)}; known: {', '.join(EFFECT_DEPENDENCIES)}")
     effects = tuple(dict.fromkeys(effects_raw))
     if not effects:
         raise top.error("effects", "list at least one effect")
@@ -315,7 +315,7 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     # a bare number is rev/min already: keep it exact rather than round-tripping through rad/s
     rpm = float(raw_rpm) if isinstance(raw_rpm, (int, float)) else rpm_si * 60.0 / (2.0 * math.pi)
     if rpm > MAX_RPM:
-        raise drive_t.error("rpm", f"more than {MAX_RPM:g} rpm is outside any valve gear, got {raw_rpm!r}")
+        raise drive_t.error("rpm", f"more than {MAX_RPM:g} rpm is outside any valve gear, got {echo(raw_rpm)}")
     drive = Drive(rpm=rpm, operating_range=_operating_range(drive_t))
 
     follower = _parse_follower(top.table("follower", required=False), file)
@@ -415,7 +415,7 @@ def _parse_lift(t: Table, file: str) -> LiftSpec:
     if not 0.0 <= start < 2.0 * math.pi:
         raise t.error("start", "must lie in [0 deg, 360 deg)")
     if height > MAX_LIFT:
-        raise t.error("height", f"more than {MAX_LIFT:g} m of lift is outside any valve gear, got {t.raw('height')!r}")
+        raise t.error("height", f"more than {MAX_LIFT:g} m of lift is outside any valve gear, got {echo(t.raw('height'))}")
     rise = t.quantity("rise", "angle", positive=True) if shaped else t.quantity("rise", "angle", 0.0, nonnegative=True)
     dwell = t.quantity("dwell", "angle", 0.0, nonnegative=True)
     ret = t.quantity("return", "angle", rise, positive=True) if shaped else t.quantity("return", "angle", 0.0, nonnegative=True)

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 
 TWO_PI = 2.0 * math.pi
 FORMATS = ("csv", "dxf", "stl", "glb", "grind")
@@ -124,7 +124,7 @@ def cam_source(scene, lift=None) -> CamSource:
     f = scene.follower
     if f.type != "translating-roller":
         raise InputError(scene.source, "follower.type",
-                         f"exports are for translating-roller cams; this scene's follower is {f.type!r}")
+                         f"exports are for translating-roller cams; this scene's follower is {echo(f.type)}")
     src = CamSource(lift if lift is not None else build_lift(scene), f.base_radius, f.roller_radius,
                     f.offset, scene.name, scene.source)
     fault = lift_fault(src.lift, f)  # the checks every cam passes (explorer.lift.validity)

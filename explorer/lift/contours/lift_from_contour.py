@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from ...core.errors import InputError
+from ...core.errors import InputError, echo
 from .arcs import ContourError, make_arc_lift
 
 BASE_RADIUS_TOLERANCE = 1e-6  # m: follower.base_radius must match the contour this closely
@@ -23,7 +23,7 @@ def contour_lift(spec, follower, file: str):
     explorer.lift.contours.spec, which calls this while it reads [cam]); InputError when the follower
     cannot run on it (undercut, base circle mismatch, offset too large)."""
     if follower.type != "translating-roller":
-        raise InputError(file, "follower.type", f"a [cam] contour is analysed for translating-roller followers only, not {follower.type!r}")
+        raise InputError(file, "follower.type", f"a [cam] contour is analysed for translating-roller followers only, not {echo(follower.type)}")
     if abs(follower.base_radius - spec.min_radius) > BASE_RADIUS_TOLERANCE:
         raise InputError(
             file,

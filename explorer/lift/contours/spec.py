@@ -38,9 +38,9 @@ from typing import Any
 
 import numpy as np
 
-from ...core.errors import InputError
+from ...core.errors import InputError, echo
 from ...core.reader import Table
-from ...core.units import plain_number, to_si
+from ...core.units import plain_number, to_si, unit_scale
 from .arcs import Arc, ArcContour, ContourError, build_arc_contour
 
 # Arcs below a micron or centres beyond 10 m are no valve-gear cam; they also push the tangency
@@ -93,7 +93,7 @@ def parse_cam_section(table: Table | None, fields: dict) -> CamSpec | None:
     file = table.file
     lift = fields.get("lift")
     if lift is not None and lift.law != "contour":
-        raise InputError(file, table.prefix, f"[cam] describes a contour, used only with [lift] law = \"contour\" (law is {lift.law!r})")
+        raise InputError(file, table.prefix, f"[cam] describes a contour, used only with [lift] law = \"contour\" (law is {echo(lift.law)})")
     table.reject_unknown(("rotation", "tolerance", "arcs", "points", "file", "unit", "spline_degree"))
     rotation = table.quantity("rotation", "angle", 0.0)
     given = [k for k in ("arcs", "points", "file") if table.has(k)]
@@ -208,9 +208,9 @@ def first_bad_point(pts: np.ndarray, scale: float) -> tuple[int, str] | None:
 def _parse_points(table: Table, rotation: float, fields: dict) -> CamSpec:
     file = table.file
     unit_text = table.string("unit", "m")
-    scale = to_si(f"1 {unit_text}", "length", file=file, key=table.key("unit"))
+    scale = unit_scale(unit_text, "length", file=file, key=table.key("unit"))
     if not scale > 0.0:
-        raise table.error("unit", f"not a length unit: {unit_text!r}")
+        raise table.error("unit", f"not a length unit: {echo(unit_text)}")
     degree = table.number("spline_degree", 5, integer=True)
     if degree not in (3, 5):
         raise table.error("spline_degree", f"must be 3 or 5, got {degree}")
