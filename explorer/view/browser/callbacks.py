@@ -31,6 +31,12 @@ class IdleEndingExecutor(Executor):
         self._lock = threading.Lock()
         self._threads: set[threading.Thread] = set()
         self._idle = 0  # threads waiting for work
+        # work put and not yet taken. A thread that has just taken an item still counts as idle
+        # until it takes the lock, but then the item still counts as pending too: a submit starts
+        # a thread when pending work outnumbers the waiting threads, which stays right in that
+        # window (comparing the idle count with zero did not: under load a burst of submits saw
+        # the first thread 'idle' after it had taken its item and started too few threads)
+        self._pending = 0
         self._shutdown = False
         self._started = 0
 
@@ -41,7 +47,8 @@ class IdleEndingExecutor(Executor):
             if self._shutdown:
                 raise RuntimeError("cannot schedule new futures after shutdown")
             self._queue.put((future, fn, args, kwargs))
-            if self._idle == 0 and len(self._threads) < self._max:
+            self._pending += 1
+            if self._pending > self._idle and len(self._threads) < self._max:
                 self._started += 1
                 thread = threading.Thread(target=self._work, name=f"{self._name}-{self._started}", daemon=True)
                 self._threads.add(thread)
@@ -59,6 +66,8 @@ class IdleEndingExecutor(Executor):
                 except queue.Empty:
                     break
                 if item is not None:
+                    with self._lock:
+                        self._pending -= 1
                     item[0].cancel()
         for _ in threads:
             self._queue.put(None)  # one wake-up each: a thread that takes it ends
@@ -83,9 +92,11 @@ class IdleEndingExecutor(Executor):
                 item = False
             with self._lock:
                 self._idle -= 1
+                if item:
+                    self._pending -= 1
                 # idle for idle_s and nothing came in since (a submit under the lock sees us gone
                 # and starts a thread): end
-                if item is False and (self._shutdown or self._queue.empty()):
+                if item is False and (self._shutdown or self._pending == 0):
                     self._threads.discard(me)
                     return
                 if item is None:
