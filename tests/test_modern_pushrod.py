@@ -258,3 +258,25 @@ def test_the_ratio_jet_is_the_ratio_and_its_derivatives():
 def away_from(marks, theta, distance):
     gap = np.abs(np.mod(theta[:, None] - np.asarray(marks)[None, :] + math.pi, 2.0 * math.pi) - math.pi)
     return np.all(gap > distance, axis=1)
+
+
+@pytest.mark.parametrize("rf", [1.5, 5.0, 10.0, 1e3])
+def test_a_crowned_lifter_is_never_below_either_hertz_bound(rf):
+    """The crowned lifter's face on the lobe: where the point contact's ellipse fits the width it is
+    the answer; where it would run over the edges the contact is cut to the width and its peak is
+    at least both the untruncated ellipse's p0 and the line contact's over the width (Johnson,
+    eq. 4.45, written here). At Rf = 5 m the ellipse overruns the 12 mm lobe on the flanks while
+    its p0 (1050 MPa) is still above the line contact's (903 MPa): the larger is reported."""
+    from explorer.mechanics.hertz import point_contact
+
+    gear = make_pushrod_train(base_radius=RB, lifter=Lifter("flat", radius=rf, socket_height=0.040, width=0.012),
+                              rocker_pivot=PIVOT, cup=CUP, valve_pad_centre=PAD, valve_pad_radius=0.010,
+                              valve_axis=-0.5 * math.pi, tip_radius=0.004, law=LIFT)
+    k = gear.kinematics(TH)
+    f = gear.contact_forces(k, 700.0 + 3e4 * np.maximum(k.lift[0], 0.0))
+    cam, _tip = gear.hertz_stress(k, f, E_STAR)
+    point = point_contact(f.normal, 1.0 / rf + 1.0 / k.surface.radius, np.full(TH.size, 1.0 / rf), E_STAR)
+    line = np.sqrt(f.normal / 0.012 * E_STAR * (1.0 / rf + 1.0 / k.surface.radius) / math.pi)
+    fits = point.semi_major <= 0.006
+    assert np.array_equal(cam[fits], point.peak_pressure[fits])
+    assert np.all(cam >= np.maximum(point.peak_pressure, line) * (1.0 - 1e-14))

@@ -270,8 +270,9 @@ class PushrodTrain:
     def hertz_stress(self, k: PushrodKinematics, forces: ContactForces, e_star: float,
                      tip_width: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Peak Hertz pressure at the cam (the lifter's roller or face on the lobe: a line contact of
-        the lifter's width; a crowned face: the point contact as for the bucket tappet) and at the
-        valve tip (explorer.gears.arm.tip_stress)."""
+        the lifter's width; a crowned face: the point contact as for the bucket tappet, at least the
+        line contact where its ellipse would overrun the width, explorer.gears.flat_face.crown_stress)
+        and at the valve tip (explorer.gears.arm.tip_stress)."""
         from ..mechanics.contact import hertz_line_stress
         from .arm import tip_stress
 
@@ -280,11 +281,9 @@ class PushrodTrain:
             raise InputError(self.file, f"{self.key}.lifter.width", "the contact stress needs the roller's or lobe's width")
         rho = k.surface.radius
         if f.kind == "flat" and f.circular:
-            from ..mechanics.hertz import point_contact
+            from .flat_face import crown_stress
 
-            point = point_contact(forces.normal, 1.0 / f.radius + 1.0 / rho, np.full_like(rho, 1.0 / f.radius), e_star)
-            line = hertz_line_stress(forces.normal, f.width, f.radius, rho, e_star)
-            cam = np.where(point.semi_major <= 0.5 * f.width, point.peak_pressure, line)
+            cam = crown_stress(forces.normal, f.radius, rho, e_star, f.width)[0]
         else:
             cam = hertz_line_stress(forces.normal, f.width, f.radius, rho, e_star)
         return cam, tip_stress(self.valve, k.tip, forces.tip_normal, e_star, tip_width)
