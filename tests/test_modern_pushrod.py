@@ -230,7 +230,7 @@ def test_a_flat_lifter_cusp_names_the_base_radius():
 def test_the_pad_off_the_valve_tip():
     with pytest.raises(InputError) as info:
         train(tip_radius=0.0003)
-    one_line(info, "gear.valve_pad.tip_radius")
+    one_line(info, "gear.valve.tip_radius")
 
 
 def test_pushrod_and_rocker_in_line_at_rest():
@@ -280,3 +280,18 @@ def test_a_crowned_lifter_is_never_below_either_hertz_bound(rf):
     fits = point.semi_major <= 0.006
     assert np.array_equal(cam[fits], point.peak_pressure[fits])
     assert np.all(cam >= np.maximum(point.peak_pressure, line) * (1.0 - 1e-14))
+
+
+def test_a_loop_through_its_dead_point_names_the_cup_a_scene_key():
+    """The pushrod's length is no scene key: it follows from the cup's rest position ([gear.rocker]
+    cup, explorer.gears.modern_spec). A loop of pushrod and rocker that passes its dead point during
+    the lift names that key (a layout found by drawing random ones)."""
+    law = LawLift(height=0.009, start=0.5, rise=math.radians(80), dwell=0.0, ret=math.radians(80),
+                  rise_law="polynomial-345", return_law="polynomial-345")
+    with pytest.raises(InputError) as info:
+        make_pushrod_train(base_radius=0.017, lifter=Lifter("flat", socket_height=0.03, width=0.012),
+                           rocker_pivot=(0.0019893832949996054, 0.20336515815569378),
+                           cup=(0.011213222130708744, 0.362284038488325),
+                           valve_pad_centre=(0.043454158188915376, 0.2648009284409056), valve_pad_radius=0.01,
+                           law=law, n=720)
+    assert "dead point" in one_line(info, "gear.rocker.cup")

@@ -126,7 +126,7 @@ class PushrodTrain:
             by = np.asarray(by, dtype=float)
             bx = np.full(by.shape, bx)
         x, y = closure_or_error((bx, by), self.pushrod_length, self.rocker_pivot, self.rocker_arm, self.branch,
-                                file=self.file, key=f"{self.key}.pushrod.length", what="the loop of pushrod and rocker",
+                                file=self.file, key=f"{self.key}.rocker.cup", what="the loop of pushrod and rocker",
                                 theta=theta)
         psi = J.atan2(y - self.rocker_pivot[1], x - self.rocker_pivot[0])
         return psi + 2.0 * math.pi * np.round((self.rest - J.value(psi)) / (2.0 * math.pi))
@@ -138,8 +138,8 @@ class PushrodTrain:
         dx = cx - self.lifter.offset
         radicand = self.pushrod_length**2 - dx * dx
         if np.any(J.value(radicand) <= 0.0):
-            raise InputError(self.file, f"{self.key}.pushrod.length", "the pushrod is too short to reach the lifter's axis "
-                             "from the rocker's cup for this lift")
+            raise InputError(self.file, f"{self.key}.rocker.cup", "the pushrod (its length fixed by the cup's rest "
+                             "position) is too short to reach the lifter's axis from the rocker's cup for this lift")
         return cy - self.below * J.sqrt(radicand) - self.lifter.rest_height(self.base_radius)
 
     def lifter_lift(self, theta) -> Jet:
@@ -329,7 +329,8 @@ def make_pushrod_train(*, base_radius: float, lifter: Lifter, rocker_pivot, cup,
     centre = np.asarray(valve_pad_centre, dtype=float) - np.asarray(pivot)
     valve = make_valve_end(pivot=pivot, rest=rest, lifting=lifting, arm=float(np.hypot(*centre)),
                            angle=math.atan2(centre[1], centre[0]) - rest, pad_radius=valve_pad_radius, axis=valve_axis,
-                           axis_point=valve_axis_point, tip_radius=tip_radius, file=file, key=f"{key}.valve_pad")
+                           axis_point=valve_axis_point, tip_radius=tip_radius, file=file, key=f"{key}.valve_pad",
+                           tip_key=f"{key}.valve.tip_radius")
     train = replace(train0, valve=valve, law=law)
     if contour is not None:
         train = replace(train, motion=_lifter_motion(train, contour), contour=contour)
