@@ -40,7 +40,9 @@ def load(name):
 
 
 def no_float(data, law):
-    """Rigid valve force F = M a + spring + friction, > 0 wherever the valve is open."""
+    """Rigid valve force F = M a + spring + R sgn(v) (the friction opposes the valve's motion: it adds
+    to the force while the valve opens and relieves it while it closes, explorer.mechanics.forces.
+    friction_direction), > 0 wherever the valve is open."""
     omega = data["drive"]["rpm"] * 2.0 * math.pi / 60.0
     d = law.derivatives(TH)
     lash = si(data["valve"]["lash"], "length")
@@ -48,7 +50,7 @@ def no_float(data, law):
     open_ = s > 0.0
     mass = si(data["valve"]["mass"], "mass")
     spring = si(data["spring"]["preload"], "force") + si(data["spring"]["rate"], "stiffness") * s
-    force = mass * omega**2 * d[2] + spring - si(data["loads"]["friction"], "force") * np.sign(d[1])
+    force = mass * omega**2 * d[2] + spring + si(data["loads"]["friction"], "force") * np.sign(d[1])
     return float(np.min(force[open_]))
 
 
