@@ -292,8 +292,9 @@ def test_a_crown_needs_the_lobe_over_the_tappet_axis():
 def test_a_crown_longer_than_the_lobe_is_at_least_the_line_contact_and_tends_to_the_flat_face(rf):
     """A crown whose Hertz ellipse would run over the lobe's edges is cut to the lobe's width: its
     peak pressure is at least that of the line contact over the width with the crown's curvature
-    in the plane (Johnson, Contact Mechanics, eq. 4.45: p0 = sqrt(P' E* (1/Rf + 1/rho) / pi),
-    written here), and as Rf -> inf it is the flat face's (as the kinematics are). The untruncated
+    in the plane (Johnson, Contact Mechanics, two-dimensional contact of cylinders:
+    p0 = sqrt(P' E* (1/Rf + 1/rho) / pi), written here), and as Rf -> inf it is the flat face's
+    (as the kinematics are). The untruncated
     ellipse's p0 = 3P/(2 pi a b) falls to 0 as Rf -> inf: it may not be reported there."""
     force = np.full(TH.size, 800.0)
     flat_sigma = flat().hertz_stress(flat().kinematics(TH), force, E_STAR, width=0.014)

@@ -265,8 +265,9 @@ def test_a_crowned_lifter_is_never_below_either_hertz_bound(rf):
     """The crowned lifter's face on the lobe: where the point contact's ellipse fits the width it is
     the answer; where it would run over the edges the contact is cut to the width and its peak is
     at least both the untruncated ellipse's p0 and the line contact's over the width (Johnson,
-    eq. 4.45, written here). At Rf = 5 m the ellipse overruns the 12 mm lobe on the flanks while
-    its p0 (1050 MPa) is still above the line contact's (903 MPa): the larger is reported."""
+    Contact Mechanics, two-dimensional contact of cylinders; written here). At Rf = 5 m the ellipse
+    overruns the 12 mm lobe on the flanks while its p0 (1050 MPa) is still above the line
+    contact's (903 MPa): the larger is reported."""
     from explorer.mechanics.hertz import point_contact
 
     gear = make_pushrod_train(base_radius=RB, lifter=Lifter("flat", radius=rf, socket_height=0.040, width=0.012),
