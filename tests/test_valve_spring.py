@@ -62,6 +62,16 @@ def test_corrections_agree_within_a_few_percent_and_order():
     assert np.all(ks < kb) and np.all(ks < kw)  # curvature adds to the direct shear
 
 
+def test_wahl_over_bergstrasser_as_shigley_prints():
+    """Shigley's solutions manual, prob. 10-1: 100 (K_W - K_B)/K_W over 4 <= C <= 12 is largest at
+    C = 4, 1.36 %, and smallest at C = 12, 0.743 % (printed)."""
+    c = np.linspace(4.0, 12.0, 801)
+    diff = 100.0 * (vs.wahl_factor(c) - vs.bergstrasser_factor(c)) / vs.wahl_factor(c)
+    assert int(np.argmax(diff)) == 0 and int(np.argmin(diff)) == c.size - 1
+    assert diff[0] == pytest.approx(1.36, abs=5e-3)
+    assert diff[-1] == pytest.approx(0.743, abs=5e-4)
+
+
 def test_zimmerli_and_rupture():
     assert vs.ZIMMERLI[False] == (241e6, 379e6)
     assert vs.ZIMMERLI[True] == (398e6, 534e6)

@@ -109,13 +109,15 @@ def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | 
         sampled = Case(scene, ends, draws, focus, workers, progress)
         drawn = {spec.name: measure_function(spec)(sampled, settings[spec.name]) for spec in RULES
                  if spec.name in measures and measures[spec.name].applicable}
+        # one speed: every draw ran at it (and the float margin above it as every draw would)
         inexact = [spec for spec in RULES if spec.name in drawn and drawn[spec.name].applicable
-                   and not drawn[spec.name].speed_exact]
+                   and not drawn[spec.name].speed_exact] if speeds.size > 1 else []
         verified = _whole_range(scene, speeds, ends, draws, focus, inexact, settings, workers, progress, seed)
         for spec in RULES:
             if spec.name in drawn:
                 results[spec.name] = _with_probability(results[spec.name], spec, drawn[spec.name],
-                                                       draws.values.shape[0], verified.get(spec.name))
+                                                       draws.values.shape[0], verified.get(spec.name),
+                                                       one_speed=speeds.size == 1)
     return CheckReport(
         scene=scene.name, source=scene.source, speeds_rpm=tuple(float(s) for s in speeds), range_from=range_from,
         results=tuple(results[spec.name] for spec in RULES),
@@ -203,7 +205,7 @@ def _worst_verdicts(spec, m: Measure, n: int) -> np.ndarray:
     return v.max(axis=1)
 
 
-def _with_probability(result: RuleResult, spec, m: Measure, n: int, verified=None) -> RuleResult:
+def _with_probability(result: RuleResult, spec, m: Measure, n: int, verified=None, one_speed=False) -> RuleResult:
     """The result with the shares of the draws that fail and that warn or fail: Wilson's 95 % when
     every draw's worst is exact (phase one exact, or every draw verified), else phase two's
     estimate (module docstring)."""
@@ -212,7 +214,8 @@ def _with_probability(result: RuleResult, spec, m: Measure, n: int, verified=Non
     if not m.applicable or m.value.size == 0:
         return replace(result, sample_note="tolerances not propagated: " + (m.reason or "no value"))
     worst = _worst_verdicts(spec, m, n)
-    method = "exact: every draw's worst over the range" if m.speed_exact else ""
+    method = ("exact: every draw's worst over the range" if m.speed_exact
+              else "exact: one speed, every draw at it" if one_speed else "")
     if verified is not None:
         idx, m2 = verified
         worst2 = _worst_verdicts(spec, m2, idx.size) if m2.applicable and m2.value.size else np.full(idx.size, -1)
