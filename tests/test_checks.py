@@ -612,6 +612,9 @@ def test_tolerance_study_of_the_elastic_rules_against_every_draw_over_every_spee
         assert r.p_fail == truth[name], name
     monkeypatch.setattr(run_module, "CHECK_RUNS", 27 * 30)  # 30 of the 120 draws verified
     two = explorer.check(scene, rpm=rpm, sample=sample, runs=runs, seed=seed, only=ELASTIC_RULES, workers=1)
+    same = explorer.check(scene, rpm=rpm, sample=sample, runs=runs, seed=seed, only=ELASTIC_RULES, workers=1,
+                          verify=30)  # the same 30, asked for
+    assert [r.p_fail_interval for r in same.results] == [r.p_fail_interval for r in two.results]
     for name in ELASTIC_RULES:
         r = two.result(name)
         assert r.sample_method.startswith("two-phase") and r.sample_verified == 30, (name, r.sample_method)
@@ -700,11 +703,14 @@ def test_bad_rules_file_is_one_line_exit_2(tmp_path, capsys, text, key, reason):
 
 @pytest.mark.parametrize("arg, key", [("--rpm=4000:2000:3", "drive.rpm"), ("--rpm=1000:2000:1", "drive.rpm"),
                                       ("--runs=10", "10"), ("--sample=valve.lash=gauss(1,2)", "valve.lash"),
-                                      ("--sample=drive.rpm=normal(1000, 10)", "drive.rpm")])
+                                      ("--sample=drive.rpm=normal(1000, 10)", "drive.rpm"), ("--verify=5", "--verify"),
+                                      ("--verify=0", "--verify"), ("--verify=-3", "--verify")])
 def test_bad_command_line_is_one_line_exit_2(capsys, arg, key):
     from explorer.cli import main
 
-    status = main(["check", FLOAT, arg] + (["--runs", "5"] if arg.startswith("--sample") else []))
+    sampled = arg.startswith("--sample") or arg in ("--verify=0", "--verify=-3")
+    extra = ["--sample", "valve.lash=normal(0.25 mm, 0.01 mm)"] if arg.startswith("--verify=") and sampled else []
+    status = main(["check", FLOAT, arg] + extra + (["--runs", "5"] if sampled else []))
     err = capsys.readouterr().err
     assert status == 2 and err.count("\n") == 1 and key in err, err
 

@@ -49,7 +49,9 @@ class Case:
         self.scene = scene
         self.speeds = np.asarray(speeds_rpm, dtype=float)
         self.draws = draws
-        self.focus = dict(focus or {})  # sampling: rule -> the speeds (rpm) where the nominal design is worst
+        # sampling: rule -> the speeds (rpm) it judges the draws at: where the nominal design is worst
+        # (phase one), every speed of the range (phase two: explorer.checks.run)
+        self.focus = dict(focus or {})
         self.workers = workers
         self.progress = progress
         self._elastic: dict = {}

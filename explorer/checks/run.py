@@ -21,7 +21,7 @@ tolerances when draws are asked for.
        P(fail) = P1 + (1 - P1) q,
    its interval [L1 + (1 - L1) L2, U1 + (1 - U1) U2] from the two Wilson intervals at 97.5 %
    (together at least 95 %: the union bound); the same for warn-or-fail. The result says which
-   (RuleResult.sample_method) and how many draws were verified and missed.
+   (RuleResult.sample_method) and how many draws were verified and missed. `verify` sets M.
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ DEFAULT_SPEEDS = 200
 # Phase two's runs (verified draws x speeds): at ~0.25 ms a compiled elastic run, ~2.5 s on one
 # core; 50 draws over 200 speeds. Below it every draw runs over the whole range.
 CHECK_RUNS = 10_000
+VERIFY_MIN = 10  # verified draws at least, whatever the range (a gear's run costs ~100 x a compiled one)
 Z_975 = 2.241402727604947  # two-sided 97.5 % normal quantile: two such intervals hold together at >= 95 %
 
 
@@ -63,11 +64,12 @@ def operating_speeds(scene, rpm=None) -> tuple[np.ndarray, str]:
 
 def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | None = None, rules=None,
           workers: int | None = None, progress: Callable | None = None, yes: bool = False,
-          only=None) -> CheckReport:
+          only=None, verify: int | None = None) -> CheckReport:
     """Check a design (a Scene or a scene file's path); see the module docstring. `sample`:
     {key: "normal(MEAN, SD)" | "uniform(LOW, HIGH)"}; `rules`: a --rules file's path; `only`:
-    the names of the rules to judge (the others are reported "off"). Bad input raises
-    InputError before any work."""
+    the names of the rules to judge (the others are reported "off"); `verify`: how many draws
+    phase two runs over every speed of the range (default: as many as CHECK_RUNS runs allow, at
+    least VERIFY_MIN; all of them: exact). Bad input raises InputError before any work."""
     from ..studies.sweep_spec import check_scene, make_plan, parse_sample
     from .settings import load_rules_file, resolve
 
@@ -93,6 +95,12 @@ def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | 
         draws = Draws(plan.keys, plan.values, tuple(f"{s.key} = {s.text}" for s in samples))
     elif runs is not None:
         raise InputError("--runs", str(runs), "--runs sets the number of draws: give --sample too")
+    if verify is not None:
+        if draws is None:
+            raise InputError("--verify", str(verify), "--verify sets how many draws run over the whole range: give "
+                             "--sample too")
+        if isinstance(verify, bool) or not isinstance(verify, (int, np.integer)) or verify < 1:
+            raise InputError("--verify", str(verify), "a whole number of draws, at least 1")
 
     nominal = Case(scene, speeds, workers=workers, progress=progress)
     measures: dict[str, Measure] = {}
@@ -112,7 +120,7 @@ def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | 
         # one speed: every draw ran at it (and the float margin above it as every draw would)
         inexact = [spec for spec in RULES if spec.name in drawn and drawn[spec.name].applicable
                    and not drawn[spec.name].speed_exact] if speeds.size > 1 else []
-        verified = _whole_range(scene, speeds, ends, draws, focus, inexact, settings, workers, progress, seed)
+        verified = _whole_range(scene, speeds, ends, draws, focus, inexact, settings, workers, progress, seed, verify)
         for spec in RULES:
             if spec.name in drawn:
                 results[spec.name] = _with_probability(results[spec.name], spec, drawn[spec.name],
@@ -179,14 +187,14 @@ def _limit_source(spec, settings, m: Measure) -> tuple[str, str]:
 
 
 def _whole_range(scene, speeds, ends, draws: Draws, focus: dict, specs, settings, workers, progress,
-                 seed) -> dict:
+                 seed, verify: int | None = None) -> dict:
     """Phase two (module docstring): rule name -> (indices of the verified draws, their Measure over
     every speed of the range and the rule's own speeds). One Case for all the rules: the elastic
     rules share its runs."""
     if not specs:
         return {}
     n = draws.values.shape[0]
-    count = min(n, max(1, CHECK_RUNS // max(1, speeds.size + 2)))
+    count = min(n, int(verify) if verify is not None else max(VERIFY_MIN, CHECK_RUNS // max(1, speeds.size + 2)))
     if count >= n:
         idx = np.arange(n)
     else:  # seeded from the study's seed: the same draws are verified again in a repeated check
