@@ -7,9 +7,10 @@
   spectrally accurate for a periodic analytic integrand), must close the gap exactly:
   u(0, 0) - u(x, y) = A x^2 + B y^2 inside the ellipse. Shares no code or elliptic integral
   with the module.
-- Hamrock & Dowson's curve fits (J. Lubrication Technology 99, 1977): ellipticity
-  k = 1.0339 (Ry/Rx)^0.636 and the peak pressure, within their stated few per cent for
-  Ry/Rx in [1, 10].
+- Brewe & Hamrock's curve fits (J. Lubrication Technology 99, 1977, pp. 485-487; repeated by
+  Hamrock & Brewe, 105, 1983, as the module cites): ellipticity k = 1.0339 (Ry/Rx)^0.636, the
+  elliptic integral 1.0003 + 0.5968 Rx/Ry and the peak pressure, within their stated few per cent
+  for Ry/Rx in [1, 10]. (Hamrock & Dowson's own fits of 1976-77 are the rounder k = 1.03 a^0.64.)
 """
 
 import math

@@ -382,7 +382,7 @@ def one_line(info, key):
 def test_pad_not_reaching_the_tip():
     with pytest.raises(InputError) as info:
         finger(tip_radius=0.0005)
-    assert "does not reach the valve tip" in one_line(info, "gear.valve_pad.tip_radius")
+    assert "does not reach the valve tip" in one_line(info, "gear.valve.tip_radius")
 
 
 def test_roller_through_the_base_circle():

@@ -286,3 +286,25 @@ def test_a_crown_needs_the_lobe_over_the_tappet_axis():
     with pytest.raises(InputError) as info:
         synthesise_bucket(Tappet(base_radius=RB, face_radius=1.0, cam_width=0.01, offset=0.006), LIFT)
     assert info.value.key == "gear.tappet.offset"
+
+
+@pytest.mark.parametrize("rf", [100.0, 1e4, 1e6])
+def test_a_crown_longer_than_the_lobe_is_at_least_the_line_contact_and_tends_to_the_flat_face(rf):
+    """A crown whose Hertz ellipse would run over the lobe's edges is cut to the lobe's width: its
+    peak pressure is at least that of the line contact over the width with the crown's curvature
+    in the plane (Johnson, Contact Mechanics, two-dimensional contact of cylinders:
+    p0 = sqrt(P' E* (1/Rf + 1/rho) / pi), written here), and as Rf -> inf it is the flat face's
+    (as the kinematics are). The untruncated
+    ellipse's p0 = 3P/(2 pi a b) falls to 0 as Rf -> inf: it may not be reported there."""
+    force = np.full(TH.size, 800.0)
+    flat_sigma = flat().hertz_stress(flat().kinematics(TH), force, E_STAR, width=0.014)
+    gear = synthesise_bucket(Tappet(base_radius=RB, face_radius=rf, cam_width=0.014), LIFT)
+    k = gear.kinematics(TH)
+    got = gear.hertz_stress(k, force, E_STAR)
+    line = np.sqrt(800.0 / 0.014 * E_STAR * (1.0 / rf + 1.0 / k.surface.radius) / math.pi)
+    assert gear.edge_loaded(k, force, E_STAR).all()
+    assert np.all(got >= line * (1.0 - 1e-14))
+    point = point_contact(force, 1.0 / rf + 1.0 / k.surface.radius, np.full(TH.size, 1.0 / rf), E_STAR).peak_pressure
+    assert np.all(got >= point)
+    # the crown changes rho like 1/Rf (test_crown_radius_to_infinity_is_the_flat_face): the stress too
+    assert np.max(np.abs(got / flat_sigma - 1.0)) < 0.2 / rf

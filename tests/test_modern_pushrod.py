@@ -230,7 +230,7 @@ def test_a_flat_lifter_cusp_names_the_base_radius():
 def test_the_pad_off_the_valve_tip():
     with pytest.raises(InputError) as info:
         train(tip_radius=0.0003)
-    one_line(info, "gear.valve_pad.tip_radius")
+    one_line(info, "gear.valve.tip_radius")
 
 
 def test_pushrod_and_rocker_in_line_at_rest():
@@ -258,3 +258,41 @@ def test_the_ratio_jet_is_the_ratio_and_its_derivatives():
 def away_from(marks, theta, distance):
     gap = np.abs(np.mod(theta[:, None] - np.asarray(marks)[None, :] + math.pi, 2.0 * math.pi) - math.pi)
     return np.all(gap > distance, axis=1)
+
+
+@pytest.mark.parametrize("rf", [1.5, 5.0, 10.0, 1e3])
+def test_a_crowned_lifter_is_never_below_either_hertz_bound(rf):
+    """The crowned lifter's face on the lobe: where the point contact's ellipse fits the width it is
+    the answer; where it would run over the edges the contact is cut to the width and its peak is
+    at least both the untruncated ellipse's p0 and the line contact's over the width (Johnson,
+    Contact Mechanics, two-dimensional contact of cylinders; written here). At Rf = 5 m the ellipse
+    overruns the 12 mm lobe on the flanks while its p0 (1050 MPa) is still above the line
+    contact's (903 MPa): the larger is reported."""
+    from explorer.mechanics.hertz import point_contact
+
+    gear = make_pushrod_train(base_radius=RB, lifter=Lifter("flat", radius=rf, socket_height=0.040, width=0.012),
+                              rocker_pivot=PIVOT, cup=CUP, valve_pad_centre=PAD, valve_pad_radius=0.010,
+                              valve_axis=-0.5 * math.pi, tip_radius=0.004, law=LIFT)
+    k = gear.kinematics(TH)
+    f = gear.contact_forces(k, 700.0 + 3e4 * np.maximum(k.lift[0], 0.0))
+    cam, _tip = gear.hertz_stress(k, f, E_STAR)
+    point = point_contact(f.normal, 1.0 / rf + 1.0 / k.surface.radius, np.full(TH.size, 1.0 / rf), E_STAR)
+    line = np.sqrt(f.normal / 0.012 * E_STAR * (1.0 / rf + 1.0 / k.surface.radius) / math.pi)
+    fits = point.semi_major <= 0.006
+    assert np.array_equal(cam[fits], point.peak_pressure[fits])
+    assert np.all(cam >= np.maximum(point.peak_pressure, line) * (1.0 - 1e-14))
+
+
+def test_a_loop_through_its_dead_point_names_the_cup_a_scene_key():
+    """The pushrod's length is no scene key: it follows from the cup's rest position ([gear.rocker]
+    cup, explorer.gears.modern_spec). A loop of pushrod and rocker that passes its dead point during
+    the lift names that key (a layout found by drawing random ones)."""
+    law = LawLift(height=0.009, start=0.5, rise=math.radians(80), dwell=0.0, ret=math.radians(80),
+                  rise_law="polynomial-345", return_law="polynomial-345")
+    with pytest.raises(InputError) as info:
+        make_pushrod_train(base_radius=0.017, lifter=Lifter("flat", socket_height=0.03, width=0.012),
+                           rocker_pivot=(0.0019893832949996054, 0.20336515815569378),
+                           cup=(0.011213222130708744, 0.362284038488325),
+                           valve_pad_centre=(0.043454158188915376, 0.2648009284409056), valve_pad_radius=0.01,
+                           law=law, n=720)
+    assert "dead point" in one_line(info, "gear.rocker.cup")

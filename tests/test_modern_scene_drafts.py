@@ -40,7 +40,9 @@ def load(name):
 
 
 def no_float(data, law):
-    """Rigid valve force F = M a + spring + friction, > 0 wherever the valve is open."""
+    """Rigid valve force F = M a + spring + R sgn(v) (the friction opposes the valve's motion: it adds
+    to the force while the valve opens and relieves it while it closes, explorer.mechanics.forces.
+    friction_direction), > 0 wherever the valve is open."""
     omega = data["drive"]["rpm"] * 2.0 * math.pi / 60.0
     d = law.derivatives(TH)
     lash = si(data["valve"]["lash"], "length")
@@ -48,7 +50,7 @@ def no_float(data, law):
     open_ = s > 0.0
     mass = si(data["valve"]["mass"], "mass")
     spring = si(data["spring"]["preload"], "force") + si(data["spring"]["rate"], "stiffness") * s
-    force = mass * omega**2 * d[2] + spring - si(data["loads"]["friction"], "force") * np.sign(d[1])
+    force = mass * omega**2 * d[2] + spring + si(data["loads"]["friction"], "force") * np.sign(d[1])
     return float(np.min(force[open_]))
 
 
@@ -122,3 +124,22 @@ def test_a_finger_roller_undercut_names_the_follower_key():
     with pytest.raises(InputError) as info:
         build_modern_gear("finger-follower", parts, base_radius=0.018, roller_radius=0.012, lift=sharp, file="f.toml")
     assert info.value.key == "follower.roller_radius" and "undercut" in info.value.reason
+
+
+@pytest.mark.parametrize("name, kind", [("finger_follower", "finger-follower"), ("pushrod_rocker", "rocker")])
+def test_a_pad_off_the_tip_names_the_tip_radius_key_of_the_scene(name, kind):
+    """The tip's radius is [gear.valve] tip_radius in a scene (modern_spec._valve): a pad that runs
+    off the tip, or a tip radius that is no length, names that key, not one the scene cannot have."""
+    data = tomllib.loads((DRAFTS / f"{name}.toml").read_text())
+    lift = data["lift"]
+    law = LawLift(height=si(lift["height"], "length"), start=si(lift["start"], "angle"), rise=si(lift["rise"], "angle"),
+                  dwell=si(lift["dwell"], "angle"), ret=si(lift["return"], "angle"), rise_law=lift["law"],
+                  return_law=lift["law"])
+    data["gear"]["valve"]["tip_radius"] = "0.05 mm"
+    parts = parse_parts(Table(data["gear"], "v.toml", "gear"), kind)
+    with pytest.raises(InputError) as info:
+        build_modern_gear(kind, parts, base_radius=si(data["follower"]["base_radius"], "length"),
+                          roller_radius=si(data["follower"].get("roller_radius", "0 mm"), "length"), lift=law,
+                          file="v.toml")
+    assert info.value.key == "gear.valve.tip_radius" and "does not reach the valve tip" in info.value.reason
+    assert "gear.valve.tip_radius" in Table(data["gear"], "v.toml", "gear").table("valve").key("tip_radius")

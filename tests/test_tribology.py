@@ -2,8 +2,13 @@
 oracles.
 
 EHL film thickness. No worked example of a line contact with its printed digits could be
-retrieved with the project's search tool (Hamrock's and Dowson-Higginson's books are not among the
-stored pages), so the oracles are: the formulas as printed (Dowson & Higginson, Elasto-
+retrieved with the project's search tool (searched again for this issue's follow-up: Hamrock's
+Fundamentals of Fluid Film Lubrication (NASA RP-1255) and Fundamentals of Machine Elements,
+Stachowiak & Batchelor, Harnoy, Stolarski, Pan & Hamrock's NASA memorandum, Shigley/Norton, course
+notes: the stored pages hold their formulas and definitions -- Stolarski, Tribology in Machine
+Design, sec. 6.7, p. 242: Dowson-Higginson with U = eta0 (V1 + V2)/(2 E' R), the mean surface speed
+this module calls the entrainment, and W = w/(E' R L) -- but no line-contact example with its
+digits; Stachowiak & Batchelor's E' is checked to its printed digits below), so the oracles are: the formulas as printed (Dowson & Higginson, Elasto-
 Hydrodynamic Lubrication, SI ed. 1977: H = 2.65 U^0.70 G^0.54 / W^0.13; Pan & Hamrock, ASME J.
 Tribol. 111 (1989): H = 1.714 W'^-0.128 U^0.694 G^0.568) evaluated here from their dimensional
 parameters by other code; the invariance of h under a change of the system of units (which catches
@@ -34,6 +39,14 @@ from explorer.lift.contours.translating import profile_from_derivatives
 from explorer.mechanics import tribology as tb
 
 E_STEEL, NU = 210e9, 0.3
+
+
+def test_reduced_modulus_against_stachowiak_batchelor():
+    """G. W. Stachowiak and A. W. Batchelor, Engineering Tribology, 2nd ed. (Butterworth-Heinemann
+    2001), ch. 7, p. 292, EXAMPLE (two steel balls): 1/E' = 1/2 [(1 - nu_A^2)/E_A + (1 - nu_B^2)/E_B]
+    with E = 2.1e11 Pa and nu = 0.3 prints E' = 2.308 x 10^11 Pa -- the E' of the film formulas here
+    (Dowson-Higginson's, Hamrock's), twice the E* of Hertz's line contact."""
+    assert tb.reduced_modulus(2.1e11, 0.3, 2.1e11, 0.3) / 1e11 == pytest.approx(2.308, abs=5e-4)
 
 
 def test_reduced_modulus_is_twice_e_star():

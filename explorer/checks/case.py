@@ -31,6 +31,7 @@ from ..mechanics.gear_contact import GearContact, NotApplicable
 
 RPM = 2.0 * math.pi / 60.0
 BLOCK_CELLS = 4_000_000  # draws x speeds x angles per block of the force arrays (32 MB of float64)
+FEW_RUNS = 16  # elastic runs computed in this process with the check's own engine cache (else a sweep)
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,9 @@ class Case:
         self.scene = scene
         self.speeds = np.asarray(speeds_rpm, dtype=float)
         self.draws = draws
-        self.focus = dict(focus or {})  # sampling: rule -> the speeds (rpm) where the nominal design is worst
+        # sampling: rule -> the speeds (rpm) it judges the draws at: where the nominal design is worst
+        # (phase one), every speed of the range (phase two: explorer.checks.run)
+        self.focus = dict(focus or {})
         self.workers = workers
         self.progress = progress
         self._elastic: dict = {}
@@ -218,41 +221,70 @@ class Case:
             raise NotApplicable("needs the elastic linkage: [linkage] stiffness, [valve], [spring]")
 
     def elastic(self, speeds) -> dict[str, np.ndarray]:
-        """The sweep engine's elastic figures of every (draw, speed) run: name -> (N, S)."""
+        """The sweep engine's elastic figures of every (draw, speed) run: name -> (N, S).
+
+        Each speed's runs are computed once and kept: the rules that judge the same speeds (the
+        seating velocity, the float margin's grid, the seat bounce) share them, and a call runs
+        only the speeds not yet run. Many runs go through the sweep (run_plan: its workers and
+        progress); a few (a bisection step of the float margin) go through the engine's chunk
+        directly with one cache for the whole check (the lift, the lash take-up: a gear's lift is
+        built once, not once per step). Either way each run's figures are the engine's, which do
+        not depend on how the runs were cut into chunks (tests/test_sweep_engine.py)."""
+        from ..studies.sweep_engine import compute_chunk, result_columns
         from ..studies.sweep_run import run_plan
         from ..studies.sweep_spec import Plan
 
         self.needs_linkage()
-        speeds = np.asarray(speeds, dtype=float)
-        key = speeds.tobytes()
-        if key in self._elastic:
-            return self._elastic[key]
-        n, s = self.n, speeds.size
-        keys = ("drive.rpm",) + (self.draws.keys if self.draws is not None else ())
-        values = np.empty((n * s, len(keys)))
-        values[:, 0] = np.tile(speeds, n)
-        if self.draws is not None:
-            values[:, 1:] = np.repeat(self.draws.values, s, axis=0)
-        plan = Plan(keys, values, (), (), None)
-        scene = self.scene.with_changes(effects=("elastic",))
-        table = run_plan(scene, plan, workers=self.workers, progress=self.progress)
-        if not table.complete:
-            raise KeyboardInterrupt
-        out = {name: np.asarray(col, dtype=float).reshape(n, s) for name, col in table.columns.items()}
-        self._elastic[key] = out
-        return out
+        speeds = np.asarray(speeds, dtype=float).ravel()
+        missing = np.array(sorted({float(v) for v in speeds} - set(self._elastic)))
+        if missing.size:
+            n, s = self.n, missing.size
+            keys = ("drive.rpm",) + (self.draws.keys if self.draws is not None else ())
+            values = np.empty((n * s, len(keys)))
+            values[:, 0] = np.tile(missing, n)
+            if self.draws is not None:
+                values[:, 1:] = np.repeat(self.draws.values, s, axis=0)
+            scene = self.elastic_scene
+            names = result_columns(scene)
+            if n * s <= FEW_RUNS:
+                columns = dict(zip(names, compute_chunk(scene, keys, values, names, self._shared).T))
+            else:
+                out = run_plan(scene, Plan(keys, values, (), (), None), workers=self.workers, progress=self.progress)
+                if not out.complete:
+                    raise KeyboardInterrupt
+                columns = {name: out.columns[name] for name in names}
+            for j, speed in enumerate(missing):
+                self._elastic[float(speed)] = {name: np.asarray(col, dtype=float).reshape(n, s)[:, j]
+                                               for name, col in columns.items()}
+        names = self._elastic[float(speeds[0])].keys() if speeds.size else ()
+        return {name: np.stack([self._elastic[float(v)][name] for v in speeds], axis=1) for name in names}
+
+    @cached_property
+    def elastic_scene(self):
+        """The scene with its elastic effect only (the figures the elastic rules read)."""
+        return self.scene.with_changes(effects=("elastic",))
+
+    @cached_property
+    def _shared(self):
+        from ..studies.sweep_engine import _Shared
+
+        return _Shared()
 
     def elastic_event_angle(self, rpm: float, kind: str, pick: str = "first", draw: int = 0) -> float:
         """Cam angle (deg) of an elastic event of one run, from `simulate` (for "where")."""
         from ..effects.pipeline import simulate
         from ..studies.sweep_spec import scene_for
 
-        scene = self.scene.with_changes(effects=("elastic",))
+        from ..gears.registry import lift_reads
+
+        scene = self.elastic_scene
         if self.draws is not None:
             scene = scene_for(scene, self.draws.keys, self.draws.values[draw])
         scene = scene_for(scene, ("drive.rpm",), (rpm,))
+        # the check's lift when the scene's lift reads none of the run's values (a gear's is costly)
+        lift = self.lift if self.draws is None and lift_reads(self.scene) == () else None
         try:
-            events = [e for e in simulate(scene).summary["events"] if e["kind"] == kind
+            events = [e for e in simulate(scene, lift=lift).summary["events"] if e["kind"] == kind
                       and e.get("effect", "elastic") == "elastic"]
         except (InputError, RuntimeError, ValueError, ArithmeticError):
             return math.nan

@@ -40,6 +40,12 @@ class RuleResult:
     p_warn: float | None = None  # share that warn or fail
     p_warn_interval: tuple[float, float] | None = None
     sample_note: str = ""
+    # how the probabilities were found: "exact: ..." (every draw's worst over the range) or
+    # "two-phase: ..." (explorer.checks.run: draws at the nominal's worst speeds, a subset verified
+    # over every speed; the interval then bounds what phase one misses); "" without draws
+    sample_method: str = ""
+    sample_verified: int | None = None  # two-phase: draws run over every speed of the range
+    sample_missed: int | None = None  # two-phase: of those, failing there though not at the nominal's worst speeds
 
     def shown(self, value: float | None) -> float | None:
         if value is None or not math.isfinite(value):
@@ -98,7 +104,7 @@ class CheckReport:
 
     CSV_COLUMNS = ("rule", "verdict", "value", "unit", "speed_rpm", "cam_angle_deg", "fail", "warn", "source",
                    "firmness", "samples", "p_fail", "p_fail_low", "p_fail_high", "p_warn", "p_warn_low", "p_warn_high",
-                   "note")
+                   "sample_method", "note")
 
     def to_csv(self) -> str:
         buf = io.StringIO()
@@ -114,7 +120,7 @@ class CheckReport:
             w.writerow([r.name, r.verdict, _num(r.shown(r.value)), r.unit, _num(r.speed_rpm), _num(r.cam_angle_deg),
                         _num(r.shown(r.fail)), _num(r.shown(r.warn)), r.source, r.firmness, r.samples or "",
                         _num(r.p_fail), _num(lo), _num(hi), _num(r.p_warn), _num(wlo), _num(whi),
-                        r.note or r.reason])
+                        r.sample_method, r.note or r.reason])
         return buf.getvalue()
 
     def table_text(self) -> str:
@@ -142,13 +148,17 @@ class CheckReport:
             row = [r.name, r.verdict.upper() if r.verdict == "fail" else r.verdict, f"{_fmt(r.shown(r.value))} {r.unit}",
                    ", ".join(where), limit]
             if self.samples:
+                mark = "~" if r.sample_method.startswith("two-phase") else ""
                 row.append("" if r.p_fail is None else
-                           f"{r.p_fail:.3g} [{r.p_fail_interval[0]:.3g}, {r.p_fail_interval[1]:.3g}]")
+                           f"{mark}{r.p_fail:.3g} [{r.p_fail_interval[0]:.3g}, {r.p_fail_interval[1]:.3g}]")
             row.append(_short(r.source))
             rows.append(row)
         widths = [max(len(str(row[i])) for row in rows) for i in range(len(head))]
         for row in rows:
             lines.append("  ".join(str(c).ljust(widths[i]) for i, c in enumerate(row)).rstrip())
+        if any(r.sample_method.startswith("two-phase") for r in self.results):
+            lines.append("~ two-phase estimate: every draw judged at the nominal design's worst speeds, a subset over "
+                         "every speed of the range to bound what that misses (sample_method in the JSON)")
         lines.append(f"verdict: {self.verdict.upper()} ({sum(r.verdict == 'fail' for r in self.results)} fail, "
                      f"{sum(r.verdict == 'warn' for r in self.results)} warn, "
                      f"{sum(r.verdict == 'pass' for r in self.results)} pass, "

@@ -32,7 +32,10 @@ class Rule(Protocol):
        pressure angle's 30 deg for a straight guide and 35 deg for a lever), and a note (the model,
        the approximations). Not judgeable: `Measure.not_applicable(reason)` (no roller, no spring
        geometry, no [lubricant], ...). Pure: read the case, write nothing; no exceptions but
-       InputError for a setting the rule cannot use.
+       InputError for a setting the rule cannot use. With tolerance draws a rule may judge them at a
+   few speeds (case.rule_speeds: where the nominal design was worst); unless its worst over those
+   speeds is provably its worst over the range it says so (Measure.speed_exact = False) and the
+   checks judge a random subset of the draws over the whole range to bound what it misses.
     3. One line of RULES (explorer/checks/registry.py): a RuleSpec with the rule's name (the key of
        [checks] and --rules files), the "module:function" of its measure, its title, the quantity
        and the unit it is shown in, its sense ("max": the value must stay at or below the limits, a
@@ -91,6 +94,11 @@ class Measure:
     note: str = ""
     limit_source: str | None = None  # where the limit chosen comes from, when not the setting's own
     details: tuple[str, ...] = ()  # further lines for the report (angles of a reversal, ...)
+    # with tolerance draws: whether each draw's worst over the speeds it ran is its worst over the
+    # whole range (speed-independent figures; figures extremal at the range's ends, at each angle).
+    # False: the rule ran the draws at a few speeds only; the checks then bound what that misses
+    # (explorer.checks.run: two phases).
+    speed_exact: bool = True
     applicable: bool = True
     reason: str = ""
 

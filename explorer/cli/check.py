@@ -58,6 +58,9 @@ def register(sub) -> None:
                    help="a tolerance: normal(MEAN, SD) or uniform(LOW, HIGH) (repeatable)")
     p.add_argument("--runs", type=int, help="draws of the tolerances (with --sample)")
     p.add_argument("--seed", type=int, help="seed of the draws (default: fresh)")
+    p.add_argument("--verify", type=int, metavar="N",
+                   help="draws run over every speed of the range to bound what judging the others at the nominal's "
+                        "worst speeds misses (default: as many as 10^4 runs allow, at least 10)")
     p.add_argument("--rules", metavar="FILE.toml", help="rule settings: limits, rules switched off")
     p.add_argument("-o", "--output", metavar="OUT.json|OUT.csv", help="write the report here")
     p.add_argument("--workers", type=int, help="local worker processes for the elastic runs (default: every core)")
@@ -91,7 +94,7 @@ def run(args) -> int:
     progress = Progress(sys.stderr)
     try:
         report = check(scene, args.rpm, sample or None, runs=args.runs, seed=args.seed, rules=args.rules,
-                       workers=args.workers, progress=progress, yes=args.yes)
+                       workers=args.workers, progress=progress, yes=args.yes, verify=args.verify)
     finally:
         progress.end()
     text = report.table_text()

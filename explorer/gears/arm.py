@@ -408,7 +408,7 @@ def tip_stress(valve: ValveEnd, tip: TipContact, force, e_star: float, width: fl
 
     if width is None:
         if valve.tip_radius is None:
-            raise InputError(valve.file, f"{valve.key}.tip_radius", "the tip's contact stress needs the tip's radius")
+            raise InputError(valve.file, valve.tip_key, "the tip's contact stress needs the tip's radius")
         chord = 2.0 * np.sqrt(np.maximum(valve.tip_radius**2 - tip.scrub**2, 0.0))
     else:
         chord = np.full(len(tip.scrub), float(width))

@@ -262,6 +262,20 @@ def make_trip_lift(spec, source):
     return build_trip_lift(law_lift(_get(source, "lift")), valve.lash, trip["angle"], omega, model, spec.file)
 
 
+def gear_lift_reads(scene) -> tuple[str, ...] | None:
+    """The sweep keys (explorer.studies.sweep_spec.SWEEP_KEYS) whose values build_gear_lift reads
+    for this scene (the registry's lift_reads): none for the lever gears, whose geometry alone
+    makes the lift; the lash for a rocking cam fitted to [gear.target] (the fit is to the valve's
+    lift after the lash: rocking_target); None for the trip gear, whose lift is the valve's free
+    closing after the trip (the speed, the masses, the spring, the loads, the lash)."""
+    spec = scene.gear
+    if spec is None or spec.type == "trip":
+        return None
+    if spec.type == "rocking-cam" and "target" in spec.parts and spec.part("target")["use"] == "fitted":
+        return ("valve.lash",)
+    return ()
+
+
 def build_gear_lift(scene):
     """The valve-referred lift curve of a gear scene (called by lift.build_lift)."""
     spec = scene.gear

@@ -267,15 +267,16 @@ class BucketTappetGear:
         """Peak contact pressure (Pa). Flat face on the cam: a line contact of the lobe's width with
         the cam's radius (explorer.mechanics.contact.hertz_line_stress). Crown on the cam: the
         elliptical point contact of the sphere Rf on the cam (rho in the plane, straight across;
-        explorer.mechanics.hertz.point_contact); `contact_ellipse` tells where its ellipse would
-        run over the lobe's edges (then the real pressure is higher at the edges: a crown is
-        chosen to keep the ellipse on the lobe)."""
+        explorer.mechanics.hertz.point_contact), and where its ellipse would run over the lobe's
+        edges (`edge_loaded`) at least the line contact over the lobe's width (crown_stress: the
+        real pressure is higher still at the edges; a crown is chosen to keep the ellipse on the
+        lobe)."""
         from ..mechanics.contact import hertz_line_stress
 
         t = self.tappet
-        if t.crowned:
-            return self.contact_ellipse(k, normal_force, e_star).peak_pressure
         b = width if width is not None else t.cam_width
+        if t.crowned:
+            return crown_stress(normal_force, t.face_radius, k.surface.radius, e_star, b)[0]
         if b is None:
             raise InputError(t.file, f"{t.key}.cam_width", "the contact stress needs the lobe's width")
         return hertz_line_stress(normal_force, b, math.inf, k.surface.radius, e_star)
@@ -290,11 +291,36 @@ class BucketTappetGear:
         return point_contact(normal_force, 1.0 / rf + 1.0 / k.surface.radius, across, e_star)
 
     def edge_loaded(self, k: TappetKinematics, normal_force, e_star: float) -> np.ndarray:
-        """Crown only: where the contact ellipse would be longer than the lobe is wide."""
+        """Crown only: where the contact ellipse would be longer across the lobe than the lobe is wide."""
         t = self.tappet
         if t.cam_width is None:
             raise InputError(t.file, f"{t.key}.cam_width", "the edge-loading check needs the lobe's width")
-        return self.contact_ellipse(k, normal_force, e_star).semi_major > 0.5 * t.cam_width
+        return crown_stress(normal_force, t.face_radius, k.surface.radius, e_star)[1] > 0.5 * t.cam_width
+
+
+def crown_stress(normal_force, crown_radius: float, cam_radius, e_star: float, width: float | None = None):
+    """(peak pressure Pa, the contact's half-length across the lobe m) of a spherical crown Rf on a
+    cam of radius rho (straight across): Hertz's ellipse (explorer.mechanics.hertz.point_contact)
+    with the curvature sums 1/Rf + 1/rho in the plane and 1/Rf across. Its long axis lies along the
+    smaller sum: across the lobe on a convex cam, in the plane on a concave one. Where the ellipse
+    would run over the lobe's edges (half-length across > width/2) the contact is cut to the width
+    and carries the load on less than the ellipse: its peak is at least the larger of the ellipse's
+    p0 and the line contact's over the width with the in-plane curvature (explorer.mechanics.
+    contact.hertz_line_stress; the edges add more). That larger figure is returned there; as
+    Rf -> inf it is the flat face's line contact, where the ellipse's p0 would fall to 0."""
+    from ..mechanics.contact import hertz_line_stress
+    from ..mechanics.hertz import point_contact
+
+    rho = np.asarray(cam_radius, dtype=float)
+    in_plane = 1.0 / crown_radius + 1.0 / rho
+    across_sum = np.full(rho.shape, 1.0 / crown_radius)
+    ellipse = point_contact(normal_force, in_plane, across_sum, e_star)
+    across = np.where(in_plane >= across_sum, ellipse.semi_major, ellipse.semi_minor)
+    if width is None:
+        return ellipse.peak_pressure, across
+    line = hertz_line_stress(normal_force, width, crown_radius, rho, e_star)
+    peak = np.where(across <= 0.5 * width, ellipse.peak_pressure, np.maximum(ellipse.peak_pressure, line))
+    return peak, across
 
 
 # --------------------------------------------------------------------------------------------

@@ -126,7 +126,7 @@ class PushrodTrain:
             by = np.asarray(by, dtype=float)
             bx = np.full(by.shape, bx)
         x, y = closure_or_error((bx, by), self.pushrod_length, self.rocker_pivot, self.rocker_arm, self.branch,
-                                file=self.file, key=f"{self.key}.pushrod.length", what="the loop of pushrod and rocker",
+                                file=self.file, key=f"{self.key}.rocker.cup", what="the loop of pushrod and rocker",
                                 theta=theta)
         psi = J.atan2(y - self.rocker_pivot[1], x - self.rocker_pivot[0])
         return psi + 2.0 * math.pi * np.round((self.rest - J.value(psi)) / (2.0 * math.pi))
@@ -138,8 +138,8 @@ class PushrodTrain:
         dx = cx - self.lifter.offset
         radicand = self.pushrod_length**2 - dx * dx
         if np.any(J.value(radicand) <= 0.0):
-            raise InputError(self.file, f"{self.key}.pushrod.length", "the pushrod is too short to reach the lifter's axis "
-                             "from the rocker's cup for this lift")
+            raise InputError(self.file, f"{self.key}.rocker.cup", "the pushrod (its length fixed by the cup's rest "
+                             "position) is too short to reach the lifter's axis from the rocker's cup for this lift")
         return cy - self.below * J.sqrt(radicand) - self.lifter.rest_height(self.base_radius)
 
     def lifter_lift(self, theta) -> Jet:
@@ -270,8 +270,9 @@ class PushrodTrain:
     def hertz_stress(self, k: PushrodKinematics, forces: ContactForces, e_star: float,
                      tip_width: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Peak Hertz pressure at the cam (the lifter's roller or face on the lobe: a line contact of
-        the lifter's width; a crowned face: the point contact as for the bucket tappet) and at the
-        valve tip (explorer.gears.arm.tip_stress)."""
+        the lifter's width; a crowned face: the point contact as for the bucket tappet, at least the
+        line contact where its ellipse would overrun the width, explorer.gears.flat_face.crown_stress)
+        and at the valve tip (explorer.gears.arm.tip_stress)."""
         from ..mechanics.contact import hertz_line_stress
         from .arm import tip_stress
 
@@ -280,11 +281,9 @@ class PushrodTrain:
             raise InputError(self.file, f"{self.key}.lifter.width", "the contact stress needs the roller's or lobe's width")
         rho = k.surface.radius
         if f.kind == "flat" and f.circular:
-            from ..mechanics.hertz import point_contact
+            from .flat_face import crown_stress
 
-            point = point_contact(forces.normal, 1.0 / f.radius + 1.0 / rho, np.full_like(rho, 1.0 / f.radius), e_star)
-            line = hertz_line_stress(forces.normal, f.width, f.radius, rho, e_star)
-            cam = np.where(point.semi_major <= 0.5 * f.width, point.peak_pressure, line)
+            cam = crown_stress(forces.normal, f.radius, rho, e_star, f.width)[0]
         else:
             cam = hertz_line_stress(forces.normal, f.width, f.radius, rho, e_star)
         return cam, tip_stress(self.valve, k.tip, forces.tip_normal, e_star, tip_width)
@@ -330,7 +329,8 @@ def make_pushrod_train(*, base_radius: float, lifter: Lifter, rocker_pivot, cup,
     centre = np.asarray(valve_pad_centre, dtype=float) - np.asarray(pivot)
     valve = make_valve_end(pivot=pivot, rest=rest, lifting=lifting, arm=float(np.hypot(*centre)),
                            angle=math.atan2(centre[1], centre[0]) - rest, pad_radius=valve_pad_radius, axis=valve_axis,
-                           axis_point=valve_axis_point, tip_radius=tip_radius, file=file, key=f"{key}.valve_pad")
+                           axis_point=valve_axis_point, tip_radius=tip_radius, file=file, key=f"{key}.valve_pad",
+                           tip_key=f"{key}.valve.tip_radius")
     train = replace(train0, valve=valve, law=law)
     if contour is not None:
         train = replace(train, motion=_lifter_motion(train, contour), contour=contour)

@@ -7,6 +7,10 @@ What the generic code asks of a gear is looked up here, never branched on by typ
             drives only from the pick-up to the trip, so forces, contact and elastic are its own)
   meshes    module with gear_layout, gear_parts and gear_poses (explorer.view.parts)
   rejected  [section] -> why the gear takes no such section (the scene loader's error)
+  lift_reads "module:function", scene -> the sweep keys (explorer.studies.sweep_spec.SWEEP_KEYS)
+            whose values the gear's lift reads, () when none (the gear's geometry alone makes it),
+            None when it may read any (the speed, the train's loads): a sweep builds a lift that
+            reads none once and shares it across its runs (explorer.studies.sweep_engine)
 
 Adding a gear: its own modules and one line of GEARS. Import-light: names only, standard
 library only (scene.py reads GEAR_TYPES while validating follower.type); the functions are
@@ -29,6 +33,7 @@ class GearEntry:
     effects: Mapping[str, str] = field(default_factory=lambda: _NONE)
     meshes: str = "explorer.view.gear_parts"
     rejected: Mapping[str, str] = field(default_factory=lambda: _NONE)
+    lift_reads: str = "explorer.gears.build:gear_lift_reads"
 
 
 _TRIP = "explorer.effects.trip"
@@ -66,6 +71,13 @@ def effect_variant(follower_type: str, effect: str) -> str | None:
     """The "module:function" of the gear's own variant of an effect, or None (the generic one)."""
     entry = GEARS.get(follower_type)
     return None if entry is None else entry.effects.get(effect)
+
+
+def lift_reads(scene) -> tuple[str, ...] | None:
+    """The sweep keys whose values the scene's gear lift reads (the entry's lift_reads): () for a
+    scene that is not a gear (its lift is the cam's alone), None when it may read any."""
+    entry = GEARS.get(scene.follower.type)
+    return () if entry is None else resolve(entry.lift_reads)(scene)
 
 
 def lift_builder(follower_type: str) -> Callable | None:

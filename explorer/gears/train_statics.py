@@ -19,7 +19,8 @@ exactly (friction turns the difference into heat), and T omega = F v without fri
 
 Friction drags each surface the way the other surface slides relative to it (sigma is the sign of
 the sliding velocity of the first body, the cam or the valve, relative to the second). A sample
-with (n + mu_c sigma_c t_c) . V_c <= 0 while F > 0 cannot be driven (self-locking): N = inf there.
+with (n + mu_c sigma_c t_c) . V_c <= 0 while F > 0 cannot be driven (self-locking): N = inf there,
+and the friction and the torque are their limits (+-inf; a roller's friction 0), never NaN.
 A valve force F <= 0 (the valve would have to be pulled) is passed through without friction.
 Rollers roll: no sliding friction at their contact (mu_c = 0; the bearing's drag is not modelled).
 """
@@ -77,11 +78,15 @@ def cam_forces(valve_force, *, contact: np.ndarray, normal: np.ndarray, tangent:
         n_loaded = np.where(drive > 0.0, f * resist / drive, np.inf)
         n_free = f * opening / free_drive
     n = np.where(loaded, n_loaded, np.where(f < 0.0, n_free, 0.0))
-    mu_c = np.where(loaded, cam_friction, 0.0)
-    friction = mu_c * sigma_c * n
-    force = n[:, None] * normal + friction[:, None] * tangent
+    coefficient = np.where(loaded, cam_friction, 0.0) * sigma_c  # friction per newton of normal force
+    finite = np.isfinite(n)
+    # a self-locked sample (N infinite): the friction and the torque are the limits N -> inf, never the
+    # NaN of 0 x inf (a roller's zero friction) or of inf - inf between the force's components
     with np.errstate(invalid="ignore"):
-        torque = _cross(contact, force)
+        friction = np.where(coefficient == 0.0, 0.0, coefficient * n)
+        force = np.where(finite[:, None], n[:, None] * normal + friction[:, None] * tangent, 0.0)
+        arm = _cross(contact, normal) + coefficient * _cross(contact, tangent)  # torque per newton of N
+        torque = np.where(finite, _cross(contact, force), np.where(arm == 0.0, n, n * arm))
     tip_fr = np.where(loaded, tip_friction, 0.0) * sigma_t * f
     return ContactForces(normal=n, friction=friction, torque=torque, tip_normal=f.copy(), tip_friction=tip_fr)
 

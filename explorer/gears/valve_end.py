@@ -63,6 +63,7 @@ class ValveEnd:
     tip_radius: float | None = None  # m, the valve tip face's radius; None: not checked
     file: str = "<memory>"
     key: str = "gear.valve_pad"
+    tip_key: str = "gear.valve.tip_radius"  # the scene key of tip_radius ([gear.valve], not the pad's table)
 
     @property
     def pivot(self) -> tuple[float, float]:
@@ -127,7 +128,7 @@ class ValveEnd:
         i = int(np.argmax(far))
         if far[i] >= self.tip_radius:
             raise InputError(
-                self.file, f"{self.key}.tip_radius",
+                self.file, self.tip_key,
                 f"the pad does not reach the valve tip: its contact is {far[i] * 1e3:.3g} mm from the stem's axis at cam "
                 f"angle {math.degrees(float(theta[i])) % 360.0:.2f} deg, beyond the tip's radius "
                 f"{self.tip_radius * 1e3:.3g} mm (move the valve axis or the pad, or enlarge the pad radius)",
@@ -136,7 +137,8 @@ class ValveEnd:
 
 def make_valve_end(*, pivot, rest: float, lifting: float, arm: float, angle: float, pad_radius: float,
                    axis: float | None = None, axis_point=None, tip_radius: float | None = None,
-                   file: str = "<memory>", key: str = "gear.valve_pad") -> ValveEnd:
+                   file: str = "<memory>", key: str = "gear.valve_pad",
+                   tip_key: str = "gear.valve.tip_radius") -> ValveEnd:
     """The valve end for an arm at rest angle `rest` whose angle grows (lifting = +1) or falls
     (-1) as the cam lifts it. Default axis: the way the pad's centre moves when the arm lifts;
     default axis point: through the contact at rest (no scrub offset at the closed valve)."""
@@ -144,7 +146,7 @@ def make_valve_end(*, pivot, rest: float, lifting: float, arm: float, angle: flo
         if not (math.isfinite(value) and value > 0.0):
             raise InputError(file, f"{key}.{name}", f"must be greater than zero, got {value!r}")
     if tip_radius is not None and not tip_radius > 0.0:
-        raise InputError(file, f"{key}.tip_radius", f"must be greater than zero, got {tip_radius!r}")
+        raise InputError(file, tip_key, f"must be greater than zero, got {tip_radius!r}")
     direction = rest + angle + 0.5 * math.pi  # d C / d psi
     dx, dy = lifting * math.cos(direction), lifting * math.sin(direction)
     if axis is None:
@@ -155,8 +157,9 @@ def make_valve_end(*, pivot, rest: float, lifting: float, arm: float, angle: flo
     if along < 1e-3:
         raise InputError(file, f"{key}.angle", "the pad moves across the valve axis at rest (dead point)")
     drive = RockerDrive(pivot=tuple(pivot), arm=arm, angle=angle, axis=axis, rest=rest, file=file, key=key)
-    end = ValveEnd(drive=drive, pad_radius=pad_radius, axis_point=(0.0, 0.0), tip_radius=tip_radius, file=file, key=key)
+    end = ValveEnd(drive=drive, pad_radius=pad_radius, axis_point=(0.0, 0.0), tip_radius=tip_radius, file=file, key=key,
+                   tip_key=tip_key)
     if axis_point is None:
         axis_point = tuple(end.rest_contact())
     return ValveEnd(drive=drive, pad_radius=pad_radius, axis_point=tuple(axis_point), tip_radius=tip_radius,
-                    file=file, key=key)
+                    file=file, key=key, tip_key=tip_key)

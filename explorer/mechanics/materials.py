@@ -7,8 +7,18 @@ strengths of gear steels as machine-design texts quote them; a design names its 
 hertz_stress rule's `material` setting or gives its own figure as the rule's `fail` limit.
 
 Spring wires: the minimum tensile strength of commercial wire S_ut = A / d^m (d in mm, S_ut in
-MPa), the classic two-constant fit of the machine-design texts (Shigley & Mischke); the static
-allowable shear stress as a share of S_ut from a spring maker's data sheet.
+MPa), the classic two-constant fit of the machine-design texts; the static allowable shear stress
+as a share of S_ut from a spring maker's data sheet. The five rows are the older table's metric
+column (music wire 2060 MPa mm^m, m 0.163 ...; the FE exam's table), as printed at
+ncalculators.com (all five, with the kpsi in^m column beside them) and used in engineeringprep.com's
+worked problems (music wire 7.25 mm: 1492 MPa; oil-tempered 10 mm: 1032 MPa). That metric column
+is not its own kpsi column converted (A_SI = 6.895 (25.4)^m A_kpsi, Shigley's solutions manual,
+prob. 10-2): it is 3 % (chrome-silicon) to 17 % (hard-drawn) lower, and
+for hard-drawn A227 at 0.106 in it gives 180 ksi where ASTM A227 class I's minimum is 216 ksi
+(interwiregroup.com's copy of the standard's table; the kpsi column gives 215). The rules using
+it therefore err on the safe side by that much; the current Shigley (8th-11th eds., Table 10-4)
+has new fits (music wire 2211 MPa mm^m, m 0.145; oil-tempered 1855, 0.187: both confirmed in
+its solutions manuals), not taken here because its other three rows could not be confirmed.
 """
 
 from __future__ import annotations
@@ -16,6 +26,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..core.units import AT
+
+PSI = 6894.757293168361  # Pa per lbf/in^2
 
 
 @dataclass(frozen=True)
@@ -31,16 +43,16 @@ CONTACT_MATERIALS: dict[str, ContactMaterial] = {m.name: m for m in (
                     "gas engines", "historical: a cast-iron era allowable, far below modern hardened steel"),
     ContactMaterial("diesel", 4000.0 * AT, "seed 004 ('Oel- und Gasmaschinen', p. 404): about 4000 kgf/cm^2 for "
                     "Diesel engines", "historical, as above"),
-    ContactMaterial("through-hardened-300HB", 866e6, "AGMA 2001: S_c = 2.22 H_B + 200 MPa (grade 1) at 300 HB, "
-                    "10^7 cycles, 99 % reliability (Shigley, Mechanical Engineering Design, gear chapter)",
-                    "gear practice, quoted here without its life and reliability factors; not confirmed against "
-                    "the book in this project"),
-    ContactMaterial("carburized-grade-1", 1240e6, "AGMA 2001: carburized and hardened 58-64 HRC, grade 1, "
-                    "S_c = 180 kpsi (Shigley, Mechanical Engineering Design, gear chapter)",
-                    "gear practice; not confirmed against the book in this project"),
-    ContactMaterial("carburized-grade-2", 1550e6, "AGMA 2001: carburized and hardened 58-64 HRC, grade 2, "
-                    "S_c = 225 kpsi (Shigley, Mechanical Engineering Design, gear chapter)",
-                    "gear practice; not confirmed against the book in this project"),
+    ContactMaterial("through-hardened-300HB", 866e6, "AGMA 2001 via Shigley, Mechanical Engineering Design, "
+                    "Fig. 14-5, grade 1: S_c = 2.22 H_B + 200 MPa at 300 HB, 10^7 cycles, 99 % reliability (its "
+                    "US form 322 H_B + 29 100 psi = 125 700 psi = 866.7 MPa is printed in the book's continuation "
+                    "of Ex. 14-6, holooly.com)", "gear practice, quoted without its life and reliability factors"),
+    ContactMaterial("carburized-grade-1", 180e3 * PSI, "AGMA 2001 (ANSI/AGMA 2001-D04 Table 3) via Shigley "
+                    "Table 14-6: carburized and hardened, grade 1, S_c = 180 000 psi (engineersedge.com's copy of "
+                    "the AGMA table)", "gear practice, 10^7 cycles, 99 % reliability"),
+    ContactMaterial("carburized-grade-2", 225e3 * PSI, "AGMA 2001 (ANSI/AGMA 2001-D04 Table 3) via Shigley "
+                    "Table 14-6: carburized and hardened, grade 2, S_c = 225 000 psi (engineersedge.com's copy of "
+                    "the AGMA table)", "gear practice, 10^7 cycles, 99 % reliability"),
 )}
 
 
@@ -51,9 +63,10 @@ class SpringWire:
     a_mpa: float  # MPa mm^m
     m: float
     allowable_share: float  # static allowable shear stress / S_ut
-    source: str = ("S_ut = A/d^m: the machine-design texts' table (Shigley & Mischke), as reproduced at "
-                   "ncalculators.com (spring material tensile calculator); allowable 45 % of S_ut in torsion: Katy "
-                   "Spring & Mfg., common spring materials data sheet")
+    source: str = ("S_ut = A/d^m: the older machine-design table's metric column (as printed at ncalculators.com, "
+                   "spring material tensile calculator, and in engineeringprep.com's worked problems): 3-17 % "
+                   "below its own kpsi column and ASTM A227's minimum, on the safe side (module docstring); "
+                   "allowable 45 % of S_ut in torsion: Katy Spring & Mfg., common spring materials data sheet")
 
     def ultimate_tensile_strength(self, wire_diameter: float) -> float:
         """S_ut (Pa) of a wire of diameter d (m)."""

@@ -4,9 +4,11 @@ A run is `simulate(scene with the run's values)` reduced to the figures a design
 (row_scalars). The engine computes the same figures without the parts of `simulate` that no
 row needs, and shares across runs everything that does not depend on the varied values:
 
-- the lift curve (built once: the cam is the same in every run; for the gears whose lift a
-  builder assembles from the scene, and for the trip gear's own effects, each run goes through
-  `simulate` whole -- correct, and as slow as a loop);
+- the lift curve (built once: the cam is the same in every run, and so is a gear's lift when it
+  reads none of the run's values -- explorer.gears.registry's lift_reads; for a gear whose lift
+  does (the trip gear's closing, a rocking cam fitted to its target after the lash) or that
+  brings its own effects (the trip gear's), each run goes through `simulate` whole -- correct,
+  and as slow as a loop);
 - the rigid float speed and the smooth pieces of the lift (they depend on lash, masses and
   loads, not on the speed: cached per distinct set of those), the lash take-up angles (per lash);
 - the forces effect's side figures and loss intervals, which no row holds, are not computed.
@@ -19,7 +21,7 @@ Which engine computes a chunk's rows is a registry (ENGINES, the first that acce
   tests/test_effects/elastic_batch.py);
 - "shared": the elastic effect itself (elastic_effect), each row equal to simulate's to the bit
   (tests/test_sweep_engine.py), for the other non-gear scenes (a spring chain, another solver);
-- "simulate": simulate whole (the gears).
+- "simulate": simulate whole (the gears whose lift or effects are their own per run).
 
 Columns (SI units in the names, as in `simulate`'s CSV), by effect:
   forces   min_contact_force_N (rigid, refined), float_speed_rpm (rigid; NaN: never floats)
@@ -149,10 +151,13 @@ class _Shared(BatchCache):
 
 
 def _batchable(scene) -> bool:
-    """True when the lift is the same curve in every run and the effects are the generic ones."""
-    from ..gears.registry import GEARS
+    """True when the lift is the same curve in every run and the effects are the generic ones:
+    a scene that is not a gear, or a gear that brings no effect of its own and whose lift reads
+    none of the sweep keys (explorer.gears.registry: effects, lift_reads)."""
+    from ..gears.registry import GEARS, lift_reads
 
-    return scene.follower.type not in GEARS
+    entry = GEARS.get(scene.follower.type)
+    return entry is None or (not entry.effects and lift_reads(scene) == ())
 
 
 def engine_row(scene, names, shared: _Shared) -> dict[str, float]:
@@ -316,7 +321,7 @@ ENGINES: tuple[RowEngine, ...] = (
     RowEngine("compiled", _kernel_accepts, _kernel_row, _kernel_chunk, pool_min_runs=10_000, max_chunk=4096),
     # the effects' own functions, sharing the lift and the rigid float speed across runs
     RowEngine("shared", lambda scene, shared: _batchable(scene), engine_row),
-    # simulate itself (the gears, whose lift or effects are their own)
+    # simulate itself (the gears whose lift reads the run's values or whose effects are their own)
     RowEngine("simulate", lambda scene, shared: True, lambda scene, names, shared: reference_row(scene, names)),
 )
 

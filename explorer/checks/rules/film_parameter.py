@@ -52,7 +52,14 @@ def measure(case, settings) -> Measure:
     u = (speeds * RPM)[:, None] * mean_rate[None, :]  # (S, n)
     value = np.empty((case.n, speeds.size))
     angle = np.empty_like(value)
+    # h ~ u^0.70 w^-0.13 (u ~ omega, w ~ F = omega^2 A + G at each angle) grows with the speed
+    # wherever the static load G > 0, so a draw's thinnest film is at the range's lowest speed; where
+    # G <= 0 < A (a contact loaded only above some speed) it may dip inside the range
+    speed_exact = True
     for rows, force, _ in case.blocks(speeds):
+        if case.sampling and speed_exact:
+            a_coef, g_part, is_open = case.force_parts(rows)
+            speed_exact = not bool(np.any(is_open & (g_part <= 0.0) & (a_coef > 0.0)))
         w = case.normal(force) / width
         loaded = (w > 0.0) & (radius > 0.0)
         finite = np.isfinite(w)  # an infinite normal force: the guide locks, no film
@@ -62,6 +69,6 @@ def measure(case, settings) -> Measure:
         lam = np.where(loaded, np.where(finite, h / sigma, 0.0), np.nan)
         wv, a = reduce_angles(lam, "min", case.theta_deg)
         value[rows], angle[rows] = wv, a
-    return Measure.of(value, angle, speeds, settings,
+    return Measure.of(value, angle, speeds, settings, speed_exact=speed_exact,
                       note=f"{lub.film} film, Rq {sigma * 1e6:.3g} um composite, width {width * 1e3:.4g} mm ({how}); "
                            f"viscosity {lub.viscosity:.4g} Pa s, alpha {lub.pressure_viscosity:.3g} 1/Pa")

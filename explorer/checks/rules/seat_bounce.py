@@ -25,4 +25,5 @@ def measure(case, settings) -> Measure:
         r, j = np.unravel_index(i, bounces.shape)
         angle[r, j] = case.elastic_event_angle(float(speeds[j]), "seat", "second")
     return Measure.of(bounces, angle, speeds, settings,
-                      note=f"bounces rising above {settings['min_height'] * 1e6:.3g} um are counted")
+                      note=f"bounces rising above {settings['min_height'] * 1e6:.3g} um are counted",
+                      speed_exact=not case.sampling)
