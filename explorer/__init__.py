@@ -10,11 +10,18 @@ command's help or a tool that only needs InputError starts at once.
 """
 
 from importlib import import_module
+from typing import TYPE_CHECKING
 
 from .core.errors import InputError
 from .core.version import __version__
 
-__all__ = ["InputError", "Scene", "load_scene", "loads_scene", "simulate", "sweep", "__version__"]
+__all__ = ["InputError", "Scene", "check", "load_scene", "loads_scene", "simulate", "sweep", "__version__"]
+
+if TYPE_CHECKING:  # for type checkers and the API reference (mkdocstrings); at run time: __getattr__
+    from .checks.run import check
+    from .effects.pipeline import simulate
+    from .scene.scene import Scene, load_scene, loads_scene
+    from .studies.sweep_run import sweep
 
 # name -> the module that defines it (relative to this package)
 _API = {
@@ -23,6 +30,7 @@ _API = {
     "loads_scene": ".scene.scene",
     "simulate": ".effects.pipeline",
     "sweep": ".studies.sweep_run",
+    "check": ".checks.run",  # design checks over the speed range and tolerances: a CheckReport
 }
 
 

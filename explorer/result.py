@@ -16,6 +16,16 @@ from .core.units import printable
 CSV_CHUNK_ROWS = 20_000  # ~ 5 MB of text per piece at 30 columns
 
 
+# The output columns that may hold NaN, each with what NaN means there (docs/reference/validity.md).
+# Every other column of every scene is a number (or +-inf where the docs say so, a self-locked
+# cam's force); the pipeline refuses a NaN elsewhere, and tests/test_nan_outputs.py runs every
+# built-in scene against this table.
+NAN_MEANINGS: Mapping[str, str] = MappingProxyType({
+    "valve_referred_stiffness_N_m": "the rolling levers are apart: the valve is seated and the chain carries no "
+                                    "load, so it has no stiffness to refer to the valve",
+})
+
+
 @dataclass(frozen=True, eq=False)
 class Event(Mapping):
     """One instant of a run that an effect reports: what happened (`kind`), when (`time_s` within
@@ -64,6 +74,7 @@ class Event(Mapping):
         return isinstance(other, Mapping) and self.as_dict() == dict(other)
 
     __hash__ = None  # type: ignore[assignment]
+
 
 
 @dataclass(frozen=True)

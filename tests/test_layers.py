@@ -16,6 +16,7 @@ bottom up:
                effects) and their table
     scene      scene files -> validated, frozen Scene; built-in scenes; section parsers
     view | studies   3D parts (the gears' views), browser, rerun  |  bench, sweeps, studies
+    checks     design rules over the operating range and the tolerances (runs the sweep engine)
     cli        the `explorer` command
 
 view and studies stand side by side: neither imports the other. The package's own __init__ (the
@@ -40,6 +41,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("gears",),
     ("scene",),
     ("view", "studies"),
+    ("checks",),
     ("cli",),
     ("__init__", "__main__"),
 )

@@ -286,7 +286,8 @@ def test_latch_force_and_torque_by_hand_at_grid_angles(full):
     """In the carried window the forces effect's latch force is M w^2 X'' + F0 + k s + D + R and the
     camshaft torque F dX/dtheta (power balance T w = F v); outside it the latch carries nothing:
     force and torque 0, the spring force follows the valve, the required spring force and margin
-    are the seat's while shut and NaN while the valve closes freely. Rounding only: rel 1e-12."""
+    are the seat's while shut and Trinks' closing force while the valve closes freely (issue #22
+    item 4: it was NaN there). Rounding only: rel 1e-12."""
     scene, result = full
     w = scene.omega
     c = result.columns
@@ -311,8 +312,43 @@ def test_latch_force_and_torque_by_hand_at_grid_angles(full):
     free = np.nonzero((deg >= 100.0) & (np.asarray(c["rigid_valve_lift_m"]) > 0.0))[0]
     assert free.size > 50
     assert np.all(c["contact_force_N"][free] == 0.0) and np.all(c["inertia_force_N"][free] == 0.0)
-    assert np.all(np.isnan(c["required_spring_force_N"][free])) and np.all(np.isnan(c["spring_margin_N"][free]))
+    # released: the force that closes the valve from the lift at the trip (100 deg) in the wanted 30 ms,
+    # Trinks' P_f = M p + R - W with p = 2 s_trip / t^2, by hand from the scene's numbers
+    s_trip = E_LATCH * (1.0 - math.cos(math.radians(100.0))) - S_O
+    wanted = M * 2.0 * s_trip / 0.03**2 + R_FRIC - D_CLOSE
+    assert np.allclose(c["required_spring_force_N"][free], wanted, rtol=1e-12, atol=0.0)
+    assert np.allclose(c["spring_margin_N"][free], c["spring_force_N"][free] - wanted, rtol=1e-12, atol=0.0)
     assert np.allclose(c["spring_force_N"][free], F0 + RATE * np.asarray(c["rigid_valve_lift_m"])[free], rtol=1e-14)
+    assert result.summary["min_spring_margin_N"] == pytest.approx(float(np.min(c["spring_margin_N"])), rel=1e-15)
+
+
+def test_free_closing_requirement_is_trinks_rule():
+    """Oracle: with the valve's weight as the only closing load, W = G_v = M g, the released valve's
+    required spring force is Trinks' P_f = (p/g - 1) G_v + W_s (seed 003) exactly, as the gear
+    summary gives it (same lift at the trip, same wanted time); without a wanted closing time it
+    is the limit t -> infinity, W_s - G_v: the spring must at least beat the friction the weight
+    leaves (else the released valve hangs open)."""
+    from explorer.effects.pipeline import simulate
+
+    weight = f'loads.closing.valve_weight="{M * TRINKS_G!r} N"'
+    for overrides, closing_time in (([weight], 0.03), ([weight, 'gear.trip.closing_time="45 ms"'], 0.045)):
+        result = simulate(load_scene(SCENE, overrides))
+        c, t = result.columns, result.summary["gear"]["trinks"]
+        free = (np.asarray(c["cam_angle_deg"]) >= 100.0) & (np.asarray(c["rigid_valve_lift_m"]) > 0.0)
+        p_f = trinks_closing_force(t["lift_m"], closing_time, M * TRINKS_G, R_FRIC)
+        assert t["closing_time_s"] == closing_time
+        assert np.allclose(c["required_spring_force_N"][free], p_f, rtol=1e-12, atol=1e-12)
+    import tomllib
+
+    from explorer.scene.scene import scene_from_dict
+
+    data = tomllib.loads(SCENE.read_text())
+    del data["gear"]["trip"]["closing_time"]
+    data["loads"]["closing"]["valve_weight"] = f"{M * TRINKS_G!r} N"
+    c = simulate(scene_from_dict(data, str(SCENE))).columns
+    free = (np.asarray(c["cam_angle_deg"]) >= 100.0) & (np.asarray(c["rigid_valve_lift_m"]) > 0.0)
+    assert np.allclose(c["required_spring_force_N"][free], R_FRIC - M * TRINKS_G, rtol=1e-12, atol=1e-12)
+    assert not np.any(np.isnan(c["required_spring_force_N"])) and not np.any(np.isnan(c["spring_margin_N"]))
 
 
 def test_latch_force_extremes_and_throw_off_speed_by_hand(full):

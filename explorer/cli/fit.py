@@ -7,7 +7,7 @@ import json
 import math
 import sys
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..effects.context import sample_grid
 from ..gears.registry import GEARS
 
@@ -68,15 +68,14 @@ def register(sub) -> None:
 def _follower_type(path: str, overrides: list[str]):
     """follower.type as written (after --set), or None when the file cannot tell: then loading
     the scene reports what is wrong with it."""
-    import tomllib
-
     from ..scene.scene import apply_overrides
 
     from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
+    from ..core.reader import toml_loads
 
     try:
         text = read_regular(path, file=path, key="-", limit=MAX_SCENE_FILE_BYTES).decode("utf-8")
-        data = apply_overrides(tomllib.loads(text), overrides, path)
+        data = apply_overrides(toml_loads(text, path), overrides, path)
         return data["follower"]["type"]
     except Exception:  # noqa: BLE001 - any failure here is load_scene's to report, with its key
         return None
@@ -90,7 +89,7 @@ def load_target_scene(args):
     fitters = [name for name, gear in GEARS.items() if gear.fits_target]
     if kind is not None and kind not in fitters:
         raise InputError(args.scene, "follower.type", f"explorer fit chooses a rocking cam's contour; this scene's "
-                         f"follower.type is {kind!r}, not " + " or ".join(f'"{t}"' for t in fitters))
+                         f"follower.type is {echo(kind)}, not " + " or ".join(f'"{t}"' for t in fitters))
     overrides = list(args.overrides)
     for key, value in (("lift", args.lift), ("open_angle", args.open_angle),
                        ("max_pressure_angle", args.max_pressure_angle)):

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..dynamics import solvers as registry
 from ..dynamics.chain import CHAIN_EVENT_KINDS, FRICTION_EVENT_KINDS, ChainModel, solid_travel
 from ..dynamics.model import Drive
@@ -35,7 +35,7 @@ def chain_solver(method: str, file: str):
     function = registry.solver(method).chain_function()
     if function is None:
         able = [name for name, info in registry.SOLVERS.items() if info.chain_entry]
-        raise InputError(file, "solver.method", f"{method!r} takes only the massless spring; with spring.elements > 0 "
+        raise InputError(file, "solver.method", f"{echo(method)} takes only the massless spring; with spring.elements > 0 "
                          f"use {' or '.join(map(repr, able))}")
     return function
 

@@ -51,10 +51,21 @@ def _residual_reference(shared, lift, ratio: float, lash: float, n: int):
     from .residual import dwell_sample, reference_lift
     from ..core.memo import remember
 
-    def make():
+    def base():  # what does not depend on the lash (a tolerance study draws a new lash every run)
         theta = np.arange(n) * (2.0 * math.pi / n)
         i = dwell_sample(lift, theta)
-        return np.ascontiguousarray(reference_lift(lift, ratio, lash, theta, 1)), (-1 if i is None else i)
+        if getattr(lift, "wanted_valve_lift", None) is not None:  # a polydyne's wanted lift: no lash in it
+            return np.ascontiguousarray(reference_lift(lift, ratio, lash, theta, 1)), (-1 if i is None else i), True
+        return lift.derivatives(theta)[:2] * ratio, (-1 if i is None else i), False
+
+    def make():
+        d, i, fixed = remember(shared.grids, ("residual", ratio, n), base)
+        if fixed:
+            return d, i
+        d = d.copy()  # reference_lift's arithmetic on its lift derivatives: the same floats
+        is_open = d[0] - lash > 0.0
+        d[0] -= lash
+        return np.ascontiguousarray(np.where(is_open, d, 0.0)), i
 
     return remember(shared.take_ups, ("residual", ratio, lash, n), make)
 
@@ -108,7 +119,6 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     raise: a speed beyond the step budget, a motion that does not settle), the runs on one grid
     in one compiled call (exact_kernel.revolutions: no Python per run but its scene's values)."""
     from .elastic import MAX_SOLVER_NODES
-    from ..mechanics.kinematics import lash_crossings
     from ..core.memo import remember
 
     lift = shared.lift
@@ -118,13 +128,14 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     failed = np.zeros(R, bool)
     params = np.empty((R, len(kernel.RUN_PARAMETERS)))
     groups: dict = {}
+    ups_of = _take_ups(scenes, shared)
     for r, scene in enumerate(scenes):
         v, sp, link = scene.valve, scene.spring, scene.linkage
         ratio, lash = scene.follower.ratio, v.lash
         omega = scene.drive.omega
         M1 = v.oscillating_mass if v.oscillating_mass is not None else v.mass
         closing = scene.loads.closing_total
-        ups = remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
+        ups = ups_of[(ratio, lash)]
         params[r] = (omega, v.mass, M1, link.stiffness, link.damping, lash, sp.preload + closing, sp.rate,
                      scene.loads.friction, scene.seat.restitution, sp.preload + closing,
                      ups[0] / omega if len(ups) else math.nan)
@@ -160,6 +171,33 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
             failed[m] = status[0] != kernel.OK
     figures[failed] = math.nan
     return figures, failed
+
+
+def _take_ups(scenes, shared) -> dict:
+    """{(ratio, lash): [first take-up angle]} of a chunk's runs, the lashes found together
+    (mechanics.kinematics.lash_take_ups: lash_crossings' root to brentq's tolerance): a tolerance
+    study's runs each draw their own lash, and one Brent search per lash cost ten times the
+    compiled revolution. Every lash takes this one search whatever else its chunk holds, so a table
+    does not depend on how it was cut into chunks (each lane of the search is elementwise)."""
+    from ..core.memo import remember
+    from ..mechanics.kinematics import lash_take_ups
+
+    out: dict = {}
+    wanted: dict[float, set] = {}
+    for scene in scenes:
+        ratio, lash = scene.follower.ratio, scene.valve.lash
+        cached = shared.take_ups.get(("batched", ratio, lash))
+        if cached is not None:
+            out[(ratio, lash)] = cached
+        else:
+            wanted.setdefault(ratio, set()).add(lash)
+    for ratio, lashes in wanted.items():
+        values = np.array(sorted(lashes))
+        for lash, up in zip(values.tolist(), lash_take_ups(shared.lift, ratio, values).tolist()):
+            ups = np.array([up]) if math.isfinite(up) else np.zeros(0)
+            out[(ratio, lash)] = ups
+            remember(shared.take_ups, ("batched", ratio, lash), lambda ups=ups: ups)
+    return out
 
 
 def kernel_outputs(scene, shared) -> tuple[list[dict], np.ndarray]:

@@ -43,7 +43,8 @@ def kinematics_effect(ctx) -> EffectOutput:
         "max_abs_valve_jerk_m_s3": float(np.abs(valve["valve_jerk_m_s3"]).max()),
         "valve_open_angle_deg": float(360.0 * np.count_nonzero(is_open) / is_open.size),
     }
-    # the gear's own figures (a translating roller's pressure angle and radii of curvature)
+    # the gear's own figures (a translating roller's pressure angle and radii of curvature; InputError
+    # when its cam fails the validity checks of every cam, explorer.lift.validity)
     gear_columns, gear_summary = ctx.gear.kinematics(ctx, d)
     columns.update(gear_columns)
     summary.update(gear_summary)

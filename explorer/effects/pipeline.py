@@ -22,16 +22,16 @@ import numpy as np
 
 from ..core import plugins
 from ..core.errors import InputError
-from ..result import EffectOutput, EffectTiming, Event, Result
+from ..result import NAN_MEANINGS, EffectOutput, EffectTiming, Event, Result
 from . import registry
 from .context import Context, sample_grid  # noqa: F401 (Context: the effects' API, imported from here too)
 from .lift import build_lift
 
 # Results are checked behind the valid ranges: NaN (inf - inf, 0 / 0: an overflow inside an
-# effect) is refused except in the columns that mark with NaN where they are not defined (no
-# contact, valve not carried); infinity is a result for forces (a self-locking cam needs an
-# infinite push), never for the motion.
-NAN_WHERE_UNDEFINED = frozenset({"valve_referred_stiffness_N_m", "required_spring_force_N", "spring_margin_N"})
+# effect) is refused except in the columns that mark with NaN where they are not defined, each with
+# its documented meaning (result.NAN_MEANINGS); infinity is a result for forces (a self-locking cam
+# needs an infinite push), never for the motion.
+NAN_WHERE_UNDEFINED = frozenset(NAN_MEANINGS)
 MOTION_PREFIXES = ("cam_angle", "time_", "follower_", "valve_lift", "valve_velocity", "valve_accel", "valve_jerk",
                    "rigid_valve_")
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Callable, Mapping
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.reader import Table
 from ..lift.registry import law_spec, scene_lift
 
@@ -79,9 +79,13 @@ class Gear:
     9. Give the cam to make, if it has one: `cam_profile(scene, lift)` -> a CamProfile
        (explorer.lift.contours.cam_profile: contour, pitch, normal, curvatures at any cam angle)
        for the exports (point table, DXF, STL/GLB, grinding table); None: nothing to export.
-    10. Say how sweeps run it: `batch_sweeps` when the runs of a sweep (speed, masses, springs,
-        lash, linkage) share one lift and the generic effects (the batched and compiled engines,
-        checked against simulate); else every run is `simulate` whole.
+    10. Say how sweeps run it: `lift_reads(scene)`, the sweep keys
+        (explorer.studies.sweep_spec.SWEEP_KEYS) whose values `build_lift` reads -- () when none
+        (the default: the cam's or the geometry's alone), None when it may read any (the speed,
+        the train's loads). A gear without variants of effects whose lift reads none shares one
+        lift across a sweep's runs (`shares_lift`: the sweep engine's figures-only path, and the
+        design checks); `batch_sweeps` when, beyond that, the compiled batch path and the residual
+        sweep take its runs (a constant ratio to the valve); else every run is `simulate` whole.
     11. Import only from its own layer and below (core ... effects): names of view, studies or cli
         never appear in it; heavy or optional packages (scipy, numba) only inside functions.
     """
@@ -174,7 +178,7 @@ class Gear:
 
     def contact_geometry(self, ctx):
         """The ContactGeometry of the contact statics over ctx.theta."""
-        raise InputError(ctx.scene.source, "follower.type", f"effect 'contact' does not model follower type {self.type!r}")
+        raise InputError(ctx.scene.source, "follower.type", f"effect 'contact' does not model follower type {echo(self.type)}")
 
     def contact_figures(self, ctx, geometry, columns) -> tuple[dict, dict]:
         """(columns, summary) the contact effect adds after its own (`columns`: those so far)."""
@@ -185,7 +189,7 @@ class Gear:
         if "contact" in self.effects:  # its own statics
             return
         if type(self).contact_geometry is Gear.contact_geometry:
-            raise InputError(file, "follower.type", f"effect 'contact' does not model follower type {self.type!r}")
+            raise InputError(file, "follower.type", f"effect 'contact' does not model follower type {echo(self.type)}")
         if self.contact_roller and follower.roller_radius <= 0.0:
             raise InputError(file, "follower.roller_radius",
                              "effect 'contact' needs a roller (roller_radius > 0) for the Hertz stress and the width rule")
@@ -204,6 +208,15 @@ class Gear:
     def cam_profile(self, scene, lift=None):
         """Its cam for the exports (a CamProfile), or None when it has none to make."""
         return None
+
+    # -- 10. sweeps ---------------------------------------------------------------------------
+    def lift_reads(self, scene) -> tuple[str, ...] | None:
+        """The sweep keys whose values build_lift reads for this scene: () none, None any."""
+        return ()
+
+    def shares_lift(self, scene) -> bool:
+        """True when a sweep's runs share one lift curve and the generic effects."""
+        return not self.effects and self.lift_reads(scene) == ()
 
     # -- explorer fit --------------------------------------------------------------------------
     def fit(self, scene, theta) -> tuple[dict, list[str]]:

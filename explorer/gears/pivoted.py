@@ -160,17 +160,16 @@ class PivotedRollerGear:
 
     # -- checks -----------------------------------------------------------------------------
     def check(self, n: int = 1440) -> "LeverGeometry":
+        from ..lift.validity import cam_fault, entered_error
+
         theta = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
         g = self.geometry(theta)
         r = self.roller_radius
-        bad = (g.pitch_radius > 0.0) & (g.pitch_radius <= r)
-        if np.any(bad):
-            i = int(np.argmin(np.where(bad, g.pitch_radius, np.inf)))
-            raise InputError(
-                self.file, "follower.roller_radius",
-                f"undercut: roller radius {r * 1e3:.4g} mm exceeds the convex pitch-curve radius "
-                f"{g.pitch_radius[i] * 1e3:.4g} mm at cam angle {math.degrees(theta[i]):.2f} deg",
-            )
+        # the checks every cam passes (explorer.lift.validity): the valve-referred lift, the
+        # pressure angle at the roller and the undercut of the cam this lever needs
+        fault = cam_fault(theta, g.lift, pressure_angle=g.pressure_angle, pitch_radius=g.pitch_radius, roller_radius=r)
+        if fault is not None:
+            raise entered_error(fault, self.file)
         outer = float(np.max(np.hypot(g.contour[:, 0], g.contour[:, 1])))
         if math.hypot(*self.pivot) <= outer:
             raise InputError(self.file, "gear.lever.pivot", "the lever pivot lies inside the cam's sweep (cam nose radius "

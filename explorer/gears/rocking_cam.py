@@ -28,13 +28,14 @@ import numpy as np
 from ..core.errors import InputError
 from ..core.reader import Table
 from ..lift.registry import closed_form_names
+from ..lift.validity import cam_fault, entered_error
 from ..mechanics.kinematics import lash_crossings
 from ..result import EffectOutput
 from .base import Gear
 from .common import (SENSES, LeverContact, eccentric_keys, lever_keys, make_eccentric, make_valve_drive, section,
                      spec_of, valve_keys)
 from .linkage import side_sign
-from .rocking import RockingContour, build_rocking_gear, fit_target, swing_increments, target_report
+from .rocking import RockingContour, build_rocking_gear, check_one_turn, fit_target, swing_increments, target_report
 
 TWO_PI = 2.0 * math.pi
 
@@ -49,6 +50,7 @@ def rocking_cam_keys(t: Table) -> dict:
         "law": t.string("law", "cycloidal", choices=closed_form_names()),
         "opens": t.string("opens", "ccw", choices=SENSES),
     }
+    check_one_turn(out["lift_start"], out["flank"], t.file)
     return out
 
 
@@ -124,22 +126,28 @@ def rocking_target(spec, source):
         fitted = make_rocking_gear(spec, source, lift_start=fit.lift_start, rise=fit.rise)
     except InputError as exc:
         raise InputError(spec.file, "gear.target", f"the fitted contour (lift_start "
-                         f"{math.degrees(fit.lift_start):.4g} deg, rise {fit.rise * 1e3:.4g} mm) fails: {exc.reason}") from None
+                         f"{math.degrees(fit.lift_start):.4g} deg, rise {fit.rise * 1e3:.4g} mm) fails: {exc.reason}; "
+                         "for this target lower gear.target.lift, lengthen gear.target.open_angle or give a longer "
+                         "gear.rocking_cam.flank") from None
     return given, fit, fitted
 
 
 def check_rocking_contour(gear, n: int = 721) -> None:
-    """Undercut of the rocking cam: a convex stretch of the pitch curve sharper than the roller."""
+    """The checks every cam passes (explorer.lift.validity), on the rocking cam as written or as
+    fitted: its valve-referred lift over the shaft's turn (finite, in range), the pressure angle at
+    the roller, and undercut -- a convex stretch of the flank's pitch curve sharper than the roller."""
     c = gear.contour
     w = np.linspace(c.lift_start, c.lift_start + c.flank, n)
     curvature = c.pitch_curvature(c.reference - c.sense * w)
     with np.errstate(divide="ignore"):
         radius = 1.0 / curvature
-    bad = (radius > 0.0) & (radius <= gear.roller_radius)
-    if np.any(bad):
-        raise InputError(gear.file, "follower.roller_radius",
-                         f"undercut: the rocking cam's flank is sharper ({np.min(radius[bad]) * 1e3:.4g} mm) than the roller")
-    gear.lift_jet(np.linspace(0.0, TWO_PI, 721))  # the roller keeps the cam all round
+    theta = np.linspace(0.0, TWO_PI, 721)
+    lift = gear.lift_jet(theta).c  # the roller keeps the cam all round (else the gear raises)
+    fault = cam_fault(theta, lift, pressure_angle=gear.contact_details(theta)["pressure_angle"], pitch_radius=radius,
+                      roller_radius=gear.roller_radius, curvature_angle=w, where="shaft angle {}",
+                      curvature_where="flank angle {}")
+    if fault is not None:
+        raise entered_error(fault, gear.file)
 
 
 def symmetry_report(scene, lift) -> dict:
@@ -208,6 +216,15 @@ class RockingCam(LeverContact, Gear):
             return rocking_target(spec, source)[2]
         return make_rocking_gear(spec, source)
 
+    def lift_reads(self, scene) -> tuple[str, ...]:
+        """None of the sweep keys for a contour as written (its geometry alone makes the lift); the
+        lash for one fitted to [gear.target] (the fit is to the valve's lift after the lash:
+        rocking_target)."""
+        spec = scene.gear
+        if "target" in spec.parts and spec.part("target")["use"] == "fitted":
+            return ("valve.lash",)
+        return ()
+
     def build_lift(self, scene) -> RockingLift:
         gear = self.make(spec_of(self, scene), scene)
         return RockingLift(gear, tuple(gear.flank_angles()))
@@ -257,6 +274,7 @@ class RockingCam(LeverContact, Gear):
         given, fit, fitted = rocking_target(spec, scene)
         lash = scene.valve.lash if scene.valve is not None else 0.0
         return target_report(given, fit, fitted, spec.part("target"), spec.part("rocking_cam"), lash, theta)
+
 
 
 GEAR = RockingCam()

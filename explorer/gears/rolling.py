@@ -31,7 +31,7 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
+from ..core.roots import root_in
 
 from ..core.errors import InputError
 from ..mechanics.contact import ContactGeometry
@@ -109,8 +109,8 @@ class RollingLeverGear:
         w = self.rolling_swing(grid).c[0]
         out = []
         for i in np.nonzero(np.sign(w[:-1]) * np.sign(w[1:]) < 0)[0]:
-            out.append(brentq(lambda t: float(self.rolling_swing(np.array([t])).c[0][0]), grid[i], grid[i + 1],
-                              xtol=1e-15, rtol=1e-15))
+            out.append(root_in(lambda t: float(self.rolling_swing(np.array([t])).c[0][0]), grid[i], grid[i + 1],
+                               fa=w[i], fb=w[i + 1], xtol=1e-15, rtol=1e-15))
         return np.unique(np.mod(out, TWO_PI))
 
     def faces(self, n: int = 200):

@@ -6,7 +6,7 @@ names no other.
 Its keys are the [follower] section's own (base_radius, roller_radius, offset, ratio); it takes
 every lift law with a builder or a closed form, and the analysis of a [cam] contour. Its figures:
 pressure angle and radii of curvature in the kinematics (closed forms of
-explorer.lift.contours.translating, with the undercut check), the contact statics of the roller on
+explorer.lift.contours.translating, with the validity checks of explorer.lift.validity), the contact statics of the roller on
 the cam, and the cam to make (exports).
 """
 
@@ -57,8 +57,10 @@ class TranslatingRoller(Gear):
         return scene_lift(scene)
 
     def kinematics(self, ctx, d) -> tuple[dict, dict]:
-        """Pressure angle and radii of curvature (closed forms); InputError on undercut."""
-        return resolve(_GEOMETRY_COLUMNS)(ctx.scene, ctx.theta, d)
+        """Pressure angle and radii of curvature (closed forms); InputError when the cam fails the
+        validity checks of every cam (explorer.lift.validity: finite, lift range, pressure angle,
+        undercut; a measured table's lift may dip below the base circle by its `dip_allowance`)."""
+        return resolve(_GEOMETRY_COLUMNS)(ctx.scene, ctx.theta, d, getattr(ctx.lift, "dip_allowance", 0.0))
 
     def contact_geometry(self, ctx) -> ContactGeometry:
         """The kinematics' geometry columns when the cam provides them, otherwise the exact closed

@@ -182,6 +182,11 @@ class TripGear(Gear):
     def build_lift(self, scene):
         return self.make(spec_of(self, scene), scene)
 
+    def lift_reads(self, scene) -> None:
+        """Its lift is the valve's free closing after the trip: it reads the speed, the masses, the
+        spring, the loads and the lash -- any sweep key."""
+        return None
+
     def report(self, ctx) -> EffectOutput:
         """Latch lift and force, buffer, the closing, the pick-up impact, Trinks' rule, the buffers compared."""
         lift = ctx.lift if hasattr(ctx.lift, "closing") else self.build_lift(ctx.scene)

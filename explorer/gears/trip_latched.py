@@ -34,7 +34,14 @@ forces   Over the carried window the latch transmits
          Outside the window the latch force, its inertia and friction parts and the torque are 0
          (nothing transmitted - as forces.rigid_train_forces reports a seated valve); the spring
          force follows the valve; the required spring force and the margin are the seat's while
-         the valve is shut and NaN while it closes freely (no latch to stay on).
+         the valve is shut (-W: hold it down against the closing loads) and, while it closes
+         freely (no latch to stay on), the spring force that closes it: Trinks' rule (seed 003)
+         P_f = (p/g - 1) G_v + W_s = M p - W + R with p = 2 s_trip / t^2 for the wanted closing
+         time t = [gear.trip] closing_time from the lift at the trip (explorer.mechanics.springs.
+         trinks_closing_force; here with every closing load W, not the valve's weight alone), and
+         without a wanted time its limit t -> infinity, R - W: the spring must at least overcome
+         the friction beyond the closing loads, or the valve hangs open (the closing model refuses
+         such a scene). No NaN: every sample has a requirement.
 contact  No cam surface: the latch face bears on the spindle's catch (face square to the spindle).
          To trip, the governor-set trip gear pulls the latch out sideways against the friction
          mu F_trip ([gear.trip] latch_friction) and, over the engagement latch_depth d, does the
@@ -223,6 +230,17 @@ def loss_intervals(lift, loads, omega: float, pieces, n_grid: int = 4096) -> lis
 # --------------------------------------------------------------------------------------------
 
 
+def free_closing_requirement(scene, lift, loads) -> float:
+    """The spring force (N) the released valve needs: Trinks' rule P_f = M p + R - W (seed 003,
+    explorer.mechanics.springs.trinks_closing_force with every closing load W in the place of the
+    valve's weight G_v = M g) for closing from the lift at the trip within [gear.trip]
+    closing_time, p = 2 s_trip / t^2; without a wanted closing time its limit p -> 0, R - W."""
+    t_wanted = scene.gear.part("trip")["closing_time"]
+    s_trip = float(lift.latch.derivatives(np.array([lift.trip_angle]))[0, 0] - lift.overtravel)
+    p = 2.0 * s_trip / t_wanted**2 if t_wanted is not None else 0.0
+    return loads.mass * p + loads.friction - loads.closing
+
+
 def trip_forces_effect(ctx) -> EffectOutput:
     scene, w = ctx.scene, ctx.omega
     lift = trip_lift_of(ctx)
@@ -232,9 +250,10 @@ def trip_forces_effect(ctx) -> EffectOutput:
     on, force, torque = parts["carried"], parts["force"], parts["torque"]
     seated = ~on & (s <= 0.0)
     spring = loads.preload + loads.rate * s
-    # F = spring + inertia + friction + closing - B: the spring force that keeps F >= 0
+    # F = spring + inertia + friction + closing - B: the spring force that keeps F >= 0; seated: the
+    # force that holds the valve down; released: the force that closes it (free_closing_requirement)
     required = np.where(on, -(parts["inertia"] + parts["friction"] + loads.closing - parts["buffer"]),
-                        np.where(seated, -loads.closing, np.nan))
+                        np.where(seated, -loads.closing, free_closing_requirement(scene, lift, loads)))
     margin = spring - required
     columns = {
         "spring_force_N": spring,
@@ -297,7 +316,7 @@ def trip_forces_effect(ctx) -> EffectOutput:
         "max_contact_force_cam_angle_deg": math.degrees(th_max),
         "max_follower_force_N": f_max,
         "max_spring_force_N": float(spring.max()),
-        "min_spring_margin_N": float(np.nanmin(margin)),
+        "min_spring_margin_N": float(np.min(margin)),
         # the speed at which the latch's deceleration would throw the valve off before the trip
         # (spring and loads only: the buffer force depends on the speed through the pocket's flow)
         "jump_speed_rpm": jump.rpm if math.isfinite(jump.omega) else None,

@@ -59,7 +59,7 @@ from typing import Protocol
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.units import AT
 
 STEEL_E = 210e9  # Pa
@@ -91,10 +91,10 @@ def effective_modulus(e1: float, nu1: float, e2: float, nu2: float) -> float:
     """E* of two elastic bodies in contact: 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2."""
     for key, e, nu in (("youngs_modulus", e1, nu1), ("roller_youngs_modulus", e2, nu2)):
         if not (math.isfinite(e) and e > 0.0):
-            raise InputError("<arguments>", key, f"must be greater than zero, got {e!r}")
+            raise InputError("<arguments>", key, f"must be greater than zero, got {echo(e)}")
         if not (-1.0 < nu < 0.5):
             raise InputError("<arguments>", key.replace("youngs_modulus", "poisson_ratio"),
-                             f"must lie in (-1, 0.5), got {nu!r}")
+                             f"must lie in (-1, 0.5), got {echo(nu)}")
     return 1.0 / ((1.0 - nu1**2) / e1 + (1.0 - nu2**2) / e2)
 
 
@@ -153,7 +153,7 @@ def width_rule(roller_force: float, roller_diameter: float, k: float) -> float:
     if not roller_diameter > 0.0:
         raise InputError("<arguments>", "follower.roller_radius", "the width rule needs a roller (diameter > 0)")
     if not k > 0.0:
-        raise InputError("<arguments>", "contact.width_rule_k", f"must be greater than zero, got {k!r}")
+        raise InputError("<arguments>", "contact.width_rule_k", f"must be greater than zero, got {echo(k)}")
     return max(0.0, float(roller_force)) / (k * roller_diameter)
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.ranges import FRICTION_COEFFICIENT
 from ..gears.registry import gear
 from ..mechanics.contact import ALLOWABLE, STEEL_E, STEEL_NU, WIDTH_RULE_K, ContactSpec
@@ -34,7 +34,7 @@ def parse_contact_section(table, fields) -> ContactSpec:
     else:
         rho = table.quantity("friction_angle", "angle", 0.0)
         if not 0.0 <= rho < 0.5 * math.pi:
-            raise table.error("friction_angle", f"must lie in [0 deg, 90 deg), got {table.raw('friction_angle')!r}")
+            raise table.error("friction_angle", f"must lie in [0 deg, 90 deg), got {echo(table.raw('friction_angle'))}")
     e_cam = table.quantity("youngs_modulus", "pressure", STEEL_E, positive=True)
     nu_cam = table.number("poisson_ratio", STEEL_NU, minimum=-1.0, maximum=0.5, open_minimum=True, open_maximum=True)
     valve = table.string("valve", "exhaust", choices=tuple(WIDTH_RULE_K))

@@ -17,10 +17,10 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Mapping
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
 from ..core.plugins import resolve
-from ..core.reader import Table
+from ..core.reader import Table, toml_loads
 from ..dynamics import solvers
 from ..effects import registry as effect_table
 from ..gears import registry as gear_table
@@ -32,6 +32,8 @@ if TYPE_CHECKING:
     from ..lift.contours.spec import CamSpec
     from ..mechanics.contact import ContactSpec
     from ..mechanics.springs import SpringDesign
+    from ..mechanics.tribology import LubricantSpec
+    from .checks_section import ChecksSpec
 
 MIN_STEPS = 36
 # Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
@@ -48,12 +50,17 @@ OWNED_SECTIONS: dict[str, str] = {
     "cam": "explorer.lift.contours.spec:parse_cam_section",
     "contact": "explorer.scene.contact_section:parse_contact_section",
     "spring_design": "explorer.mechanics.springs:parse_spring_design_section",
+    "lubricant": "explorer.mechanics.tribology:parse_lubricant_section",
+    "checks": "explorer.scene.checks_section:parse_checks_section",
 }
 # what a section needs, for the message when an effect requires a scene without it
 SECTION_KEYS = {"valve": "mass", "spring": "preload and rate", "linkage": "stiffness"}
+
+
 @dataclass(frozen=True)
 class Drive:
     rpm: float  # rev/min, > 0
+    operating_range: tuple[float, float] | None = None  # rev/min, lowest and highest (explorer check)
 
     @property
     def omega(self) -> float:
@@ -100,6 +107,10 @@ class Spring:
     damping_ratio: float = 0.0
     free_length: float | None = None  # m
     solid_height: float | None = None  # m
+    # the wire geometry when the scene gives it (the design rules' stresses: explorer.checks)
+    wire_diameter: float | None = None  # m
+    coil_diameter: float | None = None  # m, mean
+    active_coils: float | None = None
 
 
 @dataclass(frozen=True)
@@ -152,6 +163,8 @@ class Scene:
     cam: CamSpec | None = None  # owned by explorer.lift.contours.spec
     contact: ContactSpec | None = None  # owned by explorer.scene.contact_section
     spring_design: SpringDesign | None = None  # owned by explorer.mechanics.springs (advice and historic rules)
+    lubricant: LubricantSpec | None = None  # owned by explorer.mechanics.tribology (the design rules' film and flash temperature)
+    checks: ChecksSpec | None = None  # owned by explorer.scene.checks_section (design-rule settings, read by explorer.checks)
     gear: GearSpec | None = None  # the [gear] section, owned by the follower's gear
 
     @property
@@ -207,7 +220,7 @@ def loads_scene(text: str, source: str = "<memory>", overrides=()) -> Scene:
 
 def _toml_data(text: str, source: str, overrides) -> dict:
     try:
-        data = tomllib.loads(text)
+        data = toml_loads(text, source)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(source, "-", f"malformed TOML: {_first_line(str(exc))}") from None
     except RecursionError:
@@ -249,7 +262,7 @@ def apply_overrides(data: dict, overrides, file: str) -> dict:
         if len(parts) > MAX_NESTING:
             raise InputError(file, dotted[:60], f"override key nested too deeply (at most {MAX_NESTING} levels)")
         try:
-            value = tomllib.loads(f"v = {text}")["v"]
+            value = toml_loads(f"v = {text}", file, dotted)["v"]
         except tomllib.TOMLDecodeError:
             value = text.strip()
         except RecursionError:
@@ -279,20 +292,20 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
         raise top.error("effects", "expected a list of effect names, such as [\"kinematics\", \"lash\"]")
     for effect in effects_raw:
         if effect not in effect_table.EFFECTS:
-            raise top.error("effects", f"unknown effect {effect!r}; known: {', '.join(effect_table.names())}")
+            raise top.error("effects", f"unknown effect {echo(effect)}; known: {', '.join(effect_table.names())}")
     effects = tuple(dict.fromkeys(effects_raw))
     if not effects:
         raise top.error("effects", "list at least one effect")
 
     drive_t = top.table("drive")
-    drive_t.reject_unknown(("rpm",))
+    drive_t.reject_unknown(("rpm", "operating_range"))
     rpm_si = drive_t.quantity("rpm", "speed", positive=True)
     raw_rpm = drive_t.raw("rpm")
     # a bare number is rev/min already: keep it exact rather than round-tripping through rad/s
     rpm = float(raw_rpm) if isinstance(raw_rpm, (int, float)) else rpm_si * 60.0 / (2.0 * math.pi)
     if rpm > MAX_RPM:
-        raise drive_t.error("rpm", f"more than {MAX_RPM:g} rpm is outside any valve gear, got {raw_rpm!r}")
-    drive = Drive(rpm=rpm)
+        raise drive_t.error("rpm", f"more than {MAX_RPM:g} rpm is outside any valve gear, got {echo(raw_rpm)}")
+    drive = Drive(rpm=rpm, operating_range=_operating_range(drive_t))
 
     follower = _parse_follower(top.table("follower", required=False), file)
     lift = _parse_lift(top.table("lift"), file)
@@ -342,6 +355,24 @@ def _parse_gear(table: Table | None, fields: dict) -> GearSpec | None:
     return gear.parse(table, fields)
 
 
+def _operating_range(t: Table) -> tuple[float, float] | None:
+    """[drive] operating_range = [LOWEST, HIGHEST] speeds (bare numbers rev/min), or None."""
+    if not t.has("operating_range"):
+        return None
+    raw = t.raw("operating_range")
+    if not isinstance(raw, list) or len(raw) != 2:
+        raise t.error("operating_range", "expected [LOWEST, HIGHEST], such as [\"800 rpm\", \"6500 rpm\"]")
+    ends = []
+    for i, value in enumerate(raw):
+        item = Table({"v": value}, t.file, t.key(f"operating_range[{i}]"))
+        si = item.quantity("v", "speed", positive=True)
+        ends.append(float(value) if isinstance(value, (int, float)) and not isinstance(value, bool)
+                    else float(f"{si * 60.0 / (2.0 * math.pi):.12g}"))  # "800 rpm" is 800, not 799.99...
+    if not ends[0] < ends[1] <= MAX_RPM:
+        raise t.error("operating_range", f"needs LOWEST < HIGHEST <= {MAX_RPM:g} rpm, got {raw!r}")
+    return ends[0], ends[1]
+
+
 def _parse_follower(t: Table | None, file: str) -> Follower:
     if t is None:
         return Follower()
@@ -371,7 +402,7 @@ def _parse_lift(t: Table, file: str) -> LiftSpec:
     if not 0.0 <= start < 2.0 * math.pi:
         raise t.error("start", "must lie in [0 deg, 360 deg)")
     if height > MAX_LIFT:
-        raise t.error("height", f"more than {MAX_LIFT:g} m of lift is outside any valve gear, got {t.raw('height')!r}")
+        raise t.error("height", f"more than {MAX_LIFT:g} m of lift is outside any valve gear, got {echo(t.raw('height'))}")
     rise = t.quantity("rise", "angle", positive=True) if shaped else t.quantity("rise", "angle", 0.0, nonnegative=True)
     dwell = t.quantity("dwell", "angle", 0.0, nonnegative=True)
     ret = t.quantity("return", "angle", rise, positive=True) if shaped else t.quantity("return", "angle", 0.0, nonnegative=True)
@@ -409,6 +440,7 @@ def _parse_spring(t: Table | None) -> Spring | None:
     preload = t.quantity("preload", "force", nonnegative=True)
     geometry = [name for name in SPRING_GEOMETRY if t.has(name)]
     rate = mass = None
+    d = D = n = None
     if geometry:
         missing = [name for name in SPRING_GEOMETRY if not t.has(name)]
         if missing:
@@ -436,7 +468,7 @@ def _parse_spring(t: Table | None) -> Spring | None:
     return Spring(
         preload=preload, rate=rate, mass=mass, elements=elements,
         damping_ratio=t.number("damping_ratio", 0.0, minimum=0.0, maximum=1.0, open_maximum=True),
-        free_length=free, solid_height=solid,
+        free_length=free, solid_height=solid, wire_diameter=d, coil_diameter=D, active_coils=n,
     )
 
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..effects.lift import build_lift
 from ..gears.registry import GEARS
 from ..lift.polydyne import RISE_POLYNOMIALS, residual_amplitude
@@ -154,21 +154,14 @@ def chart_png(scene, table) -> bytes:
 
 
 def parse_speeds(text: str) -> np.ndarray:
-    """'A:B:N' (N speeds from A to B rpm) or 'A,B,C'."""
-    key = "--rpm"
-    try:
-        if ":" in text:
-            a, b, n = text.split(":")
-            lo, hi, count = float(a), float(b), int(n)
-            if not 1 <= count <= MAX_SPEEDS:
-                raise InputError("<command line>", key, f"between 1 and {MAX_SPEEDS} speeds, got {count}")
-            speeds = np.linspace(lo, hi, count)
-        else:
-            speeds = np.array([float(x) for x in text.split(",")])
-    except ValueError:
-        raise InputError("<command line>", key, f"expected A:B:N or A,B,C in rpm, got {text[:40]!r}") from None
-    if speeds.size > MAX_SPEEDS:
-        raise InputError("<command line>", key, f"at most {MAX_SPEEDS} speeds, got {speeds.size}")
-    if not np.all(np.isfinite(speeds)) or np.any(speeds <= 0.0) or np.any(speeds > 100_000.0):
-        raise InputError("<command line>", key, "speeds must lie in (0, 100000] rpm")
+    """--rpm in the range grammar of every command (explorer.core.grids, as `explorer sweep
+    --vary drive.rpm=...`): 'A:B:N' (N speeds from A to B, upwards), 'A:B:N:log' or 'A,B,C';
+    bare numbers in rev/min, or with a unit; each speed in drive.rpm's valid range."""
+    from ..core import grids
+    from .sweep_spec import SWEEP_KEYS, check_values, quantity
+
+    info, key = SWEEP_KEYS["drive.rpm"], "--rpm"
+    shape = grids.read(text, file=key, key=info.key, max_points=MAX_SPEEDS)
+    speeds = grids.values(shape, lambda value: quantity(value, info, key), file=key, key=info.key)
+    check_values(info, speeds, key)
     return speeds

@@ -5,8 +5,11 @@ effect's row function (explorer/effects/registry.py: sweep_figures and row). The
 the same figures without the parts of `simulate` that no row needs, and shares across runs
 everything that does not depend on the varied values:
 
-- the lift curve (built once: the cam is the same in every run, for the gears whose runs share it,
-  Gear.batch_sweeps; the others' runs go through `simulate` whole -- correct, and as slow as a loop);
+- the lift curve (built once: the cam is the same in every run, and so is a gear's lift when it
+  reads none of the run's values and the gear brings no effect of its own, Gear.shares_lift; for a
+  gear whose lift does (the trip gear's closing, a rocking cam fitted to its target after the lash)
+  or that brings its own effects (the trip gear's), each run goes through `simulate` whole --
+  correct, and as slow as a loop);
 - what the effects' figures-only forms keep across runs (the pipeline's `figures` run: the rigid
   float speed and the smooth pieces of the lift, per distinct lash, masses and loads; the lash
   take-up angles per lash); what no row holds (the forces' side figures, the loss intervals) is not
@@ -15,13 +18,15 @@ everything that does not depend on the varied values:
 Which engine computes a chunk's rows is a table (ENGINES, the first that accepts the scene):
 - "compiled" (effects/elastic_batch.py): the elastic figures from the solver's compiled batch module
   (explorer/dynamics/solvers.py: batch_entry, the exact solver's exact_kernel), for the scenes whose
-  elastic effect solves the LinkageModel with that solver and a constant stiffness and whose every
-  figure it computes; equal to simulate's within 1e-12 m of lift, 1e-12 s of event time and ~1e-9
-  relative of a figure (rounding of another order of the same operations; tests/test_sweep_kernel.py);
+  gear takes batches (Gear.batch_sweeps), whose elastic effect solves the LinkageModel with that
+  solver and a constant stiffness and whose every figure it computes; equal to simulate's within
+  1e-12 m of lift, 1e-12 s of event time and ~1e-9 relative of a figure (rounding of another order of
+  the same operations; tests/test_sweep_kernel.py);
 - "shared": the pipeline's figures-only run (effects/pipeline.figures), each row equal to simulate's
   to the bit (tests/test_sweep_engine.py), for the other scenes whose runs share a lift (a spring
-  chain, another solver, an effect of the table that the compiled path does not know);
-- "simulate": simulate whole (the gears whose runs do not share a lift).
+  chain, another solver, a lever gear, an effect of the table that the compiled path does not know);
+- "simulate": simulate whole (the gears whose lift reads the run's values or whose effects are their
+  own).
 
 Columns (SI units in the names, as in `simulate`'s CSV), by effect:
   forces   min_contact_force_N (rigid, refined), float_speed_rpm (rigid; NaN: never floats)
@@ -88,8 +93,9 @@ class _Shared(RunCache, BatchCache):
 
 
 def _batchable(scene) -> bool:
-    """True when the runs share one lift curve and the generic effects (the scene's gear says)."""
-    return scene.gear_plugin.batch_sweeps
+    """True when the runs share one lift curve and the generic effects (the scene's gear says:
+    Gear.shares_lift -- no variant of an effect, a lift that reads none of the sweep keys)."""
+    return scene.gear_plugin.shares_lift(scene)
 
 
 def engine_row(scene, names, shared: _Shared) -> dict[str, float]:
@@ -184,7 +190,7 @@ ENGINES: tuple[RowEngine, ...] = (
     RowEngine("compiled", _kernel_accepts, _kernel_row, _kernel_chunk, pool_min_runs=10_000, max_chunk=4096),
     # the effects' own functions, sharing the lift and the rigid float speed across runs
     RowEngine("shared", lambda scene, shared: _batchable(scene), engine_row),
-    # simulate itself (the gears, whose lift or effects are their own)
+    # simulate itself (the gears whose lift reads the run's values or whose effects are their own)
     RowEngine("simulate", lambda scene, shared: True, lambda scene, names, shared: reference_row(scene, names)),
 )
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..effects.lift import build_lift
 from ..gears.base import Gear
 from ..gears.registry import GEARS
@@ -44,12 +44,12 @@ MIN_POINTS, MAX_POINTS = 8, 1_000_000
 
 def cam_source(scene, lift=None) -> CamProfile:
     """The scene's cam (its gear's cam_profile); InputError for a gear that has no cam to make, and
-    for an undercut cam (its contour folds: nothing to make)."""
+    for a cam that fails the validity checks of every cam (an undercut one folds: nothing to make)."""
     profile = scene.gear_plugin.cam_profile(scene, lift if lift is not None else build_lift(scene))
     if profile is None:
         makers = [name for name, gear in GEARS.items() if type(gear).cam_profile is not Gear.cam_profile]
         raise InputError(scene.source, "follower.type",
-                         f"exports are for {', '.join(makers)} cams; this scene's follower is {scene.follower.type!r}")
+                         f"exports are for {', '.join(makers)} cams; this scene's follower is {echo(scene.follower.type)}")
     return profile
 
 

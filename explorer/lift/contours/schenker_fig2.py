@@ -141,7 +141,7 @@ def lift_of(design: Design):
 
 def _inflection(lift, k: int) -> float | None:
     """Cam angle inside arc k where L'' changes sign (the inflection of the lift), if any."""
-    from scipy.optimize import brentq
+    from ...core.roots import root_in
 
     a = float(lift.junction_angles[k])
     b = a + float(np.mod(lift.junction_angles[(k + 1) % lift.contour.n] - a, 2.0 * math.pi))
@@ -149,7 +149,7 @@ def _inflection(lift, k: int) -> float | None:
     fa, fb = f(a), f(b)
     if not fa > 0.0 > fb:
         return None
-    return brentq(f, a, b, xtol=1e-15)
+    return root_in(f, a, b, fa=fa, fb=fb, xtol=1e-15)
 
 
 def figures(design: Design, lift=None, steps: int = 36000) -> dict:
