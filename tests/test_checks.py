@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 import math
-from types import MappingProxyType
 
 import numpy as np
 import pytest
@@ -19,7 +18,7 @@ from scipy.optimize import brentq
 
 import explorer
 from explorer import load_scene, loads_scene
-from explorer.checks import contacts as contacts_module
+from explorer.gears.translating_roller import TranslatingRoller
 from explorer.checks.registry import RULES, RPM
 from explorer.core.errors import InputError
 
@@ -155,8 +154,8 @@ def flat_face(scene, lift, theta):
 
 @pytest.fixture
 def flat(monkeypatch):
-    monkeypatch.setattr(contacts_module, "CONTACTS", MappingProxyType({
-        **contacts_module.CONTACTS, "translating-roller": flat_face}))
+    # the translating roller's contact for the rules replaced by the flat face's (Gear.cam_contact)
+    monkeypatch.setattr(TranslatingRoller, "cam_contact", lambda self, scene, lift, theta: flat_face(scene, lift, theta))
     yield
 
 
@@ -462,7 +461,7 @@ def test_gear_surface_motion_against_the_contact_path(path, frame):
     case = Case(s, [s.drive.rpm])
     gear = case.lift.gear
     theta = np.linspace(0.0, 2 * math.pi, 97, endpoint=False) + 0.013
-    motion = contacts_module.gear_contact(s, case.lift, theta).motion
+    motion = s.gear_plugin.cam_contact(s, case.lift, theta).motion
     h = 1e-6
 
     def path_point(t):

@@ -8,7 +8,7 @@ in every run, so the lift and the gear's contact geometry are computed once.
 
 Shared quantities:
 - the lift L(theta) and its derivatives on the scene's grid (steps_per_revolution angles);
-- the gear's contact (explorer.mechanics.gear_contact.GearContact, from contacts.py's table);
+- the gear's contact (explorer.mechanics.gear_contact.GearContact, from the gear: Gear.cam_contact);
 - the rigid contact force F = w^2 A(theta) + G(theta) of every run (explorer.mechanics.forces:
   A = M ratio L'', G = preload + rate s + R sgn v + closing, on the open samples) and the normal
   force on the cam N = F ratio_g / (cos a - mu sin|a| sgn v) of the contact statics, in blocks of
@@ -112,10 +112,8 @@ class Case:
 
     @cached_property
     def _contact(self):
-        from .contacts import gear_contact
-
         try:
-            return gear_contact(self.scene, self.lift, self.theta)
+            return self.scene.gear_plugin.cam_contact(self.scene, self.lift, self.theta)
         except NotApplicable as exc:
             return exc
 

@@ -7,11 +7,11 @@ Import-light: names and numbers only; a rule's measure is imported when a design
 
 from __future__ import annotations
 
-import importlib
 import math
 from types import MappingProxyType
 from typing import Mapping
 
+from ..core.plugins import resolve
 from .rule import Rule, RuleSpec, Setting  # noqa: F401 (Rule: the type measure_function returns)
 
 _R = "explorer.checks.rules"
@@ -192,8 +192,7 @@ def rule(name: str) -> RuleSpec:
 
 
 def measure_function(spec: RuleSpec) -> "Rule":
-    module, _, attr = spec.measure.partition(":")
-    return getattr(importlib.import_module(module), attr)
+    return resolve(spec.measure)  # the one resolver of plug-in references (explorer.core.plugins)
 
 
 def show(value, unit: str) -> float:

@@ -16,6 +16,7 @@ from typing import Any, Callable, Mapping
 from ..core.errors import InputError, echo
 from ..core.reader import Table
 from ..lift.registry import law_spec, scene_lift
+from ..mechanics.gear_contact import NotApplicable
 
 _NONE: Mapping[str, Any] = MappingProxyType({})
 
@@ -57,7 +58,9 @@ class Gear:
        geometry makes the lift (law "gear"), else `takes_law(law)` (default: the closed forms;
        `law_refusal` the message), and for law "contour" the analysis of a [cam] contour,
        `contour_lift(cam, follower, file)` (`analyses_contours`). `accepts_law` combines them (the
-       browser's law list).
+       browser's law list). `roller_envelope`: a cam a law builder computes for it (polydyne,
+       spline, table, acceleration) is the envelope of the [follower] roller on a straight path
+       at `offset`, checked in closed form (explorer.lift.validity.lift_fault).
     5. Build the lift: `build_lift(scene) -> LiftCurve` (explorer.lift.curves.LiftCurve: analytic
        L, L', L'', L''' and breakpoints; valve-referred with lash included when `linkage_ratio`).
        A lift curve whose linkage has its own elasticity carries `linkage_stiffness` (theta ->
@@ -69,7 +72,10 @@ class Gear:
        `contact_geometry(ctx)` -> mechanics.contact.ContactGeometry (the contact effect computes
        normal force with friction, torque and Hertz stress from it; `contact_roller`: the width rule
        needs roller_radius > 0); `contact_figures(ctx, geometry, columns)` -> (columns, summary)
-       added by the contact effect (sliding and entrainment velocities, a second contact...).
+       added by the contact effect (sliding and entrainment velocities, a second contact...);
+       `cam_contact(scene, lift, theta)` -> mechanics.gear_contact.GearContact, its contact for the
+       design rules (explorer.checks: the same ContactGeometry plus each surface's motion), or
+       NotApplicable (the default) when it has no cam contact the rules judge.
     7. Replace a generic effect where its physics differ: `effects` maps an effect name to a
        function (ctx) -> result.EffectOutput run instead of the generic one (the trip gear's latch).
        `columns` declares, per effect, the columns it adds to it or its variant returns beyond the
@@ -98,6 +104,7 @@ class Gear:
     linkage_ratio: bool = False  # item 3
     makes_lift: bool = False  # item 4
     contact_roller: bool = False  # item 6
+    roller_envelope: bool = False  # item 4: its cam is the [follower] roller's envelope on a straight path
     effects: Mapping[str, Callable] = _NONE  # item 7
     columns: Mapping[str, tuple[str, ...]] = _NONE
     batch_sweeps: bool = False  # item 10
@@ -193,6 +200,11 @@ class Gear:
         if self.contact_roller and follower.roller_radius <= 0.0:
             raise InputError(file, "follower.roller_radius",
                              "effect 'contact' needs a roller (roller_radius > 0) for the Hertz stress and the width rule")
+
+    def cam_contact(self, scene, lift, theta):
+        """Its cam contact on the angles theta for the design rules (a GearContact), or
+        NotApplicable with the reason."""
+        raise NotApplicable(f"follower type {self.type!r} has no cam contact the rules judge (its own rules judge it)")
 
     # -- 7. variants of effects ----------------------------------------------------------------
     def effect(self, name: str) -> Callable | None:

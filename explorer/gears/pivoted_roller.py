@@ -23,6 +23,8 @@ import numpy as np
 from ..core.errors import InputError
 from ..lift.curves import law_lift
 from ..lift.registry import closed_form_names, law_spec
+from ..mechanics.gear_contact import GearContact
+from ..mechanics.tribology import rolling_roller_motion
 from ..result import EffectOutput
 from .base import Gear
 from .common import LeverContact, lever_keys, make_valve_drive, section, spec_of, valve_keys
@@ -109,5 +111,16 @@ class PivotedRoller(LeverContact, Gear):
         }
         return EffectOutput(columns=columns, summary=summary)
 
+
+    def cam_contact(self, scene, lift, theta) -> GearContact:
+        """The roller rolls without slipping on the cam (rolling_roller_motion), its centre's path
+        traced in the camshaft's frame; the lever swings (oscillating)."""
+        gear = lift.gear
+        geometry = gear.contact_geometry(theta)
+        px, py = gear.pitch(theta)  # the roller centre in the cam frame, jets in theta
+        speed = np.hypot(px.c[1], py.c[1])
+        pitch_radius = np.asarray(geometry.contour_radius, dtype=float) + gear.roller_radius
+        motion = rolling_roller_motion(speed, pitch_radius, gear.roller_radius)
+        return GearContact(geometry, motion, oscillating=True, pitch_radius=pitch_radius)
 
 GEAR = PivotedRoller()

@@ -29,11 +29,14 @@ from ..core.errors import InputError
 from ..core.reader import Table
 from ..lift.registry import closed_form_names
 from ..lift.validity import cam_fault, entered_error
+from ..mechanics.gear_contact import GearContact
 from ..mechanics.kinematics import lash_crossings
+from ..mechanics.tribology import rolling_roller_motion
 from ..result import EffectOutput
 from .base import Gear
 from .common import (SENSES, LeverContact, eccentric_keys, lever_keys, make_eccentric, make_valve_drive, section,
                      spec_of, valve_keys)
+from .jet import Jet
 from .linkage import side_sign
 from .rocking import RockingContour, build_rocking_gear, check_one_turn, fit_target, swing_increments, target_report
 
@@ -276,5 +279,16 @@ class RockingCam(LeverContact, Gear):
         return target_report(given, fit, fitted, spec.part("target"), spec.part("rocking_cam"), lash, theta)
 
 
+    def cam_contact(self, scene, lift, theta) -> GearContact:
+        """The roller rolls without slipping on the rocking cam (rolling_roller_motion), the pitch
+        curve traced in the frame of the rocking body, about its pivot; the lever swings."""
+        gear = lift.gear
+        geometry = gear.contact_geometry(theta)
+        phi, _ = gear.contact_angle(theta)  # the contact's body angle on the pitch curve, jets in theta
+        rho = gear.contour.radius(Jet.variable(phi.c[0]))  # pitch radius about the pivot, jets in phi
+        speed = np.hypot(rho.c[0], rho.c[1]) * np.abs(phi.c[1])  # |dP/dtheta| in the rocking body's frame
+        pitch_radius = np.asarray(geometry.contour_radius, dtype=float) + gear.roller_radius
+        motion = rolling_roller_motion(speed, pitch_radius, gear.roller_radius)
+        return GearContact(geometry, motion, oscillating=True, pitch_radius=pitch_radius)
 
 GEAR = RockingCam()

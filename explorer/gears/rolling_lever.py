@@ -24,6 +24,8 @@ import numpy as np
 from ..core.errors import InputError
 from ..core.reader import Table
 from ..dynamics.solvers import varying_stiffness
+from ..mechanics.gear_contact import GearContact
+from ..mechanics.tribology import SurfaceMotion
 from ..result import EffectOutput, Event
 from .base import Gear
 from .common import (SENSES, LeverContact, eccentric_keys, make_eccentric, make_valve_drive, point_key, spec_of,
@@ -157,5 +159,16 @@ class RollingLever(LeverContact, Gear):
         )
         return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
 
+
+    def cam_contact(self, scene, lift, theta) -> GearContact:
+        """The faces roll on each other: the contact runs along face A (a spiral rho = rho_c + k w
+        about its pivot) at sqrt(k^2 + rho^2) per radian of rolling swing w, both surfaces alike."""
+        gear = lift.gear
+        geometry = gear.contact_geometry(theta)
+        swing = gear.rolling_swing(theta)  # w and dw/dtheta
+        w = np.maximum(swing.c[0], 0.0)
+        rho = gear.law.rho(w)
+        rate = np.where(swing.c[0] > 0.0, -np.hypot(gear.law.growth, rho) * np.abs(swing.c[1]), 0.0)
+        return GearContact(geometry, SurfaceMotion(rate, rate.copy()), oscillating=True, pitch_radius=None)
 
 GEAR = RollingLever()

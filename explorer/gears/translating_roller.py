@@ -12,6 +12,7 @@ the cam, and the cam to make (exports).
 
 from __future__ import annotations
 
+import math
 from types import MappingProxyType
 
 import numpy as np
@@ -19,6 +20,8 @@ import numpy as np
 from ..core.plugins import resolve
 from ..lift.registry import law_spec, scene_lift
 from ..mechanics.contact import ContactGeometry, camshaft_torque, contact_point_radius
+from ..mechanics.gear_contact import GearContact, NotApplicable
+from ..mechanics.tribology import rolling_roller_motion
 from .base import Gear
 
 # The cam's geometry, imported when first used (core.plugins.resolve): a scene loads without the
@@ -34,6 +37,7 @@ class TranslatingRoller(Gear):
     type = "translating-roller"
     description = "roller (or knife edge) on a follower sliding along a straight axis, constant lever ratio"
     contact_roller = True
+    roller_envelope = True
     analyses_contours = True
     columns = MappingProxyType({"kinematics": ("pressure_angle_deg", "pitch_radius_m", "contour_radius_m")})
     batch_sweeps = True
@@ -80,6 +84,27 @@ class TranslatingRoller(Gear):
             contour_radius=contour_radius, counter_radius=f.roller_radius, roller_diameter=2.0 * f.roller_radius,
             from_columns=reused,
         )
+
+    def cam_contact(self, scene, lift, theta) -> GearContact:
+        """The roller rolls without slipping: both surfaces pass the contact at the contour's
+        arc-length rate, the pitch curve's times (rho_p - r)/rho_p
+        (explorer.mechanics.tribology.rolling_roller_motion)."""
+        f = scene.follower
+        if not f.roller_radius > 0.0:
+            raise NotApplicable("a knife-edge follower (roller_radius 0): no contact radius to judge")
+        d = lift.derivatives(theta)
+        profile = resolve(_TRANSLATING).profile_from_derivatives(theta, d, f.base_radius, f.roller_radius, f.offset)
+        alpha = profile.pressure_angle
+        arm = camshaft_torque(1.0, alpha, d[0], f.base_radius, f.roller_radius, f.offset)
+        geometry = ContactGeometry(
+            pressure_angle=alpha, ratio=np.full(alpha.shape, f.ratio), torque_arm=arm, body_arm=arm,
+            body_radius=contact_point_radius(alpha, d[0], f.base_radius, f.roller_radius, f.offset),
+            contour_radius=profile.contour_radius, counter_radius=f.roller_radius, roller_diameter=2.0 * f.roller_radius,
+        )
+        rp = f.base_radius + f.roller_radius
+        speed = np.hypot(math.sqrt(rp * rp - f.offset**2) + d[0], d[1] - f.offset)  # |dP/dtheta|, P the pitch point
+        motion = rolling_roller_motion(speed, profile.pitch_radius, f.roller_radius)
+        return GearContact(geometry, motion, oscillating=False, pitch_radius=profile.pitch_radius)
 
     def cam_profile(self, scene, lift=None):
         """The cam to make (a TranslatingCam); InputError for an undercut cam (its contour folds:

@@ -121,15 +121,17 @@ def sample_angles(lift, n: int = SAMPLES) -> np.ndarray:
 
 def lift_fault(lift, follower, dip: float | None = None, n: int = SAMPLES) -> CamFault | None:
     """cam_fault of a lift curve (explorer.lift.curves.LiftCurve) over one revolution: the whole
-    check for a translating roller; the finite and lift-range checks for a gear's follower lift
-    (the gear checks its own geometry through cam_fault). dip: default the lift's own
+    check for a cam that is the envelope of the follower's roller on a straight path
+    (follower.roller_envelope, which its gear declares: the translating roller); the finite and
+    lift-range checks for a gear's follower lift (the gear checks its own geometry through
+    cam_fault). dip: default the lift's own
     `dip_allowance` (a measured table's noise), else 0."""
     if dip is None:
         dip = float(getattr(lift, "dip_allowance", 0.0))
     theta = sample_angles(lift, n)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         d = lift.derivatives(theta)
-        if follower is not None and follower.type == "translating-roller":
+        if follower is not None and follower.roller_envelope:
             return translating_fault(theta, d, follower, dip)
         return cam_fault(theta, d, dip=dip)
 

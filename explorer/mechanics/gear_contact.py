@@ -1,9 +1,9 @@
 """What the design rules need to know of a gear's cam contact (explorer.checks): the narrow
 interface a gear supplies, one object per grid of cam angles.
 
-A gear (or the translating roller) supplies a GearContact through a provider function
-`(scene, lift, theta) -> GearContact`, named in explorer/checks/contacts.py's table (one line per
-follower type; the function may live in the gear's own module). It holds:
+A gear supplies a GearContact through its `cam_contact(scene, lift, theta)` hook
+(explorer.gears.base.Gear, item 6; the default raises NotApplicable: no cam contact the rules
+judge). It holds:
 
 1. `geometry`: the contact statics' ContactGeometry (explorer.mechanics.contact: pressure angle
    against the driven point's travel, the valve/driven-point ratio, torque arms, the signed

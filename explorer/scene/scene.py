@@ -88,6 +88,13 @@ class Follower:
     offset: float = 0.0  # m, follower axis offset from the cam centre
     ratio: float = 1.0  # valve travel per follower travel
 
+    @property
+    def roller_envelope(self) -> bool:
+        """True when the cam is the envelope of this roller (radius roller_radius, base circle
+        base_radius) on a straight path at `offset` -- the gear says (Gear.roller_envelope): a cam
+        made for it is checked in the closed forms of explorer.lift.validity.translating_fault."""
+        return gear_table.gear(self.type).roller_envelope
+
 
 @dataclass(frozen=True)
 class Valve:
