@@ -274,14 +274,18 @@ def test_compiled_rows_equal_simulate(scene_file, overrides, runs, rpm, k_max):
 
 
 def test_scenes_outside_the_kernel_take_the_other_paths():
-    """A spring chain, another solver, a gear: not the compiled path (the registry's next)."""
+    """A spring chain, another solver, a gear: not the compiled path (the registry's next). A lever
+    gear's lift reads no run value, so its runs share it (the shared path, Gear.shares_lift); the
+    trip gear's lift and effects are its own per run (simulate)."""
     shared = _Shared()
     chain = load_scene(SCENES / "spring_surge.toml")
     assert engine_for(chain, shared).name == "shared"
     taylor = load_scene(SCENES / "elastic_float.toml", ['solver.method="taylor"'])
     assert engine_for(taylor, _Shared()).name == "shared"
     gear = load_scene(SCENES / "pivoted_roller_lever.toml")
-    assert engine_for(gear, _Shared()).name == "simulate"
+    assert engine_for(gear, _Shared()).name == "shared"
+    trip = load_scene(SCENES / "trip_gear_dashpot.toml")
+    assert engine_for(trip, _Shared()).name == "simulate"
     assert [e.name for e in ENGINES] == ["compiled", "shared", "simulate"]
 
 
