@@ -123,7 +123,7 @@ def test_simulate_gives_the_residual_amplitude_of_the_closed_form(tmp_path, law)
     for r in RATIOS:
         result = simulate(load_scene(tmp_path / f"{law}.toml", [f"drive.rpm={rpm_for(r)}"]))
         s = result.summary
-        assert not [e for e in s["events"] if e["kind"] == "separation" and e["cam_angle_deg"] < 150.0], r
+        assert not [e for e in result.events if e.kind == "separation" and e.cam_angle_deg < 150.0], r
         assert abs(s["residual_amplitude_m"] - closed_form(law, r)) <= 1e-6 * H, (r, s["residual_amplitude_m"])
     assert base.lift.law == law
 

@@ -12,11 +12,12 @@ cache); the lash take-up angles per lash. A run then costs its scene's values, o
 (the stepping, the events and the figures) and, when the scene has them, the rigid effects
 (forces, contact) as sweep_engine computes them.
 
-The compiled path takes a run when the elastic effect would solve the LinkageModel with the
-registry's `exact` solver and a constant stiffness (no spring chain, no stiffness carried by the
-lift, a lift shared by all runs): `accepts`. Otherwise sweep_engine's other paths do.
+The compiled path takes a run when the elastic effect would solve the LinkageModel with a solver
+that has a compiled batch module (explorer/dynamics/solvers.py: batch_entry, the exact solver's
+exact_kernel) and a constant stiffness (no spring chain, no stiffness carried by the lift, a lift
+shared by all runs): `accepts`. Otherwise sweep_engine's other paths do.
 
-numba is imported (with exact_kernel) only when a run takes this path.
+numba is imported (with the batch module) only when a run takes this path.
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+
+from ..dynamics import solvers
 
 ELASTIC = ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
            "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
@@ -45,28 +48,31 @@ class BatchCache:
 def _residual_reference(shared, lift, ratio: float, lash: float, n: int):
     """The residual figures' reference lift at the n output angles, the dwell's first sample (-1:
     none) and the drive there: effects/residual.residual_reference, per lever ratio and lash."""
-    from .residual import residual_reference
+    from .residual import lash_reference, reference_parts
     from ..core.memo import remember
 
-    return remember(shared.take_ups, ("residual", ratio, lash, n),
-                    lambda: residual_reference(lift, ratio, lash, np.arange(n) * (2.0 * math.pi / n)))
+    def base():  # what does not depend on the lash (a tolerance study draws a new lash every run)
+        return reference_parts(lift, ratio, np.arange(n) * (2.0 * math.pi / n))
+
+    def make():
+        d, i, S, less_lash = remember(shared.grids, ("residual", ratio, n), base)
+        return (lash_reference(d, lash) if less_lash else d), i, S
+
+    return remember(shared.take_ups, ("residual", ratio, lash, n), make)
 
 
 def accepts(scene, shared) -> bool:
     """The elastic effect of this scene is the compiled kernel's model and method."""
-    from .pipeline import resolve
-    from ..gears.registry import GEARS
+    from .registry import order
 
-    if scene.follower.type in GEARS:  # a gear builds its own lift and may bring its own effects
+    if not scene.gear_plugin.batch_sweeps:  # a gear whose runs do not share one lift, or its own effects
         return False
-    if "elastic" not in resolve(scene.effects):
+    if "elastic" not in order(scene.effects):
         return False
-    if scene.spring.elements > 0 or scene.solver.method != "exact":
+    if scene.spring.elements > 0 or solvers.solver(scene.solver.method).batch_entry is None:
         return False
     if shared.lift is None:
-        from .lift import build_lift
-
-        shared.lift = build_lift(scene)
+        shared.lift = scene.gear_plugin.build_lift(scene)
     return getattr(shared.lift, "linkage_stiffness", None) is None
 
 
@@ -74,7 +80,6 @@ def elastic_run(scene, shared):
     """(figures as a dict of ELASTIC, valve lift at the output samples, the revolution's elastic
     events) of one run. InputError: a speed beyond the solver's step budget (as the elastic
     effect); RuntimeError: a motion that does not settle (as the exact solver)."""
-    from ..dynamics import exact_kernel as kernel
     from ..dynamics.model import LinkageModel
     from .elastic import check_resolution
     from ..mechanics.kinematics import lash_crossings
@@ -86,7 +91,8 @@ def elastic_run(scene, shared):
     omega = scene.drive.omega
     model = LinkageModel.from_scene(scene)
     period = 2.0 * math.pi / omega
-    check_resolution(model, np.array([0.0, period]), "exact", scene.source)
+    kernel = solvers.solver(scene.solver.method).batch_module()
+    check_resolution(model, np.array([0.0, period]), scene.solver.method, scene.source)
     base = _remember(shared.grids, (ratio, n), lambda: kernel.revolution_grid(lift, ratio, n))
     rho_theta = kernel.phase_rates(model) / omega
     parts = kernel.split_parts(base, rho_theta)
@@ -103,9 +109,8 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     """The ELASTIC figures (runs x figures) of many runs and which failed (as elastic_run would
     raise: a speed beyond the step budget, a motion that does not settle), the runs on one grid
     in one compiled call (exact_kernel.revolutions: no Python per run but its scene's values)."""
-    from ..dynamics.exact_kernel import RUN_PARAMETERS
-
-    params = np.empty((len(scenes), len(RUN_PARAMETERS)))
+    kernel = solvers.solver(scenes[0].solver.method).batch_module()
+    params = np.empty((len(scenes), len(kernel.RUN_PARAMETERS)))
     group = np.empty((len(scenes), 2))  # per run: lever ratio, steps per revolution
     for r, scene in enumerate(scenes):
         v, sp, link = scene.valve, scene.spring, scene.linkage
@@ -114,7 +119,7 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
         params[r, :11] = (scene.drive.omega, v.mass, M1, link.stiffness, link.damping, v.lash, sp.preload + closing,
                           sp.rate, scene.loads.friction, scene.seat.restitution, sp.preload + closing)
         group[r] = scene.follower.ratio, scene.solver.steps_per_revolution
-    return _chunk(params, group, shared)
+    return _chunk(kernel, params, group, shared)
 
 
 # the run parameters a sweep key sets (studies.sweep_spec.SWEEP_KEYS; drive.rpm sets omega, and
@@ -130,8 +135,6 @@ def elastic_chunk_values(base, keys, values, shared) -> tuple[np.ndarray, np.nda
     its own (studies.sweep_spec.scene_for's runs), the run parameters built column by column
     with the same arithmetic as elastic_chunk's per scene, no scene built per run. keys: sweep keys
     (KEY_PARAMETERS)."""
-    from ..dynamics.exact_kernel import RUN_PARAMETERS
-
     unknown = [key for key in keys if key not in KEY_PARAMETERS]
     if unknown:  # a key this table does not map would be silently left at the base scene's value
         raise ValueError(f"elastic_chunk_values: no run parameter for the sweep keys {unknown}")
@@ -144,7 +147,8 @@ def elastic_chunk_values(base, keys, values, shared) -> tuple[np.ndarray, np.nda
         return col[key] if key in col else np.full(R, float(default))
 
     closing = base.loads.closing_total
-    params = np.empty((R, len(RUN_PARAMETERS)))
+    kernel = solvers.solver(base.solver.method).batch_module()
+    params = np.empty((R, len(kernel.RUN_PARAMETERS)))
     params[:, 0] = column("drive.rpm", base.drive.rpm) * 2.0 * math.pi / 60.0  # (Drive.omega's operations)
     params[:, 1] = column("valve.mass", v.mass)
     if "valve.oscillating_mass" in col or v.oscillating_mass is not None:
@@ -162,15 +166,14 @@ def elastic_chunk_values(base, keys, values, shared) -> tuple[np.ndarray, np.nda
     group = np.empty((R, 2))
     group[:, 0] = base.follower.ratio
     group[:, 1] = base.solver.steps_per_revolution
-    return _chunk(params, group, shared)
+    return _chunk(kernel, params, group, shared)
 
 
-def _chunk(params, group, shared) -> tuple[np.ndarray, np.ndarray]:
-    """elastic_chunk from the run parameters (RUN_PARAMETERS but take_up_s, filled here) and per
-    run its lever ratio and steps per revolution: the runs of one grid and lash in one call."""
-    from ..dynamics import exact_kernel as kernel
+def _chunk(kernel, params, group, shared) -> tuple[np.ndarray, np.ndarray]:
+    """elastic_chunk from the run parameters (the batch module `kernel`'s RUN_PARAMETERS but
+    take_up_s, filled here) and per run its lever ratio and steps per revolution: the runs of one
+    grid and lash in one call."""
     from .elastic import MAX_SOLVER_NODES
-    from ..mechanics.kinematics import lash_crossings
     from ..core.memo import remember
 
     lift = shared.lift
@@ -178,11 +181,13 @@ def _chunk(params, group, shared) -> tuple[np.ndarray, np.ndarray]:
     figures = np.full((R, len(ELASTIC)), math.nan)
     failed = np.zeros(R, bool)
     groups: dict = {}
-    for r, (ratio, n, lash) in enumerate(zip(group[:, 0].tolist(), group[:, 1].tolist(), params[:, 5].tolist())):
+    pairs = list(zip(group[:, 0].tolist(), params[:, 5].tolist()))
+    ups_of = _take_ups(pairs, shared)
+    for r, ((ratio, lash), n) in enumerate(zip(pairs, group[:, 1].tolist())):  # runs of one grid and lash
         groups.setdefault((ratio, int(n), lash), []).append(r)
     omega = params[:, 0]
     for (ratio, n, lash), members in groups.items():
-        ups = remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
+        ups = ups_of[(ratio, lash)]
         params[members, 11] = ups[0] / omega[members] if len(ups) else math.nan
     # the fastest rate of each run: the step budget (effects.elastic.check_resolution) and the split
     M, M1, k, c, rate = (params[:, i] for i in (1, 2, 3, 4, 7))
@@ -216,10 +221,34 @@ def _chunk(params, group, shared) -> tuple[np.ndarray, np.ndarray]:
     return figures, failed
 
 
+def _take_ups(pairs, shared) -> dict:
+    """{(ratio, lash): [first take-up angle]} of a chunk's runs (pairs: their (ratio, lash)), the
+    lashes found together (mechanics.kinematics.lash_take_ups: lash_crossings' root to brentq's tolerance): a tolerance
+    study's runs each draw their own lash, and one Brent search per lash cost ten times the
+    compiled revolution. Every lash takes this one search whatever else its chunk holds, so a table
+    does not depend on how it was cut into chunks (each lane of the search is elementwise)."""
+    from ..core.memo import remember
+    from ..mechanics.kinematics import lash_take_ups
+
+    out: dict = {}
+    wanted: dict[float, set] = {}
+    for ratio, lash in pairs:
+        cached = shared.take_ups.get(("batched", ratio, lash))
+        if cached is not None:
+            out[(ratio, lash)] = cached
+        else:
+            wanted.setdefault(ratio, set()).add(lash)
+    for ratio, lashes in wanted.items():
+        values = np.array(sorted(lashes))
+        for lash, up in zip(values.tolist(), lash_take_ups(shared.lift, ratio, values).tolist()):
+            ups = np.array([up]) if math.isfinite(up) else np.zeros(0)
+            out[(ratio, lash)] = ups
+            remember(shared.take_ups, ("batched", ratio, lash), lambda ups=ups: ups)
+    return out
+
+
 def kernel_outputs(scene, shared) -> tuple[list[dict], np.ndarray]:
     """For tests: (the revolution's elastic events as the elastic effect lists them, the valve lift
     at the output samples as its valve_lift_m column)."""
-    from ..dynamics.exact_kernel import revolution_events
-
     _, lift_column, rev = elastic_run(scene, shared)
-    return revolution_events(rev), lift_column
+    return solvers.solver(scene.solver.method).batch_module().revolution_events(rev), lift_column

@@ -9,10 +9,12 @@ Definition and oracles: docs/theory/residual.md.
                         for: a polydyne cam's wanted valve lift (explorer.lift.polydyne; then it
                         vanishes at the design speed), else the rigid valve lift max(ratio L - lash, 0)
   residual_amplitude_m  the amplitude of the valve's free vibration about its static equilibrium
-                        in the dwell after the rise (explorer.dynamics.free_vibration), at the
+                        in the dwell after the rise, sqrt(z^2 + (v/wn)^2) with z = s - s_eq
+                        measured from that equilibrium (explorer.dynamics.free_vibration), at the
                         first output sample in that dwell (explorer.lift.dwell.dwell_after_rise:
                         the top dwell of a rise-dwell-return cam, else the base circle after the
-                        event). NaN: the lift has no such dwell, or no output sample falls in it.
+                        event). Undefined (summary: null; sweep row: NaN) when the lift has no
+                        such dwell, or no output sample falls in it.
 """
 
 from __future__ import annotations
@@ -36,24 +38,44 @@ def reference_lift(lift, ratio: float, lash: float, theta, order: int = 1) -> np
     return np.where(is_open, d, 0.0)
 
 
+def reference_parts(lift, ratio: float, theta) -> tuple[np.ndarray, int, float, bool]:
+    """residual_reference's parts that do not depend on the lash (a tolerance study draws a new
+    lash every run): (a polydyne's wanted valve lift at theta, or ratio * L at theta; the dwell's
+    first sample or -1; the valve-referred drive in the dwell ratio * L, NaN without a dwell; True
+    when the lash is still to be taken off the first: lash_reference)."""
+    theta = np.asarray(theta, dtype=float)
+    if getattr(lift, "wanted_valve_lift", None) is not None:  # the wanted lift has no lash in it
+        d, less_lash = np.ascontiguousarray(reference_lift(lift, ratio, 0.0, theta, 1)[0]), False
+    else:
+        d, less_lash = lift.derivatives(theta)[0] * ratio, True
+    dwell = dwell_after_rise(lift)
+    i = dwell.first_sample(theta) if dwell is not None else None
+    if i is None:
+        return d, -1, math.nan, less_lash
+    return d, i, ratio * dwell.lift, less_lash
+
+
+def lash_reference(d, lash: float) -> np.ndarray:
+    """The rigid valve lift max(d - lash, 0) from d = ratio * L (reference_lift's floats)."""
+    return np.ascontiguousarray(np.where(d - lash > 0.0, d - lash, 0.0))
+
+
 def residual_reference(lift, ratio: float, lash: float, theta) -> tuple[np.ndarray, int, float]:
     """What the figures take from the lift at the output angles theta (one revolution from 0):
     (s_ref at theta, the dwell's first sample or -1, the valve-referred drive in the dwell
     ratio * L, NaN without a dwell)."""
-    ref = np.ascontiguousarray(reference_lift(lift, ratio, lash, theta, 1)[0])
-    dwell = dwell_after_rise(lift)
-    i = dwell.first_sample(theta) if dwell is not None else None
-    if i is None:
-        return ref, -1, math.nan
-    return ref, i, ratio * dwell.lift
+    d, i, S, less_lash = reference_parts(lift, ratio, theta)
+    return (lash_reference(d, lash) if less_lash else d), i, S
 
 
 def residual_figures(lift, ratio: float, model, theta, s, v) -> dict:
     """The summary entries (module doc) from the run's valve lift s and velocity v at angles theta
-    (the LinkageModel `model`: its stiffness where the dwell is, for one that changes)."""
+    (the LinkageModel `model`: its stiffness where the dwell is, for one that changes). The
+    amplitude is None where it is undefined (a summary figure is never NaN; a sweep row reads
+    it as NaN, effects/elastic_events.elastic_row, as the compiled path gives it)."""
     ref, i, S = residual_reference(lift, ratio, model.lash, theta)
     deviation = float(np.max(np.abs(np.asarray(s) - ref)))
-    amplitude = math.nan
+    amplitude = None  # undefined (no dwell, or no output sample in it): JSON null, as every summary figure
     if i >= 0:
         k = model.stiffness if model.stiffness_profile is None else float(model.stiffness_at(
             np.array([theta[i] / model.stiffness_profile.omega]))[0])
