@@ -17,6 +17,13 @@ bracket was proven with, when the caller has them, and:
 - else Brent's method with at most `maxiter` iterations (200 by default; about 55 bisections
   take an interval of a few radians to 1e-15). If the tolerance is not met by then, the best
   point found, still inside the bracket, is returned: a bound on the work, never an error.
+
+Brent's method is `brent`, here in Python: the same steps in the same floating-point operations
+as scipy.optimize.brentq (its C routine, scipy/optimize/Zeros/brentq.c), so every root is the
+same float as brentq's (tests/test_roots.py compares them bit for bit). Why not brentq itself:
+importing scipy.optimize costs ~0.3 s of CPU (it loads scipy.linalg, scipy.sparse, scipy.special
+and more), which was a third of a fresh process's first sweep (issue #27.3) for a routine of 40
+lines; a root search calls f some 10-60 times, so the Python loop costs nothing measurable.
 """
 
 from __future__ import annotations
@@ -41,8 +48,6 @@ def root_in(f: Callable[[float], float], a: float, b: float, *, fa: float | None
             xtol: float = 1e-15, rtol: float = EPS_RTOL, maxiter: int = 200) -> float:
     """A zero of `f` in [a, b] (see the module docstring). `fa`, `fb`: the values at the ends that
     proved the bracket (a grid's), if the caller has them."""
-    from scipy.optimize import brentq
-
     # a grid's sign change: values on either side of zero (a zero counts on either side)
     proven = fa is not None and fb is not None and min(fa, fb) <= 0.0 <= max(fa, fb) and (fa, fb) != (0.0, 0.0)
     ga, gb = float(f(a)), float(f(b))
@@ -54,5 +59,56 @@ def root_in(f: Callable[[float], float], a: float, b: float, *, fa: float | None
         if proven and math.isfinite(ga) and math.isfinite(gb):
             return float(a) if abs(ga) <= abs(gb) else float(b)
         raise NoBracket(a, b, ga, gb)
-    root, _ = brentq(f, a, b, xtol=xtol, rtol=rtol, maxiter=maxiter, full_output=True, disp=False)
-    return float(root)
+    return brent(f, float(a), float(b), ga, gb, xtol, rtol, maxiter)
+
+
+def _div(n: float, d: float) -> float:
+    """n / d as C divides doubles (IEEE 754: +-inf or NaN by zero, where Python raises): a
+    quotient of underflowed values (a very flat f) then makes the step a bisection, as in C."""
+    try:
+        return n / d
+    except ZeroDivisionError:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return float(np.float64(n) / np.float64(d))
+
+
+def brent(f: Callable[[float], float], a: float, b: float, fa: float, fb: float, xtol: float, rtol: float,
+          maxiter: int) -> float:
+    """Brent's method (R. P. Brent, Algorithms for Minimization without Derivatives, 1973, ch. 4)
+    on [a, b] with f(a) = fa, f(b) = fb of opposite signs, neither zero: scipy.optimize.brentq's
+    iteration, step for step (see the module docstring). Stops when the bracket is shorter than
+    xtol + rtol |x| or after maxiter steps (then the best point so far); a NaN value of f raises
+    ValueError, as brentq does."""
+    x_pre, x_cur, f_pre, f_cur = a, b, fa, fb
+    x_blk = f_blk = s_pre = s_cur = 0.0
+    for _ in range(maxiter):
+        if f_pre * f_cur < 0.0:  # the bracket is [x_pre, x_cur]: x_blk is its other end
+            x_blk, f_blk = x_pre, f_pre
+            s_pre = s_cur = x_cur - x_pre
+        if abs(f_blk) < abs(f_cur):  # x_cur: the end with the smaller value
+            x_pre, x_cur, x_blk = x_cur, x_blk, x_cur
+            f_pre, f_cur, f_blk = f_cur, f_blk, f_cur
+        delta = (xtol + rtol * abs(x_cur)) / 2
+        s_bis = (x_blk - x_cur) / 2
+        if f_cur == 0.0 or abs(s_bis) < delta:
+            return x_cur
+        step_bisect = True
+        if abs(s_pre) > delta and abs(f_cur) < abs(f_pre):
+            if x_pre == x_blk:  # secant
+                s_try = _div(-f_cur * (x_cur - x_pre), f_cur - f_pre)
+            else:  # inverse quadratic interpolation
+                d_pre = _div(f_pre - f_cur, x_pre - x_cur)
+                d_blk = _div(f_blk - f_cur, x_blk - x_cur)
+                s_try = _div(-f_cur * (f_blk * d_blk - f_pre * d_pre), d_blk * d_pre * (f_blk - f_pre))
+            bound = 3 * abs(s_bis) - delta
+            if 2 * abs(s_try) < (abs(s_pre) if abs(s_pre) < bound else bound):  # C's MIN(a, b)
+                s_pre, s_cur = s_cur, s_try
+                step_bisect = False
+        if step_bisect:
+            s_pre = s_cur = s_bis
+        x_pre, f_pre = x_cur, f_cur
+        x_cur += s_cur if abs(s_cur) > delta else (delta if s_bis > 0 else -delta)
+        f_cur = float(f(x_cur))
+        if math.isnan(f_cur):
+            raise ValueError(f"The function value at x={x_cur} is NaN; solver cannot continue.")
+    return x_cur
