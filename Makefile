@@ -18,7 +18,7 @@ CONSTRAINTS := constraints.txt
 KERNEL := $(wildcard explorer/dynamics/kernel_*.py) explorer/dynamics/exact_kernel.py explorer/dynamics/free_vibration.py \
 	explorer/dynamics/exact.py explorer/dynamics/exact_events.py explorer/dynamics/exact_grid.py \
 	explorer/dynamics/exact_phase.py explorer/dynamics/exact_steps.py explorer/dynamics/phases.py \
-	explorer/dynamics/chain_kernels.py
+	explorer/dynamics/chain_kernels.py explorer/mechanics/sweep_kernels.py
 KERNEL_STAMP := $(VENV)/.kernel-compiled
 
 .PHONY: run test bench docs lock clean
@@ -38,6 +38,7 @@ $(TEST_STAMP): pyproject.toml $(CONSTRAINTS) | $(BIN)/python
 $(KERNEL_STAMP): $(KERNEL) $(STAMP)
 	$(BIN)/python -m explorer.dynamics.exact_kernel --warm
 	$(BIN)/python -m explorer.dynamics.chain_exact
+	$(BIN)/python -m explorer.mechanics.sweep_kernels
 	touch $@
 
 run: $(STAMP) $(KERNEL_STAMP)

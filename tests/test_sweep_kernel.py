@@ -304,7 +304,9 @@ def test_numba_is_imported_by_the_kernel_module_only():
     """numba (~0.3 s to import) only in the compiled exact solver's modules (dynamics/kernel_*.py,
     imported only by dynamics/exact_kernel.py, which only the sweep's compiled path imports), and
     in dynamics/chain_kernels.py, which only the spring chain's exact solver imports (scenes with
-    spring.elements > 0): `import explorer`, loading and simulating a massless scene leave it out."""
+    spring.elements > 0), and in mechanics/sweep_kernels.py, imported inside the two functions of the
+    compiled sweep's rigid figures (forces.min_contact_forces, contact.peak_torques): `import
+    explorer`, loading and simulating a massless scene leave it out."""
     import ast
     import subprocess
     import sys
@@ -319,7 +321,18 @@ def test_numba_is_imported_by_the_kernel_module_only():
             if any(n.split(".")[0] == "numba" for n in names):
                 users.add(path.relative_to(package).as_posix())
     kernel = {f"dynamics/kernel_{part}.py" for part in ("steps", "events", "grid", "phase", "figures")}
-    assert users == kernel | {"dynamics/chain_kernels.py"}
+    assert users == kernel | {"dynamics/chain_kernels.py", "mechanics/sweep_kernels.py"}
+    rigid = {}
+    for path in package.rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in tree.body:  # a module-level import of it would load numba with its module
+            assert not (isinstance(node, ast.ImportFrom) and (node.module or "").endswith("sweep_kernels")), path
+        for fn in ast.walk(tree):
+            if isinstance(fn, ast.FunctionDef):
+                for node in ast.walk(fn):
+                    if isinstance(node, ast.ImportFrom) and (node.module or "").endswith("sweep_kernels"):
+                        rigid[path.relative_to(package).as_posix()] = fn.name
+    assert rigid == {"mechanics/forces.py": "min_contact_forces", "effects/contact.py": "peak_torques"}
     importers = set()
     for path in package.rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):
@@ -390,3 +403,41 @@ def test_every_sweep_key_sets_a_run_parameter_of_the_compiled_path():
     base = load_scene(SCENES / "elastic_float.toml")
     with pytest.raises(ValueError, match="follower.ratio"):
         elastic_chunk_values(base, ("follower.ratio",), np.ones((1, 1)), BatchCache())
+
+
+def test_rigid_kernels_equal_numpy_forms_bit_for_bit():
+    """mechanics/sweep_kernels.py (issue #27.5) against the numpy forms they replace: the minimum
+    of F = w^2 A + G per piece and its first index (np.minimum.reduceat, np.argmin), and the
+    largest finite torque F c (contact.peak_torques' numpy form), NaN, inf and ties included."""
+    from explorer.mechanics.sweep_kernels import peak_torques, piece_minima
+
+    rng = np.random.default_rng(27)
+    a, g = rng.normal(size=400), rng.normal(size=400)
+    a[17], a[250] = np.nan, 0.0
+    g[250] = 0.0
+    a[300:310] = a[300]
+    g[300:310] = g[300]  # equal values: the first one's index
+    push, pull = rng.uniform(0.5, 2.0, 400), rng.uniform(0.5, 2.0, 400)
+    push[5], pull[9] = np.inf, np.inf
+    w2 = rng.uniform(0.0, 3.0, 50)
+    lows = np.array([0, 10, 200, 300, 390], dtype=np.intp)
+    highs = np.array([10, 200, 300, 390, 400], dtype=np.intp)
+    values = w2[:, None] * a[None, :] + g[None, :]
+    minima, where = piece_minima(w2, a, g, lows, highs)
+    assert np.array_equal(minima, np.minimum.reduceat(values, lows, axis=1), equal_nan=True)
+    for k in range(lows.size):
+        assert np.array_equal(where[:, k], np.argmin(values[:, lows[k]:highs[k]], axis=1))
+    for floor in (0.0, -np.inf):
+        with np.errstate(invalid="ignore"):
+            torque = values * np.where(values > 0.0, push[None, :], pull[None, :])
+        expected = np.maximum(floor, np.where(np.isfinite(torque), torque, -np.inf).max(axis=1))
+        assert np.array_equal(peak_torques(w2, a, g, push, pull, floor), expected)
+
+
+def test_speeds_of_is_drive_omega():
+    """The rigid sweep's speeds without a scene per run are each scene's Drive.omega, bit for bit."""
+    from explorer.studies.sweep_rigid import speeds_of
+
+    scene = load_scene(SCENES / "valve_float_demo.toml")
+    rpms = np.concatenate([np.linspace(1.0, 20000.0, 2001), np.geomspace(0.1, 1e5, 500)])
+    assert np.array_equal(speeds_of(scene, rpms), [replace(scene.drive, rpm=float(r)).omega for r in rpms])

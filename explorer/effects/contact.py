@@ -110,7 +110,6 @@ def contact_row(result) -> dict[str, float]:
 
 # --- the peak camshaft torque at many speeds at once -------------------------------------------
 
-BLOCK_CELLS = 2_000_000  # speeds x samples per block (16 MB of float64)
 
 
 def torque_factors(ctx) -> tuple[np.ndarray, np.ndarray]:
@@ -140,13 +139,9 @@ def peak_torques(a_coef, g_part, is_open, push, pull, omegas) -> np.ndarray:
     a_coef, g_part, push, pull = a_coef[is_open], g_part[is_open], push[is_open], pull[is_open]
     if a_coef.size == 0:
         return np.zeros(w2.size)
-    out = np.full(w2.size, 0.0 if not is_open.all() else -np.inf)
-    block = max(1, BLOCK_CELLS // a_coef.size)
-    for start in range(0, w2.size, block):
-        end = min(w2.size, start + block)
-        forces = w2[start:end, None] * a_coef[None, :] + g_part[None, :]
-        with np.errstate(invalid="ignore"):
-            torque = forces * np.where(forces > 0.0, push[None, :], pull[None, :])
-        torque = np.where(np.isfinite(torque), torque, -np.inf)  # self-locked samples: no finite torque
-        out[start:end] = np.maximum(out[start:end], torque.max(axis=1))
+    from ..mechanics.sweep_kernels import peak_torques as compiled  # numba: the compiled sweep's path only
+
+    # one pass per speed over the open samples (no (speeds x samples) temporaries)
+    out = compiled(w2, np.ascontiguousarray(a_coef), np.ascontiguousarray(g_part), np.ascontiguousarray(push),
+                   np.ascontiguousarray(pull), 0.0 if not is_open.all() else -np.inf)
     return np.where(np.isfinite(out), out, np.nan)

@@ -253,6 +253,7 @@ def minimise_on_pieces(
     return best_value, float(np.mod(best_theta, TWO_PI))
 
 
+SPEED_BLOCK = 4096  # speeds per block of min_contact_forces (its (speeds x pieces) arrays)
 ZOOM_POINTS = 33  # samples per zoom: the bracket shrinks 16-fold per lift evaluation
 
 
@@ -358,6 +359,8 @@ def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash
     same floats as min_contact_force's. The samples, the lift there and A, G of F = w^2 A + G are
     shared by all speeds; the zoom of every speed's candidate pieces runs as one batch, one lift
     evaluation a round for all of them (minimise_on_pieces and _zoom_minimum, row by row)."""
+    from .sweep_kernels import piece_minima  # numba: the compiled sweep's path only
+
     pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
     w2 = np.asarray(omegas, dtype=float).ravel() ** 2
     values_out, theta_out = np.full(w2.size, math.inf), np.full(w2.size, math.nan)
@@ -367,31 +370,45 @@ def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash
     a_coef, g_part, _ = load_parts(lift.derivatives(np.mod(theta, TWO_PI)), direction, loads, ratio, lash)
     counts = np.bincount(owner, minlength=chosen.size)
     offsets = np.concatenate([[0], np.cumsum(counts)])
-    rows, los, his, dirs = [], [], [], []
-    for s, w2s in enumerate(w2):
-        values = w2s * a_coef + g_part  # min_contact_force's force(): omega**2 * A + G
-        grid_min = np.minimum.reduceat(values, offsets[:-1])
-        floor = np.nanmin(grid_min)
-        slack = 1e-3 * abs(floor) + 1e-9
-        best_value, best_theta = math.inf, math.nan
-        for k in np.argsort(grid_min):
-            seg = values[offsets[k]: offsets[k + 1]]
-            j = int(np.argmin(seg))
-            if grid_min[k] < best_value:
-                best_value, best_theta = float(grid_min[k]), float(theta[offsets[k] + j])
-            if grid_min[k] > floor + slack:
-                continue
-            ts = theta[offsets[k]: offsets[k + 1]]
-            lo, hi = ts[max(j - 1, 0)], ts[min(j + 1, ts.size - 1)]
-            if hi > lo:
-                rows.append(s), los.append(float(lo)), his.append(float(hi)), dirs.append(pieces.direction[chosen[k]])
-        values_out[s], theta_out[s] = best_value, best_theta
-    if rows:
-        rows_a = np.asarray(rows)
-        zoom_value, zoom_theta = _zoom_minima(lift, loads, w2[rows_a], ratio, lash, np.asarray(dirs, dtype=float),
-                                              np.asarray(los), np.asarray(his))
+    # the grid minimum of every (speed, piece) and where it is, compiled (sweep_kernels.piece_minima:
+    # min_contact_force's floats, omega**2 * A + G and the minimum of each piece's samples)
+    block = SPEED_BLOCK
+    lows, highs = offsets[:-1].astype(np.intp), offsets[1:].astype(np.intp)
+    candidates = []  # per block: (speed, piece, lo, hi) of the pieces min_contact_force zooms into
+    for b0 in range(0, w2.size, block):
+        b1 = min(w2.size, b0 + block)
+        grid_min, j_of = piece_minima(w2[b0:b1], a_coef, g_part, lows, highs)
+        floor = np.nanmin(grid_min, axis=1)
+        slack = 1e-3 * np.abs(floor) + 1e-9
+        # its pieces in the order min_contact_force visits them (np.argsort of each row)
+        order = np.argsort(grid_min, axis=1)
+        rows = np.arange(b1 - b0)
+        first = order[:, 0]
+        # the best grid value: the first piece of that order (strictly smaller values replace)
+        zoom = ~(grid_min > (floor + slack)[:, None])
+        best_j = j_of[rows, first]
+        best = grid_min[rows, first]
+        found = best < math.inf  # else no grid value is below +inf: (inf, nan) as min_contact_force
+        values_out[b0:b1] = np.where(found, best, math.inf)
+        theta_out[b0:b1] = np.where(found, theta[lows[first] + best_j], math.nan)
+        # the zoom's brackets: the grid neighbours of each candidate piece's argmin
+        ranked = zoom[rows[:, None], order]  # (speed, rank): zoom into the piece of that rank
+        r_idx, rank = np.nonzero(ranked)  # row-major: each speed's pieces in its own order
+        k_idx = order[r_idx, rank]
+        j = j_of[r_idx, k_idx]
+        lo_i = lows[k_idx] + np.maximum(j - 1, 0)
+        hi_i = lows[k_idx] + np.minimum(j + 1, counts[k_idx] - 1)
+        lo, hi = theta[lo_i], theta[hi_i]
+        keep = hi > lo
+        candidates.append((r_idx[keep] + b0, lo[keep], hi[keep], pieces.direction[chosen[k_idx[keep]]]))
+    rows_a = np.concatenate([c[0] for c in candidates])
+    if rows_a.size:
+        zoom_value, zoom_theta = _zoom_minima(lift, loads, w2[rows_a], ratio, lash,
+                                              np.concatenate([c[3] for c in candidates]).astype(float),
+                                              np.concatenate([c[1] for c in candidates]),
+                                              np.concatenate([c[2] for c in candidates]))
         # in each speed's own order of its pieces: a strictly smaller zoom value replaces the best
-        for r, s in enumerate(rows):
+        for r, s in enumerate(rows_a.tolist()):
             if zoom_value[r] < values_out[s]:
                 values_out[s], theta_out[s] = zoom_value[r], zoom_theta[r]
     return values_out, np.mod(theta_out, TWO_PI)

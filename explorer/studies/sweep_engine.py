@@ -57,7 +57,7 @@ from ..core.plugins import resolve
 from ..effects import registry as effects
 from ..effects.elastic_batch import BatchCache, ELASTIC, accepts, elastic_chunk_values, elastic_run
 from ..effects.pipeline import RunCache, figures, simulate
-from .sweep_rigid import RIGID, rigid_over_speeds
+from .sweep_rigid import RIGID, rigid_over_speeds, speeds_of
 from .sweep_spec import scene_for
 
 
@@ -149,7 +149,7 @@ def _kernel_row(scene, names, shared) -> dict[str, float]:
     row: dict[str, float] = {}
     rigid = names - set(ELASTIC) - {"run_failed"}
     if rigid:
-        row.update({name: float(v[0]) for name, v in rigid_over_speeds([scene], rigid, shared).items()})
+        row.update({name: float(v[0]) for name, v in rigid_over_speeds(scene, [scene.drive.omega], rigid, shared).items()})
     figures, _, _ = elastic_run(scene, shared)
     row.update(figures)
     return row
@@ -168,10 +168,15 @@ def _kernel_chunk(base, keys, values, names, shared, groups=None) -> np.ndarray:
     fail = names.index("run_failed")
     failed = np.zeros(len(values), bool)
     rigid = [n for n in names if n not in ELASTIC and n != "run_failed"]
+    speed = list(keys).index("drive.rpm") if "drive.rpm" in keys else None
     if rigid:
         for group in (groups if groups is not None else [np.array([i]) for i in range(len(values))]):
             try:
-                figures = rigid_over_speeds([scene_for(base, keys, values[i]) for i in group], rigid, shared)
+                # the group's runs differ in speed only: one scene, and each run's speed
+                scene = scene_for(base, keys, values[group[0]])
+                omegas = (speeds_of(scene, values[group, speed]) if speed is not None
+                          else np.full(len(group), scene.drive.omega))
+                figures = rigid_over_speeds(scene, omegas, rigid, shared)
             except (InputError, RuntimeError, ValueError, ArithmeticError):
                 failed[group] = True
                 continue

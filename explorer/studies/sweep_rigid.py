@@ -11,7 +11,8 @@ geometry and the torque factors. Then
   effect's per-sample product T = c(F) F, equal to its max_camshaft_torque_Nm to 1e-9 relative:
   the factor c is formed once instead of per speed).
 The caller groups the runs (sweep_engine.speed_groups: equal in every varied key but the speed); a
-run alone is a group of one, computed the same way.
+run alone is a group of one, computed the same way. A group is one scene and its speeds (no scene
+built per run: speeds_of gives Drive.omega of each rpm).
 """
 
 from __future__ import annotations
@@ -29,13 +30,21 @@ from ..mechanics.forces import TrainLoads, float_speed, grid_load_parts, min_con
 RIGID = ("min_contact_force_N", "float_speed_rpm", "max_camshaft_torque_Nm")
 
 
-def rigid_over_speeds(scenes, names, shared) -> dict[str, np.ndarray]:
-    """{name: value per run} of the rigid names asked for, for scenes that differ in speed only."""
-    scene = scenes[0]
+def speeds_of(scene, rpms) -> np.ndarray:
+    """Camshaft speeds (rad/s) of the scene at each of `rpms`: Drive.omega's arithmetic
+    (rpm * 2 pi / 60, in that order) on the array, the floats a scene built with each rpm has
+    (tests/test_sweep_engine.py checks them against Drive.omega) without a scene per run
+    (dataclasses.replace was 10 % of a 1000-speed sweep)."""
+    return np.asarray(rpms, dtype=float) * 2.0 * math.pi / 60.0
+
+
+def rigid_over_speeds(scene, omegas, names, shared) -> dict[str, np.ndarray]:
+    """{name: value per run} of the rigid names asked for, for the scene at the camshaft speeds
+    `omegas` (rad/s; the runs of a group differ in speed only)."""
     if shared.lift is None:
         shared.lift = scene.gear_plugin.build_lift(scene)
     lift = shared.lift
-    omegas = np.array([s.drive.omega for s in scenes])
+    omegas = np.asarray(omegas, dtype=float)
     out: dict[str, np.ndarray] = {}
     ratio, lash = scene.follower.ratio, scene.valve.lash
     if "min_contact_force_N" in names or "float_speed_rpm" in names:
@@ -48,7 +57,11 @@ def rigid_over_speeds(scenes, names, shared) -> dict[str, np.ndarray]:
                         lambda: float_speed(lift, loads, ratio, lash, pieces, n_grid))
         out["float_speed_rpm"] = np.full(omegas.size, jump.rpm if math.isfinite(jump.omega) else math.nan)
     if "max_camshaft_torque_Nm" in names:
-        theta, a_coef, g_part, is_open = grid_load_parts(scene, lift)
+        # speed-independent: made once per distinct loads, lash and grid (as the pieces above)
+        n = scene.solver.steps_per_revolution
+        lash = scene.valve.lash if scene.valve is not None else 0.0
+        key = (TrainLoads.from_scene(scene), ratio, lash, n)
+        theta, a_coef, g_part, is_open = remember(shared.of("contact grid"), key, lambda: grid_load_parts(scene, lift))
         # the kinematics' geometry columns at the first speed (the pipeline's run of that effect
         # alone): the factors do not depend on the speed
         kinematics = figures(scene, shared, effects=("kinematics",))
