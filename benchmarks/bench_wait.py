@@ -1,0 +1,205 @@
+"""Where a user waits (issue #27, items 3, 5, 7, 8): two checkouts side by side in one run, each
+figure measured in child processes that alternate between the checkouts, so that a change of the
+machine's load hits both alike; CPU time throughout (time.process_time in a child, the children's
+rusage for whole processes: on a 2-core machine shared with other work a process waits for a core
+as long again as it computes, and a wall clock would time the waits).
+
+    git archive <commit> | tar -x -C /tmp/before     # the code before
+    (cd /tmp/before && /path/to/.venv/bin/python -m explorer.dynamics.exact_kernel --warm)
+    .venv/bin/python benchmarks/bench_wait.py /tmp/before [--rounds 5] [--pool]
+
+Rows (medians over the rounds; the ratio after / before or the ratio the target names):
+- #27.5: a 1000-speed sweep of valve_float_demo.toml with all its effects (forces, contact,
+  elastic), one core: CPU of run_plan after a warm-up sweep in the same child (median of 3 a child);
+- #27.3: the first sweep in a fresh process (10 speeds of the float demo, imports included:
+  `import explorer; explorer.sweep(...)`), the child's whole CPU (rusage); and a whole
+  `explorer sweep` of 200 speeds against a whole `explorer simulate` of the same scene (each a
+  fresh process, `python -m explorer`, its rusage);
+- #27.8: `simulate` of one elastic revolution (the float scenes) against scipy DOP853 at rtol
+  1e-10 on the same model (explorer.studies.bench.speed_ratio's baseline), and the solver alone
+  (solve(method="exact")) against it: the difference is the cost outside the solver;
+- #27.7 (--pool, this checkout only): 20 000 runs of elastic_float.toml on 1 and 2 local workers
+  (run_plan's pool), wall time (two workers can only gain wall time) and the load.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from _timing import ROOT, print_table
+
+ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+
+
+def child_sweep(root: str, speeds: int, repeat: int) -> None:
+    sys.path.insert(0, root)
+    from explorer.scene.scene import load_scene
+    from explorer.studies.sweep_run import plan_from, run_plan
+
+    demo = load_scene(Path(root) / "assets" / "scenes" / "valve_float_demo.toml")
+    run_plan(demo, plan_from(demo, {"drive.rpm": "1000:6000:10"}), workers=1)  # imports, kernels
+    plan = plan_from(demo, {"drive.rpm": f"1000:6000:{speeds}"})
+    times = []
+    for _ in range(repeat):
+        t = time.process_time()
+        run_plan(demo, plan, workers=1)
+        times.append(time.process_time() - t)
+    print(json.dumps(statistics.median(times)))
+
+
+def child_single(root: str, repeat: int) -> None:
+    """simulate whole, the exact solver alone and DOP853 on the float scenes (CPU, alternating)."""
+    sys.path.insert(0, root)
+    import math
+
+    import numpy as np
+
+    from explorer.dynamics.solvers import solve
+    from explorer.effects.pipeline import simulate
+    from explorer.scene.scene import load_scene
+    from explorer.studies.bench import model_and_drive
+
+    out = {}
+    for name in ("valve_float_demo.toml", "elastic_float.toml"):
+        scene = load_scene(Path(root) / "assets" / "scenes" / name)
+        elastic = load_scene(Path(root) / "assets" / "scenes" / name, ['effects=["elastic"]'])
+        model, drive = model_and_drive(scene)
+        n = scene.solver.steps_per_revolution
+        t = np.arange(n) * (2.0 * math.pi / drive.omega / n)
+        runs = {
+            "dop853": lambda: solve(model, drive, t, method="scipy", rtol=1e-10, atol=1e-13, watch_extrema=False),
+            "solver": lambda: solve(model, drive, t, method="exact"),
+            "simulate_elastic": lambda: simulate(elastic),
+            "simulate": lambda: simulate(scene),
+        }
+        samples = {k: [] for k in runs}
+        for fn in runs.values():
+            fn()
+        for _ in range(repeat):
+            for k, fn in runs.items():
+                c = time.process_time()
+                fn()
+                samples[k].append(time.process_time() - c)
+        out[name] = {k: statistics.median(v) for k, v in samples.items()}
+    print(json.dumps(out))
+
+
+def run_child(root: Path, *args) -> object:
+    out = subprocess.run([sys.executable, __file__, "--child", str(root), *map(str, args)], capture_output=True,
+                         text=True, check=True, env=ENV)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def process_cpu(root: Path, argv: list[str]) -> float:
+    """CPU (user + system, rusage) of one whole child process run in the checkout `root`."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run(argv, cwd=root, check=True, capture_output=True, env=ENV)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+
+
+FIRST = ("import explorer; explorer.sweep('assets/scenes/valve_float_demo.toml', vary={'drive.rpm': '2000:5000:10'}, "
+         "workers=1)")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("before", type=Path, nargs="?", help="checkout of the code before (git archive)")
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--speeds", type=int, default=1000)
+    parser.add_argument("--pool", action="store_true", help="also time 20 000 runs on 1 and 2 local workers")
+    parser.add_argument("--child", nargs="+", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        root, *rest = args.child
+        if rest[0] == "sweep":
+            child_sweep(root, int(rest[1]), int(rest[2]))
+        else:
+            child_single(root, int(rest[1]))
+        return
+
+    trees = {"before": args.before.resolve(), "after": ROOT}
+    load0 = os.getloadavg()[0]
+    figures: dict[str, dict[str, list[float]]] = {k: {} for k in trees}
+    tmp = Path(os.environ.get("TMPDIR", "/tmp"))
+    for r in range(args.rounds):
+        for label in (list(trees) if r % 2 == 0 else list(trees)[::-1]):
+            root = trees[label]
+            f = figures[label]
+            f.setdefault("sweep", []).append(run_child(root, "sweep", args.speeds, 3))
+            f.setdefault("first", []).append(process_cpu(root, [sys.executable, "-c", FIRST]))
+            f.setdefault("cli_sweep", []).append(process_cpu(root, [
+                sys.executable, "-m", "explorer", "sweep", "assets/scenes/valve_float_demo.toml", "--vary",
+                "drive.rpm=1000:6000:200", "--workers", "1", "-o", str(tmp / f"bench_wait_{label}.csv")]))
+            f.setdefault("cli_simulate", []).append(process_cpu(root, [
+                sys.executable, "-m", "explorer", "simulate", "assets/scenes/valve_float_demo.toml", "-o",
+                str(tmp / f"bench_wait_{label}_sim.csv")]))
+            single = run_child(root, "single", 5)
+            for scene, values in single.items():
+                for k, v in values.items():
+                    f.setdefault(f"{scene}:{k}", []).append(v)
+    load1 = os.getloadavg()[0]
+    med = {label: {k: statistics.median(v) for k, v in f.items()} for label, f in figures.items()}
+    b, a = med["before"], med["after"]
+    print(f"bench_wait: before {trees['before']}, after {trees['after']}; medians of {args.rounds} rounds "
+          f"(alternating child processes), CPU time; load average {load0:.1f} -> {load1:.1f} on {os.cpu_count()} cores")
+    rows = [
+        [f"#27.5 {args.speeds}-speed sweep, valve_float_demo, all effects, 1 core", f"{b['sweep']:.3f} s",
+         f"{a['sweep']:.3f} s", f"{a['sweep'] / b['sweep']:.2f}x", "after/before <= 0.5"],
+        ["#27.3 first sweep in a fresh process (10 speeds, imports included)", f"{b['first']:.2f} s",
+         f"{a['first']:.2f} s", f"{a['first'] / b['first']:.2f}x", "after <= 0.5 s"],
+        ["#27.3 whole `explorer sweep` 200 speeds", f"{b['cli_sweep']:.2f} s", f"{a['cli_sweep']:.2f} s",
+         f"{a['cli_sweep'] / b['cli_sweep']:.2f}x", ""],
+        ["#27.3 whole `explorer simulate` (float demo)", f"{b['cli_simulate']:.2f} s", f"{a['cli_simulate']:.2f} s",
+         f"{a['cli_simulate'] / b['cli_simulate']:.2f}x", ""],
+        ["#27.3 sweep 200 / simulate 1 (whole processes)", f"{b['cli_sweep'] / b['cli_simulate']:.2f}x",
+         f"{a['cli_sweep'] / a['cli_simulate']:.2f}x", "", "<= 1.2x"],
+    ]
+    for scene in ("valve_float_demo.toml", "elastic_float.toml"):
+        k = lambda m, x: m[f"{scene}:{x}"]  # noqa: E731
+        rows.append([f"#27.8 {scene}: DOP853 rtol 1e-10 / simulate (its effects)",
+                     f"{k(b, 'dop853') / k(b, 'simulate'):.1f}x", f"{k(a, 'dop853') / k(a, 'simulate'):.1f}x", "",
+                     ">= 100x"])
+        rows.append([f"#27.8 {scene}: DOP853 / simulate (elastic effect only)",
+                     f"{k(b, 'dop853') / k(b, 'simulate_elastic'):.1f}x",
+                     f"{k(a, 'dop853') / k(a, 'simulate_elastic'):.1f}x", "", ">= 100x"])
+        rows.append([f"#27.8 {scene}: DOP853 / exact solver alone",
+                     f"{k(b, 'dop853') / k(b, 'solver'):.1f}x", f"{k(a, 'dop853') / k(a, 'solver'):.1f}x", "", ""])
+        rows.append([f"#27.8 {scene}: CPU ms DOP853 | solver | simulate elastic | simulate",
+                     " | ".join(f"{1e3 * k(b, x):.1f}" for x in ("dop853", "solver", "simulate_elastic", "simulate")),
+                     " | ".join(f"{1e3 * k(a, x):.1f}" for x in ("dop853", "solver", "simulate_elastic", "simulate")),
+                     "", ""])
+    print_table(["case", "before", "after", "after/before", "target"], rows)
+
+    if args.pool:
+        sys.path.insert(0, str(ROOT))
+        from explorer.scene.scene import load_scene
+        from explorer.studies.sweep_run import plan_from, run_plan
+
+        flt = load_scene(ROOT / "assets" / "scenes" / "elastic_float.toml")
+        run_plan(flt, plan_from(flt, {"drive.rpm": "3000:5000:16"}), workers=1)
+        plan = plan_from(flt, {"drive.rpm": "3000:5000:20000"})
+        walls = {1: [], 2: []}
+        for _ in range(3):
+            for w in (1, 2):
+                t = time.perf_counter()
+                run_plan(flt, plan, workers=w)
+                walls[w].append(time.perf_counter() - t)
+        w1, w2 = statistics.median(walls[1]), statistics.median(walls[2])
+        print(f"\n#27.7 20 000 runs of elastic_float.toml, local pool, wall time (median of 3); load average "
+              f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+        print_table(["workers", "wall s", "runs/s", "speed-up"],
+                    [["1", f"{w1:.2f}", f"{20000 / w1:,.0f}", "1.00x"], ["2", f"{w2:.2f}", f"{20000 / w2:,.0f}",
+                                                                        f"{w1 / w2:.2f}x"]])
+
+
+if __name__ == "__main__":
+    main()
