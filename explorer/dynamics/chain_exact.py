@@ -41,6 +41,7 @@ import numpy as np
 from . import chain_kernels as kernels
 from .chain import ChainModel, static_equilibrium
 from .model import DynamicsSolution
+from .phase_system import Event, PhaseModes, Transition, decompose, held_modes, state_matrix
 from .series import hermite5, taylor_shift
 
 FACT = np.array([math.factorial(k) for k in range(7)], dtype=float)
@@ -86,43 +87,9 @@ _INV_FACT = [1.0 / math.factorial(k) for k in range(8)]
 _PHI_SERIES_C = _PHI_SERIES.astype(complex)
 
 
-@dataclass(frozen=True)
-class PhaseModes:
-    contact: bool
-    seat: bool
-    lam: np.ndarray  # (2n,) eigenvalues
-    phys: np.ndarray  # (2n, 2n): y = Re(phys @ z)
-    inv: np.ndarray  # (2n, 2n): z = inv @ y
-    mB: np.ndarray  # (2n, 3): modal forcing per unit S, S', 1
-    A: np.ndarray  # (2n, 2n) physical state matrix
-    B: np.ndarray  # (2n, 3)
-    mode: int = 1  # the valve moving up (+1: friction -R) or down (-1), or held by friction (0)
-
-
 def _decompose(M: np.ndarray, K: np.ndarray, C: np.ndarray):
-    """(lam, phys, inv) of y' = A y (y = [x, x'], M x'' + C x' + K x = 0, K positive definite) in
-    mass-normalised coordinates Y = [K~^(1/2) q, q'] (q = M^(1/2) x), where the undamped A is
-    skew-symmetric and its eigenvectors orthogonal: y = phys @ z, z = inv @ y."""
-    n = M.size
-    mh, ms = 1.0 / np.sqrt(M), np.sqrt(M)
-    Kt = mh[:, None] * K * mh[None, :]
-    Ct = mh[:, None] * C * mh[None, :]
-    w2, Q = np.linalg.eigh(0.5 * (Kt + Kt.T))
-    w = np.sqrt(w2)
-    Sq = (Q * w) @ Q.T
-    Sqi = (Q / w) @ Q.T
-    AY = np.block([[np.zeros((n, n)), Sq], [-Sq, -Ct]])
-    lam, V = np.linalg.eig(AY)
-    Vi = np.linalg.inv(V)
-    T = np.zeros((2 * n, 2 * n))
-    T[:n, :n] = mh[:, None] * Sqi
-    T[n:, n:] = np.diag(mh)
-    Ti = np.zeros((2 * n, 2 * n))
-    Ti[:n, :n] = Sq * ms[None, :]
-    Ti[n:, n:] = np.diag(ms)
-    # a purely imaginary pair must not drift into the right half plane by rounding
-    lam = np.where(lam.real > 0.0, 1j * lam.imag, lam)
-    return lam, T @ V, Vi @ Ti
+    """(lam, phys, inv) of the chain's phase (phase_system.decompose without first-order states)."""
+    return decompose(M, K, C)
 
 
 def phase_modes(model: ChainModel, contact: bool, seat: bool, mode: int = 1) -> PhaseModes:
@@ -133,44 +100,94 @@ def phase_modes(model: ChainModel, contact: bool, seat: bool, mode: int = 1) -> 
     n = model.n
     M = model.masses
     K, C = model.phase_matrices(contact, seat)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K / M[:, None], -C / M[:, None]]])
-    B = np.zeros((2 * n, 3))
+    key = (contact, seat, mode)
     if mode != 0:
+        A = state_matrix(M, K, C)
+        B = np.zeros((2 * n, 3))
         lam, phys, inv = _decompose(M, K, C)
         B[n:] = model.forcing_vectors(contact, float(mode)) / M[:, None]
-        return PhaseModes(contact, seat, lam, phys, inv, inv @ B, A, B, mode)
-    # held valve: the rows of s and v are 0 (s' = 0, v' = 0: s stays s*, v stays 0); the coils
-    # u = G s + w with G the static shape (K_cc G = -K_c0), w the chain with held ends
-    A[0] = 0.0
-    A[n] = 0.0
-    A[:, n] = 0.0  # v = 0: its damping couplings do not act (and e_v is then a mode of eigenvalue 0)
-    m = n - 1
-    cs = np.r_[1:n, n + 1:2 * n]  # the coils' rows of y
-    z = np.zeros((2 * n, 2 * n), dtype=complex)
-    phys = z.copy()
-    inv = z.copy()
-    lam = np.zeros(2 * n, dtype=complex)
-    if m:
-        lc, pc, ic = _decompose(M[1:], K[1:, 1:], C[1:, 1:])
-        G = -np.linalg.solve(K[1:, 1:], K[1:, 0])
-        lam[:2 * m] = lc
-        phys[np.ix_(cs, np.arange(2 * m))] = pc
-        inv[np.ix_(np.arange(2 * m), cs)] = ic
-        # y_u = G s + w: the s column of phys adds G; z_w = ic [u - G s; u']
-        phys[1:n, 2 * m] = G
-        inv[:2 * m, 0] = -ic[:, :m] @ G
-    phys[0, 2 * m] = phys[n, 2 * m + 1] = 1.0
-    inv[2 * m, 0] = inv[2 * m + 1, n] = 1.0
-    return PhaseModes(contact, seat, lam, phys, inv, np.zeros((2 * n, 3), dtype=complex), A, B, 0)
+        return PhaseModes(key, lam, phys, inv, inv @ B, A, B, mode)
+    # held valve: its forcing acts on the valve's rows only, which are held (B = 0)
+    return held_modes(key, M, K, C, np.zeros((2 * n, 3)), 0)
 
 
-class _Event:
-    """g = coef . y + alpha S + beta S' + const, crossing in direction sign (+1 up, -1 down)."""
+class ChainPhases:
+    """The spring-chain model (chain.py) as a PhaseSystem (phase_system.py): phase types
+    (linkage loaded, seat engaged, valve mode), keyed (contact, seat, mode)."""
 
-    def __init__(self, kind: str, coef: np.ndarray, alpha: float, beta: float, const: float, sign: float,
-                 index: int = -1):
-        self.kind, self.coef, self.alpha, self.beta, self.const = kind, coef, alpha, beta, const
-        self.sign, self.index = sign, index
+    def __init__(self, model: ChainModel):
+        self.model = model
+        self.n = model.n
+        self.size = 2 * model.n
+        self.velocity_index = model.n
+
+    def phase_modes(self, key) -> PhaseModes:
+        return phase_modes(self.model, *key)
+
+    def fastest_rate(self) -> float:
+        return max(float(np.max(np.abs(self.phase_modes(k).lam))) for k in ((True, True, 1),))
+
+    def event_functions(self, key) -> list[Event]:
+        m, n = self.model, self.n
+        contact, seat, mode = key
+        ev = []
+        e_s = np.zeros(2 * n)
+        e_s[0] = 1.0
+        e_v = np.zeros(2 * n)
+        e_v[n] = 1.0
+        if contact:  # linkage force k (S - lash - s) + c (S' - v) falls to 0
+            ev.append(Event("separation", -m.stiffness * e_s - m.damping * e_v, m.stiffness, m.damping,
+                            -m.stiffness * m.lash, -1.0))
+        else:  # the gap S - lash - s closes
+            ev.append(Event("re-contact", -e_s, 1.0, 0.0, -m.lash, +1.0))
+        if mode == 0:
+            # held by friction: released when the net force leaves the band [-R, R] (the seat's
+            # state cannot change while the valve stands)
+            coef, alpha, beta, const = m.net_force_row(contact, seat)
+            ev.append(Event("release", coef, alpha, beta, const - m.friction, +1.0, index=+1))
+            ev.append(Event("release", coef, alpha, beta, const + m.friction, -1.0, index=-1))
+        elif seat:
+            ev.append(Event("lift-off", e_s, 0.0, 0.0, 0.0, +1.0))
+        else:
+            ev.append(Event("seat", e_s, 0.0, 0.0, 0.0, -1.0))
+        if mode != 0 and m.friction > 0.0:  # the velocity reaches 0: the valve sticks or turns
+            ev.append(Event("velocity-zero", -mode * e_v, 0.0, 0.0, 0.0, +1.0))
+        if math.isfinite(m.clash_compression):
+            for j in range(n):  # element j: x_j - x_(j+1) reaches the clash compression
+                c = np.zeros(2 * n)
+                c[j] = 1.0
+                if j + 1 < n:
+                    c[j + 1] = -1.0
+                ev.append(Event("coil-clash", c, 0.0, 0.0, -m.clash_compression, +1.0, index=j, grouped=True))
+        return ev
+
+    def apply_event(self, key, e: Event, y: np.ndarray, S: float, S1: float) -> Transition:
+        kind = e.kind
+        contact, seat, mode = key
+        if kind == "velocity-zero":
+            kind, mode = stick_or_turn(self.model, y, S, S1, contact, seat)
+            y[self.n] = 0.0  # (a rounding away from 0)
+        elif kind == "release":
+            mode = e.index
+        item = {"kind": kind}
+        if kind == "seat":
+            item["velocity_m_s"] = float(y[self.n])
+        if kind == "coil-clash":
+            item["element"] = e.index
+        contact = {"separation": False, "re-contact": True}.get(kind, contact)
+        seat = {"lift-off": False, "seat": True}.get(kind, seat)
+        # the valve starts from v = 0 with an acceleration that may be a rounding of 0 (the net
+        # force has just left the band): its velocity-zero function waits until the valve has
+        # moved in its direction, or a rounding would read as a stop at once
+        disarm = ("velocity-zero",) if kind in ("release", "turn") else ()
+        return Transition(item, (contact, seat, mode), y, disarm)
+
+    def start_state(self, drive, t0: float):
+        x0, v0, key = start_state(self.model, drive, t0)
+        return np.concatenate([x0, v0]), key
+
+    def outputs(self, t, y, keys, codes, events, stats, matrices, D):
+        return chain_outputs(self.model, None, t, y, codes, events, stats, matrices, D=D, keys=keys)
 
 
 @dataclass(frozen=True)
@@ -178,23 +195,27 @@ class _PhaseData:
     """What the compiled loops need of one phase type, as contiguous arrays (built once)."""
     modes: PhaseModes
     events: tuple
-    mB: np.ndarray  # (3, 2n) complex: modal forcing per unit S, S', 1
-    rows: np.ndarray  # (E, 2n) complex: event function e = Re(rows[e] . z) + ...
-    absrows: np.ndarray  # (E, 2n)
-    absmB: np.ndarray  # (2, 2n): |mB| of S and S' (the bound of the forcing's second derivative)
+    mB: np.ndarray  # (3, N) complex: modal forcing per unit S, S', 1
+    rows: np.ndarray  # (E, N) complex: event function e = Re(rows[e] . z) + ...
+    absrows: np.ndarray  # (E, N)
+    absmB: np.ndarray  # (2, N): |mB| of S and S' (the bound of the forcing's second derivative)
     ev: np.ndarray  # (4, E): alpha, beta, const, sign of each event function
-    W: np.ndarray  # (6, G, 2n) complex: hh k! phi_(k+1)(lambda hh) per group of equal steps
-    E0: np.ndarray  # (G, 2n) complex: e^(lambda hh)
+    W: np.ndarray  # (6, G, N) complex: hh k! phi_(k+1)(lambda hh) per group of equal steps
+    E0: np.ndarray  # (G, N) complex: e^(lambda hh)
 
 
-class ChainSolver:
-    def __init__(self, model: ChainModel, drive, t: np.ndarray, max_events: int = 10_000):
-        self.model, self.drive, self.max_events = model, drive, max_events
+class PhaseSolver:
+    """The event loop over the steps of the output grid for any PhaseSystem (phase_system.py):
+    the spring chain (ChainPhases) and the valve train (train.TrainModel)."""
+
+    def __init__(self, system, drive, t: np.ndarray, max_events: int = 10_000):
+        self.system, self.drive, self.max_events = system, drive, max_events
         self._modes: dict = {}
         self._data: dict = {}
         self._build_grid(drive, t)
         self.events: list[dict] = []
-        self.n = model.n
+        self.keys: list = []  # the phase types met, numbered in that order (key_nodes holds the numbers)
+        self._codes: dict = {}
 
     # ------------------------------------------------------------------ grid and drive
     def _build_grid(self, drive, t: np.ndarray) -> None:
@@ -244,10 +265,10 @@ class ChainSolver:
         self.h_group = np.array(means)
 
     # ------------------------------------------------------------------ phases
-    def modes(self, key: tuple[bool, bool, int]) -> PhaseModes:
+    def modes(self, key) -> PhaseModes:
         md = self._modes.get(key)
         if md is None:
-            md = self._modes[key] = phase_modes(self.model, *key)
+            md = self._modes[key] = self.system.phase_modes(key)
         return md
 
     def data(self, key) -> _PhaseData:
@@ -255,51 +276,24 @@ class ChainSolver:
         pd = self._data.get(key)
         if pd is None:
             md = self.modes(key)
-            events = tuple(self._make_event_functions(key))
-            rows = np.ascontiguousarray(np.array([e.coef @ md.phys for e in events]))  # (E, 2n)
+            events = tuple(self.system.event_functions(key))
+            rows = np.ascontiguousarray(np.array([e.coef @ md.phys for e in events]))  # (E, N)
             ev = np.array([[getattr(e, f) for e in events] for f in ("alpha", "beta", "const", "sign")])
-            F = phi_functions(md.lam[None, :] * self.h_group[:, None])  # (7, G, 2n)
+            F = phi_functions(md.lam[None, :] * self.h_group[:, None])  # (7, G, N)
             W = np.ascontiguousarray(F[1:] * (self.h_group[None, :, None] * FACT[:6, None, None]))
             mB = np.ascontiguousarray(md.mB.T)
             pd = self._data[key] = _PhaseData(md, events, mB, rows, np.abs(rows), np.abs(mB[:2]), ev, W,
                                               np.ascontiguousarray(F[0]))
         return pd
 
-    # ------------------------------------------------------------------ events
-    def _make_event_functions(self, key) -> list[_Event]:
-        m, n = self.model, self.n
-        contact, seat, mode = key
-        ev = []
-        e_s = np.zeros(2 * n)
-        e_s[0] = 1.0
-        e_v = np.zeros(2 * n)
-        e_v[n] = 1.0
-        if contact:  # linkage force k (S - lash - s) + c (S' - v) falls to 0
-            ev.append(_Event("separation", -m.stiffness * e_s - m.damping * e_v, m.stiffness, m.damping,
-                             -m.stiffness * m.lash, -1.0))
-        else:  # the gap S - lash - s closes
-            ev.append(_Event("re-contact", -e_s, 1.0, 0.0, -m.lash, +1.0))
-        if mode == 0:
-            # held by friction: released when the net force leaves the band [-R, R] (the seat's
-            # state cannot change while the valve stands)
-            coef, alpha, beta, const = m.net_force_row(contact, seat)
-            ev.append(_Event("release", coef, alpha, beta, const - m.friction, +1.0, index=+1))
-            ev.append(_Event("release", coef, alpha, beta, const + m.friction, -1.0, index=-1))
-        elif seat:
-            ev.append(_Event("lift-off", e_s, 0.0, 0.0, 0.0, +1.0))
-        else:
-            ev.append(_Event("seat", e_s, 0.0, 0.0, 0.0, -1.0))
-        if mode != 0 and m.friction > 0.0:  # the velocity reaches 0: the valve sticks or turns
-            ev.append(_Event("velocity-zero", -mode * e_v, 0.0, 0.0, 0.0, +1.0))
-        if math.isfinite(m.clash_compression):
-            for j in range(n):  # element j: x_j - x_(j+1) reaches the clash compression
-                c = np.zeros(2 * n)
-                c[j] = 1.0
-                if j + 1 < n:
-                    c[j + 1] = -1.0
-                ev.append(_Event("coil-clash", c, 0.0, 0.0, -m.clash_compression, +1.0, index=j))
-        return ev
+    def code(self, key) -> int:
+        c = self._codes.get(key)
+        if c is None:
+            c = self._codes[key] = len(self.keys)
+            self.keys.append(key)
+        return c
 
+    # ------------------------------------------------------------------ events
     def _arm(self, pd: _PhaseData, z, j: int, u: float, previous=None) -> np.ndarray:
         """An event function is armed while it is on the near side of its crossing; right after
         an event its value is a rounding away from 0 and moving out: not armed until it has
@@ -319,13 +313,13 @@ class ChainSolver:
         return None if i < 0 else (u, i)
 
     # ------------------------------------------------------------------ the run
-    def run(self, x0: np.ndarray, v0: np.ndarray, key) -> None:
+    def run(self, y0: np.ndarray, key) -> None:
         nodes, h = self.nodes, self.h
         steps = h.size
-        self.z_nodes = np.empty((nodes.size, 2 * self.n), dtype=complex)
-        self.key_nodes = np.empty(nodes.size, dtype=np.int8)
+        self.z_nodes = np.empty((nodes.size, self.system.size), dtype=complex)
+        self.key_nodes = np.empty(nodes.size, dtype=np.int16)
         pd = self.data(key)
-        z = pd.modes.inv @ np.concatenate([x0, v0])
+        z = pd.modes.inv @ y0
         self._store(0, z, key)
         armed = None
         j, u = 0, 0.0  # the state z is at node j + u of its step
@@ -348,7 +342,7 @@ class ChainSolver:
             done, zend = kernels.scan(j, z, steps, lam, pd.mB, pd.rows, pd.absrows, pd.absmB, pd.ev, pd.W, pd.E0,
                                       self.group, self.P, h, self.S2b, self.S3b, self.z_nodes, armed)
             if done:
-                self.key_nodes[j + 1:j + done + 1] = key_code(key)
+                self.key_nodes[j + 1:j + done + 1] = self.code(key)
                 j += done
                 z = self.z_nodes[j]
             if j >= steps:
@@ -364,7 +358,7 @@ class ChainSolver:
 
     def _store(self, i: int, z, key) -> None:
         self.z_nodes[i] = z
-        self.key_nodes[i] = key_code(key)
+        self.key_nodes[i] = self.code(key)
 
     def _apply(self, hit, pd: _PhaseData, key, j, z0, u0):
         """The event `hit` = (u, function index) in step j (state z0 at u0): record it, switch
@@ -374,39 +368,28 @@ class ChainSolver:
         hj = float(self.h[j])
         z = kernels.advance_to(pd.modes.lam, pd.mB, z0, self.PT[j], u0, u, hj)
         y = (pd.modes.phys @ z).real
-        kind = e.kind
-        contact, seat, mode = key
-        if kind == "velocity-zero":
-            S, S1, _, _ = kernels.drive_at(self.PT[j], hj, u)
-            kind, mode = stick_or_turn(self.model, y, S, S1, contact, seat)
-            y[self.n] = 0.0  # (a rounding away from 0)
-        elif kind == "release":
-            mode = e.index
-        item = {"kind": kind, "time_s": float(self.nodes[j]) + u * hj}
-        if kind == "seat":
-            item["velocity_m_s"] = float(y[self.n])
-        if kind == "coil-clash":
-            item["element"] = e.index
+        S, S1, _, _ = kernels.drive_at(self.PT[j], hj, u)
+        tr = self.system.apply_event(key, e, y, S, S1)
+        item = {"kind": tr.record["kind"], "time_s": float(self.nodes[j]) + u * hj}
+        item.update((k, v) for k, v in tr.record.items() if k != "kind")
         self.events.append(item)
         if len(self.events) > self.max_events:
             raise RuntimeError(f"more than {self.max_events} events in one run")
-        contact = {"separation": False, "re-contact": True}.get(kind, contact)
-        seat = {"lift-off": False, "seat": True}.get(kind, seat)
-        new = (contact, seat, mode)
+        new = tr.key
         if new == key:  # a clash: that function waits until it has come back
             armed = self._arm(pd, z, j, u)
             armed[i] = False
             return key, z, u, armed
         pd_new = self.data(new)
-        z = pd_new.modes.inv @ y
-        if kind in ("release", "turn"):
-            # the valve starts from v = 0 with an acceleration that may be a rounding of 0 (the net
-            # force has just left the band): its velocity-zero function waits until the valve has
-            # moved in its direction, or a rounding would read as a stop at once
+        z = pd_new.modes.inv @ tr.y
+        if tr.disarm:
             armed = self._arm(pd_new, z, j, u)
-            armed[[e.kind == "velocity-zero" for e in pd_new.events]] = False
+            armed[[e.kind in tr.disarm for e in pd_new.events]] = False
             return new, z, u, armed
         return new, z, u, None
+
+
+ChainSolver = PhaseSolver  # (its name when it ran the spring chain only)
 
 
 _NONE = np.zeros(0, bool)  # "no previous flags" for the compiled arm
@@ -450,21 +433,21 @@ def key_code(key) -> int:
 
 
 def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes: np.ndarray, events, stats,
-                  modes, D: np.ndarray | None = None) -> ChainSolution:
-    """The solution's columns from the physical states y (2n, T) and the phase code of each
-    sample (key_code); D: the drive (3+, T) at t when the caller has it."""
+                  modes, D: np.ndarray | None = None, keys=KEYS) -> ChainSolution:
+    """The solution's columns from the physical states y (2n, T) and the phase of each sample,
+    keys[codes[i]] (default: key_code's numbering); modes(key) -> (A, B); D: the drive (3+, T)
+    at t when the caller has it."""
     n = model.n
     if D is None:
         D = np.asarray(drive(t), dtype=float)
     codes = np.asarray(codes)
-    contact = (codes % 4) >= 2
-    seat = (codes % 2) == 1
-    held = codes >= 8
+    table = np.array([[k[0], k[1], k[2] == 0] for k in keys], dtype=bool).reshape(-1, 3)
+    contact, seat, held = table[codes, 0], table[codes, 1], table[codes, 2]
     yd = np.empty_like(y)
     ydd = np.empty_like(y)
     for code in np.unique(codes).tolist():
         idx = codes == code
-        A, B = modes(KEYS[code])
+        A, B = modes(keys[code])
         u = np.array([D[0, idx], D[1, idx], np.ones(int(idx.sum()))])
         u1 = np.array([D[1, idx], D[2, idx], np.zeros(int(idx.sum()))])
         yd[:, idx] = A @ y[:, idx] + B @ u
@@ -482,23 +465,43 @@ def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes:
     )
 
 
-def solve(model: ChainModel, drive, t: np.ndarray, initial_state=None, max_events: int = 10_000) -> ChainSolution:
-    """The chain model over the times t, from rest in static equilibrium at t[0] (or from
-    initial_state = (x0, v0, (contact, seat)))."""
-    t = np.asarray(t, dtype=float)
-    solver = ChainSolver(model, drive, t, max_events=max_events)
-    x0, v0, key = initial_state if initial_state is not None else start_state(model, drive, float(t[0]))
-    solver.run(np.asarray(x0, float), np.asarray(v0, float), key)
+def as_system(model):
+    """The PhaseSystem of a model: a ChainModel wrapped (ChainPhases), any other taken as it is."""
+    return ChainPhases(model) if isinstance(model, ChainModel) else model
+
+
+def run_states(system, drive, t: np.ndarray, y0: np.ndarray, key, max_events: int = 10_000):
+    """Run the solver: (solver, physical states (N, T) at t, the phase code of each sample)."""
+    solver = PhaseSolver(system, drive, t, max_events=max_events)
+    solver.run(np.asarray(y0, float), key)
     out = solver.is_out
     zs = solver.z_nodes[out]
     codes = solver.key_nodes[out]
-    y = np.empty((2 * model.n, zs.shape[0]))
+    y = np.empty((system.size, zs.shape[0]))
     for code in np.unique(codes).tolist():
         idx = codes == code
-        y[:, idx] = (solver.modes(KEYS[code]).phys @ zs[idx].T).real
+        y[:, idx] = (solver.modes(solver.keys[code]).phys @ zs[idx].T).real
+    return solver, y, codes
+
+
+def solve(model, drive, t: np.ndarray, initial_state=None, max_events: int = 10_000):
+    """The model (a ChainModel, or a PhaseSystem such as train.TrainModel) over the times t, from
+    rest in static equilibrium at t[0], or from initial_state: (x0, v0, key) for the chain,
+    (y0, key) for a PhaseSystem."""
+    t = np.asarray(t, dtype=float)
+    system = as_system(model)
+    if initial_state is None:
+        y0, key = system.start_state(drive, float(t[0]))
+    elif isinstance(model, ChainModel):
+        x0, v0, key = initial_state
+        y0 = np.concatenate([np.asarray(x0, float), np.asarray(v0, float)])
+    else:
+        y0, key = initial_state
+    solver, y, codes = run_states(system, drive, t, y0, key, max_events)
+    out = solver.is_out
     stats = {"steps": int(solver.h.size), "events": len(solver.events), "phase_types": len(solver._modes)}
-    return chain_outputs(model, drive, t, y, codes, solver.events, stats,
-                         lambda key: (solver.modes(key).A, solver.modes(key).B), D=solver.D_nodes[:, out])
+    return system.outputs(t, y, solver.keys, codes, solver.events, stats,
+                          lambda key: (solver.modes(key).A, solver.modes(key).B), solver.D_nodes[:, out])
 
 
 class _CosineLift:
