@@ -124,9 +124,6 @@ class ChainPhases:
     def phase_modes(self, key) -> PhaseModes:
         return phase_modes(self.model, *key)
 
-    def fastest_rate(self) -> float:
-        return max(float(np.max(np.abs(self.phase_modes(k).lam))) for k in ((True, True, 1),))
-
     def event_functions(self, key) -> list[Event]:
         m, n = self.model, self.n
         contact, seat, mode = key
@@ -139,7 +136,7 @@ class ChainPhases:
             ev.append(Event("separation", -m.stiffness * e_s - m.damping * e_v, m.stiffness, m.damping,
                             -m.stiffness * m.lash, -1.0))
         else:  # the gap S - lash - s closes
-            ev.append(Event("re-contact", -e_s, 1.0, 0.0, -m.lash, +1.0))
+            ev.append(Event("re-contact", -e_s, 1.0, 0.0, -m.lash, +1.0, guard=True))
         if mode == 0:
             # held by friction: released when the net force leaves the band [-R, R] (the seat's
             # state cannot change while the valve stands)
@@ -149,7 +146,7 @@ class ChainPhases:
         elif seat:
             ev.append(Event("lift-off", e_s, 0.0, 0.0, 0.0, +1.0))
         else:
-            ev.append(Event("seat", e_s, 0.0, 0.0, 0.0, -1.0))
+            ev.append(Event("seat", e_s, 0.0, 0.0, 0.0, -1.0, guard=True))
         if mode != 0 and m.friction > 0.0:  # the velocity reaches 0: the valve sticks or turns
             ev.append(Event("velocity-zero", -mode * e_v, 0.0, 0.0, 0.0, +1.0))
         if math.isfinite(m.clash_compression):

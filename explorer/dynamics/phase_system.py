@@ -48,12 +48,13 @@ class Event:
     (+1 up, -1 down); index tells functions of one kind apart (a contact, a coil element, the
     direction of a release). grouped: a function of the state alone (alpha = beta = 0) that the
     solver may certify together with the other grouped ones (coil clashes: one bound for all);
-    the grouped functions of a phase come last."""
+    the grouped functions of a phase come last. guard: a re-engagement (a seat, a contact closing)
+    whose short excursions the scipy reference splits at its turning points (chain_reference.py)."""
 
     def __init__(self, kind: str, coef: np.ndarray, alpha: float, beta: float, const: float, sign: float,
-                 index: int = -1, grouped: bool = False):
+                 index: int = -1, grouped: bool = False, guard: bool = False):
         self.kind, self.coef, self.alpha, self.beta, self.const = kind, coef, alpha, beta, const
-        self.sign, self.index, self.grouped = sign, index, grouped
+        self.sign, self.index, self.grouped, self.guard = sign, index, grouped, guard
 
 
 @dataclass(frozen=True)
