@@ -199,6 +199,8 @@ class _PhaseData:
     ev: np.ndarray  # (4, E): alpha, beta, const, sign of each event function
     W: np.ndarray  # (6, G, N) complex: hh k! phi_(k+1)(lambda hh) per group of equal steps
     E0: np.ndarray  # (G, N) complex: e^(lambda hh)
+    gs: int  # the grouped functions (certified together) are those from gs on
+    colmax: np.ndarray  # (N,): max over the grouped functions of |rows[e, i]|
 
 
 class PhaseSolver:
@@ -279,8 +281,14 @@ class PhaseSolver:
             F = phi_functions(md.lam[None, :] * self.h_group[:, None])  # (7, G, N)
             W = np.ascontiguousarray(F[1:] * (self.h_group[None, :, None] * FACT[:6, None, None]))
             mB = np.ascontiguousarray(md.mB.T)
-            pd = self._data[key] = _PhaseData(md, events, mB, rows, np.abs(rows), np.abs(mB[:2]), ev, W,
-                                              np.ascontiguousarray(F[0]))
+            grouped = [e.grouped for e in events]
+            gs = grouped.index(True) if any(grouped) else len(events)
+            if not all(grouped[gs:]) or any(e.alpha or e.beta for e in events[gs:]):
+                raise ValueError("grouped event functions must come last and depend on the state alone")
+            absrows = np.abs(rows)
+            colmax = absrows[gs:].max(axis=0) if gs < len(events) else np.zeros(md.lam.size)
+            pd = self._data[key] = _PhaseData(md, events, mB, rows, absrows, np.abs(mB[:2]), ev, W,
+                                              np.ascontiguousarray(F[0]), gs, np.ascontiguousarray(colmax))
         return pd
 
     def code(self, key) -> int:
@@ -337,7 +345,8 @@ class PhaseSolver:
                 continue
             # step on while every step is certified free of events (the compiled recurrence)
             done, zend = kernels.scan(j, z, steps, lam, pd.mB, pd.rows, pd.absrows, pd.absmB, pd.ev, pd.W, pd.E0,
-                                      self.group, self.P, h, self.S2b, self.S3b, self.z_nodes, armed)
+                                      self.group, self.P, h, self.S2b, self.S3b, self.z_nodes, armed, pd.gs,
+                                      pd.colmax)
             if done:
                 self.key_nodes[j + 1:j + done + 1] = self.code(key)
                 j += done
