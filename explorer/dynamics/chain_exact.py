@@ -40,8 +40,9 @@ import numpy as np
 
 from . import chain_kernels as kernels
 from .chain import ChainModel, static_equilibrium
+from .chain_modes import chain_phase_modes
 from .model import DynamicsSolution
-from .phase_system import Event, PhaseModes, Transition, decompose, held_modes, state_matrix
+from .phase_system import Event, PhaseModes, Transition, decompose, held_modes, reduce_pairs, state_matrix
 from .series import hermite5, taylor_shift
 
 FACT = np.array([math.factorial(k) for k in range(7)], dtype=float)
@@ -92,6 +93,12 @@ def _decompose(M: np.ndarray, K: np.ndarray, C: np.ndarray):
     return decompose(M, K, C)
 
 
+# from this many coil elements on, a moving phase is decomposed from the chain's structure
+# (chain_modes.py: O(n^2)) rather than by the dense eig (O(n^3)); below it the dense one, which is
+# as fast there (measured: 8 elements 0.3 vs 0.6 ms, 16: 0.5 vs 1.5 ms, 64: 14-24 vs 2 ms per phase type)
+STRUCTURED_FROM = 24
+
+
 def phase_modes(model: ChainModel, contact: bool, seat: bool, mode: int = 1) -> PhaseModes:
     """The phase type's state matrix and its decomposition. mode +1/-1: the valve moves (its
     friction -mode R in the forcing). mode 0: the valve is held by friction at its height s*
@@ -104,7 +111,8 @@ def phase_modes(model: ChainModel, contact: bool, seat: bool, mode: int = 1) -> 
     if mode != 0:
         A = state_matrix(M, K, C)
         B = np.zeros((2 * n, 3))
-        lam, phys, inv = _decompose(M, K, C)
+        structured = chain_phase_modes(model, contact, seat) if model.elements >= STRUCTURED_FROM else None
+        lam, phys, inv = structured if structured is not None else _decompose(M, K, C)
         B[n:] = model.forcing_vectors(contact, float(mode)) / M[:, None]
         return PhaseModes(key, lam, phys, inv, inv @ B, A, B, mode)
     # held valve: its forcing acts on the valve's rows only, which are held (B = 0)
@@ -120,6 +128,9 @@ class ChainPhases:
         self.n = model.n
         self.size = 2 * model.n
         self.velocity_index = model.n
+        # a long chain: half the modes (conjugate pairs) and the outputs' rows only (a short one
+        # keeps the arithmetic its results were made with: golden scenes)
+        self.reduce_pairs = model.elements >= STRUCTURED_FROM
 
     def phase_modes(self, key) -> PhaseModes:
         return phase_modes(self.model, *key)
@@ -184,7 +195,8 @@ class ChainPhases:
         return np.concatenate([x0, v0]), key
 
     def outputs(self, t, y, keys, codes, events, stats, matrices, D):
-        return chain_outputs(self.model, None, t, y, codes, events, stats, matrices, D=D, keys=keys)
+        return chain_outputs(self.model, None, t, y, codes, events, stats, matrices, D=D, keys=keys,
+                             rows_only=self.reduce_pairs)
 
 
 @dataclass(frozen=True)
@@ -267,7 +279,10 @@ class PhaseSolver:
     def modes(self, key) -> PhaseModes:
         md = self._modes.get(key)
         if md is None:
-            md = self._modes[key] = self.system.phase_modes(key)
+            md = self.system.phase_modes(key)
+            if getattr(self.system, "reduce_pairs", False):
+                md = reduce_pairs(md)
+            self._modes[key] = md
         return md
 
     def data(self, key) -> _PhaseData:
@@ -350,7 +365,7 @@ class PhaseSolver:
             if done:
                 self.key_nodes[j + 1:j + done + 1] = self.code(key)
                 j += done
-                z = self.z_nodes[j]
+                z = self.z_nodes[j, :lam.size]
             if j >= steps:
                 break
             hit = self._search(pd, armed, z, j, 0.0)
@@ -363,7 +378,7 @@ class PhaseSolver:
             key, z, u, armed = self._apply(hit, pd, key, j, z, 0.0)
 
     def _store(self, i: int, z, key) -> None:
-        self.z_nodes[i] = z
+        self.z_nodes[i, :z.size] = z
         self.key_nodes[i] = self.code(key)
 
     def _apply(self, hit, pd: _PhaseData, key, j, z0, u0):
@@ -438,26 +453,45 @@ def key_code(key) -> int:
     return 2 * int(key[0]) + int(key[1]) + 4 * MODE_INDEX[key[2]]
 
 
+def valve_derivatives(y, codes, keys, modes, D, row: int, rows_only: bool = False):
+    """(y', y'') of state row `row` (a velocity: the acceleration and the jerk) from the phase ODE,
+    y' = A y + B u, y'' = A y' + B u' (u = [S, S', 1]). rows_only: from A's row and A^2's row
+    alone, O(N T) (long chains); else the whole y' (the arithmetic the short chain's results
+    were made with)."""
+    if not rows_only:
+        yd = np.empty_like(y)
+        ydd = np.empty_like(y)
+    acc = np.empty(y.shape[1])
+    jerk = np.empty(y.shape[1])
+    for code in np.unique(codes).tolist():
+        idx = codes == code
+        A, B = modes(keys[code])
+        u = np.array([D[0, idx], D[1, idx], np.ones(int(idx.sum()))])
+        u1 = np.array([D[1, idx], D[2, idx], np.zeros(int(idx.sum()))])
+        if rows_only:
+            a_row, b_row = A[row], B[row]
+            acc[idx] = a_row @ y[:, idx] + b_row @ u
+            jerk[idx] = (a_row @ A) @ y[:, idx] + (a_row @ B) @ u + b_row @ u1
+        else:
+            yd[:, idx] = A @ y[:, idx] + B @ u
+            ydd[:, idx] = A @ yd[:, idx] + B @ u1
+    if not rows_only:
+        return yd[row], ydd[row]
+    return acc, jerk
+
+
 def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes: np.ndarray, events, stats,
-                  modes, D: np.ndarray | None = None, keys=KEYS) -> ChainSolution:
+                  modes, D: np.ndarray | None = None, keys=KEYS, rows_only: bool = False) -> ChainSolution:
     """The solution's columns from the physical states y (2n, T) and the phase of each sample,
     keys[codes[i]] (default: key_code's numbering); modes(key) -> (A, B); D: the drive (3+, T)
-    at t when the caller has it."""
+    at t when the caller has it; rows_only: valve_derivatives'."""
     n = model.n
     if D is None:
         D = np.asarray(drive(t), dtype=float)
     codes = np.asarray(codes)
     table = np.array([[k[0], k[1], k[2] == 0] for k in keys], dtype=bool).reshape(-1, 3)
     contact, seat, held = table[codes, 0], table[codes, 1], table[codes, 2]
-    yd = np.empty_like(y)
-    ydd = np.empty_like(y)
-    for code in np.unique(codes).tolist():
-        idx = codes == code
-        A, B = modes(keys[code])
-        u = np.array([D[0, idx], D[1, idx], np.ones(int(idx.sum()))])
-        u1 = np.array([D[1, idx], D[2, idx], np.zeros(int(idx.sum()))])
-        yd[:, idx] = A @ y[:, idx] + B @ u
-        ydd[:, idx] = A @ yd[:, idx] + B @ u1
+    acc, jerk = valve_derivatives(y, codes, keys, modes, D, n, rows_only)
     s, v = y[0], y[n]
     force = np.where(contact, model.stiffness * (D[0] - model.lash - s) + model.damping * (D[1] - v), 0.0)
     force = np.maximum(force, 0.0)
@@ -465,8 +499,8 @@ def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes:
     phase = np.where(seat, 0, np.where(held, 3, np.where(contact, 1, 2)))
     seat_force = np.where(seat, -model.seat_stiffness * s - model.seat_damping * v, 0.0)
     return ChainSolution(
-        t=t, s=s, v=v, a=yd[n], linkage_force=force, contact=contact, events=tuple(events), stats=stats,
-        jerk=ydd[n], phase=phase, coils=y[1:n], coil_velocities=y[n + 1:],
+        t=t, s=s, v=v, a=acc, linkage_force=force, contact=contact, events=tuple(events), stats=stats,
+        jerk=jerk, phase=phase, coils=y[1:n], coil_velocities=y[n + 1:],
         retainer_force=model.retainer_force(y[:n], y[n:]), seat_force=seat_force,
     )
 
@@ -483,6 +517,21 @@ def run_states(system, drive, t: np.ndarray, y0: np.ndarray, key, max_events: in
     out = solver.is_out
     zs = solver.z_nodes[out]
     codes = solver.key_nodes[out]
+    if getattr(system, "reduce_pairs", False):
+        # Re(phys z) as one real product of the modal states' (re, im) pairs (a view of the
+        # complex array) with [Re phys', -Im phys'] interleaved: half the arithmetic of the complex
+        # product and no copies of the parts
+        yT = np.empty((zs.shape[0], system.size))
+        zf = zs.view(np.float64)
+        for code in np.unique(codes).tolist():
+            idx = codes == code
+            phys = solver.modes(solver.keys[code]).phys
+            m = phys.shape[1]
+            P = np.empty((2 * m, system.size))
+            P[0::2] = phys.real.T
+            P[1::2] = -phys.imag.T
+            yT[idx] = zf[idx, :2 * m] @ P
+        return solver, yT.T, codes
     y = np.empty((system.size, zs.shape[0]))
     for code in np.unique(codes).tolist():
         idx = codes == code

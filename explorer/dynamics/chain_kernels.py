@@ -580,3 +580,65 @@ def advance_to(lam, mB, z0, P, u0, u, hj):
     out = np.empty(lam.size, dtype=np.complex128)
     _state(lam, mB, z0, P, u0, u, hj, F, c, out)
     return out
+
+
+@njit(cache=True)
+def aberth(lam, p, b2, ms, c0, k0, max_iterations):
+    """The roots of the long chain's secular function (chain_modes.py) in the upper half plane by
+    Aberth's iteration from the starts lam (changed in place): each root's Newton correction
+    P/P' of the characteristic polynomial P = f prod_k d_k, from g = d_k f with its nearest pole
+    p_k removed (d factored, (lambda - p)(lambda - conj p): nothing cancels near a pole), repelled
+    from the other roots' approximations and their conjugates. Returns the iterations taken
+    (max_iterations + 1: not converged to 4 eps of each root)."""
+    n = lam.size
+    N = p.size
+    eps = np.finfo(np.float64).eps
+    step = np.empty(n, dtype=np.complex128)
+    for it in range(max_iterations):
+        done = True
+        for i in range(n):
+            L = lam[i]
+            k = 0
+            best = math.inf
+            for l in range(N):
+                dist = abs(L - p[l])
+                if dist < best:
+                    best, k = dist, l
+            S = 0.0j
+            S1 = 0.0j
+            rest = 0.0j
+            dk = 0.0j
+            ddk = 0.0j
+            for l in range(N):
+                a = L - p[l]
+                c = L - p[l].conjugate()
+                D = a * c
+                dD = a + c
+                if l == k:
+                    dk, ddk = D, dD
+                    continue
+                iD = 1.0 / D
+                q = b2[l] * iD
+                r = dD * iD
+                S += q
+                S1 += q * r
+                rest += r
+            l2 = L * L
+            fk = ms * l2 + c0 * L + k0 - l2 * l2 * S
+            dfk = 2.0 * ms * L + c0 - 4.0 * l2 * L * S + l2 * l2 * S1
+            g = dk * fk - l2 * l2 * b2[k]
+            dg = ddk * fk + dk * dfk - 4.0 * l2 * L * b2[k]
+            Nw = 1.0 / (dg / g + rest)
+            rep = 0.0j
+            for j in range(n):
+                if j != i:
+                    rep += 1.0 / (L - lam[j])
+                rep += 1.0 / (L - lam[j].conjugate())
+            step[i] = Nw / (1.0 - Nw * rep)
+        for i in range(n):
+            lam[i] -= step[i]
+            if not (abs(step[i]) <= 4.0 * eps * abs(lam[i])):
+                done = False
+        if done:
+            return it + 1
+    return max_iterations + 1

@@ -207,3 +207,25 @@ def held_modes(key, M, K, C, B: np.ndarray, held: int, H=None, cap=None, G=None)
     inv[k, held] = inv[k + 1, n + held] = 1.0
     mB = inv @ Bh if np.any(Bh) else np.zeros((N, 3), dtype=complex)
     return PhaseModes(key, lam, phys, inv, mB, A, Bh, 0)
+
+
+def reduce_pairs(md: PhaseModes) -> PhaseModes:
+    """The same phase carried by half its modes: a real state's complex modes come in conjugate
+    pairs (lambda, conj lambda) whose modal states stay conjugate, so y = Re(phys z) = Re(2 phys_i
+    z_i) over one of each pair (plus the real modes once). The solver then steps, bounds and
+    searches half as many modes; the event rows and bounds made from the doubled columns are the
+    same sums. Unchanged (md itself) when the eigenvalues are not in exact conjugate pairs."""
+    lam = md.lam
+    upper = np.flatnonzero(lam.imag > 0.0)
+    lower = np.flatnonzero(lam.imag < 0.0)
+    real = np.flatnonzero(lam.imag == 0.0)
+    if upper.size != lower.size:
+        return md
+    order_u = upper[np.lexsort((lam[upper].real, lam[upper].imag))]
+    order_l = lower[np.lexsort((lam[lower].real, -lam[lower].imag))]
+    if not np.array_equal(lam[order_u], lam[order_l].conj()):
+        return md
+    keep = np.concatenate([order_u, real])
+    factor = np.concatenate([np.full(order_u.size, 2.0), np.ones(real.size)])
+    return PhaseModes(md.key, lam[keep], md.phys[:, keep] * factor[None, :], md.inv[keep], md.mB[keep], md.A, md.B,
+                      md.mode)
