@@ -314,6 +314,18 @@ class PhaseSolver:
         return c
 
     # ------------------------------------------------------------------ events
+    @staticmethod
+    def _forcing(pd: _PhaseData, z) -> np.ndarray:
+        """The modal forcing of this phase from the state z: the phase type's, with each free
+        group's velocity V as the constant forcing of its position X (X' = V; V is constant
+        while the phase lasts, so any state of it gives the same)."""
+        if not pd.modes.rigid:
+            return pd.mB
+        mB = pd.mB.copy()
+        for a, b in pd.modes.rigid:
+            mB[2, a] = z[b]
+        return mB
+
     def _arm(self, pd: _PhaseData, z, j: int, u: float, previous=None) -> np.ndarray:
         """An event function is armed while it is on the near side of its crossing; right after
         an event its value is a rounding away from 0 and moving out: not armed until it has
@@ -321,15 +333,15 @@ class PhaseSolver:
         if j >= self.h.size:
             return np.ones(len(pd.events), bool)
         out = np.empty(len(pd.events), bool)
-        kernels.arm(pd.modes.lam, pd.mB, pd.rows, pd.ev, z, self.PT[j], float(self.h[j]), u,
+        kernels.arm(pd.modes.lam, self._forcing(pd, z), pd.rows, pd.ev, z, self.PT[j], float(self.h[j]), u,
                     _NONE if previous is None else previous, out)
         return out
 
     def _search(self, pd: _PhaseData, armed, z, j: int, u0: float):
         """The first crossing of an armed function in (u0, 1] of step j: (u, index) or None."""
-        u, i = kernels.search_step(pd.modes.lam, pd.mB, pd.rows, pd.absrows, pd.absmB, pd.ev, armed, z, self.PT[j],
-                                   float(self.h[j]), float(self.S2b[j]), float(self.S3b[j]), float(self.nodes[j]),
-                                   u0, 1.0)
+        u, i = kernels.search_step(pd.modes.lam, self._forcing(pd, z), pd.rows, pd.absrows, pd.absmB, pd.ev, armed, z,
+                                   self.PT[j], float(self.h[j]), float(self.S2b[j]), float(self.S3b[j]),
+                                   float(self.nodes[j]), u0, 1.0)
         return None if i < 0 else (u, i)
 
     # ------------------------------------------------------------------ the run
@@ -351,7 +363,7 @@ class PhaseSolver:
             if u > 0.0:  # the rest of a step after an event
                 hit = self._search(pd, armed, z, j, u)
                 if hit is None:
-                    z = kernels.advance_to(lam, pd.mB, z, self.PT[j], u, 1.0, float(h[j]))
+                    z = kernels.advance_to(lam, self._forcing(pd, z), z, self.PT[j], u, 1.0, float(h[j]))
                     j, u = j + 1, 0.0
                     self._store(j, z, key)
                     armed = self._arm(pd, z, j, 0.0, previous=armed)
@@ -359,7 +371,8 @@ class PhaseSolver:
                 key, z, u, armed = self._apply(hit, pd, key, j, z, u)
                 continue
             # step on while every step is certified free of events (the compiled recurrence)
-            done, zend = kernels.scan(j, z, steps, lam, pd.mB, pd.rows, pd.absrows, pd.absmB, pd.ev, pd.W, pd.E0,
+            done, zend = kernels.scan(j, z, steps, lam, self._forcing(pd, z), pd.rows, pd.absrows, pd.absmB, pd.ev,
+                                      pd.W, pd.E0,
                                       self.group, self.P, h, self.S2b, self.S3b, self.z_nodes, armed, pd.gs,
                                       pd.colmax)
             if done:
@@ -387,7 +400,7 @@ class PhaseSolver:
         u, i = hit
         e = pd.events[i]
         hj = float(self.h[j])
-        z = kernels.advance_to(pd.modes.lam, pd.mB, z0, self.PT[j], u0, u, hj)
+        z = kernels.advance_to(pd.modes.lam, self._forcing(pd, z0), z0, self.PT[j], u0, u, hj)
         y = (pd.modes.phys @ z).real
         S, S1, _, _ = kernels.drive_at(self.PT[j], hj, u)
         tr = self.system.apply_event(key, e, y, S, S1)

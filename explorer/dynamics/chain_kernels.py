@@ -27,6 +27,8 @@ INV_FACT = np.array([1.0 / math.factorial(k) for k in range(8)])
 FACT = np.array([float(math.factorial(k)) for k in range(7)])
 EPS = np.finfo(np.float64).eps
 STACK = 512  # bisection depth is bounded by the step's width over 1e-15 of the time: ~60 levels
+MAX_INTERVALS = 200_000  # intervals one event search may bisect (a few dozen in practice)
+NOISE = 1e-12  # an event function's rounding, relative to the size of its terms
 
 
 @njit(cache=True)
@@ -461,9 +463,16 @@ def _newton(lam, mB, rows, ev, e, z0, P, u0, hj, a, b, fa, fb, start, F, c, zs, 
 
 @njit(cache=True)
 def _first_crossing(lam, mB, rows, absrows, absmB, ev, e, armed, z0, P, u0, u1, hj, S2b, S3b, tnode,
-                    F, c, g, g1, dd):
+                    F, c, g, g1, dd, noise):
     """First u in (u0, u1] where event e crosses in its direction while armed (NaN: none).
-    Bisection of the intervals not certified free, Newton on a certified monotone crossing."""
+    Bisection of the intervals not certified free, Newton on a certified monotone crossing.
+
+    noise: the function's rounding (NOISE times the size of its terms). A function within it of
+    zero throughout an interval is zero there to the arithmetic's resolution: not armed, it
+    cannot arm (it would have to reach below -noise), armed it cannot fire (above +noise); such
+    intervals are done. (Two parts flying free side by side keep their gap at 0 to within a
+    rounding: without this the bisection would split that interval to its last digit.) The
+    intervals are bounded by MAX_INTERVALS all the same."""
     m = lam.size
     sa = np.empty(STACK)
     sb = np.empty(STACK)
@@ -479,7 +488,11 @@ def _first_crossing(lam, mB, rows, absrows, absmB, ev, e, armed, z0, P, u0, u1, 
     za_s[0] = z0
     _state(lam, mB, z0, P, u0, u1, hj, F, c, zb_s[0])
     top = 1
+    intervals = 0
     while top > 0:
+        intervals += 1
+        if intervals > MAX_INTERVALS:
+            raise RuntimeError("chain event search: too many intervals (an event function stuck at its zero)")
         top -= 1
         a, b = sa[top], sb[top]
         za[:] = za_s[top]
@@ -494,6 +507,11 @@ def _first_crossing(lam, mB, rows, absrows, absmB, ev, e, armed, z0, P, u0, u1, 
         gb, g1b = gb * sign, g1b * sign
         width = (b - a) * hj
         M2 = bound(absmB, absrows, ev, e, dda, width, S2b, S3b)
+        reach = 0.5 * M2 * width * width * (1.0 + 1e-9)
+        if not armed and min(ga, ga + g1a * width) - reach >= -noise:
+            continue  # cannot get below -noise here: cannot arm, so cannot fire
+        if armed and max(ga, ga + g1a * width) + reach <= noise:
+            continue  # cannot rise above +noise here
         if not armed:
             if ga >= 0.0 and gb > 0.0 and excluded(ga, g1a, gb, g1b, M2, width):
                 continue
@@ -561,12 +579,16 @@ def search_step(lam, mB, rows, absrows, absmB, ev, armed, z, P, hj, S2b, S3b, tn
     best_e = -1
     g = np.empty(nE)
     g1 = np.empty(nE)
+    S0, S10, _, _ = drive_at(P, hj, u0)
     for e in range(nE):
         M2 = bound(absmB, absrows, ev, e, dda, width, S2b, S3b)
         if excluded(ga[e], g1a[e], gb[e], g1b[e], M2, width):
             continue
+        size = abs(ev[0, e] * S0) + abs(ev[1, e] * S10) + abs(ev[2, e])
+        for i in range(m):
+            size += absrows[e, i] * abs(z[i])
         r = _first_crossing(lam, mB, rows, absrows, absmB, ev, e, armed[e], z, P, u0, u1, hj, S2b, S3b, tnode,
-                            F, c, g, g1, dd)
+                            F, c, g, g1, dd, NOISE * size)
         if not math.isnan(r) and r < best:
             best, best_e = r, e
     return best, best_e

@@ -12,7 +12,9 @@ its turning point towards its crossing (g' = 0 crossing in the event's direction
 apex in flight, the gap's minimum while a contact is open), so a hop shorter than a step is split;
 not right after a guard's own restart (it is 0 there and would fire again at once); (2) a function
 that has just fired without changing the phase (a coil clash) waits for its return to the near side
-(a restart there), as the exact solver disarms it."""
+(a restart there), as the exact solver disarms it; so does a function that starts a phase within
+rounding of its zero (chain_kernels.NOISE of the size of its terms) and not moving to its near
+side (the check valve on its threshold at rest): the exact solver's arming rule."""
 
 from __future__ import annotations
 
@@ -23,6 +25,7 @@ from scipy.integrate import solve_ivp
 
 from .chain import ChainModel
 from .chain_exact import as_system
+from .chain_kernels import NOISE
 
 
 def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float = 1e-10,
@@ -65,6 +68,18 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
             D = drive(np.array([tt]))
             return A @ yy + B @ np.array([D[0, 0], D[1, 0], 1.0])
 
+        # a function within rounding of its zero and not moving to its near side is not armed
+        # (the exact solver's rule): it waits for its return, or it would fire on a rounding
+        D0 = drive(np.array([t_now]))
+        u0 = np.array([D0[0, 0], D0[1, 0], 1.0])
+        yd0 = A @ y + B @ u0
+        for e in functions:
+            g0 = float(e.coef @ y) + e.alpha * float(D0[0, 0]) + e.beta * float(D0[1, 0]) + e.const
+            g1 = float(e.coef @ yd0) + e.alpha * float(D0[1, 0]) + e.beta * float(D0[2, 0])
+            size = (float(np.abs(e.coef) @ np.abs(y)) + abs(e.alpha * float(D0[0, 0])) + abs(e.beta * float(D0[1, 0]))
+                    + abs(e.const))
+            if abs(g0) <= NOISE * size and not e.sign * g1 < 0.0:
+                waiting.add((e.kind, e.index))
         funcs, roles = [], []
 
         def add(role, func, direction):

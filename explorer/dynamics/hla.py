@@ -39,6 +39,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 ATMOSPHERE = 101_325.0  # Pa: absolute = gauge + this (the air's polytropic law needs absolute pressure)
 
 
@@ -64,6 +66,11 @@ class HLA:
     spring_rate: float = 0.0  # N/m, the plunger spring
     spring_preload: float = 0.0  # N, the plunger spring's force at p = 0 (pushes the plunger out)
     lever: float = 1.0  # valve travel per unit plunger travel at the joint it sits in
+    # the plunger's outward travel from its rest on the base circle to its retaining stop (m;
+    # None: no stop), and the stop's stiffness and damping
+    travel: float | None = None
+    stop_stiffness: float = 1e8  # N/m
+    stop_damping: float = 0.0  # N*s/m
 
     @property
     def area(self) -> float:
@@ -122,3 +129,68 @@ class HLA:
         """The orifice law's flow C_d A_o sqrt(2 dp / rho) (m^3/s): what the linear law stands for."""
         area = math.pi * self.check_diameter**2 / 4.0
         return self.discharge_coefficient * area * math.sqrt(2.0 * pressure_drop / self.oil_density)
+
+
+class LeakdownRig:
+    """An adjuster alone on a leak-down tester: a constant load W on its plunger (its body held),
+    the chamber fed at the supply pressure through the check valve. A PhaseSystem (phase_system.py)
+    of one mass and one first-order state, y = [p, p', P], phase key = the check valve open; the
+    drive is not used. Its closed-form travel (a linear system with a constant load: the matrix
+    exponential) and its leak-down rate (Poiseuille) are the oracles of the adjuster's equations
+    as the valve train solves them (tests)."""
+
+    def __init__(self, hla: HLA, load: float):
+        self.hla, self.load = hla, load
+        self.n, self.r, self.size, self.velocity_index = 1, 1, 3, 1
+
+    def matrices(self, open_: bool):
+        h = self.hla
+        M = np.array([h.plunger_mass])
+        K = np.array([[h.spring_rate]])
+        C = np.zeros((1, 1))
+        H = np.array([[h.area]])
+        cap = np.array([h.capacitance])
+        G = np.array([[h.leak_conductance + (h.refill_conductance if open_ else 0.0)]])
+        return M, K, C, H, cap, G
+
+    def forcing(self, open_: bool) -> np.ndarray:
+        """B (3, 3): the state's sources per unit S, S', 1 (only the constant)."""
+        h = self.hla
+        M, _, _, _, cap, _ = self.matrices(open_)
+        B = np.zeros((3, 3))
+        B[1, 2] = (self.load - h.spring_preload) / M[0]
+        B[2, 2] = (h.leak_conductance * h.supply_pressure
+                   + (h.refill_conductance * h.check_threshold if open_ else 0.0)) / cap[0]
+        return B
+
+    def phase_modes(self, key):
+        from .phase_system import PhaseModes, decompose, state_matrix
+
+        M, K, C, H, cap, G = self.matrices(key)
+        lam, phys, inv = decompose(M, K, C, H, cap, G)
+        B = self.forcing(key)
+        return PhaseModes(key, lam, phys, inv, inv @ B, state_matrix(M, K, C, H, cap, G), B, 1)
+
+    def event_functions(self, key):
+        from .phase_system import Event
+
+        e_w = np.array([0.0, 0.0, 1.0])
+        if key:
+            return [Event("check-valve-close", e_w, 0.0, 0.0, -self.hla.check_threshold, +1.0)]
+        return [Event("check-valve-open", e_w, 0.0, 0.0, -self.hla.check_threshold, -1.0)]
+
+    def apply_event(self, key, event, y, S, S1):
+        from .phase_system import Transition
+
+        return Transition({"kind": event.kind}, event.kind == "check-valve-open", y)
+
+    def start_state(self, drive, t0: float):
+        """The plunger at p = 0 at rest, the chamber at the supply pressure, the load just put on."""
+        return np.array([0.0, 0.0, self.hla.supply_pressure]), False
+
+    def outputs(self, t, y, keys, codes, events, stats, matrices, D):
+        from types import SimpleNamespace
+
+        open_ = np.array([bool(k) for k in keys], dtype=bool)[np.asarray(codes)]
+        return SimpleNamespace(t=t, plunger=y[0], plunger_velocity=y[1], chamber_pressure=y[2], check_open=open_,
+                               events=tuple(events), stats=stats)

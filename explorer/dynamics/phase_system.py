@@ -41,6 +41,8 @@ class PhaseModes:
     A: np.ndarray  # (N, N) physical state matrix
     B: np.ndarray  # (N, 3)
     mode: int = 1  # the valve moving up (+1), down (-1), or held by friction (0)
+    # (X, V) mode indices of each group of masses flying free (decompose_free): X' = V, V' = 0
+    rigid: tuple = ()
 
 
 class Event:
@@ -153,6 +155,62 @@ def decompose(M: np.ndarray, K: np.ndarray, C: np.ndarray, H: np.ndarray | None 
     return lam, T @ V, Vi @ Ti
 
 
+def decompose_free(M, K, C, H=None, cap=None, G=None, groups=()):
+    """decompose() of a phase in which groups of masses fly free (no spring, damper or drive ties
+    them to the rest: K phi = C phi = 0 for phi = 1 on the group, H' phi = 0), returning
+    (lam, phys, inv, rigid): each group's rigid-body motion is a double eigenvalue 0 with a
+    Jordan block (X' = V, V' = 0: nothing acts on the group as a whole), which no eigenvector
+    basis holds. It is decomposed with each group held by a spring kappa (M phi)(M phi)' of
+    frequency below every other (it changes that mode alone: the others are M-orthogonal to phi),
+    and that pair of modes is then replaced by the exact ones, the group's position X and velocity
+    V (lambda = 0; columns [phi; 0], [0; phi]; rows phi' M / (phi' M phi) on x and on x'). rigid:
+    the (X, V) mode indices of each group; the solver adds V as X's constant forcing in each
+    phase it enters (chain_exact: X(t) = X0 + V t exactly)."""
+    if not groups:
+        lam, phys, inv = decompose(M, K, C, H, cap, G)
+        return lam, phys, inv, ()
+    n = M.size
+    mh = 1.0 / np.sqrt(M)
+    free = np.ones(n, bool)
+    for g in groups:
+        free[np.asarray(g)] = False
+    Kt = mh[:, None] * K * mh[None, :]
+    w2 = np.linalg.eigvalsh(0.5 * (Kt + Kt.T))
+    floor = float(np.min(w2[w2 > 1e-9 * np.max(w2)]))
+    Kr = K.copy()
+    phis = []
+    for i, g in enumerate(groups):
+        phi = np.zeros(n)
+        phi[np.asarray(g)] = 1.0
+        Mphi = M * phi
+        mg = float(phi @ Mphi)
+        w2g = floor * 0.37 / (i + 1)  # below every other mode, distinct for each group
+        Kr = Kr + (w2g / mg) * np.outer(Mphi, Mphi)
+        phis.append((phi, Mphi, mg))
+    lam, phys, inv = decompose(M, Kr, C, H, cap, G)
+    lam = lam.copy()
+    phys = phys.copy()
+    inv = inv.copy()
+    rigid = []
+    taken: set = set()
+    for phi, Mphi, mg in phis:
+        share = np.abs(Mphi @ phys[:n]) / np.max(np.abs(phys), axis=0)
+        share[list(taken)] = -1.0
+        a, b = np.argsort(share)[-2:]
+        taken.update((a, b))
+        lam[a] = lam[b] = 0.0
+        phys[:, a] = 0.0
+        phys[:, b] = 0.0
+        phys[:n, a] = phi
+        phys[n:2 * n, b] = phi
+        inv[a] = 0.0
+        inv[b] = 0.0
+        inv[a, :n] = Mphi / mg
+        inv[b, n:2 * n] = Mphi / mg
+        rigid.append((int(a), int(b)))
+    return lam, phys, inv, tuple(rigid)
+
+
 def state_matrix(M, K, C, H=None, cap=None, G=None) -> np.ndarray:
     """A of y' = A y + B u for y = [x, x', w] (the physical state matrix)."""
     n = M.size
@@ -170,7 +228,7 @@ def state_matrix(M, K, C, H=None, cap=None, G=None) -> np.ndarray:
     return A
 
 
-def held_modes(key, M, K, C, B: np.ndarray, held: int, H=None, cap=None, G=None) -> PhaseModes:
+def held_modes(key, M, K, C, B: np.ndarray, held: int, H=None, cap=None, G=None, groups=()) -> PhaseModes:
     """The phase with mass `held` held at rest (a valve stuck by friction): its position and
     velocity rows are 0 (it stays where it is, v = 0); the other masses move about their static
     shape with it there, u = G_s s + w, K_rr G_s = -K_r,held, and w (with the first-order states)
@@ -194,9 +252,13 @@ def held_modes(key, M, K, C, B: np.ndarray, held: int, H=None, cap=None, G=None)
     phys = np.zeros((N, N), dtype=complex)
     inv = np.zeros((N, N), dtype=complex)
     k = 2 * m + r
+    rigid: tuple = ()
     if k:
         Hr = None if H is None else H[rest]
-        lc, pc, ic = decompose(M[rest], K[np.ix_(rest, rest)], C[np.ix_(rest, rest)], Hr, cap, G)
+        where = {int(i): j for j, i in enumerate(rest)}  # index in the rest of each free mass
+        lc, pc, ic, rg = decompose_free(M[rest], K[np.ix_(rest, rest)], C[np.ix_(rest, rest)], Hr, cap, G,
+                                        [[where[int(i)] for i in g] for g in groups])
+        rigid = rg
         Gs = -np.linalg.solve(K[np.ix_(rest, rest)], K[rest, held])
         lam[:k] = lc
         phys[np.ix_(rows, np.arange(k))] = pc
@@ -206,7 +268,9 @@ def held_modes(key, M, K, C, B: np.ndarray, held: int, H=None, cap=None, G=None)
     phys[held, k] = phys[n + held, k + 1] = 1.0
     inv[k, held] = inv[k + 1, n + held] = 1.0
     mB = inv @ Bh if np.any(Bh) else np.zeros((N, 3), dtype=complex)
-    return PhaseModes(key, lam, phys, inv, mB, A, Bh, 0)
+    for a, b in rigid:
+        mB[a] = mB[b] = 0.0
+    return PhaseModes(key, lam, phys, inv, mB, A, Bh, 0, rigid)
 
 
 def reduce_pairs(md: PhaseModes) -> PhaseModes:
@@ -227,5 +291,7 @@ def reduce_pairs(md: PhaseModes) -> PhaseModes:
         return md
     keep = np.concatenate([order_u, real])
     factor = np.concatenate([np.full(order_u.size, 2.0), np.ones(real.size)])
+    where = {int(i): j for j, i in enumerate(keep)}
+    rigid = tuple((where[a], where[b]) for a, b in md.rigid)
     return PhaseModes(md.key, lam[keep], md.phys[:, keep] * factor[None, :], md.inv[keep], md.mB[keep], md.A, md.B,
-                      md.mode)
+                      md.mode, rigid)

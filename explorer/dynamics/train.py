@@ -38,14 +38,14 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
 
 from .chain import ChainModel
 from .hla import HLA
-from .phase_system import Event, PhaseModes, Transition, decompose, held_modes, state_matrix
+from .phase_system import Event, PhaseModes, Transition, decompose_free, held_modes, state_matrix
 
 TRAIN_EVENT_KINDS = ("lift-off", "separation", "re-contact", "seat", "coil-clash", "check-valve-open",
                      "check-valve-close")
@@ -162,14 +162,29 @@ class TrainModel:
         return np.concatenate([self.chain.masses, np.array(extra, dtype=float)])
 
     @cached_property
+    def all_joints(self) -> tuple:
+        """The chain's joints, then the plunger's stop (a one-sided joint between the adjuster's
+        body and its plunger, closing where the plunger has travelled hla.travel out of its rest
+        on the base circle)."""
+        if self.hla is None or self.hla.travel is None:
+            return tuple(self.joints)
+        rest = replace(self, hla=replace(self.hla, travel=None))
+        y, _ = rest.static_state(0.0)
+        p_rest = float(y[self.plunger_index])
+        return tuple(self.joints) + (Joint("plunger-stop", self.hla.stop_stiffness, self.hla.stop_damping,
+                                           self.hla.travel - p_rest, True),)
+
+    @cached_property
     def one_sided(self) -> tuple:
         """Indices of the one-sided joints (their open/closed state is part of the phase key)."""
-        return tuple(j for j, jt in enumerate(self.joints) if jt.one_sided)
+        return tuple(j for j, jt in enumerate(self.all_joints) if jt.one_sided)
 
     def joint_terms(self, j: int) -> tuple:
         """(alpha, ((index, coefficient), ...)) of joint j's compression alpha S + a . x - lash,
         the terms in the order of their indices."""
         L, nc = len(self.parts), self.chain.n
+        if j > L:  # the plunger's stop: compressed as the plunger goes out (p falls)
+            return 0.0, ((self.plunger_index, -1.0),)
         terms = {}
         if j > 0:
             terms[nc + j - 1] = 1.0
@@ -178,11 +193,46 @@ class TrainModel:
             terms[self.plunger_index] = -self.hla.lever
         return (1.0 if j == 0 else 0.0), tuple(sorted(terms.items()))
 
+    def free_groups(self, key, held: bool = False) -> tuple:
+        """The groups of parts (their DOF indices) that nothing holds in phase `key`: connected by
+        closed joints only among themselves, not to the cam (a closed cam joint), the valve (its
+        spring and seat; or held by friction), the coils or the plunger (its spring)."""
+        nc = self.chain.n
+        L = len(self.parts)
+        parent = list(range(self.n + 1))  # the last: the ground
+        ground = self.n
+
+        def find(i):
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        def join(i, k):
+            parent[find(i)] = find(k)
+
+        for i in range(nc):
+            join(i, ground)
+        if self.hla is not None:
+            join(self.plunger_index, ground)
+        for j in self.closed_joints(key):
+            alpha, terms = self.joint_terms(j)
+            idx = [i for i, _ in terms]
+            if alpha != 0.0:
+                join(idx[0], ground)
+            for i in idx[1:]:
+                join(idx[0], i)
+        groups: dict = {}
+        for i in range(nc, nc + L):
+            if find(i) != find(ground):
+                groups.setdefault(find(i), []).append(i)
+        return tuple(tuple(g) for g in groups.values())
+
     def closed_joints(self, key) -> tuple:
         """The joints that carry load in phase `key`: the closed one-sided ones and the bonded ones."""
         contacts = key[0]
         closed = dict(zip(self.one_sided, contacts))
-        return tuple(j for j in range(len(self.joints)) if closed.get(j, True))
+        return tuple(j for j in range(len(self.all_joints)) if closed.get(j, True))
 
     # -- a phase's matrices -----------------------------------------------------------------------
     def phase_matrices(self, key):
@@ -195,7 +245,7 @@ class TrainModel:
         K[:nc, :nc] = c.spring_stiffness_matrix
         C[:nc, :nc] = c.spring_damping_matrix
         for j in self.closed_joints(key):
-            jt = self.joints[j]
+            jt = self.all_joints[j]
             _, terms = self.joint_terms(j)
             for i, ai in terms:
                 for k, ak in terms:
@@ -222,7 +272,7 @@ class TrainModel:
         F = np.zeros((self.n, 3))
         F[0, 2] = -c.preload - c.closing_load - sigma * c.friction
         for j in self.closed_joints(key):
-            jt = self.joints[j]
+            jt = self.all_joints[j]
             alpha, terms = self.joint_terms(j)
             for i, ai in terms:
                 F[i, 0] -= jt.stiffness * alpha * ai
@@ -246,16 +296,24 @@ class TrainModel:
         B[n:2 * n] = F / M[:, None]
         if self.r:
             B[2 * n:] = Fw / cap[:, None]
+        groups = self.free_groups(key)
         if mode == 0:
-            return held_modes(key, M, K, C, B, 0, H, cap, G)
+            return held_modes(key, M, K, C, B, 0, H, cap, G, groups)
         A = state_matrix(M, K, C, H, cap, G)
         structured = None
         if self.bare and self.reduce_pairs:
             from .chain_modes import chain_phase_modes
 
             structured = chain_phase_modes(self.chain, bool(contacts[0]), seat)
-        lam, phys, inv = structured if structured is not None else decompose(M, K, C, H, cap, G)
-        return PhaseModes(key, lam, phys, inv, inv @ B, A, B, mode)
+        if structured is not None:
+            lam, phys, inv = structured
+            rigid = ()
+        else:
+            lam, phys, inv, rigid = decompose_free(M, K, C, H, cap, G, groups)
+        mB = inv @ B
+        for a, b in rigid:  # nothing acts on a free group as a whole (its X' = V: the solver's)
+            mB[a] = mB[b] = 0.0
+        return PhaseModes(key, lam, phys, inv, mB, A, B, mode, rigid)
 
     # -- events -----------------------------------------------------------------------------------
     def _e(self, i: int) -> np.ndarray:
@@ -265,7 +323,7 @@ class TrainModel:
 
     def joint_rows(self, j: int):
         """(gap row, force row) of joint j over y, each (coef, alpha, beta, const)."""
-        jt = self.joints[j]
+        jt = self.all_joints[j]
         alpha, terms = self.joint_terms(j)
         n = self.n
         gap = np.zeros(self.size)
@@ -335,7 +393,7 @@ class TrainModel:
         if kind in ("separation", "re-contact"):
             contacts = tuple((kind == "re-contact") if j == e.index else closed
                              for j, closed in zip(self.one_sided, contacts))
-            item["contact"] = self.joints[e.index].name
+            item["contact"] = self.all_joints[e.index].name
         elif kind == "velocity-zero":
             coef, alpha, beta, const = self.net_force_row(key)
             yy = y.copy()
@@ -366,35 +424,47 @@ class TrainModel:
     # -- start ------------------------------------------------------------------------------------
     def static_state(self, S: float, S1: float = 0.0):
         """(y, key): at rest in static equilibrium with the drive at S (S' = S1: the dampers'
-        forces), the first consistent phase; the chamber at the supply pressure, its check valve
-        shut (on its threshold when it has no cracking pressure)."""
+        forces), the first consistent phase: a closed one-sided joint compressed with a positive
+        force, an open one not (as chain.static_equilibrium); failing that, parts resting against a
+        neighbour with no force between them (a train with lash on the base circle: nothing else
+        places its loose parts), within rounding. The chamber at the supply pressure, its check
+        valve shut (on its threshold when it has no cracking pressure)."""
         n = self.n
         mode = 0 if self.chain.friction > 0.0 else 1
         J = len(self.one_sided)
         orders = (sorted(itertools.product((False, True), repeat=J), key=sum),
                   sorted(itertools.product((False, True), repeat=J), key=lambda c: -sum(c)))
-        for seat, order in zip((True, False), orders):
-            for contacts in order:
-                key = (tuple(contacts), seat, mode, False if self.hla is not None else None)
-                K, _, H, _, _ = self.phase_matrices(key)
-                F, _ = self.forcing(key, 0.0)
-                rhs = F[:, 0] * S + F[:, 1] * S1 + F[:, 2]
-                w = np.zeros(self.r)
-                if self.hla is not None:
-                    w[0] = self.hla.supply_pressure
-                    rhs = rhs - H[:, 0] * w[0]
-                x = np.linalg.solve(K, rhs)
-                ok = (seat == (x[0] < 0.0))
-                for j, closed in zip(self.one_sided, contacts):
-                    jt = self.joints[j]
-                    alpha, terms = self.joint_terms(j)
-                    gap = alpha * S - jt.lash
-                    for i, ai in terms:
-                        gap += ai * x[i]
-                    force = jt.stiffness * gap + jt.damping * alpha * S1
-                    ok = ok and (closed == (gap >= 0.0 and force > 0.0))
-                if ok:
-                    return np.concatenate([x, np.zeros(n), w]), key
+        for relaxed in (False, True):
+            for seat, order in zip((True, False), orders):
+                for contacts in order:
+                    key = (tuple(contacts), seat, mode, False if self.hla is not None else None)
+                    if self.free_groups(key):
+                        continue  # a part free of its neighbours has no rest position
+                    K, _, H, _, _ = self.phase_matrices(key)
+                    F, _ = self.forcing(key, 0.0)
+                    rhs = F[:, 0] * S + F[:, 1] * S1 + F[:, 2]
+                    w = np.zeros(self.r)
+                    if self.hla is not None:
+                        w[0] = self.hla.supply_pressure
+                        rhs = rhs - H[:, 0] * w[0]
+                    x = np.linalg.solve(K, rhs)
+                    ok = (seat == (x[0] < 0.0))
+                    scale = 1e-9 * max(float(np.max(np.abs(x))), abs(S), 1e-6)
+                    for j, closed in zip(self.one_sided, contacts):
+                        jt = self.all_joints[j]
+                        alpha, terms = self.joint_terms(j)
+                        gap = alpha * S - jt.lash
+                        for i, ai in terms:
+                            gap += ai * x[i]
+                        force = jt.stiffness * gap + jt.damping * alpha * S1
+                        if not relaxed:
+                            ok = ok and (closed == (gap >= 0.0 and force > 0.0))
+                        elif closed:
+                            ok = ok and gap >= -scale and force >= -jt.stiffness * scale
+                        else:
+                            ok = ok and (gap <= scale or force <= jt.stiffness * scale)
+                    if ok:
+                        return np.concatenate([x, np.zeros(n), w]), key
         raise ValueError("no static equilibrium of the valve train at rest")
 
     def start_state(self, drive, t0: float):
@@ -404,7 +474,7 @@ class TrainModel:
     # -- outputs ----------------------------------------------------------------------------------
     def joint_force(self, j: int, D: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Joint j's force k delta + c delta' over the samples (whether it is closed or not)."""
-        jt = self.joints[j]
+        jt = self.all_joints[j]
         alpha, terms = self.joint_terms(j)
         n = self.n
         gap = alpha * D[0] - jt.lash
@@ -423,12 +493,13 @@ class TrainModel:
         table = np.array([[k[1], k[2] == 0] for k in keys], dtype=bool).reshape(-1, 2)
         seat, held = table[codes, 0], table[codes, 1]
         closed_by_key = [set(self.closed_joints(k)) for k in keys]
-        closed = {j: np.array([j in cl for cl in closed_by_key], dtype=bool)[codes] for j in range(len(self.joints))}
+        closed = {j: np.array([j in cl for cl in closed_by_key], dtype=bool)[codes]
+                  for j in range(len(self.all_joints))}
         rows_only = self.reduce_pairs or not self.bare
         acc, jerk = valve_derivatives(y, codes, keys, matrices, D, n, rows_only)
         s, v = y[0], y[n]
         forces = {}
-        for j, jt in enumerate(self.joints):
+        for j, jt in enumerate(self.all_joints):
             f = self.joint_force(j, D, y)
             if jt.one_sided:
                 f = np.maximum(np.where(closed[j], f, 0.0), 0.0)
@@ -444,7 +515,7 @@ class TrainModel:
             events=tuple(events), stats=stats, coils=y[1:nc], coil_velocities=y[n + 1:n + nc],
             retainer_force=c.retainer_force(y[:nc], y[n:n + nc]), seat_force=seat_force,
             parts=y[nc:nc + L], part_velocities=y[n + nc:n + nc + L], part_accelerations=parts_acc,
-            joint_forces=forces, joint_closed={jt.name: closed[j] for j, jt in enumerate(self.joints)},
+            joint_forces=forces, joint_closed={jt.name: closed[j] for j, jt in enumerate(self.all_joints)},
         )
         if self.hla is not None:
             ip = self.plunger_index
