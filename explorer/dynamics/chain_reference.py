@@ -4,7 +4,8 @@ Any PhaseSystem (phase_system.py: the spring chain, the valve train) runs here w
 phase types, event functions and transitions: in each phase y' = A y + B [S, S', 1] with the
 analytic drive (not its step polynomials), integrated by solve_ivp (DOP853 by default) with the
 phase's event functions; at an event the model's apply_event decides the next phase and the
-integration restarts there. The step is bounded by a quarter of the fastest period of the phase.
+integration restarts there. The step is bounded by a quarter of the fastest period of the phase
+(its oscillating modes; a real eigenvalue's decay is left to the error control).
 
 solve_ivp sees a crossing only between its steps. Two guards keep a short excursion from going
 unseen: (1) a function the model marks `guard` (a seat, a contact's re-contact) gets a restart at
@@ -47,7 +48,10 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
     def modes(k):
         if k not in cache:
             md = system.phase_modes(k)
-            cache[k] = (md.A, md.B, float(np.max(np.abs(md.lam))))
+            # the step bound: a quarter of the fastest period; a real eigenvalue (a leak's, a
+            # refill's decay) has no period, and DOP853's error control follows its decay itself
+            osc = np.abs(md.lam[np.abs(md.lam.imag) > 1e-6 * np.abs(md.lam)])
+            cache[k] = (md.A, md.B, float(np.max(osc)) if osc.size else float(np.max(np.abs(md.lam))))
         return cache[k]
 
     out = np.empty((N, t.size))
@@ -60,6 +64,7 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
     nfev = 0
     last_guard = None
     waiting: set = set()  # (kind, index) of functions that fired without a phase change
+    fresh = True  # a phase begins (the run's start, or an event): its functions are armed by the rule below
     while i_next < t.size:
         A, B, rho = modes(key)
         functions = system.event_functions(key)
@@ -68,12 +73,12 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
             D = drive(np.array([tt]))
             return A @ yy + B @ np.array([D[0, 0], D[1, 0], 1.0])
 
-        # a function within rounding of its zero and not moving to its near side is not armed
-        # (the exact solver's rule): it waits for its return, or it would fire on a rounding
+        # a phase's function within rounding of its zero and not moving to its near side is not
+        # armed (the exact solver's rule): it waits for its return, or it would fire on a rounding
         D0 = drive(np.array([t_now]))
         u0 = np.array([D0[0, 0], D0[1, 0], 1.0])
         yd0 = A @ y + B @ u0
-        for e in functions:
+        for e in functions if fresh else ():
             g0 = float(e.coef @ y) + e.alpha * float(D0[0, 0]) + e.beta * float(D0[1, 0]) + e.const
             g1 = float(e.coef @ yd0) + e.alpha * float(D0[1, 0]) + e.beta * float(D0[2, 0])
             size = (float(np.abs(e.coef) @ np.abs(y)) + abs(e.alpha * float(D0[0, 0])) + abs(e.beta * float(D0[1, 0]))
@@ -122,6 +127,7 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
         y = sol.y_events[k][0].copy()
         role, e = roles[k]
         t_now = t_ev
+        fresh = role == "event"
         if role == "guard":
             last_guard = e
             continue

@@ -208,6 +208,12 @@ def decompose_free(M, K, C, H=None, cap=None, G=None, groups=()):
         inv[a, :n] = Mphi / mg
         inv[b, n:2 * n] = Mphi / mg
         rigid.append((int(a), int(b)))
+    # the other modes exactly free of the rigid ones (they are, to the rounding of the temporary
+    # spring's modes): their rows annihilate the rigid columns, their columns the rigid rows
+    R = np.array([i for pair in rigid for i in pair])
+    O = np.setdiff1d(np.arange(lam.size), R)
+    inv[O] -= (inv[O] @ phys[:, R]) @ inv[R]
+    phys[:, O] -= phys[:, R] @ (inv[R] @ phys[:, O])
     return lam, phys, inv, tuple(rigid)
 
 

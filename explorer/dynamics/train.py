@@ -120,6 +120,25 @@ class TrainModel:
         if self.hla is not None and not self.parts:
             raise ValueError("the lash adjuster sits under a lever: the train needs a part (the finger or rocker)")
 
+    @staticmethod
+    def from_scene(scene) -> "TrainModel":
+        """The scene's train: its [[linkage.elements]] (each part's mass and its cam-side joint
+        referred to the valve: mass / ratio^2 or inertia / arm^2, stiffness and damping / ratio^2,
+        lash * ratio), [linkage] as the joint at the valve (valve.lash its gap), the valve, spring,
+        seat and loads as the spring-chain model takes them, and [hla] under the first part."""
+        chain = ChainModel.from_scene(scene)
+        link = scene.linkage
+        parts, joints = [], []
+        for i, e in enumerate(link.elements):
+            r2 = e.ratio * e.ratio
+            parts.append(Part(e.name, e.referred_mass))
+            joints.append(Joint("cam" if i == 0 else e.name, e.stiffness / r2, e.damping / r2, e.lash * e.ratio,
+                                e.one_sided))
+        joints.append(Joint("valve" if link.elements else "cam", link.stiffness, link.damping, scene.valve.lash,
+                            link.one_sided))
+        section = getattr(scene, "hla", None)
+        return TrainModel(chain, tuple(parts), tuple(joints), section.hla if section is not None else None)
+
     # -- layout ------------------------------------------------------------------------------------
     @property
     def bare(self) -> bool:
