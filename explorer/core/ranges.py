@@ -39,6 +39,9 @@ RANGES: dict[str, tuple[float, float]] = {
     "acceleration": (1e-9, 1e9),  # m/s**2
     "jerk": (1e-9, 1e14),  # m/s**3
     "torque": (1e-6, 1e10),  # N*m (and N*m/rad: a lever's rotational stiffness)
+    "volume": (1e-15, 1.0),  # m**3: a cubic micrometre to a cubic metre
+    "viscosity": (1e-6, 1e4),  # Pa*s: a gas to a heavy grease
+    "inertia": (1e-12, 1e4),  # kg*m**2
 }
 SHOWN_UNITS: dict[str, tuple[str, float]] = {
     "angle": ("deg", 180.0 / math.pi),
@@ -46,6 +49,7 @@ SHOWN_UNITS: dict[str, tuple[str, float]] = {
     "length": ("m", 1.0), "mass": ("kg", 1.0), "force": ("N", 1.0), "stiffness": ("N/m", 1.0),
     "damping": ("N*s/m", 1.0), "pressure": ("Pa", 1.0), "time": ("s", 1.0), "area": ("m**2", 1.0),
     "velocity": ("m/s", 1.0), "acceleration": ("m/s**2", 1.0), "jerk": ("m/s**3", 1.0), "torque": ("N*m", 1.0),
+    "volume": ("m**3", 1.0), "viscosity": ("Pa*s", 1.0), "inertia": ("kg*m**2", 1.0),
 }
 # dotted key (glob) -> (smallest non-zero size, largest size) in SI, narrower than the dimension's
 KEY_RANGES: dict[str, tuple[float, float]] = {
