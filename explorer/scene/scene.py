@@ -51,6 +51,7 @@ OWNED_SECTIONS: dict[str, str] = {
     "contact": "explorer.scene.contact_section:parse_contact_section",
     "spring_design": "explorer.mechanics.springs:parse_spring_design_section",
     "gear": "explorer.gears.spec:parse_gear_section",
+    "hla": "explorer.scene.train_section:parse_hla_section",
 }
 # Law-specific [lift] keys, parsed by the module of the law: law -> "module:function".
 LAW_OPTION_PARSERS: dict[str, str] = {
@@ -136,6 +137,11 @@ class Loads:
 class Linkage:
     stiffness: float  # N/m referred to the valve
     damping: float = 0.0  # N*s/m, viscous, in parallel with the stiffness
+    # the valve train as parts (issue #25, explorer/scene/train_section.py): the parts from the cam,
+    # each with its cam-side joint; stiffness and damping above are then the joint at the valve,
+    # one-sided (it can open: valve.lash is its gap) or bonded
+    elements: tuple = ()
+    one_sided: bool = True
 
 
 @dataclass(frozen=True)
@@ -173,6 +179,7 @@ class Scene:
     contact: Any = None  # owned by explorer.mechanics.contact
     spring_design: Any = None  # owned by explorer.mechanics.springs (optional advice and historic rules)
     gear: Any = None  # owned by explorer.gears.spec (pivoted lever, rocking cam, rolling lever, trip gear)
+    hla: Any = None  # owned by explorer.scene.train_section (a hydraulic lash adjuster under the lever)
 
     @property
     def directory(self) -> Path:
@@ -314,7 +321,7 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     valve = _parse_valve(top.table("valve", required=False))
     spring = _parse_spring(top.table("spring", required=False))
     loads = _parse_loads(top.table("loads", required=False), file)
-    linkage = _parse_linkage(top.table("linkage", required=False))
+    linkage = _parse_linkage(top.table("linkage", required=False), follower.ratio)
     seat = _parse_seat(top.table("seat", required=False) or Table({}, file, "seat"))
     solver = _parse_solver(top.table("solver", required=False) or Table({}, file, "solver"))
 
@@ -335,6 +342,7 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     for section, target in OWNED_SECTIONS.items():
         table = top.table(section, required=False)
         fields[section] = _import(target)(table, fields) if table is not None or section in needs else None
+    _import("explorer.scene.train_section:check_train")(fields, file)
     if lift.law in LAW_OPTION_PARSERS:
         options = _import(LAW_OPTION_PARSERS[lift.law])(top.table("lift"), fields)
         fields["lift"] = replace(lift, options=options)
@@ -516,13 +524,17 @@ def _parse_loads(t: Table | None, file: str) -> Loads:
     return Loads(friction=friction, closing=MappingProxyType(closing))
 
 
-def _parse_linkage(t: Table | None) -> Linkage | None:
+def _parse_linkage(t: Table | None, follower_ratio: float = 1.0) -> Linkage | None:
     if t is None:
         return None
-    t.reject_unknown(("stiffness", "damping"))
+    t.reject_unknown(("stiffness", "damping", "elements", "contact"))
+    from .train_section import CONTACTS, parse_elements
+
     return Linkage(
         stiffness=t.quantity("stiffness", "stiffness", positive=True),
         damping=t.quantity("damping", "damping", 0.0, nonnegative=True),
+        elements=parse_elements(t, follower_ratio),
+        one_sided=t.string("contact", "one-sided", choices=CONTACTS) == "one-sided",
     )
 
 
