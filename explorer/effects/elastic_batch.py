@@ -67,6 +67,8 @@ def accepts(scene, shared) -> bool:
         return False
     if scene.spring.elements > 0 or scene.solver.method != "exact":
         return False
+    if scene.linkage.elements or getattr(scene, "hla", None) is not None:  # a train of parts: the shared path
+        return False
     if shared.lift is None:
         from .lift import build_lift
 
