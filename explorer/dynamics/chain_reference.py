@@ -63,7 +63,10 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
     i_next = 1
     nfev = 0
     last_guard = None
-    waiting: set = set()  # (kind, index) of functions that fired without a phase change
+    # (kind, index) -> margin of the functions waiting for their return to the near side (a function
+    # that fired without a phase change, or one that began its phase on its zero): the return is
+    # where it is back by more than its rounding (margin), as the exact solver arms
+    waiting: dict = {}
     fresh = True  # a phase begins (the run's start, or an event): its functions are armed by the rule below
     while i_next < t.size:
         A, B, rho = modes(key)
@@ -78,13 +81,17 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
         D0 = drive(np.array([t_now]))
         u0 = np.array([D0[0, 0], D0[1, 0], 1.0])
         yd0 = A @ y + B @ u0
-        for e in functions if fresh else ():
+        for e in functions:
+            if not fresh and (e.kind, e.index) not in waiting:
+                continue
             g0 = float(e.coef @ y) + e.alpha * float(D0[0, 0]) + e.beta * float(D0[1, 0]) + e.const
             g1 = float(e.coef @ yd0) + e.alpha * float(D0[1, 0]) + e.beta * float(D0[2, 0])
             size = (float(np.abs(e.coef) @ np.abs(y)) + abs(e.alpha * float(D0[0, 0])) + abs(e.beta * float(D0[1, 0]))
                     + abs(e.const))
-            if abs(g0) <= NOISE * size and not e.sign * g1 < 0.0:
-                waiting.add((e.kind, e.index))
+            if (e.kind, e.index) in waiting:
+                waiting[(e.kind, e.index)] = NOISE * size
+            elif abs(g0) <= NOISE * size and not e.sign * g1 < 0.0:
+                waiting[(e.kind, e.index)] = NOISE * size
         funcs, roles = [], []
 
         def add(role, func, direction):
@@ -98,7 +105,12 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
                 return float(e.coef @ yy) + e.alpha * float(D[0, 0]) + e.beta * float(D[1, 0]) + e.const
 
             if (e.kind, e.index) in waiting:
-                add(("return", e), g, -e.sign)
+                margin = e.sign * waiting[(e.kind, e.index)]
+
+                def back(tt, yy, g=g, margin=margin):
+                    return g(tt, yy) + margin
+
+                add(("return", e), back, -e.sign)
                 continue
             add(("event", e), g, e.sign)
         # the guards after every event function: at a tie (the valve's apex is where its velocity
@@ -132,7 +144,7 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
             last_guard = e
             continue
         if role == "return":
-            waiting.discard((e.kind, e.index))
+            waiting.pop((e.kind, e.index), None)
             continue
         D = drive(np.array([t_ev]))
         tr = system.apply_event(key, e, y, float(D[0, 0]), float(D[1, 0]))
@@ -142,7 +154,7 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
         if len(events) > max_events:
             raise RuntimeError(f"more than {max_events} events in one run")
         if tr.key == key:
-            waiting.add((e.kind, e.index))
+            waiting[(e.kind, e.index)] = 0.0  # (its margin is set at the segment's start)
         y = tr.y
         key = tr.key
     stats = {"rhs_evaluations": int(nfev), "events": len(events)}
