@@ -296,7 +296,8 @@ def test_finger_on_an_adjuster_matches_scipy_with_two_contacts_and_the_check_val
     assert {("separation", "cam"), ("separation", "pad"), ("check-valve-open", None),
             ("check-valve-close", None)} <= kinds
     assert np.max(np.abs(ex.plunger - ref.plunger)) < 1e-9
-    assert np.max(np.abs(ex.chamber_pressure - ref.chamber_pressure)) < 1e-9 * np.max(np.abs(ex.chamber_pressure)) * 1e3
+    # measured: the lift 2.6e-14 m, the plunger 3.3e-14 m, the pressure 3e-10 of its peak, events 1e-13 s
+    assert np.max(np.abs(ex.chamber_pressure - ref.chamber_pressure)) < 1e-6 * np.max(np.abs(ex.chamber_pressure))
 
 
 def test_stiff_pushrod_ten_masses_high_speed_stays_finite_and_matches_scipy():
@@ -307,3 +308,29 @@ def test_stiff_pushrod_ten_masses_high_speed_stays_finite_and_matches_scipy():
     tr = TrainModel(_valve(spring_mass=0.0, lash=0.0), parts, joints)
     ex, _ = _compare(tr, 12000, steps=1800)
     assert np.all(np.isfinite(ex.s)) and np.all(np.isfinite(ex.parts))
+
+
+def test_pushrod_train_rattling_in_its_lash_matches_scipy():
+    # the pushrod scene's lifter and rocker (the pushrod in series with the rocker's cup) with the
+    # lash at the valve tip: after the valve seats, the lifter and the rocker rattle in the lash --
+    # the cam contact, the rocker's cup and the pad open and close, parts fly free of both
+    # neighbours (their rigid-body modes) -- 54 events, every one as scipy finds it; measured
+    # 7e-13 m over the revolution
+    from dataclasses import replace
+
+    scene = load_scene(scenes_dir() / "pushrod_train.toml")
+    els = scene.linkage.elements
+    series = 1.0 / (1.0 / els[1].stiffness + 1.0 / els[2].stiffness)
+    tr = TrainModel.from_scene(scene.with_changes(linkage=replace(
+        scene.linkage, elements=(els[0], replace(els[2], stiffness=series)))))
+    rpm = 2000
+    drive = Drive(build_lift(scene), scene.follower.ratio, rpm * math.pi / 30.0)
+    t = _grid(rpm)
+    ex = chain_exact.solve(tr, drive, t)
+    ref = chain_reference.solve(tr, drive, t, rtol=1e-11, atol=1e-14)
+    assert [(e["kind"], e.get("contact")) for e in ex.events] == [(e["kind"], e.get("contact")) for e in ref.events]
+    contacts = {e.get("contact") for e in ex.events if e["kind"] == "separation"}
+    assert contacts == {"cam", "rocker", "valve"}
+    np.testing.assert_allclose([e["time_s"] for e in ex.events], [e["time_s"] for e in ref.events], atol=1e-9)
+    assert np.max(np.abs(ex.s - ref.s)) < 1e-9
+    assert np.max(np.abs(ex.parts - ref.parts)) < 1e-9

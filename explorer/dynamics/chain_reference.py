@@ -81,6 +81,7 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
         D0 = drive(np.array([t_now]))
         u0 = np.array([D0[0, 0], D0[1, 0], 1.0])
         yd0 = A @ y + B @ u0
+        yd0_size = np.abs(A) @ np.abs(y) + np.abs(B) @ np.abs(u0)
         for e in functions:
             if not fresh and (e.kind, e.index) not in waiting:
                 continue
@@ -88,9 +89,13 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
             g1 = float(e.coef @ yd0) + e.alpha * float(D0[1, 0]) + e.beta * float(D0[2, 0])
             size = (float(np.abs(e.coef) @ np.abs(y)) + abs(e.alpha * float(D0[0, 0])) + abs(e.beta * float(D0[1, 0]))
                     + abs(e.const))
+            # (the slope's rounding: that of the terms making y', not y' itself, which is a rounding at rest)
+            size1 = float(np.abs(e.coef) @ yd0_size) + abs(e.alpha * float(D0[1, 0])) + abs(e.beta * float(D0[2, 0]))
             if (e.kind, e.index) in waiting:
                 waiting[(e.kind, e.index)] = NOISE * size
-            elif abs(g0) <= NOISE * size and not e.sign * g1 < 0.0:
+            elif abs(g0) <= NOISE * size and not e.sign * g1 < -NOISE * size1:
+                # on its zero and not moving in by more than a rounding (parts at rest against
+                # each other with no force between them)
                 waiting[(e.kind, e.index)] = NOISE * size
         funcs, roles = [], []
 
