@@ -533,18 +533,22 @@ def run_states(system, drive, t: np.ndarray, y0: np.ndarray, key, max_events: in
     if getattr(system, "reduce_pairs", False):
         # Re(phys z) as one real product of the modal states' (re, im) pairs (a view of the
         # complex array) with [Re phys', -Im phys'] interleaved: half the arithmetic of the complex
-        # product and no copies of the parts
-        yT = np.empty((zs.shape[0], system.size))
-        zf = zs.view(np.float64)
-        for code in np.unique(codes).tolist():
-            idx = codes == code
-            phys = solver.modes(solver.keys[code]).phys
-            m = phys.shape[1]
-            P = np.empty((2 * m, system.size))
-            P[0::2] = phys.real.T
-            P[1::2] = -phys.imag.T
-            yT[idx] = zf[idx, :2 * m] @ P
-        return solver, yT.T, codes
+        # product; phase by phase over the nodes (a phase's nodes follow each other: no copies)
+        zf = solver.z_nodes.view(np.float64)
+        every = solver.key_nodes
+        yT = np.empty((every.size, system.size))
+        mats: dict = {}
+        cuts = np.flatnonzero(np.diff(every)) + 1
+        for a, b in zip(np.r_[0, cuts], np.r_[cuts, every.size]):
+            code = int(every[a])
+            P = mats.get(code)
+            if P is None:
+                phys = solver.modes(solver.keys[code]).phys
+                P = mats[code] = np.empty((2 * phys.shape[1], system.size))
+                P[0::2] = phys.real.T
+                P[1::2] = -phys.imag.T
+            np.matmul(zf[a:b, :P.shape[0]], P, out=yT[a:b])
+        return solver, (yT if bool(np.all(out)) else yT[out]).T, codes
     y = np.empty((system.size, zs.shape[0]))
     for code in np.unique(codes).tolist():
         idx = codes == code

@@ -298,7 +298,10 @@ def scan(j, z, steps, lam, mB, rows, absrows, absmB, ev, W, E0, group, P, h, S2b
             gam1_a = mB[0, i] * S10 + mB[1, i] * S20
             dza[i] = lam[i] * za[i] + gam_a
             dzb[i] = lam[i] * zb[i] + gam_b
-            ddza_abs[i] = abs(lam[i] * dza[i] + gam1_a)
+            # |z''| bounded by |re| + |im| (<= sqrt 2 times the modulus): a certificate's bound
+            # needs no square root, and this is the scan's costliest line with one
+            dd = lam[i] * dza[i] + gam1_a
+            ddza_abs[i] = abs(dd.real) + abs(dd.imag)
             mb[i] = absmB[0, i] * s2b + absmB[1, i] * s3b
         clear = True
         one_by_one = gs
