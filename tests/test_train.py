@@ -253,10 +253,13 @@ def test_refill_against_the_orifice_formula():
     assert [e["kind"] for e in sol.events] == ["check-valve-open"]
     assert sol.check_open[-1]
     P = sol.chamber_pressure[-1]
-    assert P == pytest.approx(h.supply_pressure - dp, rel=1e-9)
+    # at rest in force: A P = load - F_0 - k_s p (the feeble spring's travel moves it by 1e-8)
+    assert P == pytest.approx((load - h.spring_preload - h.spring_rate * sol.plunger[-1]) / h.area, rel=1e-10)
+    assert P == pytest.approx(h.supply_pressure - dp, rel=1e-7)
     Q = -h.area * sol.plunger_velocity[-1]  # the chamber grows by this
     refill = Q - h.leak_conductance * (h.supply_pressure - P)
-    assert refill == pytest.approx(h.orifice_flow(dp), rel=1e-8)
+    assert refill == pytest.approx(h.refill_conductance * (h.check_threshold - P), rel=1e-9)
+    assert refill == pytest.approx(h.orifice_flow(dp), rel=1e-6)
     assert h.refill_flow(dp) == pytest.approx(h.orifice_flow(dp), rel=1e-15)
     assert h.refill_flow(4 * dp) == pytest.approx(2 * h.orifice_flow(4 * dp), rel=1e-15)
 
