@@ -56,6 +56,12 @@ EFFECT_COLUMNS: dict[str, tuple[str, ...]] = {
                 "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
                 "largest_bounce_m", "residual_deviation_m", "residual_amplitude_m"),
 }
+# with a hydraulic lash adjuster ([hla], effects/train_elastic.py), the elastic effect's adjuster figures:
+# how far the valve stays off its seat over the last revolution's base circle (0: it seats; where a
+# speed sweep shows pump-up beginning), the lash the adjuster took up, its plunger's travel over that
+# revolution and its chamber's peak pressure
+HLA_COLUMNS = ("pump_up_valve_lift_m", "hla_lash_taken_up_m", "hla_plunger_travel_per_revolution_m",
+               "hla_chamber_pressure_max_Pa")
 
 
 def result_columns(scene) -> tuple[str, ...]:
@@ -67,6 +73,8 @@ def result_columns(scene) -> tuple[str, ...]:
     for effect, cols in EFFECT_COLUMNS.items():
         if effect in effects:
             out.extend(cols)
+    if "elastic" in effects and getattr(scene, "hla", None) is not None:
+        out.extend(HLA_COLUMNS)
     return tuple(out) + ("run_failed",)
 
 
@@ -110,6 +118,12 @@ def row_scalars(names, summary, events, columns) -> dict[str, float]:
         row["largest_bounce_m"] = _largest_bounce(elastic, seats, columns)
         for name in ("residual_deviation_m", "residual_amplitude_m"):  # the elastic effect's (effects/residual.py)
             row[name] = _nan_none(summary.get(name))
+    if "pump_up_valve_lift_m" in names:
+        hla = summary.get("hla") or {}
+        row["pump_up_valve_lift_m"] = _nan_none(hla.get("pump_up_valve_lift_m"))
+        row["hla_lash_taken_up_m"] = _nan_none(hla.get("lash_taken_up_m"))
+        row["hla_plunger_travel_per_revolution_m"] = _nan_none(hla.get("plunger_travel_per_revolution_m"))
+        row["hla_chamber_pressure_max_Pa"] = _nan_none(hla.get("chamber_pressure_max_Pa"))
     return row
 
 
