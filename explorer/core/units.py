@@ -317,7 +317,7 @@ _FAST_UNITS: dict[str, tuple[str, float]] = {
     "m/s**2": ("acceleration", 1.0), "m/s^2": ("acceleration", 1.0),
     "N*m": ("torque", 1.0), "kgf*m": ("torque", _G),
     "kg/m**3": ("density", 1.0), "kg/m^3": ("density", 1.0),
-    "m**3": ("volume", 1.0), "cm**3": ("volume", 1e-6), "mm**3": ("volume", 1e-9),
+    "m**3": ("volume", 1.0), "mm**3": ("volume", 1e-9),
     "Pa*s": ("viscosity", 1.0), "mPa*s": ("viscosity", 1e-3),
     "kg*m**2": ("inertia", 1.0), "kg*cm**2": ("inertia", 1e-4), "kg*mm**2": ("inertia", 1e-6),
     "g*mm**2": ("inertia", 1e-9),
