@@ -404,11 +404,12 @@ class PhaseSolver:
         y = (pd.modes.phys @ z).real
         S, S1, _, _ = kernels.drive_at(self.PT[j], hj, u)
         tr = self.system.apply_event(key, e, y, S, S1)
-        item = {"kind": tr.record["kind"], "time_s": float(self.nodes[j]) + u * hj}
-        item.update((k, v) for k, v in tr.record.items() if k != "kind")
-        self.events.append(item)
-        if len(self.events) > self.max_events:
-            raise RuntimeError(f"more than {self.max_events} events in one run")
+        if tr.record is not None:
+            item = {"kind": tr.record["kind"], "time_s": float(self.nodes[j]) + u * hj}
+            item.update((k, v) for k, v in tr.record.items() if k != "kind")
+            self.events.append(item)
+            if len(self.events) > self.max_events:
+                raise RuntimeError(f"more than {self.max_events} events in one run")
         new = tr.key
         if new == key:  # a clash: that function waits until it has come back
             armed = self._arm(pd, z, j, u)

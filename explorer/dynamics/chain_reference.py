@@ -153,11 +153,12 @@ def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float
             continue
         D = drive(np.array([t_ev]))
         tr = system.apply_event(key, e, y, float(D[0, 0]), float(D[1, 0]))
-        item = {"kind": tr.record["kind"], "time_s": t_ev}
-        item.update((kk, v) for kk, v in tr.record.items() if kk != "kind")
-        events.append(item)
-        if len(events) > max_events:
-            raise RuntimeError(f"more than {max_events} events in one run")
+        if tr.record is not None:
+            item = {"kind": tr.record["kind"], "time_s": t_ev}
+            item.update((kk, v) for kk, v in tr.record.items() if kk != "kind")
+            events.append(item)
+            if len(events) > max_events:
+                raise RuntimeError(f"more than {max_events} events in one run")
         if tr.key == key:
             waiting[(e.kind, e.index)] = 0.0  # (its margin is set at the segment's start)
         y = tr.y

@@ -62,11 +62,12 @@ class Event:
 @dataclass(frozen=True)
 class Transition:
     """What an event does (PhaseSystem.apply_event): the record of the event (kind, and what
-    else it reports), the phase type after it, the state after it (the same but for a rounding
+    else it reports; None: a crossing that changes nothing and is not an event, such as a
+    contact's force turning positive while its gap is open), the phase type after it, the state after it (the same but for a rounding
     put right, such as a velocity set to 0 where it was reached), and the kinds of functions of
     the new phase that wait until they have come back to their near side (they sit on their zero)."""
 
-    record: dict
+    record: dict | None
     key: Any
     y: np.ndarray
     disarm: tuple[str, ...] = ()

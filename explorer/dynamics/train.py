@@ -44,6 +44,7 @@ from functools import cached_property
 import numpy as np
 
 from .chain import ChainModel
+from .chain_kernels import NOISE
 from .hla import HLA
 from .phase_system import Event, PhaseModes, Transition, decompose_free, held_modes, state_matrix
 
@@ -378,6 +379,13 @@ class TrainModel:
                 ev.append(Event("separation", *force, -1.0, index=j))
             else:  # its gap closes
                 ev.append(Event("re-contact", *gap, +1.0, index=j, guard=True))
+                if not self.bare and self.all_joints[j].damping > 0.0:  # (undamped: no remainder)
+                    # or, still compressed after a damped separation (the damper had cancelled the
+                    # spring: the gap > 0), the force it would carry turns positive again: a part
+                    # pushed back by a neighbour or the adjuster turns round within that remainder.
+                    # (A bare train keeps the spring-chain model's convention, bit for bit: there
+                    # the valve leaves faster than the remainder closes.)
+                    ev.append(Event("re-contact-force", *force, +1.0, index=j))
         e_s, e_v = self._e(0), self._e(n)
         if mode == 0:
             coef, alpha, beta, const = self.net_force_row(key)
@@ -409,6 +417,14 @@ class TrainModel:
         kind = e.kind
         n = self.n
         item: dict = {"kind": kind}
+        if kind == "re-contact-force":
+            gap, _ = self.joint_rows(e.index)
+            coef, alpha, _, const = gap
+            value = float(coef @ y) + alpha * S + const
+            size = float(np.abs(coef) @ np.abs(y)) + abs(alpha * S) + abs(const)
+            if value < -NOISE * size:  # the gap is open (beyond a rounding): a damper's pull, no contact
+                return Transition(None, key, y)
+            kind = item["kind"] = "re-contact"
         if kind in ("separation", "re-contact"):
             contacts = tuple((kind == "re-contact") if j == e.index else closed
                              for j, closed in zip(self.one_sided, contacts))
