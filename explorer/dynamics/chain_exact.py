@@ -603,6 +603,8 @@ def warm() -> int:
                        clash_compression=2e-3)
     omega = 600.0
     sol = solve(model, Drive(_CosineLift(4e-3), 1.0, omega), np.linspace(0.0, 2.0 * math.pi / omega, 721))
+    # the long chains' root finder (chain_modes.py), on a one-mode problem
+    kernels.aberth(np.array([1j]), np.array([2j]), np.array([0.1]), 1.0, 0.1, 1.0, 4)
     return [e["kind"] for e in sol.events]
 
 
