@@ -30,6 +30,7 @@ import math
 
 import numpy as np
 
+from ..core.errors import InputError
 from ..dynamics import solvers as registry
 from ..dynamics.hla import ATMOSPHERE
 from ..dynamics.model import Drive
@@ -79,6 +80,10 @@ def train_elastic_effect(ctx) -> EffectOutput:
     i0 = int(np.argmin(D[0]))
     one = np.concatenate([ctx.time[i0:], ctx.time[:i0] + period])
     t_run = np.concatenate([one + k * period for k in range(revolutions)])
+    try:
+        model.start_state(drive, float(t_run[0]))
+    except ValueError as exc:  # no rest for the train on the base circle: its joints contradict each other
+        raise InputError(scene.source, "linkage.elements", f"{exc}: check the joints' lash and contacts") from None
     sol = solve(model, drive, t_run, **options)
     rotate, _ = output_order(n, i0)
     last = slice((revolutions - 1) * n, revolutions * n)
