@@ -1,5 +1,7 @@
-"""The exact solver of the spring-chain model (chain.py): each phase's linear ODE solved in
-closed form through the eigen-decomposition of its state matrix.
+"""The exact solver of piecewise-linear models: the spring chain (chain.py, through ChainPhases)
+and the valve train of parts with its lash adjuster (train.py), any PhaseSystem
+(phase_system.py): each phase's linear ODE solved in closed form through the eigen-decomposition
+of its state matrix.
 
 Method. A phase (linkage loaded or not, seat engaged or not, the valve moving up or down with
 its friction, or held by it) is y' = A y + B [S, S', 1] with

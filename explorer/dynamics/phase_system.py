@@ -84,8 +84,8 @@ class PhaseSystem(Protocol):
     5. `start_state(drive, t0) -> (y0, key)`: at rest in static equilibrium with the drive at t0.
     6. `outputs(t, y, keys, codes, events, stats, matrices, D)`: the solution's columns from the
        physical states y (N, T) and each sample's phase (keys[codes[i]]); matrices(key) -> (A, B).
-    7. `fastest_rate() -> float`: an upper bound of |lambda| over its phase types (1/s), for the
-       step budget and the reference's step bound.
+    7. optional `reduce_pairs` (bool): the solver carries one mode of each conjugate pair
+       (reduce_pairs() below) and projects the states with real products.
     Keys are hashable; the solver numbers them in the order it meets them."""
 
     size: int

@@ -16,7 +16,9 @@ with alpha_0 = 1 (the cam's drive S, referred to the valve), a_j = e_(cam side) 
 and at the cam joint, under an adjuster, -g on p (g = hla.lever: the valve's travel per unit
 plunger travel with the cam still; r - 1 for an end-pivot finger of ratio r). A one-sided joint
 carries load only while closed (f > 0: it separates where f falls to 0, closes again where
-delta rises through 0, as the linkage of model.py); a bonded one always. The seat is one-sided
+delta rises through 0, as the linkage of model.py, or -- damped, in a train with parts -- where
+the force it would carry turns positive while delta is still > 0: a part pushed back within the
+remainder a damped separation leaves); a bonded one always. The seat is one-sided
 at the valve (chain.py's elastic seat), the spring acts on the valve, Coulomb friction on the
 valve as in chain.py. The adjuster's chamber pressure P is a first-order state (hla.py):
     m_p p'' = (g f_0) - A P - F_0 - k_s p,      (V / beta_e) P' = A p' - G_l (P - P_s) [+ G_r (P_s - P_c - P)]
@@ -47,10 +49,6 @@ from .chain import ChainModel
 from .chain_kernels import NOISE
 from .hla import HLA
 from .phase_system import Event, PhaseModes, Transition, decompose_free, held_modes, state_matrix
-
-TRAIN_EVENT_KINDS = ("lift-off", "separation", "re-contact", "seat", "coil-clash", "check-valve-open",
-                     "check-valve-close")
-
 
 @dataclass(frozen=True)
 class Part:
