@@ -15,6 +15,7 @@ from explorer import load_scene, loads_scene, simulate
 from explorer.core.errors import InputError
 from explorer.dynamics.train import TrainModel
 from explorer.scene.builtin import scenes_dir
+from explorer.scene.train_section import HLA_KEYS, HLA_NUMBERS
 from explorer.studies.sweep_engine import ENGINES, HLA_COLUMNS, _Shared, compute_chunk, result_columns, row_scalars
 from explorer.studies.sweep_spec import scene_for
 
@@ -83,6 +84,27 @@ def test_pushrod_scene_reports_each_part_and_contact():
     # the cam contact's force along the lifter is the camshaft's back pressure
     np.testing.assert_allclose(r.columns["contact_cam_force_N"], r.columns["camshaft_back_pressure_N"], rtol=1e-12)
     del lift
+
+
+def test_each_contact_force_is_plotted_in_the_browser_and_recorded():
+    # issue #25 item 3 (the plots): the browser draws every joint's force, cam to valve, in a plot
+    # of its own (the generic Forces plot keeps its five curves); the recording puts each under
+    # /forces (the rerun rule for N columns)
+    from explorer.view.browser import model
+    from explorer.view.rerun.recording import entity_path
+
+    r = simulate(load_scene(PUSHROD))
+    plots = {p.title: p for p in model.build_plots(r)}
+    contacts = plots["Contact forces"]
+    assert [label for label, _, _ in contacts.series] == ["cam", "pushrod", "rocker", "valve"]
+    for label, values, _ in contacts.series:  # the decimated curve keeps each column's extremes
+        col = r.columns[f"contact_{label}_force_N"]
+        assert np.nanmax(values) == np.max(col) and np.nanmin(values) == np.min(col)
+    assert not any(label.startswith("contact ") and label != "contact force" for label, _, _ in plots["Forces"].series)
+    assert entity_path("contact_rocker_force_N") == "/forces/contact_rocker"
+    # a scene without parts has no such plot
+    plain = simulate(load_scene(scenes_dir() / "spring_surge.toml"))
+    assert "Contact forces" not in [p.title for p in model.build_plots(plain)]
 
 
 def test_finger_scene_pumps_up():
@@ -188,6 +210,33 @@ def test_any_bad_element_value_is_one_input_error(key, value):
         scene_from_dict(data, "train.toml")
     except InputError as err:
         assert "\n" not in str(err)
+
+
+_quantities = st.sampled_from(["-3 bar", "0 bar", "1e30 Pa", "nan Pa", "inf mm", "12 kg", "5", "abc", "1e-30 m",
+                                "0 mm**3", "-1 mPa*s", "2 N/um"])
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(key=st.sampled_from([*HLA_KEYS, *HLA_NUMBERS, "lever", "revolutions"]), value=st.one_of(_values, _quantities))
+def test_any_bad_hla_value_is_one_input_error(key, value):
+    # a valid [hla] with one value replaced by anything (removed where None): it loads with a
+    # finite adjuster, or fails with one InputError naming an [hla] key, in one line
+    import tomllib
+
+    from explorer.scene.scene import scene_from_dict
+
+    data = tomllib.loads(_text(ELEMENT + HLA))
+    if value is None:
+        data["hla"].pop(key, None)
+    else:
+        data["hla"][key] = value
+    try:
+        scene = scene_from_dict(data, "train.toml")
+    except InputError as err:
+        assert "\n" not in str(err) and err.key.startswith("hla"), str(err)
+        return
+    hla = scene.hla.hla
+    assert all(math.isfinite(v) for v in vars(hla).values() if isinstance(v, float)), hla
 
 
 def test_sweep_rows_equal_simulate_bit_for_bit():
