@@ -124,8 +124,8 @@ def test_series_equal_simulate_output(float_recording):
 def test_events_and_warnings_are_logged_at_their_instants(float_recording):
     out, _ = float_recording
     result = simulate(load_scene(FLOAT))
-    events = result.summary["events"]
-    warnings = result.summary["warnings"]
+    events = result.events
+    warnings = result.warnings
     assert events and warnings  # this scene has lash impacts and a float warning
     log = read_rrd(out)[0].temporal["/events"]
     texts, levels = list(log["TextLog:text"]), list(log["TextLog:level"])

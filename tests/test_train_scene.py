@@ -16,12 +16,15 @@ from explorer.core.errors import InputError
 from explorer.dynamics.train import TrainModel
 from explorer.scene.builtin import scenes_dir
 from explorer.scene.train_section import HLA_KEYS, HLA_NUMBERS
-from explorer.studies.sweep_engine import ENGINES, HLA_COLUMNS, _Shared, compute_chunk, result_columns, row_scalars
+from explorer.effects.registry import effect_spec
+from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, result_columns, row_figures
 from explorer.studies.sweep_spec import scene_for
 
 PUSHROD = scenes_dir() / "pushrod_train.toml"
 FINGER = scenes_dir() / "finger_hla_pumpup.toml"
 SHARED = next(engine for engine in ENGINES if engine.name == "shared")
+# the elastic effect's adjuster figures, a row's with [hla] (its table line's section_figures)
+HLA_COLUMNS = next(extra.figures for extra in effect_spec("elastic").section_figures if extra.section == "hla")
 
 
 def _text(extra: str = "", linkage: str = 'stiffness = "120 N/um"\ndamping = "40 N*s/m"', seat: str = "",
@@ -80,7 +83,7 @@ def test_pushrod_scene_reports_each_part_and_contact():
     lift = r.columns["rigid_valve_lift_m"] if "rigid_valve_lift_m" in r.columns else None
     s = r.summary
     assert len(s["train_natural_frequencies_Hz"]) == 4 and s["train_natural_frequencies_Hz"][0] > 500.0
-    assert s["warnings"] == []
+    assert r.warnings == ()
     # the cam contact's force along the lifter is the camshaft's back pressure
     np.testing.assert_allclose(r.columns["contact_cam_force_N"], r.columns["camshaft_back_pressure_N"], rtol=1e-12)
     del lift
@@ -112,8 +115,8 @@ def test_finger_scene_pumps_up():
     hla = r.summary["hla"]
     assert hla["pump_up"] and hla["pump_up_valve_lift_m"] > 1e-5
     assert not hla["per_revolution"][-1]["seated"]
-    assert any(e["kind"] == "pump-up" for e in r.summary["events"])
-    assert any(w.startswith("pump-up") for w in r.summary["warnings"])
+    assert any(e["kind"] == "pump-up" for e in r.events)
+    assert any(w.startswith("pump-up") for w in r.warnings)
     for col in ("hla_plunger_travel_m", "hla_chamber_pressure_Pa", "hla_check_valve_open"):
         assert np.all(np.isfinite(r.columns[col]))
     assert hla["check_valve_openings"] > 0
@@ -124,7 +127,7 @@ def test_finger_scene_below_its_float_speed_seats_every_revolution():
     hla = r.summary["hla"]
     assert not hla["pump_up"] and hla["pump_up_valve_lift_m"] == 0.0
     assert all(rev["seated"] for rev in hla["per_revolution"])
-    assert not any(e["kind"] == "pump-up" for e in r.summary["events"])
+    assert not any(e["kind"] == "pump-up" for e in r.events)
     # the adjuster leaks down under the lift's load: its plunger sinks over each revolution
     assert abs(hla["plunger_travel_per_revolution_m"]) < 5e-5
 
@@ -250,7 +253,7 @@ def test_sweep_rows_equal_simulate_bit_for_bit():
     table = compute_chunk(base, keys, values, names, _Shared(), engine=SHARED)
     for row, vals in zip(table, values):
         r = simulate(scene_for(base, keys, vals))
-        want = row_scalars(set(names), r.summary, r.summary["events"], r.columns)
+        want = row_figures(set(names), r)
         got = dict(zip(names, row))
         for name in want:
             assert (got[name] == want[name]) or (math.isnan(got[name]) and math.isnan(want[name])), name

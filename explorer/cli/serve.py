@@ -78,6 +78,7 @@ def run(args) -> int:
 
     import viser
 
+    from ..view.browser import callbacks
     from ..view.browser.app import ExplorerApp
     from ..view.browser.sessions import PerClientExplorer
 
@@ -87,6 +88,7 @@ def run(args) -> int:
             if args.rerun or args.rerun_save:
                 stream = open_live_stream(args)
             server = viser.ViserServer(host=args.host, port=args.port, verbose=False)
+            callbacks.use_for(server)  # idle callback threads end (the sessions' crowd leaves none behind)
             on_result = (lambda prepared: stream.log(prepared.result, prepared.label)) if stream is not None else None
             if args.shared:
                 app = ExplorerApp(server, scene.source, args.overrides, playing=not args.paused, on_result=on_result)

@@ -31,11 +31,10 @@ import math
 import numpy as np
 
 from ..core.errors import InputError
-from ..dynamics import solvers as registry
 from ..dynamics.hla import ATMOSPHERE
 from ..dynamics.model import Drive
 from ..dynamics.train import TrainModel
-from ..result import EffectOutput
+from ..result import EffectOutput, Event
 from .chain_elastic import chain_solver, check_solid, exciting_orders
 from .elastic_events import linkage_outputs, output_order
 
@@ -48,19 +47,17 @@ def is_train(scene) -> bool:
     return bool(scene.linkage is not None and scene.linkage.elements) or getattr(scene, "hla", None) is not None
 
 
-def _event(ev: dict, t0: float, period: float, omega: float) -> dict:
+def _event(ev: dict, period: float, omega: float) -> Event:
+    """A solver's event (a dict of the phase system) as the result lists it: the time within the
+    revolution, the cam angle, the joint (contact) and the impact speed or coil where known."""
     kind = ev["kind"]
     contact = ev.get("contact")
     if contact is not None and contact != "cam":
         kind = {"separation": "contact-opens", "re-contact": "contact-closes"}[kind]
     t_ev = math.fmod(ev["time_s"], period)  # the run's times are the output's plus whole revolutions
-    item = {"kind": kind, "time_s": t_ev, "cam_angle_deg": math.degrees(omega * t_ev) % 360.0}
-    if contact is not None:
-        item["contact"] = contact
-    for key in ("velocity_m_s", "element"):
-        if key in ev:
-            item[key] = ev[key]
-    return item
+    values = {} if contact is None else {"contact": contact}
+    values.update((key, ev[key]) for key in ("velocity_m_s", "element") if key in ev)
+    return Event(kind, t_ev, math.degrees(omega * t_ev) % 360.0, values)
 
 
 def train_elastic_effect(ctx) -> EffectOutput:
@@ -76,7 +73,7 @@ def train_elastic_effect(ctx) -> EffectOutput:
     D = drive(ctx.time)
     check_solid(scene, float(D[0].max()))
     solve = chain_solver(scene.solver.method, scene.source)
-    options = {name: getattr(scene.solver, name) for name in registry.solver(scene.solver.method).scene_options}
+    options = dict(scene.solver.options)
     i0 = int(np.argmin(D[0]))
     one = np.concatenate([ctx.time[i0:], ctx.time[:i0] + period])
     t_run = np.concatenate([one + k * period for k in range(revolutions)])
@@ -105,8 +102,8 @@ def train_elastic_effect(ctx) -> EffectOutput:
     separated = open_valve & ~contact
 
     warnings: list[str] = []
-    events = sorted((_event(e, t_last, period, omega) for e in sol.events if e["time_s"] >= t_last),
-                    key=lambda e: e["time_s"])
+    events = sorted((_event(e, period, omega) for e in sol.events if e["time_s"] >= t_last),
+                    key=lambda e: e.time_s)
     motion, columns = linkage_outputs(s, v, a, jerk, force, ratio * force, deviation, contact, separated, events,
                                       TRAIN_KINDS)
     columns["valve_phase"] = phase
@@ -132,10 +129,10 @@ def train_elastic_effect(ctx) -> EffectOutput:
     counts: dict = {}
     first: dict = {}
     for e in events:
-        name = e.get("contact")
-        if name is not None and e["kind"] in ("separation", "contact-opens"):
+        name = e.values.get("contact")
+        if name is not None and e.kind in ("separation", "contact-opens"):
             counts[name] = counts.get(name, 0) + 1
-            first.setdefault(name, e["cam_angle_deg"])
+            first.setdefault(name, e.cam_angle_deg)
     freqs = model.natural_frequencies(model.closed_key())
     summary = {
         "elastic_method": scene.solver.method,
@@ -150,15 +147,15 @@ def train_elastic_effect(ctx) -> EffectOutput:
         **motion,
         "elastic_solver": dict(sol.stats),
     }
-    clashes = [e for e in events if e["kind"] == "coil-clash"]
+    clashes = [e for e in events if e.kind == "coil-clash"]
     if clashes:
         warnings.append(f"coil clash: the spring reaches its solid height {len(clashes)} time(s), first at "
-                        f"{clashes[0]['cam_angle_deg']:.2f} deg (the model goes on without the coils' contact)")
+                        f"{clashes[0].cam_angle_deg:.2f} deg (the model goes on without the coils' contact)")
     if model.hla is not None:
         block, more_events, more_warnings = _hla_report(model, sol, D, t_run, n, revolutions, i0, col, period, omega,
                                                          t_last, ctx.time)
         summary["hla"] = block
-        events = sorted(events + more_events, key=lambda e: e["time_s"])
+        events = sorted(events + more_events, key=lambda e: e.time_s)
         warnings.extend(more_warnings)
         p_rest = float(model.static_state(0.0)[0][model.plunger_index])
         columns["hla_plunger_travel_m"] = col(sol.plunger) - p_rest
@@ -213,8 +210,8 @@ def _hla_report(model, sol, D, t_run, n, revolutions, i0, col, period, omega, t_
         # at the first output sample of the base circle (in cam angle) of the last revolution
         j = int(np.flatnonzero(base)[0])
         t_ev = float(time[j])
-        events.append({"kind": "pump-up", "time_s": t_ev, "cam_angle_deg": math.degrees(omega * t_ev) % 360.0,
-                       "valve_lift_m": block["pump_up_valve_lift_m"]})
+        events.append(Event("pump-up", t_ev, math.degrees(omega * t_ev) % 360.0,
+                            {"valve_lift_m": block["pump_up_valve_lift_m"]}))
         warnings.append(f"pump-up: the adjuster has grown {1e3 * block['lash_taken_up_m']:.3f} mm while the valve "
                         f"floated; the valve stays {1e3 * block['pump_up_valve_lift_m']:.3f} mm off its seat over the "
                         f"base circle (revolution {revolutions} of {revolutions}): the cylinder's compression leaks there")
@@ -222,3 +219,17 @@ def _hla_report(model, sol, D, t_run, n, revolutions, i0, col, period, omega, t_
         warnings.append(f"the adjuster's chamber falls to {P.min() / 1e6:.2f} MPa (gauge): below the oil's vapour "
                         "pressure, where it would cavitate; the model's oil does not (a linear chamber)")
     return block, events, warnings
+
+
+def hla_row(result) -> dict[str, float]:
+    """A sweep row's adjuster figures (the elastic effect's with [hla]: explorer/effects/registry.py,
+    section_figures) from the run's summary block "hla"."""
+    hla = result.summary.get("hla") or {}
+
+    def figure(key: str) -> float:
+        value = hla.get(key)
+        return math.nan if value is None else float(value)
+
+    return {"pump_up_valve_lift_m": figure("pump_up_valve_lift_m"), "hla_lash_taken_up_m": figure("lash_taken_up_m"),
+            "hla_plunger_travel_per_revolution_m": figure("plunger_travel_per_revolution_m"),
+            "hla_chamber_pressure_max_Pa": figure("chamber_pressure_max_Pa")}

@@ -82,9 +82,9 @@ class HLASection:
 
 def parse_elements(t: Table, follower_ratio: float) -> tuple[LinkageElement, ...]:
     """[[linkage.elements]] of the [linkage] table t (absent: ())."""
-    if not t.has("elements"):
+    raw = t.raw("elements", None)  # optional: a linkage without parts is one joint
+    if raw is None:
         return ()
-    raw = t.raw("elements")
     if not isinstance(raw, list) or not all(isinstance(e, dict) for e in raw):
         raise t.error("elements", "expected an array of tables [[linkage.elements]], one per part from the cam")
     if not raw:

@@ -29,8 +29,8 @@ from typing import Any, Callable
 import numpy as np
 
 from .. import parts as meshes
-from ...lift.laws import LAWS
-from ...scene.scene import EFFECT_DEPENDENCIES, SPECIAL_LAWS
+from ...lift import registry as laws
+from ...effects import registry as effect_table
 from . import origin
 from .compute import ComputeWorker
 from .model import (
@@ -321,11 +321,11 @@ class ExplorerApp:
             self.scene = gui.add_dropdown("Scene", list(self.scene_paths), initial_value=self._scene_label)
             # right under the scene: an 800 px page shows it even with an error above
             self.reset = gui.add_button("Reset to scene file", hint="every field back to the scene file's values")
-            laws = list(LAWS) + list(SPECIAL_LAWS)
+            law_names = list(laws.names())
             self.fields: dict[str, Any] = {}
             for key, (label, kind, unit) in PARAMETERS.items():
                 if kind == "choice":
-                    handle = gui.add_dropdown(label, laws, initial_value=laws[0])
+                    handle = gui.add_dropdown(label, law_names, initial_value=law_names[0])
                 elif kind == "number":
                     handle = gui.add_number(label, 1.0, step=1.0)
                 elif kind == "integer":
@@ -337,7 +337,7 @@ class ExplorerApp:
                 self._field_shown[key] = handle.value
             self.effects: dict[str, Any] = {}
             with gui.add_folder("Effects"):
-                for name in EFFECT_DEPENDENCIES:
+                for name in effect_table.names():
                     handle = gui.add_checkbox(name, initial_value=name == "kinematics")
                     handle.on_update(self._effects_changed)
                     self.effects[name] = handle

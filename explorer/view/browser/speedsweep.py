@@ -113,9 +113,9 @@ def torque_sweep(scene, lift, result, rpms) -> np.ndarray:
 
 
 def has_contact(scene) -> bool:
-    from ...effects.pipeline import resolve
+    from ...effects.registry import order
 
-    return "contact" in resolve(scene.effects)
+    return "contact" in order(scene.effects)
 
 
 def rigid_sweep(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray]:
@@ -140,9 +140,9 @@ def rigid_sweep(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray]:
 
 
 def has_elastic(scene) -> bool:
-    from ...effects.pipeline import resolve
+    from ...effects.registry import order
 
-    return "elastic" in resolve(scene.effects)
+    return "elastic" in order(scene.effects)
 
 
 def start_sweep(scene, lift, serial: int, previous: tuple[float, float] | None = None, result=None) -> SpeedSweep | None:
@@ -207,7 +207,7 @@ def elastic_figures(scene, lift, rpm: float) -> tuple[float, float, float]:
         result = simulate(at_speed(scene, rpm), lift=lift)
     except (InputError, RuntimeError, ValueError, ArithmeticError):
         return (math.nan, math.nan, math.nan)
-    events = [e for e in result.summary.get("events", []) if e.get("effect", "elastic") == "elastic"]
+    events = [e for e in result.events if e.effect == "elastic"]
     seps = [float(e["cam_angle_deg"]) for e in events if e.get("kind") == "separation"]
     seats = [float(e["velocity_m_s"]) for e in events if e.get("kind") == "seat"]
     deviation = result.summary.get("max_deviation_m")
