@@ -248,6 +248,8 @@ def test_sweep_rows_equal_simulate_bit_for_bit():
     base = load_scene(FINGER, overrides=["hla.revolutions=2", "solver.steps_per_revolution=720"])
     names = result_columns(base)
     assert set(HLA_COLUMNS) <= set(names)
+    # a scene without [hla] has none of them (its table stays as before: the golden sweeps)
+    assert not set(HLA_COLUMNS) & set(result_columns(load_scene(PUSHROD)))
     keys = ("drive.rpm",)
     values = np.array([[3000.0], [5200.0]])
     table = compute_chunk(base, keys, values, names, _Shared(), engine=SHARED)
