@@ -223,6 +223,10 @@ def test_parts_and_recording_show_the_tappet_and_the_contact(tmp_path, crowned):
     np.testing.assert_allclose((lay.stem_top_rest - rigid)[open_], (-(RB + lift + wall))[open_], rtol=0, atol=1e-15)
     np.testing.assert_allclose(poses["valve"][0][:, 2], lay.stem_top_rest - meshes.displayed_valve_lift(crowned),
                                rtol=0, atol=1e-15)
+    from explorer.view.browser.model import Request, prepare
+
+    bundle = prepare(Request(str(SCENE)))  # the browser's bundle: the same parts and poses
+    assert {"tappet", "cam_contact", "cam", "valve"} <= set(bundle.meshes) == set(bundle.poses)
     out = tmp_path / "b.rrd"
     write_recordings(out, [with_parts("bucket", crowned)])
     (run,) = read_rrd(out)
