@@ -139,6 +139,7 @@ def test_the_design_rules_read_the_flat_face(flat):
     assert width.verdict != "n/a"
     d = build_lift(scene).derivatives(np.linspace(0.0, 2.0 * math.pi, 3600, endpoint=False))
     assert width.value == pytest.approx(0.015 - np.max(np.abs(d[1])), rel=1e-6)
+    assert result.result("face_curvature").value == pytest.approx(np.min(RB + d[0] + d[2]), rel=1e-12)
     contact = scene.gear_plugin.cam_contact(scene, build_lift(scene), np.linspace(0.0, 6.0, 50))
     from explorer.mechanics.tribology import flat_face_motion
 

@@ -36,7 +36,7 @@ the design rules' case computes (ratio_g / cos a).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from types import MappingProxyType
 from typing import Any
 
@@ -205,8 +205,6 @@ class BucketTappet(Gear):
         geometry = face_geometry(gear.kinematics(ctx.theta), gear.tappet.base_radius, gear.tappet.face_radius,
                                  spec.sliding_friction)
         if "pressure_angle_deg" in ctx.columns and "contour_radius_m" in ctx.columns:
-            from dataclasses import replace
-
             geometry = replace(geometry, from_columns=True)  # the kinematics' columns are these
         return geometry
 
