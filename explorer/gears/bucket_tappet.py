@@ -208,9 +208,6 @@ class BucketTappet(Gear):
             geometry = replace(geometry, from_columns=True)  # the kinematics' columns are these
         return geometry
 
-    def check_contact(self, follower, file: str) -> None:
-        """The face needs no roller (the generic check's width rule does)."""
-
     def contact_figures(self, ctx, geometry, columns) -> tuple[dict, dict]:
         """The face's own Hertz stress (line contact over the lobe's width, or the crown's ellipse:
         BucketTappetGear.hertz_stress), the face friction, and the sliding and entrainment
