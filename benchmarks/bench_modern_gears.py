@@ -1,6 +1,6 @@
 """Benchmark of today's valve trains' kinematics (issue #24: one revolution at 3600 steps <= 5 ms).
 
-    .venv/bin/python benchmarks/bench_modern_gears.py [--repeat 15]
+    .venv/bin/python benchmarks/bench_modern_gears.py [--repeat 15] [--speeds 1000] [--sweep-repeat 3]
 
 For each gear, the median time of its full kinematics over one revolution of 3600 cam angles:
 valve lift with v, a, jerk (jets), the cam's contour, radius of curvature and contact point, the
@@ -12,6 +12,13 @@ and explorer.lift.contours.translating's closed-form profile), the gear the proj
 The machine is shared (the load average is printed with the table): the times are CPU times of
 this process (time.process_time), which a busy machine inflates far less than wall-clock times;
 the wall-clock medians are printed beside them.
+
+The built-in scenes of the wired gears (assets/scenes/bucket_tappet.toml), against the translating
+roller's valve_float_demo.toml in the same run: the kinematics effect of one revolution at 3600
+steps (`simulate` with effects = ["kinematics"]: the lift, the valve's columns and the gear's
+pressure angle, radius of curvature and contact offset), and a sweep of --speeds camshaft speeds
+(1000 to 6000 rpm) with the scene's own effects on one core (explorer.studies.sweep_run.run_plan,
+what `explorer sweep --workers 1` runs; wall-clock medians of --sweep-repeat sweeps).
 """
 
 from __future__ import annotations
@@ -86,6 +93,8 @@ def analysed(name, gear):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeat", type=int, default=15)
+    parser.add_argument("--speeds", type=int, default=1000)
+    parser.add_argument("--sweep-repeat", type=int, default=3)
     args = parser.parse_args()
 
     from explorer.lift.contours.translating import profile_from_derivatives
@@ -114,6 +123,50 @@ def main() -> None:
                      f"{slow[name] * 1e3:.1f}", f"{slow[name] / base:.0f}"])
     print(f"one revolution, 3600 cam angles; CPU-time medians of {args.repeat} runs (analysis: of {few})")
     print_table(["gear", "synthesis ms", "x roller", "wall ms", "analysis ms", "x roller"], rows)
+    print(f"load average (1, 5, 15 min): {', '.join(f'{x:.2f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
+    scenes_table(args)
+
+
+SCENE_CASES = {  # label -> built-in scene; the first is the baseline
+    "translating roller, valve_float_demo (baseline)": "valve_float_demo.toml",
+    "bucket tappet, bucket_tappet": "bucket_tappet.toml",
+}
+
+
+def scenes_table(args) -> None:
+    """The built-in scenes' kinematics effect and a sweep over speed (module docstring)."""
+    import statistics
+
+    from _timing import ROOT
+    from explorer.effects.pipeline import simulate
+    from explorer.scene.scene import load_scene
+    from explorer.studies.sweep_engine import _Shared, engine_for
+    from explorer.studies.sweep_run import plan_from, run_plan
+
+    scenes = ROOT / "assets" / "scenes"
+    kin = {label: load_scene(scenes / name, ['effects=["kinematics"]']) for label, name in SCENE_CASES.items()}
+    cpu = median_times({label: (lambda sc: lambda: simulate(sc))(sc) for label, sc in kin.items()}, args.repeat,
+                       clock=time.process_time)
+    rows = []
+    base_kin = base_sweep = None
+    for label, name in SCENE_CASES.items():
+        scene = load_scene(scenes / name)
+        plan = plan_from(scene, {"drive.rpm": f"1000:6000:{args.speeds}"})
+        run_plan(scene, plan_from(scene, {"drive.rpm": "1000:6000:4"}), workers=1)  # warm: imports, kernels
+        times = []
+        for _ in range(args.sweep_repeat):
+            started = time.perf_counter()
+            run_plan(scene, plan, workers=1)
+            times.append(time.perf_counter() - started)
+        sweep = statistics.median(times)
+        base_kin = base_kin or cpu[label]
+        base_sweep = base_sweep or sweep
+        rows.append([label, f"{cpu[label] * 1e3:.2f}", f"{cpu[label] / base_kin:.1f}", f"{sweep:.2f}",
+                     f"{sweep / base_sweep:.1f}", engine_for(scene, _Shared()).name, ", ".join(scene.effects)])
+    print()
+    print(f"built-in scenes: the kinematics effect (3600 steps; CPU-time medians of {args.repeat}) and a "
+          f"{args.speeds}-speed sweep on one core (wall-clock medians of {args.sweep_repeat})")
+    print_table(["scene", "kinematics ms", "x roller", "sweep s", "x roller", "engine", "effects"], rows)
     print(f"load average (1, 5, 15 min): {', '.join(f'{x:.2f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
 
 

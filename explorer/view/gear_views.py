@@ -20,6 +20,7 @@ VIEWS: Registry[GearView] = Registry("gear view", {
     "rocking-cam": "explorer.view.rocking_cam:VIEW",
     "rolling-lever": "explorer.view.rolling_lever:VIEW",
     "trip": "explorer.view.trip_gear:VIEW",
+    "bucket-tappet": "explorer.view.bucket_tappet:VIEW",
 })
 
 
