@@ -9,7 +9,7 @@ counter-clockwise from +x, lengths with units as everywhere.
 
 bucket-tappet    follower.base_radius; [gear.tappet] face_diameter, face_radius (absent: a flat
                  face), offset (along the camshaft), cam_width, face_margin
-finger-follower  follower.base_radius, follower.roller_radius (cam_side = "roller");
+finger           follower.base_radius, follower.roller_radius (cam_side = "roller");
                  [gear.finger] pivot (the lash adjuster's ball), arm, side, cam_side, pad_radius
                  (cam_side = "pad"; absent: flat), face_angle, width; [gear.valve_pad] arm, angle,
                  radius; [gear.valve] axis, axis_point, tip_radius; [gear.lash_adjuster] (drawing)
@@ -30,7 +30,9 @@ from ..core.ranges import check_range
 from ..core.reader import Table
 from ..core.units import to_si
 
-MODERN_TYPES = ("bucket-tappet", "finger-follower", "rocker")
+# what parse_parts and build_modern_gear take: the bucket tappet, or the arm (an end-pivot finger, a
+# centre-pivot rocker with or without [gear.lifter]); the follower types are their gears' to name
+MODERN_TYPES = ("bucket-tappet", "finger", "rocker")
 SIDES = {"left": 1, "right": -1}
 CAM_SIDES = ("roller", "pad")
 LIFTER_TYPES = ("flat", "roller")
@@ -135,7 +137,7 @@ def parse_parts(table: Table, kind: str) -> dict[str, Mapping[str, Any]]:
         raise InputError(table.file, "follower.type", f"not one of today's valve trains: {kind!r}")
     if kind == "bucket-tappet":
         parsers, optional = {"tappet": _tappet}, set()
-    elif kind == "finger-follower":
+    elif kind == "finger":
         parsers = {"finger": _arm, "valve_pad": _valve_pad, "valve": _valve, "lash_adjuster": _lash_adjuster}
         optional = {"valve", "lash_adjuster"}
     else:
@@ -187,7 +189,7 @@ def build_modern_gear(kind: str, parts: Mapping[str, Mapping[str, Any]], *, base
         common.pop("n")
         return make_pushrod_train(base_radius=base_radius, lifter=lifter, rocker_pivot=r["pivot"], cup=r["cup"],
                                   valve_pad_centre=centre, n=n, **common)
-    name = "finger" if kind == "finger-follower" else "rocker"
+    name = kind
     a = parts[name]
     if a["cam_side"] == "roller":
         if not roller_radius > 0.0:
