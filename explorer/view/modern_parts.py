@@ -31,7 +31,7 @@ import numpy as np
 import trimesh
 
 from .gear_parts import extrude_contour
-from .parts import quat_about_y
+from .drawing import quat_about_y
 
 TWO_PI = 2.0 * math.pi
 
