@@ -285,3 +285,27 @@ def test_random_finger_geometry_loads_or_names_a_key(pivot_x, pivot_y, arm, pad,
     lift = build_lift(scene)
     k = lift.gear.kinematics(np.linspace(0.0, 2 * math.pi, 360, endpoint=False))
     assert np.isfinite(k.ratio).all() and np.isfinite(k.surface.radius).all()
+
+
+@pytest.mark.parametrize("path", [FINGER, PUSHROD])
+def test_a_speed_sweep_takes_the_compiled_path_and_its_rows_are_simulate_s(path):
+    """The lift is the valve's (ratio 1, no elasticity of its own): the compiled batch engine takes
+    the scene's runs (Gear.batch_sweeps), and each row equals simulate's figures (the kernel is
+    the exact solver's arithmetic: to 1e-9 of each figure's scale, as tests/test_sweep_kernel.py)."""
+    from explorer.studies.sweep_engine import _Shared, compute_chunk, engine_for, result_columns, row_figures
+    from explorer.studies.sweep_spec import scene_for
+
+    base = load_scene(path)
+    shared = _Shared()
+    assert engine_for(base, shared).name == "compiled"
+    names = result_columns(base)
+    values = np.array([[0.6], [1.0], [1.4]]) * base.drive.rpm
+    table = compute_chunk(base, ("drive.rpm",), values, names, shared)
+    for i, row in enumerate(values):
+        expected = row_figures(names, simulate(scene_for(base, ("drive.rpm",), row)))
+        for name, value in expected.items():
+            got = table[i, names.index(name)]
+            if math.isnan(value):
+                assert math.isnan(got), (i, name)
+            else:
+                assert got == pytest.approx(value, rel=1e-9, abs=1e-12), (i, name, got, value)

@@ -133,6 +133,10 @@ class ArmTrainGear(Gear):
     arm_kind: str = ""
     linkage_ratio = True
     contact_keys = CONTACT_KEYS
+    # the lift is the valve's (follower.ratio 1, no elasticity of its own on the lift): the compiled
+    # batch path's linkage model is the elastic effect's, and the contact row's torque factors are
+    # this gear's ContactGeometry (item 10)
+    batch_sweeps = True
 
     # -- 2, 3: keys and geometry ------------------------------------------------------------------
     def parse(self, table, fields) -> GearSpec:
