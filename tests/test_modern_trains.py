@@ -309,3 +309,28 @@ def test_a_speed_sweep_takes_the_compiled_path_and_its_rows_are_simulate_s(path)
                 assert math.isnan(got), (i, name)
             else:
                 assert got == pytest.approx(value, rel=1e-9, abs=1e-12), (i, name, got, value)
+
+
+def test_a_cam_side_stiffness_is_referred_to_the_valve_through_the_ratio(tmp_path):
+    """[gear.finger] stiffness k at the roller: k / i^2 at the valve (energy), its derivative
+    -2 k i' / i^3 against central differences; in series with [linkage] in the elastic effect,
+    which then needs a solver that takes k(t) (the exact one is refused naming solver.method)."""
+    text = FINGER.read_text().replace('width = "10 mm"              # roller width (Hertz)',
+                                      'width = "10 mm"\nstiffness = "60 kN/mm"')
+    with pytest.raises(InputError) as info:
+        loads_scene(text, "k.toml")
+    assert info.value.key == "solver.method" and "taylor" in info.value.reason
+    scene = loads_scene(text.replace('method = "exact"', 'method = "taylor"'), "k.toml")
+    lift = build_lift(scene)
+    theta = np.radians(np.arange(0.1, 360.0, 1.0))
+    k, dk = lift.linkage_stiffness(theta)
+    ratio = lift.gear.kinematics(theta).ratio
+    assert np.max(np.abs(k - 60e6 / ratio**2)) < 1e-12 * k.max()
+    h = 1e-5
+    fd = (lift.linkage_stiffness(theta + h)[0] - lift.linkage_stiffness(theta - h)[0]) / (2 * h)
+    assert np.max(np.abs(dk - fd)) < 1e-6 * np.abs(fd).max()
+    result = simulate(scene)
+    stats = result.report()["elastic_solver"]
+    series = 1.0 / (1.0 / k + 1.0 / scene.linkage.stiffness)
+    assert stats["stiffness_max_N_m"] == pytest.approx(series.max(), rel=1e-3)
+    assert result.report()["gear"]["valve_referred_side_stiffness_N_m"][0] == pytest.approx(60e6 / 1.71136**2, rel=1e-4)

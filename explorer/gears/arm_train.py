@@ -66,6 +66,25 @@ class TrainLift:
     gear: Any
     law: Any
     memo: dict = field(default_factory=dict, compare=False, repr=False)  # kinematics per grid (bounded)
+    side_stiffness: float | None = None  # N/m, the arm's (lifter's and pushrod's) at its cam-side point
+
+    @property
+    def linkage_stiffness(self):
+        """theta -> (k, dk/dtheta): the cam-side stiffness referred to the valve through the
+        ratio i(theta) (valve travel per travel of the roller centre, pad crown or lifter; energy
+        k_side dx^2 / 2 with dx = ds / i): k = k_side / i^2, dk/dtheta = -2 k_side i' / i^3 (i' of
+        the exact jets); None without [gear.*] stiffness. The elastic effect puts it in series with
+        [linkage] stiffness (the rest of the chain, at the valve)."""
+        if self.side_stiffness is None:
+            return None
+        k_side = self.side_stiffness
+
+        def of(theta):
+            jet = self.gear.kinematics(np.asarray(theta, dtype=float)).ratio_jet
+            i, di = np.abs(jet[0]), np.sign(jet[0]) * jet[1]
+            return k_side / i**2, -2.0 * k_side * di / i**3
+
+        return of
 
     def derivatives(self, theta) -> np.ndarray:
         return self.law.derivatives(theta)
@@ -159,6 +178,15 @@ class ArmTrainGear(Gear):
         if law_spec(fields["lift"].law).gear_made:
             raise InputError(fields.get("source", "<memory>"), "lift.law",
                              f"the {self.type} gear needs a lift law (the wanted valve lift)")
+        if spec is not None and self.side_stiffness(spec) is not None and "elastic" in fields["effects"]:
+            from ..dynamics.solvers import varying_stiffness
+
+            varying = varying_stiffness()
+            if fields["solver"].method not in varying:
+                raise InputError(spec.file, "solver.method", f"method \"{fields['solver'].method}\" needs a constant "
+                                 f"linkage stiffness, but the {self.type}'s stiffness ([gear.*] stiffness) is referred to "
+                                 "the valve through its changing ratio: use method = "
+                                 + " or ".join(f'"{m}"' for m in varying))
 
     def make(self, spec, source):
         """The train's geometry with its synthesised cam, checked over a revolution (undercut or
@@ -170,8 +198,13 @@ class ArmTrainGear(Gear):
 
     # -- 5: the lift -------------------------------------------------------------------------------
     def build_lift(self, scene) -> TrainLift:
-        gear = self.make(spec_of(self, scene), scene)
-        return TrainLift(gear, gear.law)
+        spec = spec_of(self, scene)
+        gear = self.make(spec, scene)
+        return TrainLift(gear, gear.law, side_stiffness=self.side_stiffness(spec))
+
+    def side_stiffness(self, spec) -> float | None:
+        """The [gear.*] stiffness of its cam side (N/m), or None."""
+        return None
 
     def _lift(self, ctx) -> TrainLift:
         return ctx.lift if isinstance(ctx.lift, TrainLift) else self.build_lift(ctx.scene)
@@ -345,6 +378,10 @@ class ArmTrainGear(Gear):
             "max_tip_scrub_m": float(np.max(np.abs(k.tip.scrub))),
             **self.extra_report(train, k),
         }
+        own = self._lift(ctx).linkage_stiffness
+        if own is not None:  # the cam side's stiffness referred to the valve, before [linkage] in series
+            referred = own(ctx.theta)[0]
+            summary["valve_referred_side_stiffness_N_m"] = [float(referred.min()), float(referred.max())]
         return EffectOutput(summary=summary)
 
     def extra_report(self, train, k) -> dict:

@@ -28,6 +28,9 @@ class FingerFollower(ArmTrainGear):
     optional_parts = frozenset({"valve", "lash_adjuster"})
     columns = MappingProxyType({"kinematics": KINEMATICS_COLUMNS, "contact": CONTACT_COLUMNS + ("hertz_stress_Pa",)})
 
+    def side_stiffness(self, spec):
+        return spec.part("finger").get("stiffness")
+
     def roller_radius(self, train) -> float:
         side = train.arm.cam_side
         return side.radius if side.kind == "roller" else 0.0

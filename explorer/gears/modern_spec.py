@@ -11,10 +11,12 @@ bucket-tappet    follower.base_radius; [gear.tappet] face_diameter, face_radius 
                  face), offset (along the camshaft), cam_width, face_margin
 finger           follower.base_radius, follower.roller_radius (cam_side = "roller");
                  [gear.finger] pivot (the lash adjuster's ball), arm, side, cam_side, pad_radius
-                 (cam_side = "pad"; absent: flat), face_angle, width; [gear.valve_pad] arm, angle,
+                 (cam_side = "pad"; absent: flat), face_angle, width, stiffness (the arm's and the lash
+                 adjuster's, at the roller or pad along its travel); [gear.valve_pad] arm, angle,
                  radius; [gear.valve] axis, axis_point, tip_radius; [gear.lash_adjuster] (drawing)
 rocker           with [gear.lifter] the OHV pushrod train: [gear.lifter] type, face_radius,
-                 roller_radius, offset, socket_height, width; [gear.rocker] pivot, cup (the
+                 roller_radius, offset, socket_height, width, stiffness (lifter and pushrod, along the
+                 lifter's axis); [gear.rocker] pivot, cup (the
                  pushrod's upper ball with the valve closed); without it the OHC rocker:
                  [gear.rocker] as [gear.finger]. [gear.valve_pad] angle is measured from the
                  rocker's reference direction (pivot -> roller, pad crown or cup).
@@ -69,7 +71,7 @@ def _tappet(t: Table) -> dict:
 
 
 def _arm(t: Table) -> dict:
-    t.reject_unknown(("pivot", "arm", "side", "cam_side", "pad_radius", "face_angle", "width"))
+    t.reject_unknown(("pivot", "arm", "side", "cam_side", "pad_radius", "face_angle", "width", "stiffness"))
     cam_side = t.string("cam_side", "roller", choices=CAM_SIDES)
     if cam_side == "roller":
         for name in ("pad_radius", "face_angle"):
@@ -83,6 +85,7 @@ def _arm(t: Table) -> dict:
         "pad_radius": _optional(t, "pad_radius", positive=True),
         "face_angle": t.quantity("face_angle", "angle", -0.5 * math.pi),
         "width": _optional(t, "width", positive=True),
+        "stiffness": _optional(t, "stiffness", "stiffness", positive=True),
     }
 
 
@@ -113,9 +116,9 @@ def _lash_adjuster(t: Table) -> dict:
 def _lifter(t: Table) -> dict:
     kind = t.string("type", "flat", choices=LIFTER_TYPES)
     if kind == "flat":
-        t.reject_unknown(("type", "face_radius", "socket_height", "width"))
+        t.reject_unknown(("type", "face_radius", "socket_height", "width", "stiffness"))
     else:
-        t.reject_unknown(("type", "roller_radius", "offset", "socket_height", "width"))
+        t.reject_unknown(("type", "roller_radius", "offset", "socket_height", "width", "stiffness"))
     return {
         "type": kind,
         "face_radius": _optional(t, "face_radius", positive=True),
@@ -123,6 +126,7 @@ def _lifter(t: Table) -> dict:
         "offset": t.quantity("offset", "length", 0.0),
         "socket_height": t.quantity("socket_height", "length", nonnegative=True),
         "width": _optional(t, "width", positive=True),
+        "stiffness": _optional(t, "stiffness", "stiffness", positive=True),
     }
 
 

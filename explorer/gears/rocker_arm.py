@@ -44,6 +44,10 @@ class RockerArm(ArmTrainGear):
     columns = MappingProxyType({"kinematics": KINEMATICS_COLUMNS + PUSHROD_KINEMATICS,
                                 "contact": CONTACT_COLUMNS + ("hertz_stress_Pa", "pushrod_force_N")})
 
+    def side_stiffness(self, spec):
+        part = spec.part("lifter") if "lifter" in spec.parts else spec.part("rocker")
+        return part.get("stiffness")
+
     def arm_angle(self, k) -> np.ndarray:
         return k.rocker_angle[0] if hasattr(k, "rocker_angle") else k.arm_angle[0]
 
