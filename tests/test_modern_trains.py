@@ -334,3 +334,26 @@ def test_a_cam_side_stiffness_is_referred_to_the_valve_through_the_ratio(tmp_pat
     series = 1.0 / (1.0 / k + 1.0 / scene.linkage.stiffness)
     assert stats["stiffness_max_N_m"] == pytest.approx(series.max(), rel=1e-3)
     assert result.report()["gear"]["valve_referred_side_stiffness_N_m"][0] == pytest.approx(60e6 / 1.71136**2, rel=1e-4)
+
+
+@pytest.mark.parametrize("path, arm", [(FINGER, "finger"), (PUSHROD, "rocker")])
+def test_the_browser_and_a_recording_draw_the_train(path, arm, tmp_path):
+    """The browser's bundle (layout, meshes, poses) and a rerun recording hold the arm, posed at
+    the kinematics' arm angle (a turn by a in the gear's plane is quat_about_y(-a))."""
+    from explorer.view.browser.model import Request, prepare
+    from explorer.view.rerun.read import read_rrd
+    from explorer.view.rerun.recording import with_parts, write_recordings
+
+    bundle = prepare(Request(str(path)))
+    assert {arm, "cam", "valve", "spring", "seat", "tip_contact"} <= set(bundle.meshes) == set(bundle.poses)
+    angle = np.radians(bundle.result.columns["arm_angle_deg"])
+    wxyz = bundle.poses[arm][1]
+    turned = 2.0 * np.arctan2(-wxyz[:, 2], wxyz[:, 0])
+    assert np.max(np.abs(np.angle(np.exp(1j * (turned - angle))))) < 1e-12
+
+    out = tmp_path / "train.rrd"
+    write_recordings(out, [with_parts("train", simulate(load_scene(path)))])
+    (run,) = read_rrd(out)
+    quaternion = run.temporal[f"/parts/{arm}"]["Transform3D:quaternion"]  # x y z w
+    turned = 2.0 * np.arctan2(-quaternion[:, 1], quaternion[:, 3])
+    assert np.max(np.abs(np.angle(np.exp(1j * (turned - angle))))) < 1e-6
