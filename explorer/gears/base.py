@@ -76,9 +76,6 @@ class Gear:
        `cam_contact(scene, lift, theta)` -> mechanics.gear_contact.GearContact, its contact for the
        design rules (explorer.checks: the same ContactGeometry plus each surface's motion), or
        NotApplicable (the default) when it has no cam contact the rules judge.
-       `contact_keys` {key: meaning}: friction coefficients of its own contacts that [contact]
-       takes beside the generic keys (a pad sliding on the cam, on the valve tip), read by the
-       scene loader with the friction coefficient's range into ContactSpec.gear_friction.
     7. Replace a generic effect where its physics differ: `effects` maps an effect name to a
        function (ctx) -> result.EffectOutput run instead of the generic one (the trip gear's latch).
        `columns` declares, per effect, the columns it adds to it or its variant returns beyond the
@@ -107,7 +104,6 @@ class Gear:
     linkage_ratio: bool = False  # item 3
     makes_lift: bool = False  # item 4
     contact_roller: bool = False  # item 6
-    contact_keys: Mapping[str, str] = _NONE  # item 6: its own friction coefficients in [contact]
     roller_envelope: bool = False  # item 4: its cam is the [follower] roller's envelope on a straight path
     effects: Mapping[str, Callable] = _NONE  # item 7
     columns: Mapping[str, tuple[str, ...]] = _NONE

@@ -80,12 +80,6 @@ class ContactSpec:
     width_rule_k: float = WIDTH_RULE_K["exhaust"]  # Pa
     engine: str = "large-gas"
     allowable_stress: float = ALLOWABLE["large-gas"]  # Pa
-    # the gear's own friction coefficients ([contact] keys it declares, Gear.contact_keys), as pairs
-    gear_friction: tuple[tuple[str, float], ...] = ()
-
-    def friction_of(self, key: str, default: float = 0.0) -> float:
-        """A friction coefficient the gear declared (Gear.contact_keys), or `default`."""
-        return dict(self.gear_friction).get(key, default)
 
 
 

@@ -22,11 +22,10 @@ def parse_contact_section(table, fields) -> ContactSpec:
         return ContactSpec()
     if owner is not None and "contact" in owner.rejected:  # the trip gear: no cam and roller
         raise InputError(file, "contact", owner.rejected["contact"])
-    own = tuple(owner.contact_keys) if owner is not None else ()  # the gear's friction coefficients
     table.reject_unknown((
         "friction_angle", "friction_coefficient", "youngs_modulus", "poisson_ratio", "roller_youngs_modulus",
         "roller_poisson_ratio", "width", "valve", "width_rule_k", "engine", "allowable_stress",
-    ) + own)
+    ))
     if table.has("friction_angle") and table.has("friction_coefficient"):
         raise table.error("friction_coefficient", "give friction_angle or friction_coefficient, not both")
     if table.has("friction_coefficient"):
@@ -52,6 +51,4 @@ def parse_contact_section(table, fields) -> ContactSpec:
         width_rule_k=table.quantity("width_rule_k", "pressure", WIDTH_RULE_K[valve], positive=True),
         engine=engine,
         allowable_stress=table.quantity("allowable_stress", "pressure", ALLOWABLE[engine], positive=True),
-        gear_friction=tuple((key, table.number(key, minimum=FRICTION_COEFFICIENT[0], maximum=FRICTION_COEFFICIENT[1]))
-                            for key in own if table.has(key)),
     )
