@@ -45,10 +45,6 @@ from .modern_spec import build_modern_gear, parse_parts
 
 TWO_PI = 2.0 * math.pi
 MEMO_GRIDS = 4
-CONTACT_KEYS = MappingProxyType({
-    "sliding_friction": "friction coefficient of a pad or a flat lifter sliding on the cam (a roller rolls: unused)",
-    "tip_friction": "friction coefficient of the valve pad sliding on the valve tip",
-})
 # the kinematics' columns of every arm train; the pushrod train adds its own
 KINEMATICS_COLUMNS = ("pressure_angle_deg", "contour_radius_m", "valve_ratio", "valve_ratio_d1", "valve_ratio_d2",
                       "arm_angle_deg")
@@ -151,7 +147,6 @@ class ArmTrainGear(Gear):
 
     arm_kind: str = ""
     linkage_ratio = True
-    contact_keys = CONTACT_KEYS
     # the lift is the valve's (follower.ratio 1, no elasticity of its own on the lift): the compiled
     # batch path's linkage model is the elastic effect's, and the contact row's torque factors are
     # this gear's ContactGeometry (item 10)
@@ -249,7 +244,7 @@ class ArmTrainGear(Gear):
 
     def frictions(self, scene) -> tuple[float, float]:
         spec = scene.contact if scene.contact is not None else ContactSpec()
-        return spec.friction_of("sliding_friction"), spec.friction_of("tip_friction")
+        return spec.sliding_friction, spec.tip_friction
 
     def roller_radius(self, train) -> float:
         """The cam-side roller's radius (0: a pad or a flat lifter)."""

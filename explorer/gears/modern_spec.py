@@ -7,7 +7,7 @@ units, ranges and defaults are listed in docs/theory/modern-gears.md. Points are
 from the camshaft's centre (x to the right, y up, the cam turning counter-clockwise), angles
 counter-clockwise from +x, lengths with units as everywhere.
 
-bucket-tappet    follower.base_radius; [gear.tappet] face_diameter, face_radius (absent: a flat
+bucket           follower.base_radius; [gear.tappet] face_diameter, face_radius (absent: a flat
                  face), offset (along the camshaft), cam_width, face_margin
 finger           follower.base_radius, follower.roller_radius (cam_side = "roller");
                  [gear.finger] pivot (the lash adjuster's ball), arm, side, cam_side, pad_radius
@@ -32,9 +32,10 @@ from ..core.ranges import check_range
 from ..core.reader import Table
 from ..core.units import to_si
 
-# what parse_parts and build_modern_gear take: the bucket tappet, or the arm (an end-pivot finger, a
+# what parse_parts and build_modern_gear take (part names, not follower types: this module is shared
+# by the gears, and the plug-in check keeps a follower type out of shared modules): the bucket, or the arm (an end-pivot finger, a
 # centre-pivot rocker with or without [gear.lifter]); the follower types are their gears' to name
-MODERN_TYPES = ("bucket-tappet", "finger", "rocker")
+MODERN_TYPES = ("bucket", "finger", "rocker")
 SIDES = {"left": 1, "right": -1}
 CAM_SIDES = ("roller", "pad")
 LIFTER_TYPES = ("flat", "roller")
@@ -139,7 +140,7 @@ def parse_parts(table: Table, kind: str) -> dict[str, Mapping[str, Any]]:
     """[gear] of a modern gear -> {sub-table: SI dict}; one-line InputErrors naming the key."""
     if kind not in MODERN_TYPES:
         raise InputError(table.file, "follower.type", f"not one of today's valve trains: {kind!r}")
-    if kind == "bucket-tappet":
+    if kind == "bucket":
         parsers, optional = {"tappet": _tappet}, set()
     elif kind == "finger":
         parsers = {"finger": _arm, "valve_pad": _valve_pad, "valve": _valve, "lash_adjuster": _lash_adjuster}
@@ -170,7 +171,7 @@ def build_modern_gear(kind: str, parts: Mapping[str, Mapping[str, Any]], *, base
     from .pushrod import Lifter, make_pushrod_train
 
     law = None if contour is not None else lift
-    if kind == "bucket-tappet":
+    if kind == "bucket":
         p = parts["tappet"]
         tappet = Tappet(base_radius=base_radius, face_radius=p["face_radius"] or math.inf,
                         face_diameter=p["face_diameter"], offset=p["offset"], cam_width=p["cam_width"],
