@@ -19,6 +19,8 @@ GEARS: Registry[Gear] = Registry("gear", {
     "rolling-lever": "explorer.gears.rolling_lever:GEAR",
     "trip": "explorer.gears.trip_gear:GEAR",
     "bucket-tappet": "explorer.gears.bucket_tappet:GEAR",
+    "finger-follower": "explorer.gears.finger_follower:GEAR",
+    "rocker-arm": "explorer.gears.rocker_arm:GEAR",
 })
 
 DEFAULT = "translating-roller"  # the follower.type of a scene that names none
