@@ -7,6 +7,7 @@ as long again as it computes, and a wall clock would time the waits).
     git archive <commit> | tar -x -C /tmp/before     # the code before
     (cd /tmp/before && /path/to/.venv/bin/python -m explorer.dynamics.exact_kernel --warm)
     .venv/bin/python benchmarks/bench_wait.py /tmp/before [--rounds 5] [--pool]
+    .venv/bin/python benchmarks/bench_wait.py --stages [--rounds 5]   # this checkout's fresh process
 
 Rows (medians over the rounds; the ratio after / before or the ratio the target names):
 - #27.5: a 1000-speed sweep of valve_float_demo.toml with all its effects (forces, contact,
@@ -92,6 +93,35 @@ def child_single(root: str, repeat: int) -> None:
     print(json.dumps(out))
 
 
+STAGES = """
+import time, json, sys
+T = time.process_time; c = [("start", T())]
+import numpy; c.append(("import numpy", T()))
+import explorer.studies.sweep_run, explorer.scene.scene; c.append(("import the sweep's modules (explorer)", T()))
+import numba; c.append(("import numba", T()))
+import explorer.dynamics.exact_kernel; c.append(("import the kernel's modules", T()))
+import explorer
+s = explorer.load_scene("assets/scenes/valve_float_demo.toml"); c.append(("load the scene", T()))
+explorer.sweep(s, vary={"drive.rpm": "2000:5000:10"}, workers=1)
+c.append(("first sweep: numba's target set-up (its registries, which import scipy.linalg), cache loads, the runs", T()))
+explorer.sweep(s, vary={"drive.rpm": "2000:5000:10"}, workers=1); c.append(("the same sweep again", T()))
+print(json.dumps([[b, y - x] for (a, x), (b, y) in zip(c, c[1:])] + [["modules using scipy", sorted({m.split(".")[1] for m in sys.modules if m.startswith("scipy.") and m.count(".") >= 1})]]))
+"""
+
+
+def stages(rounds: int) -> None:
+    """Where a fresh process's first sweep spends its CPU, stage by stage (this checkout)."""
+    runs = []
+    for _ in range(rounds):
+        out = subprocess.run([sys.executable, "-c", STAGES], cwd=ROOT, capture_output=True, text=True, check=True, env=ENV)
+        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    names = [row[0] for row in runs[0][:-1]]
+    print(f"a fresh process's first sweep, CPU by stage (median of {rounds} processes); load average "
+          f"{os.getloadavg()[0]:.1f}; scipy subpackages loaded: {', '.join(runs[0][-1][1])}")
+    print_table(["stage", "CPU s"], [[name, f"{statistics.median(r[i][1] for r in runs):.3f}"]
+                                     for i, name in enumerate(names)])
+
+
 def run_child(root: Path, *args) -> object:
     out = subprocess.run([sys.executable, __file__, "--child", str(root), *map(str, args)], capture_output=True,
                          text=True, check=True, env=ENV)
@@ -116,8 +146,12 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--speeds", type=int, default=1000)
     parser.add_argument("--pool", action="store_true", help="also time 20 000 runs on 1 and 2 local workers")
+    parser.add_argument("--stages", action="store_true", help="only: a fresh process's first sweep by stage")
     parser.add_argument("--child", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.stages:
+        stages(args.rounds)
+        return
     if args.child:
         root, *rest = args.child
         if rest[0] == "sweep":

@@ -441,3 +441,47 @@ def test_speeds_of_is_drive_omega():
     scene = load_scene(SCENES / "valve_float_demo.toml")
     rpms = np.concatenate([np.linspace(1.0, 20000.0, 2001), np.geomspace(0.1, 1e5, 500)])
     assert np.array_equal(speeds_of(scene, rpms), [replace(scene.drive, rpm=float(r)).omega for r in rpms])
+
+
+def test_torque_factors_do_not_depend_on_the_speed_so_chunks_share_them():
+    """sweep_rigid keeps a group's torque factors across a sweep's chunks (issue #27.5): they must be
+    the same floats at any speed (every built-in scene with the contact effect), and a table must
+    not depend on how it was cut into chunks."""
+    from types import MappingProxyType
+
+    from explorer.effects.contact import torque_factors
+    from explorer.effects.pipeline import Context, RunCache, figures
+    from explorer.studies.sweep_engine import _Shared, compute_chunk, result_columns
+
+    checked = 0
+    for path in sorted(SCENES.glob("*.toml")):
+        base = load_scene(path)
+        if "contact" not in base.effects or base.valve is None:
+            continue
+        factors = []
+        for rpm in (base.drive.rpm, 0.37 * base.drive.rpm, 1.9 * base.drive.rpm):
+            scene = replace(base, drive=replace(base.drive, rpm=rpm))
+            shared = RunCache()
+            try:
+                shared.lift = scene.gear_plugin.build_lift(scene)
+                kin = figures(scene, shared, effects=("kinematics",))
+                n = scene.solver.steps_per_revolution
+                theta = np.arange(n) * (2.0 * math.pi / n)
+                ctx = Context(scene, theta, kin.columns["time_s"], shared.lift, kin.columns, MappingProxyType({}))
+                factors.append(torque_factors(ctx))
+            except InputError:  # the trip gear: its own contact variant, not on the compiled path
+                break
+        else:
+            for push, pull in factors[1:]:
+                assert np.array_equal(push, factors[0][0], equal_nan=True), path.name
+                assert np.array_equal(pull, factors[0][1], equal_nan=True), path.name
+            checked += 1
+    assert checked >= 3
+    demo = load_scene(SCENES / "valve_float_demo.toml")
+    names = result_columns(demo)
+    values = np.column_stack([np.linspace(1500.0, 6000.0, 30), np.repeat([2.0e-4, 3.0e-4], 15)])
+    keys = ("drive.rpm", "valve.lash")
+    whole = compute_chunk(demo, keys, values, names, _Shared())
+    shared = _Shared()
+    parts = np.vstack([compute_chunk(demo, keys, values[i:i + 7], names, shared) for i in range(0, 30, 7)])
+    assert np.array_equal(whole, parts, equal_nan=True)

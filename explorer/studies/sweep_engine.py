@@ -172,6 +172,7 @@ def _kernel_chunk(base, keys, values, names, shared, groups=None) -> np.ndarray:
     failed = np.zeros(len(values), bool)
     rigid = [n for n in names if n not in ELASTIC and n != "run_failed"]
     speed = list(keys).index("drive.rpm") if "drive.rpm" in keys else None
+    other = [j for j, key in enumerate(keys) if key != "drive.rpm"]
     if rigid:
         for group in (groups if groups is not None else [np.array([i]) for i in range(len(values))]):
             try:
@@ -179,7 +180,8 @@ def _kernel_chunk(base, keys, values, names, shared, groups=None) -> np.ndarray:
                 scene = scene_for(base, keys, values[group[0]])
                 omegas = (speeds_of(scene, values[group, speed]) if speed is not None
                           else np.full(len(group), scene.drive.omega))
-                figures = rigid_over_speeds(scene, omegas, rigid, shared)
+                group_key = tuple(values[group[0], other].tolist())  # the group's values but the speed
+                figures = rigid_over_speeds(scene, omegas, rigid, shared, group_key)
             except (InputError, RuntimeError, ValueError, ArithmeticError):
                 failed[group] = True
                 continue

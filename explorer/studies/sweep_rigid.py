@@ -38,9 +38,11 @@ def speeds_of(scene, rpms) -> np.ndarray:
     return np.asarray(rpms, dtype=float) * 2.0 * math.pi / 60.0
 
 
-def rigid_over_speeds(scene, omegas, names, shared) -> dict[str, np.ndarray]:
+def rigid_over_speeds(scene, omegas, names, shared, group=None) -> dict[str, np.ndarray]:
     """{name: value per run} of the rigid names asked for, for the scene at the camshaft speeds
-    `omegas` (rad/s; the runs of a group differ in speed only)."""
+    `omegas` (rad/s; the runs of a group differ in speed only). `group`: a hashable key of the
+    scene's values other than the speed within one sweep (its varied values but drive.rpm), under
+    which the torque factors are kept across the sweep's chunks; None: made for this call."""
     if shared.lift is None:
         shared.lift = scene.gear_plugin.build_lift(scene)
     lift = shared.lift
@@ -62,10 +64,15 @@ def rigid_over_speeds(scene, omegas, names, shared) -> dict[str, np.ndarray]:
         lash = scene.valve.lash if scene.valve is not None else 0.0
         key = (TrainLoads.from_scene(scene), ratio, lash, n)
         theta, a_coef, g_part, is_open = remember(shared.of("contact grid"), key, lambda: grid_load_parts(scene, lift))
-        # the kinematics' geometry columns at the first speed (the pipeline's run of that effect
-        # alone): the factors do not depend on the speed
-        kinematics = figures(scene, shared, effects=("kinematics",))
-        ctx = Context(scene, theta, kinematics.columns["time_s"], lift, kinematics.columns, MappingProxyType({}))
-        push, pull = torque_factors(ctx)
+        def factors():
+            # the kinematics' geometry columns at the first speed (the pipeline's run of that
+            # effect alone): the factors do not depend on the speed (torque_factors; the same
+            # floats at any speed for every gear with a contact, checked in tests/test_sweep_kernel.py),
+            # so a group's chunks share them
+            kinematics = figures(scene, shared, effects=("kinematics",))
+            ctx = Context(scene, theta, kinematics.columns["time_s"], lift, kinematics.columns, MappingProxyType({}))
+            return torque_factors(ctx)
+
+        push, pull = factors() if group is None else remember(shared.of("torque factors"), (key, group), factors)
         out["max_camshaft_torque_Nm"] = peak_torques(a_coef, g_part, is_open, push, pull, omegas)
     return out
