@@ -8,7 +8,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 TEST_STAMP := $(VENV)/.installed-test
 # Pinned versions of every dependency (`make lock` refreshes them).
 CONSTRAINTS := constraints.txt
-# The compiled solvers (numba, cache=True): the sweep's exact solver and the spring chain's
+# The compiled solvers (numba, cache=True): the sweep's exact solver, its rigid figures' loops and the spring chain's
 # kernels, compiled once here, after install and whenever their source changes, into
 # explorer/dynamics/__pycache__, so that no sweep, chain scene or test worker pays the ~30 s and
 # ~10 s of compilation; numba replaces its cache files atomically, so concurrent test workers
