@@ -61,7 +61,7 @@ def _server_positions(app, names):
 
 def _framed(app):
     """True once every page reports the camera the viewer aimed for its canvas' shape."""
-    from explorer.view.browser.app import CAMERA_FOV
+    from explorer.view.browser.camera import CAMERA_FOV
 
     clients = app.server.get_clients()
     if not clients:
@@ -233,7 +233,7 @@ def test_page_shows_the_gear_follows_a_slider_and_renders(tmp_path):
                 _wait_in_step(page, app, parts)
                 # the page's plots are those of the result shown: titles and series (and the cursor);
                 # the live legend lists the x axis first (its value under the pointer)
-                from explorer.view.browser.app import PLOT_X_LABEL
+                from explorer.view.browser.plots import PLOT_X_LABEL
 
                 plots = [[plot.title, [PLOT_X_LABEL] + [label for label, _, _ in plot.series] + ["now"]]
                          for plot in app.current.plots]

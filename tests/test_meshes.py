@@ -391,7 +391,7 @@ def test_the_framed_camera_sees_every_vertex_of_the_revolution(name):
     of a sample of steps is in the picture (a convex frustum holding the box's corners holds
     the box), and the gear fills it: its silhouette spans at least 60 % of the picture's width
     or height."""
-    from explorer.view.browser.app import ASSUMED_ASPECT, CAMERA_FOV
+    from explorer.view.browser.camera import ASSUMED_ASPECT, CAMERA_FOV
 
     lay, parts, poses, lengths = _posed(name)
     lo, hi = meshes.motion_bounds(parts, poses)

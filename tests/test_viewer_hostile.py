@@ -155,7 +155,7 @@ def test_a_slow_value_is_abandoned_and_the_server_stays_responsive():
 
 
 def test_values_out_of_bounds_are_refused_before_any_computation():
-    from explorer.view.browser.app import MAX_GUI_STEPS, MAX_TEXT_LENGTH
+    from explorer.view.browser.parameters import MAX_GUI_STEPS, MAX_TEXT_LENGTH
 
     with running_app() as (server, app):
         steps = app.fields["solver.steps_per_revolution"]
