@@ -34,7 +34,8 @@ def read_csv(path):
 
 def test_simulate_writes_csv_and_summary(tmp_path):
     out, summary = tmp_path / "out.csv", tmp_path / "out.json"
-    proc = run_cli("simulate", DEMO, "-o", out, "--summary", summary)
+    # the demo's kinematics (it opens with forces and the elastic linkage too, #28.10)
+    proc = run_cli("simulate", DEMO, "--set", 'effects=["kinematics", "lash"]', "-o", out, "--summary", summary)
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == ""
     header, body = read_csv(out)
@@ -170,7 +171,7 @@ def test_kinematics_only_scene_imports_no_solver_and_no_viewer():
     code = f"""
 import sys
 from explorer import load_scene, simulate
-result = simulate(load_scene({str(DEMO)!r}))
+result = simulate(load_scene({str(DEMO)!r}, ['effects=["kinematics", "lash"]']))
 assert result.columns["valve_lift_m"].size == 3600
 registry = ("explorer.dynamics", "explorer.dynamics.solvers")  # solver names, read by the scene loader
 heavy = [m for m in sys.modules if m.startswith(("explorer.dynamics", "viser", "rerun", "matplotlib", "trimesh"))

@@ -71,6 +71,7 @@ class ComputeWorker:
     _pending_at: float = 0.0  # when the waiting request came
     _sweep: Any = None  # the SpeedSweep being filled in, or a SweepTask still to start
     _advice: int | None = None  # serial of the result whose spring advice is still to compute
+    _background: bool = False  # an advice or sweep step is being computed
     _span: tuple[str, tuple[float, float]] | None = None  # (scene path, speed range) last swept
 
     def start(self) -> "ComputeWorker":
@@ -146,14 +147,20 @@ class ComputeWorker:
                         advice, self._advice = self._advice, None
                         sweep = self._sweep
                         request = None
+                        self._background = True
                     else:
                         request, self._pending = self._pending, None
                         self._busy = True
                 if request is None:
-                    if advice is not None:
-                        self._advice_step(advice)
-                    else:
-                        self._sweep_step(sweep)
+                    try:
+                        if advice is not None:
+                            self._advice_step(advice)
+                        else:
+                            self._sweep_step(sweep)
+                    finally:
+                        with self._cond:
+                            self._background = False
+                            self._cond.notify_all()
                     continue
                 try:
                     self._compute(request)
@@ -227,7 +234,8 @@ class ComputeWorker:
     def sweep_idle(self) -> bool:
         """Whether nothing is waiting and the advice and speed sweep of the newest result are complete."""
         with self._cond:
-            return self._pending is None and not self._busy and self._sweep is None and self._advice is None
+            return (self._pending is None and not self._busy and self._sweep is None and self._advice is None
+                    and not self._background)
 
     def resweep(self) -> None:
         """Sweep the newest result again (the compiled solver became ready: all speeds at once)."""
