@@ -8,8 +8,10 @@ README's)."""
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import shutil
+import sys
 import time
 from pathlib import Path
 
@@ -478,7 +480,7 @@ def test_a_long_error_keeps_the_controls_on_an_800px_page(tmp_path):
     with _running_explorer(ROOT / "assets" / "scenes" / "cycloidal_demo.toml") as (server, app):
         assert app.wait_applied(WAIT_S)
         with _connected_page(sync_api, tmp_path, server) as page:
-            app._reject("error: Lash: " + "a very long reason that goes on; " * 40)
+            app.reject("error: Lash: " + "a very long reason that goes on; " * 40)
             _wait_until(lambda: app.error_text.startswith("error: Lash"), "no error shown")
             alert = page.locator(".explorer-error")
             alert.wait_for(timeout=WAIT_MS)
@@ -518,7 +520,7 @@ def test_speed_sweep_plot_appears_and_choosing_a_speed_updates_the_rpm(tmp_path)
             box, plot_box = slider.bounding_box(), rigid_plot.bounding_box()
             assert box["y"] >= plot_box["y"] + plot_box["height"] - 1  # right under the sweep plot
             page.mouse.click(box["x"] + 0.25 * box["width"], box["y"] + 0.5 * box["height"])
-            _wait_until(lambda: app.current.scene.drive.rpm != before and app.handled_serial >= app._serial,
+            _wait_until(lambda: app.current.scene.drive.rpm != before and app.wait_applied(0.5),
                         "a click on the speed slider did not recompute at another speed")
             chosen = app.current.scene.drive.rpm
             assert 0.15 * span[1] < chosen < 0.35 * span[1]
@@ -556,3 +558,177 @@ def test_elastic_speed_sweep_figures_each_get_their_own_plot_in_the_page(tmp_pat
             page.screenshot(path=str(shot), clip={"x": 0, "y": 0, "width": 450, "height": 1500}, timeout=WAIT_MS)
     if os.environ.get("EXPLORER_UPDATE_SCREENSHOT"):
         shutil.copyfile(shot, ROOT / "docs" / "speed_sweep.png")
+
+
+# ------------------------------------------------------------------------------------------------
+# Issue #28: a new user's session at 1280x800 on a loaded machine (two CPU burners), typing at a
+# person's pace (120 ms a key)
+
+
+@contextlib.contextmanager
+def _burners(count: int = 2):
+    """Two CPU burners for the test's duration (the issue's loaded machine); always stopped."""
+    from explorer.core.processes import spawn, stop_group
+
+    procs = []
+    try:
+        for _ in range(count):
+            procs.append(spawn([sys.executable, "-c", "while True: pass"]))
+        yield
+    finally:
+        for proc in procs:
+            stop_group(proc, grace=1.0)
+
+
+def _type(page, field, text):
+    """Empty a field and type `text` into it at 120 ms a key, as a person does."""
+    field.click()
+    field.press("Control+a")
+    field.press("Delete")
+    page.keyboard.type(text, delay=120)
+
+
+def _sent_values(app, key):
+    """Record every value of `key` the app sends to its compute thread (the requests' overrides)."""
+    sent = []
+    submit = app.worker.submit
+
+    def recording(request):
+        for text in request.overrides:
+            if text.startswith(key + "="):
+                sent.append(json.loads(text.split("=", 1)[1]))
+        submit(request)
+
+    app.worker.submit = recording
+    return sent
+
+
+def test_typed_values_apply_only_as_complete_quantities_in_the_labels_unit(tmp_path):
+    """#28.1-3 in a real page at 1280x800, two CPU burners running, 120 ms a key.
+    1. '7 kg' into Lash [mm]: the page computed a 7 m lash in 4 of 8 tries ("7 " applied
+       mid-typing). Now nothing but complete lengths is ever sent, and '7 kg' is refused once
+       typed out, naming the lash in use.
+    3. After that error, '0.6 mm': the header, the field and the result all say 0.6 mm.
+    2. '3000' into Linkage stiffness [N/mm] is 3000 N/mm (it was 3000 N/m); the field then shows
+       the value used with its unit.
+    Enter applies at once, even a text that would wait for its unit ("0.4 ")."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+    from explorer.core.units import to_si
+    from explorer.view.browser.fields import TYPING_PAUSE_S
+    from explorer.view.browser.parameters import PARAMETERS, field_value
+
+    with _running_explorer(ROOT / "assets" / "scenes" / "cycloidal_demo.toml") as (server, app), _burners():
+        assert app.wait_applied(WAIT_S)
+        lash_sent = _sent_values(app, "valve.lash")
+        with _connected_page(sync_api, tmp_path, server) as page:
+            lash = _row_input(page, "Lash [mm]")
+            _type(page, lash, "7 kg")
+            _wait_until(lambda: "'7 kg' is not a length" in app.error_text, "'7 kg' was not refused")
+            assert "Lash not applied" in app.error_text and app.current.values["valve.lash"] in app.error_text
+            for text in lash_sent:  # a complete length with its unit, never '7 ' (nor 7 m)
+                assert field_value(PARAMETERS["valve.lash"], text) == text
+                assert to_si(text, "length", file="test", key="lash") < 0.01, text
+            assert '"7 "' not in app.current.label and lash.input_value() == "7 kg"
+            # 3: the next value applies, and header, field and result agree
+            _type(page, lash, "0.6 mm")
+            _wait_until(lambda: app.current.scene.valve.lash == pytest.approx(0.6e-3) and app.error_text == "",
+                        "0.6 mm was not applied after the error")
+            assert app.wait_applied(WAIT_S)
+            assert 'valve.lash="0.6 mm"' in app.current.label and app.current.label in app.readout.content
+            assert lash.input_value() == "0.6 mm" and app.fields["valve.lash"].value == "0.6 mm"
+            # 2: a bare number is in the label's unit, and the field says so once it is used
+            stiffness = _row_input(page, "Linkage stiffness [N/mm]")
+            _type(page, stiffness, "3000")
+            _wait_until(lambda: app.current.scene.linkage.stiffness == pytest.approx(3.0e6),
+                        "3000 in [N/mm] was not 3000 N/mm")
+            page.wait_for_function("(e) => e.value === '3000 N/mm'", arg=stiffness.element_handle(), timeout=WAIT_MS)
+            # Enter: "0.4 " waits for its unit by itself; Enter applies it as 0.4 mm
+            before = len(lash_sent)
+            _type(page, lash, "0.4 ")
+            time.sleep(2 * TYPING_PAUSE_S)
+            assert len(lash_sent) == before and app.current.scene.valve.lash == pytest.approx(0.6e-3)
+            assert app.error_text == ""  # waiting for a unit is no error
+            lash.press("Enter")
+            _wait_until(lambda: app.current.scene.valve.lash == pytest.approx(0.4e-3), "Enter did not apply '0.4 '")
+            assert lash_sent[before:] == ["0.4 mm"]
+
+
+def _plots_with_ticks(page):
+    """For every uPlot of the page: (title, number of tick values on x, on y). viser's client
+    keeps each chart in window.__viserTestpoints.uplots (its own test hook); uPlot's axes hold
+    the values they draw in `_values` ([] or [0, 0] increments: no tick labels, no grid)."""
+    return page.evaluate(
+        "() => Object.values(window.__viserTestpoints?.uplots ?? {}).map(t => [t.chart.root.querySelector('.u-title')"
+        "?.textContent ?? '', ...t.chart.axes.slice(0, 2).map(a => (a._values ?? []).length)])")
+
+
+@pytest.mark.parametrize("scene", ["schenker1902_fig2.toml", "cycloidal_demo.toml"])
+def test_every_plot_has_tick_labels_and_grid_at_1280x800(tmp_path, scene):
+    """#28.4: on the default scene at 1280x800 the plots came without tick labels or grid: a page
+    that connects while the animation plays got cursor data while it laid the plots out, and
+    uPlot kept the axes it had computed at width 0. Here, loaded and playing, every cam-angle
+    plot and every speed-sweep plot ends up with tick values on both axes."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    import viser
+
+    from explorer.view.browser.app import ExplorerApp
+
+    with _burners():
+        server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+        app = ExplorerApp(server, str(ROOT / "assets" / "scenes" / scene), playing=True)
+        try:
+            assert app.wait_applied(WAIT_S)
+            _wait_until(lambda: app.sweep is not None, "no speed sweep")
+            with _connected_page(sync_api, tmp_path, server) as page:
+                expected = len(app.current.plots) + len(app.sweep_view.handles)
+                deadline = time.monotonic() + WAIT_S
+                while True:
+                    plots = _plots_with_ticks(page)
+                    if len(plots) >= expected and all(x >= 2 and y >= 2 for _, x, y in plots):
+                        break
+                    assert time.monotonic() < deadline, plots
+                    time.sleep(0.2)
+                assert len(plots) >= expected and all(x >= 2 and y >= 2 for _, x, y in plots), plots
+                page.screenshot(path=str(tmp_path / f"plots_{scene}.png"))
+        finally:
+            app.stop()
+            server.stop()
+        assert app.loop_errors == 0 and app.worker.internal_errors == 0
+
+
+def test_a_click_in_the_middle_of_the_slider_under_the_plots_moves_the_angle(tmp_path):
+    """#28.7 at 1280x800 with two CPU burners: the animation plays, a click in the middle of the
+    cam-angle slider under the plots pauses it there, every time (a thread-pool callback used
+    to read the slider late, after the loop had moved it on: the click was lost)."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    import viser
+
+    from explorer.view.browser.app import ExplorerApp
+    from explorer.view.browser.plots import PLOT_X_LABEL
+
+    with _burners():
+        server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+        app = ExplorerApp(server, str(ROOT / "assets" / "scenes" / "schenker1902_fig2.toml"), playing=True)
+        try:
+            assert app.wait_applied(WAIT_S)
+            with _connected_page(sync_api, tmp_path, server) as page:
+                slider = _row_input(page, PLOT_X_LABEL, "div[contains(@class,'mantine-Slider-root')]")
+                slider.wait_for(timeout=WAIT_MS)
+                for attempt in range(3):
+                    app.play.value = True
+                    _wait_until(lambda: app.playback.playing and abs(app.playback.angle_deg - 180.0) > 30.0,
+                                "the animation did not move on")
+                    slider.scroll_into_view_if_needed()
+                    page.evaluate(TWO_FRAMES)
+                    box = slider.bounding_box()
+                    page.mouse.click(box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"])
+                    _wait_until(lambda: not app.playback.playing and abs(app.playback.angle_deg - 180.0) < 15.0,
+                                f"click {attempt + 1} in the middle of the slider did not move the angle there")
+                    assert app.wait_applied(WAIT_S)
+                    assert abs(app.playback.angle_deg - 180.0) < 15.0 and not app.playback.playing
+                    _wait_in_step(page, app, ["valve"])
+        finally:
+            app.stop()
+            server.stop()
+        assert app.loop_errors == 0 and app.worker.internal_errors == 0

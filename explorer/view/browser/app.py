@@ -38,7 +38,7 @@ from .fields import Fields
 from .gear_view import GearView
 from .loop import FrameLoop
 from .model import COMPUTE_TIME_LIMIT_S, Prepared, Request, default_speed
-from .plots import Plots
+from .plots import REPLOT_AFTER_S, Plots
 from .readouts import Readouts, status_html
 from .requests import (AdviceArrived, CameraMoved, ClientConnected, ClientLeft, Computed, Edited, EffectsTicked,
                        EventChosen, Failed, Inbox, Magnified, Played, ResetClicked, SceneChosen, Scrubbed,
@@ -121,6 +121,7 @@ class ExplorerApp:
         self._error: tuple[int, str] | None = None  # (serial, message) of the failure shown
         self._loading = 0  # serial of a scene load whose result opens at its own playback speed
         self._compiled = kernels is None or kernels.ready()
+        self._replot_at: float | None = None  # when to make the plots anew for a page that connected
 
         self._build_gui(playing)
         if client is None:
@@ -250,6 +251,9 @@ class ExplorerApp:
                 self._compiled = frame.resweep = True
             if frame.resweep:
                 self.worker.resweep()  # the compiled solver is ready: every elastic speed at once
+            replot = self._replot_at is not None and now >= self._replot_at and self.current is not None
+            if replot:
+                self._replot_at = None
             playback = self.controls.playback
             if frame.incoming is not None:
                 self.handled_serial = max(self.handled_serial, frame.incoming.request.serial)
@@ -262,6 +266,8 @@ class ExplorerApp:
             with self.target.atomic():
                 if frame.incoming is not None:
                     self._show(frame.incoming, since)
+                if replot:
+                    self.plots.replot(self.current, playback.angle_deg)
                 if frame.advice is not None and self.current is not None \
                         and frame.advice.serial == self.current.request.serial:
                     self.readouts.readout.content = frame.advice.readout
@@ -340,6 +346,8 @@ class ExplorerApp:
             frame.advice = item
         elif isinstance(item, ClientConnected):
             self.cameras.connected(item.client)
+            self.plots.settle()
+            self._replot_at = time.monotonic() + REPLOT_AFTER_S
         elif isinstance(item, ClientLeft):
             self.cameras.left(item.client_id)
         elif isinstance(item, CameraMoved):

@@ -129,7 +129,7 @@ class Fields:
     def apply(self, key: str, value, submit, refuse, current, forced: bool) -> None:
         p = PARAMETERS[key]
         try:
-            value = field_value(p, value, tuple(self.handles[key].options) if p.kind == "choice" else ())
+            value = field_value(p, value, tuple(self.handles[key].options) if p.kind == "choice" else (), final=forced)
         except NotYet as why:
             if why.typing and not forced:
                 self.parked.add(key)  # "7 ": the unit is still to come; it stays typed, and nothing is said

@@ -58,10 +58,11 @@ class NotYet(ValueError):
         self.typing = typing
 
 
-def field_value(parameter: Parameter, value: Any, options: tuple[str, ...] = ()):
+def field_value(parameter: Parameter, value: Any, options: tuple[str, ...] = (), final: bool = False):
     """The value a field's content stands for, as the scene reader takes it: a number, a law
     name, or a quantity's text with its unit ("3000 N/mm" for a bare "3000"). Raises NotYet
-    when it is not one: out of bounds, not a quantity of the field's dimension, or unfinished."""
+    when it is not one: out of bounds, not a quantity of the field's dimension, or unfinished.
+    `final`: the user said it is finished (Enter): "7 " is 7 in the field's unit."""
     kind = parameter.kind
     if kind in ("number", "integer"):
         if isinstance(value, bool):
@@ -84,7 +85,7 @@ def field_value(parameter: Parameter, value: Any, options: tuple[str, ...] = ())
         if text not in options:
             raise NotYet(f"not one of the choices: {text!r}")
         return text
-    return quantity_text(parameter, text)
+    return quantity_text(parameter, text.strip() if final else text)
 
 
 def quantity_text(parameter: Parameter, text: str) -> str:

@@ -15,6 +15,15 @@ import numpy as np
 
 PLOT_X_LABEL = "cam angle θ [°]"
 PLOT_CURSOR_HZ = 8.0  # the plots' angle cursor is redrawn at most this often
+# A plot that gets new data while a page lays it out for the first time (uPlot created at width 0,
+# resized when its panel is measured) keeps the axes it computed at width 0: no tick labels, no
+# grid, for good (viser's uPlot in headless Chromium at 1280x800, a page connecting while the
+# animation plays: #28.4; its axes' increments stay [0, 0]). So the cursor, the only data that
+# changes without a new result, holds still for CURSOR_SETTLE_S after the plots are made, and a
+# page that connects gets its plots made anew REPLOT_AFTER_S later, once it is laid out and idle
+# (a page still busy loading can take longer than any fixed wait to measure its panels).
+CURSOR_SETTLE_S = 2.0
+REPLOT_AFTER_S = 3.0
 PLOT_SLIDER_ORDER = 1e6  # after every plot: the plots are added and removed as results change
 
 
@@ -75,6 +84,7 @@ class Plots:
     def __init__(self, gui, tab, angle_slider_hint: str):
         self.gui, self.tab = gui, tab
         self.handles: list = []
+        self._settle_until = 0.0  # no cursor data before this (time.perf_counter())
         self._cursor_at = 0.0  # when the cursor was last redrawn (it is throttled to PLOT_CURSOR_HZ)
         self._cursor_step = -1
         with tab:
@@ -84,6 +94,13 @@ class Plots:
             # to clicking a plot is this slider right under the plots, on their angle scale
             self.angle = gui.add_slider(PLOT_X_LABEL, min=0.0, max=360.0, step=0.1, initial_value=0.0,
                                         order=PLOT_SLIDER_ORDER, hint=angle_slider_hint)
+
+    def replot(self, prepared, angle: float) -> None:
+        """Make the plots anew (a page that connected is laid out by now)."""
+        for handle in self.handles:
+            handle.remove()
+        self.handles = []
+        self.show(prepared, angle)
 
     def show(self, prepared, angle: float) -> None:
         """The plots of a new result: replaced where their titles or curves differ, else new data."""
@@ -99,15 +116,23 @@ class Plots:
             with self.tab:
                 self.handles = [self.gui.add_uplot(data=plot_data(plot, angle), **options)
                                 for plot, options in zip(prepared.plots, wanted)]
+            self.settle()
         else:
             for handle, plot, options in zip(self.handles, prepared.plots, wanted):
                 handle.data = plot_data(plot, angle)
                 if handle.scales != options["scales"]:
                     handle.scales = options["scales"]
 
+    def settle(self) -> None:
+        """A page is laying the plots out: no cursor data for CURSOR_SETTLE_S."""
+        self._settle_until = time.perf_counter() + CURSOR_SETTLE_S
+
     def cursor(self, prepared, angle: float, step: int, force: bool = False) -> None:
-        """The cursor at `angle` (step `step` of the revolution), at most PLOT_CURSOR_HZ a second."""
+        """The cursor at `angle` (step `step` of the revolution), at most PLOT_CURSOR_HZ a second
+        (none while the plots settle, unless forced)."""
         now = time.perf_counter()
+        if not force and now < self._settle_until:
+            return
         if force or (step != self._cursor_step and now - self._cursor_at >= 1.0 / PLOT_CURSOR_HZ):
             for handle, plot in zip(self.handles, prepared.plots):
                 handle.data = plot_data(plot, angle)
