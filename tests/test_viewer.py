@@ -180,7 +180,9 @@ def test_scene_swap_replaces_the_cam_geometry_and_the_plots(app):
     assert app.fields["drive.rpm"].value == pytest.approx(scene.drive.rpm)
     assert app.effects["forces"].value is True
     labels = _plot_labels(app)
-    assert "linkage force" in labels and "linkage force" not in titles_before
+    assert "linkage force" in labels and labels != titles_before
+    assert labels == [label for p in app.current.plots
+                      for label in ["cam angle θ [°]", *(s[0] for s in p.series), "now"]]
     assert "forces" in app.readout.content
 
 
@@ -486,6 +488,9 @@ def test_plots_follow_a_new_result_that_arrives_with_a_magnification_change(app)
     frame, the loop receives one bundle that the worker marked `new_result=False` (only the
     magnification differs from its previous one). The plots and read-outs must still be the new
     result's (they were stale: old series with new data, drawn wrong in the page)."""
+    for name in ("elastic", "contact", "forces"):  # the rigid kinematics first
+        app.effects[name].value = False
+    assert app.wait_applied(60) and "elastic" not in app.current.result.summary["effects"]
     app.loop.stop()  # the test plays the loop: frames come only when it calls tick()
     app.effects["elastic"].value = True
     app.tick(0.0)  # the request is applied (sent to the compute thread) in a frame

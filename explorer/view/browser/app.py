@@ -138,7 +138,7 @@ class ExplorerApp:
             compiled=None if kernels is None else kernels.ready,
             time_limit=time_limit).start()
         self._loading = self._submit()
-        self.loop = FrameLoop(self.tick, fps).start()
+        self.loop = FrameLoop(self.tick, fps, wake=self.inbox.arrived).start()
 
     # ------------------------------------------------------------------ the page
 

@@ -131,11 +131,13 @@ class Inbox:
         self._items: deque = deque()
         self._recorded = 0
         self._applied = 0
+        self.arrived = threading.Event()  # set by `put`: the frame loop waits on it (loop.FrameLoop)
 
     def put(self, item) -> None:
         with self._cond:
             self._items.append(item)
             self._recorded += 1
+        self.arrived.set()
 
     def take(self) -> list:
         """Every request recorded so far, oldest first (the loop calls `done` once applied)."""
