@@ -732,3 +732,132 @@ def test_a_click_in_the_middle_of_the_slider_under_the_plots_moves_the_angle(tmp
             app.stop()
             server.stop()
         assert app.loop_errors == 0 and app.worker.internal_errors == 0
+
+
+# the pictures of docs/guide/browser.md: file, scene, what the page shows
+GUIDE = ROOT / "docs" / "img"
+
+
+def test_the_guides_pictures_show_what_it_says(tmp_path):
+    """docs/guide/browser.md's pictures, taken from the real app at 1280x800 (set
+    EXPLORER_UPDATE_SCREENSHOT=1 to copy them to docs/img): the whole page on the default scene,
+    the Scene folder refusing '7 kg' for a lash, the float demo's speed sweep and its Read-outs.
+    Each is checked for what the guide says it shows before it is kept."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+    from explorer.view.browser.plots import PLOT_X_LABEL
+
+    shots = {}
+    with _running_explorer(ROOT / "assets" / "scenes" / "schenker1902_fig2.toml") as (server, app):
+        assert app.wait_applied(WAIT_S)
+        s = app.current.result.columns["valve_lift_m"]
+        app.angle.value = round(float(app.current.result.columns["cam_angle_deg"][int(np.argmax(s))]) - 20.0, 1)
+        assert app.wait_applied(WAIT_S)
+        _wait_until(lambda: app.sweep is not None, "no speed sweep")
+        with _connected_page(sync_api, tmp_path, server) as page:
+            page.wait_for_function(
+                "(n) => { const t = Object.values(window.__viserTestpoints?.uplots ?? {}); return t.length >= n"
+                " && t.every(p => p.chart.axes.slice(0, 2).every(a => (a._values ?? []).length >= 2)); }",
+                arg=len(app.current.plots), timeout=WAIT_MS)
+            _wait_framed(app)
+            _wait_in_step(page, app, ["valve"])
+            page.mouse.move(640, 790)
+            page.evaluate(TWO_FRAMES)
+            shots["browser_overview.png"] = tmp_path / "overview.png"
+            page.screenshot(path=str(shots["browser_overview.png"]))
+            # a value typed as a person does, refused with the reason and the value in use
+            lash = _row_input(page, "Lash [mm]")
+            _type(page, lash, "7 kg")
+            _wait_until(lambda: "'7 kg' is not a length" in app.error_text, "'7 kg' was not refused")
+            page.locator(".explorer-error").wait_for(timeout=WAIT_MS)
+            page.mouse.move(640, 790)
+            page.evaluate(TWO_FRAMES)
+            shots["browser_refused.png"] = tmp_path / "refused.png"
+            page.screenshot(path=str(shots["browser_refused.png"]), clip={"x": 880, "y": 0, "width": 400, "height": 800})
+
+    with _running_explorer(ROOT / "assets" / "scenes" / "valve_float_demo.toml") as (server, app):
+        assert app.wait_applied(WAIT_S)
+        _wait_until(lambda: app.sweep is not None and app.sweep.elastic_done == app.sweep.elastic_total > 0,
+                    "the float demo's sweep did not complete")
+        _wait_until(lambda: "**Spring advice** for" in app.readout.content, "no spring advice")
+        with _connected_page(sync_api, tmp_path, server, height=1400) as page:
+            title = page.locator(".uplot .u-title", has_text="Speed sweep (rigid)")
+            title.wait_for(timeout=WAIT_MS)
+            _row_input(page, "Speed [rpm]", "div[contains(@class,'mantine-Slider-root')]").scroll_into_view_if_needed()
+            page.evaluate(TWO_FRAMES)
+            shots["browser_speed_sweep.png"] = tmp_path / "sweep.png"
+            page.screenshot(path=str(shots["browser_speed_sweep.png"]), clip={"x": 0, "y": 0, "width": 450, "height": 1400})
+            page.get_by_role("tab", name="Read-outs").click()
+            page.locator(".explorer-events").wait_for(timeout=WAIT_MS)
+            page.get_by_text("Spring advice").first.wait_for(timeout=WAIT_MS)
+            page.evaluate(TWO_FRAMES)
+            shots["browser_readouts.png"] = tmp_path / "readouts.png"
+            page.screenshot(path=str(shots["browser_readouts.png"]), clip={"x": 0, "y": 0, "width": 450, "height": 1400})
+            assert PLOT_X_LABEL  # (the plots tab's slider label, named in the guide)
+
+    import matplotlib.image
+
+    for name, shot in shots.items():
+        image = matplotlib.image.imread(str(shot))[..., :3]
+        assert image.std() > 0.05 and len(np.unique((image * 255).astype(np.uint8).reshape(-1, 3), axis=0)) > 100, name
+        if os.environ.get("EXPLORER_UPDATE_SCREENSHOT"):
+            GUIDE.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(shot, GUIDE / name)
+
+
+def test_the_first_page_is_served_before_the_compiled_solver_and_says_it_is_being_prepared(tmp_path):
+    """#27.2: `make run` compiled the numba kernels (~30 s idle, minutes loaded) before serving,
+    though the first page needs none of them. With numba's cache empty (NUMBA_CACHE_DIR: a first
+    start after an install), `explorer serve` prints its address while the kernels are still
+    being compiled, in a background process it started after; the page says so; and stopping
+    the server ends that process too."""
+    import signal
+    import subprocess
+
+    import psutil
+
+    sync_api = pytest.importorskip("playwright.sync_api")
+    from explorer.core.processes import spawn, stop_group
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"), PYTHONUNBUFFERED="1")
+    proc = spawn([sys.executable, "-m", "explorer", "serve", "cycloidal_demo.toml", "--port", "0", "--paused"],
+                 cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env)
+    try:
+        url = None
+        deadline = time.monotonic() + WAIT_S
+        while url is None and time.monotonic() < deadline:
+            line = proc.stdout.readline()
+            if line.startswith("Valve-Gear Explorer: http://"):
+                url = line.split()[2]
+            elif not line and proc.poll() is not None:
+                break
+        assert url is not None, "serve printed no address"
+        assert not any((tmp_path / "numba-cache").rglob("*.nbc"))  # nothing compiled before the page
+
+        def warmup():
+            found = []
+            for child in psutil.Process(proc.pid).children(recursive=True):
+                with contextlib.suppress(psutil.Error):  # a child that ends meanwhile
+                    if "exact_kernel import warm" in " ".join(child.cmdline()):
+                        found.append(child)
+            return found
+
+        _wait_until(lambda: warmup(), "no background compilation was started")
+        with sync_api.sync_playwright() as pw:
+            context = pw.chromium.launch_persistent_context(
+                str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=ARGS,
+                viewport={"width": 1280, "height": 800}, timeout=WAIT_MS)
+            try:
+                page = context.new_page()
+                page.goto(url)
+                page.get_by_text("preparing the compiled solver").first.wait_for(timeout=WAIT_MS)
+            finally:
+                context.close()
+        compiling = warmup()
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=WAIT_S)
+        assert proc.returncode == 0
+        gone, alive = psutil.wait_procs(compiling, timeout=WAIT_S)
+        assert not alive  # the compilation ended with the server
+    finally:
+        stop_group(proc, grace=2.0)
