@@ -8,8 +8,11 @@ import math
 import time
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from conftest import SCENES, process_timeout
+from explorer.core.units import parse_quantity, to_si
 from explorer.effects.lift import build_lift
 from explorer.effects.pipeline import simulate
 from explorer.scene.scene import load_scene
@@ -165,3 +168,28 @@ def test_cycloidal_demo_opens_with_what_the_readme_shows():
     result = simulate(scene, lift=build_lift(scene))
     assert {"contact_force_N", "linkage_force_N", "hertz_stress_Pa"} <= set(result.columns)
     assert result.summary["elastic_event_counts"].get("separation", 0) > 0  # just above its float speed
+
+
+TEXT = st.one_of(
+    st.text(max_size=120),
+    st.builds(lambda n, sp, u: f"{n}{sp}{u}", st.floats(allow_nan=True, allow_infinity=True).map(repr),
+              st.sampled_from(["", " ", "  "]),
+              st.sampled_from(["", "mm", "m", "kg", "N", "N/mm", "N/m", "kgf", "in", "deg", "mm/", "**2", "N*s/m", "µm"])),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(key=st.sampled_from(["valve.lash", "linkage.stiffness", "spring.preload", "spring.rate"]), text=TEXT,
+       final=st.booleans())
+def test_any_text_is_a_value_of_the_fields_dimension_or_not_yet(key, text, final):
+    """Whatever a page sends into a quantity field: a complete quantity of the field's dimension
+    (with its unit, which the scene reader takes as that dimension), or NotYet with the reason;
+    never another exception (the server reads it, not the time-limited compute process)."""
+    p = PARAMETERS[key]
+    try:
+        value = field_value(p, text, final=final)
+    except NotYet as why:
+        assert str(why)
+        return
+    assert isinstance(value, str) and parse_quantity(value, file="test", key=key)[1]  # a number and its unit
+    assert math.isfinite(to_si(value, p.dimension, file="test", key=key))

@@ -22,7 +22,8 @@ DEMO = SCENES / "cycloidal_demo.toml"
 
 
 def _scene(*overrides):
-    return load_scene(DEMO, list(overrides))
+    # the demo's rigid motion (it opens with forces and the elastic linkage too, #28.10)
+    return load_scene(DEMO, ['effects=["kinematics", "lash"]', *overrides])
 
 
 @pytest.fixture(scope="module")

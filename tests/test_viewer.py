@@ -1108,7 +1108,8 @@ def test_each_page_has_its_own_session_and_a_closed_page_frees_it():
         assert _wait_for(lambda: not worker_a.is_running() or worker_a.status() == psutil.STATUS_ZOMBIE,
                          process_timeout())
         assert not loop_a.alive()
-        assert a.worker._thread is None or not a.worker._thread.is_alive()
+        # the session is dropped before its app is stopped: the thread ends within worker.stop
+        assert _wait_for(lambda: a.worker._thread is None or not a.worker._thread.is_alive(), process_timeout())
         # B still works
         other.set("Camshaft rpm", 2000.0)
         assert _wait_for(lambda: b.current.scene.drive.rpm == 2000.0, process_timeout())
@@ -1128,3 +1129,34 @@ def test_a_shared_session_says_so_on_the_page(app):
     from explorer.view.browser.app import SHARED_NOTE
 
     assert app.client is None and SHARED_NOTE in app.share_note.content
+
+
+def test_the_plots_cursor_is_hidden_while_the_animation_plays():
+    """#28.4: the cursor was the plots' data that changed 8 times a second while the animation
+    played, and a page laying the plots out then kept axes without ticks. While playing, no
+    cursor; paused by a scrub, the cursor stands at the angle chosen."""
+    from explorer.view.browser.app import ExplorerApp
+    from explorer.view.browser.plots import CURSOR_SETTLE_S
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    app = ExplorerApp(server, str(DEMO), playing=True)
+    try:
+        assert app.wait_applied(60)
+        time.sleep(CURSOR_SETTLE_S + 0.5)  # past the settling, while the clock moves on
+        assert app.controls.playback.playing and app.plots.handles
+        for handle in app.plots.handles:
+            assert not np.any(np.asarray(handle.data[-1]))
+        app.angle.value = 90.0
+        assert app.wait_applied(60)
+
+        def at_90():
+            for handle in app.plots.handles:
+                x, cursor = np.asarray(handle.data[0]), np.asarray(handle.data[-1])
+                if cursor.sum() != 1.0 or abs(x[int(np.argmax(cursor))] - 90.0) > 0.5:
+                    return False
+            return True
+
+        assert _wait_for(at_90, process_timeout()) and not app.controls.playback.playing
+    finally:
+        app.stop()
+        server.stop()

@@ -267,7 +267,7 @@ class ExplorerApp:
                 if frame.incoming is not None:
                     self._show(frame.incoming, since)
                 if replot:
-                    self.plots.replot(self.current, playback.angle_deg)
+                    self.plots.replot(self.current, None if playback.playing else playback.angle_deg)
                 if frame.advice is not None and self.current is not None \
                         and frame.advice.serial == self.current.request.serial:
                     self.readouts.readout.content = frame.advice.readout
@@ -278,7 +278,8 @@ class ExplorerApp:
                 if self.current is not None:
                     angle = playback.angle_deg
                     step = self.gear.pose(angle, force=frame.incoming is not None)
-                    self.plots.cursor(self.current, angle, step, force=frame.incoming is not None)
+                    self.plots.cursor(self.current, None if playback.playing else angle, step,
+                                      force=frame.incoming is not None)
                     self.controls.sync((self.controls.angle, self.plots.angle), since)
                     self.cameras.aim_pending(self.current)
             self.target.flush()
@@ -365,7 +366,8 @@ class ExplorerApp:
         # compared with what is shown, not with the worker's previous bundle (`new_result`): a
         # new result and a magnification change computed together come as one bundle
         if previous is None or prepared.result is not previous.result:
-            self.plots.show(prepared, self.controls.playback.angle_deg)
+            playback = self.controls.playback
+            self.plots.show(prepared, None if playback.playing else playback.angle_deg)
             self.readouts.show(prepared)
         self.fields.show(prepared, since)
         if previous is None or Path(previous.request.path) != Path(prepared.request.path):

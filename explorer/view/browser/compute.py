@@ -212,6 +212,9 @@ class ComputeWorker:
             self.on_error(request, payload)
         else:
             prepared = self._relink(*payload)
+            # a result not shown before (a magnification change is the same result; so is a
+            # fresh child's recomputation of it, linked by _relink)
+            fresh = self._last is None or prepared.result is not self._last.result
             self._last = prepared
             self.computed += 1
             self.on_ready(prepared)
@@ -225,7 +228,7 @@ class ComputeWorker:
                 span = self._span[1] if self._span is not None and self._span[0] == path else None
                 with self._cond:
                     self._sweep = SweepTask(prepared.request.serial, None, span)
-            if self.on_result is not None and prepared.new_result:
+            if self.on_result is not None and fresh:
                 try:
                     self.on_result(prepared)
                 except Exception:
@@ -329,9 +332,17 @@ class ComputeWorker:
         """A bundle that reused the previous simulation (only the magnification changed) shares
         the previous bundle's objects again, as it did in the child: the viewer tells what to
         redraw by identity, and a pickled copy would redraw the plots and every mesh. `reused`
-        is the serial of the bundle the child reused; only that one may be linked to."""
+        is the serial of the bundle the child reused; only that one may be linked to.
+
+        A child restarted meanwhile (a sweep step stopped for this request, SWEEP_YIELD_S) has
+        nothing to reuse and simulates again; its bundle for the same scene and overrides is
+        linked too, by the child's own criterion (model.prepare), but stays `new_result`: the
+        sweep and the advice, whose child state was lost, start again."""
         last = self._last
-        if reused is None or last is None or last.request.serial != reused:
+        if last is None:
+            return prepared
+        same = (last.request.path, last.request.overrides) == (prepared.request.path, prepared.request.overrides)
+        if last.request.serial != reused and not (reused is None and same):
             return prepared
         return dataclasses.replace(
             prepared, scene=last.scene, result=last.result, layout=last.layout, lift=last.lift,

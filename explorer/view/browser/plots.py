@@ -15,13 +15,15 @@ import numpy as np
 
 PLOT_X_LABEL = "cam angle θ [°]"
 PLOT_CURSOR_HZ = 8.0  # the plots' angle cursor is redrawn at most this often
-# A plot that gets new data while a page lays it out for the first time (uPlot created at width 0,
-# resized when its panel is measured) keeps the axes it computed at width 0: no tick labels, no
-# grid, for good (viser's uPlot in headless Chromium at 1280x800, a page connecting while the
-# animation plays: #28.4; its axes' increments stay [0, 0]). So the cursor, the only data that
-# changes without a new result, holds still for CURSOR_SETTLE_S after the plots are made, and a
-# page that connects gets its plots made anew REPLOT_AFTER_S later, once it is laid out and idle
-# (a page still busy loading can take longer than any fixed wait to measure its panels).
+# A plot that gets new data while a page lays it out for the first time keeps the axes it
+# computed at width 0: no tick labels, no grid, for good (#28.4: viser's uPlot is created at width
+# 0 and resized once its panel is measured; uPlot's redraw() after a data update clears the
+# pending recalculation of the axes that the resize asked for, so its axes' increments stay
+# [0, 0]). The cursor was the data that changed all the time, 8 times a second while the
+# animation played. So the cursor is drawn while the animation is paused (or scrubbed: one update
+# per change, throttled while a slider is dragged) and hidden while it plays, when the sliders and
+# the 3D gear show the angle; it also holds still for CURSOR_SETTLE_S after the plots are made,
+# and a page that connects gets its plots made anew REPLOT_AFTER_S later, once laid out.
 CURSOR_SETTLE_S = 2.0
 REPLOT_AFTER_S = 3.0
 PLOT_SLIDER_ORDER = 1e6  # after every plot: the plots are added and removed as results change
@@ -68,9 +70,11 @@ def plot_options(plot) -> dict:
     )
 
 
-def plot_data(plot, angle: float) -> tuple[np.ndarray, ...]:
+def plot_data(plot, angle: float | None) -> tuple[np.ndarray, ...]:
+    """The plot's data with the cursor at `angle` (None: no cursor)."""
     cursor = np.zeros(len(plot.x))
-    cursor[int(np.argmin(np.abs(plot.x - angle % 360.0)))] = 1.0
+    if angle is not None:
+        cursor[int(np.argmin(np.abs(plot.x - angle % 360.0)))] = 1.0
     return (plot.x, *(values for _, values, _ in plot.series), cursor)
 
 
@@ -95,14 +99,14 @@ class Plots:
             self.angle = gui.add_slider(PLOT_X_LABEL, min=0.0, max=360.0, step=0.1, initial_value=0.0,
                                         order=PLOT_SLIDER_ORDER, hint=angle_slider_hint)
 
-    def replot(self, prepared, angle: float) -> None:
+    def replot(self, prepared, angle: float | None) -> None:
         """Make the plots anew (a page that connected is laid out by now)."""
         for handle in self.handles:
             handle.remove()
         self.handles = []
         self.show(prepared, angle)
 
-    def show(self, prepared, angle: float) -> None:
+    def show(self, prepared, angle: float | None) -> None:
         """The plots of a new result: replaced where their titles or curves differ, else new data."""
         if self.note.content != prepared.plot_note:
             self.note.content = prepared.plot_note
@@ -127,12 +131,13 @@ class Plots:
         """A page is laying the plots out: no cursor data for CURSOR_SETTLE_S."""
         self._settle_until = time.perf_counter() + CURSOR_SETTLE_S
 
-    def cursor(self, prepared, angle: float, step: int, force: bool = False) -> None:
-        """The cursor at `angle` (step `step` of the revolution), at most PLOT_CURSOR_HZ a second
-        (none while the plots settle, unless forced)."""
+    def cursor(self, prepared, angle: float | None, step: int, force: bool = False) -> None:
+        """The cursor at `angle` (step `step` of the revolution; None: hidden, the animation
+        plays), at most PLOT_CURSOR_HZ a second, none while the plots settle unless forced."""
         now = time.perf_counter()
         if not force and now < self._settle_until:
             return
+        step = -2 if angle is None else step
         if force or (step != self._cursor_step and now - self._cursor_at >= 1.0 / PLOT_CURSOR_HZ):
             for handle, plot in zip(self.handles, prepared.plots):
                 handle.data = plot_data(plot, angle)
