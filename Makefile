@@ -16,7 +16,7 @@ CONSTRAINTS := constraints.txt
 KERNEL := explorer/dynamics/exact_kernel.py explorer/dynamics/chain_kernels.py
 KERNEL_STAMP := $(VENV)/.kernel-compiled
 
-.PHONY: run test bench lock clean
+.PHONY: run test bench docs lock clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -43,6 +43,12 @@ run: $(STAMP)
 test: $(TEST_STAMP) $(KERNEL_STAMP)
 	$(BIN)/python -m pytest -q -n auto
 
+# The documentation site into site/ (mkdocs.yml; strict: a warning or a broken link fails it;
+# the reference pages are generated from the code by docs/_hooks/generate.py).
+docs: $(TEST_STAMP)
+	$(BIN)/mkdocs build --strict --quiet
+	@echo "site/index.html"
+
 bench: $(STAMP) $(KERNEL_STAMP)
 	$(BIN)/python benchmarks/run_all.py
 
@@ -58,4 +64,4 @@ lock:
 	rm -rf .venv-lock
 
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build site *.egg-info

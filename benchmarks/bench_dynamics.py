@@ -33,7 +33,7 @@ CASES = [
 def measure(scene, repeat: int) -> list[tuple[str, float, float]]:
     from explorer.studies.bench import model_and_drive
     from explorer.dynamics import schenker1902
-    from explorer.dynamics.model import solve
+    from explorer.dynamics.solvers import solve
 
     model, drive = model_and_drive(scene)
     n = scene.solver.steps_per_revolution
@@ -63,7 +63,7 @@ def rpm_sweep(path: Path, overrides: list[str], rpms: list[float], repeat: int) 
     natural periods per revolution (its step is bounded by Tn/4 and must resolve them), the exact
     solver's mostly its fixed cost and the phases between events."""
     from explorer.studies.bench import model_and_drive
-    from explorer.dynamics.model import solve
+    from explorer.dynamics.solvers import solve
     from explorer.scene.scene import load_scene
 
     rows = []

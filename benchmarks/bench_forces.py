@@ -36,7 +36,7 @@ def main() -> None:
 
     def median_effect(scene, name):
         simulate(scene)
-        return statistics.median(simulate(scene).summary["effects"][name]["compute_time_s"] for _ in range(args.repeat))
+        return statistics.median(simulate(scene).timings[name].compute_time_s for _ in range(args.repeat))
 
     rows = []
     t_kin = median_effect(kin, "kinematics")

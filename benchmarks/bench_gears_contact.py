@@ -36,8 +36,8 @@ def main() -> None:
         scene = load_scene(ROOT / "assets" / "scenes" / f"{name}.toml",
                            ['effects=["kinematics", "lash", "forces", "contact"]'])
         simulate(scene)
-        runs = [simulate(scene).summary["effects"] for _ in range(args.repeat)]
-        t = {k: statistics.median(r[k]["compute_time_s"] for r in runs) for k in ("kinematics", "forces", "contact")}
+        runs = [simulate(scene).timings for _ in range(args.repeat)]
+        t = {k: statistics.median(r[k].compute_time_s for r in runs) for k in ("kinematics", "forces", "contact")}
         rows.append([name, f"{t['kinematics'] * 1e3:.2f}", f"{t['forces'] * 1e3:.2f}", f"{t['forces'] / t['kinematics']:.2f}",
                      f"{t['contact'] * 1e3:.2f}", f"{t['contact'] / t['kinematics']:.2f}"])
     print_table(["scene", "kinematics ms", "forces ms", "x kin", "contact ms", "x kin"], rows)

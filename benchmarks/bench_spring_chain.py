@@ -23,7 +23,8 @@ sys.path.insert(0, str(ROOT))
 from explorer import load_scene  # noqa: E402
 from explorer.dynamics import chain_exact, chain_reference  # noqa: E402
 from explorer.dynamics.chain import ChainModel  # noqa: E402
-from explorer.dynamics.model import Drive, LinkageModel, solve  # noqa: E402
+from explorer.dynamics.model import Drive, LinkageModel  # noqa: E402
+from explorer.dynamics.solvers import solve  # noqa: E402
 from explorer.effects.lift import build_lift  # noqa: E402
 
 

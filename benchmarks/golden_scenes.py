@@ -1,11 +1,19 @@
-"""Bit-identity check of `simulate` on every built-in scene (issue #12: results bit-identical).
+"""Bit-identity check of `simulate`, `sweep` and the 3D parts on every built-in scene (issue #12:
+results bit-identical; issue #23: the plug-in refactor changes no figure, table or part).
 
     .venv/bin/python benchmarks/golden_scenes.py save  [DIR]   # from the unchanged code
     .venv/bin/python benchmarks/golden_scenes.py check [DIR]   # after a change: exit 1 on any difference
 
-Stores each scene's result columns (.npz) and summary (.json, timings removed: they are measured,
-not computed) in DIR (default /tmp/gears-golden). Columns are compared with np.array_equal
-(bit for bit, NaN-aware via equal_nan where the golden column has NaNs), summaries with ==.
+Stores in DIR (default /tmp/gears-golden), per scene:
+- the result's columns (.npz) and summary (.json, timings removed: they are measured, not
+  computed), and the JSON text itself with the timings zeroed (.txt: the text, key order included);
+- the table of a small sweep (.sweep.npz): five speeds about the scene's own, and with a [valve]
+  two lashes too (so the sweep engine's speed groups and every engine -- compiled, shared,
+  simulate -- are exercised);
+- a digest of the 3D parts (.parts.json): the layout, every part's vertices and faces and every
+  pose of the browser's and the recordings' drawing (explorer.view.parts), as SHA-256 of the bytes.
+Columns are compared with np.array_equal (bit for bit, NaN-aware via equal_nan where the golden
+column has NaNs), summaries with ==, texts and digests as strings.
 Golden data is never committed: it is made from the code before a change.
 """
 
@@ -39,13 +47,73 @@ def run(path: Path):
     return {k: np.asarray(v) for k, v in result.columns.items()}, _strip_timings(summary)
 
 
+def _zero_timings(value):
+    if isinstance(value, dict):
+        return {k: (0.0 if k in TIMING_KEYS else _zero_timings(v)) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_zero_timings(v) for v in value]
+    return value
+
+
+def json_text(path: Path) -> str:
+    """The result's JSON text with its measured timings zeroed (key order as written)."""
+    sys.path.insert(0, str(ROOT))
+    from explorer import load_scene, simulate
+
+    return json.dumps(_zero_timings(json.loads(simulate(load_scene(path)).json_text())), indent=2)
+
+
+def sweep_columns(path: Path) -> dict:
+    sys.path.insert(0, str(ROOT))
+    from explorer import load_scene, sweep
+
+    scene = load_scene(path)
+    rpm = scene.drive.rpm
+    vary = {"drive.rpm": [f * rpm for f in (0.8, 0.9, 1.0, 1.1, 1.2)]}
+    if scene.valve is not None:
+        lash = scene.valve.lash
+        vary["valve.lash"] = [f"{lash!r} m", f"{lash + 2e-5!r} m"]
+    table = sweep(scene, vary=vary, workers=1)
+    return {k: np.asarray(v) for k, v in table.columns.items()}
+
+
+def parts_digest(path: Path) -> dict:
+    """SHA-256 of the layout, of every part's vertices and faces and of every pose."""
+    import dataclasses
+    import hashlib
+
+    sys.path.insert(0, str(ROOT))
+    from explorer import load_scene, simulate
+    from explorer.view import parts as meshes
+
+    def digest(*arrays) -> str:
+        h = hashlib.sha256()
+        for a in arrays:
+            h.update(np.ascontiguousarray(np.asarray(a)).tobytes())
+        return h.hexdigest()
+
+    scene = load_scene(path)
+    result = simulate(scene)
+    lay = meshes.layout(scene, result)
+    out = {"layout": repr(dataclasses.astuple(lay))}
+    for name, mesh in sorted(meshes.build_parts(scene, result, lay=lay).items()):
+        out[f"part {name}"] = digest(mesh.vertices, mesh.faces)
+        out[f"colour {name}"] = repr(meshes.PART_COLORS[name])
+    for name, (pos, wxyz) in sorted(meshes.part_poses(scene, result, magnification=3.0, lay=lay).items()):
+        out[f"pose {name}"] = digest(pos, wxyz)
+    return out
+
+
 def save(directory: Path) -> None:
     directory.mkdir(parents=True, exist_ok=True)
     for path in SCENES:
         columns, summary = run(path)
         np.savez(directory / f"{path.stem}.npz", **columns)
         (directory / f"{path.stem}.json").write_text(json.dumps(summary, sort_keys=True, indent=1))
-        print(f"saved {path.stem}: {len(columns)} columns")
+        (directory / f"{path.stem}.txt").write_text(json_text(path))
+        np.savez(directory / f"{path.stem}.sweep.npz", **sweep_columns(path))
+        (directory / f"{path.stem}.parts.json").write_text(json.dumps(parts_digest(path), indent=1))
+        print(f"saved {path.stem}: {len(columns)} columns, sweep, parts")
 
 
 def check(directory: Path) -> int:
@@ -66,6 +134,20 @@ def check(directory: Path) -> int:
         golden_summary = json.loads((directory / f"{path.stem}.json").read_text())
         if json.loads(json.dumps(summary, sort_keys=True)) != golden_summary:
             problems.append("summary differs")
+        if (directory / f"{path.stem}.txt").exists() and json_text(path) != (directory / f"{path.stem}.txt").read_text():
+            problems.append("JSON text differs")
+        if (directory / f"{path.stem}.sweep.npz").exists():
+            table = sweep_columns(path)
+            with np.load(directory / f"{path.stem}.sweep.npz") as golden:
+                if set(golden.files) != set(table):
+                    problems.append(f"sweep columns differ: {sorted(set(golden.files) ^ set(table))}")
+                problems += [f"sweep column {name} differs" for name in sorted(set(golden.files) & set(table))
+                             if not np.array_equal(golden[name], table[name], equal_nan=golden[name].dtype.kind == "f")]
+        if (directory / f"{path.stem}.parts.json").exists():
+            golden_parts = json.loads((directory / f"{path.stem}.parts.json").read_text())
+            parts = parts_digest(path)
+            problems += [f"3D {key} differs" for key in sorted(set(golden_parts) | set(parts))
+                         if golden_parts.get(key) != parts.get(key)]
         status = "identical" if not problems else "DIFFERENT: " + "; ".join(problems)
         print(f"{path.stem}: {len(columns)} columns {status}")
         failures += bool(problems)

@@ -48,7 +48,7 @@ def run(path, overrides) -> dict:
     except Exception as exc:  # noqa: BLE001 - the refusal itself is recorded
         return {"error": np.array(f"{type(exc).__name__}: {exc}")}
     out = {f"col:{name}": np.asarray(values) for name, values in result.columns.items()}
-    events = [e for e in result.summary.get("events", [])]
+    events = [e.as_dict() for e in result.events]
     out["events"] = np.array(json.dumps(events, sort_keys=True, default=repr))
     counts = result.summary.get("elastic_event_counts")
     out["event_counts"] = np.array(json.dumps(counts, sort_keys=True))

@@ -4,26 +4,43 @@
     result = simulate(load_scene("assets/scenes/schenker1902_fig2.toml"))
     result.columns["valve_lift_m"], result.summary["impact_velocity_opening_m_s"]
 
-Viewers (viser, rerun) are imported only by the commands that use them.
+Viewers (viser, rerun) are imported only by the commands that use them. The API's names are
+loaded when first used (PEP 562): `import explorer` itself reads no table and no numpy, so a
+command's help or a tool that only needs InputError starts at once.
 """
+
+from importlib import import_module
+from typing import TYPE_CHECKING
 
 from .core.errors import InputError
 from .core.version import __version__
-from .scene.scene import Scene, load_scene, loads_scene
 
-__all__ = ["InputError", "Scene", "load_scene", "loads_scene", "simulate", "sweep", "__version__"]
+__all__ = ["InputError", "Scene", "check", "load_scene", "loads_scene", "simulate", "sweep", "__version__"]
+
+if TYPE_CHECKING:  # for type checkers and the API reference (mkdocstrings); at run time: __getattr__
+    from .checks.run import check
+    from .effects.pipeline import simulate
+    from .scene.scene import Scene, load_scene, loads_scene
+    from .studies.sweep_run import sweep
+
+# name -> the module that defines it (relative to this package)
+_API = {
+    "Scene": ".scene.scene",
+    "load_scene": ".scene.scene",
+    "loads_scene": ".scene.scene",
+    "simulate": ".effects.pipeline",
+    "sweep": ".studies.sweep_run",
+    "check": ".checks.run",  # design checks over the speed range and tolerances: a CheckReport
+}
 
 
-def simulate(scene):
-    """Compute the scene's effects over one revolution; returns a Result (.columns, .summary)."""
-    from .effects.pipeline import simulate as _simulate
+def __getattr__(name: str):
+    if name not in _API:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(_API[name], __name__), name)
+    globals()[name] = value  # once: later lookups find it directly
+    return value
 
-    return _simulate(scene)
 
-
-def sweep(scene, vary=None, sample=None, **options):
-    """Many runs of a scene, one row of figures each (explorer.studies.sweep_run.sweep):
-    explorer.sweep("assets/scenes/valve_float_demo.toml", vary={"drive.rpm": "1000:6000:500"})"""
-    from .studies.sweep_run import sweep as _sweep
-
-    return _sweep(scene, vary, sample, **options)
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_API))

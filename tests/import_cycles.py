@@ -57,7 +57,9 @@ def import_graph(package_dir: Path, named: bool = False) -> dict[str, set[str]]:
                     targets.append(sub if sub in modules else source)
             elif named and isinstance(node, ast.Constant) and isinstance(node.value, str):
                 target = node.value.partition(":")[0]
-                if target in modules and target != name:
+                # a dotted module path ("pkg.module" or "pkg.module:name"), not a bare word that
+                # happens to be the package's name (a program name, say)
+                if "." in target and target in modules and target != name:
                     targets = [target]
             for target in targets:
                 while target and target not in modules:  # import a.b.c of a package module a.b

@@ -17,7 +17,7 @@ import pytest
 from conftest import process_timeout, run_cli
 from explorer.studies.bench import ProgressBar, chart_png, model_and_drive, run_bench
 from explorer.dynamics import schenker1902
-from explorer.dynamics.model import solve
+from explorer.dynamics.solvers import solve
 from explorer.core.errors import InputError
 from explorer.scene.scene import loads_scene
 from dynamics_cases import float_valve_scene

@@ -426,7 +426,7 @@ def test_slider_under_the_plots_and_the_event_list_jump_the_animation(tmp_path):
 
     with _running_explorer(ROOT / "assets" / "scenes" / "valve_float_demo.toml") as (server, app):
         assert app.wait_applied(WAIT_S)
-        events = app.current.result.summary["events"]
+        events = app.current.result.events
         assert len(events) > 14
         with _connected_page(sync_api, tmp_path, server) as page:
             app.play.value = True  # running, so that a click must pause it

@@ -70,7 +70,7 @@ def test_python_api_matches_csv_columns(tmp_path):
     assert header == list(result.columns)
     for i, name in enumerate(header):
         assert body[:, i] == pytest.approx(result.columns[name], rel=1e-15, abs=0)  # repr round-trips
-    assert json.loads(result.json_text()).keys() == dict(result.summary).keys()
+    assert json.loads(result.json_text()).keys() == result.report().keys() == {*result.summary, "effects", "events", "warnings"}
 
 
 def test_summary_to_stdout_without_files(capsys):
@@ -173,7 +173,7 @@ import sys
 from explorer import load_scene, simulate
 result = simulate(load_scene({str(DEMO)!r}, ['effects=["kinematics", "lash"]']))
 assert result.columns["valve_lift_m"].size == 3600
-registry = ("explorer.dynamics", "explorer.dynamics.solvers")  # solver names, read by the scene loader
+registry = ("explorer.dynamics", "explorer.dynamics.solvers", "explorer.dynamics.solver_base")  # the solver table, read by the scene loader
 heavy = [m for m in sys.modules if m.startswith(("explorer.dynamics", "viser", "rerun", "matplotlib", "trimesh"))
          and m not in registry]
 print(",".join(heavy))

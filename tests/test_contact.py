@@ -142,7 +142,7 @@ def test_normal_force_solves_the_follower_free_body(p, alpha, rho, v):
 
 def _run(**changes):
     out = simulate(scene(**changes))
-    return out, out.columns, out.summary
+    return out, out.columns, out.report()
 
 
 @pytest.mark.parametrize("offset", [0.0, 6.0, -8.0])

@@ -13,7 +13,8 @@ import math
 import numpy as np
 import pytest
 
-from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
+from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel
+from explorer.dynamics.solvers import solve
 from explorer.lift.curves import LawLift
 from dynamics_cases import (KGF, REF, BumpLift, ConstantLift, flight_case, friction_apex, revolution,
                             rise_in_contact, stopping_drive)

@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
+from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel
+from explorer.dynamics.solvers import solve
 from explorer.lift.curves import LawLift
 from dynamics_cases import (REF, SCHENKER, BumpLift, ConstantLift, flight_case, friction_apex, rise_in_contact,
                             schenker_drive, stopping_drive)

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from explorer.dynamics import schenker1902 as sch
-from explorer.dynamics.model import Drive, LinkageModel, solve
+from explorer.dynamics.model import Drive, LinkageModel
+from explorer.dynamics.solvers import solve
 from explorer.lift.curves import LawLift
 from dynamics_cases import KGF, SCHENKER, ConstantLift, flight_case, rise_in_contact, schenker_drive
 

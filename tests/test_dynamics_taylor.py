@@ -23,7 +23,8 @@ from hypothesis import strategies as st
 from explorer.studies.bench import model_and_drive
 from explorer.effects.elastic import linkage_model
 from explorer.dynamics import solvers
-from explorer.dynamics.model import Drive, StiffnessProfile, solve
+from explorer.dynamics.model import Drive, StiffnessProfile
+from explorer.dynamics.solvers import solve
 from explorer.effects.lift import build_lift
 from explorer.scene.scene import load_scene
 

@@ -19,7 +19,8 @@ import numpy as np
 import pytest
 
 from explorer.effects.elastic import linkage_model
-from explorer.dynamics.model import Drive, LinkageModel, StiffnessProfile, solve
+from explorer.dynamics.model import Drive, LinkageModel, StiffnessProfile
+from explorer.dynamics.solvers import solve
 from explorer.core.errors import InputError
 from explorer.gears import jet as J
 from explorer.gears.jet import Jet

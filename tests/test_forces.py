@@ -168,8 +168,8 @@ def test_static_loss_gives_zero_jump_speed():
     assert jump.omega == 0.0 and jump.static_loss
     out = simulate(sc)
     assert out.summary["jump_speed_rpm"] == 0.0
-    assert any("float" in w and "standstill" in w for w in out.summary["warnings"])
-    assert any("lifts off its seat" in w for w in out.summary["warnings"])
+    assert any("float" in w and "standstill" in w for w in out.warnings)
+    assert any("lifts off its seat" in w for w in out.warnings)
 
 
 # --- the effect ------------------------------------------------------------------------------------
@@ -206,13 +206,13 @@ def test_inertia_scales_with_speed_squared_and_loads_do_not():
 def test_float_warning_at_and_above_jump_speed():
     base = dict(law="cycloidal", rate=20, friction=8, closing=12, lash=0.2)
     jump_rpm = simulate(scene(**base)).summary["jump_speed_rpm"]
-    below = simulate(scene(rpm=jump_rpm * (1 - 1e-7), **base)).summary
+    below = simulate(scene(rpm=jump_rpm * (1 - 1e-7), **base)).report()
     assert not below["valve_floats"] and not any("float" in w for w in below["warnings"])
     assert below["min_contact_force_N"] > 0
     at = simulate(scene(rpm=jump_rpm, **base)).summary
     assert at["min_contact_force_N"] == pytest.approx(0.0, abs=1e-7 * 200)
     above = simulate(scene(rpm=jump_rpm * 1.05, **base))
-    s = above.summary
+    s = above.report()
     assert s["valve_floats"] and any("float" in w for w in s["warnings"])
     assert s["min_contact_force_N"] < 0
     losses = [e for e in s["events"] if e["kind"] == "rigid-contact-loss"]
@@ -315,7 +315,7 @@ def test_cli_missing_spring_is_one_line(tmp_path):
 
 def test_float_demo_scene_floats(scenes_dir):
     out = simulate(load_scene(scenes_dir / "valve_float_demo.toml"))
-    s = out.summary
+    s = out.report()
     assert s["valve_floats"] and s["jump_speed_rpm"] < s["rpm"]
     assert any("float" in w for w in s["warnings"])
     # the advisor's spring keeps the requested 50 N at the scene's speed
@@ -409,7 +409,7 @@ def test_float_scene_reports_one_set_of_angles_everywhere():
     hold the same angles, those of this speed; every sampled contact force inside a stretch is
     <= 0 and every one outside it (valve open) > 0 (the columns are an independent computation)."""
     result = simulate(load_scene(SCENES / "valve_float_demo.toml"))
-    s, c = result.summary, result.columns
+    s, c = result.report(), result.columns
     stretches = s["contact_loss_cam_angles_deg"]
     assert len(stretches) == 2
     kinds = [(e["kind"], e["cam_angle_deg"]) for e in s["events"] if e["kind"].startswith("rigid-contact")]

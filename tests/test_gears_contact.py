@@ -232,7 +232,7 @@ def test_self_locking_warning_names_the_angle(name):
     """A friction angle of 80 deg leaves no margin on any of the gears (largest pressure angles 18,
     33 and 64 deg): seed 004's self-locking, warned with the pressure angle and the cam angle."""
     r = run(name, 'contact.friction_angle="80 deg"')
-    s = r.summary
+    s = r.report()
     assert s["min_self_locking_margin_deg"] == pytest.approx(10.0 - s["max_pressure_angle_deg"], abs=1e-9)
     assert s["min_self_locking_margin_deg"] < 0.0
     w = [x for x in s["warnings"] if "self-locking" in x]
@@ -242,7 +242,7 @@ def test_self_locking_warning_names_the_angle(name):
 
 @pytest.mark.parametrize("name", GEARS)
 def test_no_self_locking_warning_without_friction(results, name):
-    s = results[name].summary
+    s = results[name].report()
     assert s["friction_angle_deg"] == 0.0 and s["min_self_locking_margin_deg"] > 0.0
     assert not any("self-locking" in x for x in s["warnings"])
 

@@ -1,4 +1,4 @@
-"""3D parts of the gears (explorer.view.gear_parts via explorer.view.parts' dispatch): shapes, colours,
+"""3D parts of the gears (their views, explorer/view/gear_views.py, through explorer.view.parts): shapes, colours,
 and contacts that the drawing must keep - roller on cam, valve pin over the valve stem."""
 
 import math

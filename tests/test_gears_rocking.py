@@ -376,7 +376,7 @@ def test_target_report_against_the_forward_kinematics():
     scene = load_scene(SCENE, ['effects=["kinematics", "lash", "forces", "contact", "gear"]',
                                'gear.target.max_pressure_angle="32 deg"'])
     result = simulate(scene)
-    s, t = result.summary, result.summary["gear"]["target"]
+    s, t = result.report(), result.summary["gear"]["target"]
     assert t["use"] == "given" and t["lash_m"] == 0.0005
     opening = (s["seating_angles_deg"][0] - s["lash_take_up_angles_deg"][0]) % 360
     assert t["given"]["open_angle_deg"] == pytest.approx(opening, abs=1e-9)

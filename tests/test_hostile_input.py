@@ -2,8 +2,8 @@
 sweeps and data files, each run through the command line in-process under a time limit. Every
 case must end in exactly the outcome it is listed with: one line `error: FILE: KEY: reason`
 (exit status 2, the named key, no traceback, nothing written) or a correct result (exit 0, every
-output cell finite). A hang, a traceback or any other exit fails the case. The README states the
-corpus's counts; test_readme_counts_match_the_corpus keeps them honest. Then hypothesis feeds
+output cell finite). A hang, a traceback or any other exit fails the case. The scene-file guide (docs/guide/scenes.md) states the
+corpus's counts; test_documented_counts_match_the_corpus keeps them honest. Then hypothesis feeds
 the quantity grammar hostile strings."""
 
 from __future__ import annotations
@@ -355,8 +355,8 @@ def test_hostile_case(case, tmp_path, fixtures):
         assert written == set(), written
 
 
-def test_readme_counts_match_the_corpus():
-    readme = " ".join((ROOT / "README.md").read_text().split())  # the paragraph wraps anywhere
+def test_documented_counts_match_the_corpus():
+    readme = " ".join((ROOT / "docs" / "guide" / "scenes.md").read_text().split())  # the paragraph wraps anywhere
     total = len(CASES)
     expected = (f"{total} cases: {COUNTS['errors']} clean one-line errors, {COUNTS['results']} correct results, "
                 "0 hangs, 0 tracebacks")
@@ -404,13 +404,13 @@ def test_non_finite_results_are_refused(monkeypatch):
 
     real = effects.effect_function
 
-    def overflowing(name, follower_type=None):
-        if name != "lash":
-            return real(name, follower_type)
+    def overflowing(name, gear=None):
+        if name != "kinematics":
+            return real(name, gear)
         return lambda ctx: EffectOutput(columns={"valve_lift_m": np.full(ctx.theta.shape, np.nan)}, summary={},
                                         events=(), warnings=())
 
     monkeypatch.setattr(effects, "effect_function", overflowing)
     with pytest.raises(InputError) as info:
         effects.simulate(load_scene(SCENES / DEMO))
-    assert info.value.key == "lash" and "not finite" in info.value.reason
+    assert info.value.key == "kinematics" and "not finite" in info.value.reason

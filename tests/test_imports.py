@@ -1,9 +1,10 @@
 """No import cycles among explorer's modules (issue #12), read from the source with ast
-(tests/import_cycles.py: function-local imports count), and a checker that sees a planted one."""
+(tests/import_cycles.py: function-local imports count, and so do the "module:function" strings of
+the plug-in tables: a table naming a module that imports the table back is a cycle too), and a
+checker that sees a planted one."""
 
 from __future__ import annotations
 
-import importlib
 from pathlib import Path
 
 from import_cycles import cycles, import_graph, write_package
@@ -17,7 +18,7 @@ ALLOWED_IN_CYCLES: frozenset[str] = frozenset()
 
 def cycle_problems(package_dir: Path, allowed=frozenset()) -> list[str]:
     """What is wrong with the package's import cycles, given the modules allowed in one."""
-    found = cycles(import_graph(package_dir))
+    found = cycles(import_graph(package_dir, named=True))
     in_cycles = {m for component in found for m in component}
     problems = [f"{m} is in the import cycle {' <-> '.join(c)}" for c in found for m in c if m not in allowed]
     problems += [f"{m} is no longer in an import cycle: remove it from ALLOWED_IN_CYCLES"
@@ -56,19 +57,49 @@ def test_the_checker_finds_a_cycle_through_a_package_and_type_checking(tmp_path)
     assert cycles(import_graph(package)) == [["pkg", "pkg.x"]]
 
 
-def test_registry_entries_name_real_functions():
-    """The tables that name plug-ins as "module:function" (imported when used) stay resolvable."""
-    from explorer.effects.pipeline import EFFECT_FUNCTIONS, SECTION_SUMMARIES
-    from explorer.gears.registry import GEARS
-    from explorer.effects.lift import LIFT_BUILDERS
-    from explorer.view.parts import CONTOUR_FUNCTIONS
+def test_the_checker_finds_a_cycle_through_a_table_string(tmp_path):
+    """A table naming "pkg.solver:solve" in a module the solver imports back is a cycle."""
+    package = write_package(tmp_path, {
+        "__init__.py": "",
+        "table.py": 'SOLVERS = {"fast": "pkg.solver:solve"}\nclass Error(Exception):\n    pass\n',
+        "solver.py": "from .table import Error\n\ndef solve():\n    raise Error\n",
+    })
+    assert cycles(import_graph(package)) == []  # plain imports alone do not see it
+    assert cycle_problems(package) == ["pkg.solver is in the import cycle pkg.solver <-> pkg.table",
+                                       "pkg.table is in the import cycle pkg.solver <-> pkg.table"]
 
-    targets = list(EFFECT_FUNCTIONS.values()) + list(LIFT_BUILDERS.values()) + list(CONTOUR_FUNCTIONS)
-    targets += [target for entries in SECTION_SUMMARIES.values() for _, target in entries]
-    for entry in GEARS.values():
-        targets += [entry.lift, *entry.effects.values()]
-        meshes = importlib.import_module(entry.meshes)
-        assert all(callable(getattr(meshes, f)) for f in ("gear_layout", "gear_parts", "gear_poses"))
+
+def test_every_table_entry_resolves():
+    """The plug-in tables' references ("module:function", imported when used) name real objects, and
+    every entry keeps the contract's shape: a gear's view for every gear, callables where a function
+    is named."""
+    import inspect
+
+    from explorer.core.plugins import is_reference, resolve
+    from explorer.dynamics.solvers import SOLVERS
+    from explorer.effects.registry import EFFECTS
+    from explorer.gears.base import Gear
+    from explorer.gears.registry import GEARS
+    from explorer.lift.registry import LAWS
+    from explorer.scene.scene import OWNED_SECTIONS
+    from explorer.view.gear_views import VIEWS, GearView
+
+    targets = list(OWNED_SECTIONS.values())
+    for info in SOLVERS.entries():
+        targets += [t for t in (info.entry, info.chain_entry, info.stable_steps) if t is not None]
+        if info.batch_entry is not None:
+            assert inspect.ismodule(resolve(info.batch_entry)), info.name
+    for law in LAWS.entries():
+        targets += [t for t in (law.builder, law.parser) if t is not None]
+        assert law.closed_form or law.builder is not None or law.gear_made or law.from_contour, law.name
+    for spec in EFFECTS.entries():
+        targets += [t for t in (spec.function, spec.row, spec.figures) if is_reference(t)]
+        targets += [t for _, t in spec.sections]
+        assert all(dep in EFFECTS for dep in spec.depends), spec.name
+    for name, gear in GEARS.items():
+        assert isinstance(gear, Gear) and gear.type == name
+        assert all(callable(f) for f in gear.effects.values()) and set(gear.effects) <= set(EFFECTS.names())
+    assert set(VIEWS.names()) == set(GEARS.names())
+    assert all(isinstance(view, GearView) for view in VIEWS.entries())
     for target in targets:
-        module, _, attr = target.partition(":")
-        assert callable(getattr(importlib.import_module(module), attr)), target
+        assert callable(resolve(target)), target

@@ -112,7 +112,7 @@ def test_lash_take_up_and_seating_by_root_finding_match_closed_forms(result):
     v_close = RATIO * W * H * math.pi / (2 * RET) * math.sin(math.pi * u_seat)
     assert s["impact_velocity_opening_m_s"] == pytest.approx(v_open, rel=1e-9)
     assert s["impact_velocity_closing_m_s"] == pytest.approx(v_close, rel=1e-9)
-    kinds = {e["kind"]: e for e in s["events"]}
+    kinds = {e["kind"]: e for e in result.events}
     assert kinds["lash-take-up"]["time_s"] == pytest.approx(theta_up / W, rel=1e-12)
     assert kinds["seat"]["time_s"] == pytest.approx(theta_seat / W, rel=1e-12)
     assert kinds["seat"]["velocity_m_s"] == pytest.approx(-v_close, rel=1e-9)
@@ -136,7 +136,7 @@ def test_lash_larger_than_lift_never_opens():
     result = simulate(loads_scene(text))
     assert not np.any(result.columns["valve_lift_m"])
     assert result.summary["impact_velocity_opening_m_s"] == 0.0
-    assert any("never opens" in w for w in result.summary["warnings"])
+    assert any("never opens" in w for w in result.warnings)
 
 
 def test_no_valve_section_means_no_lash():
@@ -171,11 +171,11 @@ def test_lift_exactly_equal_to_lash_never_opens(dwell):
     """ratio * h == lash: the follower only touches the valve (at the top, or along a whole dwell).
     s = max(0, ratio L - lash) stays 0, so there is no take-up, no seating and no impact."""
     result = simulate(_harmonic_scene(20, dwell, "8 mm"))
-    s = result.summary
+    s = result.report()
     assert not np.any(result.columns["valve_lift_m"])
     assert s["lash_take_up_angles_deg"] == [] and s["seating_angles_deg"] == []
     assert s["impact_velocity_opening_m_s"] == 0.0 and s["impact_velocity_closing_m_s"] == 0.0
-    assert not [e for e in s["events"] if e["kind"] in ("lash-take-up", "seat")]
+    assert not [e for e in result.events if e["kind"] in ("lash-take-up", "seat")]
     assert any("never opens" in w for w in s["warnings"])
 
 
@@ -184,7 +184,8 @@ def test_event_wrapping_through_zero(start, dwell):
     """An event that starts before 360 deg and ends after it: the take-up lies before 0 deg, the
     seating after it, both at the closed-form angles theta = start + beta/pi acos(1 - 2 lash/h)
     (mod 360) of the harmonic flank, with equal impact speeds."""
-    s = simulate(_harmonic_scene(start, dwell, "0.3 mm")).summary
+    result = simulate(_harmonic_scene(start, dwell, "0.3 mm"))
+    s = result.summary
     beta = math.radians(60)
     u = math.acos(1 - 2 * LASH / H) / math.pi
     up = math.degrees(math.radians(start) + u * beta) % 360
@@ -195,7 +196,7 @@ def test_event_wrapping_through_zero(start, dwell):
     v = W * H * math.pi / (2 * beta) * math.sin(math.pi * u)
     assert s["impact_velocity_opening_m_s"] == pytest.approx(v, rel=1e-9)
     assert s["impact_velocity_closing_m_s"] == pytest.approx(v, rel=1e-9)
-    events = sorted((e for e in s["events"] if e["kind"] in ("lash-take-up", "seat")), key=lambda e: e["time_s"])
+    events = sorted((e for e in result.events if e["kind"] in ("lash-take-up", "seat")), key=lambda e: e["time_s"])
     assert [e["kind"] for e in events] == ["seat", "lash-take-up"]  # in time order over 0 .. 360 deg
 
 

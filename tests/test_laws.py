@@ -64,3 +64,21 @@ def test_acceleration_areas_balance(name):
     above = np.trapezoid(np.clip(f[2], 0, None), U)
     below = np.trapezoid(np.clip(f[2], None, 0), U)
     assert above == pytest.approx(-below, rel=1e-8)
+
+
+def test_the_law_table_states_the_closed_forms_smoothness():
+    """LawSpec.smoothness (explorer/lift/registry.py) is the highest derivative that stays
+    continuous where the law meets a dwell: f^(k)(0) = f^(k)(1) = 0 for k = 1 .. smoothness, and the
+    next derivative not zero at an end (the closed forms' own values, to rounding)."""
+    from explorer.lift import registry
+
+    closed = [registry.law_spec(name) for name in registry.closed_form_names()]
+    assert [spec.name for spec in closed] == list(LAWS)
+    for spec in closed:
+        ends = spec.function()(np.array([0.0, 1.0]))
+        scale = np.abs(spec.function()(np.linspace(0.0, 1.0, 2001))).max(axis=1)
+        assert ends[0].tolist() == pytest.approx([0.0, 1.0], abs=1e-15), spec.name
+        for k in range(1, spec.smoothness + 1):
+            assert np.abs(ends[k]).max() <= 1e-9 * scale[k], (spec.name, k)
+        if spec.smoothness < 3:
+            assert np.abs(ends[spec.smoothness + 1]).max() > 1e-3 * scale[spec.smoothness + 1], spec.name

@@ -1,19 +1,22 @@
 """Layers (issue #12): every module of explorer imports only from its own layer and the layers below,
 read from the source with ast (tests/import_cycles.py: function-local and TYPE_CHECKING imports
-count), and the checker fails on planted violations.
+count, and so do the "module:function" strings of the plug-in tables, named=True: a table may name
+only what its layer may import), and the checker fails on planted violations.
 
 A module's layer is its folder under explorer/ (explorer/result.py is the layer `result`). From the
 bottom up:
 
-    core       errors, units, the scene-file reader, files, outputs, child processes, jets
-    lift       lift curves: closed-form laws, tables, acceleration laws, cam contours
+    core       errors, units, the scene-file reader, files, outputs, child processes, jets, plug-in tables
+    lift       lift curves: closed-form laws, tables, acceleration laws, cam contours; the law table
     mechanics  rigid kinematics and lash, loads and float speed, contact statics, spring rules
-    dynamics   the elastic linkage: model, solver registry, exact/taylor/reference/1902 solvers
-    gears      the seeds' other valve gears (lift, geometry, statics of each) and their registry
+    dynamics   the elastic linkage: model, the solver table, exact/taylor/reference/1902 solvers
+    result     what a simulation returns (columns, summary, events) and what an effect hands over
+    effects    the effect table, the pipeline, one module per effect
+    gears      the follower types (each a plug-in: keys, geometry, lift, figures, variants of
+               effects) and their table
     scene      scene files -> validated, frozen Scene; built-in scenes; section parsers
-    result     what a simulation returns (columns, summary, events)
-    effects    the pipeline, the lift of a scene, one module per effect and gear variant
-    view | studies   3D parts, browser, rerun  |  bench, sweeps, accuracy studies, gear figures
+    view | studies   3D parts (the gears' views), browser, rerun  |  bench, sweeps, studies
+    checks     design rules over the operating range and the tolerances (runs the sweep engine)
     cli        the `explorer` command
 
 view and studies stand side by side: neither imports the other. The package's own __init__ (the
@@ -33,11 +36,12 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("lift",),
     ("mechanics",),
     ("dynamics",),
-    ("gears",),
-    ("scene",),
     ("result",),
     ("effects",),
+    ("gears",),
+    ("scene",),
     ("view", "studies"),
+    ("checks",),
     ("cli",),
     ("__init__", "__main__"),
 )
@@ -51,11 +55,12 @@ def layer_of(module: str, root: str) -> str:
 
 
 def layer_problems(package_dir: Path, layers=LAYERS) -> list[str]:
-    """Each import that runs up a layer or sideways between sibling layers, and each module in no layer."""
+    """Each import (or table string naming a module) that runs up a layer or sideways between
+    sibling layers, and each module in no layer."""
     root = Path(package_dir).name
     rank = {name: i for i, group in enumerate(layers) for name in group}
     problems = []
-    graph = import_graph(Path(package_dir))
+    graph = import_graph(Path(package_dir), named=True)
     for module in sorted(graph):
         here = layer_of(module, root)
         if here not in rank:
@@ -104,6 +109,22 @@ def test_the_checker_finds_planted_violations(tmp_path):
         "pkg.core.errors (core) imports pkg.lift.curve (lift), a layer above it",
         "pkg.stray is in no layer (folder 'stray'): add the folder to LAYERS",
         "pkg.view.parts (view) imports pkg.studies.bench (studies), a sibling layer",
+    ]
+
+
+def test_the_checker_reads_the_strings_of_plug_in_tables(tmp_path):
+    """A table that names a module of a higher layer as "module:function" (imported only when the
+    entry is used) is an upward dependency all the same; a string naming a lower layer is not."""
+    package = write_package(tmp_path, {
+        "__init__.py": "",
+        "core/__init__.py": "",
+        "core/table.py": 'ENTRIES = {"curve": "pkg.lift.curve:c", "self": "pkg.core.errors:e"}\n',
+        "core/errors.py": "e = 1\n",
+        "lift/__init__.py": "",
+        "lift/curve.py": 'c = 1\nBUILDERS = ("pkg.core.errors:e",)\n',
+    })
+    assert layer_problems(package, PLANTED_LAYERS) == [
+        "pkg.core.table (core) imports pkg.lift.curve (lift), a layer above it",
     ]
 
 

@@ -81,7 +81,7 @@ def test_sampled_cycloidal_acceleration_integrates_back_to_the_cycloid(n):
 
 def test_demo_closes_and_reports_its_checks():
     result = simulate(load_scene(DEMO))
-    s = result.summary
+    s = result.report()
     assert abs(s["closure_integral_p_dt_m_s"]) < 1e-8  # points given to 10 digits
     assert abs(s["closure_integral_v_dt_m"]) < 1e-10
     assert s["acceleration_area_above_m_s"] == pytest.approx(-s["acceleration_area_below_m_s"], rel=1e-8)
@@ -153,7 +153,7 @@ def test_small_closure_error_warns_and_large_one_fails():
     pts = CLOSED
     nearly = [(x, a * (1 + 1e-4) if x == 40 else a) for x, a in CLOSED]
     result = simulate(loads_scene(scene_text(nearly)))
-    assert any("does not close" in w for w in result.summary["warnings"])
+    assert any("does not close" in w for w in result.warnings)
     assert result.summary["closure_relative_error"] > 1e-6
     assert simulate(loads_scene(scene_text(pts))).summary["closure_relative_error"] < 1e-12
     gross = [(x, a * 1.2 if x == 40 else a) for x, a in CLOSED]

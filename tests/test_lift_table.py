@@ -180,7 +180,7 @@ def test_shipped_measurement_reproduces_the_cycloidal_demo():
     for key in ("max_valve_velocity_m_s", "max_valve_accel_m_s2", "impact_velocity_opening_m_s",
                 "impact_velocity_closing_m_s"):
         assert table.summary[key] == pytest.approx(exact.summary[key], rel=0.02), key
-    s = table.summary
+    s = table.report()
     assert s["table_samples"] == 360 and s["table_knots"] == 180
     assert 3e-6 < s["table_residual_rms_m"] < 7e-6  # the 5 um gauge noise (plus 0.3 um rounding)
     assert s["warnings"] == []

@@ -11,6 +11,8 @@ import pytest
 
 from explorer import load_scene
 from explorer.view import parts as meshes
+from explorer.view import drawing
+from explorer.view import translating_roller as stock
 from explorer.effects.pipeline import simulate
 from explorer.lift.contours.translating import translating_profile
 from explorer.effects.lift import build_lift
@@ -79,8 +81,8 @@ def test_cam_disc_volume_follows_steiners_formula(demo):
 def test_contour_is_counter_clockwise_and_contains_breakpoints(offset_lever):
     scene, _ = offset_lever
     lift = build_lift(scene)
-    xy = meshes.cam_contour(scene, lift, 360)
-    assert meshes._signed_area(xy) > 0.0
+    xy = stock.cam_contour(scene, lift, 360)
+    assert drawing.signed_area(xy) > 0.0
     f = scene.follower
     corners = translating_profile(lift, lift.breakpoints(), f.base_radius, f.roller_radius, f.offset).contour
     for point in corners:
@@ -167,7 +169,7 @@ def test_roller_spin_rolls_without_slip():
     scene = _scene("solver.steps_per_revolution=20000")
     lift = build_lift(scene)
     theta = np.linspace(0.0, 2 * np.pi, 20001)
-    spin = meshes.roller_spin(scene, lift, theta)
+    spin = stock.roller_spin(scene, lift, theta)
     f = scene.follower
     # on the base circle (before the rise at 20 deg) the roller turns back at Rb / rr per radian
     base = theta < math.radians(19.0)

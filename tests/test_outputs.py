@@ -377,11 +377,11 @@ def test_simulate_writes_the_csv_in_pieces(tmp_path, monkeypatch):
 
 
 def test_the_documented_step_maximum_holds(tmp_path, capsys):
-    """README and the scene loader agree on the largest steps_per_revolution, and one more is a
-    one-line error before any work (the maximum itself is measured in the README, not here)."""
+    """The scene-file guide and the scene loader agree on the largest steps_per_revolution, and one more is a
+    one-line error before any work (the maximum itself is measured in that guide, not here)."""
     from explorer.scene.scene import MAX_STEPS
 
-    readme = (ROOT / "README.md").read_text()
+    readme = (ROOT / "docs" / "guide" / "scenes.md").read_text()
     assert f"36 ... {MAX_STEPS:,}".replace(",", " ") in readme
     out = tmp_path / "out.csv"
     assert cli.main(["simulate", str(DEMO), "--set", f"solver.steps_per_revolution={MAX_STEPS + 1}", "-o", str(out)]) == 2

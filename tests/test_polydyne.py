@@ -72,7 +72,7 @@ def test_valve_follows_the_wanted_lift_at_design_speed(case):
     theta = np.radians(result.columns["cam_angle_deg"])
     cam = scene.follower.ratio * lift.derivatives(theta)[0] - scene.valve.lash
     assert np.max(np.abs(cam - lift.wanted_valve_lift(theta, 0)[0])) > 1e-4
-    kinds = [e["kind"] for e in result.summary["events"] if e.get("effect") == "elastic"]
+    kinds = [e["kind"] for e in result.events if e.get("effect") == "elastic"]
     assert "separation" not in kinds
 
 

@@ -143,8 +143,8 @@ def test_every_sample_has_its_own_place_on_the_cam_angle_timeline(float_recordin
 def test_events_and_warnings_are_logged_at_their_instants(float_recording):
     out, _ = float_recording
     result = simulate(load_scene(FLOAT))
-    events = result.summary["events"]
-    warnings = result.summary["warnings"]
+    events = result.events
+    warnings = result.warnings
     assert events and warnings  # this scene has lash impacts and a float warning
     log = read_rrd(out)[0].temporal["/events"]
     texts, levels = list(log["TextLog:text"]), list(log["TextLog:level"])

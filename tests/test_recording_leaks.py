@@ -165,20 +165,20 @@ def test_swept_extents_in_blocks_equal_the_whole():
     once); blocks change nothing, to the bit."""
     import numpy as np
 
-    from explorer.view import parts as meshes
+    from explorer.view import drawing
 
     rng = np.random.default_rng(7)
     t = np.linspace(0.0, 2.0 * np.pi, 500, endpoint=False)
     vertices = np.column_stack([np.cos(t), rng.normal(size=t.size), 0.5 * np.sin(t)])
     half = rng.uniform(0.0, np.pi, 20_011)
     wxyz = np.column_stack([np.cos(half), np.zeros_like(half), np.sin(half), np.zeros_like(half)])
-    hull = meshes._hull_2d(vertices[:, [0, 2]])
+    hull = drawing._hull_2d(vertices[:, [0, 2]])
     assert len(wxyz) > 2_000_000 // len(hull)  # several blocks
     q = wxyz / np.linalg.norm(wxyz, axis=1, keepdims=True)  # as _swept_extents does
     angle = 2.0 * np.arctan2(q[:, 2], q[:, 0])
     c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
     x = c * hull[None, :, 0] + s * hull[None, :, 1]
     z = -s * hull[None, :, 0] + c * hull[None, :, 1]
-    lo, hi = meshes._swept_extents(vertices, wxyz)
+    lo, hi = drawing._swept_extents(vertices, wxyz)
     assert np.array_equal(lo[:, 0], x.min(axis=1)) and np.array_equal(hi[:, 0], x.max(axis=1))
     assert np.array_equal(lo[:, 2], z.min(axis=1)) and np.array_equal(hi[:, 2], z.max(axis=1))

@@ -96,11 +96,24 @@ server = socket.socket()
 server.bind(("127.0.0.1", port))
 server.listen()
 helper = subprocess.Popen(["sleep", "1000"])
-with open({pids!r}, "w") as handle:
+with open({pids!r} + ".tmp", "w") as handle:
     handle.write(f"{{os.getpid()}} {{helper.pid}}")
+os.replace({pids!r} + ".tmp", {pids!r})  # whole or absent: the test polls for it
 while True:
     time.sleep(1)
 """
+
+
+def _stub_pids(pids) -> tuple[int, int]:
+    """The stub's and its helper's pids. The explorer reports the viewer's address as soon as the
+    stub serves its port, which on a loaded machine can be before the stub has started its helper
+    and written this file: wait for it (bounded by the suite's process timeout)."""
+    deadline = time.monotonic() + process_timeout(0.25)
+    while not pids.exists():
+        assert time.monotonic() < deadline, "the stub viewer never wrote its pids"
+        time.sleep(0.02)
+    viewer, helper = map(int, pids.read_text().split())
+    return viewer, helper
 
 
 def _stubborn(tmp_path):
@@ -118,7 +131,7 @@ def test_view_ends_a_viewer_that_ignores_signals_and_everything_it_started(recor
     env, pids = _stubborn(tmp_path)
     with _view(str(recording), "--port", "0", "--grpc-port", "0", env=env) as proc:
         assert _first_line(proc).startswith("rerun web viewer: http://127.0.0.1:")
-        viewer, helper = map(int, pids.read_text().split())
+        viewer, helper = _stub_pids(pids)
         proc.send_signal(stop)
         assert proc.wait(timeout=process_timeout(0.5)) == 0
         assert still_running([viewer, helper], process_timeout(0.25)) == []
@@ -130,7 +143,7 @@ def test_a_killed_view_takes_its_viewer_and_its_helpers_along(recording, tmp_pat
     env, pids = _stubborn(tmp_path)
     with _view(str(recording), "--port", "0", "--grpc-port", "0", env=env) as proc:
         assert _first_line(proc).startswith("rerun web viewer: http://127.0.0.1:")
-        viewer, helper = map(int, pids.read_text().split())
+        viewer, helper = _stub_pids(pids)
         proc.kill()
         proc.wait(timeout=process_timeout(0.25))
         assert still_running([viewer, helper], process_timeout(0.25)) == []
@@ -140,7 +153,7 @@ def test_a_second_ctrl_c_ends_view_at_once(recording, tmp_path):
     env, pids = _stubborn(tmp_path)
     with _view(str(recording), "--port", "0", "--grpc-port", "0", env=env) as proc:
         assert _first_line(proc).startswith("rerun web viewer: http://127.0.0.1:")
-        viewer, helper = map(int, pids.read_text().split())
+        viewer, helper = _stub_pids(pids)
         proc.send_signal(signal.SIGINT)
         time.sleep(0.3)
         proc.send_signal(signal.SIGINT)

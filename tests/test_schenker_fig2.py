@@ -192,14 +192,14 @@ def test_only_the_roller_centre_geometry_matters():
 
 
 def test_readme_reproduces_f1_f2_and_the_3600_step_figures():
-    """Issue #13.9: the README's command gives F1/F2 = 20.48 / 288.27 kgf (his 21 / 288) from the
+    """Issue #13.9: the documented command (docs/theory/schenker1902.md) gives F1/F2 = 20.48 / 288.27 kgf (his 21 / 288) from the
     shipped scene with the §4 steam load, and its 3600-step figures are what the default run
     reports (the exact one-sided values at F are test_paper_figures')."""
     import json
 
     from conftest import ROOT, run_cli
 
-    readme = (ROOT / "README.md").read_text()
+    readme = (ROOT / "docs" / "theory" / "schenker1902.md").read_text()
     command = """explorer simulate --set 'loads.closing.steam_on_stem_and_valve="46 kgf"'"""
     assert command in readme and "20.48 and 288.27 kgf" in readme
     proc = run_cli("simulate", "--set", 'loads.closing.steam_on_stem_and_valve="46 kgf"')
@@ -214,3 +214,14 @@ def test_readme_reproduces_f1_f2_and_the_3600_step_figures():
     assert (round(default["min_valve_accel_m_s2"], 2), round(default["max_valve_accel_m_s2"], 2)) == (-115.88, 158.72)
     assert default["opening_side"]["required_spring_force_N"] / kgf == pytest.approx(-23.5, abs=0.05)
     assert default["closing_side"]["required_spring_force_N"] / kgf == pytest.approx(244.3, abs=0.05)
+
+
+def test_the_scene_file_holds_the_arcs_the_design_gives():
+    """assets/scenes/schenker1902_fig2.toml's [[cam.arcs]] are toml_arcs() of the paper's design,
+    verbatim (centres to 1e-9 mm): the file is the design, not a copy that can drift."""
+    from pathlib import Path
+
+    from explorer.lift.contours.schenker_fig2 import toml_arcs
+
+    scene = Path(__file__).resolve().parents[1] / "assets" / "scenes" / "schenker1902_fig2.toml"
+    assert toml_arcs().strip() in scene.read_text()

@@ -65,8 +65,8 @@ def test_the_valve_lifts_when_the_linkage_is_compressed_by_S0(result):
     S0 = W_KGF / K_KGF_M
     assert round(S0, 6) == 0.000214  # the paper's number
     assert result.summary["lift_off_compression_m"] == pytest.approx(S0, rel=1e-12)
-    lift_off = next(e for e in result.summary["events"] if e["kind"] == "lift-off")
-    take_up = next(e for e in result.summary["events"] if e["kind"] == "lash-take-up")
+    lift_off = next(e for e in result.events if e["kind"] == "lift-off")
+    take_up = next(e for e in result.events if e["kind"] == "lash-take-up")
     scene = result.scene
     lift = scene_lift(scene)
     S = lift.derivatives(np.array([math.radians(lift_off["cam_angle_deg"])]))[0, 0]
@@ -88,7 +88,7 @@ def test_free_flight_decelerates_with_W_over_M(result):
     decel = -c["valve_accel_m_s2"][flight]
     np.testing.assert_allclose(decel, W_KGF / M_TME, rtol=1e-12)  # g cancels: kgf / TME = m/s^2
     assert round(W_KGF / M_TME) == 133
-    kinds = [e["kind"] for e in result.summary["events"] if e["effect"] == "elastic"]
+    kinds = [e["kind"] for e in result.events if e["effect"] == "elastic"]
     assert kinds.count("separation") == kinds.count("re-contact") >= 3
 
 
@@ -137,7 +137,7 @@ def test_the_fig2_cam_with_the_elastic_linkage():
     effects = [e for e in base.effects if e != "elastic"] + ["elastic"]
     scene = load_scene(FIG2, overrides=[f"effects={effects!r}".replace("'", '"')])
     result = simulate(scene)
-    s = result.summary
+    s = result.report()
     W = scene.spring.preload + scene.loads.closing_total + scene.loads.friction
     assert s["lift_off_compression_m"] == pytest.approx(W / scene.linkage.stiffness, rel=1e-12)
     kinds = [e["kind"] for e in s["events"] if e.get("effect") == "elastic"]

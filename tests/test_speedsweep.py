@@ -147,7 +147,7 @@ def test_elastic_figures_run_only_the_effects_they_need_and_equal_the_full_run()
         scene, lift = _scene(path)
         rpm = 2.0 * scene.drive.rpm
         full = simulate(ss.at_speed(scene, rpm), lift=lift)
-        events = [e for e in full.summary["events"] if e.get("effect", "elastic") == "elastic"]
+        events = [e for e in full.events if e.effect == "elastic"]
         seps = [float(e["cam_angle_deg"]) for e in events if e["kind"] == "separation"]
         seats = [float(e["velocity_m_s"]) for e in events if e["kind"] == "seat"]
         expected = (seps[0] if seps else math.nan, min(seats) if seats else math.nan, full.summary["max_deviation_m"])

@@ -13,7 +13,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel, solve
+from explorer.dynamics.model import PHASE_CODES, Drive, LinkageModel
+from explorer.dynamics.solvers import solve
 from explorer.lift.curves import LawLift
 from dynamics_cases import REF, BumpLift, ConstantLift, cycloidal_groups, revolution
 

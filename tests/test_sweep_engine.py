@@ -21,7 +21,8 @@ from conftest import SCENES
 from explorer.effects.pipeline import simulate
 from explorer.core.errors import InputError
 from explorer.scene.scene import load_scene
-from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, engine_outputs, result_columns, row_scalars
+from explorer.effects.pipeline import figures
+from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, result_columns, row_figures
 from explorer.studies.sweep_spec import scene_for
 
 KEYS = ("drive.rpm", "linkage.stiffness", "valve.mass", "spring.preload", "valve.lash", "linkage.damping",
@@ -77,14 +78,13 @@ def test_engine_rows_lift_and_events_equal_simulate(scene_file, overrides, runs,
         except (InputError, RuntimeError):
             assert table[i, names.index("run_failed")] == 1.0, i
             continue
-        summary, events, columns = engine_outputs(scene, shared)
+        run = figures(scene, shared)  # the engine's run: the pipeline's figures-only run
         # the motion: lift within 1e-12 m, the same events in the same order at the same instants
-        lift = np.asarray(columns["valve_lift_m"])
+        lift = np.asarray(run.columns["valve_lift_m"])
         assert np.max(np.abs(lift - result.columns["valve_lift_m"])) <= LIFT_TOL_M, i
-        assert [(e["kind"], float(e["time_s"]), e.get("velocity_m_s")) for e in events] \
-            == _elastic_events(result.summary["events"]), i
+        assert _elastic_events(run.events) == _elastic_events(result.events), i
         # the row: every figure as read from simulate's result
-        expected = row_scalars(names, result.summary, result.summary["events"], result.columns)
+        expected = row_figures(names, result)
         got = dict(zip(names, table[i]))
         assert got["run_failed"] == 0.0
         for name, value in expected.items():
@@ -119,7 +119,7 @@ def test_gear_scenes_take_the_simulate_path_and_agree():
     table = compute_chunk(base, ("drive.rpm",), values, names)
     for i, r in enumerate(values):
         result = simulate(scene_for(base, ("drive.rpm",), r))
-        expected = row_scalars(names, result.summary, result.summary["events"], result.columns)
+        expected = row_figures(names, result)
         for name, value in expected.items():
             got = table[i, names.index(name)]
             assert got == value or (math.isnan(got) and math.isnan(value)), name
@@ -135,7 +135,46 @@ def test_shared_caches_stay_bounded_in_a_tolerance_study():
     lash = np.random.default_rng(5).uniform(2e-4, 3e-4, CACHE_ENTRIES + 8)[:, None]
     shared = _Shared()
     table = compute_chunk(base, ("valve.lash",), lash, names, shared)
-    assert len(shared.pieces) <= CACHE_ENTRIES and len(shared.jumps) <= CACHE_ENTRIES
+    assert len(shared.of("forces pieces")) <= CACHE_ENTRIES and len(shared.of("forces jumps")) <= CACHE_ENTRIES
     # and an evicted entry, made again, gives the same figures (the cache holds pure results)
     again = compute_chunk(base, ("valve.lash",), lash[:2], names, shared)
     assert np.array_equal(again, table[:2])
+
+
+@pytest.mark.parametrize("scene_file, engine", [
+    ("pivoted_roller_lever.toml", "shared"), ("rocking_cam.toml", "shared"), ("rolling_lever.toml", "shared"),
+    ("trip_gear_dashpot.toml", "simulate"),  # its lift is the valve's closing: it reads the speed, the train
+])
+def test_a_gear_lift_that_reads_no_run_value_is_built_once_and_rows_equal_simulate(scene_file, engine):
+    """The lever gears' lifts depend on their geometry alone (Gear.lift_reads):
+    the engine builds the lift once and shares it (with the lash take-up) across runs; every figure
+    of every row still equals simulate's to the bit, with the speed, lash, preload and stiffness
+    varied together. The trip gear keeps the simulate path."""
+    from explorer.studies.sweep_engine import engine_for
+
+    base = load_scene(SCENES / scene_file, ["solver.steps_per_revolution=720"])
+    assert engine_for(base, _Shared()).name == engine
+    assert (base.gear_plugin.lift_reads(base) == ()) == (engine == "shared")
+    names = result_columns(base)
+    keys = ("drive.rpm", "valve.lash", "spring.preload", "linkage.stiffness")
+    v0 = np.array([base.drive.rpm, base.valve.lash, base.spring.preload, base.linkage.stiffness])
+    values = v0 * np.array([[0.8, 1.0, 1.0, 1.0], [1.3, 1.2, 0.9, 2.0], [1.1, 0.7, 1.1, 0.5]])
+    shared = _Shared()
+    table = compute_chunk(base, keys, values, names, shared)
+    for i, r in enumerate(values):
+        result = simulate(scene_for(base, keys, r))
+        expected = row_figures(names, result)
+        for name, value in expected.items():
+            got = table[i, names.index(name)]
+            assert got == value or (math.isnan(got) and math.isnan(value)), (i, name, got, value)
+    assert (shared.lift is not None) == (engine == "shared")  # built once, kept for the next chunk
+
+
+def test_a_rocking_cam_fitted_to_its_target_reads_the_lash():
+    """gear.target use = "fitted" fits the contour to the valve's lift after the lash: its lift reads
+    valve.lash, so a sweep cannot share it (the simulate path)."""
+    from explorer.studies.sweep_engine import engine_for
+
+    base = load_scene(SCENES / "rocking_cam.toml", ['gear.target.use="fitted"'])
+    assert base.gear_plugin.lift_reads(base) == ("valve.lash",)
+    assert engine_for(base, _Shared()).name == "simulate"

@@ -39,7 +39,7 @@ from explorer.dynamics.model import Drive, LinkageModel
 from explorer.effects.lift import build_lift
 from explorer.effects.pipeline import simulate
 from explorer.scene.scene import load_scene
-from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, engine_for, result_columns, row_scalars
+from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, engine_for, result_columns, row_figures
 from explorer.effects.elastic_batch import ELASTIC, kernel_outputs
 from explorer.studies.sweep_spec import scene_for
 
@@ -208,7 +208,7 @@ def _scene_inputs(scene) -> dict:
 def _simulated(scene, name, value):
     """simulate's elastic lift and events with one input changed."""
     result = simulate(scene_for(scene, (_SCENE_FIELDS[name],), (value,)))
-    return result.columns["valve_lift_m"], [e for e in result.summary["events"] if e.get("effect") == "elastic"]
+    return result.columns["valve_lift_m"], [e for e in result.events if e.get("effect") == "elastic"]
 
 
 CASES = [
@@ -238,7 +238,7 @@ def test_compiled_rows_equal_simulate(scene_file, overrides, runs, rpm, k_max):
             assert table[i, names.index("run_failed")] == 1.0, i
             continue
         events, lift = kernel_outputs(scene, shared)
-        elastic = [e for e in result.summary["events"] if e.get("effect") == "elastic"]
+        elastic = [e for e in result.events if e.get("effect") == "elastic"]
         _same_kinds(events, elastic)
         d = _differences(lift, events, result.columns["valve_lift_m"], elastic)
         tol = Tolerance()
@@ -248,7 +248,7 @@ def test_compiled_rows_equal_simulate(scene_file, overrides, runs, rpm, k_max):
                                      "events": elastic})
             assert _within(d, tol, elastic), (i, d, tol)
             spread += 1
-        expected = row_scalars(names, result.summary, result.summary["events"], result.columns)
+        expected = row_figures(names, result)
         got = dict(zip(names, table[i]))
         assert got["run_failed"] == 0.0
         for name, value in expected.items():
@@ -274,14 +274,18 @@ def test_compiled_rows_equal_simulate(scene_file, overrides, runs, rpm, k_max):
 
 
 def test_scenes_outside_the_kernel_take_the_other_paths():
-    """A spring chain, another solver, a gear: not the compiled path (the registry's next)."""
+    """A spring chain, another solver, a gear: not the compiled path (the registry's next). A lever
+    gear's lift reads no run value, so its runs share it (the shared path, Gear.shares_lift); the
+    trip gear's lift and effects are its own per run (simulate)."""
     shared = _Shared()
     chain = load_scene(SCENES / "spring_surge.toml")
     assert engine_for(chain, shared).name == "shared"
     taylor = load_scene(SCENES / "elastic_float.toml", ['solver.method="taylor"'])
     assert engine_for(taylor, _Shared()).name == "shared"
     gear = load_scene(SCENES / "pivoted_roller_lever.toml")
-    assert engine_for(gear, _Shared()).name == "simulate"
+    assert engine_for(gear, _Shared()).name == "shared"
+    trip = load_scene(SCENES / "trip_gear_dashpot.toml")
+    assert engine_for(trip, _Shared()).name == "simulate"
     assert [e.name for e in ENGINES] == ["compiled", "shared", "simulate"]
 
 

@@ -221,7 +221,7 @@ def test_summary_has_latch_impact_and_trinks():
     assert t["required_spring_force_N"] == pytest.approx(
         (2 * t["lift_m"] / t["closing_time_s"] ** 2 / TRINKS_G - 1) * t["valve_weight_N"] + 20.0, rel=1e-12)
     assert g["seating_velocity_m_s"] == pytest.approx(result.summary["impact_velocity_closing_m_s"], rel=1e-9)
-    kinds = [e["kind"] for e in result.summary["events"]]
+    kinds = [e["kind"] for e in result.events]
     assert kinds.index("lash-take-up") < kinds.index("trip") < kinds.index("dashpot-entry") < kinds.index("seat")
 
 
@@ -286,7 +286,8 @@ def test_latch_force_and_torque_by_hand_at_grid_angles(full):
     """In the carried window the forces effect's latch force is M w^2 X'' + F0 + k s + D + R and the
     camshaft torque F dX/dtheta (power balance T w = F v); outside it the latch carries nothing:
     force and torque 0, the spring force follows the valve, the required spring force and margin
-    are the seat's while shut and NaN while the valve closes freely. Rounding only: rel 1e-12."""
+    are the seat's while shut and Trinks' closing force while the valve closes freely (issue #22
+    item 4: it was NaN there). Rounding only: rel 1e-12."""
     scene, result = full
     w = scene.omega
     c = result.columns
@@ -311,8 +312,43 @@ def test_latch_force_and_torque_by_hand_at_grid_angles(full):
     free = np.nonzero((deg >= 100.0) & (np.asarray(c["rigid_valve_lift_m"]) > 0.0))[0]
     assert free.size > 50
     assert np.all(c["contact_force_N"][free] == 0.0) and np.all(c["inertia_force_N"][free] == 0.0)
-    assert np.all(np.isnan(c["required_spring_force_N"][free])) and np.all(np.isnan(c["spring_margin_N"][free]))
+    # released: the force that closes the valve from the lift at the trip (100 deg) in the wanted 30 ms,
+    # Trinks' P_f = M p + R - W with p = 2 s_trip / t^2, by hand from the scene's numbers
+    s_trip = E_LATCH * (1.0 - math.cos(math.radians(100.0))) - S_O
+    wanted = M * 2.0 * s_trip / 0.03**2 + R_FRIC - D_CLOSE
+    assert np.allclose(c["required_spring_force_N"][free], wanted, rtol=1e-12, atol=0.0)
+    assert np.allclose(c["spring_margin_N"][free], c["spring_force_N"][free] - wanted, rtol=1e-12, atol=0.0)
     assert np.allclose(c["spring_force_N"][free], F0 + RATE * np.asarray(c["rigid_valve_lift_m"])[free], rtol=1e-14)
+    assert result.summary["min_spring_margin_N"] == pytest.approx(float(np.min(c["spring_margin_N"])), rel=1e-15)
+
+
+def test_free_closing_requirement_is_trinks_rule():
+    """Oracle: with the valve's weight as the only closing load, W = G_v = M g, the released valve's
+    required spring force is Trinks' P_f = (p/g - 1) G_v + W_s (seed 003) exactly, as the gear
+    summary gives it (same lift at the trip, same wanted time); without a wanted closing time it
+    is the limit t -> infinity, W_s - G_v: the spring must at least beat the friction the weight
+    leaves (else the released valve hangs open)."""
+    from explorer.effects.pipeline import simulate
+
+    weight = f'loads.closing.valve_weight="{M * TRINKS_G!r} N"'
+    for overrides, closing_time in (([weight], 0.03), ([weight, 'gear.trip.closing_time="45 ms"'], 0.045)):
+        result = simulate(load_scene(SCENE, overrides))
+        c, t = result.columns, result.summary["gear"]["trinks"]
+        free = (np.asarray(c["cam_angle_deg"]) >= 100.0) & (np.asarray(c["rigid_valve_lift_m"]) > 0.0)
+        p_f = trinks_closing_force(t["lift_m"], closing_time, M * TRINKS_G, R_FRIC)
+        assert t["closing_time_s"] == closing_time
+        assert np.allclose(c["required_spring_force_N"][free], p_f, rtol=1e-12, atol=1e-12)
+    import tomllib
+
+    from explorer.scene.scene import scene_from_dict
+
+    data = tomllib.loads(SCENE.read_text())
+    del data["gear"]["trip"]["closing_time"]
+    data["loads"]["closing"]["valve_weight"] = f"{M * TRINKS_G!r} N"
+    c = simulate(scene_from_dict(data, str(SCENE))).columns
+    free = (np.asarray(c["cam_angle_deg"]) >= 100.0) & (np.asarray(c["rigid_valve_lift_m"]) > 0.0)
+    assert np.allclose(c["required_spring_force_N"][free], R_FRIC - M * TRINKS_G, rtol=1e-12, atol=1e-12)
+    assert not np.any(np.isnan(c["required_spring_force_N"])) and not np.any(np.isnan(c["spring_margin_N"]))
 
 
 def test_latch_force_extremes_and_throw_off_speed_by_hand(full):
@@ -352,7 +388,7 @@ def test_latch_throws_the_valve_off_above_the_throw_off_speed():
 
     scene = load_scene(SCENE, ["drive.rpm=1100", 'gear.trip.angle="170 deg"',
                                'effects=["kinematics", "lash", "forces", "contact"]'])
-    s = simulate(scene).summary
+    s = simulate(scene).report()
     w = scene.omega
     assert s["min_contact_force_N"] < 0.0 and s["valve_floats"] and not s["latch"]["valve_stays_on_latch"]
     assert s["min_contact_force_N"] == pytest.approx(hand_latch_force(math.radians(170.0), w), rel=1e-9)
@@ -445,7 +481,7 @@ def test_elastic_valve_lags_the_latch_by_the_linkage_compression(full):
     after = np.asarray(c["cam_angle_deg"]) >= 100.0
     assert np.all(c["linkage_force_N"][after] == 0.0) and np.all(c["valve_in_contact"][after] == 0.0)
     assert t["closing_time_s"] > 0.0 and t["seating_velocity_m_s"] > 0.0
-    kinds = [e["kind"] for e in result.summary["events"] if e["effect"] == "elastic"]
+    kinds = [e["kind"] for e in result.events if e["effect"] == "elastic"]
     assert kinds.index("lift-off") < kinds.index("separation") < kinds.index("release") < kinds.index("seat")
 
 
@@ -462,7 +498,7 @@ def test_lift_off_angle_of_the_seated_valve_by_hand(full):
 
     pick = math.acos(1.0 - S_O / E_LATCH)
     th = brentq(excess, pick, pick + 0.1, xtol=1e-15)
-    lift_off = [e for e in result.summary["events"] if e["kind"] == "lift-off"]
+    lift_off = [e for e in result.events if e["kind"] == "lift-off"]
     assert len(lift_off) == 1 and lift_off[0]["cam_angle_deg"] == pytest.approx(math.degrees(th), abs=1e-9)
 
 
@@ -471,7 +507,7 @@ def test_stiff_linkage_converges_to_the_rigid_trip_gear():
     state at the trip tends to the rigid latch's, s_e = s_r - F/k + c dF/dt / k^2 (quasi-static
     lag and its first correction) and v_e = v_r - dF/dt / k; the closing from that state tends to
     the rigid closing (time and seating velocity errors O(1/k): a decade of k, a decade less)."""
-    from explorer.effects.trip import elastic_trip_motion
+    from explorer.gears.trip_latched import elastic_trip_motion
 
     base = load_scene(SCENE)
     rigid = build_lift(base).closing
@@ -502,7 +538,7 @@ def test_elastic_energy_balance_of_the_latched_phase():
     spring's and the closing loads' work, the friction's R x path, and the strain energy left in
     the linkage at the trip. Trapezoid on 40 000 samples of the window (about 1400 per natural
     period): quadrature error ~1e-7 relative; tolerance 1e-6."""
-    from explorer.effects.trip import elastic_trip_motion
+    from explorer.gears.trip_latched import elastic_trip_motion
 
     scene = load_scene(SCENE, ['linkage.damping="0 N*s/m"'])
     lift = build_lift(scene)
@@ -528,7 +564,7 @@ def test_hand_over_to_the_free_closing_is_continuous():
     it exactly; just before and after the trip (1e-7 rad, 1.6e-9 s at 100 rpm) s and v agree to
     first order (|ds| <= |v| dt + a dt^2, |dv| <= max |a| dt); the acceleration jumps as the latch
     lets go (the linkage force drops to 0)."""
-    from explorer.effects.trip import elastic_trip_motion
+    from explorer.gears.trip_latched import elastic_trip_motion
 
     scene = load_scene(SCENE)
     lift = build_lift(scene)
@@ -656,7 +692,7 @@ def test_orifice_pocket_sucks_on_the_latched_lift(full):
         assert c["contact_force_N"][i] == pytest.approx(hand_latch_force(th, w) - b, rel=1e-9)
     i = int(np.argmin(np.abs(deg - 80.0)))
     assert c["latch_buffer_force_N"][i] == 0.0  # open above the stroke
-    s = result.summary
+    s = result.report()
     b_open = (air.pressure(rho(opens)) - air.ambient_pressure) * air.area
     latch = s["latch"]
     assert latch["buffer_inlet"] == "orifice"
@@ -763,7 +799,7 @@ def test_check_valve_pocket_pushes_when_the_latch_lowers_the_valve_into_it():
         f = M * w**2 * E_LATCH * math.cos(th) + F0 + RATE * (E_LATCH * (1 - math.cos(th)) - S_O) + D_CLOSE - R_FRIC
         assert v < 0.0 and c["contact_force_N"][i] == pytest.approx(f - b, rel=1e-9)
     assert lift.closing.segments[0].y0[2] == pytest.approx(float(rho(trip)), rel=1e-9)
-    s = result.summary
+    s = result.report()
     assert s["elastic_event_counts"]["lift-off"] == 1 and s["elastic_trip"]["lift_at_trip_m"] == 0.0
     assert any("set it down again before the trip" in m for m in s["warnings"])
     assert not any("never lifted" in m for m in s["warnings"])
@@ -775,7 +811,7 @@ def test_peak_linkage_force_counts_the_force_at_a_trip_inside_one_grid_cell():
     trip's). The elastic valve has not lifted yet: 'never lifted'."""
     from explorer.effects.pipeline import simulate
 
-    s = simulate(load_scene(SCENE, ['gear.trip.angle="30 deg"'])).summary
+    s = simulate(load_scene(SCENE, ['gear.trip.angle="30 deg"'])).report()
     f_trip = s["elastic_trip"]["linkage_force_at_trip_N"]
     assert f_trip > 0.0
     assert s["peak_linkage_force_N"] == f_trip and s["peak_camshaft_back_pressure_N"] == f_trip

@@ -18,6 +18,7 @@ import pytest
 
 from explorer import load_scene
 from explorer.view import parts as meshes
+from explorer.view import translating_roller as stock
 from explorer.effects.pipeline import simulate
 from explorer.effects.lift import build_lift
 from explorer.view.browser import model
@@ -399,7 +400,7 @@ def test_the_roller_turns_on_smoothly_when_the_revolution_loops(name):
     if scene.follower.type == "translating-roller":
         # oracle: explorer.view.parts.roller_spin (tested against the cam's perimeter in test_meshes)
         theta = np.radians(result.columns["cam_angle_deg"])
-        exact = meshes.roller_spin(scene, build_lift(scene), np.append(theta, 2.0 * math.pi))
+        exact = stock.roller_spin(scene, build_lift(scene), np.append(theta, 2.0 * math.pi))
         total = exact[-1]
         factor = -steps / np.diff(exact[:-1])  # drawn quat_about_y(-spin)
         np.testing.assert_allclose(factor, factor[0], rtol=1e-9)  # one scale for the whole revolution
@@ -490,7 +491,7 @@ def test_plots_follow_a_new_result_that_arrives_with_a_magnification_change(app)
     result's (they were stale: old series with new data, drawn wrong in the page)."""
     for name in ("elastic", "contact", "forces"):  # the rigid kinematics first
         app.effects[name].value = False
-    assert app.wait_applied(60) and "elastic" not in app.current.result.summary["effects"]
+    assert app.wait_applied(60) and "elastic" not in app.current.result.timings
     app.loop.stop()  # the test plays the loop: frames come only when it calls tick()
     app.effects["elastic"].value = True
     app.tick(0.0)  # the request is applied (sent to the compute thread) in a frame
@@ -500,7 +501,7 @@ def test_plots_follow_a_new_result_that_arrives_with_a_magnification_change(app)
     assert app.worker.wait_idle(60)
     app.tick(0.0)
     assert app.error_text == "" and app.current.request.magnification == 10.0
-    assert not app.current.new_result and "elastic" in app.current.result.summary["effects"]
+    assert not app.current.new_result and "elastic" in app.current.result.timings
     shown = [(h.title, tuple(s["label"] for s in h.series[1:-1])) for h in app.plots.handles]
     assert shown == [(p.title, tuple(label for label, _, _ in p.series)) for p in app.current.plots]
     assert "rigid" in shown[0][1]
@@ -514,7 +515,7 @@ def test_effect_checkbox_adds_the_force_effect(app):
     assert app.wait_applied(60)
     assert app.error_text == ""
     assert "forces" in app.current.scene.effects
-    assert "forces" in app.current.result.summary["effects"]
+    assert "forces" in app.current.result.timings
     labels = _plot_labels(app)
     assert any(label.endswith("force") for label in labels)
 
@@ -646,13 +647,13 @@ def test_readout_lists_every_effect_event_and_warning():
         pytest.skip("valve_float_demo.toml not shipped")
     result = simulate(load_scene(path))
     text = model.readout_markdown(result)
-    for name, info in result.summary["effects"].items():
-        assert f"| {name} | {1e3 * info['compute_time_s']:.2f} ms |" in text
-    for warning in result.summary["warnings"]:
+    for name, timing in result.timings.items():
+        assert f"| {name} | {1e3 * timing.compute_time_s:.2f} ms |" in text
+    for warning in result.warnings:
         assert f"- ⚠ {warning}" in text
     assert text.index("**Warnings**") < text.index("**Key figures**")
     # every event (#13.5: there were "… 11 more"), in the scrolling table and in "Go to event"
-    events = result.summary["events"]
+    events = result.events
     assert len(events) > 14
     table = model.events_html(result)
     choices = model.event_choices(result)
@@ -1004,9 +1005,8 @@ def test_law_dropdown_offers_only_laws_the_scene_can_take(app):
     """Issue #13.6: the law dropdown lists exactly the laws with which this scene file loads and
     builds its lift (oracle: load each law of the full list directly), and every law offered
     computes without an error in the explorer."""
-    from explorer.lift.laws import LAWS
     from explorer.effects.lift import build_lift
-    from explorer.scene.scene import SPECIAL_LAWS
+    from explorer.lift.registry import names as law_names
 
     def loads(path, law):
         try:
@@ -1020,7 +1020,7 @@ def test_law_dropdown_offers_only_laws_the_scene_can_take(app):
         app.scene.value = scene
         assert app.wait_applied(60)
         offered = tuple(app.fields["lift.law"].options)
-        expected = tuple(law for law in (*LAWS, *SPECIAL_LAWS) if law == load_scene(path).lift.law or loads(path, law))
+        expected = tuple(law for law in law_names() if law == load_scene(path).lift.law or loads(path, law))
         assert offered == expected, scene
         assert "contour" not in offered  # none of these has a [cam] contour
         assert app.fields["lift.law"].value == load_scene(path).lift.law
@@ -1036,7 +1036,7 @@ def test_go_to_event_and_the_slider_under_the_plots_scrub(app):
     """Issue #13.5/#13.4: choosing an event in "Go to event" pauses the animation at the event's
     cam angle (the summary's figure); the slider under the plots scrubs like the one in Playback,
     and both sliders then show the angle."""
-    events = app.current.result.summary["events"]
+    events = app.current.result.events
     assert events and app.event_jump.options[0] == "—" and len(app.event_jump.options) == len(events) + 1
     for label, event in zip(app.event_jump.options[1:], events):
         app.play.value = True

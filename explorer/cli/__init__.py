@@ -4,10 +4,11 @@ modules are light to import (viser and rerun load only inside the command that r
 from __future__ import annotations
 
 import argparse
-import importlib
+import re
 import sys
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
+from ..core.plugins import resolve
 
 COMMAND_MODULES = [
     "explorer.cli.simulate",
@@ -21,6 +22,7 @@ COMMAND_MODULES = [
     "explorer.cli.residual",
     "explorer.cli.design",
     "explorer.cli.spectrum",
+    "explorer.cli.check",
 ]
 
 DESCRIPTION = """\
@@ -51,6 +53,7 @@ examples:
   explorer residual assets/scenes/polydyne_demo.toml --rpm 1000:3000:21 --plot r.png   (vibration vs speed)
   explorer design assets/scenes/spline_demo.toml --objective peak-acceleration --max-pressure-angle 30   (spline lift)
   explorer spectrum SCENE --orders 60 --plot s.png   (harmonics of the valve acceleration vs cam order)
+  explorer check SCENE --rpm 800:6500:200 -o report.json   (is the design acceptable? rules, limits, sources)
   explorer <command> --help            details of one command
 
 Quantities in scene files carry units ("20 mm", "385 kgf", "2.9 kgf*s**2/m"); a bare number
@@ -59,8 +62,30 @@ Bad input ends with one line 'error: FILE: KEY: reason' and exit status 2; nothi
 """
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse with the program's one-line errors: `error: <command line>: OPTION: reason`, exit
+    status 2, the value cut to a readable length (argparse prints its usage and the whole value)."""
+
+    def error(self, message: str):
+        option = "-"
+        if message.startswith("argument "):  # "argument --seed: invalid int value: '...'"
+            option, _, message = message[len("argument "):].partition(": ")
+            option = option.split("/")[-1]
+        # the values argparse quotes ('...'), each cut by echo; the rest of its message kept
+        reason = _QUOTED.sub(lambda m: echo(m.group(1)), message.replace("\n", " "))
+        raise SystemExit(_one_line(InputError("<command line>", option, f"{reason} (see {self.prog} --help)")))
+
+
+_QUOTED = re.compile(r"'((?:[^'\\]|\\.)*)'", re.DOTALL)
+
+
+def _one_line(exc: InputError) -> int:
+    print(f"error: {exc}", file=sys.stderr)
+    return 2
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="explorer", description=DESCRIPTION, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     from ..core.version import __version__
@@ -68,7 +93,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
-        importlib.import_module(name).register(sub)
+        resolve(f"{name}:register")(sub)
     return parser
 
 
@@ -78,14 +103,19 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "run", None):
         parser.print_help()
         return 0
+    from ..core.processes import Stopped, stop_signals_raise
+
     try:
-        return int(args.run(args) or 0)
+        with stop_signals_raise():  # SIGTERM/SIGHUP unwind like Ctrl-C: temporaries go, workers end
+            return int(args.run(args) or 0)
+    except Stopped as exc:
+        print(f"stopped by {exc}", file=sys.stderr)
+        return 128 + exc.signum
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:  # a file or port the user named cannot be used: one line, no traceback
-        print(f"error: {exc.filename or '-'}: -: {exc.strerror or exc}", file=sys.stderr)
-        return 2
+        return _one_line(InputError(exc.filename or "-", "-", exc.strerror or exc))  # cut like any message
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from pathlib import Path
 
@@ -47,20 +48,35 @@ def _slug(name: str) -> str:
 
 
 def run(args) -> int:
-    from ..studies.bench import ProgressBar, chart_png, differentiation_png, run_bench
     from .simulate import scene_from_args
-    from ..core.outputs import check_output, write_output
 
     if args.repeats < 1:
         raise InputError("<command line>", "--repeats", f"must be at least 1, got {args.repeats}")
     scene = scene_from_args(args)
+    from ..core.files import check_path
+
+    check_path(args.output_dir, file="<command line>", key="--output-dir")
     out_dir = Path(args.output_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise InputError(str(out_dir), "--output-dir", "exists and is not a directory")
+    made = False
     if not out_dir.exists():
         if not out_dir.resolve().parent.is_dir():
             raise InputError(str(out_dir), "--output-dir", f"parent directory {out_dir.resolve().parent} does not exist")
         out_dir.mkdir()
+        made = True
+    try:
+        return _bench(args, scene, out_dir)
+    except BaseException:
+        if made:  # a directory we made for files that never came
+            with contextlib.suppress(OSError):
+                out_dir.rmdir()
+        raise
+
+
+def _bench(args, scene, out_dir: Path) -> int:
+    from ..studies.bench import ProgressBar, chart_png, differentiation_png, run_bench
+    from ..core.outputs import all_or_none, check_output, write_checked
 
     stem = Path(scene.source).stem if scene.source != "<memory>" else _slug(scene.name)
     base = out_dir / f"bench_{stem}"
@@ -74,17 +90,18 @@ def run(args) -> int:
                        differentiation=not args.no_differentiation)
     table = report.table()
     sys.stdout.write(table)
-    write_output(outs[".csv"], report.csv_text())
-    write_output(outs[".txt"], table)
-    write_output(outs[".png"], chart_png(report))
     written = [f"{base}.csv", f"{base}.png", f"{base}.txt"]
-    if report.differentiation is not None:
-        study = report.differentiation
-        cols = study.columns()
-        lines = [",".join(cols)]
-        lines += [",".join(repr(float(cols[k][i])) for k in cols) for i in range(len(study.rows))]
-        write_output(outs["_differentiation.csv"], "\n".join(lines) + "\n")
-        write_output(outs["_differentiation.png"], differentiation_png(study))
-        written += [f"{base}_differentiation.csv", f"{base}_differentiation.png"]
+    with all_or_none():  # every file of the report, or none
+        write_checked(outs[".csv"], report.csv_text())
+        write_checked(outs[".txt"], table)
+        write_checked(outs[".png"], chart_png(report))
+        if report.differentiation is not None:
+            study = report.differentiation
+            cols = study.columns()
+            lines = [",".join(cols)]
+            lines += [",".join(repr(float(cols[k][i])) for k in cols) for i in range(len(study.rows))]
+            write_checked(outs["_differentiation.csv"], "\n".join(lines) + "\n")
+            write_checked(outs["_differentiation.png"], differentiation_png(study))
+            written += [f"{base}_differentiation.csv", f"{base}_differentiation.png"]
     print("wrote " + ", ".join(written))
     return 0

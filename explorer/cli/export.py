@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 
 HELP = """\
 Export a scene's cam (translating roller follower) to make it:
@@ -52,7 +52,7 @@ def _length(text: str | None, option: str, default: str | None = None) -> float 
         return None
     value = to_si(text if text is not None else default, "length", file="<command line>", key=option)
     if not value > 0.0:
-        raise InputError("<command line>", option, f"must be positive, got {text!r}")
+        raise InputError("<command line>", option, f"must be positive, got {echo(text)}")
     return value
 
 
@@ -72,15 +72,15 @@ def _check_options(args) -> tuple[float, float | None, float | None, int]:
     tolerance = _length(args.tolerance, "--tolerance", DEFAULT_TOLERANCE)
     if not MIN_TOLERANCE <= tolerance <= MAX_TOLERANCE:
         raise InputError("<command line>", "--tolerance",
-                         f"must be between {MIN_TOLERANCE * 1e3:g} mm and {MAX_TOLERANCE * 1e3:g} mm, got {args.tolerance!r}")
+                         f"must be between {MIN_TOLERANCE * 1e3:g} mm and {MAX_TOLERANCE * 1e3:g} mm, got {echo(args.tolerance)}")
     width = _length(args.width, "--width")
     if width is not None and width > 10.0:
-        raise InputError("<command line>", "--width", f"more than 10 m is outside any cam, got {args.width!r}")
+        raise InputError("<command line>", "--width", f"more than 10 m is outside any cam, got {echo(args.width)}")
     wheel = _length(args.grinding_wheel_radius, "--grinding-wheel-radius")
     if fmt == "grind" and wheel is None:
         raise InputError("<command line>", "--grinding-wheel-radius", "--format grind needs the wheel radius, such as '150 mm'")
     if wheel is not None and wheel > 10.0:
-        raise InputError("<command line>", "--grinding-wheel-radius", f"more than 10 m is outside any grinder, got {args.grinding_wheel_radius!r}")
+        raise InputError("<command line>", "--grinding-wheel-radius", f"more than 10 m is outside any grinder, got {echo(args.grinding_wheel_radius)}")
     points = 3600 if args.points is None else args.points
     if not MIN_POINTS <= points <= MAX_POINTS:
         raise InputError("<command line>", "--points", f"must be between {MIN_POINTS} and {MAX_POINTS}, got {points}")
@@ -94,7 +94,7 @@ def run(args) -> int:
 
     tolerance, width, wheel, points = _check_options(args)
     scene = scene_from_args(args)
-    name = args.output or f"{Path(scene.source).stem if scene.source != '<memory>' else 'cam'}{EXTENSIONS[args.format]}"
+    name = args.output if args.output is not None else f"{Path(scene.source).stem if scene.source != '<memory>' else 'cam'}{EXTENSIONS[args.format]}"
     out = check_output(name, "--output")
     src = exports.cam_source(scene)
     if args.format == "csv":

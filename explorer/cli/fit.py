@@ -7,7 +7,9 @@ import json
 import math
 import sys
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
+from ..effects.context import sample_grid
+from ..gears.registry import GEARS
 
 HELP = """\
 Choose the contour of a rocking cam (follower.type = "rocking-cam", seed 004 "Schwingdaumen")
@@ -66,15 +68,14 @@ def register(sub) -> None:
 def _follower_type(path: str, overrides: list[str]):
     """follower.type as written (after --set), or None when the file cannot tell: then loading
     the scene reports what is wrong with it."""
-    import tomllib
-
     from ..scene.scene import apply_overrides
 
     from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
+    from ..core.reader import toml_loads
 
     try:
         text = read_regular(path, file=path, key="-", limit=MAX_SCENE_FILE_BYTES).decode("utf-8")
-        data = apply_overrides(tomllib.loads(text), overrides, path)
+        data = apply_overrides(toml_loads(text, path), overrides, path)
         return data["follower"]["type"]
     except Exception:  # noqa: BLE001 - any failure here is load_scene's to report, with its key
         return None
@@ -85,18 +86,19 @@ def load_target_scene(args):
     from ..scene.scene import load_scene
 
     kind = _follower_type(args.scene, args.overrides)
-    if kind is not None and kind != "rocking-cam":
+    fitters = [name for name, gear in GEARS.items() if gear.fits_target]
+    if kind is not None and kind not in fitters:
         raise InputError(args.scene, "follower.type", f"explorer fit chooses a rocking cam's contour; this scene's "
-                         f"follower.type is {kind!r}, not \"rocking-cam\"")
+                         f"follower.type is {echo(kind)}, not " + " or ".join(f'"{t}"' for t in fitters))
     overrides = list(args.overrides)
     for key, value in (("lift", args.lift), ("open_angle", args.open_angle),
                        ("max_pressure_angle", args.max_pressure_angle)):
         if value is not None:
             overrides.append(f"gear.target.{key}={value}")
     scene = load_scene(args.scene, overrides)
-    if scene.follower.type != "rocking-cam":
-        raise InputError(args.scene, "follower.type", "explorer fit chooses a rocking cam's contour; "
-                         "set follower.type = \"rocking-cam\"")
+    if not scene.gear_plugin.fits_target:
+        raise InputError(args.scene, "follower.type", "explorer fit chooses a rocking cam's contour; set "
+                         "follower.type = " + " or ".join(f'"{t}"' for t in fitters))
     if "target" not in scene.gear.parts:
         raise InputError(args.scene, "gear.target", "missing section: explorer fit needs the wanted lift and open "
                          "angle, from [gear.target] lift and open_angle or from --lift and --open-angle")
@@ -104,17 +106,10 @@ def load_target_scene(args):
 
 
 def fit_report(scene) -> tuple[dict, list[str]]:
-    import numpy as np
-
-    from ..gears.build import rocking_target
-    from ..gears.rocking import target_report
-
-    spec = scene.gear
-    given, fit, fitted = rocking_target(spec, scene)
-    lash = scene.valve.lash if scene.valve is not None else 0.0
-    n = scene.solver.steps_per_revolution
-    theta = np.arange(n) * (2.0 * math.pi / n)  # the simulation's grid: same pressure angles as 'gear'
-    return target_report(given, fit, fitted, spec.part("target"), spec.part("rocking_cam"), lash, theta)
+    """The gear's fit of its contour to [gear.target], on the simulation's grid (the same pressure
+    angles as the 'gear' effect's)."""
+    theta, _ = sample_grid(scene)
+    return scene.gear_plugin.fit(scene, theta)
 
 
 def _table(scene, report: dict, warnings: list[str]) -> str:

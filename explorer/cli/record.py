@@ -59,41 +59,62 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--sweep", action="append", default=[], metavar="SECTION.KEY=V1,V2,...",
-        help="one recording per value (repeatable: every combination of the sweeps)",
+        help="one recording per value, V1,V2,... or START:STOP:COUNT[:log] (repeatable: every combination)",
     )
     p.add_argument("--no-parts", action="store_true", help="leave out the 3D parts (series and events only)")
     p.set_defaults(run=run)
 
 
 
-def parse_sweep(text: str) -> tuple[str, list[str]]:
-    """'drive.rpm=100,200' -> ('drive.rpm', ['100', '200'])."""
+# a sweep's values are counted before any is made (a COUNT of 10^9 must not make 10^9 strings);
+# the product of the sweeps is then held to MAX_RUNS, with a message that names the factors
+MAX_SWEEP_POINTS = 10_000_000
+
+
+def sweep_shape(text: str):
+    """(key, shape) of one --sweep in the range grammar of every command (explorer.core.grids)."""
+    from ..core import grids
+
     if "=" not in text:
-        raise InputError("--sweep", text, "a sweep must look like section.key=v1,v2,...")
+        raise InputError("--sweep", text, "a sweep must look like section.key=v1,v2,... or section.key=START:STOP:COUNT")
     key, _, values_text = text.partition("=")
     key = key.strip()
     parts = key.split(".")
     if not key or len(parts) < 2 or any(not p for p in parts):
         raise InputError("--sweep", key or text, "sweep key must be dotted, such as drive.rpm")
-    values = [v.strip() for v in values_text.split(",")]
-    if not values or any(not v for v in values):
-        raise InputError("--sweep", key, f"empty value in {values_text!r}; give v1,v2,...")
-    return key, values
+    return key, grids.read(values_text, file="--sweep", key=key, max_points=MAX_SWEEP_POINTS)
+
+
+def _size(shape) -> int:
+    from ..core import grids
+
+    return len(shape.values) if isinstance(shape, grids.Listed) else int(shape.count)
+
+
+def parse_sweep(text: str) -> tuple[str, list[str]]:
+    """'drive.rpm=100,200' -> ('drive.rpm', ['100', '200']); 'drive.rpm=100:300:3' -> ('drive.rpm',
+    ['100', '200', '300']): each value in the unit it was written in, checked by the scene loader."""
+    from ..core import grids
+
+    key, shape = sweep_shape(text)
+    return key, grids.texts(shape, file="--sweep", key=key)
 
 
 def plan_runs(scene_paths: list[str], overrides: list[str], sweeps: list[str]):
     """(label, scene) for every scene and every combination of sweep values; all validated here."""
+    from ..core import grids
     from ..scene.scene import load_scene
     from ..scene.builtin import default_scene
 
     scene_paths = scene_paths or [str(default_scene())]
-    parsed = [parse_sweep(s) for s in sweeps]
-    count = len(scene_paths) * math.prod(len(values) for _, values in parsed)
+    shapes = [sweep_shape(s) for s in sweeps]
+    count = len(scene_paths) * math.prod(_size(shape) for _, shape in shapes)
     if count > MAX_RUNS:
-        factors = ([f"{len(scene_paths)} scenes"] if len(scene_paths) > 1 else []) + [str(len(v)) for _, v in parsed]
+        factors = ([f"{len(scene_paths)} scenes"] if len(scene_paths) > 1 else []) + [str(_size(v)) for _, v in shapes]
         product = " x ".join(factors) + " = " if len(factors) > 1 else ""
-        raise InputError("--sweep", ", ".join(key for key, _ in parsed) or "SCENE",
+        raise InputError("--sweep", ", ".join(key for key, _ in shapes) or "SCENE",
                          f"{product}{count} recordings; at most {MAX_RUNS} per file")
+    parsed = [(key, grids.texts(shape, file="--sweep", key=key)) for key, shape in shapes]
     combos = list(itertools.product(*[[(key, v) for v in values] for key, values in parsed])) or [()]
     plans = []
     for path in scene_paths:
@@ -139,14 +160,13 @@ def run(args) -> int:
             yield Run(label=label, result=result) if args.no_parts else _with_parts_or_warn(label, result)
 
     def written(r) -> None:
-        s = r.result.summary
-        done.append((r.label, len(r.result.columns["time_s"]), len(s.get("events", [])), len(s.get("warnings", []))))
+        done.append((r.label, len(r.result.columns["time_s"]), len(r.result.events), len(r.result.warnings)))
 
     try:
         write_recordings(out, runs(), on_run=written)
     except (OSError, RuntimeError) as exc:  # disk full, rerun CLI missing: not the user's input
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
-        print(f"error: {out.name}: --output: writing failed: {reason}", file=sys.stderr)
+        print(f"error: {InputError(out.name, '--output', f'writing failed: {reason}')}", file=sys.stderr)
         return 1
     report = sys.stderr if out.is_stdout() else sys.stdout  # stdout may be the file itself
     steps = sum(d[1] for d in done)

@@ -33,31 +33,30 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..core.errors import InputError
-    from ..core.outputs import check_output, write_checked
+    from ..core.outputs import all_or_none, check_output, write_checked
     from ..studies.residual import chart_png, parse_speeds, residual_table
     from ..studies.sweep_table import table_format
     from .simulate import scene_from_args
-    from .sweep import Progress
+    from .sweep import Progress, check_workers
 
     speeds = parse_speeds(args.rpm)
     scene = scene_from_args(args)
-    if args.output:
+    if args.output is not None:
         kind = table_format(args.output)
         table_out = check_output(args.output, "--output")
     else:
         kind, table_out = ".csv", check_output("-", "--output")
-    plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot else None
-    if args.workers is not None and args.workers < 1:
-        raise InputError("--workers", str(args.workers), "at least 1")
+    plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot is not None else None
+    workers = check_workers(args.workers)
     progress = Progress(sys.stderr)
     try:
-        table = residual_table(scene, speeds, workers=args.workers, progress=progress)
+        table = residual_table(scene, speeds, workers=workers, progress=progress)
     finally:
         progress.end()
     if not table.complete:
         return 130
-    write_checked(table_out, table.parquet_bytes() if kind == ".parquet" else table.csv_text())
-    if plot_out is not None:
-        write_checked(plot_out, chart_png(scene, table))
+    with all_or_none():  # the table and its chart, or neither
+        write_checked(table_out, table.parquet_bytes() if kind == ".parquet" else table.csv_text())
+        if plot_out is not None:
+            write_checked(plot_out, chart_png(scene, table))
     return 0

@@ -78,6 +78,7 @@ def run(args) -> int:
 
     import viser
 
+    from ..view.browser import callbacks
     from ..view.browser.app import ExplorerApp
     from ..view.browser.kernels import KernelWarmup
     from ..view.browser.sessions import PerClientExplorer
@@ -88,6 +89,7 @@ def run(args) -> int:
             if args.rerun or args.rerun_save:
                 stream = open_live_stream(args)
             server = viser.ViserServer(host=args.host, port=args.port, verbose=False)
+            callbacks.use_for(server)  # idle callback threads end (the sessions' crowd leaves none behind)
             on_result = (lambda prepared: stream.log(prepared.result, prepared.label)) if stream is not None else None
             # the compiled solvers are prepared once the page is served, not before (#27.2)
             kernels = KernelWarmup()

@@ -31,7 +31,7 @@ def scene_from_args(args):
     from ..scene.scene import load_scene
     from ..scene.builtin import default_scene
 
-    path = args.scene or str(default_scene())
+    path = args.scene if args.scene is not None else str(default_scene())
     return load_scene(path, args.overrides)
 
 
@@ -48,18 +48,19 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from ..effects.pipeline import simulate
-    from ..core.outputs import check_output, write_checked
+    from ..core.outputs import all_or_none, check_output, write_checked
 
     scene = scene_from_args(args)
     # both outputs before any work, so that a bad --summary does not leave the CSV written
     # and the summary missing
-    csv_out = check_output(args.output, "--output") if args.output else None
-    json_out = check_output(args.summary, "--summary") if args.summary else None
+    csv_out = check_output(args.output, "--output") if args.output is not None else None
+    json_out = check_output(args.summary, "--summary") if args.summary is not None else None
     result = simulate(scene)
-    if csv_out is not None:
-        write_checked(csv_out, result.csv_chunks())  # in pieces: the largest step counts are gigabytes of text
-    if json_out is not None:
-        write_checked(json_out, result.json_text())
+    with all_or_none():  # the columns and the summary, or neither
+        if csv_out is not None:
+            write_checked(csv_out, result.csv_chunks())  # in pieces: the largest step counts are gigabytes of text
+        if json_out is not None:
+            write_checked(json_out, result.json_text())
     if csv_out is None and json_out is None:
         sys.stdout.write(result.json_text())
     else:
@@ -71,8 +72,8 @@ def run(args) -> int:
 def _print_brief(result, stream) -> None:
     s = result.summary
     parts = [f"{s['scene']}: {s['steps_per_revolution']} steps at {s['rpm']:g} rpm"]
-    for name, info in s["effects"].items():
-        parts.append(f"  {name:<11s} {1e3 * info['compute_time_s']:9.3f} ms")
-    for w in s.get("warnings", []):
+    for name, timing in result.timings.items():
+        parts.append(f"  {name:<11s} {1e3 * timing.compute_time_s:9.3f} ms")
+    for w in result.warnings:
         parts.append(f"  warning: {w}")
     print("\n".join(parts), file=stream)

@@ -28,17 +28,18 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from .simulate import scene_from_args
-    from ..core.outputs import check_output, write_checked
+    from ..core.outputs import all_or_none, check_output, write_checked
     from ..effects.lift import build_lift
     from ..studies.spectrum import MAX_ORDERS, acceleration_spectrum, chart_png, table_text
 
     if not 1 <= args.orders <= MAX_ORDERS:
         raise InputError("<command line>", "--orders", f"must be between 1 and {MAX_ORDERS}, got {args.orders}")
     scene = scene_from_args(args)
-    table_out = check_output(args.output or "-", "--output")
-    plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot else None
+    table_out = check_output("-" if args.output is None else args.output, "--output")
+    plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot is not None else None
     spectrum = acceleration_spectrum(scene, build_lift(scene), args.orders)
-    write_checked(table_out, table_text(scene, spectrum))
-    if plot_out is not None:
-        write_checked(plot_out, chart_png(scene, spectrum))
+    with all_or_none():  # the table and its chart, or neither
+        write_checked(table_out, table_text(scene, spectrum))
+        if plot_out is not None:
+            write_checked(plot_out, chart_png(scene, spectrum))
     return 0

@@ -25,8 +25,10 @@ Sweepable keys: {keys}.
 
 The table (-o, .parquet or .csv) is written when the sweep ends, atomically; Ctrl-C stops it and
 writes the runs finished so far, marked incomplete (Parquet metadata explorer.complete = false;
-CSV: a '# complete: false' line). Runs use every core here by default (--workers), or a Dask
-cluster (--scheduler tcp://HOST:8786, needs the `cluster` extra). More than 10^7 runs need --yes.
+CSV: a '# complete: false' line); SIGTERM stops it and writes nothing. Runs use every core here by
+default (--workers, at most the usable cores), or a Dask cluster (--scheduler tcp://HOST:8786, needs
+the `cluster` extra). More than 10^7 runs need --yes; a plan whose table would not fit in the
+available memory is refused, --yes or not (docs/reference/bad-input.md).
 """
 
 EPILOG = """\
@@ -68,11 +70,12 @@ def register(sub) -> None:
     p.add_argument("--sample", action="append", default=[], metavar='KEY="normal(MEAN, SD)"',
                    help="a random draw per run: normal(MEAN, SD) or uniform(LOW, HIGH) (repeatable)")
     p.add_argument("--runs", type=int, help="draws per grid point (with --sample)")
-    p.add_argument("--seed", type=int, help="seed of the random draws (default: fresh)")
+    p.add_argument("--seed", type=int, help="seed of the random draws, 0 to 2**128 - 1 (default: fresh)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.parquet|OUT.csv", help="the table")
     p.add_argument("--plot", metavar="OUT.png", help="a picture: lines (1 key), heat maps (2), histograms (samples)")
     p.add_argument("--record", metavar="OUT.rrd", help="a rerun recording with the swept keys as timelines")
-    p.add_argument("--workers", type=int, help="local worker processes (default: every core; 1: this process)")
+    p.add_argument("--workers", type=int, help="local worker processes (default: every core; 1: this process; "
+                   "more than the usable cores are capped)")
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on this Dask distributed scheduler")
     p.add_argument("--yes", action="store_true", help="allow more than 10^7 runs")
     p.set_defaults(run=run, grids=None)
@@ -112,8 +115,26 @@ class Progress:
             self.stream.flush()
 
 
+def check_workers(workers: int | None, scheduler: str | None = None) -> int | None:
+    """--workers: at least 1, at most the usable cores (capped, with a note on stderr); not with
+    --scheduler (the cluster has its own)."""
+    from ..studies.sweep_run import worker_count
+
+    if workers is None:
+        return None
+    if scheduler is not None:
+        raise InputError("<command line>", "--workers", "sets local worker processes; with --scheduler the cluster's "
+                         "workers run the sweep")
+    if workers < 1:
+        raise InputError("<command line>", "--workers", f"at least 1, got {workers}")
+    count, note = worker_count(workers)
+    if note is not None:
+        print(f"note: {note}", file=sys.stderr)
+    return count
+
+
 def run(args) -> int:
-    from ..core.outputs import check_output
+    from ..core.outputs import all_or_none, check_output
     from ..scene.scene import load_scene
     from ..scene.builtin import default_scene
     from ..studies.sweep_run import SweepResult, plan_from, run_plan
@@ -121,7 +142,7 @@ def run(args) -> int:
 
     if getattr(args, "stray_log", False):
         raise InputError("--log", "-", "--log follows the --vary it applies to")
-    scene = load_scene(args.scene or str(default_scene()), args.overrides)
+    scene = load_scene(str(default_scene()) if args.scene is None else args.scene, args.overrides)
     vary, log = {}, []
     for text, is_log in args.grids or []:
         key, value = _split(text, "--vary")
@@ -140,23 +161,26 @@ def run(args) -> int:
     # every output checked before any work
     table_format(args.output)
     out = check_output(args.output, "--output")
-    plot_out = check_output(args.plot, "--plot", ".png") if args.plot else None
-    record_out = check_output(args.record, "--record", ".rrd") if args.record else None
-    if args.workers is not None and args.workers < 1:
-        raise InputError("--workers", str(args.workers), "at least 1")
+    plot_out = check_output(args.plot, "--plot", ".png") if args.plot is not None else None
+    record_out = check_output(args.record, "--record", ".rrd") if args.record is not None else None
+    workers = check_workers(args.workers, args.scheduler)
     report = sys.stderr if out.is_stdout() else sys.stdout
     progress = Progress(sys.stderr)
     started = time.perf_counter()
     try:
-        table = run_plan(scene, plan, workers=args.workers, scheduler=args.scheduler, progress=progress)
+        table = run_plan(scene, plan, workers=workers, scheduler=args.scheduler, progress=progress)
     finally:
         progress.end()
     result = SweepResult(table)
-    result.write(out)
-    if plot_out is not None:
-        result.plot(plot_out)
-    if record_out is not None:
-        result.record(record_out)
+    with all_or_none():  # the table, its picture and its recording, or none of them
+        try:
+            result.write(out)
+            if plot_out is not None:
+                result.plot(plot_out)
+            if record_out is not None:
+                result.record(record_out)
+        except OSError as exc:  # a full disk while writing a temporary
+            raise InputError(getattr(exc, "filename", None) or out.name, "-", f"cannot write: {exc.strerror or exc}") from None
     seconds = time.perf_counter() - started
     failed = int(sum(table.columns["run_failed"])) if len(table) else 0
     state = "" if table.complete else f" (INCOMPLETE: interrupted, {len(table)} of {plan.runs} runs kept)"

@@ -29,8 +29,21 @@ def _kind(mode: int) -> str:
     return "not a plain file"
 
 
+def check_path(path, *, file: str, key: str, prefix: str = "") -> None:
+    """A path the user named must be one the system can look up: no NUL byte (os functions raise
+    ValueError on it, which is no message), not empty."""
+    text = os.fspath(path)
+    if isinstance(text, bytes):
+        text = text.decode("utf-8", "surrogateescape")
+    if "\x00" in text:
+        raise InputError(file, key, f"{prefix}a file name cannot contain a NUL byte")
+    if not text:
+        raise InputError(file, key, f"{prefix}empty file name")
+
+
 def check_regular(path, *, file: str, key: str, prefix: str = "", limit: int | None = None) -> os.stat_result:
     """stat of `path` if it is a regular file (within `limit` bytes), else InputError."""
+    check_path(path, file=file, key=key, prefix=prefix)
     try:
         info = os.stat(path)
     except FileNotFoundError:

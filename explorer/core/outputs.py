@@ -18,11 +18,20 @@ rules decides what a path the user named may become.
 `check_output` applies these rules before anything is computed, including a real probe that the
 directory accepts a new file (as root, or on a read-only file system, the permission bits say
 nothing): a wrong path costs one line and exit status 2, not a simulation.
+
+Several outputs of one command are all or none (`all_or_none`): inside the block every file is
+written to its temporary and every device or pipe to a temporary of its own; when the block ends
+without an error the devices and pipes are written first (they are the outputs that can still
+fail: /dev/full passes every check and takes no byte), then the files are renamed into place.
+Any failure, a stop signal included, removes every temporary and publishes nothing, so a table
+is never left without its plot. (A device or pipe written before another one failed keeps what
+it got: bytes sent cannot be taken back.)
 """
 
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import os
 import re
 import shutil
@@ -118,6 +127,8 @@ def check_output(path: str | os.PathLike, option: str, suffix: str | None = None
     name = os.fspath(path)
     if not name:
         raise InputError("<command line>", option, "empty file name")
+    if "\x00" in name:
+        raise InputError("<command line>", option, "a file name cannot contain a NUL byte")
     if name == "-" or _through_fd_link(name):
         where = "/dev/stdout" if name == "-" else name  # "-": standard output, as for most tools
         out = Output(name, option, Path(where), direct=True)
@@ -196,12 +207,100 @@ def _publish(fd: int, tmp: Path, target: Path, keep: tuple[int | None, int, int]
     os.replace(tmp, target)
 
 
+@dataclass(frozen=True)
+class _Staged:
+    """An output written to its temporary inside all_or_none, published when the block ends."""
+
+    out: Output
+    tmp: Path
+    keep: tuple[int | None, int, int] | None = None  # a file's mode etc. to keep (None: a direct output)
+    scratch: Path | None = None  # a direct output's temporary directory
+
+
+_pending: contextvars.ContextVar[list[_Staged] | None] = contextvars.ContextVar("explorer_outputs", default=None)
+
+
+def _stage(out: Output) -> _Staged:
+    """A temporary for `out`, registered with the open all_or_none block before anything is
+    written to it (so that a failure or a signal finds it and removes it)."""
+    if out.direct:
+        scratch = Path(tempfile.mkdtemp(prefix=".explorer-out."))
+        item = _Staged(out, scratch / "out", None, scratch)
+    else:
+        fd, tmp, keep = _create_temporary(out.target)
+        os.close(fd)
+        item = _Staged(out, tmp, keep)
+    pending = _pending.get()
+    assert pending is not None
+    pending.append(item)
+    return item
+
+
+def _discard(staged: list[_Staged]) -> None:
+    for item in staged:
+        if item.scratch is not None:
+            shutil.rmtree(item.scratch, ignore_errors=True)
+        else:
+            item.tmp.unlink(missing_ok=True)
+
+
+def _commit(staged: list[_Staged]) -> None:
+    for item in staged:  # devices and pipes first: the outputs that can still fail
+        if item.keep is not None:
+            continue
+        try:
+            with open(item.tmp, "rb") as src:
+                fd = os.open(item.out.target, os.O_WRONLY | os.O_APPEND | getattr(os, "O_CLOEXEC", 0))
+                with os.fdopen(fd, "wb") as dst:
+                    shutil.copyfileobj(src, dst, 1 << 20)
+        except BrokenPipeError:
+            pass  # the reader has gone (`| head`): it has what it wanted, as for any filter
+        except OSError as exc:
+            raise item.out.error(f"cannot write: {exc.strerror or exc}") from None
+    for item in staged:
+        if item.keep is not None:
+            try:
+                with open(item.tmp, "rb+") as handle:
+                    _publish(handle.fileno(), item.tmp, item.out.target, item.keep)
+            except OSError as exc:
+                raise item.out.error(f"cannot write: {exc.strerror or exc}") from None
+    _discard([item for item in staged if item.scratch is not None])
+
+
+@contextlib.contextmanager
+def all_or_none() -> Iterator[None]:
+    """Every output written inside the block (write_output, open_output, output_path) is published
+    when the block ends without an error, and none if anything fails (module docstring). Nested
+    blocks join the outermost."""
+    if _pending.get() is not None:
+        yield
+        return
+    staged: list[_Staged] = []
+    token = _pending.set(staged)
+    try:
+        yield
+        _pending.reset(token)
+        token = None
+        _commit(staged)
+    except BaseException:
+        if token is not None:
+            _pending.reset(token)
+        _discard(staged)
+        raise
+
+
 @contextlib.contextmanager
 def open_output(out: Output, binary: bool = False) -> Iterator[IO]:
     """A handle to write `out` through; on success the file is complete under its name (renamed
-    into place, or written through for a device or pipe); on failure no temporary is left."""
+    into place, or written through for a device or pipe; inside all_or_none, when the block ends);
+    on failure no temporary is left."""
     mode = "wb" if binary else "w"
     text_args = {} if binary else {"encoding": "utf-8", "newline": ""}
+    if _pending.get() is not None:
+        item = _stage(out)
+        with open(item.tmp, mode, **text_args) as handle:
+            yield handle
+        return
     if out.direct:
         fd = os.open(out.target, os.O_WRONLY | os.O_APPEND | getattr(os, "O_CLOEXEC", 0))
         with os.fdopen(fd, mode, **text_args) as handle:
@@ -241,7 +340,11 @@ def output_path(out: Output, work_dir: Path | None = None) -> Iterator[Path]:
     """A file name for a writer that needs one (rerun's file sink, `rerun rrd merge`): yields a
     fresh temporary path; when the block ends without an error, its content is published to `out`
     (renamed into place, or copied into a device or pipe). `work_dir` holds the temporary for a
-    direct output (default: the system's temporary directory)."""
+    direct output (default: the system's temporary directory). Inside all_or_none the content is
+    published when that block ends."""
+    if _pending.get() is not None:
+        yield _stage(out).tmp
+        return
     if out.direct:
         scratch = Path(tempfile.mkdtemp(prefix=".explorer-out.", dir=work_dir))
         try:

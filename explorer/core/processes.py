@@ -41,6 +41,48 @@ GRACE_S = 3.0
 _PR_SET_PDEATHSIG = 1
 
 
+class Stopped(BaseException):
+    """A stop signal (SIGTERM, SIGHUP) delivered as an exception (see stop_signals_raise): like
+    Ctrl-C's KeyboardInterrupt, every `finally` and `with` on the way out runs, so temporaries
+    are removed and worker processes ended; unlike it, no command treats it as "keep what is
+    done" (a sweep writes its finished runs on Ctrl-C, nothing on SIGTERM)."""
+
+    def __init__(self, signum: int):
+        self.signum = int(signum)
+        super().__init__(signal.Signals(signum).name)
+
+
+@contextlib.contextmanager
+def stop_signals_raise(signals=(signal.SIGTERM, signal.SIGHUP)):
+    """While the block runs, the stop signals raise Stopped in the main thread of this process.
+    A child forked inside the block inherits the handler; there it takes the signal's default
+    action (it ends), so that a worker never runs our clean-up. A second signal of the same kind
+    during the clean-up ends the process at once (the default action). Outside the main thread
+    (a test calling `main` from a thread) nothing is installed."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    owner = os.getpid()
+
+    def handler(signum, frame):
+        signal.signal(signum, signal.SIG_DFL)  # a second one: the default action, at once
+        if os.getpid() != owner:
+            os.kill(os.getpid(), signum)
+            return
+        raise Stopped(signum)
+
+    previous = {}
+    for sig in signals:
+        with contextlib.suppress(ValueError, OSError):
+            previous[sig] = signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, old in previous.items():
+            with contextlib.suppress(ValueError, OSError, TypeError):
+                signal.signal(sig, old)
+
+
 def shutdown_timeout() -> float:
     text = os.environ.get("EXPLORER_SHUTDOWN_TIMEOUT", "")
     try:

@@ -16,7 +16,7 @@ import fnmatch
 import math
 import sys
 
-from .errors import InputError
+from .errors import InputError, echo
 
 _TURN = 2.0 * math.pi
 _RPM = _TURN / 60.0  # rad/s per rev/min
@@ -39,6 +39,10 @@ RANGES: dict[str, tuple[float, float]] = {
     "acceleration": (1e-9, 1e9),  # m/s**2
     "jerk": (1e-9, 1e14),  # m/s**3
     "torque": (1e-6, 1e10),  # N*m (and N*m/rad: a lever's rotational stiffness)
+    "viscosity": (1e-6, 1e4),  # Pa*s: a gas to a bitumen
+    "pressure_viscosity": (1e-12, 1e-6),  # 1/Pa: mineral oils ~2e-8
+    "temperature": (1.0, 2000.0),  # K
+    "lift_rate": (1e-12, 10.0),  # m/rad
 }
 SHOWN_UNITS: dict[str, tuple[str, float]] = {
     "angle": ("deg", 180.0 / math.pi),
@@ -46,10 +50,16 @@ SHOWN_UNITS: dict[str, tuple[str, float]] = {
     "length": ("m", 1.0), "mass": ("kg", 1.0), "force": ("N", 1.0), "stiffness": ("N/m", 1.0),
     "damping": ("N*s/m", 1.0), "pressure": ("Pa", 1.0), "time": ("s", 1.0), "area": ("m**2", 1.0),
     "velocity": ("m/s", 1.0), "acceleration": ("m/s**2", 1.0), "jerk": ("m/s**3", 1.0), "torque": ("N*m", 1.0),
+    "viscosity": ("Pa*s", 1.0), "pressure_viscosity": ("1/Pa", 1.0), "temperature": ("K", 1.0),
+    "lift_rate": ("m/rad", 1.0),
 }
 # dotted key (glob) -> (smallest non-zero size, largest size) in SI, narrower than the dimension's
 KEY_RANGES: dict[str, tuple[float, float]] = {
     "gear.air_dashpot.ambient_pressure": (1.0, 1e8),  # Pa: an ambient pressure, not a modulus
+    # a rocking cam's contour is one polar curve about its pivot: its flank, and the swing before
+    # it, lie within one turn of the body (lift_start + flank < 360 deg is checked with the section)
+    "gear.rocking_cam.flank": (RANGES["angle"][0], _TURN),
+    "gear.rocking_cam.lift_start": (RANGES["angle"][0], _TURN),
 }
 # plain numbers (no unit): key -> (minimum, maximum), checked by the key's parser
 AMBIENT_TEMPERATURE = (1.0, 2000.0)  # K
@@ -90,5 +100,4 @@ def check_range(number: float, dimension: str, *, file: str, key: str, shown, ze
 
 
 def _short(value) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:40] + f"... ({len(text)} characters)"
+    return echo(value)

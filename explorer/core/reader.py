@@ -6,10 +6,11 @@ bad input always ends in the same one-line InputError.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Any, Iterable, Mapping
 
-from .errors import InputError
+from .errors import InputError, echo
 from .ranges import check_range
 from .units import check_magnitude, plain_number, to_si
 
@@ -67,13 +68,13 @@ class Table:
             return float(value)  # a default already in SI
         number = to_si(value, dimension, file=self.file, key=self.key(name))
         if positive and not number > 0.0:
-            raise self.error(name, f"must be greater than zero, got {value!r}")
+            raise self.error(name, f"must be greater than zero, got {echo(value)}")
         if nonnegative and not number >= 0.0:
-            raise self.error(name, f"must not be negative, got {value!r}")
+            raise self.error(name, f"must not be negative, got {echo(value)}")
         if minimum is not None and number < minimum:
-            raise self.error(name, f"must be at least {minimum:g} (SI), got {value!r}")
+            raise self.error(name, f"must be at least {minimum:g} (SI), got {echo(value)}")
         if maximum is not None and number > maximum:
-            raise self.error(name, f"must be at most {maximum:g} (SI), got {value!r}")
+            raise self.error(name, f"must be at most {maximum:g} (SI), got {echo(value)}")
         return check_range(number, dimension, file=self.file, key=self.key(name), shown=value, zero_allowed=not positive)
 
     def number(
@@ -91,14 +92,14 @@ class Table:
         if not present:
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.error(name, f"expected a plain number, got {value!r}")
+            raise self.error(name, f"expected a plain number, got {echo(value)}")
         number = plain_number(value, file=self.file, key=self.key(name))
         if integer and not number.is_integer():
-            raise self.error(name, f"expected a whole number, got {value!r}")
+            raise self.error(name, f"expected a whole number, got {echo(value)}")
         if minimum is not None and (number < minimum or (open_minimum and number == minimum)):
-            raise self.error(name, f"must be {'greater than' if open_minimum else 'at least'} {minimum:g}, got {value!r}")
+            raise self.error(name, f"must be {'greater than' if open_minimum else 'at least'} {minimum:g}, got {echo(value)}")
         if maximum is not None and (number > maximum or (open_maximum and number == maximum)):
-            raise self.error(name, f"must be {'less than' if open_maximum else 'at most'} {maximum:g}, got {value!r}")
+            raise self.error(name, f"must be {'less than' if open_maximum else 'at most'} {maximum:g}, got {echo(value)}")
         check_magnitude(number, value, file=self.file, key=self.key(name))
         return int(number) if integer else number
 
@@ -107,19 +108,11 @@ class Table:
         if not present:
             return value
         if not isinstance(value, str):
-            raise self.error(name, f"expected a string, got {value!r}")
+            raise self.error(name, f"expected a string, got {echo(value)}")
         if choices is not None:
             options = list(choices)
             if value not in options:
-                raise self.error(name, f"unknown value {value!r}; choose one of: {', '.join(options)}")
-        return value
-
-    def boolean(self, name: str, default: Any = ...) -> bool:
-        value, present = self._lookup(name, default)
-        if not present:
-            return value
-        if not isinstance(value, bool):
-            raise self.error(name, f"expected true or false, got {value!r}")
+                raise self.error(name, f"unknown value {echo(value)}; choose one of: {', '.join(options)}")
         return value
 
     def reject_unknown(self, known: Iterable[str]) -> None:
@@ -128,3 +121,41 @@ class Table:
         for name in self.data:
             if name not in known:
                 raise self.error(name, f"unknown key; known keys here: {', '.join(sorted(known))}")
+
+
+# An integer literal longer than this cannot be converted by Python (sys.get_int_max_str_digits,
+# a guard against quadratic-time conversion): tomllib then raises a bare ValueError that names
+# neither the line nor the key. No quantity needs more than a few digits.
+_LONG_NUMBER = re.compile(r"[0-9][0-9_]{4299,}")
+_TABLE_HEADER = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(?:#.*)?$")
+
+
+def toml_loads(text: str, file: str, key: str | None = None) -> dict:
+    """tomllib.loads, with a number beyond Python's integer-conversion limit (4300 digits) turned
+    into InputError naming the key (`key`, or the dotted key written on the offending line) and the
+    line. tomllib's own TOMLDecodeError and RecursionError pass through (the caller words them)."""
+    import tomllib
+
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        raise
+    except ValueError:
+        match = _LONG_NUMBER.search(text)
+        if match is None:
+            raise
+    line = text.count("\n", 0, match.start()) + 1
+    where = key
+    if where is None:
+        table, written = "", "-"
+        for number, row in enumerate(text.splitlines()[:line], start=1):
+            header = _TABLE_HEADER.match(row)
+            if header and number < line:
+                table = header.group(1).replace(" ", "").replace('"', "")
+            elif number == line and "=" in row:
+                written = row.split("=", 1)[0].strip().replace(" ", "").replace('"', "")
+        where = f"{table}.{written}" if table and written != "-" else written
+    digits = sum(c.isdigit() for c in match.group(0))
+    at = "" if key is not None else f" (line {line})"
+    raise InputError(file, where, f"a number of {digits} digits{at}: out of range for every quantity "
+                     "(Python reads at most 4300 digits)")

@@ -14,7 +14,7 @@ import functools
 import math
 import re
 
-from .errors import InputError
+from .errors import InputError, echo
 
 # dimension name -> (pint dimensionality string, unit used for bare numbers, SI unit)
 DIMENSIONS: dict[str, tuple[str, str, str]] = {
@@ -34,6 +34,11 @@ DIMENSIONS: dict[str, tuple[str, str, str]] = {
     "snap": ("[length]/[time]**4", "m/s**4", "m/s**4"),  # the fourth derivative (a polydyne's wanted spline)
     "torque": ("[force]*[length]", "N*m", "N*m"),
     "density": ("[mass]/[length]**3", "kg/m**3", "kg/m**3"),
+    # a lubricant and its surfaces ([lubricant]) and the design rules' thresholds ([checks])
+    "viscosity": ("[pressure]*[time]", "Pa*s", "Pa*s"),
+    "pressure_viscosity": ("1/[pressure]", "1/Pa", "1/Pa"),
+    "temperature": ("[temperature]", "K", "K"),  # absolute: "90 degC" is 363.15 K
+    "lift_rate": ("[length]", "m/rad", "m/rad"),  # lift per cam angle ("0.002 in/deg"); pint counts angles as 1
     "dimensionless": ("", "", ""),
 }
 
@@ -55,7 +60,7 @@ def to_si(value, dimension: str, *, file: str, key: str) -> float:
     """Convert a scene value (number or string with units) to an SI float, or raise InputError."""
     number = _to_si(value, dimension, file=file, key=key)
     if not math.isfinite(number):  # a finite number whose conversion overflows (1e308 rpm -> rad/s)
-        raise InputError(file, key, f"{str(value)[:40]!r} is too large to express in SI units")
+        raise InputError(file, key, f"{echo(value)} is too large to express in SI units")
     return number
 
 
@@ -109,10 +114,18 @@ def check_magnitude(number: float, shown, *, file: str, key: str) -> float:
     return number
 
 
+def unit_scale(unit: str, dimension: str, *, file: str, key: str) -> float:
+    """The SI size of one `unit` (a unit key's value: angle_unit, lift_unit, ...). A blank unit is
+    refused: "1 " would be a bare number, read silently as the dimension's SI unit (degrees for
+    an angle)."""
+    if not str(unit).strip():
+        raise InputError(file, key, "empty unit: write one, such as mm, deg or m/s**2")
+    return to_si(f"1 {unit}", dimension, file=file, key=key)
+
+
 def short_repr(value) -> str:
     """repr of a value for a message, cut so that a hostile value cannot flood the terminal."""
-    text = repr(value)
-    return text if len(text) <= 60 else text[:40] + "..." + f" ({len(text)} characters)"
+    return echo(value)
 
 
 # The quantity grammar: a decimal number, then a unit expression of unit names, "*", "/", small
@@ -201,7 +214,7 @@ def _parse_unit(unit: str, text: str, *, file: str, key: str) -> str:
                 raise bad("unbalanced parentheses")
             i += 1
         else:
-            raise bad(f"unexpected {tok!r} in the unit")
+            raise bad(f"unexpected {echo(tok)} in the unit")
         if i < len(tokens) and tokens[i][0] == "power":
             out += f"**{tokens[i][1]}"
             i += 1
@@ -225,7 +238,7 @@ def _parse_unit(unit: str, text: str, *, file: str, key: str) -> str:
 
     canonical = expr(0)
     if i != len(tokens):
-        raise bad(f"unexpected {tokens[i][1]!r} in the unit")
+        raise bad(f"unexpected {echo(tokens[i][1])} in the unit")
     return canonical
 
 
@@ -249,7 +262,7 @@ def _pint_to_si(value, text: str, dimension: str, *, file: str, key: str) -> flo
     try:
         units = ureg.parse_units(unit)
     except Exception as exc:  # pint raises many types for unknown names
-        raise InputError(file, key, f"cannot read {short_repr(value)} as a quantity: unknown unit {unit!r} "
+        raise InputError(file, key, f"cannot read {short_repr(value)} as a quantity: unknown unit {echo(unit)} "
                          f"({type(exc).__name__})") from None
     quantity = ureg.Quantity(number, units)
     try:
@@ -337,12 +350,6 @@ def _fast_to_si(text: str, dimension: str) -> float | None:
         return None
     value = number * entry[1]
     return value if math.isfinite(value) else None
-
-
-def from_si(number: float, unit: str) -> float:
-    """SI float -> the given unit (for reports in the seeds' units, e.g. kgf)."""
-    ureg = registry()
-    return float(ureg.Quantity(number, _si_unit_for(unit, ureg)).to(unit).magnitude)
 
 
 def _si_unit_for(unit: str, ureg) -> str:

@@ -1,1 +1,1 @@
-"""Elastic valve-train dynamics: one model, several interchangeable solvers (see model.solve)."""
+"""Elastic valve-train dynamics: one model, several interchangeable solvers (see solvers.solve)."""

@@ -189,9 +189,6 @@ class ChainModel:
     def static_retainer_force(self, s: np.ndarray) -> np.ndarray:
         return self.preload + self.spring_rate * np.asarray(s)
 
-    def element_compressions(self, x: np.ndarray) -> np.ndarray:
-        """(N + 1, T): each element's compression beyond its installed state."""
-        return x - np.vstack([x[1:], np.zeros((1,) + x.shape[1:])])
 
 
 def chain_frequencies(N: int, k: float, m_s: float) -> np.ndarray:

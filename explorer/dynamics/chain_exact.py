@@ -40,7 +40,7 @@ import numpy as np
 
 from . import chain_kernels as kernels
 from .chain import ChainModel, static_equilibrium
-from .model import DynamicsSolution
+from .model import Drive, DynamicsSolution
 from .series import hermite5, taylor_shift
 
 FACT = np.array([math.factorial(k) for k in range(7)], dtype=float)
@@ -520,8 +520,6 @@ def warm() -> int:
     a 2-element chain with lift-off, seat, separation and a coil clash. For the install step
     (`python -c "from explorer.dynamics.chain_exact import warm; warm()"`), so that the first run
     does not pay numba's compilation (~10 s). Returns the kinds of its events."""
-    from .model import Drive
-
     model = ChainModel(valve_mass=0.08, spring_mass=0.04, elements=2, spring_rate=30e3, preload=200.0,
                        stiffness=3e6, seat_stiffness=2e8, damping=8.0, seat_damping=400.0, damping_ratio=0.02,
                        clash_compression=2e-3)

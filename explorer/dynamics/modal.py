@@ -162,15 +162,6 @@ def step_powers(mu, hidx: np.ndarray, h_unique: np.ndarray, mu_lo=0.0, base: int
 PREFIX_BLOCK = 64
 
 
-def _prefix_sum(x: np.ndarray) -> np.ndarray:
-    """Cumulative sum in two levels (within blocks of PREFIX_BLOCK, then of the block totals):
-    the rounding accumulates over ~PREFIX_BLOCK + n / PREFIX_BLOCK additions instead of n (a
-    sequential cumulative sum over 10^4 steps of a stiff linkage costs ~1e-14 relative)."""
-    out = np.empty(_prefix_size(x.size) + 1, dtype=x.dtype)
-    out[1:x.size + 1] = x
-    return _prefix_sum_into(out, x.size)[1:]
-
-
 def _prefix_size(n: int) -> int:
     """Length of the buffer _prefix_sum_into works in for n terms (whole blocks)."""
     return n if n <= 4 * PREFIX_BLOCK else -(-n // PREFIX_BLOCK) * PREFIX_BLOCK

@@ -18,8 +18,8 @@ coefficients.
 
 Every solver has the signature
     solve(model: LinkageModel, drive: Drive, t: np.ndarray, **options) -> DynamicsSolution
-and is listed, with what it accepts, in explorer/dynamics/solvers.py; `solve()` below dispatches on the
-method name.
+and is listed, with what it accepts, in explorer/dynamics/solvers.py, whose `solve()` dispatches on
+the method name.
 """
 
 from __future__ import annotations
@@ -31,7 +31,6 @@ from typing import Any
 
 import numpy as np
 
-from . import solvers as registry
 from .phases import PHASE_CODES, phase_of_state, release_from_rest  # noqa: F401 (re-exported)
 
 EVENT_KINDS = ("lift-off", "separation", "re-contact", "seat")
@@ -153,15 +152,3 @@ class DynamicsSolution:
     # optional (None when a solver does not provide them):
     jerk: np.ndarray | None = None  # m/s^3, derivative of a within the phase at t (exact solver: closed form)
     phase: np.ndarray | None = None  # int codes PHASE_CODES: what the valve is doing at t
-
-
-def solve(model: LinkageModel, drive: Drive, t: np.ndarray, method: str = "exact", **options) -> DynamicsSolution:
-    """Solve with the registry's solver `method` (ValueError: unknown method, or k(t) given to a
-    solver that needs a constant stiffness; explorer.dynamics.solvers.UnknownOptionError, a TypeError: an option
-    the solver does not have)."""
-    info = registry.solver(method)
-    if model.stiffness_profile is not None and not info.varying_stiffness:
-        raise ValueError(f"method {method!r} needs a constant linkage stiffness; for a stiffness that changes "
-                         f"along the cycle use {' or '.join(map(repr, registry.varying_stiffness()))}")
-    info.check_options(options)
-    return info.function()(model, drive, np.asarray(t, dtype=float), **options)

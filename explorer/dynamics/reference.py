@@ -22,11 +22,11 @@ import math
 
 import numpy as np
 from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
+from ..core.roots import root_in
 
-from .solvers import SCIPY_METHODS
 from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel
 from .phases import phase_of_state, rebound_rest_speed, seat_speed, touching, velocity_zero
+from .tabulated import TabulatedDrive
 
 REST, CONTACT, FLIGHT = "rest", "contact", "flight"
 IMPLICIT_METHODS = ("Radau", "BDF", "LSODA")
@@ -260,8 +260,9 @@ def _missed_crossing(sol, functions, watch: dict, t_seg: float):
                 def along(tt):
                     return g(tt, sol.sol(tt))
 
-                if along(lo) * direction < 0.0:
-                    root = brentq(along, lo, float(te), xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+                f_lo = along(lo)
+                if f_lo * direction < 0.0:  # the event value (g at te, > 0 by direction) closes the bracket
+                    root = root_in(along, lo, float(te), fa=f_lo, fb=float(g(te, ye)), xtol=1e-15, maxiter=200)
                     best = (float(root), i)
     return best
 
@@ -329,7 +330,7 @@ def _first_positive(f, a: float, b: float) -> float:
     where f leaves zero."""
     fa = f(a)
     if fa < 0.0:
-        a = brentq(f, a, b, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+        a = root_in(f, a, b, fa=fa, fb=f(b), xtol=1e-15, maxiter=200)
         if f(a) > 0.0:
             return a
     for _ in range(200):  # bisection on the predicate f > 0: a stays where f <= 0, b where f > 0
@@ -370,8 +371,6 @@ def solve(
     per instant; default: 4 when the stiffness changes along the cycle (a gear's k(t) costs a
     millisecond an instant), else off.
     """
-    if scipy_method not in SCIPY_METHODS:
-        raise ValueError(f"unknown scipy method {scipy_method!r}; known: {', '.join(SCIPY_METHODS)}")
     t = np.asarray(t, dtype=float)
     n = t.size
     if n == 0 or np.any(np.diff(t) < 0.0):
@@ -385,8 +384,6 @@ def solve(
     if tabulate is None:
         tabulate = 4 if varying else 0
     if tabulate:
-        from .tabulated import TabulatedDrive
-
         spacing = min(float(np.min(np.diff(t))) if n > 1 else max_step, max_step) / tabulate
         cache = TabulatedDrive(drive, model.stiffness_profile, float(t[0]), t_end, spacing)
     else:

@@ -27,18 +27,13 @@ import math
 
 import numpy as np
 
-from . import solvers as registry
+from .solver_base import StabilityError
 from .model import PHASE_CODES, DynamicsSolution, Drive, LinkageModel
 from .phases import rebound_rest_speed, touching
 from .reference import CONTACT, FLIGHT, REST, initial_phase
 
 VARIANTS = ("printed", "newmark")
 MASS_RULES = ("model", "paper")
-
-
-# the step is too long for the scheme to be stable (the solution would grow without bound); the
-# registry's class, so that a caller can tell it from any other ValueError by its type
-StabilityError = registry.StabilityError
 
 
 def stability_limit(variant: str = "printed") -> float:

@@ -1,99 +1,36 @@
-"""The registry of the elastic-linkage solvers (explorer/dynamics/): one table, read by the scene
-loader, the model's `solve()`, the elastic effect, the gears' k(t) check, the scipy solver's
-method check and the benchmark (`explorer bench`: which solver it times as the piecewise one,
-the fixed-step ones and their stability limit).
+"""The table of the elastic-linkage solvers (explorer/dynamics/), and `solve`, which runs one.
 
-Adding a solver: write its module (a `solve(model, drive, t, **options) -> DynamicsSolution`) and
-add one line to SOLVERS below. Every solver in the table runs the solver contract test
-(tests/test_solver_contract.py).
+One line per solver (a SolverInfo: explorer/dynamics/solver_base.py lists, numbered, what a solver
+must provide). Everyone who needs a fact about solvers reads it here: the scene loader (the
+[solver] methods and their options), `solve`, the elastic effects, the gears' k(t) check, the
+sweep engine's compiled path (batch_entry) and the benchmark (`explorer bench`: the piecewise
+solver it times, the fixed-step ones and their stability limit, the reference). Adding a solver:
+its module and one line of SOLVERS (or `register_solver(info)`); every solver in the table runs
+the solver contract test (tests/test_solver_contract.py).
 
-The module imports nothing heavy (no numpy, no scipy, no other module of explorer.dynamics, whose
-__init__ imports nothing): the scene loader reads it when it parses a [solver] table (`import
-explorer` does not load it), and a scene without the elastic effect loads no solver module
+The module imports nothing heavy (no scipy, no solver module): the scene loader reads it while
+parsing [solver], and a scene without the elastic effect loads no solver module
 (tests/test_elastic_effect.py). A solver's module is imported when it first runs.
 """
 
 from __future__ import annotations
 
-import importlib
-from dataclasses import dataclass
+from types import MappingProxyType
 
+import numpy as np
 
-class StabilityError(ValueError):
-    """The step is too long for a fixed-step scheme to be stable (the solution would grow without
-    bound). A solver that raises it names, in the table, the option that runs it anyway."""
-
-
-class UnknownOptionError(TypeError):
-    """A solver option the solver does not have (a TypeError, like any unexpected keyword)."""
-
-
-@dataclass(frozen=True)
-class SolverInfo:
-    name: str  # [solver] method in a scene, `method=` of model.solve
-    entry: str  # "module:function" that runs it
-    description: str
-    varying_stiffness: bool  # accepts a LinkageModel with a stiffness_profile (k(t))
-    options: tuple[str, ...]  # keyword options its function accepts
-    scene_options: tuple[str, ...] = ()  # [solver] fields a scene passes on as options of the same name
-    stability_error: type[Exception] | None = None  # raised beyond a stability limit, if it has one
-    unstable_option: str | None = None  # the option (True) that runs it beyond that limit anyway
-    # "module:function" (model, omega) -> the fewest equal steps per revolution it is stable with
-    stable_steps: str | None = None
-    # how it steps: "piecewise" (closed forms or series per step of the output grid, events to
-    # machine precision), "fixed-step" (events fall on its steps, located within one step, not at
-    # their instant), "adaptive" (its own steps to a tolerance, events by sign changes)
-    kind: str = "piecewise"
-    # largest difference from the exact solution on the contract test's smooth cases (a rise in
-    # contact over 6000 steps, a manufactured k(t) motion over 800) at default settings, m: what
-    # this solver claims there (measured: schenker1902 2e-10, scipy 3e-13, taylor 8e-16)
-    contract_tolerance_m: float = 0.0
-    # "module:function" that solves the spring-chain model (spring.elements > 0), None when this
-    # solver takes only the massless spring
-    chain_entry: str | None = None
-
-    @property
-    def fixed_step(self) -> bool:
-        return self.kind == "fixed-step"
-
-    def min_stable_steps(self, model, omega: float) -> int:
-        """The fewest equal steps per revolution it is stable with (1: no stability limit)."""
-        if self.stable_steps is None:
-            return 1
-        module, _, name = self.stable_steps.partition(":")
-        return getattr(importlib.import_module(module), name)(model, omega)
-
-    def function(self):
-        """The solver's `solve` function (imports its module)."""
-        module, _, name = self.entry.partition(":")
-        return getattr(importlib.import_module(module), name)
-
-    def chain_function(self):
-        """The solver's function for the spring-chain model (imports its module), or None."""
-        if self.chain_entry is None:
-            return None
-        module, _, name = self.chain_entry.partition(":")
-        return getattr(importlib.import_module(module), name)
-
-    def check_options(self, options) -> None:
-        unknown = [name for name in options if name not in self.options]
-        if unknown:
-            raise UnknownOptionError(f"solver {self.name!r} has no option {unknown[0]!r}; "
-                                     f"its options: {', '.join(self.options)}")
-
-    def unstable_options(self) -> dict:
-        """Options that run it beyond its stability limit ({} for a solver without one)."""
-        return {self.unstable_option: True} if self.unstable_option else {}
-
+from ..core.plugins import Registration, Registry
+from .solver_base import Reference, SolverInfo, SolverOption, StabilityError, UnknownOptionError  # noqa: F401 (the solvers' API)
 
 # solve_ivp methods the scipy solver offers (its scipy_method option, a scene's [solver] scipy_method)
-SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA", "BDF", "RK23")
+_SOLVE_IVP_METHODS = ("RK45", "DOP853", "Radau", "LSODA", "BDF", "RK23")
 
-SOLVERS: dict[str, SolverInfo] = {info.name: info for info in (
+SOLVERS: Registry[SolverInfo] = Registry("solver", {info.name: info for info in (
     SolverInfo("exact", "explorer.dynamics.exact:solve",
                "piecewise-exact closed forms per step, events to machine precision (constant k)",
                varying_stiffness=False, options=("initial_state", "zeno_height", "max_events", "chunk"),
-               contract_tolerance_m=0.0, chain_entry="explorer.dynamics.chain_exact:solve"),
+               contract_tolerance_m=0.0, chain_entry="explorer.dynamics.chain_exact:solve",
+               batch_entry="explorer.dynamics.exact_kernel:"),
     SolverInfo("schenker1902", "explorer.dynamics.schenker1902:solve",
                "Schenker's 1902 fixed-step scheme (printed or Newmark), second order",
                varying_stiffness=True,
@@ -106,25 +43,36 @@ SOLVERS: dict[str, SolverInfo] = {info.name: info for info in (
                varying_stiffness=True,
                options=("scipy_method", "rtol", "atol", "max_step_fraction", "initial_state", "rest_height",
                         "watch_extrema", "tabulate"),
-               scene_options=("scipy_method", "rtol", "atol"), kind="adaptive", contract_tolerance_m=1e-11,
-               chain_entry="explorer.dynamics.chain_reference:solve"),
+               scene_options=(SolverOption("scipy_method", "DOP853", choices=_SOLVE_IVP_METHODS),
+                              SolverOption("rtol", 1e-10, minimum=1e-14, maximum=1e-1),
+                              SolverOption("atol", 1e-13, minimum=1e-20, maximum=1e-1)),
+               kind="adaptive", contract_tolerance_m=1e-11,
+               chain_entry="explorer.dynamics.chain_reference:solve",
+               reference=Reference("DOP853", fixed=MappingProxyType({"scipy_method": "DOP853"}),
+                                   plain=MappingProxyType({"watch_extrema": False}))),
     SolverInfo("taylor", "explorer.dynamics.taylor:solve",
                "Taylor-series steps with polynomial k(t), events as polynomial roots",
                varying_stiffness=True, options=("initial_state", "zeno_height", "max_events", "max_rho_h"),
                contract_tolerance_m=1e-13),
-)}
+)})
+
+DEFAULT = "exact"  # the [solver] method of a scene that names none
+
+
+def register_solver(info: SolverInfo, *, replace: bool = False) -> Registration:
+    """Add a solver to the table (one call; `.undo()` removes it again)."""
+    return SOLVERS.register(info.name, info, replace=replace)
 
 
 def solver(name: str) -> SolverInfo:
     """The table entry of `name`; ValueError (one line, the known names) if there is none."""
-    try:
-        return SOLVERS[name]
-    except KeyError:
-        raise ValueError(f"unknown solver method {name!r}; known: {', '.join(SOLVERS)}") from None
+    if name not in SOLVERS:
+        raise ValueError(f"unknown solver method {name!r}; known: {', '.join(SOLVERS)}")
+    return SOLVERS[name]
 
 
 def names() -> tuple[str, ...]:
-    return tuple(SOLVERS)
+    return SOLVERS.names()
 
 
 def varying_stiffness() -> tuple[str, ...]:
@@ -138,6 +86,31 @@ def of_kind(kind: str, varying: bool = False) -> tuple[str, ...]:
     return tuple(name for name, info in SOLVERS.items() if info.kind == kind and (info.varying_stiffness or not varying))
 
 
-def scene_options() -> tuple[str, ...]:
-    """The [solver] fields of a scene that some solver takes as its options (table order)."""
-    return tuple(dict.fromkeys(name for info in SOLVERS.values() for name in info.scene_options))
+def scene_options() -> dict[str, SolverOption]:
+    """The [solver] fields of a scene that some solver takes as its options, by name (table
+    order; the first solver that declares a name gives its parsing)."""
+    out: dict[str, SolverOption] = {}
+    for info in SOLVERS.entries():
+        for option in info.scene_options:
+            out.setdefault(option.name, option)
+    return out
+
+
+def reference() -> SolverInfo:
+    """The reference solver (the one whose entry has a Reference)."""
+    found = [info for info in SOLVERS.entries() if info.reference is not None]
+    if len(found) != 1:
+        raise RuntimeError(f"the solver table must have exactly one reference solver, has {len(found)}")
+    return found[0]
+
+
+def solve(model, drive, t, method: str = DEFAULT, **options):
+    """Solve the linkage model with the table's solver `method` (ValueError: unknown method, an
+    option value it does not take, or k(t) given to a solver that needs a constant stiffness;
+    UnknownOptionError, a TypeError: an option the solver does not have)."""
+    info = solver(method)
+    if model.stiffness_profile is not None and not info.varying_stiffness:
+        raise ValueError(f"method {method!r} needs a constant linkage stiffness; for a stiffness that changes "
+                         f"along the cycle use {' or '.join(map(repr, varying_stiffness()))}")
+    info.check_options(options)
+    return info.function()(model, drive, np.asarray(t, dtype=float), **options)

@@ -22,11 +22,11 @@ import math
 
 import numpy as np
 
+from ..core.errors import InputError, echo
 from ..dynamics import solvers as registry
-from ..core.errors import InputError
-from ..result import EffectOutput
 from ..dynamics.chain import CHAIN_EVENT_KINDS, FRICTION_EVENT_KINDS, ChainModel, solid_travel
 from ..dynamics.model import Drive
+from ..result import EffectOutput
 from .elastic_events import linkage_outputs, output_order, revolution_events
 
 
@@ -35,7 +35,7 @@ def chain_solver(method: str, file: str):
     function = registry.solver(method).chain_function()
     if function is None:
         able = [name for name, info in registry.SOLVERS.items() if info.chain_entry]
-        raise InputError(file, "solver.method", f"{method!r} takes only the massless spring; with spring.elements > 0 "
+        raise InputError(file, "solver.method", f"{echo(method)} takes only the massless spring; with spring.elements > 0 "
                          f"use {' or '.join(map(repr, able))}")
     return function
 
@@ -79,7 +79,7 @@ def chain_elastic_effect(ctx) -> EffectOutput:
     D = drive(ctx.time)
     check_solid(scene, float(D[0].max()))
     solve = chain_solver(scene.solver.method, scene.source)
-    options = {name: getattr(scene.solver, name) for name in registry.solver(scene.solver.method).scene_options}
+    options = dict(scene.solver.options)
     i0 = int(np.argmin(D[0]))
     t_run = np.concatenate([ctx.time[i0:], ctx.time[:i0] + period])
     sol = solve(model, drive, t_run, **options)
@@ -100,11 +100,11 @@ def chain_elastic_effect(ctx) -> EffectOutput:
     # with friction the valve's stops (stick, turn, release) are listed and counted too
     kinds = CHAIN_EVENT_KINDS + (FRICTION_EVENT_KINDS if model.friction > 0.0 else ())
     events = revolution_events(sol.events, kinds, float(t_run[0]), period, omega)
-    clashes = [e for e in events if e["kind"] == "coil-clash"]
+    clashes = [e for e in events if e.kind == "coil-clash"]
     if clashes:
         warnings.append(f"coil clash: the spring reaches its solid height {len(clashes)} time(s), first at "
                         f"{clashes[0]['cam_angle_deg']:.2f} deg (the model goes on without the coils' contact)")
-    separations = [e["cam_angle_deg"] for e in events if e["kind"] == "separation"]
+    separations = [e.cam_angle_deg for e in events if e.kind == "separation"]
     motion, columns = linkage_outputs(s, v, a, jerk, force, ratio * force, deviation, contact, separated, events, kinds)
     freqs = model.spring_modal_frequencies()
     summary = {

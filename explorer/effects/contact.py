@@ -1,53 +1,22 @@
-"""Effect `contact`: cam-roller contact statics of a scene (explorer.mechanics.contact holds the physics)."""
+"""Effect `contact`: the contact statics of a scene's gear (explorer.mechanics.contact holds the
+physics; the gear gives its contact geometry and may add figures of its own)."""
 
 from __future__ import annotations
 
 import math
+from types import MappingProxyType
 
 import numpy as np
 
-from ..mechanics.contact import ContactGeometry, ContactSpec, camshaft_torque, contact_loads, contact_point_radius, effective_modulus, hertz_line_stress, hertz_width
+from ..mechanics.contact import (ContactGeometry, ContactSpec, contact_loads, effective_modulus, hertz_line_stress,
+                                 hertz_width)
 from ..result import EffectOutput
-from ..scene.contact_section import check_follower
-
-
-def translating_geometry(ctx) -> ContactGeometry:
-    """Translating roller: the kinematics' geometry columns when the cam provides them, otherwise
-    the exact closed forms of explorer.lift.contours.translating. The roller centre q = (e, y0 + L)."""
-    c, f = ctx.columns, ctx.scene.follower
-    if "pressure_angle_deg" in c and "contour_radius_m" in c:
-        alpha, contour_radius, reused = np.radians(c["pressure_angle_deg"]), np.asarray(c["contour_radius_m"]), True
-    else:
-        from ..lift.contours.translating import profile_from_derivatives
-
-        profile = profile_from_derivatives(ctx.theta, ctx.lift.derivatives(ctx.theta), f.base_radius, f.roller_radius,
-                                           f.offset)
-        alpha, contour_radius, reused = profile.pressure_angle, profile.contour_radius, False
-    lift = np.asarray(c["follower_lift_m"])
-    arm = camshaft_torque(1.0, alpha, lift, f.base_radius, f.roller_radius, f.offset)
-    return ContactGeometry(
-        pressure_angle=alpha, ratio=np.full(alpha.shape, f.ratio), torque_arm=arm, body_arm=arm,
-        body_radius=contact_point_radius(alpha, lift, f.base_radius, f.roller_radius, f.offset),
-        contour_radius=contour_radius, counter_radius=f.roller_radius, roller_diameter=2.0 * f.roller_radius,
-        from_columns=reused,
-    )
-
-
-def gear_geometry(ctx) -> ContactGeometry:
-    """The gear's own contact geometry (explorer.gears: pivoted.py, rocking.py, rolling.py)."""
-    lift = ctx.lift
-    if not hasattr(lift, "gear"):
-        from .lift import build_lift
-
-        lift = build_lift(ctx.scene)
-    return lift.gear.contact_geometry(ctx.theta)
 
 
 def contact_geometry(ctx) -> ContactGeometry:
-    check_follower(ctx.scene.follower, ctx.scene.source)
-    if ctx.scene.follower.type == "translating-roller":
-        return translating_geometry(ctx)
-    return gear_geometry(ctx)
+    """The contact geometry of the scene's gear over ctx.theta (explorer.gears.base.Gear, item 6)."""
+    ctx.gear.check_contact(ctx.scene.follower, ctx.scene.source)
+    return ctx.gear.contact_geometry(ctx)
 
 
 def contact_effect(ctx) -> EffectOutput:
@@ -73,6 +42,8 @@ def contact_effect(ctx) -> EffectOutput:
     if not geometry.from_columns:  # reuse the kinematics' geometry columns when they exist; add them otherwise
         columns["pressure_angle_deg"] = np.degrees(alpha)
         columns["contour_radius_m"] = contour_radius
+    gear_columns, gear_summary = ctx.gear.contact_figures(ctx, geometry, MappingProxyType(columns))
+    columns.update(gear_columns)
 
     theta_deg = np.degrees(ctx.theta)
     i_alpha = int(np.argmax(np.abs(alpha)))
@@ -106,6 +77,7 @@ def contact_effect(ctx) -> EffectOutput:
         "width_rule_k_Pa": spec.width_rule_k,
         "valve_kind": spec.valve,
         "engine": spec.engine,
+        **gear_summary,
     }
     warnings: list[str] = []
     if margin[i_margin] <= 0.0:
@@ -128,6 +100,12 @@ def contact_effect(ctx) -> EffectOutput:
             f"cam width {spec.width * 1e3:.4g} mm is below the width rule b = P/(k D) = {required_width * 1e3:.4g} mm"
         )
     return EffectOutput(columns=columns, summary=summary, warnings=tuple(warnings))
+
+
+def contact_row(result) -> dict[str, float]:
+    """A sweep row's contact figure: the peak camshaft torque (NaN: none finite)."""
+    torque = result.summary.get("max_camshaft_torque_Nm")
+    return {"max_camshaft_torque_Nm": math.nan if torque is None else float(torque)}
 
 
 # --- the peak camshaft torque at many speeds at once -------------------------------------------

@@ -1,5 +1,6 @@
 """Cam geometry for the rest of the program: contour points for meshes and viewers, and the
-pressure-angle / curvature columns of the kinematics effect (with the undercut check).
+pressure-angle / curvature columns of the kinematics effect (with the validity checks of every cam,
+explorer.lift.validity: finite, lift range, pressure angle, undercut).
 
 Both work the same way for law-based and contour-based cams: the envelope of the roller over
 the lift curve (translating.py). For a contour cam whose lift came from the contour, that
@@ -12,14 +13,14 @@ import math
 
 import numpy as np
 
-from ..lift.contours.translating import find_undercut, pitch_geometry, translating_profile, undercut_error
+from ..lift.contours.translating import pitch_geometry, translating_profile
+from ..lift.validity import cam_fault, entered_error
+from .lift import build_lift
 
 
 def _profile(scene, lift, n: int):
     """The scene's translating-roller profile at cam angles 0, 2 pi / n, ... (its own lift unless given)."""
     if lift is None:
-        from .lift import build_lift
-
         lift = build_lift(scene)
     f = scene.follower
     theta = np.arange(int(n)) * (2.0 * math.pi / int(n))
@@ -38,14 +39,16 @@ def pitch_curve(scene, lift=None, n: int = 720) -> np.ndarray:
     return _profile(scene, lift, n).pitch
 
 
-def geometry_columns(scene, theta: np.ndarray, d: np.ndarray) -> tuple[dict, dict]:
+def geometry_columns(scene, theta: np.ndarray, d: np.ndarray, dip: float = 0.0) -> tuple[dict, dict]:
     """Columns pressure_angle_deg, pitch_radius_m, contour_radius_m (signed: > 0 convex,
-    < 0 concave; +-inf where the curve is straight) and their summary; InputError on undercut."""
+    < 0 concave; +-inf where the curve is straight) and their summary; InputError when the cam
+    fails a validity check (explorer.lift.validity.cam_fault, the one every cam passes; dip: how far
+    the lift may go below the base circle, a measured table's noise)."""
     f = scene.follower
     phi, rho = pitch_geometry(d, f.base_radius, f.roller_radius, f.offset)
-    i = find_undercut(rho, f.roller_radius)
-    if i is not None:
-        raise undercut_error(float(theta[i]), float(rho[i]), f.roller_radius, scene.source)
+    fault = cam_fault(theta, d, pressure_angle=phi, pitch_radius=rho, roller_radius=f.roller_radius, dip=dip)
+    if fault is not None:
+        raise entered_error(fault, scene.source)
     contour_radius = rho - f.roller_radius
     phi_deg = np.degrees(phi)
     k = int(np.argmax(np.abs(phi_deg)))

@@ -33,17 +33,13 @@ from dataclasses import replace
 import numpy as np
 
 from ..core.errors import InputError
-from ..result import EffectOutput
 from ..dynamics import solvers as registry
+from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, StiffnessProfile
+from ..dynamics.solvers import solve
+from ..result import EffectOutput
+from .chain_elastic import chain_elastic_effect
 from .elastic_events import linkage_outputs, output_order, revolution_events
 from .residual import residual_figures
-from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, StiffnessProfile, solve
-
-
-def _solver_options(scene) -> dict:
-    """The [solver] fields the scene's solver takes as options (registry: scene_options)."""
-    solver = scene.solver
-    return {name: getattr(solver, name) for name in registry.solver(solver.method).scene_options}
 
 
 # The exact and taylor solvers split every output step into pieces of at most 0.5 / rho (rho the
@@ -75,9 +71,10 @@ def check_resolution(model, t, method: str, file: str) -> None:
                          f"linkage (softer, less damped) or the valve (heavier)")
 
 
-def _solve(model, drive, t, method: str, options: dict, file: str = "<memory>") -> tuple:
-    """Solve; a fixed-step scheme beyond its stability limit (the 1902 scheme) is run anyway, with
-    a warning."""
+def solve_reporting(model, drive, t, method: str, options: dict, file: str = "<memory>") -> tuple:
+    """(solution, warnings): solve(), a fixed-step scheme beyond its stability limit (the 1902
+    scheme) run anyway with a warning, a resolution beyond the step budget refused naming `file`
+    (also the gears' own elastic runs)."""
     check_resolution(model, t, method, file)
     warnings: list[str] = []
     info = registry.solver(method)
@@ -88,18 +85,6 @@ def _solve(model, drive, t, method: str, options: dict, file: str = "<memory>") 
             raise
         warnings.append(f"{exc} The results below are those of the unstable scheme.")
         return solve(model, drive, t, method=method, **info.unstable_options(), **options), warnings
-
-
-def solver_options(scene) -> dict:
-    """The scene's solver options as keywords of solve() (public: the gears' own elastic runs)."""
-    return _solver_options(scene)
-
-
-def solve_reporting(model, drive, t, method: str, options: dict, file: str = "<memory>") -> tuple:
-    """(solution, warnings): solve(), the 1902 scheme beyond its stability limit run anyway with a
-    warning, a resolution beyond the step budget refused naming `file` (public: the gears' own
-    elastic runs)."""
-    return _solve(model, drive, t, method, options, file)
 
 
 def elastic_jerk(model: LinkageModel, drive_values: np.ndarray, sol) -> np.ndarray:
@@ -140,8 +125,6 @@ def linkage_model(scene, lift, omega: float) -> LinkageModel:
 def elastic_effect(ctx) -> EffectOutput:
     scene = ctx.scene
     if scene.spring.elements > 0:  # the spring as a body: its own model and solvers (issue #15)
-        from .chain_elastic import chain_elastic_effect
-
         return chain_elastic_effect(ctx)
     omega = ctx.omega
     model = linkage_model(scene, ctx.lift, omega)
@@ -156,7 +139,7 @@ def elastic_effect(ctx) -> EffectOutput:
     t_run = np.concatenate([ctx.time[i0:], ctx.time[:i0] + period])
     t_run = np.append(t_run, ctx.time[i0] + period)
     method = scene.solver.method
-    sol, warnings = _solve(model, drive, t_run, method, _solver_options(scene), scene.source)
+    sol, warnings = solve_reporting(model, drive, t_run, method, dict(scene.solver.options), scene.source)
     warnings.extend(sol.stats.get("warnings", []))
 
     rotate, back = output_order(n, i0)
@@ -215,5 +198,5 @@ def _stiffness_at_lift_off(model: LinkageModel, events) -> float:
     """k where the valve lifts (the first lift-off; the constant k, or k(t) there)."""
     if model.stiffness_profile is None:
         return model.stiffness
-    lift_offs = [e["time_s"] for e in events if e["kind"] == "lift-off"]
+    lift_offs = [e.time_s for e in events if e.kind == "lift-off"]
     return float(model.stiffness_at(np.array(lift_offs[:1] or [0.0]))[0])

@@ -6,8 +6,10 @@ import math
 
 import numpy as np
 
-from ..mechanics.forces import TrainLoads, contact_loss_intervals, float_speed, loss_report, min_contact_force, rigid_train_forces, side_extremes, smooth_pieces
-from ..result import EffectOutput
+from ..core.memo import remember
+from ..mechanics.forces import (TrainLoads, contact_loss_intervals, float_speed, loss_report, min_contact_force,
+                                rigid_train_forces, side_extremes, smooth_pieces)
+from ..result import EffectOutput, Event
 
 
 def forces_effect(ctx) -> EffectOutput:
@@ -51,7 +53,7 @@ def forces_effect(ctx) -> EffectOutput:
     summary["wasted_spring_force_N"] = abs(f2 - f1) if f1 is not None and f2 is not None else None
 
     warnings: list[str] = []
-    events: list[dict] = []
+    events: list[Event] = []
     if jump.static_loss:
         warnings.append(
             f"valve float at any speed: the spring and closing loads do not hold the valve on the cam "
@@ -60,7 +62,7 @@ def forces_effect(ctx) -> EffectOutput:
     intervals = contact_loss_intervals(ctx.lift, loads, w, ratio, lash, pieces, n_grid) if f_min < 0.0 else []
     summary["contact_loss_cam_angles_deg"] = [[math.degrees(a), math.degrees(b)] for a, b in intervals]
     loss_events, phrase = loss_report(intervals, w, f_min, f_theta)
-    events.extend(loss_events)
+    events.extend(Event.of(e) for e in loss_events)
     if not jump.static_loss and summary["valve_floats"]:
         # one set of angles, those of this speed; the float speed's own angle is named as such
         warnings.append(
@@ -75,5 +77,33 @@ def forces_effect(ctx) -> EffectOutput:
             f"valve lifts off its seat: opening loads exceed the preload by {-seat_force:.4g} N "
             f"(closing loads {loads.closing:.4g} N, preload {loads.preload:.4g} N)"
         )
-    # [spring_design] adds its block to this summary through the pipeline (effects.SECTION_SUMMARIES)
+    # [spring_design] adds its block to this summary through the pipeline (the effect table's sections)
     return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
+
+
+def forces_figures(ctx, cache) -> EffectOutput:
+    """The forces effect's figures for sweeps: its columns, the refined minimum contact force at
+    this speed and the float speed (kept across the runs: it does not depend on the speed, nor do
+    the lift's smooth pieces); the side figures and loss intervals, which no row holds, are left out."""
+    scene, w = ctx.scene, ctx.omega
+    loads = TrainLoads.from_scene(scene)
+    ratio, lash = scene.follower.ratio, scene.valve.lash
+    c = ctx.columns
+    n_grid = max(4096, scene.solver.steps_per_revolution)
+    columns = rigid_train_forces(c["rigid_valve_lift_m"], c["rigid_valve_velocity_m_s"], c["rigid_valve_accel_m_s2"],
+                                 loads, ratio)
+    pieces = remember(cache.of("forces pieces"), (ratio, lash, n_grid),
+                      lambda: smooth_pieces(ctx.lift, ratio, lash, n_grid))
+    f_min, _ = min_contact_force(ctx.lift, loads, w, ratio, lash, pieces, n_grid)
+    jump = remember(cache.of("forces jumps"), (ratio, lash, n_grid, loads),
+                    lambda: float_speed(ctx.lift, loads, ratio, lash, pieces, n_grid))
+    return EffectOutput(columns=columns, summary={"min_contact_force_N": f_min if math.isfinite(f_min) else None,
+                                                  "jump_speed_rpm": jump.rpm if math.isfinite(jump.omega) else None})
+
+
+def forces_row(result) -> dict[str, float]:
+    """A sweep row's forces figures: the refined minimum contact force (+inf: the valve never opens,
+    no contact to lose) and the float speed (NaN: it never floats)."""
+    f_min, jump = result.summary.get("min_contact_force_N"), result.summary.get("jump_speed_rpm")
+    return {"min_contact_force_N": math.inf if f_min is None else float(f_min),
+            "float_speed_rpm": math.nan if jump is None else float(jump)}

@@ -7,8 +7,9 @@ import math
 
 import numpy as np
 
+from ..core.memo import remember
 from ..mechanics.kinematics import lash_crossings
-from ..result import EffectOutput
+from ..result import EffectOutput, Event
 
 
 def kinematics_effect(ctx) -> EffectOutput:
@@ -42,13 +43,11 @@ def kinematics_effect(ctx) -> EffectOutput:
         "max_abs_valve_jerk_m_s3": float(np.abs(valve["valve_jerk_m_s3"]).max()),
         "valve_open_angle_deg": float(360.0 * np.count_nonzero(is_open) / is_open.size),
     }
-    if scene.follower.type == "translating-roller":
-        # pressure angle and radii of curvature (closed forms); raises InputError on undercut
-        from .contour import geometry_columns
-
-        geo_columns, geo_summary = geometry_columns(scene, ctx.theta, d)
-        columns.update(geo_columns)
-        summary.update(geo_summary)
+    # the gear's own figures (a translating roller's pressure angle and radii of curvature; InputError
+    # when its cam fails the validity checks of every cam, explorer.lift.validity)
+    gear_columns, gear_summary = ctx.gear.kinematics(ctx, d)
+    columns.update(gear_columns)
+    summary.update(gear_summary)
     # laws that check themselves (table fit, acceleration closure) carry a report and warnings
     summary.update(getattr(ctx.lift, "report", None) or {})
     warnings = tuple(getattr(ctx.lift, "warnings", None) or ())
@@ -69,9 +68,9 @@ def lash_effect(ctx) -> EffectOutput:
     v_up = ratio * w * ctx.lift.derivatives(ups)[1]
     v_down = ratio * w * ctx.lift.derivatives(downs)[1] if downs.size else np.zeros(0)
     for th, v in zip(ups, v_up):
-        events.append({"kind": "lash-take-up", "time_s": th / w, "cam_angle_deg": math.degrees(th), "velocity_m_s": float(v)})
+        events.append(Event("lash-take-up", th / w, math.degrees(th), {"velocity_m_s": float(v)}))
     for th, v in zip(downs, v_down):
-        events.append({"kind": "seat", "time_s": th / w, "cam_angle_deg": math.degrees(th), "velocity_m_s": float(v)})
+        events.append(Event("seat", th / w, math.degrees(th), {"velocity_m_s": float(v)}))
     # Speeds (>= 0) with which the follower meets the valve and the valve meets its seat.
     summary.update(
         impact_velocity_opening_m_s=float(np.max(np.abs(v_up))),
@@ -80,3 +79,13 @@ def lash_effect(ctx) -> EffectOutput:
         seating_angles_deg=[math.degrees(a) for a in downs],
     )
     return EffectOutput(summary=summary, events=tuple(events), warnings=tuple(warnings))
+
+
+def lash_figures(ctx, cache) -> EffectOutput:
+    """The lash effect's figures for sweeps: the take-up events only (what a row's lift-off delay
+    reads), their angles kept per lever ratio and lash across the runs."""
+    ratio = ctx.scene.follower.ratio
+    lash = ctx.scene.valve.lash if ctx.scene.valve else 0.0
+    ups = remember(cache.of("lash"), (ratio, lash), lambda: lash_crossings(ctx.lift, ratio, lash)[0])
+    w = ctx.omega
+    return EffectOutput(events=tuple(Event("lash-take-up", th / w, math.degrees(th)) for th in ups))

@@ -1,104 +1,65 @@
 """The effects pipeline: run exactly the effects a scene lists (plus what they need), timed.
 
-Effects run in dependency order; each gets the scene, the shared sampling grid, the lift curve
-and the columns computed so far, and returns an EffectOutput. Columns of later effects replace
-earlier ones of the same name, which is how `valve_*` always holds the most detailed motion.
+Effects run in dependency order (explorer/effects/registry.py); each gets a Context (the scene,
+the sampling grid, the lift curve, the columns and summary so far) and returns an EffectOutput.
+Columns of later effects replace earlier ones of the same name, which is how `valve_*` always holds
+the most detailed motion. A gear's own variant of an effect (its `effects`) runs instead of the
+generic function.
+
+Two runs share this one loop: `simulate` (every effect whole, timed) and `figures` (each effect's
+figures-only form where it has one, with caches shared across the runs of a sweep: the sweep
+engine's shared path and its rigid figures).
 """
 
 from __future__ import annotations
 
-import importlib
-import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, Callable, Mapping
+from typing import Any, Callable
 
 import numpy as np
 
+from ..core import plugins
 from ..core.errors import InputError
-from ..gears.registry import effect_variant
-from ..result import EffectOutput, Result
-from ..scene.scene import EFFECT_DEPENDENCIES, Scene
-
-# effect -> "module:function"; imported only when the effect runs, so a kinematics-only scene
-# never even imports a dynamics solver. A gear's own variant of an effect is an entry of its
-# line in explorer.gears.registry (effects), which replaces the generic function here.
-EFFECT_FUNCTIONS: dict[str, str] = {
-    "kinematics": "explorer.effects.kinematics:kinematics_effect",
-    "lash": "explorer.effects.kinematics:lash_effect",
-    "forces": "explorer.effects.forces:forces_effect",
-    "contact": "explorer.effects.contact:contact_effect",
-    "elastic": "explorer.effects.elastic:elastic_effect",
-    "gear": "explorer.effects.gear:gear_effect",
-}
-
-# effect -> ((scene section, "module:function"), ...): the owner of an optional section adds a
-# block to the generic effect's summary when the scene has that section, function(scene, lift)
-# -> (block, warnings), stored as summary[section] after the effect's own entries (a gear's
-# variant of the effect gets none).
-SECTION_SUMMARIES: dict[str, tuple[tuple[str, str], ...]] = {
-    "forces": (("spring_design", "explorer.effects.spring_design:spring_design_summary"),),
-}
-
-
-@dataclass(frozen=True)
-class Context:
-    """Read-only inputs of an effect."""
-
-    scene: Scene
-    theta: np.ndarray  # rad, 0 <= theta < 2 pi, one revolution
-    time: np.ndarray  # s, theta / omega
-    lift: Any  # LiftCurve
-    columns: Mapping[str, np.ndarray]  # computed so far
-    summary: Mapping[str, Any]  # computed so far
-
-    @property
-    def omega(self) -> float:
-        return self.scene.drive.omega
-
-
-def resolve(effects) -> list[str]:
-    """Requested effects plus their dependencies, in an order where dependencies come first."""
-    order: list[str] = []
-
-    def visit(name: str, path: tuple[str, ...]) -> None:
-        if name in order:
-            return
-        if name in path:
-            raise RuntimeError(f"effect dependency cycle: {' -> '.join(path + (name,))}")
-        for dep in EFFECT_DEPENDENCIES[name]:
-            visit(dep, path + (name,))
-        order.append(name)
-
-    for effect in effects:
-        visit(effect, ())
-    return order
-
-
-def _resolve(target: str):
-    module, _, attr = target.partition(":")
-    return getattr(importlib.import_module(module), attr)
-
+from ..result import NAN_MEANINGS, EffectOutput, EffectTiming, Event, Result
+from . import registry
+from .context import Context, sample_grid  # noqa: F401 (Context: the effects' API, imported from here too)
+from .lift import build_lift
 
 # Results are checked behind the valid ranges: NaN (inf - inf, 0 / 0: an overflow inside an
-# effect) is refused except in the columns that mark with NaN where they are not defined (no
-# contact, valve not carried); infinity is a result for forces (a self-locking cam needs an
-# infinite push), never for the motion.
-NAN_WHERE_UNDEFINED = frozenset({"valve_referred_stiffness_N_m", "required_spring_force_N", "spring_margin_N"})
+# effect) is refused except in the columns that mark with NaN where they are not defined, each with
+# its documented meaning (result.NAN_MEANINGS); infinity is a result for forces (a self-locking cam
+# needs an infinite push), never for the motion.
+NAN_WHERE_UNDEFINED = frozenset(NAN_MEANINGS)
 MOTION_PREFIXES = ("cam_angle", "time_", "follower_", "valve_lift", "valve_velocity", "valve_accel", "valve_jerk",
                    "rigid_valve_")
 
 
-def effect_function(name: str, follower_type: str | None = None) -> Callable[[Context], EffectOutput]:
-    """The function of effect `name`: the gear's variant for that follower type when its
-    registry entry has one, else the generic effect (with the sections' summary blocks)."""
-    variant = effect_variant(follower_type, name) if follower_type is not None else None
+@dataclass
+class RunCache:
+    """What the runs of one scene share in `figures` (a sweep's chunk, the browser's speed sweep):
+    the lift curve (the same cam in every run) and each effect's own bounded memo
+    (explorer.core.memo.remember). The sweep engine's cache extends it."""
+
+    lift: Any = None
+    memo: dict = field(default_factory=dict)
+
+    def of(self, effect: str) -> dict:
+        """The memo of one effect (each bounded on its own: a tolerance study's new lash per run
+        must not push out another effect's entries)."""
+        return self.memo.setdefault(effect, {})
+
+
+def effect_function(name: str, gear=None) -> Callable[[Context], EffectOutput]:
+    """The function of effect `name`: the gear's own variant when it has one, else the generic
+    effect (with the sections' summary blocks)."""
+    variant = gear.effect(name) if gear is not None else None
     if variant is not None:
-        return _resolve(variant)
-    function = _resolve(EFFECT_FUNCTIONS[name])
-    sections = SECTION_SUMMARIES.get(name)
-    return function if not sections else _with_sections(function, sections)
+        return variant
+    spec = registry.effect_spec(name)
+    function = spec.run()
+    return function if not spec.sections else _with_sections(function, spec.sections)
 
 
 def _with_sections(function, sections):
@@ -107,7 +68,7 @@ def _with_sections(function, sections):
         for section, target in sections:
             if getattr(ctx.scene, section, None) is None:
                 continue
-            block, extra_warnings = _resolve(target)(ctx.scene, ctx.lift)
+            block, extra_warnings = plugins.resolve(target)(ctx.scene, ctx.lift)
             out = EffectOutput(columns=out.columns, summary={**out.summary, section: block}, events=out.events,
                                warnings=tuple(out.warnings) + tuple(extra_warnings))
         return out
@@ -115,51 +76,80 @@ def _with_sections(function, sections):
     return run
 
 
-def simulate(scene: Scene, lift=None) -> Result:
-    """Run the scene's effects over one revolution; `lift` may pass a prebuilt lift curve."""
-    from .lift import build_lift
+def _figures_function(name: str, gear, cache: RunCache) -> Callable[[Context], EffectOutput]:
+    """The figures-only form of effect `name` (its own function where it has none, or where the
+    gear has a variant of it)."""
+    spec = registry.effect_spec(name)
+    if gear.effect(name) is None and spec.figures is not None:
+        form = plugins.resolve(spec.figures)
+        return lambda ctx: form(ctx, cache)
+    return effect_function(name, gear)
 
-    n = scene.solver.steps_per_revolution
-    theta = np.arange(n) * (2.0 * math.pi / n)
-    t_time = theta / scene.drive.omega
+
+def _check_columns(scene, name: str, gear, out: EffectOutput, shape) -> None:
+    spec = registry.effect_spec(name)
+    own = gear.columns.get(name, ())
+    for column, values in out.columns.items():
+        if not (spec.declares(column) or registry.declared(column, own)):
+            raise RuntimeError(f"effect {name} returned column {column}, which neither the effect table nor the "
+                               f"{gear.type} gear declares")
+        values = np.asarray(values, dtype=float)
+        if values.shape != shape:
+            raise RuntimeError(f"effect {name} returned column {column} of shape {values.shape}")
+        if column not in NAN_WHERE_UNDEFINED and np.any(np.isnan(values)) \
+                or column.startswith(MOTION_PREFIXES) and np.any(np.isinf(values)):
+            # behind the valid ranges of the scene: an overflow must not end as a file of NaN
+            raise InputError(scene.source, name, f"the {name} effect's results are not finite ({column}): "
+                             "the scene's values are beyond what the model can compute")
+
+
+def _run(scene, lift, effects, function_of, timed: bool) -> Result:
+    theta, t_time = sample_grid(scene)
     started = time.perf_counter()
     lift_curve = lift if lift is not None else build_lift(scene)
     lift_seconds = time.perf_counter() - started
+    gear = scene.gear_plugin
 
     columns: dict[str, np.ndarray] = {"cam_angle_deg": np.degrees(theta), "time_s": t_time}
     summary: dict[str, Any] = {
         "scene": scene.name,
         "rpm": scene.drive.rpm,
-        "steps_per_revolution": n,
-        "revolution_time_s": 2.0 * math.pi / scene.drive.omega,
+        "steps_per_revolution": scene.solver.steps_per_revolution,
+        "revolution_time_s": 2.0 * np.pi / scene.drive.omega,
     }
-    effect_info: dict[str, Any] = {}
-    events: list[dict] = []
+    timings: dict[str, EffectTiming] = {}
+    events: list[Event] = []
     warnings: list[str] = []
-    for name in resolve(scene.effects):
+    for name in registry.order(effects):
         ctx = Context(scene, theta, t_time, lift_curve, MappingProxyType(columns), MappingProxyType(summary))
         # import outside the timing: cost of the effect, not of Python
-        function = effect_function(name, scene.follower.type)
+        function = function_of(name, gear)
         started = time.perf_counter()
         out = function(ctx)
         seconds = time.perf_counter() - started
         if name == "kinematics":
             seconds += lift_seconds  # building the lift curve is part of the kinematics cost
-        for column, values in out.columns.items():
-            values = np.asarray(values, dtype=float)
-            if values.shape != theta.shape:
-                raise RuntimeError(f"effect {name} returned column {column} of shape {values.shape}")
-            if column not in NAN_WHERE_UNDEFINED and np.any(np.isnan(values)) \
-                    or column.startswith(MOTION_PREFIXES) and np.any(np.isinf(values)):
-                # behind the valid ranges of the scene: an overflow must not end as a file of NaN
-                raise InputError(scene.source, name, f"the {name} effect's results are not finite ({column}): "
-                                 "the scene's values are beyond what the model can compute")
-            columns[column] = values
+        _check_columns(scene, name, gear, out, theta.shape)
+        columns.update((column, np.asarray(values, dtype=float)) for column, values in out.columns.items())
         summary.update(out.summary)
-        events.extend(dict(e, effect=name) for e in out.events)
+        events.extend(e.with_effect(name) for e in out.events)
         warnings.extend(out.warnings)
-        effect_info[name] = {"compute_time_s": seconds, "requested": name in scene.effects}
-    summary["effects"] = effect_info
-    summary["events"] = sorted(events, key=lambda e: e["time_s"])
-    summary["warnings"] = warnings
-    return Result.build(scene, columns, summary)
+        if timed:
+            timings[name] = EffectTiming(compute_time_s=seconds, requested=name in scene.effects)
+    return Result.build(scene, columns, summary, sorted(events, key=lambda e: e.time_s), warnings, timings)
+
+
+def simulate(scene, lift=None) -> Result:
+    """Run the scene's effects over one revolution; `lift` may pass a prebuilt lift curve."""
+    return _run(scene, lift, scene.effects, effect_function, timed=True)
+
+
+def figures(scene, cache: RunCache, effects=None) -> Result:
+    """The figures-only run of the scene's effects (or of `effects`): each effect's figures form
+    where it has one (explorer/effects/registry.py, item 6), sharing `cache` across the runs of a
+    sweep (the lift curve is built once, into cache.lift). Its Result holds what sweep rows and
+    later effects read, computed as `simulate` computes them; no timings."""
+    if cache.lift is None:
+        cache.lift = build_lift(scene)
+    return _run(scene, cache.lift, scene.effects if effects is None else effects,
+                lambda name, gear: _figures_function(name, gear, cache), timed=False)

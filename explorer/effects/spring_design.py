@@ -8,10 +8,14 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.units import G0, KGF
-from ..mechanics.forces import RPM_PER_RAD_S, TWO_PI, TrainLoads, min_contact_force, piece_direction, sample_pieces, side_extremes, smooth_pieces
-from ..mechanics.springs import OBJECTIVES, ReversedLift, SpringAdvice, SpringDesign, _upper_hull, balanced_split, historic_preload, trinks_closing_force
+from ..lift.curves import LawLift
+from ..mechanics.forces import (RPM_PER_RAD_S, TWO_PI, TrainLoads, min_contact_force, piece_direction, sample_pieces,
+                                side_extremes, smooth_pieces)
+from ..mechanics.springs import (OBJECTIVES, ReversedLift, SpringAdvice, SpringDesign, _upper_hull, balanced_split,
+                                 historic_preload, trinks_closing_force)
+from .lift import build_lift
 
 
 def advise_spring(scene, rpm: float | None = None, safety_margin: float = 0.0, lift=None,
@@ -30,14 +34,13 @@ def advise_spring(scene, rpm: float | None = None, safety_margin: float = 0.0, l
     """
     from scipy.optimize import linprog
 
-    from .lift import build_lift
 
     if scene.valve is None or scene.spring is None:
         TrainLoads.from_scene(scene)  # raises the one-line InputError for the missing section
     if not (math.isfinite(safety_margin) and safety_margin >= 0.0):
-        raise InputError(scene.source, "spring_design.safety_margin", f"must not be negative, got {safety_margin!r}")
+        raise InputError(scene.source, "spring_design.safety_margin", f"must not be negative, got {echo(safety_margin)}")
     if rpm is not None and not (math.isfinite(rpm) and rpm > 0.0):
-        raise InputError(scene.source, "spring_design.target_rpm", f"must be greater than zero, got {rpm!r}")
+        raise InputError(scene.source, "spring_design.target_rpm", f"must be greater than zero, got {echo(rpm)}")
     lift = lift if lift is not None else build_lift(scene)
     loads = TrainLoads.from_scene(scene)
     ratio, lash = scene.follower.ratio, scene.valve.lash
@@ -45,7 +48,7 @@ def advise_spring(scene, rpm: float | None = None, safety_margin: float = 0.0, l
     omega = rpm / RPM_PER_RAD_S
     n = n_grid or max(4096, scene.solver.steps_per_revolution)
     if objective not in OBJECTIVES:
-        raise InputError(scene.source, "objective", f"unknown value {objective!r}; choose one of: {', '.join(OBJECTIVES)}")
+        raise InputError(scene.source, "objective", f"unknown value {echo(objective)}; choose one of: {', '.join(OBJECTIVES)}")
     pieces = smooth_pieces(lift, ratio, lash, n)
     # samples of the open stretches, ends just inside (one-sided limits at breakpoints and seating)
     theta, direction, _, _ = sample_pieces(pieces, None, n)
@@ -136,9 +139,6 @@ def compare_events(scene, rpm: float | None = None, safety_margin: float = 0.0, 
 
     Each variant is judged two ways: Schenker's constant-force measure max(F1, F2) (the spring force
     needed at the worse side) and the advisor's smallest spring (its largest force P0 + k s_max)."""
-    from ..lift.curves import LawLift
-    from .lift import build_lift
-
     lift = lift if lift is not None else build_lift(scene)
     loads = TrainLoads.from_scene(scene)
     rpm = scene.drive.rpm if rpm is None else rpm
@@ -164,8 +164,11 @@ def compare_events(scene, rpm: float | None = None, safety_margin: float = 0.0, 
         "asymmetric_saves_N": None,
         "asymmetric_saves_max_spring_force_N": None,
     }
-    split = balanced_split(lift, loads, omega, scene.follower.ratio)
-    if split is not None:
+    found = balanced_split(lift, loads, omega, scene.follower.ratio)
+    if found is not None and found.angles is None:
+        result["asymmetric_note"] = found.reason
+    if found is not None and found.angles is not None:
+        split = found.angles
         balanced = replace(lift, rise=split[0], ret=split[1])
         assert isinstance(balanced, LawLift)
         asym = judge(balanced)
@@ -188,6 +191,9 @@ def spring_design_summary(scene, lift) -> tuple[dict, list[str]]:
     rpm = design.target_rpm or scene.drive.rpm
     comparison = compare_events(scene, rpm, design.safety_margin, lift=lift)
     out: dict = {"advice": comparison["current"], "event_comparison": comparison}
+    if "asymmetric_note" in comparison:  # the speed is the input that rules the balance out
+        speed_key = "spring_design.target_rpm" if design.target_rpm else "drive.rpm"
+        warnings.append(f"{speed_key}: {comparison['asymmetric_note']}")
     if design.cylinder_bore is not None:
         lo, hi = historic_preload(design.cylinder_bore, design.cylinder)
         computed = comparison["current"]["preload_for_current_rate_N"]

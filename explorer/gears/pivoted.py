@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
+from ..mechanics.contact import ContactGeometry
 from . import jet as J
 from .jet import Jet
 from .linkage import circle_intersection, polar
@@ -129,8 +130,6 @@ class PivotedRollerGear:
         """explorer.mechanics.contact's view of the cam-roller contact: pressure angle referred to the lever,
         ratio |ds/dpsi| / a (valve travel per roller-centre travel), and the torque arm R x n of
         the normal through the roller centre about the camshaft."""
-        from ..mechanics.contact import ContactGeometry
-
         g = self.geometry(theta)
         r, n = g.roller_centre, g.normal_ground
         arm = r[:, 0] * n[:, 1] - r[:, 1] * n[:, 0]
@@ -161,17 +160,16 @@ class PivotedRollerGear:
 
     # -- checks -----------------------------------------------------------------------------
     def check(self, n: int = 1440) -> "LeverGeometry":
+        from ..lift.validity import cam_fault, entered_error
+
         theta = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
         g = self.geometry(theta)
         r = self.roller_radius
-        bad = (g.pitch_radius > 0.0) & (g.pitch_radius <= r)
-        if np.any(bad):
-            i = int(np.argmin(np.where(bad, g.pitch_radius, np.inf)))
-            raise InputError(
-                self.file, "follower.roller_radius",
-                f"undercut: roller radius {r * 1e3:.4g} mm exceeds the convex pitch-curve radius "
-                f"{g.pitch_radius[i] * 1e3:.4g} mm at cam angle {math.degrees(theta[i]):.2f} deg",
-            )
+        # the checks every cam passes (explorer.lift.validity): the valve-referred lift, the
+        # pressure angle at the roller and the undercut of the cam this lever needs
+        fault = cam_fault(theta, g.lift, pressure_angle=g.pressure_angle, pitch_radius=g.pitch_radius, roller_radius=r)
+        if fault is not None:
+            raise entered_error(fault, self.file)
         outer = float(np.max(np.hypot(g.contour[:, 0], g.contour[:, 1])))
         if math.hypot(*self.pivot) <= outer:
             raise InputError(self.file, "gear.lever.pivot", "the lever pivot lies inside the cam's sweep (cam nose radius "

@@ -1,78 +1,37 @@
-"""The gear registry: one frozen entry per follower type that is a gear.
+"""The table of gears: one line per follower type (explorer.gears.base.Gear lists, numbered, what a
+gear must provide). The scene loader reads it for follower.type and the [gear] section; everyone
+else asks the scene's gear (Scene.gear_plugin). Adding a gear: its module and one line of GEARS
+(or `register_gear(gear)`); its drawing is a line of explorer/view/gear_views.py.
 
-What the generic code asks of a gear is looked up here, never branched on by type:
-  lift      "module:function", scene -> the valve-referred lift curve (lift.build_lift)
-  effects   effect name -> "module:function", the gear's variant of that effect, which the
-            pipeline (explorer.effects.pipeline) runs instead of the generic one (the trip gear's latch
-            drives only from the pick-up to the trip, so forces, contact and elastic are its own)
-  meshes    module with gear_layout, gear_parts and gear_poses (explorer.view.parts)
-  rejected  [section] -> why the gear takes no such section (the scene loader's error)
-
-Adding a gear: its own modules and one line of GEARS. Import-light: names only, standard
-library only (scene.py reads GEAR_TYPES while validating follower.type); the functions are
-imported when used.
+The gears are written as references ("module:GEAR"), imported when a scene first uses one: loading
+a translating-roller scene imports no lever, eccentric or dashpot.
 """
 
 from __future__ import annotations
 
-import importlib
-from dataclasses import dataclass, field
-from types import MappingProxyType
-from typing import Any, Callable, Mapping
+from ..core.plugins import Registration, Registry
+from .base import Gear
 
-_NONE: Mapping[str, str] = MappingProxyType({})
-
-
-@dataclass(frozen=True)
-class GearEntry:
-    lift: str = "explorer.gears.build:build_gear_lift"
-    effects: Mapping[str, str] = field(default_factory=lambda: _NONE)
-    meshes: str = "explorer.view.gear_parts"
-    rejected: Mapping[str, str] = field(default_factory=lambda: _NONE)
-
-
-_TRIP = "explorer.effects.trip"
-
-GEARS: Mapping[str, GearEntry] = MappingProxyType({
-    "pivoted-roller": GearEntry(),
-    "rocking-cam": GearEntry(),
-    "rolling-lever": GearEntry(),
-    "trip": GearEntry(
-        effects=MappingProxyType({
-            "forces": f"{_TRIP}:trip_forces_effect",  # the latch drives only from the pick-up to the trip
-            "contact": f"{_TRIP}:trip_contact_effect",  # a latch on the spindle, no cam surface
-            "elastic": f"{_TRIP}:trip_elastic_effect",  # latch drives until the trip, then the valve closes freely
-        }),
-        rejected=MappingProxyType({
-            "contact": "the trip gear has no cam and roller: its latch keys are latch_friction, "
-                       "latch_width and latch_depth in [gear.trip]",
-        }),
-    ),
+GEARS: Registry[Gear] = Registry("gear", {
+    "translating-roller": "explorer.gears.translating_roller:GEAR",
+    "pivoted-roller": "explorer.gears.pivoted_roller:GEAR",
+    "rocking-cam": "explorer.gears.rocking_cam:GEAR",
+    "rolling-lever": "explorer.gears.rolling_lever:GEAR",
+    "trip": "explorer.gears.trip_gear:GEAR",
 })
 
-
-def resolve(target: str) -> Any:
-    """The object a "module:name" string names (imported now)."""
-    module, _, attr = target.partition(":")
-    return getattr(importlib.import_module(module), attr)
+DEFAULT = "translating-roller"  # the follower.type of a scene that names none
 
 
-def gear(follower_type: str) -> GearEntry | None:
-    """The registry entry of a follower type; None when it is not a gear."""
-    return GEARS.get(follower_type)
+def register_gear(gear: Gear, *, replace: bool = False) -> Registration:
+    """Add a gear to the table (one call; `.undo()` removes it again)."""
+    return GEARS.register(gear.type, gear, replace=replace)
 
 
-def effect_variant(follower_type: str, effect: str) -> str | None:
-    """The "module:function" of the gear's own variant of an effect, or None (the generic one)."""
-    entry = GEARS.get(follower_type)
-    return None if entry is None else entry.effects.get(effect)
+def gear(follower_type: str) -> Gear:
+    """The gear of a follower type (KeyError naming the known ones)."""
+    return GEARS[follower_type]
 
 
-def lift_builder(follower_type: str) -> Callable | None:
-    entry = GEARS.get(follower_type)
-    return None if entry is None else resolve(entry.lift)
-
-
-def meshes_module(follower_type: str):
-    entry = GEARS.get(follower_type)
-    return None if entry is None else importlib.import_module(entry.meshes)
+def gear_types() -> tuple[str, ...]:
+    return GEARS.names()

@@ -37,10 +37,11 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
+from ..core.roots import NoBracket, root_in
 
 from ..core.errors import InputError
-from ..lift.laws import law as normalised_law
+from ..lift.registry import normalised as normalised_law
+from ..mechanics.contact import ContactGeometry
 from . import jet as J
 from .jet import Jet
 from .linkage import circle_intersection, polar, polar_curvature, wrap
@@ -187,7 +188,7 @@ class RockingCamGear:
             for i in np.nonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) < 0)[0]:
                 if abs(vals[i] - vals[i + 1]) > 1.0:
                     continue  # wrap-around, not a crossing
-                out.append(brentq(g, grid[i], grid[i + 1], xtol=1e-15, rtol=1e-15) % TWO_PI)
+                out.append(root_in(g, grid[i], grid[i + 1], fa=vals[i], fb=vals[i + 1], xtol=1e-15, rtol=1e-15) % TWO_PI)
         return np.unique(np.array(out))
 
     # -- pressure angle and forces ---------------------------------------------------------------
@@ -224,8 +225,6 @@ class RockingCamGear:
         lever, ratio |ds/dpsi| / a, the normal's moment arm (R - C) x n about the rocking cam's pivot
         C, carried to the eccentric shaft by the four-bar's dchi/dtheta (massless rod: T = M_C chi'),
         and the contour radius at the contact (pitch-curve radius less the roller's)."""
-        from ..mechanics.contact import ContactGeometry
-
         d = self.contact_details(theta)
         r = self.roller_radius
         n = d["normal"]
@@ -271,8 +270,9 @@ class RockingCamGear:
             return td - lead, td - lead + TWO_PI
         if w >= omega:
             return td, td
-        opening = brentq(g, td - lead, td, xtol=1e-15, rtol=_EPS)
-        closing = brentq(g, td, td - lead + TWO_PI, xtol=1e-15, rtol=_EPS)
+        # the swing rises from 0 to omega and falls back between the dead centres: -w and omega - w
+        opening = root_in(g, td - lead, td, fa=-w, fb=omega - w, xtol=1e-15, rtol=_EPS)
+        closing = root_in(g, td, td - lead + TWO_PI, fa=omega - w, fb=-w, xtol=1e-15, rtol=_EPS)
         return opening, closing
 
     def open_angle_at_swing(self, w: float) -> float:
@@ -327,6 +327,14 @@ class RockingCamGear:
         bx = self.cam_pivot[0] + arm * np.cos(chi)
         by = self.cam_pivot[1] + arm * np.sin(chi)
         return np.arctan2(by, bx)
+
+
+def check_one_turn(lift_start: float, flank: float, file: str) -> None:
+    """A rocking cam's contour is one polar curve about its pivot: the dwell before the flank and
+    the flank itself must fit in one turn of the body, or the contour overlaps itself."""
+    if lift_start + flank >= TWO_PI:
+        raise InputError(file, "gear.rocking_cam.flank", f"lift_start + flank = {math.degrees(lift_start + flank):.6g} "
+                         "deg: the contour would overlap itself (it must fit in one turn of the rocking cam, < 360 deg)")
 
 
 def build_rocking_gear(*, drive, cam_pivot, contour: RockingContour, roller_radius, lever_pivot, lever_arm,
@@ -416,7 +424,7 @@ def valve_opening(gear: RockingCamGear, lash: float = 0.0) -> tuple[float, float
     if lash <= 0.0:
         w_open = gear.contour.lift_start
     else:
-        w_open = brentq(lambda w: float(gear.lift_at_swing([w])[0]) - lash, 0.0, omega, xtol=1e-15, rtol=_EPS)
+        w_open = root_in(lambda w: float(gear.lift_at_swing([w])[0]) - lash, 0.0, omega, xtol=1e-15, rtol=_EPS)
     return top, gear.open_angle_at_swing(w_open)
 
 
@@ -425,6 +433,9 @@ def fit_target(gear: RockingCamGear, target_lift: float, target_open_angle: floa
     naming gear.target.* when no flank of this length and law reaches them."""
     try:
         return _fit_target(gear, target_lift, target_open_angle, lash)
+    except NoBracket:  # every search below is bracketed by construction; should rounding say otherwise
+        raise InputError(gear.file, "gear.target", "no contour of this flank reaches the target (no bracket for "
+                         "the fit's root search)") from None
     except InputError as exc:
         if exc.key.startswith("gear.target"):
             raise
@@ -492,13 +503,13 @@ def _fit_target(gear, target_lift, target_open_angle, lash) -> ContourFit:
             e = excess(h)
             return math.inf if e is None else e
 
-        return brentq(finite_excess, h_lo, h_hi, xtol=1e-15, rtol=_EPS)
+        return root_in(finite_excess, h_lo, h_hi, xtol=1e-15, rtol=_EPS)
 
     def seat_swing(ws, h):
         """The swing at which the lift reaches the lash for this flank."""
         if lash <= 0.0:
             return ws
-        return brentq(lambda w: float(lift(ws, h, [w])[0]) - lash, ws, omega, xtol=1e-15, rtol=_EPS)
+        return root_in(lambda w: float(lift(ws, h, [w])[0]) - lash, ws, omega, xtol=1e-15, rtol=_EPS)
 
     h0 = rise_for(0.0)
     if h0 is None:
@@ -517,7 +528,7 @@ def _fit_target(gear, target_lift, target_open_angle, lash) -> ContourFit:
                          f"{math.degrees(max_open):.4g} deg, the flank starting at the closed end): shorten "
                          "gear.rocking_cam.flank")
     # the linkage alone: the swing at which the valve must leave its seat
-    w_o = brentq(lambda w: gear.open_angle_at_swing(w) - target_open_angle, 0.0, omega, xtol=1e-15, rtol=_EPS)
+    w_o = root_in(lambda w: gear.open_angle_at_swing(w) - target_open_angle, 0.0, omega, xtol=1e-15, rtol=_EPS)
     if lash <= 0.0:
         ws = w_o
     else:
@@ -526,7 +537,7 @@ def _fit_target(gear, target_lift, target_open_angle, lash) -> ContourFit:
             # a flank the roller lever cannot follow counts as one that opens too late
             return -lash if h is None else float(lift(ws, h, [w_o])[0]) - lash
 
-        ws = brentq(excess, 0.0, w_o, xtol=1e-15, rtol=_EPS) if excess(0.0) > 0.0 else 0.0
+        ws = root_in(excess, 0.0, w_o, xtol=1e-15, rtol=_EPS) if excess(0.0) > 0.0 else 0.0
     h = rise_for(ws)
     if h is not None:
         got = lift(ws, h, [w_o, omega])
@@ -534,6 +545,7 @@ def _fit_target(gear, target_lift, target_open_angle, lash) -> ContourFit:
         raise InputError(file, KEY_OPEN, f"{math.degrees(target_open_angle):.4g} deg is too short for "
                          f"{target_lift * 1e3:.4g} mm of lift: the flank would have to rise more steeply than "
                          "the roller lever can follow; lengthen open_angle or lower the lift")
+    check_one_turn(float(ws), flank, file)  # the fitted contour is checked as a written one
     return ContourFit(lift_start=float(ws), rise=float(h), open_swing=float(w_o),
                       full_lift_dwell=trial(ws, h).full_lift_dwell(), max_open_angle=float(max_open),
                       full_flank_open_angle=full_open)

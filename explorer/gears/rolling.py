@@ -31,11 +31,13 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
+from ..core.roots import root_in
 
 from ..core.errors import InputError
+from ..mechanics.contact import ContactGeometry
 from . import jet as J
 from .jet import Jet
+from .linkage import polar_curvature
 
 TWO_PI = 2.0 * math.pi
 
@@ -107,8 +109,8 @@ class RollingLeverGear:
         w = self.rolling_swing(grid).c[0]
         out = []
         for i in np.nonzero(np.sign(w[:-1]) * np.sign(w[1:]) < 0)[0]:
-            out.append(brentq(lambda t: float(self.rolling_swing(np.array([t])).c[0][0]), grid[i], grid[i + 1],
-                              xtol=1e-15, rtol=1e-15))
+            out.append(root_in(lambda t: float(self.rolling_swing(np.array([t])).c[0][0]), grid[i], grid[i + 1],
+                               fa=w[i], fb=w[i + 1], xtol=1e-15, rtol=1e-15))
         return np.unique(np.mod(out, TWO_PI))
 
     def faces(self, n: int = 200):
@@ -204,10 +206,6 @@ class RollingLeverGear:
         the valve lever's travel) is atan(rho / k): circular faces (k = 0) could drive only by
         friction. Radii of both faces from their polar forms about their own pivots (convex > 0).
         Before pick-up (no contact, no force) the values are those of the faces' meeting point."""
-        from ..mechanics.contact import ContactGeometry
-        from . import jet as J
-        from .linkage import polar_curvature
-
         theta = np.asarray(theta, dtype=float)
         swing = self.rolling_swing(theta)
         w = Jet.variable(np.maximum(swing.c[0], 0.0))  # jets in the rolling swing

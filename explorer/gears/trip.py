@@ -35,13 +35,14 @@ then the latch again.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
 from ..core.errors import InputError
+from ..mechanics.forces import velocity_zeros
 from .dashpot import AirDashpot, OilDashpot
 
 TWO_PI = 2.0 * math.pi
@@ -316,8 +317,6 @@ def compare_buffers(model: ClosingModel, buffers: dict, s0: float, v0: float, t_
     """Close the same valve with each buffer (None = no buffer): seating velocity, closing time,
     largest buffer force and the number of rebounds, one row per buffer. densities: an air
     buffer's pocket density at the release (by name; default ambient)."""
-    from dataclasses import replace
-
     rows = []
     for name, buffer in buffers.items():
         rho0 = (densities or {}).get(name)
@@ -413,7 +412,6 @@ class LatchedBuffer:
 def latched_buffer(buffer, latch, overtravel: float, start: float, omega: float, phi_pick: float,
                    phi_trip: float, n_grid: int = 4096, rtol: float = 1e-11) -> LatchedBuffer:
     """The buffer's state and force along the rigid latch motion over the carried window."""
-    from ..mechanics.forces import velocity_zeros
     from ..mechanics.kinematics import lash_crossings
 
     so, w = overtravel, omega

@@ -33,15 +33,15 @@ from typing import Any
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.reader import Table
-from ..core.units import plain_number, short_repr, to_si
+from ..core.units import plain_number, registry, short_repr, to_si, unit_scale
+from .validity import MAX_LIFT, check_computed  # MAX_LIFT: a bigger result means wrong units; it guards overflow
 
 TWO_PI = 2.0 * math.pi
 INTERPOLATIONS = ("linear", "step")
 CLOSURE_WARN = 1e-6  # relative residual: rounding of hand-typed points beyond ~6 digits
 CLOSURE_ERROR = 1e-2  # relative residual: the curve does not describe a closed event
-MAX_LIFT = 1.0  # m; no valve gear lifts more: a bigger result means wrong units, and it guards overflow
 UNUSED_KEYS = ("height", "rise", "dwell", "return", "return_law")
 ANGLE_UNITS = {"radian", "degree", "turn", "revolution", "arcminute", "arcsecond", "gradian", "milliradian"}
 
@@ -62,9 +62,9 @@ def parse_acceleration_options(table: Table, fields: dict[str, Any]) -> Accelera
         if table.has(name):
             raise table.error(name, "not used by law 'acceleration' (the lift follows from the points); remove it")
     angle_unit = table.string("angle_unit", "deg")
-    angle_scale = to_si(f"1 {angle_unit}", "angle", file=table.file, key=table.key("angle_unit"))
+    angle_scale = unit_scale(angle_unit, "angle", file=table.file, key=table.key("angle_unit"))
     if not angle_scale > 0.0:
-        raise table.error("angle_unit", f"{angle_unit!r} is not a usable angle unit")
+        raise table.error("angle_unit", f"{echo(angle_unit)} is not a usable angle unit")
     unit = table.string("acceleration_unit", "m/s**2")
     scale, time_based = _acceleration_scale(table, unit)
     reference_rpm = None
@@ -76,7 +76,7 @@ def parse_acceleration_options(table: Table, fields: dict[str, Any]) -> Accelera
         scale /= omega_ref**2  # a = w^2 L''  ->  L'' = a / w^2
         reference_rpm = omega_ref * 60.0 / TWO_PI
     elif table.has("reference_rpm"):
-        raise table.error("reference_rpm", f"only used with a time-based acceleration_unit, not {unit!r}")
+        raise table.error("reference_rpm", f"only used with a time-based acceleration_unit, not {echo(unit)}")
     interpolation = table.string("interpolation", "linear", choices=INTERPOLATIONS)
     angles, values = _read_points(table, angle_scale, scale)
     options = AccelerationOptions(
@@ -100,23 +100,22 @@ def _acceleration_scale(table: Table, unit: str) -> tuple[float, bool]:
     """SI factor of `unit` and whether it is per time squared (True) or per angle squared."""
     key = table.key("acceleration_unit")
     try:
-        return to_si(f"1 {unit}", "acceleration", file=table.file, key=key), True
+        return unit_scale(unit, "acceleration", file=table.file, key=key), True
     except InputError:
         pass
     try:
-        scale = to_si(f"1 {unit}", "length", file=table.file, key=key)
+        scale = unit_scale(unit, "length", file=table.file, key=key)
     except InputError:
         raise table.error(
             "acceleration_unit",
-            f"{unit!r} is neither an acceleration (such as m/s**2) nor a lift per angle squared (such as mm/deg**2)",
+            f"{echo(unit)} is neither an acceleration (such as m/s**2) nor a lift per angle squared (such as mm/deg**2)",
         ) from None
     # pint treats angles as dimensionless, so mm/deg and mm would pass as lengths: insist on
     # exactly angle**-2 to catch a missing square.
-    from ..core.units import registry
 
     exponent = sum(p for name, p in registry().parse_units(unit)._units.items() if name in ANGLE_UNITS)
     if exponent != -2:
-        raise table.error("acceleration_unit", f"{unit!r}: a lift per angle must be per angle squared, such as mm/deg**2")
+        raise table.error("acceleration_unit", f"{echo(unit)}: a lift per angle must be per angle squared, such as mm/deg**2")
     return scale, False
 
 
@@ -319,6 +318,12 @@ class AccelerationLift:
         }
 
     @property
+    def dip_allowance(self) -> float:
+        """m below the base circle that the closure check allows (CLOSURE_ERROR of the peak lift):
+        the validity checks of every cam (explorer.lift.validity) take the same allowance."""
+        return CLOSURE_ERROR * max(self.closure_check().peak_lift, 0.0)
+
+    @property
     def warnings(self) -> tuple[str, ...]:
         c = self.closure_check()
         if c.worst > CLOSURE_WARN:
@@ -343,4 +348,8 @@ def _signed_areas(accel) -> tuple[float, float]:
 
 
 def build_acceleration_lift(scene) -> AccelerationLift:
-    return AccelerationLift.from_options(scene.lift.options, scene.lift.start, omega=scene.drive.omega)
+    lift = AccelerationLift.from_options(scene.lift.options, scene.lift.start, omega=scene.drive.omega)
+    # the integrated lift is a computed cam: the checks of every cam (explorer.lift.validity)
+    check_computed(lift, scene.follower, scene.source, "lift.points", "the lift integrated from these accelerations",
+                   "check acceleration_unit, reference_rpm and the points, or enlarge the base circle")
+    return lift

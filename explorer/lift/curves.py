@@ -71,6 +71,13 @@ class LawLift:
         return np.array(sorted({x % TWO_PI for x in marks}))  # (float % is np.mod)
 
 
+def law_lift(spec) -> LawLift:
+    """The closed-form lift of a [lift] spec (scene.lift: height, start, rise, dwell, return and
+    the laws of the rise and the return)."""
+    return LawLift(height=spec.height, start=spec.start, rise=spec.rise, dwell=spec.dwell, ret=spec.ret,
+                   rise_law=spec.law, return_law=spec.return_law or spec.law)
+
+
 def _wrap(x: np.ndarray) -> np.ndarray:
     """np.mod(x, 2 pi) from fmod and one correction (np.mod also computes the quotient and costs
     three times as much; the drive is evaluated at every node of every revolution)."""

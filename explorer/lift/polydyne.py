@@ -48,12 +48,13 @@ from typing import Any
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
+from ..core.ranges import RANGES
 from .laws import HIGH_ORDER_LAWS, LAWS, law_derivatives
+from .validity import computed_error, lift_fault
 from .spline import MAX_CONTINUITY, SplineLift, SplineOptions, check_spline_shape, parse_stations
 
 TWO_PI = 2.0 * math.pi
-OPTION_KEYS = ("wanted_law", "design_rpm", "ramp")
 SPLINE = "spline"  # wanted_law: the wanted lift through [[lift.stations]]
 SPLINE_KEYS = ("stations", "continuity", "reference_rpm")  # [lift] keys of the wanted spline only
 SHAPE_KEYS = ("height", "rise", "dwell", "return", "return_law")  # [lift] keys of a closed-form wanted law only
@@ -294,8 +295,6 @@ def parse_polydyne_options(table, fields: dict[str, Any]) -> PolydyneOptions:
     if fields["linkage"].damping != 0.0:
         raise InputError(file, "linkage.damping", "the polydyne formula has no damper term (the cam would follow from a "
                          "differential equation, not from the wanted lift); set it to 0 for the design")
-    if fields["follower"].type != "translating-roller":
-        raise InputError(file, "lift.law", "the polydyne law is for the translating-roller follower")
     wanted_law = table.string("wanted_law", choices=(*LAWS, SPLINE))
     if table.has("design_rpm"):
         omega = table.quantity("design_rpm", "speed", positive=True)
@@ -324,7 +323,7 @@ def parse_polydyne_options(table, fields: dict[str, Any]) -> PolydyneOptions:
         raise table.error("ramp", f"two ramps + {what} = {math.degrees(total):.6g} deg exceed 360 deg")
     options = PolydyneOptions(wanted_law, return_law, omega * 60.0 / TWO_PI, ramp, spline)
     lift = polydyne_lift(spec, options, fields["valve"], fields["spring"], fields["loads"], fields["linkage"], fields["follower"])
-    check_polydyne(lift, file)
+    check_polydyne(lift, file, fields["follower"])
     return options
 
 
@@ -352,21 +351,22 @@ def _parse_wanted_spline(table, design_omega: float) -> SplineOptions:
     return options
 
 
-def check_polydyne(lift: PolydyneLift, file: str) -> None:
-    """InputError when the wanted lift is too rough for a cam, or the linkage would have to pull."""
+def check_polydyne(lift: PolydyneLift, file: str, follower=None) -> None:
+    """InputError when the wanted lift is too rough for a cam, the linkage would have to pull, or
+    the cam fails the validity checks every cam passes (explorer.lift.validity; for `follower`)."""
     w = lift.wanted
     omega = lift.design_omega
     for where, before, after, law_name, beta, key in w.joints():
         for k in range(w.checked):
             jump = after[k] - before[k]
             if abs(jump) > JUMP_TOLERANCE * w.height / beta**k:
-                raise InputError(file, key, f"{law_name!r} is too rough for a polydyne cam: the cam lift "
+                raise InputError(file, key, f"{echo(law_name)} is too rough for a polydyne cam: the cam lift "
                                  f"S = s + (M w^2 s'' + W)/k needs the wanted valve {DERIVATIVE_NAMES[k]} continuous, and it "
                                  f"jumps by {jump * omega**k:.4g} {DERIVATIVE_UNITS[k]} at {where} (at "
                                  f"{omega * 60 / TWO_PI:g} rpm), which makes {CONSEQUENCES[k]}; {w.advice}")
     for name in sorted(w.closed_form_laws):
         if name not in HIGH_ORDER_LAWS:
-            raise InputError(file, "lift.wanted_law", f"{name!r} has no closed-form fourth and fifth derivative, which "
+            raise InputError(file, "lift.wanted_law", f"{echo(name)} has no closed-form fourth and fifth derivative, which "
                              "the polydyne cam's acceleration and jerk need")
     theta = lift.start + np.linspace(0.0, w.end, 20001)[1:-1]
     force = lift.linkage_force(theta)
@@ -375,9 +375,72 @@ def check_polydyne(lift: PolydyneLift, file: str) -> None:
         raise InputError(file, "lift.design_rpm", f"at {omega * 60 / TWO_PI:g} rpm the linkage would have to pull: the "
                          f"force M w^2 s'' + W(s) falls to {force[i]:.4g} N at cam angle "
                          f"{math.degrees(theta[i]) % 360:.3f} deg; more spring preload or rate, or a lower design speed")
-    d = lift.derivatives(np.linspace(0.0, TWO_PI, 7201))
-    if np.any(d[0] < -1e-15) or not np.all(np.isfinite(d)):
-        raise InputError(file, "lift", "the polydyne cam dips below its base circle")
+    fault = lift_fault(lift, follower)  # the checks every cam passes, entered or computed
+    if fault is not None:
+        raise impossible_cam(lift, follower, fault, file)
+
+
+# the stiffness and design speed that make a polydyne cam valid are found to this ratio (bisection)
+ADVICE_RATIO = 1.01
+ADVICE_ITERATIONS = 80  # bound: log2(ln(1e15) / ln(1.01)) ~ 12 halvings are needed
+
+
+def impossible_cam(lift: PolydyneLift, follower, fault, file: str) -> InputError:
+    """The one line for a polydyne cam that fails the validity checks: the cam adds the linkage's
+    deflection (M1 w_d^2 s'' + W(s))/k to the wanted lift, so what made it impossible is the
+    linkage stiffness at this design speed -- unless even a rigid linkage fails (then the wanted
+    lift itself is no cam for this follower). Says at which stiffness, and up to which design speed
+    (when the cam at rest is valid), the cam passes, found by bisection on the same check."""
+    from dataclasses import replace
+
+    t = lift.train
+    rpm = lift.design_omega * 60.0 / TWO_PI
+
+    def fault_with(stiffness: float = t.stiffness, omega: float = lift.design_omega):
+        return lift_fault(replace(lift, train=replace(t, stiffness=stiffness), design_omega=omega), follower)
+
+    def valid(**changes) -> bool:
+        return fault_with(**changes) is None
+
+    k_max = RANGES["stiffness"][1]
+    rigid = fault_with(stiffness=k_max)
+    if rigid is not None:
+        return computed_error(rigid, file, "lift", f"the polydyne cam even with a rigid linkage ({k_max:g} N/m: the "
+                              "wanted lift plus the lash)", f"change the wanted lift or the follower: {rigid.advice.strip('()')}")
+    lo, hi = t.stiffness, k_max  # fails, passes
+    for _ in range(ADVICE_ITERATIONS):
+        if hi / lo <= ADVICE_RATIO:
+            break
+        mid = math.sqrt(lo * hi)
+        lo, hi = (lo, mid) if valid(stiffness=mid) else (mid, hi)
+    theta = lift.start + np.linspace(0.0, lift.wanted.end, 4001)
+    deflection = float(np.max(lift.linkage_force(theta))) / t.stiffness
+    remedy = (f"the linkage deflection (M w^2 s'' + W)/k it adds to the wanted {_length(lift.wanted.height)} "
+              f"lift reaches {_length(deflection)}: stiffen the linkage (at {_round(hi, math.ceil):.3g} N/m the cam passes)")
+    if valid(omega=0.0):
+        slow, fast = 0.0, lift.design_omega  # passes, fails
+        for _ in range(ADVICE_ITERATIONS):
+            if fast - slow <= (ADVICE_RATIO - 1.0) * fast:
+                break
+            mid = 0.5 * (slow + fast)
+            slow, fast = (mid, fast) if valid(omega=mid) else (slow, mid)
+        remedy += f" or lower lift.design_rpm (at {_round(slow * 60.0 / TWO_PI, math.floor, 4):.4g} rpm it passes)"
+    else:
+        remedy += (f"; no lower design speed helps: the cam fails at rest too, where its take-up ramp rises "
+                   f"lash + W(0)/k = {_length(lift.ramp_height / t.ratio)} over lift.ramp = {math.degrees(lift.ramp):.4g} deg")
+    return computed_error(fault, file, "linkage.stiffness", f"the polydyne cam for linkage.stiffness {t.stiffness:.4g} N/m "
+                          f"at the design speed {rpm:g} rpm", remedy)
+
+
+def _length(x: float) -> str:
+    return f"{x * 1e3:.4g} mm" if abs(x) < 1.0 else f"{x:.4g} m"
+
+
+def _round(x: float, direction, digits: int = 3) -> float:
+    """x rounded to `digits` significant digits in `direction` (math.ceil for a stiffness to quote
+    that still passes, math.floor for a speed)."""
+    step = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
+    return direction(x / step) * step
 
 
 def polydyne_lift(spec, options: PolydyneOptions, valve, spring, loads, linkage, follower) -> PolydyneLift:
@@ -397,7 +460,7 @@ def polydyne_lift(spec, options: PolydyneOptions, valve, spring, loads, linkage,
 def build_polydyne_lift(scene) -> PolydyneLift:
     """The scene's polydyne cam, from its current train (a changed stiffness or spring redesigns it)."""
     lift = polydyne_lift(scene.lift, scene.lift.options, scene.valve, scene.spring, scene.loads, scene.linkage, scene.follower)
-    check_polydyne(lift, scene.source)
+    check_polydyne(lift, scene.source, scene.follower)
     return lift
 
 

@@ -40,7 +40,6 @@ DIMENSIONS = ("length", "velocity", "acceleration", "jerk", "snap")
 UNITS = ("m", "m/s", "m/s**2", "m/s**3", "m/s**4")
 MAX_CONTINUITY = 6  # C6 needs >= 14 coefficients a segment: beyond, the monomial system loses digits
 FREE_ORDERS = 4  # s, v, a, j may be "free" (explorer design); snap is given or left to continuity
-OPTION_KEYS = ("stations", "continuity", "reference_rpm")
 UNUSED_KEYS = ("height", "rise", "dwell", "return", "return_law")
 MAX_STATIONS = 64
 FREE = "free"
@@ -188,7 +187,7 @@ def parse_spline_options(table, fields: dict[str, Any]) -> SplineOptions:
     else:
         omega = fields["drive"].omega
     options, lift = parse_stations(table, continuity, omega)
-    check_spline_shape(table, lift)
+    check_spline_shape(table, lift, fields["follower"], fields["lift"].start)
     return options
 
 
@@ -246,19 +245,27 @@ def parse_stations(table, continuity: int, omega: float) -> tuple[SplineOptions,
     return options, solve_spline(options.stations, continuity, 0.0, table.file, where)
 
 
-def check_spline_shape(table, lift: SplineLift) -> None:
-    """The lift through the stations stays on or above the base circle, leaves it, and is < 1 m."""
+def check_spline_shape(table, lift: SplineLift, follower=None, start: float = 0.0) -> None:
+    """The lift through the stations leaves the base circle and passes the checks every cam passes
+    (explorer.lift.validity: finite, lift range; with the follower's geometry when `follower` is
+    given: pressure angle and undercut, with the lift placed at cam angle `start`). A polydyne's
+    wanted spline, a valve lift and no cam, is checked without a follower."""
+    from .validity import cam_fault, computed_error, lift_fault
+
     where = table.key("stations")
     x = np.linspace(0.0, lift.knots[-1], 20001)
-    s = lift.local_derivatives(x, 0)[0]
-    if not np.all(np.isfinite(s)) or np.max(np.abs(s)) > 1.0:
-        raise InputError(table.file, where, "the lift through these stations exceeds 1 m: check the units")
-    if not s.max() > 0.0:
+    with np.errstate(over="ignore", invalid="ignore"):
+        jet = lift.local_derivatives(x, 3)
+    fault = cam_fault(x, jet, where="{} after the start")
+    if fault is None and follower is not None:
+        fault = lift_fault(replace(lift, start=start), follower)
+    if fault is not None:
+        remedy = {"undercut": "reduce the roller, enlarge the base circle or move the stations apart",
+                  "lift range": "check the units, or add conditions (such as v and a at the top)",
+                  "": "check the units"}
+        raise computed_error(fault, table.file, where, "the lift through these stations", remedy)
+    if not jet[0].max() > 0.0:
         raise InputError(table.file, where, "the lift through these stations never leaves the base circle")
-    if s.min() < -1e-9 * max(float(s.max()), 1e-6):
-        i = int(np.argmin(s))
-        raise InputError(table.file, where, f"the lift through these stations dips below the base circle "
-                         f"({s[i] * 1e3:.4g} mm at {math.degrees(x[i]):.2f} deg after the start); add conditions")
 
 
 def _initial_free_values(stations, continuity: int, file: str, key: str) -> list:

@@ -20,6 +20,13 @@ CSV format: two columns, cam angle and lift (units from `angle_unit`, `lift_unit
 comma, semicolon or blanks; lines starting with '#' and one header line are skipped. The angles
 must increase strictly, span less than one revolution and cover it (no gap above MAX_GAP_DEG,
 wrap-around included): the base circle is part of the measurement.
+
+Physical range, row by row (the error names the file's line, never its content): every value
+finite, every angle within ten turns, every lift at most MAX_LIFT (1 m) and on or above the base
+circle -- the lift is measured from it, the cam's smallest radius -- up to the gauge's noise:
+NOISE_SHARE (1 %) of the table's largest lift or NOISE_SIGMAS (5) times the noise level stated in
+`smoothing`, whichever is larger (`dip_allowance`). The smoothed lift passes the checks of every cam
+(explorer.lift.validity) with the same allowance below the base circle.
 """
 
 from __future__ import annotations
@@ -32,10 +39,12 @@ from typing import Any
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.reader import Table
 from ..core.files import read_text
-from ..core.units import to_si
+from ..core.ranges import RANGES
+from ..core.units import to_si, unit_scale
+from .validity import MAX_LIFT, check_computed
 
 TWO_PI = 2.0 * math.pi
 DEGREE = 5  # quintic: L''' continuous
@@ -44,7 +53,8 @@ MAX_KNOTS = 360  # 1 deg knot spacing resolves any valve event; beyond that only
 MIN_SAMPLES = 24
 MAX_GAP_DEG = 15.0
 MAX_ROWS = 1_000_000
-MAX_LIFT = 1.0  # m, as scene.MAX_LIFT: beyond it the unit is wrong
+NOISE_SHARE = 0.01  # of the largest lift: a measured base circle may read this far below zero
+NOISE_SIGMAS = 5.0  # times a stated noise level: the same, when the gauge's noise is known
 UNUSED_KEYS = ("height", "rise", "dwell", "return", "return_law")
 
 
@@ -56,6 +66,7 @@ class TableOptions:
     noise: float | None  # m, stated noise sigma; None = choose by cross-validation
     angle_unit: str = "deg"
     lift_unit: str = "mm"
+    dip_allowance: float = 0.0  # m: how far the lift may read below the base circle (gauge noise)
 
 
 def parse_table_options(table: Table, fields: dict[str, Any]) -> TableOptions:
@@ -72,12 +83,12 @@ def parse_table_options(table: Table, fields: dict[str, Any]) -> TableOptions:
     path = (base / name).resolve() if not Path(name).is_absolute() else Path(name)
     angle_unit = table.string("angle_unit", "deg")
     lift_unit = table.string("lift_unit", "mm")
-    angle_scale = to_si(f"1 {angle_unit}", "angle", file=table.file, key=table.key("angle_unit"))
-    lift_scale = to_si(f"1 {lift_unit}", "length", file=table.file, key=table.key("lift_unit"))
+    angle_scale = unit_scale(angle_unit, "angle", file=table.file, key=table.key("angle_unit"))
+    lift_scale = unit_scale(lift_unit, "length", file=table.file, key=table.key("lift_unit"))
     if not angle_scale > 0.0:
-        raise table.error("angle_unit", f"{angle_unit!r} is not a usable angle unit")
+        raise table.error("angle_unit", f"{echo(angle_unit)} is not a usable angle unit")
     if not lift_scale > 0.0:
-        raise table.error("lift_unit", f"{lift_unit!r} is not a usable length unit")
+        raise table.error("lift_unit", f"{echo(lift_unit)} is not a usable length unit")
     smoothing = table.raw("smoothing", "auto")
     if smoothing == "auto":
         noise = None
@@ -86,18 +97,26 @@ def parse_table_options(table: Table, fields: dict[str, Any]) -> TableOptions:
             noise = table.quantity("smoothing", "length", nonnegative=True)
         except InputError as exc:
             raise table.error("smoothing", f'expected "auto" or the noise level of the lift, such as "0.005 mm": {exc.reason}') from None
-    angles, lifts = read_lift_csv(path, angle_scale, lift_scale, file=table.file, key=table.key("file"))
+    angles, lifts = read_lift_csv(path, angle_scale, lift_scale, file=table.file, key=table.key("file"), noise=noise)
     return TableOptions(
         path=str(path), angles=tuple(angles.tolist()), lifts=tuple(lifts.tolist()), noise=noise,
-        angle_unit=angle_unit, lift_unit=lift_unit,
+        angle_unit=angle_unit, lift_unit=lift_unit, dip_allowance=dip_allowance(lifts, noise),
     )
+
+
+def dip_allowance(lifts, noise: float | None = None) -> float:
+    """How far (m) a measured lift may read below the base circle: the gauge's noise, taken as
+    NOISE_SHARE of the largest lift or NOISE_SIGMAS times the stated noise level, the larger."""
+    peak = float(np.max(lifts)) if np.size(lifts) else 0.0
+    return max(NOISE_SHARE * peak, NOISE_SIGMAS * (noise or 0.0), 0.0) + 0.0  # + 0.0: never -0.0
 
 
 _SEPARATORS = re.compile(r"[,;\s]+")
 
 
-def read_lift_csv(path, angle_scale: float, lift_scale: float, *, file: str, key: str):
-    """(angles in rad, lifts in m) from a two-column text file, or InputError naming the line."""
+def read_lift_csv(path, angle_scale: float, lift_scale: float, *, file: str, key: str, noise: float | None = None):
+    """(angles in rad, lifts in m) from a two-column text file, or InputError naming the line of the
+    first bad row (never its content: the file may be one the user should not see, /etc/shadow)."""
     shown = Path(path).name
 
     def fail(reason: str) -> InputError:
@@ -107,7 +126,11 @@ def read_lift_csv(path, angle_scale: float, lift_scale: float, *, file: str, key
         raise fail(f"file not found ({path})")
     text = read_text(path, file=file, key=key, prefix=f"{shown}: ")
     rows: list[tuple[float, float]] = []
+    lines: list[int] = []  # the file's line of each row
     header_allowed = True
+    # (line, reason) of the first line that is no row; reading goes on, so that the noise allowance
+    # of the range check comes from the whole file, and a bad row before it is reported instead
+    unreadable = None
     for number, line in enumerate(text.splitlines(), start=1):
         line = line.strip().lstrip("\ufeff")
         if not line or line.startswith("#"):
@@ -119,39 +142,65 @@ def read_lift_csv(path, angle_scale: float, lift_scale: float, *, file: str, key
             if header_allowed:  # one header line such as "angle_deg,lift_mm"
                 header_allowed = False
                 continue
-            # the line itself is not shown: the file may be one the user should not see (/etc/shadow)
-            raise fail(f"line {number}: cannot read it as two numbers (angle, lift)") from None
+            unreadable = unreadable or (number, "cannot read it as two numbers (angle, lift)")
+            continue
         header_allowed = False
         if len(values) != 2:
-            raise fail(f"line {number}: expected 2 columns (angle, lift), got {len(values)}")
-        if not all(math.isfinite(v) for v in values):
-            raise fail(f"line {number}: values must be finite numbers")
+            unreadable = unreadable or (number, f"expected 2 columns (angle, lift), got {len(values)}")
+            continue
         rows.append((values[0], values[1]))
+        lines.append(number)
         if len(rows) > MAX_ROWS:
             raise fail(f"more than {MAX_ROWS} rows")
+    data = np.array(rows, dtype=float).reshape(-1, 2)
+    with np.errstate(over="ignore", invalid="ignore"):
+        angles, lifts = data[:, 0] * angle_scale, data[:, 1] * lift_scale
+    bad = first_out_of_range(angles, lifts, noise)
+    if bad is not None and (unreadable is None or lines[bad[0]] < unreadable[0]):
+        raise fail(f"line {lines[bad[0]]}: {bad[1]}")
+    if unreadable is not None:
+        raise fail(f"line {unreadable[0]}: {unreadable[1]}")
     if len(rows) < MIN_SAMPLES:
         raise fail(f"{len(rows)} samples; at least {MIN_SAMPLES} are needed over the revolution")
-    data = np.array(rows, dtype=float)
-    angles, lifts = data[:, 0] * angle_scale, data[:, 1] * lift_scale
     steps = np.diff(angles)
     if np.any(steps <= 0.0):
         i = int(np.argmax(steps <= 0.0))
-        raise fail(f"angles must increase strictly: row {i + 2} ({data[i + 1, 0]:g}) follows {data[i, 0]:g}")
-    if np.abs(lifts).max() > MAX_LIFT:
-        i = int(np.argmax(np.abs(lifts)))
-        raise fail(f"row {i + 1}: a lift of {lifts[i]:.4g} m is outside any valve gear (at most {MAX_LIFT:g} m); check lift_unit")
+        raise fail(f"line {lines[i + 1]}: angles must increase strictly (this row's angle is not above the one before)")
     span = angles[-1] - angles[0]
     if span >= TWO_PI:
         raise fail(f"angles span {math.degrees(span):.6g} deg; one revolution (< 360 deg) is expected")
     gaps = np.append(steps, TWO_PI - span)
     if math.degrees(gaps.max()) > MAX_GAP_DEG:
         i = int(np.argmax(gaps))
-        where = f"after {data[i, 0]:g}" if i < len(steps) else "between the last and the first row (wrap-around)"
+        where = f"after line {lines[i]}" if i < len(steps) else "between the last and the first row (wrap-around)"
         raise fail(
             f"gap of {math.degrees(gaps.max()):.4g} deg {where}; the samples must cover the whole revolution, "
             f"base circle included (gaps up to {MAX_GAP_DEG:g} deg)"
         )
     return angles, lifts
+
+
+MAX_ANGLE = RANGES["angle"][1]  # rad: ten turns, as any angle of a scene
+
+
+def first_out_of_range(angles, lifts, noise: float | None = None) -> tuple[int, str] | None:
+    """(row index, reason) of the first row outside the physical range (module doc), or None. The
+    reason states the range, never the row's values."""
+    angles, lifts = np.asarray(angles, dtype=float), np.asarray(lifts, dtype=float)
+    floor = -dip_allowance(lifts[np.isfinite(lifts) & (lifts <= MAX_LIFT)], noise)  # rows in range set the peak
+    tests = (
+        (~(np.isfinite(angles) & np.isfinite(lifts)), "values must be finite numbers (after angle_unit and lift_unit)"),
+        (np.abs(np.where(np.isfinite(angles), angles, 0.0)) > MAX_ANGLE,
+         f"the angle is outside +-{math.degrees(MAX_ANGLE):g} deg; check angle_unit"),
+        (np.where(np.isfinite(lifts), lifts, 0.0) > MAX_LIFT,
+         f"a lift above {MAX_LIFT:g} m is outside any valve gear; check lift_unit"),
+        (np.where(np.isfinite(lifts), lifts, 0.0) < floor,
+         f"the lift is below the base circle by more than {-floor * 1e3:.4g} mm (the lift is measured from the base "
+         f"circle, the cam's smallest radius; allowed below it: the gauge's noise, {100 * NOISE_SHARE:g} % of the "
+         f"largest lift or {NOISE_SIGMAS:g} times lift.smoothing)"),
+    )
+    found = [(int(np.argmax(mask)), reason) for mask, reason in tests if np.any(mask)]
+    return min(found, key=lambda item: item[0]) if found else None
 
 
 # --- the periodic penalised spline ------------------------------------------------------------
@@ -189,7 +238,9 @@ def fit_periodic_spline(angles, values, noise: float | None = None, knots: int |
     then the spline nearly interpolates)."""
     from scipy import linalg, sparse
     from scipy.interpolate import BSpline
-    from scipy.optimize import brentq, minimize_scalar
+    from scipy.optimize import minimize_scalar
+
+    from ..core.roots import root_in
 
     x = np.mod(np.asarray(angles, dtype=float), TWO_PI)
     y = np.asarray(values, dtype=float)
@@ -252,7 +303,7 @@ def fit_periodic_spline(angles, values, noise: float | None = None, knots: int |
         elif rss(10.0**hi) <= target:
             log_lam = hi
         else:
-            log_lam = brentq(lambda g: rss(10.0**g) - target, lo, hi, xtol=1e-6)
+            log_lam = root_in(lambda g: rss(10.0**g) - target, lo, hi, xtol=1e-6)  # the ends' signs checked above
     lam = 10.0**log_lam
 
     # coefficients in the same stable form: c = L^-T U D^-1 z
@@ -275,6 +326,7 @@ class TableLift:
     start: float = 0.0  # rad; table angle 0 sits at this cam angle
     report: Any = None  # summary entries (mapping) added by the kinematics effect
     warnings: tuple[str, ...] = ()
+    dip_allowance: float = 0.0  # m below the base circle that is the gauge's noise (explorer.lift.validity)
 
     def derivatives(self, theta) -> np.ndarray:
         return self.fit.derivatives(np.asarray(theta, dtype=float) - self.start)
@@ -301,4 +353,9 @@ def build_table_lift(scene) -> TableLift:
             f"table law: the smoothed lift misses the samples by {1e3 * fit.residual_rms:.3g} mm rms "
             f"({100 * fit.residual_rms / peak:.2g} % of the peak); check lift.smoothing"
         )
-    return TableLift(fit=fit, start=scene.lift.start, report=report, warnings=tuple(warnings))
+    lift = TableLift(fit=fit, start=scene.lift.start, report=report, warnings=tuple(warnings),
+                     dip_allowance=options.dip_allowance)
+    # the smoothed lift is a computed cam: the checks of every cam, with the data's noise allowance
+    check_computed(lift, scene.follower, scene.source, "lift.file", f"the smoothed lift of {Path(options.path).name}",
+                   "check the measurement's zero (the base circle), lift_unit and lift.smoothing")
+    return lift

@@ -34,8 +34,8 @@ engines; and the width rule b = P/(k D) with the roller diameter D, k = 10 (inta
 are, by the Hertz allowable (the width at which the peak stress equals it).
 
 The trip gear has no cam surface: its latch lifts the valve spindle directly and lets go. Its
-contact statics are the latch face's (explorer.effects.trip, its variant of this effect in
-the gear registry): the latch force at the release, the friction the trip must overcome to pull
+contact statics are the latch face's (explorer.gears.trip_latched, its variant of this effect in
+its gear): the latch force at the release, the friction the trip must overcome to pull
 the latch out, the face's bearing pressure; their keys are in [gear.trip] (latch_friction,
 latch_width, latch_depth), not in [contact].
 
@@ -55,12 +55,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
-from ..core.errors import InputError
-
-
+from ..core.errors import InputError, echo
 from ..core.units import AT
 
 STEEL_E = 210e9  # Pa
@@ -83,8 +82,6 @@ class ContactSpec:
     allowable_stress: float = ALLOWABLE["large-gas"]  # Pa
 
 
-ROLLER_TYPES = ("translating-roller", "pivoted-roller", "rocking-cam")  # a cam surface on a roller
-CONTACT_TYPES = ROLLER_TYPES + ("rolling-lever",)  # + two faces rolling on each other
 
 
 # --- formulas -------------------------------------------------------------------------------------
@@ -94,10 +91,10 @@ def effective_modulus(e1: float, nu1: float, e2: float, nu2: float) -> float:
     """E* of two elastic bodies in contact: 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2."""
     for key, e, nu in (("youngs_modulus", e1, nu1), ("roller_youngs_modulus", e2, nu2)):
         if not (math.isfinite(e) and e > 0.0):
-            raise InputError("<arguments>", key, f"must be greater than zero, got {e!r}")
+            raise InputError("<arguments>", key, f"must be greater than zero, got {echo(e)}")
         if not (-1.0 < nu < 0.5):
             raise InputError("<arguments>", key.replace("youngs_modulus", "poisson_ratio"),
-                             f"must lie in (-1, 0.5), got {nu!r}")
+                             f"must lie in (-1, 0.5), got {echo(nu)}")
     return 1.0 / ((1.0 - nu1**2) / e1 + (1.0 - nu2**2) / e2)
 
 
@@ -156,7 +153,7 @@ def width_rule(roller_force: float, roller_diameter: float, k: float) -> float:
     if not roller_diameter > 0.0:
         raise InputError("<arguments>", "follower.roller_radius", "the width rule needs a roller (diameter > 0)")
     if not k > 0.0:
-        raise InputError("<arguments>", "contact.width_rule_k", f"must be greater than zero, got {k!r}")
+        raise InputError("<arguments>", "contact.width_rule_k", f"must be greater than zero, got {echo(k)}")
     return max(0.0, float(roller_force)) / (k * roller_diameter)
 
 
@@ -180,6 +177,13 @@ class ContactGeometry:
     counter_radius: np.ndarray | float  # m, signed radius of the driven surface (the roller's radius)
     roller_diameter: float | None  # m, D of the width rule b = P/(k D); None: size by the Hertz allowable
     from_columns: bool = False  # pressure angle and contour radius already are kinematics columns
+
+
+class ContactModel(Protocol):
+    """A gear's geometry with contact statics (PivotedRollerGear, RockingCamGear, RollingLeverGear):
+    the ContactGeometry at cam angles theta (rad)."""
+
+    def contact_geometry(self, theta) -> ContactGeometry: ...
 
 
 def contact_loads(geometry: ContactGeometry, valve_force, velocity, friction_angle: float) -> dict[str, np.ndarray]:

@@ -25,7 +25,7 @@ they load the linkage (act to close the valve) for the loads. Friction at rest t
 the valve is about to move (sign of the acceleration): its one-sided limit right after the instant.
 
 The trip gear's latch drives the valve only from the pick-up to the trip; its forces are those
-of that window (explorer.effects.trip, its variant of this effect in the gear registry),
+of that window (explorer.gears.trip_latched, its variant of this effect in its gear),
 not of the free closing after it.
 """
 
@@ -37,7 +37,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 
 
 TWO_PI = 2.0 * math.pi
@@ -68,9 +68,9 @@ class TrainLoads:
         )
         for key, value, ok, reason in checks:
             if not math.isfinite(value):
-                raise InputError(self.source, key, f"value must be finite, got {value!r}")
+                raise InputError(self.source, key, f"value must be finite, got {echo(value)}")
             if not ok:
-                raise InputError(self.source, key, f"{reason}, got {value!r}")
+                raise InputError(self.source, key, f"{reason}, got {echo(value)}")
 
     @staticmethod
     def from_scene(scene) -> "TrainLoads":
@@ -142,7 +142,7 @@ class Pieces:
 
 def velocity_zeros(lift, n_grid: int = 4096) -> np.ndarray:
     """Angles where dL/dtheta changes sign (isolated zeros), polished by Brent's method."""
-    from scipy.optimize import brentq
+    from ..core.roots import root_in
 
     grid = np.linspace(0.0, TWO_PI, n_grid + 1)
     grid = np.unique(np.concatenate([grid, np.asarray(lift.breakpoints(), dtype=float)]))
@@ -151,7 +151,7 @@ def velocity_zeros(lift, n_grid: int = 4096) -> np.ndarray:
     roots = []
     for i in np.nonzero(sg[:-1] * sg[1:] < 0.0)[0]:
         f = lambda th: float(lift.derivatives(np.array([th]))[1, 0])  # noqa: E731
-        roots.append(brentq(f, grid[i], grid[i + 1], xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200))
+        roots.append(root_in(f, grid[i], grid[i + 1], fa=d1[i], fb=d1[i + 1], xtol=1e-15, maxiter=200))
     for i in np.nonzero(sg[1:-1] == 0.0)[0] + 1:  # an exact zero on a grid point between opposite signs
         if sg[i - 1] * sg[i + 1] < 0.0:
             roots.append(grid[i])
@@ -466,7 +466,7 @@ def loss_intervals(pieces: Pieces, force_of, n_grid: int = 4096) -> list[tuple[f
     - regain: it rises back above 0 inside a piece, at a piece start, or at the end of the open
       stretch (the valve seats and its seat holds it).
     """
-    from scipy.optimize import brentq
+    from ..core.roots import root_in
 
     n = pieces.start.size
     if n == 0:
@@ -483,8 +483,8 @@ def loss_intervals(pieces: Pieces, force_of, n_grid: int = 4096) -> list[tuple[f
         first[i], last[i] = f[0] <= 0.0, f[-1] <= 0.0
         negative = f <= 0.0
         for j in np.nonzero(negative[:-1] != negative[1:])[0]:
-            root = brentq(lambda t: float(force_of(np.atleast_1d(t), direction)[0]), th[j], th[j + 1],
-                          xtol=1e-14, maxiter=200)
+            root = root_in(lambda t: float(force_of(np.atleast_1d(t), direction)[0]), th[j], th[j + 1],
+                           fa=f[j], fb=f[j + 1], xtol=1e-14, maxiter=200)
             inside[i].append((float(root), bool(negative[j + 1])))
     transitions: list[tuple[float, bool]] = []
     for i in range(n):

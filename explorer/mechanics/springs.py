@@ -31,9 +31,12 @@ from typing import Any
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
+from ..core.roots import root_in
 from .forces import TWO_PI, RPM_PER_RAD_S, TrainLoads
 from ..core.units import KGF
+from ..lift.curves import LawLift
+from ..lift.registry import normalised
 
 TRINKS_G = 9.81  # m/s^2, the g of Trinks' formula as printed in seed 003
 
@@ -74,12 +77,12 @@ def optimum_deceleration_difference(friction: float, mass: float) -> float:
 
 def _check_positive(value: float, key: str) -> None:
     if not (math.isfinite(value) and value > 0.0):
-        raise InputError("<arguments>", key, f"must be greater than zero, got {value!r}")
+        raise InputError("<arguments>", key, f"must be greater than zero, got {echo(value)}")
 
 
 def _check_nonnegative(value: float, key: str) -> None:
     if not (math.isfinite(value) and value >= 0.0):
-        raise InputError("<arguments>", key, f"must not be negative, got {value!r}")
+        raise InputError("<arguments>", key, f"must not be negative, got {echo(value)}")
 
 
 # --- seed 003: historic rules -------------------------------------------------------------------
@@ -93,7 +96,7 @@ def historic_preload(bore: float, cylinder: str = "high-pressure") -> tuple[floa
     bore_mm/22 to bore_mm/17 kgf for low-pressure cylinders (seed 003)."""
     _check_positive(bore, "cylinder_bore")
     if cylinder not in _PRELOAD_DIVISORS:
-        raise InputError("<arguments>", "cylinder", f"unknown value {cylinder!r}; choose one of: {', '.join(CYLINDERS)}")
+        raise InputError("<arguments>", "cylinder", f"unknown value {echo(cylinder)}; choose one of: {', '.join(CYLINDERS)}")
     bore_mm = bore * 1e3
     lo_div, hi_div = _PRELOAD_DIVISORS[cylinder]
     return bore_mm / lo_div * KGF, bore_mm / hi_div * KGF
@@ -226,20 +229,34 @@ def _upper_hull(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return x[idx], y[idx]
 
 
-def balanced_split(lift, loads: TrainLoads, omega: float, ratio: float) -> tuple[float, float] | None:
+# The split's angles are a rise and a return as a scene would write them: the scene loader's
+# smallest (explorer.scene.scene.MIN_EVENT_ANGLE, 0.1 deg; equal by a test)
+SPLIT_MIN_ANGLE = math.radians(0.1)
+
+
+@dataclass(frozen=True)
+class BalancedSplit:
+    """Schenker's balanced rise and return (rad), or None with the reason no valid split exists."""
+
+    angles: tuple[float, float] | None
+    reason: str = ""
+
+
+def balanced_split(lift, loads: TrainLoads, omega: float, ratio: float) -> BalancedSplit | None:
     """For a law-based event (LawLift): the rise and return angles, same total, that satisfy
     Schenker's optimum |p1| - |p2| = 2R/M (F1 = F2). Peak decelerations of a law scale as 1/beta^2:
     |p1| = ratio w^2 h c_r / beta_r^2 with c_r = -min f_rise'', |p2| = ratio w^2 h c_d / beta_d^2
-    with c_d = max f_return''. None when the lift is not a law-based event."""
-    from scipy.optimize import brentq
+    with c_d = max f_return''. None when the lift is not a law-based event.
 
-    from ..lift.laws import law
-    from ..lift.curves import LawLift
-
+    phi(beta_r) = c_r / beta_r^2 - c_d / (total - beta_r)^2 - target decreases strictly from +inf
+    to -inf on (0, total), so its root is unique; it is a valid split when both angles are at
+    least SPLIT_MIN_ANGLE, i.e. when phi changes sign between those ends -- the proven bracket.
+    Else (a crawl, where friction outweighs any deceleration the event can have) the reason says
+    which side the balance would need and how short it would be."""
     if not isinstance(lift, LawLift) or omega <= 0.0:
         return None
-    c_r = -_law_extreme(law(lift.rise_law), -1.0)
-    c_d = _law_extreme(law(lift.return_law), 1.0)
+    c_r = -_law_extreme(normalised(lift.rise_law), -1.0)
+    c_d = _law_extreme(normalised(lift.return_law), 1.0)
     if c_r <= 0.0 or c_d <= 0.0:
         return None
     total = lift.rise + lift.ret
@@ -248,8 +265,16 @@ def balanced_split(lift, loads: TrainLoads, omega: float, ratio: float) -> tuple
     def phi(beta_r: float) -> float:  # decreasing from +inf to -inf on (0, total)
         return c_r / beta_r**2 - c_d / (total - beta_r) ** 2 - target
 
-    beta_r = brentq(phi, total * 1e-6, total * (1 - 1e-6), xtol=1e-15, maxiter=300)
-    return beta_r, total - beta_r
+    lo, hi = SPLIT_MIN_ANGLE, total - SPLIT_MIN_ANGLE
+    f_lo, f_hi = (phi(lo), phi(hi)) if hi > lo else (-math.inf, -math.inf)
+    if not (f_lo >= 0.0 >= f_hi) or not math.isfinite(target):
+        side, sign = ("rise", f_lo) if not f_lo >= 0.0 else ("return", f_hi)
+        rpm = omega * 60.0 / (2.0 * math.pi)
+        return BalancedSplit(None, f"no split of the {math.degrees(total):.6g} deg event balances the sides at "
+                             f"{rpm:.6g} rpm: |p1| - |p2| = 2R/M would need a {side} shorter than "
+                             f"{math.degrees(SPLIT_MIN_ANGLE):g} deg (friction outweighs the inertia at this speed)")
+    beta_r = root_in(phi, lo, hi, fa=f_lo, fb=f_hi, xtol=1e-15, maxiter=300)
+    return BalancedSplit((beta_r, total - beta_r))
 
 
 def _law_extreme(f, sign: float) -> float:

@@ -1,37 +1,27 @@
-"""The [contact] section of a scene and the follower types the contact statics cover."""
+"""The [contact] section of a scene (explorer.mechanics.contact.ContactSpec); which followers the
+contact statics cover is their gear's to say (explorer.gears.base.Gear.check_contact)."""
 
 from __future__ import annotations
 
 import math
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.ranges import FRICTION_COEFFICIENT
-from ..gears.registry import effect_variant, gear
-from ..mechanics.contact import ALLOWABLE, CONTACT_TYPES, ROLLER_TYPES, STEEL_E, STEEL_NU, WIDTH_RULE_K, ContactSpec
-
-
-def check_follower(follower, file: str) -> None:
-    """The follower types the contact statics cover; a roller where the width rule needs one."""
-    if effect_variant(follower.type, "contact") is not None:  # the gear's own statics (the trip gear's latch)
-        return
-    if follower.type not in CONTACT_TYPES:
-        raise InputError(file, "follower.type", f"effect 'contact' does not model follower type {follower.type!r}")
-    if follower.type in ROLLER_TYPES and follower.roller_radius <= 0.0:
-        raise InputError(file, "follower.roller_radius",
-                         "effect 'contact' needs a roller (roller_radius > 0) for the Hertz stress and the width rule")
+from ..gears.registry import gear
+from ..mechanics.contact import ALLOWABLE, STEEL_E, STEEL_NU, WIDTH_RULE_K, ContactSpec
 
 
 def parse_contact_section(table, fields) -> ContactSpec:
     """[contact] -> ContactSpec; called with table None when the effect runs without the section."""
     file = fields.get("source", "<memory>")
     follower = fields.get("follower")
-    if "contact" in fields.get("effects", ()) and follower is not None:
-        check_follower(follower, file)
+    owner = gear(follower.type) if follower is not None else None
+    if "contact" in fields.get("effects", ()) and owner is not None:
+        owner.check_contact(follower, file)
     if table is None:
         return ContactSpec()
-    entry = gear(follower.type) if follower is not None else None
-    if entry is not None and "contact" in entry.rejected:  # the trip gear: no cam and roller
-        raise InputError(file, "contact", entry.rejected["contact"])
+    if owner is not None and "contact" in owner.rejected:  # the trip gear: no cam and roller
+        raise InputError(file, "contact", owner.rejected["contact"])
     table.reject_unknown((
         "friction_angle", "friction_coefficient", "youngs_modulus", "poisson_ratio", "roller_youngs_modulus",
         "roller_poisson_ratio", "width", "valve", "width_rule_k", "engine", "allowable_stress",
@@ -44,7 +34,7 @@ def parse_contact_section(table, fields) -> ContactSpec:
     else:
         rho = table.quantity("friction_angle", "angle", 0.0)
         if not 0.0 <= rho < 0.5 * math.pi:
-            raise table.error("friction_angle", f"must lie in [0 deg, 90 deg), got {table.raw('friction_angle')!r}")
+            raise table.error("friction_angle", f"must lie in [0 deg, 90 deg), got {echo(table.raw('friction_angle'))}")
     e_cam = table.quantity("youngs_modulus", "pressure", STEEL_E, positive=True)
     nu_cam = table.number("poisson_ratio", STEEL_NU, minimum=-1.0, maximum=0.5, open_minimum=True, open_maximum=True)
     valve = table.string("valve", "exhaust", choices=tuple(WIDTH_RULE_K))

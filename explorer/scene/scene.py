@@ -8,33 +8,33 @@ those modules' `parse_*` functions, called from here so that all validation happ
 
 from __future__ import annotations
 
-import importlib
+import copy
 import math
 import os
 import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
-from ..core.errors import InputError
-from ..gears import GEAR_TYPES
-from ..lift.laws import LAWS
-from ..core.reader import Table
+from ..core.errors import InputError, echo
+from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
+from ..core.plugins import resolve
+from ..core.reader import Table, toml_loads
+from ..dynamics import solvers
+from ..effects import registry as effect_table
+from ..gears import registry as gear_table
+from ..gears.base import Gear, GearSpec
+from ..lift import registry as laws
+from .builtin import find_scene
 
-# effect name -> effects it needs (resolved by effects.resolve); kept here, free of heavy imports,
-# so that a scene can be validated without importing any solver.
-EFFECT_DEPENDENCIES: dict[str, tuple[str, ...]] = {
-    "kinematics": (),
-    "lash": ("kinematics",),
-    "forces": ("kinematics", "lash"),
-    "contact": ("kinematics", "lash", "forces"),
-    "elastic": ("kinematics", "lash"),
-    "gear": ("kinematics",),  # explorer.gears: what is particular to the lever, eccentric and trip gears
-}
+if TYPE_CHECKING:
+    from ..lift.contours.spec import CamSpec
+    from ..mechanics.contact import ContactSpec
+    from ..mechanics.springs import SpringDesign
+    from ..mechanics.tribology import LubricantSpec
+    from .checks_section import ChecksSpec
 
-SPECIAL_LAWS = ("table", "acceleration", "contour", "gear", "polydyne", "spline")  # "gear": the gear's geometry makes the lift
-FOLLOWER_TYPES = ("translating-roller", *GEAR_TYPES)
 MIN_STEPS = 36
 # Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
 # w^3 L''' must not overflow) and catch unit slips such as "10 m" for "10 mm".
@@ -50,30 +50,17 @@ OWNED_SECTIONS: dict[str, str] = {
     "cam": "explorer.lift.contours.spec:parse_cam_section",
     "contact": "explorer.scene.contact_section:parse_contact_section",
     "spring_design": "explorer.mechanics.springs:parse_spring_design_section",
-    "gear": "explorer.gears.spec:parse_gear_section",
+    "lubricant": "explorer.mechanics.tribology:parse_lubricant_section",
+    "checks": "explorer.scene.checks_section:parse_checks_section",
 }
-# Law-specific [lift] keys, parsed by the module of the law: law -> "module:function".
-LAW_OPTION_PARSERS: dict[str, str] = {
-    "table": "explorer.lift.table:parse_table_options",
-    "acceleration": "explorer.lift.acceleration:parse_acceleration_options",
-    "polydyne": "explorer.lift.polydyne:parse_polydyne_options",
-    "spline": "explorer.lift.spline:parse_spline_options",
-}
-LAW_OPTION_KEYS: dict[str, tuple[str, ...]] = {
-    "table": ("file", "angle_unit", "lift_unit", "smoothing"),
-    "acceleration": ("points", "angle_unit", "acceleration_unit", "interpolation", "reference_rpm"),
-    "polydyne": ("wanted_law", "design_rpm", "ramp", "stations", "continuity", "reference_rpm"),
-    "spline": ("stations", "continuity", "reference_rpm"),
-}
-# laws whose [lift] height, rise and return shape an event as for the closed-form laws
-SHAPED_LAWS = (*LAWS, "polydyne")
-# ... unless a [lift] key has this value, and then the law's own keys give the event: law -> (key, value)
-SHAPED_UNLESS: dict[str, tuple[str, str]] = {"polydyne": ("wanted_law", "spline")}  # the wanted lift through stations
+# what a section needs, for the message when an effect requires a scene without it
+SECTION_KEYS = {"valve": "mass", "spring": "preload and rate", "linkage": "stiffness"}
 
 
 @dataclass(frozen=True)
 class Drive:
     rpm: float  # rev/min, > 0
+    operating_range: tuple[float, float] | None = None  # rev/min, lowest and highest (explorer check)
 
     @property
     def omega(self) -> float:
@@ -95,11 +82,18 @@ class LiftSpec:
 
 @dataclass(frozen=True)
 class Follower:
-    type: str = "translating-roller"
+    type: str = gear_table.DEFAULT  # the gear (explorer/gears/registry.py)
     base_radius: float = 0.03  # m, base circle of the cam contour
     roller_radius: float = 0.0  # m
     offset: float = 0.0  # m, follower axis offset from the cam centre
     ratio: float = 1.0  # valve travel per follower travel
+
+    @property
+    def roller_envelope(self) -> bool:
+        """True when the cam is the envelope of this roller (radius roller_radius, base circle
+        base_radius) on a straight path at `offset` -- the gear says (Gear.roller_envelope): a cam
+        made for it is checked in the closed forms of explorer.lift.validity.translating_fault."""
+        return gear_table.gear(self.type).roller_envelope
 
 
 @dataclass(frozen=True)
@@ -120,6 +114,10 @@ class Spring:
     damping_ratio: float = 0.0
     free_length: float | None = None  # m
     solid_height: float | None = None  # m
+    # the wire geometry when the scene gives it (the design rules' stresses: explorer.checks)
+    wire_diameter: float | None = None  # m
+    coil_diameter: float | None = None  # m, mean
+    active_coils: float | None = None
 
 
 @dataclass(frozen=True)
@@ -147,11 +145,11 @@ class Seat:
 
 @dataclass(frozen=True)
 class Solver:
-    method: str = "exact"
+    method: str = solvers.DEFAULT
     steps_per_revolution: int = 3600
-    scipy_method: str = "DOP853"
-    rtol: float = 1e-10
-    atol: float = 1e-13
+    # the method's own [solver] options (explorer/dynamics/solvers.py: scene_options), each given
+    # or at its default
+    options: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
 
 
 @dataclass(frozen=True)
@@ -169,10 +167,18 @@ class Scene:
     solver: Solver
     source: str = "<memory>"  # file the scene came from, for messages and relative paths
     description: str = ""
-    cam: Any = None  # owned by explorer.lift.contours.spec
-    contact: Any = None  # owned by explorer.mechanics.contact
-    spring_design: Any = None  # owned by explorer.mechanics.springs (optional advice and historic rules)
-    gear: Any = None  # owned by explorer.gears.spec (pivoted lever, rocking cam, rolling lever, trip gear)
+    cam: CamSpec | None = None  # owned by explorer.lift.contours.spec
+    contact: ContactSpec | None = None  # owned by explorer.scene.contact_section
+    spring_design: SpringDesign | None = None  # owned by explorer.mechanics.springs (advice and historic rules)
+    lubricant: LubricantSpec | None = None  # owned by explorer.mechanics.tribology (the design rules' film and flash temperature)
+    checks: ChecksSpec | None = None  # owned by explorer.scene.checks_section (design-rule settings, read by explorer.checks)
+    gear: GearSpec | None = None  # the [gear] section, owned by the follower's gear
+
+    @property
+    def gear_plugin(self) -> Gear:
+        """The follower type's gear (explorer/gears/registry.py): what the effects, the sweep engine,
+        the exports and the views ask instead of testing follower.type."""
+        return gear_table.gear(self.follower.type)
 
     @property
     def directory(self) -> Path:
@@ -189,23 +195,25 @@ class Scene:
 
 TOP_KEYS = (
     "name", "description", "effects", "drive", "lift", "follower", "valve", "spring", "loads",
-    "linkage", "seat", "solver", *OWNED_SECTIONS,
+    "linkage", "seat", "solver", *OWNED_SECTIONS, "gear",
 )
 
 
 def load_scene(path: str | os.PathLike, overrides: list[str] | tuple[str, ...] = ()) -> Scene:
     """Read and validate a scene file; `overrides` are "section.key=value" strings (TOML values)."""
-    from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
+    return scene_from_dict(read_scene_data(path, overrides), str(path))
 
-    from .builtin import find_scene
 
+def read_scene_data(path: str | os.PathLike, overrides=()) -> dict:
+    """A scene file's TOML tables, overrides applied, not yet validated (InputError: the file
+    cannot be read or is no TOML)."""
     file = str(path)  # errors name the file as the user gave it
     data = read_regular(find_scene(path), file=file, key="-", limit=MAX_SCENE_FILE_BYTES)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
         raise InputError(file, "-", "not a UTF-8 text file") from None
-    return loads_scene(text, file, overrides)
+    return _toml_data(text, file, overrides)
 
 
 # tomllib and copy.deepcopy recurse once per level of nesting: a few thousand nested arrays or
@@ -214,14 +222,18 @@ MAX_NESTING = 32
 
 
 def loads_scene(text: str, source: str = "<memory>", overrides=()) -> Scene:
+    return scene_from_dict(_toml_data(text, source, overrides), source)
+
+
+def _toml_data(text: str, source: str, overrides) -> dict:
     try:
-        data = tomllib.loads(text)
+        data = toml_loads(text, source)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(source, "-", f"malformed TOML: {_first_line(str(exc))}") from None
     except RecursionError:
         raise InputError(source, "-", f"malformed TOML: nested too deeply (at most {MAX_NESTING} levels)") from None
     _check_nesting(data, source, "-")
-    return scene_from_dict(apply_overrides(data, overrides, source), source)
+    return apply_overrides(data, overrides, source)
 
 
 def _first_line(text: str) -> str:
@@ -245,8 +257,6 @@ def apply_overrides(data: dict, overrides, file: str) -> dict:
     """Apply "a.b.c=value" overrides to a copy of the raw TOML dict. Values are TOML when they
     parse as TOML (numbers, booleans, quoted strings, arrays), otherwise taken as plain strings,
     so `--set lift.height="12 mm"` and `--set lift.height=12mm` both work."""
-    import copy
-
     data = copy.deepcopy(data)
     for item in overrides:
         if "=" not in item:
@@ -259,7 +269,7 @@ def apply_overrides(data: dict, overrides, file: str) -> dict:
         if len(parts) > MAX_NESTING:
             raise InputError(file, dotted[:60], f"override key nested too deeply (at most {MAX_NESTING} levels)")
         try:
-            value = tomllib.loads(f"v = {text}")["v"]
+            value = toml_loads(f"v = {text}", file, dotted)["v"]
         except tomllib.TOMLDecodeError:
             value = text.strip()
         except RecursionError:
@@ -278,11 +288,6 @@ def apply_overrides(data: dict, overrides, file: str) -> dict:
     return data
 
 
-def _import(target: str):
-    module, _, name = target.partition(":")
-    return getattr(importlib.import_module(module), name)
-
-
 def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     top = Table(data, file, "")
     top.reject_unknown(TOP_KEYS)
@@ -293,21 +298,21 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     if not isinstance(effects_raw, list) or not all(isinstance(e, str) for e in effects_raw):
         raise top.error("effects", "expected a list of effect names, such as [\"kinematics\", \"lash\"]")
     for effect in effects_raw:
-        if effect not in EFFECT_DEPENDENCIES:
-            raise top.error("effects", f"unknown effect {effect!r}; known: {', '.join(EFFECT_DEPENDENCIES)}")
+        if effect not in effect_table.EFFECTS:
+            raise top.error("effects", f"unknown effect {echo(effect)}; known: {', '.join(effect_table.names())}")
     effects = tuple(dict.fromkeys(effects_raw))
     if not effects:
         raise top.error("effects", "list at least one effect")
 
     drive_t = top.table("drive")
-    drive_t.reject_unknown(("rpm",))
+    drive_t.reject_unknown(("rpm", "operating_range"))
     rpm_si = drive_t.quantity("rpm", "speed", positive=True)
     raw_rpm = drive_t.raw("rpm")
     # a bare number is rev/min already: keep it exact rather than round-tripping through rad/s
     rpm = float(raw_rpm) if isinstance(raw_rpm, (int, float)) else rpm_si * 60.0 / (2.0 * math.pi)
     if rpm > MAX_RPM:
-        raise drive_t.error("rpm", f"more than {MAX_RPM:g} rpm is outside any valve gear, got {raw_rpm!r}")
-    drive = Drive(rpm=rpm)
+        raise drive_t.error("rpm", f"more than {MAX_RPM:g} rpm is outside any valve gear, got {echo(raw_rpm)}")
+    drive = Drive(rpm=rpm, operating_range=_operating_range(drive_t))
 
     follower = _parse_follower(top.table("follower", required=False), file)
     lift = _parse_lift(top.table("lift"), file)
@@ -318,13 +323,12 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     seat = _parse_seat(top.table("seat", required=False) or Table({}, file, "seat"))
     solver = _parse_solver(top.table("solver", required=False) or Table({}, file, "solver"))
 
-    needs = _closure(effects)
-    if ("forces" in needs or "elastic" in needs) and valve is None:
-        raise InputError(file, "valve", "missing section: effects 'forces' and 'elastic' need [valve] mass")
-    if ("forces" in needs or "elastic" in needs) and spring is None:
-        raise InputError(file, "spring", "missing section: effects 'forces' and 'elastic' need [spring] preload and rate")
-    if "elastic" in needs and linkage is None:
-        raise InputError(file, "linkage", "missing section: effect 'elastic' needs [linkage] stiffness")
+    needs = set(effect_table.order(effects))
+    for section, given in (("valve", valve), ("spring", spring), ("linkage", linkage)):
+        if given is None and any(section in effect_table.effect_spec(e).requires for e in needs):
+            users = [f"'{name}'" for name, spec in effect_table.EFFECTS.items() if section in spec.requires]
+            who = f"effect {users[0]} needs" if len(users) == 1 else f"effects {', '.join(users[:-1])} and {users[-1]} need"
+            raise InputError(file, section, f"missing section: {who} [{section}] {SECTION_KEYS[section]}")
     if spring is not None and spring.elements > 0:
         _check_spring_chain(spring, valve, seat, loads, file)
 
@@ -334,28 +338,46 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     )
     for section, target in OWNED_SECTIONS.items():
         table = top.table(section, required=False)
-        fields[section] = _import(target)(table, fields) if table is not None or section in needs else None
-    if lift.law in LAW_OPTION_PARSERS:
-        options = _import(LAW_OPTION_PARSERS[lift.law])(top.table("lift"), fields)
-        fields["lift"] = replace(lift, options=options)
-    if lift.law == "contour" and fields.get("cam") is None:
-        raise InputError(file, "cam", "missing section: lift.law = 'contour' takes the lift from [cam]")
-    if follower.type in GEAR_TYPES and fields.get("gear") is None:
-        raise InputError(file, "gear", f"missing section: follower.type '{follower.type}' needs [gear]")
-    if lift.law == "gear" and follower.type not in ("rocking-cam", "rolling-lever"):
-        raise InputError(file, "lift.law", "lift.law = 'gear' is for the rocking-cam and rolling-lever gears")
+        fields[section] = resolve(target)(table, fields) if table is not None or section in needs else None
+    fields["gear"] = _parse_gear(top.table("gear", required=False), fields)
+    law = laws.law_spec(lift.law)
+    if law.parser is not None:
+        fields["lift"] = replace(lift, options=law.parse(top.table("lift"), fields))
+    for section in law.sections:
+        if fields.get(section) is None:
+            raise InputError(file, section, f"missing section: lift.law = '{law.name}' takes the lift from [{section}]")
+    if law.gear_made and not gear_table.gear(follower.type).makes_lift:
+        makers = [name for name, gear in gear_table.GEARS.items() if gear.makes_lift]
+        raise InputError(file, "lift.law", f"lift.law = 'gear' is for the {' and '.join(makers)} gears")
     return Scene(**fields)
 
 
-def _closure(effects) -> set[str]:
-    out: set[str] = set()
-    stack = list(effects)
-    while stack:
-        effect = stack.pop()
-        if effect not in out:
-            out.add(effect)
-            stack.extend(EFFECT_DEPENDENCIES[effect])
-    return out
+def _parse_gear(table: Table | None, fields: dict) -> GearSpec | None:
+    """[gear] through the follower's gear (its keys, checks and geometry, at load time)."""
+    gear = gear_table.gear(fields["follower"].type)
+    if table is not None and not gear.parts:
+        owners = [name for name, other in gear_table.GEARS.items() if other.parts]
+        raise InputError(fields["source"], "gear", f"[gear] describes the gears {', '.join(owners)}; follower.type is "
+                         f"{gear.type!r}")
+    return gear.parse(table, fields)
+
+
+def _operating_range(t: Table) -> tuple[float, float] | None:
+    """[drive] operating_range = [LOWEST, HIGHEST] speeds (bare numbers rev/min), or None."""
+    if not t.has("operating_range"):
+        return None
+    raw = t.raw("operating_range")
+    if not isinstance(raw, list) or len(raw) != 2:
+        raise t.error("operating_range", "expected [LOWEST, HIGHEST], such as [\"800 rpm\", \"6500 rpm\"]")
+    ends = []
+    for i, value in enumerate(raw):
+        item = Table({"v": value}, t.file, t.key(f"operating_range[{i}]"))
+        si = item.quantity("v", "speed", positive=True)
+        ends.append(float(value) if isinstance(value, (int, float)) and not isinstance(value, bool)
+                    else float(f"{si * 60.0 / (2.0 * math.pi):.12g}"))  # "800 rpm" is 800, not 799.99...
+    if not ends[0] < ends[1] <= MAX_RPM:
+        raise t.error("operating_range", f"needs LOWEST < HIGHEST <= {MAX_RPM:g} rpm, got {raw!r}")
+    return ends[0], ends[1]
 
 
 def _parse_follower(t: Table | None, file: str) -> Follower:
@@ -363,7 +385,7 @@ def _parse_follower(t: Table | None, file: str) -> Follower:
         return Follower()
     t.reject_unknown(("type", "base_radius", "roller_radius", "offset", "ratio"))
     follower = Follower(
-        type=t.string("type", "translating-roller", choices=FOLLOWER_TYPES),
+        type=t.string("type", gear_table.DEFAULT, choices=gear_table.gear_types()),
         base_radius=t.quantity("base_radius", "length", 0.03, positive=True),
         roller_radius=t.quantity("roller_radius", "length", 0.0, nonnegative=True),
         offset=t.quantity("offset", "length", 0.0),
@@ -375,24 +397,23 @@ def _parse_follower(t: Table | None, file: str) -> Follower:
 
 
 def _parse_lift(t: Table, file: str) -> LiftSpec:
-    laws = (*LAWS, *SPECIAL_LAWS)
-    law = t.string("law", choices=laws)
-    common = ("law", "height", "start", "rise", "dwell", "return", "return_law")
-    t.reject_unknown(common + LAW_OPTION_KEYS.get(law, ()))
-    if law == "contour":
+    spec = laws.law_spec(t.string("law", choices=laws.names()))
+    law = spec.name
+    t.reject_unknown(laws.COMMON_KEYS + spec.keys)
+    if not spec.event_keys:
         return LiftSpec(law=law)
-    unless = SHAPED_UNLESS.get(law)
-    shaped = law in SHAPED_LAWS and not (unless is not None and t.has(unless[0]) and t.raw(unless[0]) == unless[1])
+    unless = spec.shaped_unless
+    shaped = spec.shaped and not (unless is not None and t.has(unless[0]) and t.raw(unless[0]) == unless[1])
     height = t.quantity("height", "length", positive=True) if shaped else t.quantity("height", "length", 0.0, nonnegative=True)
     start = t.quantity("start", "angle", 0.0)
     if not 0.0 <= start < 2.0 * math.pi:
         raise t.error("start", "must lie in [0 deg, 360 deg)")
     if height > MAX_LIFT:
-        raise t.error("height", f"more than {MAX_LIFT:g} m of lift is outside any valve gear, got {t.raw('height')!r}")
+        raise t.error("height", f"more than {MAX_LIFT:g} m of lift is outside any valve gear, got {echo(t.raw('height'))}")
     rise = t.quantity("rise", "angle", positive=True) if shaped else t.quantity("rise", "angle", 0.0, nonnegative=True)
     dwell = t.quantity("dwell", "angle", 0.0, nonnegative=True)
     ret = t.quantity("return", "angle", rise, positive=True) if shaped else t.quantity("return", "angle", 0.0, nonnegative=True)
-    return_law = t.string("return_law", None, choices=LAWS) if t.has("return_law") else None
+    return_law = t.string("return_law", None, choices=laws.closed_form_names()) if t.has("return_law") else None
     for key, angle in (("rise", rise), ("return", ret)):
         if shaped and angle < MIN_EVENT_ANGLE:
             raise t.error(key, f"must be at least {math.degrees(MIN_EVENT_ANGLE):g} deg, got {angle:.3g} rad")
@@ -426,6 +447,7 @@ def _parse_spring(t: Table | None) -> Spring | None:
     preload = t.quantity("preload", "force", nonnegative=True)
     geometry = [name for name in SPRING_GEOMETRY if t.has(name)]
     rate = mass = None
+    d = D = n = None
     if geometry:
         missing = [name for name in SPRING_GEOMETRY if not t.has(name)]
         if missing:
@@ -453,7 +475,7 @@ def _parse_spring(t: Table | None) -> Spring | None:
     return Spring(
         preload=preload, rate=rate, mass=mass, elements=elements,
         damping_ratio=t.number("damping_ratio", 0.0, minimum=0.0, maximum=1.0, open_maximum=True),
-        free_length=free, solid_height=solid,
+        free_length=free, solid_height=solid, wire_diameter=d, coil_diameter=D, active_coils=n,
     )
 
 
@@ -526,29 +548,22 @@ def _parse_linkage(t: Table | None) -> Linkage | None:
     )
 
 
-def __getattr__(name: str):
-    """SOLVER_METHODS, the [solver] method choices (one per entry of explorer/dynamics/solvers.py), read
-    from the registry when asked: `import explorer` does not load it."""
-    if name == "SOLVER_METHODS":
-        from ..dynamics.solvers import names
-
-        return names()
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 def _parse_solver(t: Table) -> Solver:
-    from ..dynamics import solvers as solver_registry  # (the registry: on the first [solver] table)
-
-    t.reject_unknown(("method", "steps_per_revolution", *solver_registry.scene_options()))
+    known = solvers.scene_options()
+    t.reject_unknown(("method", "steps_per_revolution", *known))
     steps = t.number("steps_per_revolution", 3600, integer=True)
     if steps < MIN_STEPS:
         raise t.error("steps_per_revolution", f"too few steps: {steps:.6g} (at least {MIN_STEPS})")
     if steps > MAX_STEPS:
         raise t.error("steps_per_revolution", f"too many steps: {steps:.6g} (at most {MAX_STEPS})")
-    return Solver(
-        method=t.string("method", "exact", choices=solver_registry.names()),
-        steps_per_revolution=int(steps),
-        scipy_method=t.string("scipy_method", "DOP853", choices=solver_registry.SCIPY_METHODS),
-        rtol=t.number("rtol", 1e-10, minimum=1e-14, maximum=1e-1),
-        atol=t.number("atol", 1e-13, minimum=1e-20, maximum=1e-1),
-    )
+    method = t.string("method", solvers.DEFAULT, choices=solvers.names())
+    # every option given is checked (by the first solver that has it), the method's own are kept
+    values = {name: _solver_option(t, option) for name, option in known.items() if t.has(name)}
+    own = {option.name: values.get(option.name, option.default) for option in solvers.solver(method).scene_options}
+    return Solver(method=method, steps_per_revolution=int(steps), options=MappingProxyType(own))
+
+
+def _solver_option(t: Table, option) -> Any:
+    if option.choices:
+        return t.string(option.name, option.default, choices=option.choices)
+    return t.number(option.name, option.default, minimum=option.minimum, maximum=option.maximum)

@@ -20,6 +20,9 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ..lift.curves import LawLift
+from ..lift.table import fit_periodic_spline
+
 DEFAULT_SAMPLES = (90, 180, 360, 720, 1440)
 DEFAULT_NOISE_M = (0.0, 1e-6, 1e-5, 1e-4)
 SMOOTHING = ("auto", "known")  # lambda by cross-validation, or from the true noise level
@@ -68,8 +71,6 @@ class DifferentiationStudy:
 
 def default_reference():
     """The cycloidal demo cam (assets/scenes/cycloidal_demo.toml) as an analytic LiftCurve."""
-    from ..lift.curves import LawLift
-
     return LawLift(
         height=0.0103, start=math.radians(20.0), rise=math.radians(70.0), dwell=0.0, ret=math.radians(70.0),
         rise_law="cycloidal", return_law="cycloidal",
@@ -93,8 +94,6 @@ def differentiation_study(
 
     smoothing "auto" chooses lambda by cross-validation as the `table` law does by default;
     "known" tells the fit the true noise level (the law's `smoothing = "<sigma>"`)."""
-    from ..lift.table import fit_periodic_spline
-
     if smoothing not in SMOOTHING:
         raise ValueError(f"smoothing must be one of {SMOOTHING}, got {smoothing!r}")
     if repeats < 1:

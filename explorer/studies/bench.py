@@ -35,9 +35,14 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..dynamics import solvers as solver_registry
-from .charts import figure, png
 from ..core.errors import InputError
+from ..dynamics import solvers as solver_registry
+from ..dynamics.model import Drive
+from ..dynamics.solvers import solve
+from ..effects.elastic import linkage_model
+from ..effects.lift import build_lift
+from .accuracy import differentiation_study
+from .charts import figure, png
 
 STEPS = (90, 360, 900, 3600, 9000, 36_000, 90_000, 360_000)
 VARYING_MAX_STEPS = 36_000
@@ -75,7 +80,8 @@ class SpeedRatio:
     scipy_cpu_s: float
     exact_error_m: float
     scipy_error_m: float
-    method: str = "exact"  # the piecewise solver timed ("taylor" for a stiffness k(t))
+    method: str = solver_registry.DEFAULT  # the piecewise solver timed ("taylor" for a stiffness k(t))
+    baseline: str = ""  # the reference solver and its method, as the table names them ("scipy DOP853")
 
     @property
     def ratio(self) -> float:
@@ -90,9 +96,10 @@ class SpeedRatio:
         verdict = "equal or better accuracy" if self.equal_or_better else "LESS accurate than the baseline"
         return (
             f"speed ratio at {self.steps} steps, median of {self.repeats} alternating runs: "
-            f"{self.method} {1e3 * self.exact_cpu_s:.2f} ms (error {self.exact_error_m:.2e} m) vs scipy DOP853 rtol "
+            f"{self.method} {1e3 * self.exact_cpu_s:.2f} ms (error {self.exact_error_m:.2e} m) vs {self.baseline} rtol "
             f"{RATIO_RTOL:g} {1e3 * self.scipy_cpu_s:.2f} ms (error {self.scipy_error_m:.2e} m): "
-            f"{self.ratio:.1f}x faster, {verdict}" + (" (target >= 30x, goal 100x)" if self.method == "exact" else "")
+            f"{self.ratio:.1f}x faster, {verdict}"
+            + (" (target >= 30x, goal 100x)" if self.method == solver_registry.DEFAULT else "")
         )
 
 
@@ -110,14 +117,16 @@ class BenchReport:
     ratio: SpeedRatio | None  # None when no ratio was measured
     notes: tuple[str, ...] = ()
     differentiation: Any = None  # explorer.studies.accuracy.DifferentiationStudy, or None
-    check_method: str = "exact"  # what the scipy reference was cross-checked against
+    check_method: str = solver_registry.DEFAULT  # what the reference solver was cross-checked against
+    reference_solver: str = ""  # the reference solver's name in the table ("scipy")
 
     def table(self) -> str:
         lines = [
             f"explorer bench: {self.scene} at {self.rpm:g} rpm (revolution {1e3 * self.revolution_s:.3f} ms, "
             f"natural period Tn {1e3 * self.natural_period_s:.4f} ms)",
             f"reference: {self.reference}",
-            f"references cross-checked: |scipy rtol {REFERENCE_RTOL:g} - {self.check_method}| <= {self.reference_check_m:.1e} m",
+            f"references cross-checked: |{self.reference_solver} rtol {REFERENCE_RTOL:g} - {self.check_method}| <= "
+            f"{self.reference_check_m:.1e} m",
             f"reference events: {' '.join(self.reference_events) or 'none'}",
             "",
             f"{'method':<13} {'setting':<20} {'max error m':>12} {'CPU ms':>10} {'wall ms':>10} {'runs':>4} {'events':>6} {'steps':>8} {'nfev':>8}",
@@ -163,14 +172,10 @@ def _csv_cell(value) -> str:
 
 def model_and_drive(scene):
     """The LinkageModel and Drive of a scene (needs [valve], [spring] and [linkage])."""
-    from ..dynamics.model import Drive, LinkageModel
-    from ..effects.lift import build_lift
 
     for section in ("valve", "spring", "linkage"):
         if getattr(scene, section) is None:
             raise InputError(scene.source, section, f"missing section: explorer bench times the elastic model, which needs [{section}]")
-    from ..effects.elastic import linkage_model
-
     lift = build_lift(scene)  # a gear's own elasticity (k(t)) is part of the model, as in the elastic effect
     return linkage_model(scene, lift, scene.drive.omega), Drive(lift, scene.follower.ratio, scene.drive.omega)
 
@@ -197,8 +202,6 @@ def run_bench(
     differentiation: bool = True,
 ) -> BenchReport:
     """Time every method and resolution on the scene; see the module docstring."""
-    from ..dynamics.model import solve
-
     model, drive = model_and_drive(scene)
     varying = model.stiffness_profile is not None
     revolution = 2.0 * math.pi / drive.omega
@@ -212,6 +215,9 @@ def run_bench(
     # every fixed-step one at the steps where it is stable, scipy (the adaptive reference) by rtol
     fast = solver_registry.of_kind("piecewise", varying)[0]
     fixed = solver_registry.of_kind("fixed-step", varying)
+    ref_info = solver_registry.reference()
+    ref_name, ref_setting = ref_info.name, ref_info.reference
+    ref_label = f"{ref_name} {ref_setting.label}"
     min_stable = {name: solver_registry.solver(name).min_stable_steps(model, drive.omega) for name in fixed}
     stable_steps = {name: [n for n in steps if n >= min_stable[name]] for name in fixed}
     ratio_repeats = max(5, repeats)
@@ -233,9 +239,9 @@ def run_bench(
     def grid(n: int) -> np.ndarray:
         return t0 + np.arange(n) * (revolution / n)
 
-    tick(f"reference: scipy DOP853 rtol {REFERENCE_RTOL:g} at {finest} steps")
+    tick(f"reference: {ref_label} rtol {REFERENCE_RTOL:g} at {finest} steps")
     t_fine = grid(finest)
-    ref = solve(model, drive, t_fine, method="scipy", scipy_method="DOP853", rtol=REFERENCE_RTOL, atol=REFERENCE_RTOL * 1e-3)
+    ref = solve(model, drive, t_fine, method=ref_name, **ref_setting.options(REFERENCE_RTOL))
     references = {finest: ref.s}
 
     def reference_on(n: int) -> np.ndarray:
@@ -243,8 +249,7 @@ def run_bench(
             if finest % n == 0:
                 references[n] = ref.s[:: finest // n]
             else:
-                references[n] = solve(model, drive, grid(n), method="scipy", scipy_method="DOP853",
-                                      rtol=REFERENCE_RTOL, atol=REFERENCE_RTOL * 1e-3).s
+                references[n] = solve(model, drive, grid(n), method=ref_name, **ref_setting.options(REFERENCE_RTOL)).s
         return references[n]
 
     def t_on(n: int) -> np.ndarray:
@@ -253,7 +258,7 @@ def run_bench(
     def record(method, setting, n, rtol, fn) -> Run:
         sol, cpu, wall, runs = _timed(fn, repeats)
         stats = sol.stats or {}
-        truth = fast_on(n) if method == "scipy" else reference_on(n)
+        truth = fast_on(n) if method == ref_name else reference_on(n)
         return Run(
             method=method, setting=setting, steps=n, rtol=rtol,
             max_error_m=float(np.abs(sol.s - truth).max()),
@@ -266,7 +271,7 @@ def run_bench(
     runs: list[Run] = []
     notes: list[str] = []
     # warm-up: the first call of each solver pays for imports and caches, not for the method
-    for method in (fast, *fixed, "scipy"):
+    for method in (fast, *fixed, ref_name):
         options = solver_registry.solver(method).unstable_options()
         solve(model, drive, grid(360), method=method, **options)
 
@@ -274,7 +279,7 @@ def run_bench(
         tick(f"{fast} at {n} steps")
         t = t_on(n)
         runs.append(record(fast, f"{n} steps", n, None, lambda t=t: solve(model, drive, t, method=fast)))
-    tick(f"cross-check: {fast} at {finest} steps against the scipy reference")
+    tick(f"cross-check: {fast} at {finest} steps against the {ref_name} reference")
     fast_fine = solve(model, drive, t_fine, method=fast)
     reference_check = float(np.abs(fast_fine.s - ref.s).max())
     if varying:
@@ -300,14 +305,13 @@ def run_bench(
             )
     t_default = t_on(default_steps)
     for rtol in rtols:
-        tick(f"scipy DOP853 rtol {rtol:g}")
+        tick(f"{ref_label} rtol {rtol:g}")
         runs.append(record(
-            "scipy", f"DOP853 rtol {rtol:.0e}", default_steps, rtol,
-            lambda rtol=rtol: solve(model, drive, t_default, method="scipy", scipy_method="DOP853", rtol=rtol, atol=rtol * 1e-3,
-                                    watch_extrema=False),
+            ref_name, f"{ref_setting.label} rtol {rtol:.0e}", default_steps, rtol,
+            lambda rtol=rtol: solve(model, drive, t_default, method=ref_name, **ref_setting.options(rtol, plain=True)),
         ))
 
-    tick(f"speed ratio: {fast} vs scipy DOP853 rtol 1e-10, alternating")
+    tick(f"speed ratio: {fast} vs {ref_label} rtol 1e-10, alternating")
     ratio = speed_ratio(model, drive, t_default, reference_on(default_steps), ratio_repeats, fast_on(default_steps),
                         method=fast)
     if ratio.exact_error_m > TARGET_ERROR_M:
@@ -316,41 +320,36 @@ def run_bench(
     study = None
     if differentiation:
         tick("differentiating a measured lift (samples x noise)")
-        try:
-            from ..effects.lift import build_lift
-            from .accuracy import differentiation_study
-        except ImportError:  # the study lives in another module of the project; bench works without it
-            notes.append("differentiation study not available (explorer.studies.accuracy missing)")
-        else:
-            options = DIFF_QUICK if quick else {}
-            study = differentiation_study(lift=build_lift(scene), rpm=scene.drive.rpm, reference=f"{scene.name} lift", **options)
+        options = DIFF_QUICK if quick else {}
+        study = differentiation_study(lift=build_lift(scene), rpm=scene.drive.rpm, reference=f"{scene.name} lift", **options)
     if progress is not None:
         progress(total, total, "done")
 
     return BenchReport(
         scene=scene.name, rpm=scene.drive.rpm, default_steps=default_steps, natural_period_s=model.natural_period(),
         revolution_s=revolution,
-        reference=(f"{' and '.join((fast, *fixed))} against scipy DOP853 rtol {REFERENCE_RTOL:g} atol {REFERENCE_RTOL * 1e-3:g} m "
-                   f"(events, max step Tn/4{', drive and k(t) tabulated' if varying else ''}); scipy against {fast}; "
-                   f"both at {finest} steps"),
+        reference=(f"{' and '.join((fast, *fixed))} against {ref_label} rtol {REFERENCE_RTOL:g} atol "
+                   f"{ref_setting.options(REFERENCE_RTOL)['atol']:g} m (events, max step Tn/4"
+                   f"{', drive and k(t) tabulated' if varying else ''}); {ref_name} against {fast}; both at {finest} steps"),
         reference_check_m=reference_check, reference_events=tuple(e["kind"] for e in ref.events),
         runs=tuple(runs), ratio=ratio, notes=tuple(notes), differentiation=study, check_method=fast,
+        reference_solver=ref_name,
     )
 
 
 def speed_ratio(model, drive, t: np.ndarray, reference: np.ndarray, repeats: int = 7,
-                reference_for_scipy: np.ndarray | None = None, method: str = "exact") -> SpeedRatio:
-    """exact vs scipy DOP853 rtol 1e-10 (atol 1e-13, events, step bounded) on the grid t,
-    alternating the two `repeats` times in this process; median CPU times and lift errors
-    (exact against `reference`, scipy against `reference_for_scipy`, default the same)."""
-    from ..dynamics.model import solve
+                reference_for_scipy: np.ndarray | None = None, method: str = solver_registry.DEFAULT) -> SpeedRatio:
+    """`method` (the exact solver) vs the reference solver as one would use it (scipy DOP853)
+    at rtol 1e-10 (atol 1e-13, events, step bounded) on the grid t, alternating the two `repeats`
+    times in this process; median CPU times and lift errors (`method` against `reference`, the
+    reference solver against `reference_for_scipy`, default the same)."""
+    ref_info = solver_registry.reference()
 
     def exact():
         return solve(model, drive, t, method=method)
 
     def baseline():
-        return solve(model, drive, t, method="scipy", scipy_method="DOP853", rtol=RATIO_RTOL, atol=RATIO_RTOL * 1e-3,
-                     watch_extrema=False)
+        return solve(model, drive, t, method=ref_info.name, **ref_info.reference.options(RATIO_RTOL, plain=True))
 
     exact(), baseline()  # warm-up
     cpu_exact, cpu_scipy = [], []
@@ -367,38 +366,40 @@ def speed_ratio(model, drive, t: np.ndarray, reference: np.ndarray, repeats: int
         exact_cpu_s=statistics.median(cpu_exact), scipy_cpu_s=statistics.median(cpu_scipy),
         exact_error_m=float(np.abs(sol_exact.s - reference).max()),
         scipy_error_m=float(np.abs(sol_scipy.s - (reference if reference_for_scipy is None else reference_for_scipy)).max()),
-        method=method,
+        method=method, baseline=f"{ref_info.name} {ref_info.reference.label}",
     )
 
 
-STYLE = {
-    "exact": dict(color="#1f77b4", marker="o"),
-    "schenker1902": dict(color="#d62728", marker="s"),
-    "scipy": dict(color="#2ca02c", marker="^"),
-    "taylor": dict(color="#9467bd", marker="D"),
-}
+# one style per solver, in the table's order (a solver new to the table gets the next one)
+STYLES = (dict(color="#1f77b4", marker="o"), dict(color="#d62728", marker="s"), dict(color="#2ca02c", marker="^"),
+          dict(color="#9467bd", marker="D"), dict(color="#8c564b", marker="v"), dict(color="#e377c2", marker="P"))
+
+
+def style(method: str) -> dict:
+    names = solver_registry.names()
+    i = names.index(method) if method in names else len(names)
+    return STYLES[i % len(STYLES)]
+
+
 FLOOR_M = 1e-16  # errors of exactly 0 drawn here on the log axis
-
-
-
-
 
 
 def chart_png(report: BenchReport) -> bytes:
     """Error versus CPU time, log-log, one series per method, the Pareto front dashed."""
     with figure(figsize=(8.0, 5.6), dpi=110) as (fig, ax):
-        for i, method in enumerate(dict.fromkeys(r.method for r in report.runs)):
+        for method in dict.fromkeys(r.method for r in report.runs):
             rows = [r for r in report.runs if r.method == method]
-            style = STYLE.get(method) or dict(color=f"C{i}", marker="v")  # (a solver new to the table)
+            look = style(method)
             x = [max(r.cpu_time_s, 1e-6) for r in rows]
             y = [max(r.max_error_m, FLOOR_M) for r in rows]
             varying = method == report.check_method and "k(t)" in report.reference  # (in exact's place)
-            label = (f"{method} DOP853 (rtol)" if rows[0].rtol is not None
+            setting = solver_registry.solver(method).reference if method in solver_registry.SOLVERS else None
+            label = (f"{method} {setting.label if setting else ''} (rtol)" if rows[0].rtol is not None
                      else f"{method}{', k(t)' if varying else ''} (steps/rev)")
-            ax.plot(x, y, linestyle="-", linewidth=1.2, markersize=6, label=label, **style)
+            ax.plot(x, y, linestyle="-", linewidth=1.2, markersize=6, label=label, **look)
             for r, xi, yi in zip(rows, x, y):
                 text = f"{r.rtol:.0e}" if r.rtol is not None else f"{r.steps:g}"
-                ax.annotate(text, (xi, yi), textcoords="offset points", xytext=(4, 4), fontsize=7, color=style["color"])
+                ax.annotate(text, (xi, yi), textcoords="offset points", xytext=(4, 4), fontsize=7, color=look["color"])
         front = report.pareto()
         ax.plot([max(r.cpu_time_s, 1e-6) for r in front], [max(r.max_error_m, FLOOR_M) for r in front],
                 linestyle="--", color="0.4", linewidth=1.0, drawstyle="steps-post", label="Pareto front")
@@ -410,8 +411,8 @@ def chart_png(report: BenchReport) -> bytes:
         ax.set_xlabel("CPU time per revolution (s, median)")
         ax.set_ylabel("max valve-lift error (m) vs reference")
         ax.set_title(f"What accuracy costs in time: {report.scene}, {report.rpm:g} rpm\n"
-                     + (f"{report.ratio.ratio:.0f}x: {report.ratio.method} at {report.ratio.steps} steps vs DOP853 "
-                        f"rtol {RATIO_RTOL:g}" if report.ratio is not None else ""),
+                     + (f"{report.ratio.ratio:.0f}x: {report.ratio.method} at {report.ratio.steps} steps vs "
+                        f"{report.ratio.baseline.partition(' ')[2]} rtol {RATIO_RTOL:g}" if report.ratio is not None else ""),
                      fontsize=10)
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=8, loc="upper right")

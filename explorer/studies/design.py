@@ -22,6 +22,14 @@ event refined at the stations:
 The same objective and constraints are evaluated for the standard laws on the same event (same
 height, rise, dwell, return) for the comparison table.
 
+Bounds (issue #22): limits no lift can meet are refused before the optimisation, in one line
+naming the option (infeasible: the contact margin against the contact force where the valve
+leaves its seat at rest and against the deceleration any rise-and-return needs at the highest
+speed; the open area against the largest lift a scene may have); every optimisation stops after
+MAX_EVALUATIONS evaluations of its functions (counted, not timed: the same point on every
+machine) and reports the point it reached as not met; `progress(evaluations, seconds)` is called
+as it runs.
+
 A known optimum, reproduced in tests/test_spline.py: the minimum of the integral of the squared
 jerk for a rise with s, v, a given at both ends is the 3-4-5 polynomial (the minimum-jerk
 trajectory: Flash & Hogan, J. Neurosci. 5 (1985) 1688-1703; the Euler-Lagrange equation
@@ -32,17 +40,53 @@ optimiser finds it.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..core.errors import InputError
 from ..core.units import figure
+from ..lift.contours.translating import pitch_geometry
+from ..lift.curves import LawLift
+from ..lift.spline import NAMES, UNITS, solve_spline, with_values
+from ..mechanics.forces import TrainLoads, friction_direction, load_parts
 
 TWO_PI = 2.0 * math.pi
 OBJECTIVES = ("peak-acceleration", "peak-jerk", "jerk-energy", "residual-vibration")
 STANDARD_LAWS = ("cycloidal", "harmonic", "polynomial-345", "polynomial-4567", "modified-trapezoid", "modified-sine")
 GRID = 1200  # points per event (plus the stations)
+# evaluations of the objective and the limits (finite-difference steps included) one optimisation
+# may spend: about 4x the largest normal design measured (jerk-energy on spline_demo: 916, 6 s)
+MAX_EVALUATIONS = 4000
+
+
+class BudgetSpent(Exception):
+    """Raised inside the optimiser's callbacks when MAX_EVALUATIONS are spent."""
+
+
+class _Counter:
+    """Counts the optimiser's function evaluations, keeps the last point the objective saw (the
+    answer when the budget ends it), and reports progress."""
+
+    def __init__(self, budget: int, progress=None):
+        self.budget, self.progress = budget, progress
+        self.count = 0
+        self.last = None
+        self.started = time.perf_counter()
+
+    def wrap(self, function, objective: bool = False):
+        def counted(y, *args):
+            self.count += 1
+            if self.count > self.budget:
+                raise BudgetSpent()
+            if objective:
+                self.last = np.array(y, dtype=float)
+            if self.progress is not None:
+                self.progress(self.count, time.perf_counter() - self.started)
+            return function(y, *args)
+
+        return counted
 
 
 @dataclass(frozen=True)
@@ -54,12 +98,6 @@ class DesignLimits:
     band: tuple[float, float] | None = None  # rpm, residual-vibration objective
     band_points: int = 11
     open_area: float | str | None = None  # m*rad of valve lift over cam angle, or "keep" (the start's)
-
-
-@dataclass
-class Evaluation:
-    objective: float
-    constraints: dict = field(default_factory=dict)  # name -> slack (>= 0 met)
 
 
 AREA_TOLERANCE = 1e-9  # relative: SLSQP meets the equality (linear while the lift stays open) to ~1e-12
@@ -79,6 +117,57 @@ def area_slack(area: float, target: float) -> float:
     return 0.0 if deviation <= AREA_TOLERANCE * abs(target) else -1e3 * math.degrees(deviation)
 
 
+def infeasible(scene, problem, limits: DesignLimits) -> tuple[str, str] | None:
+    """(option, reason) for a limit no lift of this event can meet, proven from the physics, or
+    None. Each bound holds for every choice of the free values:
+
+    - contact margin, at rest: where the valve leaves its seat (valve lift 0+) the contact force
+      at speed 0 -- one end of "every speed up to --contact-rpm" -- is preload + closing loads +
+      friction (at most |R|), whatever the lift;
+    - contact margin, at speed w: the valve lift s rises from 0 to its peak S and returns to 0
+      within the event (angle T), so s'' <= -8 S / T^2 somewhere (a function with s'' >= -c on an
+      interval of length T rises at most c T^2 / 8 above its ends); there the force is at most
+      w^2 M s'' + preload + rate S + |R| + closing. S is at least the largest given (not free)
+      station lift: ratio s_k - lash.
+    - open area: the valve lift is at most MAX_LIFT (a scene's largest lift) times the ratio,
+      less the lash, over at most the event's angle."""
+    from ..mechanics.forces import TrainLoads
+    from ..scene.scene import MAX_LIFT
+
+    ratio = scene.follower.ratio
+    lash = scene.valve.lash if scene.valve is not None else 0.0
+    span = float(problem.knots[-1] - problem.knots[0])  # the event's angle
+    if limits.contact_margin is not None:
+        loads = TrainLoads.from_scene(scene)
+        rest = loads.preload + loads.closing + abs(loads.friction)
+        margin = limits.contact_margin
+        if margin > rest:
+            return "--contact-margin", (f"{margin:g} N exceeds the contact force where the valve leaves its seat at "
+                                        f"rest, {rest:.6g} N (spring.preload + closing loads + friction), whatever "
+                                        "the lift: lower it or raise spring.preload")
+        given = [st.values[0] for st in problem.options.stations if st.values[0] is not None and not st.free[0]]
+        peak = max([ratio * s - lash for s in given] + [0.0])
+        rpm = limits.contact_rpm or scene.drive.rpm
+        w = rpm * TWO_PI / 60.0
+        # the bound uses the least peak the stations allow: a proof only where a higher peak
+        # cannot help, i.e. where the inertia grows faster with the peak than the spring force
+        if peak > 0.0 and span > 0.0 and 8.0 * w**2 * loads.mass / span**2 >= loads.rate:
+            decel = 8.0 * peak / span**2  # per rad**2
+            best = -(w**2) * loads.mass * decel + rest + loads.rate * peak
+            if best < margin:
+                return "--contact-rpm" if limits.contact_rpm is not None else "--contact-margin", (
+                    f"{margin:g} N cannot hold up to {rpm:g} rpm: lifting the valve {1e3 * peak:.4g} mm and back within "
+                    f"{math.degrees(span):.4g} deg needs a deceleration at which the contact force is at most "
+                    f"{best:.6g} N; lower the margin or the speed")
+    if isinstance(limits.open_area, float):
+        most = span * max(ratio * MAX_LIFT - lash, 0.0)
+        if limits.open_area > most:
+            return "--open-area", (f"{1e3 * math.degrees(limits.open_area):.6g} mm*deg is more than any lift of this "
+                                   f"event opens: at most {1e3 * math.degrees(most):.6g} mm*deg ({MAX_LIFT:g} m of lift, "
+                                   f"the largest a scene may have, over the event's {math.degrees(span):.4g} deg)")
+    return None
+
+
 def _free(options):
     return [(i, k) for i, st in enumerate(options.stations) for k in range(len(st.free)) if st.free[k]]
 
@@ -90,8 +179,6 @@ class Problem:
     value, then every evaluation is a matrix product."""
 
     def __init__(self, scene, objective: str, limits: DesignLimits):
-        from ..lift.spline import solve_spline
-
         if scene.lift.law != "spline":
             raise InputError(scene.source, "lift.law", "explorer design works on a spline lift (law = \"spline\")")
         if objective not in OBJECTIVES:
@@ -121,8 +208,6 @@ class Problem:
                                for i in range(len(self.free))])
 
     def lift(self, z):
-        from ..lift.spline import with_values
-
         values = {key: float(zi * si) for key, zi, si in zip(self.free, z, self.scale)}
         options = with_values(self.options, values)
         return self.solve(options.stations, options.continuity, self.scene.lift.start, self.scene.source)
@@ -178,8 +263,6 @@ def _jumps(lift, k: int) -> bool:
 def constraint_arrays(scene, d, limits: DesignLimits) -> tuple[dict, dict]:
     """Per-sample slacks scaled to order 1 with fixed scales (a scale that moved with the lift
     would bend the optimiser's linearisation), and the smallest slack of each in its unit."""
-    from ..lift.contours.translating import pitch_geometry
-
     f = scene.follower
     ratio = f.ratio
     arrays: dict = {"lift >= 0": d[0] / (f.base_radius + f.roller_radius)}
@@ -195,8 +278,6 @@ def constraint_arrays(scene, d, limits: DesignLimits) -> tuple[dict, dict]:
         smallest = float(np.min(1.0 / kappa[convex])) if np.any(convex) else math.inf
         slacks["convex radius [mm]"] = 1e3 * (smallest - f.roller_radius - limits.radius_margin)
     if limits.contact_margin is not None:
-        from ..mechanics.forces import TrainLoads, friction_direction, load_parts
-
         loads = TrainLoads.from_scene(scene)
         a_coef, g_part, is_open = load_parts(d, friction_direction(d[1], d[2]), loads, ratio, scene.valve.lash)
         wc = (limits.contact_rpm or scene.drive.rpm) * TWO_PI / 60.0
@@ -280,6 +361,7 @@ class DesignReport:
     options: object  # the optimised SplineOptions
     method: str = "SLSQP"
     open_area: float | None = None  # m*rad held, if any
+    limits: DesignLimits | None = None  # as asked (for the report's statement of the speeds)
 
 
 def _peak_by_linear_programme(scene, problem, row: int, factor: float, limits: DesignLimits):
@@ -288,7 +370,6 @@ def _peak_by_linear_programme(scene, problem, row: int, factor: float, limits: D
     in (z, t) solved exactly by HiGHS. None if HiGHS fails."""
     from scipy.optimize import linprog
 
-    from ..mechanics.forces import TrainLoads, friction_direction
 
     n = len(problem.free)
     # in units of the largest starting value: HiGHS's tolerances are absolute (a jerk in m/s**3
@@ -320,15 +401,40 @@ def _peak_by_linear_programme(scene, problem, row: int, factor: float, limits: D
     return result.x[:-1] if result.status == 0 else None
 
 
-def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> DesignReport:
-    """Minimise `objective` over the free station values subject to `limits` (SLSQP). The peak
-    objectives are solved in epigraph form (minimise t with -t <= a_i <= t), whose constraints are
-    linear in the variables and get their exact Jacobian from the basis."""
+def _minimize(counter: _Counter, fun, x0, *, jac=None, constraints=(), options=None):
+    """scipy's SLSQP with every function counted against the budget: (x, message, iterations,
+    spent); when the budget ends it, x is the last point the objective saw."""
     from scipy.optimize import minimize
 
-    from ..lift.curves import LawLift
+    cons = []
+    for c in constraints:
+        c = dict(c)
+        c["fun"] = counter.wrap(c["fun"])
+        if "jac" in c:
+            c["jac"] = counter.wrap(c["jac"])
+        cons.append(c)
+    try:
+        result = minimize(counter.wrap(fun, objective=True), x0, jac=None if jac is None else counter.wrap(jac),
+                          method="SLSQP", constraints=cons, options=options)
+    except BudgetSpent:
+        x = counter.last if counter.last is not None else np.asarray(x0, dtype=float)
+        return x, f"stopped: the evaluation budget ({counter.budget} evaluations) is spent", -1, True
+    return result.x, str(result.message), int(result.nit), False
+
+
+def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500, *, max_evaluations: int = MAX_EVALUATIONS,
+           progress=None) -> DesignReport:
+    """Minimise `objective` over the free station values subject to `limits` (SLSQP). The peak
+    objectives are solved in epigraph form (minimise t with -t <= a_i <= t), whose constraints are
+    linear in the variables and get their exact Jacobian from the basis. Limits no lift can meet
+    raise InputError before any optimisation (infeasible); the optimisation stops after
+    `max_evaluations` evaluations; `progress(evaluations, seconds)` is called as it runs."""
 
     problem = Problem(scene, objective, limits)
+    impossible = infeasible(scene, problem, limits)
+    if impossible is not None:
+        raise InputError("<command line>", *impossible)
+    counter = _Counter(max_evaluations, progress)
     z0 = problem.start()
     peak = objective in ("peak-acceleration", "peak-jerk")
     w, ratio = scene.omega, scene.follower.ratio
@@ -381,14 +487,14 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> D
                 {"type": "ineq", "fun": lambda y: limits_of(y[:-1])}] + held
         first = z0 if z_lp is None else z_lp
         y0 = np.append(first, np.max(np.abs(column(first))))
-        result = minimize(lambda y: y[-1], y0, jac=lambda y: np.append(np.zeros(n_free), 1.0), method="SLSQP",
-                          constraints=cons, options={"maxiter": maxiter, "ftol": 1e-12})
-        candidates = [(result.x[:-1], "SLSQP")] + ([(z_lp, "HiGHS")] if z_lp is not None else [])
+        x, message, iterations, spent = _minimize(counter, lambda y: y[-1], y0,
+                                                  jac=lambda y: np.append(np.zeros(n_free), 1.0), constraints=cons,
+                                                  options={"maxiter": maxiter, "ftol": 1e-12})
+        candidates = [(x[:-1], "SLSQP")] + ([(z_lp, "HiGHS")] if z_lp is not None else [])
         feasible = [(np.max(np.abs(column(z))), z, name) for z, name in candidates
                     if np.all(limits_of(z) >= -1e-9) and area_met(z)]
-        z, method = (min(feasible, key=lambda item: item[0])[1:] if feasible else (result.x[:-1], "SLSQP"))
+        z, method = (min(feasible, key=lambda item: item[0])[1:] if feasible else (x[:-1], "SLSQP"))
         method = ("HiGHS (LP start), then SLSQP" if z_lp is not None else "SLSQP") + f"; best: {method}"
-        success, message, iterations = bool(feasible), str(result.message), int(result.nit)
     elif objective == "residual-vibration":
         # the amplitudes are |c_s + G_s z| (linear in z inside the modulus): epigraph on their
         # squares, smooth everywhere, with exact Jacobians
@@ -413,17 +519,24 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> D
         cons = [{"type": "ineq", "fun": squared, "jac": squared_jac},
                 {"type": "ineq", "fun": lambda y: limits_of(y[:-1])}] + held
         y0 = np.append(z0, 1.0)
-        result = minimize(lambda y: y[-1], y0, jac=lambda y: np.append(np.zeros(n_free), 1.0), method="SLSQP",
-                          constraints=cons, options={"maxiter": maxiter, "ftol": 1e-16})
-        z = result.x[:-1]
-        success, message, iterations = bool(result.success), str(result.message), int(result.nit)
+        x, message, iterations, spent = _minimize(counter, lambda y: y[-1], y0,
+                                                  jac=lambda y: np.append(np.zeros(n_free), 1.0), constraints=cons,
+                                                  options={"maxiter": maxiter, "ftol": 1e-16})
+        z = x[:-1]
     else:
         fun = lambda z: objective_value(scene, problem.lift(z), problem.derivatives(z), objective, limits) / norm  # noqa: E731
         cons = [{"type": "ineq", "fun": limits_of}] + held
-        result = minimize(fun, z0, method="SLSQP", constraints=cons, options={"maxiter": maxiter, "ftol": 1e-14})
-        z = result.x
-        success, message, iterations = bool(result.success), str(result.message), int(result.nit)
+        z, message, iterations, spent = _minimize(counter, fun, z0, constraints=cons,
+                                                  options={"maxiter": maxiter, "ftol": 1e-14})
     lift = problem.lift(z)
+    # the optimum is a computed cam: the checks of every cam (explorer.lift.validity) before it is reported
+    from ..lift.validity import check_computed
+
+    check_computed(lift, scene.follower, scene.source, "lift.stations", f"the optimised lift (--objective {objective})",
+                   {"undercut": "keep its curvature with --radius-margin (0 or more)",
+                    "pressure angle": "limit it with --max-pressure-angle",
+                    "lift range": "hold a smaller --open-area, or give fewer station lifts s as \"free\"",
+                    "": "check the scene's units"})
     value, _, slacks = evaluate(scene, lift, objective, limits, problem.x, target)
     values = {key: float(zi * si) for key, zi, si in zip(problem.free, z, problem.scale)}
     comparison = {}
@@ -432,16 +545,15 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500) -> D
         std = LawLift(height=height, start=scene.lift.start, rise=rise, dwell=dwell, ret=ret,
                       rise_law=law_name, return_law=law_name)
         comparison[law_name] = evaluate(scene, std, objective, limits, problem.x, target)[::2]
-    from ..lift.spline import with_values
 
     # SLSQP often ends a nonsmooth (peak) problem with "positive directional derivative for
     # linesearch" at its optimum: the result counts when every limit is met and it improved on a
     # start that met them too (a start off the held area may have to get worse to reach it)
     start_met = all(v >= -1e-9 for v in evaluate(scene, problem.lift(z0), objective, limits, problem.x, target)[2].values())
-    met = all(v >= -1e-9 for v in slacks.values()) and (value <= start_value or not start_met)
+    met = all(v >= -1e-9 for v in slacks.values()) and (value <= start_value or not start_met) and not spent
     return DesignReport(objective, value, start_value, values, slacks, comparison, iterations,
-                        met, message if met else message + "; a limit is violated or nothing improved",
-                        with_values(problem.options, values), method, target)
+                        met, message if met or spent else message + "; a limit is violated or nothing improved",
+                        with_values(problem.options, values), method, target, limits)
 
 
 def _event_shape(problem) -> tuple[float, float, float, float]:
@@ -455,8 +567,6 @@ def _event_shape(problem) -> tuple[float, float, float, float]:
 
 
 def report_text(scene, report: DesignReport) -> str:
-    from ..lift.spline import NAMES, UNITS
-
     unit = {"peak-acceleration": "m/s**2", "peak-jerk": "m/s**3", "jerk-energy": "m**2/s**5",
             "residual-vibration": "m"}[report.objective]
     w = scene.omega
@@ -465,6 +575,7 @@ def report_text(scene, report: DesignReport) -> str:
              f"  optimum {report.value:.6g} {unit} (start {report.start_value:.6g})"]
     if report.open_area is not None:
         lines.append(f"  open area held at {1e3 * math.degrees(report.open_area):.6g} mm*deg")
+    lines += speed_notes(scene, report.objective, report.limits)
     for (i, k), value in report.values.items():
         lines.append(f"  station {i} {NAMES[k]} = {value * w**k:.9g} {UNITS[k]}")
     lines.append("  constraint slacks (>= 0 met):")
@@ -477,10 +588,23 @@ def report_text(scene, report: DesignReport) -> str:
     return "\n".join(lines) + "\n"
 
 
+def speed_notes(scene, objective: str, limits: DesignLimits | None) -> list[str]:
+    """The speeds the limits and the objective hold at, defaults named: a default that shapes the
+    result is printed with it."""
+    lines = []
+    if limits is not None and limits.contact_margin is not None:
+        upto = (f"{limits.contact_rpm:g} rpm (--contact-rpm)" if limits.contact_rpm is not None
+                else f"{scene.drive.rpm:g} rpm (drive.rpm: the default without --contact-rpm)")
+        lines.append(f"  contact margin {limits.contact_margin:g} N held at every speed up to {upto}")
+    if objective == "residual-vibration":
+        band = limits.band if limits is not None else None
+        lines.append(f"  residual vibration over {band[0]:g} to {band[1]:g} rpm (--band)" if band is not None
+                     else f"  residual vibration at {scene.drive.rpm:g} rpm (drive.rpm: the default without --band)")
+    return lines
+
+
 def stations_toml(scene, report: DesignReport) -> str:
     """The optimised [[lift.stations]] in scene syntax."""
-    from ..lift.spline import NAMES
-
     w = report.options.reference_rpm * TWO_PI / 60.0
     units = ("mm", "m/s", "m/s**2", "m/s**3", "m/s**4")
     scale = (1e3, 1.0, 1.0, 1.0, 1.0)

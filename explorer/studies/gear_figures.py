@@ -12,10 +12,18 @@ writes
 from __future__ import annotations
 
 import argparse
+import io
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+
+from ..core.outputs import write_output
+from ..effects.lift import build_lift
+from ..effects.pipeline import simulate
+from ..scene.builtin import scenes_dir
+from ..scene.scene import load_scene
 
 TWO_PI = 2.0 * math.pi
 
@@ -26,7 +34,6 @@ def rocking_cam_figure(scene, path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..effects.lift import build_lift
     from ..gears.rocking import swing_increments
 
     lift = build_lift(scene)
@@ -74,8 +81,6 @@ def rocking_cam_figure(scene, path) -> Path:
 
 
 def buffer_rows(scene) -> list[dict]:
-    from ..effects.pipeline import simulate
-
     return list(simulate(scene).summary["gear"]["buffer_comparison"])
 
 
@@ -94,10 +99,8 @@ def trip_buffers_figure(scene, path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from dataclasses import replace
 
-    from ..effects.lift import build_lift
-    from ..gears.build import make_buffer
+    from ..gears.trip_gear import make_buffer
     from ..gears.trip import simulate_closing
 
     lift = build_lift(scene)
@@ -129,9 +132,6 @@ def trip_buffers_figure(scene, path) -> Path:
 
 def _save_png(fig, path: Path) -> None:
     """By explorer.core.outputs' rules (temporary and rename, mode kept), like every other output."""
-    import io
-
-    from ..core.outputs import write_output
 
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
@@ -139,8 +139,6 @@ def _save_png(fig, path: Path) -> None:
 
 
 def main(argv=None) -> int:
-    from ..scene.scene import load_scene
-    from ..scene.builtin import scenes_dir
 
     parser = argparse.ArgumentParser(prog="python -m explorer.studies.gear_figures", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -155,8 +153,6 @@ def main(argv=None) -> int:
     print(rocking_cam_figure(rocking, out / "rocking_cam_swings.png"))
     print(trip_buffers_figure(trip, out / "trip_buffers.png"))
     table = buffer_table_markdown(buffer_rows(trip))
-    from ..core.outputs import write_output
-
     write_output(out / "trip_buffers.md", table)
     print(table, end="")
     return 0

@@ -25,7 +25,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
+from ..effects.lift import build_lift
+from ..gears.registry import GEARS
+from ..lift.polydyne import RISE_POLYNOMIALS, residual_amplitude
+from .charts import figure, png
+from .sweep_run import run_plan
+from .sweep_spec import check_scene, make_plan, parse_axis
+from .sweep_table import SweepTable
 
 TWO_PI = 2.0 * math.pi
 MAX_SPEEDS = 2000
@@ -50,8 +57,9 @@ def residual_scene(scene):
         missing = [s for s in ("valve", "spring", "linkage") if getattr(scene, s) is None]
         raise InputError(scene.source, missing[0], "missing section: the residual vibration needs the elastic linkage "
                          "([valve], [spring], [linkage])")
-    if scene.follower.type != "translating-roller":
-        raise InputError(scene.source, "follower.type", "residual vibration sweeps are for translating-roller cams")
+    if not scene.gear_plugin.batch_sweeps:  # the cam must be the same at every speed
+        makers = [name for name, gear in GEARS.items() if gear.batch_sweeps]
+        raise InputError(scene.source, "follower.type", f"residual vibration sweeps are for {', '.join(makers)} cams")
     if scene.spring.elements > 0:
         raise InputError(scene.source, "spring.elements", "residual vibration sweeps are for the massless spring "
                          "(the spring chain's effect computes no residual columns)")
@@ -74,9 +82,6 @@ def contact_through_rise(lift, separations: float, first_separation_deg: float) 
 
 def closed_forms(scene, rpm: np.ndarray, separations: np.ndarray, first_separation_deg: np.ndarray) -> np.ndarray:
     """residual_closed_form_m per run (module doc)."""
-    from ..effects.lift import build_lift
-    from ..lift.polydyne import RISE_POLYNOMIALS, residual_amplitude
-
     out = np.full(rpm.shape, math.nan)
     lift = build_lift(scene)
     wanted = getattr(lift, "wanted", None)
@@ -90,10 +95,6 @@ def closed_forms(scene, rpm: np.ndarray, separations: np.ndarray, first_separati
 
 def residual_table(scene, rpms, *, workers: int | None = None, progress=None):
     """The sweep table over the speeds `rpms` (rev/min) with the closed-form column added."""
-    from .sweep_run import run_plan
-    from .sweep_spec import check_scene, make_plan, parse_axis
-    from .sweep_table import SweepTable
-
     scene = residual_scene(scene)
     plan = make_plan([parse_axis("drive.rpm", [float(r) for r in np.asarray(rpms, dtype=float).ravel()], file="--rpm")],
                      file="--rpm")
@@ -128,8 +129,6 @@ def residual_sweep(scene, rpms, progress=None, workers: int | None = 1) -> list[
 
 def chart_png(scene, table) -> bytes:
     """Deviation (and the dwell amplitude with its closed form) against speed, log scale."""
-    from .charts import figure, png
-
     c = table.columns
     rpm = np.asarray(c["drive_rpm"], float)
     floor = 1e-16
@@ -155,21 +154,14 @@ def chart_png(scene, table) -> bytes:
 
 
 def parse_speeds(text: str) -> np.ndarray:
-    """'A:B:N' (N speeds from A to B rpm) or 'A,B,C'."""
-    key = "--rpm"
-    try:
-        if ":" in text:
-            a, b, n = text.split(":")
-            lo, hi, count = float(a), float(b), int(n)
-            if not 1 <= count <= MAX_SPEEDS:
-                raise InputError("<command line>", key, f"between 1 and {MAX_SPEEDS} speeds, got {count}")
-            speeds = np.linspace(lo, hi, count)
-        else:
-            speeds = np.array([float(x) for x in text.split(",")])
-    except ValueError:
-        raise InputError("<command line>", key, f"expected A:B:N or A,B,C in rpm, got {text[:40]!r}") from None
-    if speeds.size > MAX_SPEEDS:
-        raise InputError("<command line>", key, f"at most {MAX_SPEEDS} speeds, got {speeds.size}")
-    if not np.all(np.isfinite(speeds)) or np.any(speeds <= 0.0) or np.any(speeds > 100_000.0):
-        raise InputError("<command line>", key, "speeds must lie in (0, 100000] rpm")
+    """--rpm in the range grammar of every command (explorer.core.grids, as `explorer sweep
+    --vary drive.rpm=...`): 'A:B:N' (N speeds from A to B, upwards), 'A:B:N:log' or 'A,B,C';
+    bare numbers in rev/min, or with a unit; each speed in drive.rpm's valid range."""
+    from ..core import grids
+    from .sweep_spec import SWEEP_KEYS, check_values, quantity
+
+    info, key = SWEEP_KEYS["drive.rpm"], "--rpm"
+    shape = grids.read(text, file=key, key=info.key, max_points=MAX_SPEEDS)
+    speeds = grids.values(shape, lambda value: quantity(value, info, key), file=key, key=info.key)
+    check_values(info, speeds, key)
     return speeds

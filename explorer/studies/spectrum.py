@@ -27,6 +27,8 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.units import resolved
+from ..dynamics.chain import chain_frequencies, continuous_frequencies
+from .charts import figure, png
 
 TWO_PI = 2.0 * math.pi
 MAX_ORDERS = 5000
@@ -71,8 +73,6 @@ def acceleration_spectrum(scene, lift, orders: int = 100, samples: int | None = 
 
 def spring_surge_orders(spring, omega: float, orders: int) -> tuple[float, ...]:
     """The spring's own frequencies (ends held) as cam orders up to `orders`; () for a massless spring."""
-    from ..dynamics.chain import chain_frequencies, continuous_frequencies
-
     if spring is None or spring.mass <= 0.0 or spring.rate <= 0.0:
         return ()
     if spring.elements > 0:
@@ -98,8 +98,6 @@ def table_text(scene, spectrum: Spectrum) -> str:
 
 
 def chart_png(scene, spectrum: Spectrum) -> bytes:
-    from .charts import figure, png
-
     with figure(figsize=(8.0, 4.6), dpi=110) as (fig, ax):
         floor = max(float(spectrum.amplitude.max()) * 1e-8, 1e-12)
         ax.semilogy(spectrum.orders, np.maximum(spectrum.amplitude, floor), "o-", ms=3, lw=0.8,

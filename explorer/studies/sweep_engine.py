@@ -1,25 +1,32 @@
 """The batch engine of a sweep: the scalars of many runs of one scene, one row per run.
 
-A run is `simulate(scene with the run's values)` reduced to the figures a designer reads
-(row_scalars). The engine computes the same figures without the parts of `simulate` that no
-row needs, and shares across runs everything that does not depend on the varied values:
+A run is `simulate(scene with the run's values)` reduced to the figures a designer reads: each
+effect's row function (explorer/effects/registry.py: sweep_figures and row). The engine computes
+the same figures without the parts of `simulate` that no row needs, and shares across runs
+everything that does not depend on the varied values:
 
-- the lift curve (built once: the cam is the same in every run; for the gears whose lift a
-  builder assembles from the scene, and for the trip gear's own effects, each run goes through
-  `simulate` whole -- correct, and as slow as a loop);
-- the rigid float speed and the smooth pieces of the lift (they depend on lash, masses and
-  loads, not on the speed: cached per distinct set of those), the lash take-up angles (per lash);
-- the forces effect's side figures and loss intervals, which no row holds, are not computed.
+- the lift curve (built once: the cam is the same in every run, and so is a gear's lift when it
+  reads none of the run's values and the gear brings no effect of its own, Gear.shares_lift; for a
+  gear whose lift does (the trip gear's closing, a rocking cam fitted to its target after the lash)
+  or that brings its own effects (the trip gear's), each run goes through `simulate` whole --
+  correct, and as slow as a loop);
+- what the effects' figures-only forms keep across runs (the pipeline's `figures` run: the rigid
+  float speed and the smooth pieces of the lift, per distinct lash, masses and loads; the lash
+  take-up angles per lash); what no row holds (the forces' side figures, the loss intervals) is not
+  computed.
 
-Which engine computes a chunk's rows is a registry (ENGINES, the first that accepts the scene):
-- "compiled" (effects/elastic_batch.py): the elastic figures from the compiled exact solver
-  (dynamics/exact_kernel.py), for the scenes whose elastic effect solves the LinkageModel with the
-  exact solver and a constant stiffness; equal to simulate's within 1e-12 m of lift, 1e-12 s of
-  event time and ~1e-9 relative of a figure (rounding of another order of the same operations;
-  tests/test_effects/elastic_batch.py);
-- "shared": the elastic effect itself (elastic_effect), each row equal to simulate's to the bit
-  (tests/test_sweep_engine.py), for the other non-gear scenes (a spring chain, another solver);
-- "simulate": simulate whole (the gears).
+Which engine computes a chunk's rows is a table (ENGINES, the first that accepts the scene):
+- "compiled" (effects/elastic_batch.py): the elastic figures from the solver's compiled batch module
+  (explorer/dynamics/solvers.py: batch_entry, the exact solver's exact_kernel), for the scenes whose
+  gear takes batches (Gear.batch_sweeps), whose elastic effect solves the LinkageModel with that
+  solver and a constant stiffness and whose every figure it computes; equal to simulate's within
+  1e-12 m of lift, 1e-12 s of event time and ~1e-9 relative of a figure (rounding of another order of
+  the same operations; tests/test_sweep_kernel.py);
+- "shared": the pipeline's figures-only run (effects/pipeline.figures), each row equal to simulate's
+  to the bit (tests/test_sweep_engine.py), for the other scenes whose runs share a lift (a spring
+  chain, another solver, a lever gear, an effect of the table that the compiled path does not know);
+- "simulate": simulate whole (the gears whose lift reads the run's values or whose effects are their
+  own).
 
 Columns (SI units in the names, as in `simulate`'s CSV), by effect:
   forces   min_contact_force_N (rigid, refined), float_speed_rpm (rigid; NaN: never floats)
@@ -38,187 +45,62 @@ and always run_failed (1: the run raised; its figures NaN) after the varied inpu
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from types import MappingProxyType
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..core.errors import InputError
-from ..core.memo import CACHE_ENTRIES, remember as _remember  # noqa: F401 (CACHE_ENTRIES: the tests')
-from ..effects.elastic_batch import BatchCache
+from ..core.memo import CACHE_ENTRIES  # noqa: F401 (the tests')
+from ..core.plugins import resolve
+from ..effects import registry as effects
+from ..effects.elastic_batch import BatchCache, ELASTIC, accepts, elastic_chunk, elastic_run
+from ..effects.pipeline import RunCache, figures, simulate
+from .sweep_rigid import RIGID, rigid_over_speeds
 from .sweep_spec import scene_for
-
-EFFECT_COLUMNS: dict[str, tuple[str, ...]] = {
-    "forces": ("min_contact_force_N", "float_speed_rpm"),
-    "contact": ("max_camshaft_torque_Nm",),
-    "elastic": ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
-                "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
-                "largest_bounce_m", "residual_deviation_m", "residual_amplitude_m"),
-}
 
 
 def result_columns(scene) -> tuple[str, ...]:
-    """The figures a row of this scene holds: those of the effects it computes, and run_failed."""
-    from ..effects.pipeline import resolve
-
-    effects = resolve(scene.effects)
-    out: list[str] = []
-    for effect, cols in EFFECT_COLUMNS.items():
-        if effect in effects:
-            out.extend(cols)
-    return tuple(out) + ("run_failed",)
+    """The figures a row of this scene holds: those of the effects it computes (the effect table's
+    sweep_figures), and run_failed."""
+    return effects.sweep_figures(scene.effects) + ("run_failed",)
 
 
-def _nan_none(x) -> float:
-    return math.nan if x is None else float(x)
-
-
-def row_scalars(names, summary, events, columns) -> dict[str, float]:
-    """The row of one run from what its effects returned (a Result's summary, events and
-    columns, or the engine's own): one definition for `simulate` and the engine."""
-    row: dict[str, float] = {}
+def row_figures(names, result) -> dict[str, float]:
+    """The row of one run from its Result (of `simulate` or of the pipeline's figures-only run): each
+    effect's row function (the effect table), one definition for both."""
     names = set(names)
-    if "min_contact_force_N" in names:
-        row["min_contact_force_N"] = _nan_none(summary.get("min_contact_force_N"))
-        if summary.get("min_contact_force_N") is None:
-            row["min_contact_force_N"] = math.inf  # the valve never opens: no contact to lose
-        row["float_speed_rpm"] = _nan_none(summary.get("jump_speed_rpm"))
-    if "max_camshaft_torque_Nm" in names:
-        row["max_camshaft_torque_Nm"] = _nan_none(summary.get("max_camshaft_torque_Nm"))
-    if "separations" in names:
-        elastic = [e for e in events if e.get("effect", "elastic") == "elastic"]
-        period = float(summary["revolution_time_s"])
-        seps = [e for e in elastic if e["kind"] == "separation"]
-        seats = [e for e in elastic if e["kind"] == "seat"]
-        lift_offs = [float(e["time_s"]) for e in elastic if e["kind"] == "lift-off"]
-        row["first_separation_deg"] = float(seps[0]["cam_angle_deg"]) if seps else math.nan
-        row["separations"] = float(len(seps))
-        row["flight_time_s"] = float(summary["separated_angle_deg"]) / 360.0 * period
-        row["max_deviation_m"] = float(summary["max_deviation_m"])
-        row["peak_linkage_force_N"] = float(summary["peak_linkage_force_N"])
-        row["peak_camshaft_back_pressure_N"] = float(summary["peak_camshaft_back_pressure_N"])
-        ups = summary.get("take_up_times_s")
-        if ups is None:
-            ups = [float(e["time_s"]) for e in events if e["kind"] == "lash-take-up"]
-        if ups and lift_offs:
-            row["lift_off_delay_s"] = min(math.fmod(t - ups[0] + period, period) for t in lift_offs)
-        else:
-            row["lift_off_delay_s"] = math.nan
-        row["seating_velocity_m_s"] = min(float(e["velocity_m_s"]) for e in seats) if seats else math.nan
-        row["seat_impacts"] = float(len(seats))
-        row["largest_bounce_m"] = _largest_bounce(elastic, seats, columns)
-        for name in ("residual_deviation_m", "residual_amplitude_m"):  # the elastic effect's (effects/residual.py)
-            row[name] = _nan_none(summary.get(name))
+    row: dict[str, float] = {}
+    for name in effects.order(result.scene.effects):
+        spec = effects.effect_spec(name)
+        if spec.row is not None and names & set(spec.sweep_figures):
+            row.update(resolve(spec.row)(result))
     return row
 
 
-def _largest_bounce(elastic, seats, columns) -> float:
-    """Highest valve lift on the output grid after a seat impact, before the next elastic event."""
-    if not seats:
-        return 0.0
-    t, s = np.asarray(columns["time_s"]), np.asarray(columns["valve_lift_m"])
-    times = [float(e["time_s"]) for e in elastic]
-    best = 0.0
-    for ev in seats:
-        t0 = float(ev["time_s"])
-        later = [x for x in times if x > t0]
-        t1 = min(later) if later else float(t[-1]) + 1.0
-        inside = (t > t0) & (t < t1)
-        if inside.any():
-            best = max(best, float(s[inside].max()))
-    return best
-
-
 def reference_row(scene, names) -> dict[str, float]:
-    """The row from `simulate` itself (the tests' oracle and the gears' path)."""
-    from ..effects.pipeline import simulate
-
-    result = simulate(scene)
-    return row_scalars(names, result.summary, result.summary["events"], result.columns)
+    """The row from `simulate` itself (the tests' oracle and the path of the gears whose runs share
+    no lift)."""
+    return row_figures(names, simulate(scene))
 
 
 @dataclass
-class _Shared(BatchCache):
-    """What the runs of one chunk share (built on first use): the compiled path's (lift, revolution
-    grids, take-up angles: effects/elastic_batch.py) and the rigid figures' smooth pieces and
-    float speeds."""
-
-    pieces: dict = field(default_factory=dict)
-    jumps: dict = field(default_factory=dict)
+class _Shared(RunCache, BatchCache):
+    """What the runs of one chunk share (built on first use): the lift curve, each effect's memo of
+    the figures-only run (effects/pipeline.RunCache: the forces' smooth pieces and float speeds, the
+    lash take-ups) and the compiled path's revolution grids and take-up angles
+    (effects/elastic_batch.BatchCache)."""
 
 
 def _batchable(scene) -> bool:
-    """True when the lift is the same curve in every run and the effects are the generic ones."""
-    from ..gears.registry import GEARS
-
-    return scene.follower.type not in GEARS
+    """True when the runs share one lift curve and the generic effects (the scene's gear says:
+    Gear.shares_lift -- no variant of an effect, a lift that reads none of the sweep keys)."""
+    return scene.gear_plugin.shares_lift(scene)
 
 
 def engine_row(scene, names, shared: _Shared) -> dict[str, float]:
-    """The row of one run, computed as simulate computes it, sharing `shared` across runs."""
-    summary, events, columns = engine_outputs(scene, shared)
-    return row_scalars(set(names), summary, events, columns)
-
-
-def engine_outputs(scene, shared: _Shared) -> tuple[dict, list, dict]:
-    """(summary, elastic events, columns) of one run: what the rows are read from."""
-    from ..effects.pipeline import Context, effect_function, resolve
-    from ..effects.lift import build_lift
-
-    if shared.lift is None:
-        shared.lift = build_lift(scene)
-    lift = shared.lift
-    effects = resolve(scene.effects)
-    n = scene.solver.steps_per_revolution
-    theta = np.arange(n) * (2.0 * math.pi / n)  # as simulate builds them: the same floats
-    omega = scene.drive.omega
-    t_time = theta / omega
-    columns: dict[str, np.ndarray] = {"cam_angle_deg": np.degrees(theta), "time_s": t_time}
-    summary: dict[str, Any] = {"revolution_time_s": 2.0 * math.pi / omega}
-    events: list[dict] = []
-
-    def ctx():
-        return Context(scene, theta, t_time, lift, MappingProxyType(columns), MappingProxyType(summary))
-
-    rigid = "forces" in effects or "contact" in effects
-    if rigid:
-        out = effect_function("kinematics", scene.follower.type)(ctx())
-        columns.update(out.columns)
-    if "forces" in effects:
-        summary.update(_forces_scalars(scene, lift, omega, shared, columns))
-    if "contact" in effects:
-        out = effect_function("contact", scene.follower.type)(ctx())
-        summary["max_camshaft_torque_Nm"] = out.summary.get("max_camshaft_torque_Nm")
-    if "elastic" in effects:
-        ratio, lash = scene.follower.ratio, scene.valve.lash
-        from ..mechanics.kinematics import lash_crossings
-
-        ups = _remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
-        summary["take_up_times_s"] = [th / omega for th in ups]  # lash_effect's time_s, same arithmetic
-        out = effect_function("elastic", scene.follower.type)(ctx())
-        columns.update(out.columns)
-        summary.update(out.summary)
-        events.extend(dict(e, effect="elastic") for e in out.events)
-        events.sort(key=lambda e: e["time_s"])
-    return summary, events, columns
-
-
-def _forces_scalars(scene, lift, omega, shared: _Shared, columns) -> dict:
-    """The forces effect's columns (into `columns`), its refined minimum contact force at this
-    speed and the float speed (cached: it does not depend on the speed)."""
-    from ..mechanics.forces import TrainLoads, float_speed, min_contact_force, rigid_train_forces, smooth_pieces
-
-    loads = TrainLoads.from_scene(scene)
-    ratio, lash = scene.follower.ratio, scene.valve.lash
-    n_grid = max(4096, scene.solver.steps_per_revolution)
-    columns.update(rigid_train_forces(columns["rigid_valve_lift_m"], columns["rigid_valve_velocity_m_s"],
-                                      columns["rigid_valve_accel_m_s2"], loads, ratio))
-    pieces = _remember(shared.pieces, (ratio, lash, n_grid), lambda: smooth_pieces(lift, ratio, lash, n_grid))
-    f_min, _ = min_contact_force(lift, loads, omega, ratio, lash, pieces, n_grid)
-    jump = _remember(shared.jumps, (ratio, lash, n_grid, loads), lambda: float_speed(lift, loads, ratio, lash, pieces, n_grid))
-    return {"min_contact_force_N": f_min if math.isfinite(f_min) else None,
-            "jump_speed_rpm": jump.rpm if math.isfinite(jump.omega) else None}
+    """The row of one run: the pipeline's figures-only run, sharing `shared` across runs."""
+    return row_figures(names, figures(scene, shared))
 
 
 @dataclass(frozen=True)
@@ -242,9 +124,8 @@ class RowEngine:
 
 
 def _kernel_accepts(scene, shared) -> bool:
-    from ..effects.elastic_batch import accepts
-
-    return accepts(scene, shared)
+    """The compiled path computes every figure of the scene's row (its rigid and elastic ones)."""
+    return set(result_columns(scene)) <= {*ELASTIC, *RIGID, "run_failed"} and accepts(scene, shared)
 
 
 def speed_groups(keys, values) -> list[np.ndarray]:
@@ -262,14 +143,10 @@ def speed_groups(keys, values) -> list[np.ndarray]:
 def _kernel_row(scene, names, shared) -> dict[str, float]:
     """The row of one run: the elastic figures compiled (elastic_batch.elastic_run), the rigid ones
     (forces, contact) as the compiled chunk computes them (sweep_rigid.py, a group of one)."""
-    from ..effects.elastic_batch import ELASTIC, elastic_run
-
     names = set(names)
     row: dict[str, float] = {}
     rigid = names - set(ELASTIC) - {"run_failed"}
     if rigid:
-        from .sweep_rigid import rigid_over_speeds
-
         row.update({name: float(v[0]) for name, v in rigid_over_speeds([scene], rigid, shared).items()})
     figures, _, _ = elastic_run(scene, shared)
     row.update(figures)
@@ -282,9 +159,6 @@ def _kernel_chunk(scenes, names, shared, groups=None) -> np.ndarray:
     once (sweep_rigid.py; groups: index arrays, default each run alone). Every run's rigid figures
     take the same arithmetic whatever else its chunk holds, so a table does not depend on how it
     was cut into chunks (the cluster's equals the serial one bit for bit)."""
-    from ..effects.elastic_batch import ELASTIC, elastic_chunk
-    from .sweep_rigid import rigid_over_speeds
-
     names = tuple(names)
     out = np.full((len(scenes), len(names)), math.nan)
     fail = names.index("run_failed")
@@ -316,7 +190,7 @@ ENGINES: tuple[RowEngine, ...] = (
     RowEngine("compiled", _kernel_accepts, _kernel_row, _kernel_chunk, pool_min_runs=10_000, max_chunk=4096),
     # the effects' own functions, sharing the lift and the rigid float speed across runs
     RowEngine("shared", lambda scene, shared: _batchable(scene), engine_row),
-    # simulate itself (the gears, whose lift or effects are their own)
+    # simulate itself (the gears whose lift reads the run's values or whose effects are their own)
     RowEngine("simulate", lambda scene, shared: True, lambda scene, names, shared: reference_row(scene, names)),
 )
 

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from ..core.outputs import as_output, output_path
 from .charts import figure, png
 from .sweep_spec import SWEEP_KEYS
 
@@ -162,7 +163,6 @@ def record(table, path) -> None:
     and a `run` timeline, the rows ordered by the first key."""
     import rerun as rr
 
-    from ..core.outputs import as_output, output_path
 
     out = as_output(path, "--record")
     meta = table.metadata

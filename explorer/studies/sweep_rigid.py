@@ -16,26 +16,24 @@ run alone is a group of one, computed the same way.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from types import MappingProxyType
 
 import numpy as np
+
+from ..core.memo import remember
+from ..effects.contact import peak_torques, torque_factors
+from ..effects.pipeline import Context, figures
+from ..mechanics.forces import TrainLoads, float_speed, grid_load_parts, min_contact_forces, smooth_pieces
 
 RIGID = ("min_contact_force_N", "float_speed_rpm", "max_camshaft_torque_Nm")
 
 
 def rigid_over_speeds(scenes, names, shared) -> dict[str, np.ndarray]:
     """{name: value per run} of the rigid names asked for, for scenes that differ in speed only."""
-    from ..effects.contact import peak_torques, torque_factors
-    from ..effects.lift import build_lift
-    from ..effects.pipeline import Context, effect_function
-    from ..mechanics.forces import TrainLoads, float_speed, grid_load_parts, min_contact_forces, smooth_pieces
-    from ..core.memo import remember
-
     scene = scenes[0]
     if shared.lift is None:
-        shared.lift = build_lift(scene)
+        shared.lift = scene.gear_plugin.build_lift(scene)
     lift = shared.lift
     omegas = np.array([s.drive.omega for s in scenes])
     out: dict[str, np.ndarray] = {}
@@ -43,17 +41,18 @@ def rigid_over_speeds(scenes, names, shared) -> dict[str, np.ndarray]:
     if "min_contact_force_N" in names or "float_speed_rpm" in names:
         loads = TrainLoads.from_scene(scene)
         n_grid = max(4096, scene.solver.steps_per_revolution)
-        pieces = remember(shared.pieces, (ratio, lash, n_grid), lambda: smooth_pieces(lift, ratio, lash, n_grid))
+        pieces = remember(shared.of("forces pieces"), (ratio, lash, n_grid), lambda: smooth_pieces(lift, ratio, lash, n_grid))
         f_min, _ = min_contact_forces(lift, loads, omegas, ratio, lash, pieces, n_grid)
-        out["min_contact_force_N"] = f_min  # +inf: the valve never opens, as row_scalars writes it
-        jump = remember(shared.jumps, (ratio, lash, n_grid, loads), lambda: float_speed(lift, loads, ratio, lash, pieces, n_grid))
+        out["min_contact_force_N"] = f_min  # +inf: the valve never opens, as effects.forces.forces_row writes it
+        jump = remember(shared.of("forces jumps"), (ratio, lash, n_grid, loads),
+                        lambda: float_speed(lift, loads, ratio, lash, pieces, n_grid))
         out["float_speed_rpm"] = np.full(omegas.size, jump.rpm if math.isfinite(jump.omega) else math.nan)
     if "max_camshaft_torque_Nm" in names:
         theta, a_coef, g_part, is_open = grid_load_parts(scene, lift)
-        # the kinematics' geometry columns at the first speed: the factors do not depend on it
-        ctx = Context(scene, theta, theta / omegas[0], lift, MappingProxyType({}), MappingProxyType({}))
-        columns = dict(effect_function("kinematics", scene.follower.type)(ctx).columns)
-        ctx = dataclasses.replace(ctx, columns=MappingProxyType(columns))
+        # the kinematics' geometry columns at the first speed (the pipeline's run of that effect
+        # alone): the factors do not depend on the speed
+        kinematics = figures(scene, shared, effects=("kinematics",))
+        ctx = Context(scene, theta, kinematics.columns["time_s"], lift, kinematics.columns, MappingProxyType({}))
         push, pull = torque_factors(ctx)
         out["max_camshaft_torque_Nm"] = peak_torques(a_coef, g_part, is_open, push, pull, omegas)
     return out

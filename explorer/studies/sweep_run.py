@@ -19,18 +19,25 @@ read-only mappings (MappingProxyType, which plain pickle refuses) written as dic
 from __future__ import annotations
 
 import math
+import multiprocessing
 import os
 import pickle
 import re
 import signal
 import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Callable
 
 import numpy as np
 
+from ..core.errors import InputError
+from ..core.outputs import write_output
 from ..core.pickling import dumps as dumps_scene
+from ..core.processes import _PR_SET_PDEATHSIG, _load_prctl
+from ..scene.scene import load_scene
 from .sweep_engine import _Shared, compute_chunk, engine_for, result_columns
-from .sweep_spec import SWEEP_KEYS, Plan
+from .sweep_plots import sweep_png, record
+from .sweep_spec import SWEEP_KEYS, Plan, check_scene, make_plan, parse_axis, parse_sample
 from .sweep_table import SweepTable
 
 # Runs per chunk: enough that a task's overhead (pickling, a round trip; ~1-5 ms locally, more
@@ -51,6 +58,18 @@ def local_cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def worker_count(requested: int | None) -> tuple[int, str | None]:
+    """(local worker processes, a note when the request was capped): every usable core by
+    default, never more. A worker beyond the cores adds no speed, only a copy of the process
+    (~100 MB each, 1.7 GB for 40 on a 2-core machine) and a share of the others' time."""
+    cores = local_cores()
+    if requested is None:
+        return cores, None
+    if requested > cores:
+        return cores, f"--workers {requested}: capped at the {cores} usable core{'s' if cores != 1 else ''}"
+    return max(1, int(requested)), None
+
+
 def chunk_size(runs: int, workers: int, max_chunk: int = 64) -> int:
     """About four chunks per worker, at most max_chunk runs each."""
     return max(1, min(max_chunk, math.ceil(runs / (4 * max(1, workers)))))
@@ -60,13 +79,16 @@ def chunk_size(runs: int, workers: int, max_chunk: int = 64) -> int:
 _WORKER: dict = {}  # the scene and shared caches of this worker process (set by _init_worker)
 
 
-def _init_worker(scene_bytes: bytes, keys, names) -> None:
+def _init_worker(parent: int, scene_bytes: bytes, keys, names) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C and ends us
-    from ..core.processes import _PR_SET_PDEATHSIG, _load_prctl
+    for sig in (signal.SIGTERM, signal.SIGHUP):  # the parent's handlers (forked with us) are not ours
+        signal.signal(sig, signal.SIG_DFL)
 
     prctl = _load_prctl()
     if prctl is not None:
         prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent:  # the parent died between our fork and the line above
+        os._exit(1)
     _WORKER.update(scene=loads_scene_bytes(scene_bytes), keys=tuple(keys), names=tuple(names), shared=_Shared())
 
 
@@ -102,9 +124,10 @@ def metadata(scene, plan: Plan, names, complete: bool, finished: int, seconds: f
 def run_plan(scene, plan: Plan, *, workers: int | None = None, scheduler: str | None = None,
              progress: Callable[[int, int, float], None] | None = None, chunk: int | None = None) -> SweepTable:
     """The table of the plan's runs (see the module docstring). `progress(done, total, seconds)`
-    is called as chunks finish."""
+    is called as chunks finish. `workers`: local processes, at most the usable cores (more are
+    capped: worker_count)."""
     names = result_columns(scene)
-    workers = local_cores() if workers is None else max(1, int(workers))
+    workers = worker_count(workers)[0]
     engine = engine_for(scene, _Shared())
     size = chunk or chunk_size(plan.runs, workers if scheduler is None else 8, engine.max_chunk)
     starts = list(range(0, plan.runs, size))
@@ -147,11 +170,8 @@ def _table(scene, plan: Plan, names, results: dict, size: int, complete: bool, s
 
 
 def _run_local(scene, plan: Plan, names, starts, size, workers, done) -> None:
-    import multiprocessing
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-
     pool = ProcessPoolExecutor(max_workers=min(workers, len(starts)), mp_context=multiprocessing.get_context("fork"),
-                               initializer=_init_worker, initargs=(dumps_scene(scene), plan.keys, names))
+                               initializer=_init_worker, initargs=(os.getpid(), dumps_scene(scene), plan.keys, names))
     try:
         pending = {pool.submit(_worker_chunk, s, plan.values[s:s + size]) for s in starts}
         while pending:
@@ -182,8 +202,6 @@ _ADDRESS = re.compile(r"^(?:(?:tcp|tls|ws|wss)://)?(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z
 
 def check_scheduler(address: str) -> None:
     """A scheduler address is [tcp://]HOST:PORT (tls, ws, wss too; [IPv6] in brackets)."""
-    from ..core.errors import InputError
-
     m = _ADDRESS.match(str(address or ""))
     if m is None or not 0 < int(m.group("port")) < 65536:
         raise InputError("--scheduler", str(address)[:80], "expected tcp://HOST:PORT, such as tcp://127.0.0.1:8786")
@@ -193,8 +211,6 @@ def _run_dask(scene, plan: Plan, names, starts, size, scheduler: str, done) -> N
     try:
         from distributed import Client, as_completed
     except ImportError:
-        from ..core.errors import InputError
-
         raise InputError("--scheduler", scheduler, "needs dask[distributed]: pip install 'valve-gear-explorer[cluster]'") \
             from None
     check_scheduler(scheduler)
@@ -203,8 +219,6 @@ def _run_dask(scene, plan: Plan, names, starts, size, scheduler: str, done) -> N
     try:
         client = Client(scheduler, timeout="10s", set_as_default=False)
     except (OSError, ValueError, TypeError) as exc:  # refused, timed out, not an address
-        from ..core.errors import InputError
-
         reason = str(exc).splitlines()[0][:160] if str(exc) else type(exc).__name__
         raise InputError("--scheduler", scheduler, f"cannot connect to the Dask scheduler: {reason}") from None
     with client:
@@ -251,18 +265,12 @@ class SweepResult:
         self.table.write(path)
 
     def png(self) -> bytes:
-        from .sweep_plots import sweep_png
-
         return sweep_png(self.table)
 
     def plot(self, path) -> None:
-        from ..core.outputs import write_output
-
         write_output(path, self.png(), "--plot")
 
     def record(self, path) -> None:
-        from .sweep_plots import record
-
         record(self.table, path)
 
     def __repr__(self) -> str:
@@ -273,11 +281,9 @@ class SweepResult:
 def plan_from(scene, vary=None, sample=None, runs=None, seed=None, yes=False, log=()) -> Plan:
     """The plan of `explorer.sweep`'s arguments: vary {key: "START:STOP:COUNT[:log]" | [values]},
     sample {key: "normal(MEAN, SD)" | "uniform(LOW, HIGH)"}; `log`: keys spaced geometrically."""
-    from .sweep_spec import check_scene, make_plan, parse_axis, parse_sample
-
     axes = [parse_axis(k, v, log=k in log) for k, v in (vary or {}).items()]
     samples = [parse_sample(k, v) for k, v in (sample or {}).items()]
-    plan = make_plan(axes, samples, runs=runs, seed=seed, yes=yes)
+    plan = make_plan(axes, samples, runs=runs, seed=seed, yes=yes, figures=len(result_columns(scene)))
     check_scene(scene, plan)
     return plan
 
@@ -288,8 +294,6 @@ def sweep(scene, vary=None, sample=None, *, runs=None, seed=None, workers=None, 
     explorer.studies.sweep_spec for the forms of `vary` and `sample`. Bad input raises InputError
     before any work."""
     if not hasattr(scene, "effects"):
-        from ..scene.scene import load_scene
-
         scene = load_scene(scene)
     plan = plan_from(scene, vary, sample, runs, seed, yes, log)
     return SweepResult(run_plan(scene, plan, workers=workers, scheduler=scheduler, progress=progress))

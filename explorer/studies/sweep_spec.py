@@ -17,7 +17,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core import grids
+from ..core.errors import InputError, echo
+from ..core.ranges import check_range
+from ..core.units import to_si
+from ..scene.scene import MAX_RPM
 
 # more runs than this need --yes (yes=True): 10^7 rows are ~1 GB of table and hours of CPU
 MAX_RUNS_UNASKED = 10_000_000
@@ -105,8 +109,6 @@ def sweep_key(key: str, file: str = "--vary") -> SweepKey:
 
 def quantity(text, info: SweepKey, file: str) -> float:
     """One value of a key in SI (drive.rpm in rev/min), by the scene files' rules."""
-    from ..core.units import to_si
-
     if isinstance(text, str):
         text = text.strip()
         try:  # a bare number, as in a scene file: the key's own unit for bare numbers
@@ -115,16 +117,16 @@ def quantity(text, info: SweepKey, file: str) -> float:
             value = text
         else:
             if not math.isfinite(value):
-                raise InputError(file, info.key, f"value must be finite, got {text!r}")
+                raise InputError(file, info.key, f"value must be finite, got {echo(text)}")
     else:
         value = text
     if info.dimension == "dimensionless":
         try:
             number = float(value)
         except (TypeError, ValueError):
-            raise InputError(file, info.key, f"expected a plain number, got {str(value)[:40]!r}") from None
+            raise InputError(file, info.key, f"expected a plain number, got {echo(value)}") from None
         if not math.isfinite(number):
-            raise InputError(file, info.key, f"value must be finite, got {str(value)[:40]!r}")
+            raise InputError(file, info.key, f"value must be finite, got {echo(value)}")
         return number
     number = to_si(value, info.dimension, file=file, key=info.key)
     if info.key == "drive.rpm":
@@ -136,16 +138,12 @@ def quantity(text, info: SweepKey, file: str) -> float:
 def check_values(info: SweepKey, values: np.ndarray, file: str, what: str = "value") -> None:
     """The key's valid range (the scene loader's, explorer.core.ranges) for every value; a sampled
     distribution that reaches outside it is refused with the share of bad draws."""
-    from ..core.ranges import check_range
-
     values = np.asarray(values, dtype=float)
     bad = ~np.isfinite(values)
     bad |= values <= 0.0 if info.positive else values < 0.0
     if info.upper is not None:
         bad |= values >= info.upper
     if info.key == "drive.rpm":
-        from ..scene.scene import MAX_RPM
-
         bad |= values > MAX_RPM
     if bad.any():
         first = float(values[bad][0])
@@ -161,68 +159,26 @@ def check_values(info: SweepKey, values: np.ndarray, file: str, what: str = "val
             check_range(v, info.dimension, file=file, key=info.key, shown=v, zero_allowed=not info.positive)
 
 
-_GRID = re.compile(r"^(?P<a>[^:]+):(?P<b>[^:]+):(?P<n>[^:]+?)(?::(?P<log>log|lin))?$")
-
-
-def _split_units(a: str, b: str) -> tuple[str, str]:
-    """'0.1' and '0.5 mm': the unit written once applies to both ends ('0.1:0.5 mm:5')."""
-    unit_a = re.sub(r"^[\s+\-0-9.eE]*", "", a).strip()
-    unit_b = re.sub(r"^[\s+\-0-9.eE]*", "", b).strip()
-    if unit_b and not unit_a:
-        a = f"{a.strip()} {unit_b}"
-    elif unit_a and not unit_b:
-        b = f"{b.strip()} {unit_a}"
-    return a, b
-
-
 def parse_axis(key: str, spec, log: bool = False, file: str = "--vary") -> Axis:
-    """A grid: "START:STOP:COUNT" (COUNT points, ends included; ":log" or log=True for geometric
-    spacing), "V1,V2,..." (the values as given), or a sequence of values."""
+    """A grid in the grammar of explorer.core.grids: "START:STOP:COUNT" (COUNT points, ends
+    included; ":log" or log=True for geometric spacing), "V1,V2,..." (the values as given), or a
+    sequence of values."""
     info = sweep_key(key, file)
     if isinstance(spec, (list, tuple, np.ndarray)):
         parts = list(spec)
         if not parts:
             raise InputError(file, info.key, "empty list of values")
+        if len(parts) > MAX_GRID_POINTS:
+            raise InputError(file, info.key, f"at most {MAX_GRID_POINTS:g} values per key, got {len(parts)}")
         values = np.array([quantity(p, info, file) for p in parts], dtype=float)
         check_values(info, values, file)
         return Axis(info.key, values, False)
-    text = str(spec).strip()
-    if not text:
-        raise InputError(file, info.key, "empty range; write START:STOP:COUNT or V1,V2,...")
-    m = _GRID.match(text)
-    if m is None:
-        if ":" in text:
-            raise InputError(file, info.key, f"cannot read {text[:60]!r}: a range is START:STOP:COUNT[:log]")
-        parts = [p.strip() for p in text.split(",")]
-        if any(not p for p in parts):
-            raise InputError(file, info.key, f"empty value in {text[:60]!r}; give V1,V2,...")
-        return parse_axis(info.key, parts, file=file)
-    log = log or m.group("log") == "log"
-    a_text, b_text = _split_units(m.group("a"), m.group("b"))
-    start, stop = quantity(a_text, info, file), quantity(b_text, info, file)
-    try:
-        count = int(m.group("n").strip())
-    except ValueError:
-        raise InputError(file, info.key, f"the number of points must be a whole number, got {m.group('n')!r}") from None
-    if count < 1:
-        raise InputError(file, info.key, f"zero steps: the number of points must be at least 2, got {count}")
-    if count == 1:
-        raise InputError(file, info.key, "a range of 1 point: give at least 2 points, or the value with --set")
-    if count > MAX_GRID_POINTS:
-        raise InputError(file, info.key, f"at most {MAX_GRID_POINTS:g} points per key, got {count}")
-    if start == stop:
-        raise InputError(file, info.key, f"empty range: start equals stop ({start:g})")
-    if stop < start:
-        raise InputError(file, info.key, f"backwards range: stop {stop:g} is below start {start:g}")
-    if log:
-        if start <= 0.0:
-            raise InputError(file, info.key, f"a log range needs a start > 0, got {start:g}")
-        values = np.geomspace(start, stop, count)
-    else:
-        values = np.linspace(start, stop, count)
-    values[0], values[-1] = start, stop  # the ends exactly as given
+    shape = grids.read(spec, file=file, key=info.key, max_points=MAX_GRID_POINTS)
+    if log and isinstance(shape, grids.Listed):
+        raise InputError(file, info.key, "--log spaces a START:STOP:COUNT range; a list V1,V2,... keeps its values")
+    values = grids.values(shape, lambda text: quantity(text, info, file), file=file, key=info.key, log=log)
     check_values(info, values, file)
-    return Axis(info.key, values, log)
+    return Axis(info.key, values, isinstance(shape, grids.Span) and (log or shape.log))
 
 
 _DIST = re.compile(r"^\s*(?P<name>[A-Za-z_]+)\s*\((?P<args>.*)\)\s*$", re.DOTALL)
@@ -234,24 +190,24 @@ def parse_sample(key: str, spec: str, file: str = "--sample") -> Sample:
     text = str(spec).strip()
     m = _DIST.match(text)
     if m is None:
-        raise InputError(file, info.key, f"cannot read {text[:60]!r}: write normal(MEAN, SD) or uniform(LOW, HIGH)")
+        raise InputError(file, info.key, f"cannot read {echo(text)}: write normal(MEAN, SD) or uniform(LOW, HIGH)")
     name = m.group("name").lower()
     if name not in DISTRIBUTIONS:
-        raise InputError(file, info.key, f"unknown distribution {m.group('name')!r}; known: {', '.join(DISTRIBUTIONS)}")
+        raise InputError(file, info.key, f"unknown distribution {echo(m.group('name'))}; known: {', '.join(DISTRIBUTIONS)}")
     args = [x.strip() for x in m.group("args").split(",")]
     if len(args) != 2 or not all(args):
-        raise InputError(file, info.key, f"{name}() takes two values, got {m.group('args')!r}")
-    a_text, b_text = _split_units(*args)
+        raise InputError(file, info.key, f"{name}() takes two values, got {echo(m.group('args'))}")
+    a_text, b_text = grids.share_unit(*args)
     a = quantity(a_text, info, file)
     if name == "normal":
         b = quantity(b_text, SweepKey(info.key, info.dimension, info.column, False), file) \
             if not b_text.lstrip().startswith("-") else -1.0
         if b < 0.0:
-            raise InputError(file, info.key, f"negative standard deviation {args[1]!r}")
+            raise InputError(file, info.key, f"negative standard deviation {echo(args[1])}")
     else:
         b = quantity(b_text, info, file)
         if b <= a:
-            raise InputError(file, info.key, f"uniform(LOW, HIGH) needs LOW < HIGH, got {args[0]!r}, {args[1]!r}")
+            raise InputError(file, info.key, f"uniform(LOW, HIGH) needs LOW < HIGH, got {echo(args[0])}, {echo(args[1])}")
     return Sample(info.key, name, a, b, text)
 
 
@@ -261,10 +217,33 @@ def draw(sample: Sample, rng: np.random.Generator, n: int) -> np.ndarray:
     return rng.uniform(sample.a, sample.b, n)
 
 
+MAX_SEED = 2**128  # numpy's SeedSequence takes any whole number >= 0; 128 bits are all its entropy
+TABLE_COPIES = 3  # the plan's values, the gathered figures and the table's columns, at once at the end
+
+
+def plan_bytes(runs: int, keys: int, figures: int) -> float:
+    """Memory a sweep of `runs` rows holds at its end: TABLE_COPIES float64 copies of a row of
+    the run index, the keys and the figures (as float: the count may be astronomical)."""
+    return float(TABLE_COPIES) * float(runs) * 8.0 * (1 + keys + figures)
+
+
+def check_seed(seed, samples) -> None:
+    if seed is None:
+        return
+    if not samples:
+        raise InputError("<command line>", "--seed", "seeds the random draws: give --sample too")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= int(seed) < MAX_SEED:
+        raise InputError("<command line>", "--seed", f"must be a whole number from 0 to 2**128 - 1, got {echo(seed)}")
+
+
 def make_plan(axes=(), samples=(), runs: int | None = None, seed: int | None = None, yes: bool = False,
-              file: str = "--vary") -> Plan:
+              file: str = "--vary", figures: int = 0) -> Plan:
     """The runs: the product of the axes (the first key varies slowest), each grid point repeated
-    `runs` times with fresh draws of the samples (runs defaults to 1 without samples)."""
+    `runs` times with fresh draws of the samples (runs defaults to 1 without samples). `figures`:
+    the columns each run adds to the table, for the memory check (a plan whose table would not
+    fit in the available memory is refused before anything is allocated, --yes or not)."""
+    from ..core.memory import available_bytes, size_text
+
     axes, samples = tuple(axes), tuple(samples)
     keys = [a.key for a in axes] + [s.key for s in samples]
     if not keys:
@@ -278,11 +257,17 @@ def make_plan(axes=(), samples=(), runs: int | None = None, seed: int | None = N
         raise InputError("--runs", str(runs), "--runs sets the number of random draws: give --sample too")
     if samples and runs is None:
         raise InputError("--runs", "-", "a --sample needs --runs N (how many draws)")
+    check_seed(seed, samples)
     reps = int(runs) if samples else 1
     grid = math.prod(a.values.size for a in axes)
     total = grid * reps
     if total > MAX_RUNS_UNASKED and not yes:
-        raise InputError(file, ", ".join(keys), f"{total:.4g} runs; more than {MAX_RUNS_UNASKED:g} need --yes")
+        raise InputError(file, ", ".join(keys), f"{float(total):.4g} runs; more than {MAX_RUNS_UNASKED:g} need --yes")
+    need, room = plan_bytes(total, len(keys), figures), available_bytes()
+    if need > room:
+        raise InputError("--runs" if samples else file, ", ".join(keys), f"{float(total):.4g} runs: the table needs about {size_text(need)} of "
+                         f"memory ({TABLE_COPIES} copies of {8 * (1 + len(keys) + figures)} bytes per run), "
+                         f"{size_text(room)} are available; sweep fewer runs, or in parts")
     values = np.empty((total, len(keys)))
     if axes:
         mesh = np.meshgrid(*[a.values for a in axes], indexing="ij")

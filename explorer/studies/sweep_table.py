@@ -20,6 +20,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..core.errors import InputError
+from ..core.outputs import as_output, write_output
 
 FORMATS = (".parquet", ".csv")
 # integer-valued figures, stored as integers (counts, the run index, the failure flag)
@@ -90,8 +91,6 @@ class SweepTable:
 
     def write(self, out) -> None:
         """Write to a checked explorer.core.outputs.Output (or a path) by its extension."""
-        from ..core.outputs import as_output, write_output
-
         out = as_output(out, "--output")
         kind = table_format(out.name)
         write_output(out, self.parquet_bytes() if kind == ".parquet" else self.csv_text())

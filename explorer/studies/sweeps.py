@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import InputError
+from ..effects.lift import build_lift
 from ..mechanics.forces import RPM_PER_RAD_S, grid_load_parts
 
 _BLOCK_CELLS = 2_000_000  # speeds x samples per block (16 MB of float64)
@@ -34,8 +35,6 @@ class MarginSweep:
 
 def speed_parts(scene, lift=None, n: int | None = None):
     """(theta, A, G) on the open samples of the scene's grid: F = w^2 A + G."""
-    from ..effects.lift import build_lift
-
     lift = lift if lift is not None else build_lift(scene)
     theta, a_coef, g_part, is_open = grid_load_parts(scene, lift, n)
     return theta[is_open], a_coef[is_open], g_part[is_open]

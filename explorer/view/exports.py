@@ -28,7 +28,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
+from ..effects.lift import build_lift
+from ..gears.base import Gear
+from ..gears.registry import GEARS
+from ..lift.contours.cam_profile import CamProfile, angles_with
 
 TWO_PI = 2.0 * math.pi
 FORMATS = ("csv", "dxf", "stl", "glb", "grind")
@@ -38,103 +42,15 @@ MAX_POLYLINE_POINTS = 2_000_000  # a 1 nm tolerance on a 50 mm cam needs ~200 00
 MIN_POINTS, MAX_POINTS = 8, 1_000_000
 
 
-@dataclass(frozen=True)
-class CamGeometry:
-    """Closed-form geometry at cam angles theta (cam frame, metres; normals outward, unit)."""
-
-    theta: np.ndarray
-    pitch: np.ndarray  # (N, 2) roller-centre path
-    contour: np.ndarray  # (N, 2) contact point on the cam
-    normal: np.ndarray  # (N, 2) outward contact normal
-    pitch_curvature: np.ndarray  # 1/m, > 0 convex, 0 straight
-    contour_curvature: np.ndarray  # 1/m, > 0 convex
-    pressure_angle: np.ndarray  # rad
-
-
-def geometry(lift, theta, base_radius: float, roller_radius: float, offset: float) -> CamGeometry:
-    """The pitch curve, contour, normal and curvatures at `theta` (see geometry.translating for
-    the closed forms; curvature = 1/radius keeps straight stretches finite)."""
-    theta = np.asarray(theta, dtype=float)
-    d = lift.derivatives(theta)
-    e = offset
-    y0 = math.sqrt((base_radius + roller_radius) ** 2 - e * e)
-    y = y0 + d[0]
-    tx, ty = y, d[1] - e
-    norm_t = np.hypot(tx, ty)
-    cross = ty * (2.0 * d[1] - e) - y * (d[2] - y)
-    pitch_curvature = cross / norm_t**3
-    with np.errstate(divide="ignore", invalid="ignore"):
-        # 1/(rho - r) = k / (1 - r k): finite wherever the contour is not a cusp (undercut is refused)
-        contour_curvature = pitch_curvature / (1.0 - roller_radius * pitch_curvature)
-    nx, ny = -ty / norm_t, tx / norm_t
-    c, s = np.cos(theta), np.sin(theta)
-
-    def to_cam(x, yy):
-        return np.column_stack([c * x + s * yy, -s * x + c * yy])
-
-    centre_x = np.full_like(y, e)
-    return CamGeometry(
-        theta=theta,
-        pitch=to_cam(centre_x, y),
-        contour=to_cam(centre_x - roller_radius * nx, y - roller_radius * ny),
-        normal=to_cam(nx, ny),
-        pitch_curvature=pitch_curvature,
-        contour_curvature=contour_curvature,
-        pressure_angle=np.arctan2(ty, tx),
-    )
-
-
-def angles_with(uniform: int, breakpoints) -> np.ndarray:
-    """`uniform` equally spaced cam angles in [0, 2 pi) and the breakpoints, sorted, without
-    near-copies: a breakpoint computed as start + knot and the grid angle k 2 pi / n that it
-    equals differ by an ulp, and two points one ulp apart make a zero chord and a zero step."""
-    theta = np.sort(np.concatenate([np.linspace(0.0, TWO_PI, uniform, endpoint=False),
-                                    np.mod(np.asarray(breakpoints, dtype=float), TWO_PI)]))
-    keep = np.append(True, np.diff(theta) > 1e-12)
-    theta = theta[keep]
-    if theta.size > 1 and theta[-1] > TWO_PI - 1e-12:  # the same as angle 0
-        theta = theta[:-1]
-    return theta
-
-
-@dataclass(frozen=True)
-class CamSource:
-    """What an export needs of a scene: its lift curve and follower geometry."""
-
-    lift: object
-    base_radius: float
-    roller_radius: float
-    offset: float
-    name: str
-    source: str
-
-    def at(self, theta) -> CamGeometry:
-        return geometry(self.lift, theta, self.base_radius, self.roller_radius, self.offset)
-
-    def breakpoints(self) -> np.ndarray:
-        return np.mod(np.asarray(self.lift.breakpoints(), dtype=float), TWO_PI)
-
-
-def cam_source(scene, lift=None) -> CamSource:
-    """The scene's cam; InputError for gears whose cam is not a translating-roller cam, and for an
-    undercut cam (its contour folds: nothing to make)."""
-    from ..lift.contours.translating import find_undercut, undercut_error
-    from ..effects.lift import build_lift
-
-    f = scene.follower
-    if f.type != "translating-roller":
+def cam_source(scene, lift=None) -> CamProfile:
+    """The scene's cam (its gear's cam_profile); InputError for a gear that has no cam to make, and
+    for a cam that fails the validity checks of every cam (an undercut one folds: nothing to make)."""
+    profile = scene.gear_plugin.cam_profile(scene, lift if lift is not None else build_lift(scene))
+    if profile is None:
+        makers = [name for name, gear in GEARS.items() if type(gear).cam_profile is not Gear.cam_profile]
         raise InputError(scene.source, "follower.type",
-                         f"exports are for translating-roller cams; this scene's follower is {f.type!r}")
-    src = CamSource(lift if lift is not None else build_lift(scene), f.base_radius, f.roller_radius,
-                    f.offset, scene.name, scene.source)
-    theta = angles_with(7200, src.breakpoints())
-    g = src.at(theta)
-    with np.errstate(divide="ignore"):
-        rho = 1.0 / g.pitch_curvature
-    i = find_undercut(rho, f.roller_radius)
-    if i is not None:
-        raise undercut_error(float(theta[i]), float(rho[i]), f.roller_radius, scene.source)
-    return src
+                         f"exports are for {', '.join(makers)} cams; this scene's follower is {echo(scene.follower.type)}")
+    return profile
 
 
 def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -188,7 +104,7 @@ def _drop_repeats(theta: np.ndarray, xy: np.ndarray, within: float) -> tuple[np.
 # explorer.core.outputs, so the usual rules for output files apply).
 
 
-def point_table(src: CamSource, points: int = 3600) -> str:
+def point_table(src: CamProfile, points: int = 3600) -> str:
     """CSV: one row per cam angle (uniform, plus the lift's breakpoints): contour and pitch point,
     outward normal, signed curvatures, pressure angle."""
     theta = angles_with(points, src.breakpoints())
@@ -205,7 +121,7 @@ def point_table(src: CamSource, points: int = 3600) -> str:
     return out.getvalue()
 
 
-def contour_polyline(src: CamSource, tolerance: float, which: str = "contour", merge: float = 0.0) -> np.ndarray:
+def contour_polyline(src: CamProfile, tolerance: float, which: str = "contour", merge: float = 0.0) -> np.ndarray:
     """(N, 2) vertices of the closed contour (or pitch curve) to the chord tolerance, counter-
     clockwise (the order drawings and solids expect); vertices closer than max(merge, 1e-3 of the
     tolerance) to their predecessor are dropped."""
@@ -214,7 +130,7 @@ def contour_polyline(src: CamSource, tolerance: float, which: str = "contour", m
     return xy[::-1]  # increasing cam angle runs clockwise around the cam
 
 
-def dxf_text(src: CamSource, tolerance: float) -> str:
+def dxf_text(src: CamProfile, tolerance: float) -> str:
     """A DXF (R2010, millimetres) with the contour (layer CAM) and pitch curve (layer PITCH) as
     closed LWPOLYLINEs to the chord tolerance, and the shaft centre as a point."""
     import ezdxf
@@ -233,7 +149,7 @@ def dxf_text(src: CamSource, tolerance: float) -> str:
     return stream.getvalue()
 
 
-def cam_solid(src: CamSource, tolerance: float, width: float):
+def cam_solid(src: CamProfile, tolerance: float, width: float):
     """trimesh solid of the cam: the contour polyline extruded over `width` along the cam axis
     (z), centred on z = 0; metres."""
     import trimesh
@@ -248,14 +164,14 @@ def cam_solid(src: CamSource, tolerance: float, width: float):
     return mesh
 
 
-def stl_bytes(src: CamSource, tolerance: float, width: float) -> bytes:
+def stl_bytes(src: CamProfile, tolerance: float, width: float) -> bytes:
     """Binary STL in millimetres (STL carries no unit; CAM software assumes mm)."""
     mesh = cam_solid(src, tolerance, width)
     mesh.apply_scale(1e3)
     return mesh.export(file_type="stl")
 
 
-def glb_bytes(src: CamSource, tolerance: float, width: float) -> bytes:
+def glb_bytes(src: CamProfile, tolerance: float, width: float) -> bytes:
     """Binary glTF in metres (glTF's unit)."""
     return cam_solid(src, tolerance, width).export(file_type="glb")
 
@@ -268,13 +184,13 @@ class GrindingTable:
     wheel_radius: float
 
 
-def wheel_centre(src: CamSource, theta, wheel_radius: float) -> np.ndarray:
+def wheel_centre(src: CamProfile, theta, wheel_radius: float) -> np.ndarray:
     """(N, 2) wheel centre in the cam frame when the wheel touches the contact point of theta."""
     g = src.at(theta)
     return g.contour + wheel_radius * g.normal
 
 
-def grinding_table(src: CamSource, wheel_radius: float, points: int = 3600) -> GrindingTable:
+def grinding_table(src: CamProfile, wheel_radius: float, points: int = 3600) -> GrindingTable:
     """Wheel-centre distance at `points` uniform grinder angles. The grinder angle a rotates the
     cam so that the wheel centre lies on the wheel's line, the ground y axis (the follower's
     direction), i.e. a = 90 deg - polar angle of the centre in the cam frame."""
@@ -320,7 +236,7 @@ def grinding_table(src: CamSource, wheel_radius: float, points: int = 3600) -> G
     return GrindingTable(alpha, np.hypot(centre[:, 0], centre[:, 1]), np.mod(root, TWO_PI), wheel_radius)
 
 
-def grinding_text(src: CamSource, table: GrindingTable) -> str:
+def grinding_text(src: CamProfile, table: GrindingTable) -> str:
     out = io.StringIO()
     out.write(f"# {src.name}: grinding table for a wheel of radius {table.wheel_radius * 1e3:.9g} mm fed radially;\n"
               "# grinder_angle: the cam's rotation that brings the ground point to the wheel's line;\n"

@@ -9,21 +9,22 @@ depends on the point density (parametric.points_accuracy).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
-from ...core.errors import InputError
+from ...core.errors import InputError, echo
 from .arcs import ContourError, make_arc_lift
+from .parametric import ContourFollowError, make_parametric_lift, _angle_and_height, pitch_jets
 
 BASE_RADIUS_TOLERANCE = 1e-6  # m: follower.base_radius must match the contour this closely
 
 
 def contour_lift(spec, follower, file: str):
     """The LiftCurve of a translating roller follower over the contour (spec: a CamSpec of
-    explorer.lift.contours.spec, which calls this while it reads [cam]); InputError when the follower
-    cannot run on it (undercut, base circle mismatch, offset too large)."""
-    if follower.type != "translating-roller":
-        raise InputError(file, "follower.type", f"a [cam] contour is analysed for translating-roller followers only, not {follower.type!r}")
+    explorer.lift.contours.spec; the translating roller's gear calls this when it checks a scene and
+    when it builds the lift); InputError when the follower cannot run on it (undercut, base circle
+    mismatch, offset too large)."""
     if abs(follower.base_radius - spec.min_radius) > BASE_RADIUS_TOLERANCE:
         raise InputError(
             file,
@@ -38,7 +39,6 @@ def contour_lift(spec, follower, file: str):
             return make_arc_lift(spec.arcs, r, e, rb)
         except ContourError as exc:
             raise InputError(file, f"follower.{exc.field}" if exc.field in ("roller_radius", "offset") else "cam.arcs", exc.reason) from None
-    from .parametric import ContourFollowError, make_parametric_lift
 
     contour = spec.contour_geometry()
     try:
@@ -52,18 +52,8 @@ def contour_lift(spec, follower, file: str):
 
 
 def _with_knot_breakpoints(lift, contour):
-    from dataclasses import replace
-
-    from .parametric import _angle_and_height, pitch_jets
 
     knots = np.unique(np.mod(contour.spline.t, contour.period))
     q = pitch_jets(contour, knots, 2, lift.roller_radius, lift.sign)
     theta, _ = _angle_and_height(q, lift.offset)
     return replace(lift, kinks=np.unique(np.mod(theta[0], 2.0 * math.pi)))
-
-
-def build_contour_lift(scene):
-    """lift.build_lift for law = "contour"."""
-    if scene.cam is None:
-        raise InputError(scene.source, "cam", "missing section: lift.law = 'contour' takes the lift from [cam]")
-    return contour_lift(scene.cam, scene.follower, scene.source)

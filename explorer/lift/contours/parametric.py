@@ -27,6 +27,7 @@ from typing import Protocol
 import numpy as np
 
 from ...core import jets
+from .translating import translating_profile
 
 TWO_PI = 2.0 * math.pi
 
@@ -211,8 +212,6 @@ def points_accuracy(lift, base_radius: float, roller_radius: float, offset: floa
     angles. Returns one row per n: largest lift error (m) and largest errors of L', L'', L'''
     relative to the largest |L'|, |L''|, |L'''|. Smooth contours converge like h^(degree+1) in the
     lift, one order less per derivative; jumps in the law's higher derivatives slow it down."""
-    from .translating import translating_profile
-
     theta = np.arange(samples) * TWO_PI / samples
     exact = lift.derivatives(theta)
     rows = []

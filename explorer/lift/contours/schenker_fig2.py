@@ -25,7 +25,7 @@ junctions, root-finding for the inflection), for the TOML's comment and the test
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -141,7 +141,7 @@ def lift_of(design: Design):
 
 def _inflection(lift, k: int) -> float | None:
     """Cam angle inside arc k where L'' changes sign (the inflection of the lift), if any."""
-    from scipy.optimize import brentq
+    from ...core.roots import root_in
 
     a = float(lift.junction_angles[k])
     b = a + float(np.mod(lift.junction_angles[(k + 1) % lift.contour.n] - a, 2.0 * math.pi))
@@ -149,7 +149,7 @@ def _inflection(lift, k: int) -> float | None:
     fa, fb = f(a), f(b)
     if not fa > 0.0 > fb:
         return None
-    return brentq(f, a, b, xtol=1e-15)
+    return root_in(f, a, b, fa=fa, fb=fb, xtol=1e-15)
 
 
 def figures(design: Design, lift=None, steps: int = 36000) -> dict:
@@ -228,8 +228,6 @@ def fit_rise(base: Design, r_ab: float, guess=(0.0287, 0.0158, math.radians(77.0
     """R2 (BC), R3 (CD) and the rise angle for a chosen R1 (AB): v_max = 0.82 m/s at the
     inflection of BC, the deceleration -35 m/s^2 at the end of the rise, and BC a slow transition
     (its acceleration runs from +a to -a through zero). Nelder-Mead on a smooth misfit."""
-    from dataclasses import replace
-
     from scipy.optimize import minimize
 
     def design_of(x):

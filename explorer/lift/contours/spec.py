@@ -38,16 +38,19 @@ from typing import Any
 
 import numpy as np
 
-from ...core.errors import InputError
+from ...core.errors import InputError, echo
+from ...core.files import read_text
 from ...core.reader import Table
-from ...core.units import plain_number, to_si
+from ...core.units import plain_number, to_si, unit_scale
 from .arcs import Arc, ArcContour, ContourError, build_arc_contour
+from .parametric import SplineContour
 
 # Arcs below a micron or centres beyond 10 m are no valve-gear cam; they also push the tangency
 # arithmetic into subnormal or overflowing floats, so they are refused at load time.
 MIN_ARC_RADIUS = 1e-6  # m
 MAX_CENTRE_DISTANCE = 10.0  # m
 MIN_POINTS = 12
+MIN_POINT_RADIUS = 1e-9  # m: a contour point at the cam centre (closer than the smallest length) is no contour
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,8 +84,6 @@ class CamSpec:
 
     @cached_property
     def _spline(self):
-        from .parametric import SplineContour
-
         return SplineContour(self.points, self.spline_degree)
 
 
@@ -92,7 +93,7 @@ def parse_cam_section(table: Table | None, fields: dict) -> CamSpec | None:
     file = table.file
     lift = fields.get("lift")
     if lift is not None and lift.law != "contour":
-        raise InputError(file, table.prefix, f"[cam] describes a contour, used only with [lift] law = \"contour\" (law is {lift.law!r})")
+        raise InputError(file, table.prefix, f"[cam] describes a contour, used only with [lift] law = \"contour\" (law is {echo(lift.law)})")
     table.reject_unknown(("rotation", "tolerance", "arcs", "points", "file", "unit", "spline_degree"))
     rotation = table.quantity("rotation", "angle", 0.0)
     given = [k for k in ("arcs", "points", "file") if table.has(k)]
@@ -108,12 +109,7 @@ def parse_cam_section(table: Table | None, fields: dict) -> CamSpec | None:
         if table.has("tolerance"):
             raise table.error("tolerance", "applies to arcs only")
         spec = _parse_points(table, rotation, fields)
-    follower = fields.get("follower")
-    if follower is not None:
-        from .lift_from_contour import contour_lift
-
-        contour_lift(spec, follower, file)  # every follower-dependent check, at load time
-    return spec
+    return spec  # the follower-dependent checks are its gear's (contour_lift), at load time too
 
 
 def _parse_arcs(table: Table, rotation: float) -> CamSpec:
@@ -149,13 +145,15 @@ def _parse_arcs(table: Table, rotation: float) -> CamSpec:
 _SPLIT = re.compile(r"[,;\s]+")
 
 
-def _read_points_file(path: Path, file: str, key: str) -> np.ndarray:
+def _read_points_file(path: Path, file: str, key: str, scale: float) -> np.ndarray:
+    """(N, 2) points in the file's unit, or InputError naming the line of the first bad row (a row
+    it cannot read, or one outside the physical range: first_bad_point), never the row's content."""
     if not path.exists():
         raise InputError(file, key, f"point file {str(path)!r} not found")
-    from ...core.files import read_text
 
     text = read_text(path, file=file, key=key, prefix=f"point file {path.name}: ")
-    rows = []
+    rows, lines = [], []
+    unreadable = None  # (line, reason) of the first line that is no row: rows before it are checked first
     for number, line in enumerate(text.splitlines(), start=1):
         line = line.split("#", 1)[0].strip()
         if not line:
@@ -166,19 +164,47 @@ def _read_points_file(path: Path, file: str, key: str) -> np.ndarray:
         except ValueError:
             if not rows:  # a header line
                 continue
-            raise InputError(file, key, f"{path.name} line {number}: expected two numbers x, y") from None
+            unreadable = (number, "expected two numbers x, y")
+            break
         if len(values) != 2:
-            raise InputError(file, key, f"{path.name} line {number}: expected two numbers x, y, got {len(values)}")
+            unreadable = (number, f"expected two numbers x, y, got {len(values)}")
+            break
         rows.append(values)
-    return np.array(rows, dtype=float).reshape(-1, 2)
+        lines.append(number)
+    pts = np.array(rows, dtype=float).reshape(-1, 2)
+    bad = first_bad_point(pts, scale)
+    if bad is not None and (unreadable is None or lines[bad[0]] < unreadable[0]):
+        raise InputError(file, key, f"{path.name} line {lines[bad[0]]}: {bad[1]}")
+    if unreadable is not None:
+        raise InputError(file, key, f"{path.name} line {unreadable[0]}: {unreadable[1]}")
+    return pts
+
+
+def first_bad_point(pts: np.ndarray, scale: float) -> tuple[int, str] | None:
+    """(index, reason) of the first contour point outside the physical range, or None: finite, and
+    (in metres, after `unit`) at most MAX_CENTRE_DISTANCE from the cam centre and at least
+    MIN_POINT_RADIUS from it (the contour goes round the centre). The reason states the range,
+    never the point."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        metres = np.asarray(pts, dtype=float).reshape(-1, 2) * scale
+        finite = np.all(np.isfinite(metres), axis=1)
+        radius = np.where(finite, np.hypot(metres[:, 0], metres[:, 1]), 1.0)
+    tests = (
+        (~finite, "coordinates must be finite numbers (after unit)"),
+        (radius > MAX_CENTRE_DISTANCE, f"the point lies more than {MAX_CENTRE_DISTANCE:g} m from the cam centre; check unit"),
+        (radius < MIN_POINT_RADIUS, f"the point lies within {MIN_POINT_RADIUS * 1e9:g} nm of the cam centre; a contour "
+         "goes round the centre"),
+    )
+    found = [(int(np.argmax(mask)), reason) for mask, reason in tests if np.any(mask)]
+    return min(found, key=lambda item: item[0]) if found else None
 
 
 def _parse_points(table: Table, rotation: float, fields: dict) -> CamSpec:
     file = table.file
     unit_text = table.string("unit", "m")
-    scale = to_si(f"1 {unit_text}", "length", file=file, key=table.key("unit"))
+    scale = unit_scale(unit_text, "length", file=file, key=table.key("unit"))
     if not scale > 0.0:
-        raise table.error("unit", f"not a length unit: {unit_text!r}")
+        raise table.error("unit", f"not a length unit: {echo(unit_text)}")
     degree = table.number("spline_degree", 5, integer=True)
     if degree not in (3, 5):
         raise table.error("spline_degree", f"must be 3 or 5, got {degree}")
@@ -195,6 +221,9 @@ def _parse_points(table: Table, rotation: float, fields: dict) -> CamSpec:
             pts = np.array([[plain_number(v, file=file, key=key) for v in p] for p in raw], dtype=float).reshape(-1, 2)
         except InputError as exc:
             raise InputError(file, key, exc.reason) from None
+        bad = first_bad_point(pts, scale)
+        if bad is not None:
+            raise InputError(file, f"{key}[{bad[0]}]", bad[1])
         source = "inline"
     else:
         key = table.key("file")
@@ -202,10 +231,8 @@ def _parse_points(table: Table, rotation: float, fields: dict) -> CamSpec:
         source_file = fields.get("source", "<memory>")
         base = Path(source_file).parent if source_file != "<memory>" else Path.cwd()
         path = (base / name) if not Path(name).is_absolute() else Path(name)
-        pts = _read_points_file(path, file, key)
+        pts = _read_points_file(path, file, key, scale)
         source = str(path)
-    if not np.all(np.isfinite(pts)):
-        raise InputError(file, key, "every coordinate must be finite")
     if len(pts) >= 2 and np.allclose(pts[0], pts[-1], rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(pts).max()))):
         pts = pts[:-1]  # a closed list repeats its first point; the spline closes itself
     if len(pts) < MIN_POINTS:
@@ -221,7 +248,6 @@ def _parse_points(table: Table, rotation: float, fields: dict) -> CamSpec:
     step = np.mod(np.roll(ang, -1) - ang + math.pi, 2.0 * math.pi) - math.pi
     if not (np.all(step < 0.0) or np.all(step > 0.0)) or abs(abs(step.sum()) - 2.0 * math.pi) > 1e-6:
         raise InputError(file, key, "the points must go once around the cam centre, in order (every ray from the centre meeting the contour once)")
-    from .parametric import SplineContour
 
     contour = SplineContour(pts, int(degree))
     t = np.arange(16 * len(pts)) * contour.period / (16 * len(pts))  # spacing ~ chord/16: min found to ~(h/16)^2 kappa

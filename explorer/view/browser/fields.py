@@ -23,8 +23,8 @@ from __future__ import annotations
 import math
 from typing import Any, Callable
 
-from ...lift.laws import LAWS
-from ...scene.scene import EFFECT_DEPENDENCIES, SPECIAL_LAWS
+from ...effects import registry as effect_table
+from ...lift import registry as law_table
 from .parameters import MAX_GUI_STEPS, PARAMETERS, NotYet, field_value, override, user_overrides
 from .requests import EffectsTicked, Edited, ResetClicked, SceneChosen, Submitted, wire
 
@@ -40,7 +40,7 @@ class Fields:
         self.scene = gui.add_dropdown("Scene", scene_labels, initial_value=scene_label)
         # right under the scene: an 800 px page shows it even with an error above
         self.reset = gui.add_button("Reset to scene file", hint="every field back to the scene file's values")
-        laws = list(LAWS) + list(SPECIAL_LAWS)
+        laws = list(law_table.names())  # every law of the tables; offered_laws narrows it per scene
         self.handles: dict[str, Any] = {}
         # a form: Enter in any of its fields reports itself (viser's GuiFormSubmitMessage)
         self.form = gui.add_form(None)
@@ -60,7 +60,7 @@ class Fields:
                 self.handles[key] = handle
         self.effects: dict[str, Any] = {}
         with gui.add_folder("Effects"):
-            for name in EFFECT_DEPENDENCIES:
+            for name in effect_table.names():
                 handle = gui.add_checkbox(name, initial_value=name == "kinematics")
                 wire(handle, inbox, lambda v, page, at: EffectsTicked(self._ticked()), echo)
                 self.effects[name] = handle

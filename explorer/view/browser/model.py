@@ -188,7 +188,7 @@ def event_choices(result) -> list[tuple[str, float]]:
     the entries of the explorer's "Go to event" list. Labels are numbered, so equal kinds at
     different angles stay distinct."""
     out = []
-    for k, e in enumerate(result.summary.get("events", []), start=1):
+    for k, e in enumerate(result.events, start=1):
         angle = e.get("cam_angle_deg")
         if not isinstance(angle, (int, float)) or not math.isfinite(float(angle)):
             continue
@@ -205,7 +205,7 @@ def events_html(result) -> str:
     """All events as a table that scrolls within EVENTS_HEIGHT_PX (no "… 11 more")."""
     import html
 
-    events = list(result.summary.get("events", []))
+    events = list(result.events)
     if not events:
         return "<div style='font-size:0.85em'>no events</div>"
     rows = []
@@ -268,7 +268,7 @@ def readout_markdown(result, label: str = "", float_rpm: float = math.nan, advic
     if label:
         lines.append(f"<small>{label}</small>")
     # warnings first: undercut, self-locking, float... are what a designer must not miss
-    warnings = list(s.get("warnings", []))
+    warnings = list(result.warnings)
     extra = float_warning(result, float_rpm)
     if extra is not None:
         warnings.append(extra)
@@ -277,8 +277,8 @@ def readout_markdown(result, label: str = "", float_rpm: float = math.nan, advic
     if math.isfinite(float_rpm) and "jump_speed_rpm" not in s:
         lines += ["", f"Rigid float (jump) speed: {float_rpm:.6g} rpm"]
     lines += ["", "| effect | compute |", "|---|---:|"]
-    for name, info in s.get("effects", {}).items():
-        lines.append(f"| {name} | {1e3 * info['compute_time_s']:.2f} ms |")
+    for name, timing in result.timings.items():
+        lines.append(f"| {name} | {1e3 * timing.compute_time_s:.2f} ms |")
     # the events are a table of their own beside this text (events_html) with "Go to event"
     lines += spring_advice_lines(s.get("spring_design") if advice is None else advice)
     figures = []
@@ -393,13 +393,13 @@ def offered_laws(path: str, overrides=(), current: str | None = None) -> tuple[s
     builds a lift with (a table law needs its table, a contour its [cam], "gear" a gear...).
     Any failure, not only bad input, leaves the law out: the dropdown must not offer what cannot
     be computed. The current law is always offered. Tens of milliseconds, once per scene file."""
-    from ...lift.laws import LAWS
+    from ...lift import registry as laws
     from ...effects.lift import build_lift
-    from ...scene.scene import SPECIAL_LAWS, load_scene
+    from ...scene.scene import load_scene
 
     others = [o for o in overrides if not o.startswith("lift.law=")]
     offered = []
-    for law in (*LAWS, *SPECIAL_LAWS):
+    for law in laws.names():
         if law == current:
             offered.append(law)
             continue
@@ -416,7 +416,6 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
     Reuses the previous simulation when only the magnification changed."""
     from .. import parts as meshes
     from ...effects.pipeline import simulate
-    from ...gears import GEAR_TYPES
     from ...effects.lift import build_lift
     from ...scene.scene import load_scene
 
@@ -446,12 +445,12 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
         lay = meshes.layout(scene, result)
         # only the cam depends on more than the layout: keep the other meshes when it is unchanged,
         # and the cam too when its lift and geometry are (an edit of speed, lash, springs...).
-        # Another kind of gear has other parts; the seeds' other gears (explorer.gears) draw
-        # levers and links from their own geometry, so they keep parts only with the same cam.
+        # Another kind of gear has other parts; a gear whose levers and links are drawn from its
+        # own geometry (its view's parts_follow_cam) keeps parts only with the same cam.
         keep = previous is not None and previous.scene.follower.type == scene.follower.type \
             and previous.layout == lay
         keep_cam = keep and _same_cam(previous.scene, scene)
-        if keep and not keep_cam and scene.follower.type in GEAR_TYPES:
+        if keep and not keep_cam and meshes.parts_follow_cam(scene):
             keep = False
         built = meshes.build_parts(scene, result, lay=lay, lift=lift, only=() if keep_cam else ("cam",) if keep else None)
         parts = dict(previous.meshes) if keep else {}

@@ -5,6 +5,12 @@ Every page that connects gets its own ExplorerApp on its own GUI and scene (vise
 handles), with its own requests, playback and compute worker (a child process of its own); when
 the page goes (closed, reloaded, network lost) its app is stopped and dropped: its loop thread
 ends, its worker's child process is ended, and nothing of it stays referenced here.
+
+Bounds (issue #22): at most MAX_SESSIONS pages, refused at the websocket handshake (503, by the
+Origin guard's count of open connections: simultaneous handshakes cannot all slip past it, and
+viser builds nothing for a refused page); the callbacks run on a pool whose idle threads end
+(explorer.view.browser.callbacks), so the threads a crowd of pages made busy are freed after it
+leaves.
 """
 
 from __future__ import annotations
@@ -12,7 +18,7 @@ from __future__ import annotations
 import threading
 from typing import Any, Callable
 
-from . import origin
+from . import callbacks, origin
 from .app import ExplorerApp
 
 # Each page costs a compute child process (about 100 MB) and a loop thread; past this many pages
@@ -39,6 +45,8 @@ class PerClientExplorer:
         self._gone: set[int] = set()  # pages that left while their app was being built
         self._stopped = False
         self.refused = 0  # pages turned away because MAX_SESSIONS were open
+        callbacks.use_for(server)
+        origin.limit(server.get_port(), max_sessions)  # refused at the handshake beyond this
         server.on_client_connect(self._connected)
         server.on_client_disconnect(self._disconnected)
 

@@ -181,9 +181,9 @@ def rigid_model_holds(scene, lift, result=None) -> bool:
 
 
 def has_contact(scene) -> bool:
-    from ...effects.pipeline import resolve
+    from ...effects.registry import order
 
-    return "contact" in resolve(scene.effects)
+    return "contact" in order(scene.effects)
 
 
 def rigid_sweep(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray]:
@@ -208,9 +208,9 @@ def rigid_sweep(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray]:
 
 
 def has_elastic(scene) -> bool:
-    from ...effects.pipeline import resolve
+    from ...effects.registry import order
 
-    return "elastic" in resolve(scene.effects)
+    return "elastic" in order(scene.effects)
 
 
 NO_FORCES = ("**Speed sweep:** none; it needs the rigid forces: a [valve] mass and a [spring] in the scene "
@@ -297,7 +297,7 @@ def elastic_figures(scene, lift, rpm: float) -> tuple[float, float, float]:
         result = simulate(at_speed(dataclasses.replace(scene, effects=("elastic",), spring_design=None), rpm), lift=lift)
     except (InputError, RuntimeError, ValueError, ArithmeticError):
         return (math.nan, math.nan, math.nan)
-    events = [e for e in result.summary.get("events", []) if e.get("effect", "elastic") == "elastic"]
+    events = [e for e in result.events if e.effect == "elastic"]
     seps = [float(e["cam_angle_deg"]) for e in events if e.get("kind") == "separation"]
     seats = [float(e["velocity_m_s"]) for e in events if e.get("kind") == "seat"]
     deviation = result.summary.get("max_deviation_m")

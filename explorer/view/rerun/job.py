@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import os
 import signal
+from multiprocessing.connection import Connection
+
+from .recording import APP_ID, blueprint, log_overlay, log_result, new_recording
 
 
 def _execute(job: dict) -> None:
     import rerun as rr
 
-    from .recording import APP_ID, blueprint, log_overlay, log_result, new_recording
 
     layout = blueprint(*job["layout"]) if job.get("layout") is not None else None
     if job["kind"] == "blueprint":
@@ -68,8 +70,6 @@ def _serve(inbox, outbox) -> None:
 def main() -> None:
     """The helper's entry point: jobs arrive on stdin, replies leave on the descriptor that was
     stdout, which from here on is stderr's, so nothing printed can corrupt a reply."""
-    from multiprocessing.connection import Connection
-
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     os.environ.setdefault("RUST_LOG", "off")
     replies = os.dup(1)

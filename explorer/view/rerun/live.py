@@ -38,6 +38,9 @@ import uuid
 from pathlib import Path
 
 from ...core.errors import InputError
+from ...core.outputs import as_output, output_path
+from . import recording  # its functions looked up when called (tests replace them)
+from .worker import RecordingWorker, send
 
 DEFAULT_PORT = 9876
 BIND_IP = "127.0.0.1"
@@ -76,9 +79,7 @@ def open_live_stream(args) -> "LiveStream":
 
 def check_save_path(path: str):
     """The --rerun-save path, checked by the rules of explorer.core.outputs (an Output)."""
-    from .recording import check_rrd_path
-
-    return check_rrd_path(path, "--rerun-save")
+    return recording.check_rrd_path(path, "--rerun-save")
 
 
 def check_port(port: int) -> int:
@@ -96,10 +97,9 @@ def check_port(port: int) -> int:
 
 def session_line(name: str, result) -> str:
     """One line per recording in the session index: label, speed, events, warnings."""
-    s = result.summary
-    parts = [name, f"{s.get('rpm', float('nan')):g} rpm", f"{len(s.get('events', []))} events"]
-    if s.get("warnings"):
-        parts.append(f"{len(s['warnings'])} warnings")
+    parts = [name, f"{result.summary.get('rpm', float('nan')):g} rpm", f"{len(result.events)} events"]
+    if result.warnings:
+        parts.append(f"{len(result.warnings)} warnings")
     return " | ".join(parts)
 
 
@@ -107,7 +107,6 @@ class LiveStream:
     """Recordings of successive results to a gRPC server on 127.0.0.1 and/or a file."""
 
     def __init__(self, *, serve: bool = False, port: int = DEFAULT_PORT, save_path=None, parts: bool = True):
-        from ...core.outputs import as_output
 
         self.url: str | None = None
         self._save_output = as_output(save_path, "--rerun-save") if save_path else None
@@ -131,10 +130,8 @@ class LiveStream:
         if serve:
             import rerun as rr
 
-            from .recording import APP_ID
-
             # the host stream owns the server for the whole session; the recordings are clients
-            self._host = rr.RecordingStream(APP_ID, recording_id=f"live-session-{uuid.uuid4().hex[:12]}",
+            self._host = rr.RecordingStream(recording.APP_ID, recording_id=f"live-session-{uuid.uuid4().hex[:12]}",
                                             send_properties=False)
             self._host.set_sinks(rr.GrpcServerSink(bind_ip=BIND_IP, port=port,
                                                    server_memory_limit=SERVER_MEMORY_LIMIT))
@@ -146,8 +143,6 @@ class LiveStream:
             # or pipe's in the system's temporary directory
             parent = None if self._save_output.direct else self._save_output.target.parent
             self._pieces_dir = Path(tempfile.mkdtemp(prefix=f".{self.save_path.name}.", suffix=".parts", dir=parent))
-        from .worker import RecordingWorker
-
         self._worker = RecordingWorker()  # started by the writer thread at its first recording
         self._thread = threading.Thread(target=self._run, name="rerun-live", daemon=True)
         self._thread.start()
@@ -233,16 +228,14 @@ class LiveStream:
     def _write(self, name: str, result) -> None:
         import rerun as rr
 
-        from .recording import Run, parts_bounds, recording_paths, with_parts
-        from .worker import send
 
-        run = with_parts(name, result) if self.parts else Run(name, result)
+        run = recording.with_parts(name, result) if self.parts else recording.Run(name, result)
         seen = len(self._paths)
-        for path in recording_paths(result, (run.parts or {}).keys()):
+        for path in recording.recording_paths(result, (run.parts or {}).keys()):
             if path not in self._paths:
                 self._paths.append(path)
         if self._bounds is None and run.parts:
-            self._bounds = parts_bounds(run.parts, run.poses or {})
+            self._bounds = recording.parts_bounds(run.parts, run.poses or {})
         sinks = []
         if self.url is not None:
             sinks.append(("grpc", self.url))
@@ -264,15 +257,12 @@ class LiveStream:
             self._host.log("/session", rr.TextLog(session_line(name, result)))
 
     def _finish_file(self) -> None:
-        from ...core.outputs import output_path
-        from .recording import check_complete, merge_rrd
-
         pieces_dir, self._pieces_dir = self._pieces_dir, None
         if self._pieces:
             with output_path(self._save_output) as tmp:
                 if len(self._pieces) == 1:
                     shutil.copyfile(self._pieces[0], tmp)
                 else:
-                    merge_rrd(self._pieces, tmp)  # on failure the pieces stay, each a complete .rrd
-                check_complete(tmp)
+                    recording.merge_rrd(self._pieces, tmp)  # on failure the pieces stay, each a complete .rrd
+                recording.check_complete(tmp)
         shutil.rmtree(pieces_dir, ignore_errors=True)

@@ -46,7 +46,7 @@ Other entities:
                   /parts carries the z-up view coordinates.
 - /__properties/scene   label, scene name, source file, rpm, steps per revolution.
 - /events         TextLog entries at the events' exact instants (lift-off, separation, re-contact,
-                  seat, lash-take-up, … from result.summary["events"]) at level INFO, and the
+                  seat, lash-take-up, … from result.events) at level INFO, and the
                   result's warnings at level WARN at t = 0.
 - /summary        TextDocument (static, markdown): scene, label, peaks, effect timings, warnings.
 
@@ -88,7 +88,9 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
+from ...core.outputs import as_output, check_output, output_path
 from ...core.processes import run_child
+from . import worker as helper  # its functions looked up when called (tests replace them)
 
 APP_ID = "valve-gear-explorer"
 MERGE_TIMEOUT_S = 600.0  # `rerun rrd merge` of a long live session; it is killed past this
@@ -101,7 +103,6 @@ ANGLE_PLAYBACK_S = 6.0  # one revolution at 1x on the cam-angle timeline
 OVERLAY_PATH_PREFIX = "run"
 # lengths in the browser explorer's unit (mm); unit suffix -> (factor, shown unit)
 DISPLAY_UNITS = {"m": (1e3, "mm")}
-TIMELINES = (TIMELINE_TIME, TIMELINE_STEP, TIMELINE_ANGLE)
 INDEX_COLUMNS = ("cam_angle_deg", "time_s")
 EVENTS_PATH = "/events"
 SUMMARY_PATH = "/summary"
@@ -303,8 +304,8 @@ def event_text(event: Mapping) -> str:
 
 
 def _log_events(rec, rr, result, index: Mapping[str, np.ndarray]) -> None:
-    events = list(result.summary.get("events", []))
-    warnings = list(result.summary.get("warnings", []))
+    events = list(result.events)
+    warnings = list(result.warnings)
     n = index[TIMELINE_STEP].size
     texts, levels, t, step, degrees = [], [], [], [], []
     for message in warnings:  # a warning belongs to the whole run: show it at the start
@@ -341,16 +342,15 @@ def summary_markdown(result, label: str) -> str:
         lines += [f"scene file: `{source}`", ""]
     lines += ["| quantity | value |", "|---|---|"]
     for key, value in s.items():
-        if key in ("effects", "events", "warnings") or isinstance(value, (dict, list, tuple)):
+        if isinstance(value, (dict, list, tuple)):
             continue
         if isinstance(value, (float, np.floating)):
             value = f"{float(value):.6g}"
         lines.append(f"| {key} | {value} |")
-    effects = s.get("effects", {})
-    if effects:
+    if result.timings:
         lines += ["", "| effect | compute time |", "|---|---|"]
-        lines += [f"| {name} | {1e3 * info['compute_time_s']:.3f} ms |" for name, info in effects.items()]
-    warnings = list(s.get("warnings", []))
+        lines += [f"| {name} | {1e3 * t.compute_time_s:.3f} ms |" for name, t in result.timings.items()]
+    warnings = list(result.warnings)
     if warnings:
         lines += ["", "**warnings**", ""] + [f"- {w}" for w in warnings]
     return "\n".join(lines) + "\n"
@@ -605,21 +605,6 @@ def new_recording(label: str):
     return rr.RecordingStream(APP_ID, recording_id=f"{label}-{uuid.uuid4().hex[:12]}")
 
 
-def _write_one(path: Path, run: Run, layout) -> None:
-    """One run into its own file in this process. Every rerun stream made here stays in memory
-    with its threads until the process exits (see explorer.view.rerun.worker): the commands write
-    through the helper process instead."""
-    import rerun as rr
-
-    rec = new_recording(run.label)
-    rec.set_sinks(rr.FileSink(str(path)), default_blueprint=layout)
-    try:
-        log_result(rec, run.result, run.label, run.parts, run.poses, run.scales, run.colors, run.points)
-        rec.flush()
-    finally:
-        rec.disconnect()  # closes the file with its footer
-
-
 def union_bounds(boxes):
     boxes = [b for b in boxes if b is not None]
     if not boxes:
@@ -636,21 +621,18 @@ def write_recordings(path, runs: Iterable[Run], on_run=None) -> None:
     memory of one run. `on_run(run)` is called after each is written. A single run is one file
     with its layout as default blueprint; several are one file each, without, merged with
     `rerun rrd merge` together with the layout for all of them, written last."""
-    from ...core.outputs import as_output, output_path
-    from .worker import RecordingWorker, write_file
-
     out = as_output(path, "output")
     it = iter(runs)
     first = next(it, None)
     if first is None:
         raise ValueError("no runs to record")
     second = next(it, None)
-    with output_path(out) as tmp, RecordingWorker() as worker:
+    with output_path(out) as tmp, helper.RecordingWorker() as worker:
         if second is None:
             paths = recording_paths(first.result, (first.parts or {}).keys())
             bounds = parts_bounds(first.parts, first.poses or {}) if first.parts else None
             corners = legend_corners([plotted_curves(first.result)])
-            write_file(worker, tmp, first, (paths, bounds, corners))
+            helper.write_file(worker, tmp, first, (paths, bounds, corners))
             if on_run is not None:
                 on_run(first)
         else:
@@ -659,8 +641,6 @@ def write_recordings(path, runs: Iterable[Run], on_run=None) -> None:
 
 
 def _write_merged(worker, out, tmp: Path, runs: Iterable[Run], on_run) -> None:
-    from .worker import write_blueprint, write_file, write_overlay
-
     parent = None if out.direct else out.target.parent  # a device's temporaries go to the system's
     work_dir = Path(tempfile.mkdtemp(prefix=f".{Path(out.name).name}.", suffix=".parts", dir=parent))
     try:
@@ -674,18 +654,18 @@ def _write_merged(worker, out, tmp: Path, runs: Iterable[Run], on_run) -> None:
                 boxes.append(parts_bounds(run.parts, run.poses or {}))
             overlay.append(overlay_entry(run.label, run.result))
             piece = work_dir / f"{len(pieces):05d}.rrd"
-            write_file(worker, piece, run, None)
+            helper.write_file(worker, piece, run, None)
             pieces.append(piece)
             if on_run is not None:
                 on_run(run)
             del run  # the next run is made only now: one in memory at a time
         piece = work_dir / "overlay.rrd"
-        write_overlay(worker, piece, overlay, f"overlay: all {len(overlay)} runs")
+        helper.write_overlay(worker, piece, overlay, f"overlay: all {len(overlay)} runs")
         pieces.append(piece)
         corners = legend_corners({path: (angle, values) for path, values in curves.items()}
                                  for _, angle, _, curves in overlay)
         layout = work_dir / "layout.rbl"
-        write_blueprint(worker, layout, (list(dict.fromkeys(paths)), union_bounds(boxes), corners))
+        helper.write_blueprint(worker, layout, (list(dict.fromkeys(paths)), union_bounds(boxes), corners))
         merge_rrd([*pieces, layout], tmp)
     finally:
         shutil.rmtree(work_dir, ignore_errors=True)
@@ -695,15 +675,7 @@ def check_rrd_path(path: str, option: str):
     """An output .rrd path the user named (`option` names the flag in the error), checked before
     any work by the rules of explorer.core.outputs (a .rrd name, a directory that takes a new file;
     /dev/stdout or a FIFO need no suffix): an explorer.core.outputs.Output."""
-    from ...core.outputs import check_output
-
     return check_output(path, option, suffix=".rrd")
-
-
-def temporary_name(path: Path, directory: Path | None = None) -> Path:
-    """A hidden, unique name beside `path` (or in `directory`)."""
-    directory = directory if directory is not None else (path.parent if str(path.parent) else Path("."))
-    return directory / f".{path.name}.{uuid.uuid4().hex[:12]}.part"
 
 
 def check_complete(path: Path) -> None:

@@ -21,6 +21,7 @@ import os
 import subprocess
 import threading
 from dataclasses import replace
+from multiprocessing.connection import Connection
 from types import SimpleNamespace
 from typing import Mapping
 
@@ -44,14 +45,18 @@ def _plain(value):
 
 
 def portable_run(run):
-    """The run with a result the helper process can receive: columns, summary, the scene's name
-    and source (all that explorer.view.rerun.recording.log_result reads of it)."""
+    """The run with a result the helper process can receive: columns, summary, events, warnings,
+    timings, the scene's name and source (all that explorer.view.rerun.recording.log_result reads
+    of it)."""
     result = run.result
     scene = getattr(result, "scene", None)
     light = SimpleNamespace(
         scene=SimpleNamespace(name=str(getattr(scene, "name", "")), source=str(getattr(scene, "source", ""))),
         columns={k: v for k, v in result.columns.items()},
         summary=_plain(result.summary),
+        events=tuple(_plain(e) for e in result.events),
+        warnings=tuple(result.warnings),
+        timings=dict(result.timings),
     )
     return replace(run, result=light)
 
@@ -70,8 +75,6 @@ class RecordingWorker:
         self._jobs = 0
 
     def _start(self) -> None:
-        from multiprocessing.connection import Connection
-
         # own session (Ctrl-C in the terminal is the explorer's to handle), dies with the thread that
         # started it (and exits when its pipe closes)
         proc = spawn_python(HELPER_MAIN, stdin=subprocess.PIPE, stdout=subprocess.PIPE)

@@ -1,4 +1,5 @@
-"""The trip gear's latched phase in the effects 'forces', 'contact' and 'elastic'.
+"""The trip gear's latched phase in the effects 'forces', 'contact' and 'elastic' (its variants of
+those effects: explorer.gears.trip_gear.TripGear.effects).
 
 While the latch carries the valve - from the pick-up, where the latch has run through its
 over-travel s_o (valve.lash), to the trip - the gear is a positive drive: the latch lift X(theta)
@@ -33,7 +34,14 @@ forces   Over the carried window the latch transmits
          Outside the window the latch force, its inertia and friction parts and the torque are 0
          (nothing transmitted - as forces.rigid_train_forces reports a seated valve); the spring
          force follows the valve; the required spring force and the margin are the seat's while
-         the valve is shut and NaN while it closes freely (no latch to stay on).
+         the valve is shut (-W: hold it down against the closing loads) and, while it closes
+         freely (no latch to stay on), the spring force that closes it: Trinks' rule (seed 003)
+         P_f = (p/g - 1) G_v + W_s = M p - W + R with p = 2 s_trip / t^2 for the wanted closing
+         time t = [gear.trip] closing_time from the lift at the trip (explorer.mechanics.springs.
+         trinks_closing_force; here with every closing load W, not the valve's weight alone), and
+         without a wanted time its limit t -> infinity, R - W: the spring must at least overcome
+         the friction beyond the closing loads, or the valve hangs open (the closing model refuses
+         such a scene). No NaN: every sample has a requirement.
 contact  No cam surface: the latch face bears on the spindle's catch (face square to the spindle).
          To trip, the governor-set trip gear pulls the latch out sideways against the friction
          mu F_trip ([gear.trip] latch_friction) and, over the engagement latch_depth d, does the
@@ -58,7 +66,14 @@ from typing import Any
 
 import numpy as np
 
-from ..result import EffectOutput
+from ..dynamics import solvers
+from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel
+from ..effects.elastic import elastic_jerk, solve_reporting
+from ..mechanics.forces import (Pieces, TrainLoads, float_speed, friction_direction, load_parts, loss_report,
+                                minimise_on_pieces, velocity_zeros)
+from ..mechanics.forces import loss_intervals as intervals_of
+from ..result import EffectOutput, Event
+from .trip import simulate_closing
 
 TWO_PI = 2.0 * math.pi
 GAUSS_NODES = 32  # per smooth piece: the latch laws are trigonometric/polynomial, 32 nodes reach rounding
@@ -67,12 +82,7 @@ _INSIDE = 1e-11  # rad: one-sided limits at the pick-up and the trip (as forces.
 
 def trip_lift_of(ctx):
     """The TripLift of a trip scene (the pipeline's, or built from the scene)."""
-    lift = ctx.lift
-    if not hasattr(lift, "closing"):
-        from ..gears.build import build_gear_lift
-
-        lift = build_gear_lift(ctx.scene)
-    return lift
+    return ctx.lift if hasattr(ctx.lift, "closing") else ctx.gear.build_lift(ctx.scene)
 
 
 def carried(lift, theta) -> np.ndarray:
@@ -107,8 +117,6 @@ def carried_pieces(lift, n_grid: int = 4096):
     """forces.Pieces of one revolution: the carried window split where the latch law, the
     friction direction or the buffer's state changes (is_open True), and the rest of the
     revolution as one piece (is_open False: the latch carries nothing there)."""
-    from ..mechanics.forces import Pieces, friction_direction, velocity_zeros
-
     latch = lift.latch
     latched = getattr(lift, "latched", None)
     buffer_cuts = latched.cuts() if latched is not None else np.zeros(0)
@@ -126,8 +134,6 @@ def carried_pieces(lift, n_grid: int = 4096):
 def _force(lift, d, direction, loads, omega):
     """(latch force F = w^2 A + G - B, its inertia part w^2 A) for derivatives d; a fifth row of d,
     if present, is the buffer force B (_LatchAndBuffer)."""
-    from ..mechanics.forces import load_parts
-
     a_coef, g_part, _ = load_parts(d, direction, loads, 1.0, lift.overtravel)
     force = omega**2 * a_coef + g_part
     if d.shape[0] > 4:
@@ -139,8 +145,6 @@ def latch_force(lift, theta, loads, omega: float) -> dict[str, np.ndarray]:
     """Per sample: the rigid latch force F, its inertia, friction and buffer (B, upward on the
     valve) parts, the camshaft torque T = F dX/dtheta, and the carried mask; all 0 where the latch
     does not carry the valve."""
-    from ..mechanics.forces import friction_direction
-
     theta = np.asarray(theta, dtype=float)
     d = _LatchAndBuffer(lift).derivatives(theta)
     direction = friction_direction(d[1], d[2])
@@ -188,8 +192,6 @@ def latch_force_extremes(lift, loads, omega: float, pieces, n_grid: int = 4096) 
     """Smallest and largest latch force over the carried window with their cam angles (rad),
     refined on the analytic law and the buffer's dense solution (forces.minimise_on_pieces): the
     one source of the forces effect's and the gear effect's extremes."""
-    from ..mechanics.forces import minimise_on_pieces
-
     drive = _LatchAndBuffer(lift)
 
     def force(d, direction):
@@ -203,8 +205,6 @@ def latch_force_extremes(lift, loads, omega: float, pieces, n_grid: int = 4096) 
 def buffer_extremes(lift, pieces, n_grid: int = 4096) -> dict:
     """Smallest (most suction) and largest buffer force B over the carried window, with cam angles
     (rad; None where the buffer exerts nothing)."""
-    from ..mechanics.forces import minimise_on_pieces
-
     drive = _LatchAndBuffer(lift)
     b_min, th_min = minimise_on_pieces(drive, pieces, lambda d, direction: d[4], n_grid=n_grid)
     neg_max, th_max = minimise_on_pieces(drive, pieces, lambda d, direction: -d[4], n_grid=n_grid)
@@ -217,8 +217,6 @@ def loss_intervals(lift, loads, omega: float, pieces, n_grid: int = 4096) -> lis
     """Where the latch force (buffer included) is <= 0 in the carried window: (loss, regain) cam
     angles, by the one definition of explorer.mechanics.forces.loss_intervals (the pick-up counts as the
     valve having been seated, the trip as its end)."""
-    from ..mechanics.forces import loss_intervals as intervals_of
-
     drive = _LatchAndBuffer(lift)
 
     def force_of(t, direction):
@@ -232,9 +230,18 @@ def loss_intervals(lift, loads, omega: float, pieces, n_grid: int = 4096) -> lis
 # --------------------------------------------------------------------------------------------
 
 
-def trip_forces_effect(ctx) -> EffectOutput:
-    from ..mechanics.forces import TrainLoads, float_speed, loss_report
+def free_closing_requirement(scene, lift, loads) -> float:
+    """The spring force (N) the released valve needs: Trinks' rule P_f = M p + R - W (seed 003,
+    explorer.mechanics.springs.trinks_closing_force with every closing load W in the place of the
+    valve's weight G_v = M g) for closing from the lift at the trip within [gear.trip]
+    closing_time, p = 2 s_trip / t^2; without a wanted closing time its limit p -> 0, R - W."""
+    t_wanted = scene.gear.part("trip")["closing_time"]
+    s_trip = float(lift.latch.derivatives(np.array([lift.trip_angle]))[0, 0] - lift.overtravel)
+    p = 2.0 * s_trip / t_wanted**2 if t_wanted is not None else 0.0
+    return loads.mass * p + loads.friction - loads.closing
 
+
+def trip_forces_effect(ctx) -> EffectOutput:
     scene, w = ctx.scene, ctx.omega
     lift = trip_lift_of(ctx)
     loads = TrainLoads.from_scene(scene)
@@ -243,9 +250,10 @@ def trip_forces_effect(ctx) -> EffectOutput:
     on, force, torque = parts["carried"], parts["force"], parts["torque"]
     seated = ~on & (s <= 0.0)
     spring = loads.preload + loads.rate * s
-    # F = spring + inertia + friction + closing - B: the spring force that keeps F >= 0
+    # F = spring + inertia + friction + closing - B: the spring force that keeps F >= 0; seated: the
+    # force that holds the valve down; released: the force that closes it (free_closing_requirement)
     required = np.where(on, -(parts["inertia"] + parts["friction"] + loads.closing - parts["buffer"]),
-                        np.where(seated, -loads.closing, np.nan))
+                        np.where(seated, -loads.closing, free_closing_requirement(scene, lift, loads)))
     margin = spring - required
     columns = {
         "spring_force_N": spring,
@@ -308,7 +316,7 @@ def trip_forces_effect(ctx) -> EffectOutput:
         "max_contact_force_cam_angle_deg": math.degrees(th_max),
         "max_follower_force_N": f_max,
         "max_spring_force_N": float(spring.max()),
-        "min_spring_margin_N": float(np.nanmin(margin)),
+        "min_spring_margin_N": float(np.min(margin)),
         # the speed at which the latch's deceleration would throw the valve off before the trip
         # (spring and loads only: the buffer force depends on the speed through the pocket's flow)
         "jump_speed_rpm": jump.rpm if math.isfinite(jump.omega) else None,
@@ -340,7 +348,8 @@ def trip_forces_effect(ctx) -> EffectOutput:
     intervals = loss_intervals(lift, loads, w, pieces, n_grid) if f_min < 0.0 else []
     summary["contact_loss_cam_angles_deg"] = [[math.degrees(a), math.degrees(b)] for a, b in intervals]
     events.extend(loss_report(intervals, w, f_min, th_min)[0])
-    return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
+    return EffectOutput(columns=columns, summary=summary, events=tuple(Event.of(e) for e in events),
+                        warnings=tuple(warnings))
 
 
 # --------------------------------------------------------------------------------------------
@@ -349,8 +358,6 @@ def trip_forces_effect(ctx) -> EffectOutput:
 
 
 def trip_contact_effect(ctx) -> EffectOutput:
-    from ..mechanics.forces import TrainLoads
-
     scene, w = ctx.scene, ctx.omega
     lift = trip_lift_of(ctx)
     trip = scene.gear.part("trip")
@@ -364,7 +371,7 @@ def trip_contact_effect(ctx) -> EffectOutput:
     f_max = max(float(ctx.summary["max_contact_force_N"]), 0.0)
     columns = {"latch_release_friction_N": mu * bearing}
     summary: dict[str, Any] = {
-        "contact_follower_type": "trip",
+        "contact_follower_type": scene.follower.type,
         "latch_friction_coefficient": mu,
         "latch_force_at_trip_N": f_trip,
         "latch_release_friction_force_N": mu * max(f_trip, 0.0),
@@ -406,14 +413,10 @@ class TripElasticMotion:
     warnings: tuple
 
 
-def elastic_trip_motion(scene, lift, theta, method: str = "exact", options: dict | None = None) -> TripElasticMotion:
+def elastic_trip_motion(scene, lift, theta, method: str = solvers.DEFAULT, options: dict | None = None) -> TripElasticMotion:
     """Elastic valve motion of a trip gear at the cam angles theta (any order): the linkage model
     driven by the latch from its lowest point (valve at rest on the seat) to the trip instant, then
     the free closing from the elastic state there."""
-    from .elastic import elastic_jerk, solve_reporting
-    from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel
-    from ..gears.trip import simulate_closing
-
     w = scene.drive.omega
     period = TWO_PI / w
     model = LinkageModel.from_scene(scene)
@@ -506,14 +509,10 @@ def elastic_trip_motion(scene, lift, theta, method: str = "exact", options: dict
 
 
 def trip_elastic_effect(ctx) -> EffectOutput:
-    from .elastic import solver_options
-    from ..dynamics.model import EVENT_KINDS, LinkageModel
-    from ..mechanics.forces import TrainLoads
-
     scene, w = ctx.scene, ctx.omega
     lift = trip_lift_of(ctx)
     method = scene.solver.method
-    motion = elastic_trip_motion(scene, lift, ctx.theta, method, solver_options(scene))
+    motion = elastic_trip_motion(scene, lift, ctx.theta, method, dict(scene.solver.options))
     c = motion.columns
     model = LinkageModel.from_scene(scene)
     n = ctx.theta.size
@@ -610,4 +609,5 @@ def trip_elastic_effect(ctx) -> EffectOutput:
         "valve_in_contact": c["contact"].astype(float),
         "valve_phase": c["phase"].astype(float),
     }
-    return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
+    return EffectOutput(columns=columns, summary=summary, events=tuple(Event.of(e) for e in events),
+                        warnings=tuple(warnings))

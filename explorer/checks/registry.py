@@ -1,0 +1,222 @@
+"""The design rules: one line each (explorer.checks.rule.RuleSpec: the contract), with every
+default limit, its source and how firm it is. docs/guide/checks.md's rule table is generated from
+this table (`python -m explorer.checks`; tests/test_checks.py holds the page to it).
+
+Import-light: names and numbers only; a rule's measure is imported when a design is checked.
+"""
+
+from __future__ import annotations
+
+import math
+from types import MappingProxyType
+from typing import Mapping
+
+from ..core.plugins import resolve
+from .rule import Rule, RuleSpec, Setting  # noqa: F401 (Rule: the type measure_function returns)
+
+_R = "explorer.checks.rules"
+DEG = math.pi / 180.0
+RPM = 2.0 * math.pi / 60.0  # rad/s per rev/min
+IN_PER_DEG = 0.0254 / DEG  # m/rad per in/deg
+
+# display units: name -> (factor from SI, offset)
+UNITS: Mapping[str, tuple[float, float]] = MappingProxyType({
+    "": (1.0, 0.0), "deg": (1.0 / DEG, 0.0), "rpm": (1.0 / RPM, 0.0), "m/s": (1.0, 0.0), "MPa": (1e-6, 0.0),
+    "mm": (1e3, 0.0), "mm/deg": (1e3 * DEG, 0.0), "degC": (1.0, -273.15), "um": (1e6, 0.0),
+})
+
+NORTON_DOM = "R. L. Norton, Design of Machinery, ch. 8 (cam design: pressure angle), and his DYNACAM help"
+TRADE_CAM = "cam designer's notes, camprofiledesigns.com ('cam talk', Jan 2024)"
+SHIGLEY_SPRINGS = "J. E. Shigley et al., Mechanical Engineering Design, ch. 10 (mechanical springs)"
+HAMROCK = ("B. J. Hamrock, S. R. Schmid, B. O. Jacobson, Fundamentals of Machine Elements, lubrication chapter: "
+           "film parameter ranges (boundary < 1, partial 1-5, elastohydrodynamic 3-10)")
+SEED_004 = "seed 004 ('Oel- und Gasmaschinen', p. 404)"
+
+SPRING_OPTIONS = (
+    Setting("wire", "chrome-silicon", "choice", "", "the valve-spring wire (ASTM A401) unless the design names "
+            "another; S_ut = A/d^m: explorer/mechanics/materials.py", "the wire's certificate governs",
+            choices=("music-wire", "oil-tempered", "hard-drawn", "chrome-vanadium", "chrome-silicon")),
+    Setting("correction", "wahl", "choice", "", "A. M. Wahl, Mechanical Springs (1944): K = (4C-1)/(4C-4) + 0.615/C",
+            "textbook", choices=("wahl", "bergstrasser", "direct-shear")),
+)
+
+RULES: tuple[RuleSpec, ...] = (
+    RuleSpec("pressure_angle", f"{_R}.pressure_angle:measure", "Pressure angle", "largest |pressure angle|", "deg",
+             "max", (
+                 Setting("fail_translating", 30.0 * DEG, "angle", "deg", NORTON_DOM + ": translating roller follower "
+                         "below about 30 deg", "textbook rule of thumb"),
+                 Setting("fail_oscillating", 35.0 * DEG, "angle", "deg", NORTON_DOM + ": oscillating (pivoted) "
+                         "follower below about 35 deg", "textbook rule of thumb"),
+                 Setting("warn", None, "angle", "deg", "none by default", "-"),
+             ), "kinematics"),
+    RuleSpec("self_locking", f"{_R}.self_locking:measure", "Self-locking margin", "smallest 90 - rho - |alpha|",
+             "deg", "min", (
+                 Setting("fail", 0.0, "angle", "deg", SEED_004 + ": self-locking at alpha + rho = 90 deg",
+                         "geometric necessity"),
+                 Setting("warn", 20.0 * DEG, "angle", "deg", SEED_004 + ": alpha must stay 'well below' 90 deg - rho; "
+                         "the seed gives no figure", "judgement"),
+             ), "kinematics"),
+    RuleSpec("roller_curvature", f"{_R}.roller_curvature:measure", "Cam curvature (roller)",
+             "smallest convex pitch radius / roller radius", "", "min", (
+                 Setting("fail", 1.0, "number", "", "undercut: a convex pitch radius at or below the roller's folds "
+                         "the envelope into a cusp (" + NORTON_DOM.split(",")[0] + ", cam curvature)",
+                         "geometric necessity", minimum=0.0),
+                 Setting("warn", 2.0, "number", "", "smallest convex pitch radius 2-3 x the roller radius "
+                         "(machine-design lecture notes; Norton)", "rule of thumb", minimum=0.0),
+             ), "kinematics"),
+    RuleSpec("face_curvature", f"{_R}.face_curvature:measure", "Cam curvature (flat face)",
+             "smallest radius of curvature rho = Rb + s + s''", "mm", "min", (
+                 Setting("fail", 0.0, "length", "mm", "R. L. Norton, Cam Design and Manufacturing Handbook: "
+                         "rho > 0 everywhere for a flat-faced follower, else a cusp", "geometric necessity",
+                         minimum=0.0),
+                 Setting("warn", None, "length", "mm", "none by default (a minimum radius for grinding or "
+                         "stress is the design's)", "-", minimum=0.0),
+             ), "kinematics"),
+    RuleSpec("face_width", f"{_R}.face_width:measure", "Face width used", "face half-width - largest |offset|",
+             "mm", "min", (
+                 Setting("fail", 0.0, "length", "mm", "R. L. Norton, Cam Design and Manufacturing Handbook: the face "
+                         "must cover the contact offset ds/dtheta on both sides", "geometric necessity",
+                         minimum=0.0),
+                 Setting("warn", None, "length", "mm", "none by default", "-", minimum=0.0),
+             ), "kinematics"),
+    RuleSpec("ramp_velocity", f"{_R}.ramp_velocity:measure", "Opening velocity at the end of the lash ramp",
+             "valve lift per cam angle at the lash take-up", "mm/deg", "max", (
+                 Setting("fail", 0.002 * IN_PER_DEG, "lift_rate", "mm/deg", TRADE_CAM + ": below about 0.002 in/deg "
+                         "for a solid tappet", "trade practice", minimum=0.0),
+                 Setting("warn", None, "lift_rate", "mm/deg", "none by default", "-", minimum=0.0),
+             ), "dynamics"),
+    RuleSpec("seating_velocity", f"{_R}.seating_velocity:measure", "Seating velocity",
+             "hardest seat impact (elastic; rigid without a linkage)", "m/s", "max", (
+                 Setting("fail", 1.0, "velocity", "m/s", TRADE_CAM + ": below about 1.0 m/s (40 in/s) for high-end "
+                         "valve trains", "trade practice", minimum=0.0),
+                 Setting("warn", 0.76, "velocity", "m/s", TRADE_CAM + ": about 0.76 m/s (30 in/s) for others",
+                         "trade practice", minimum=0.0),
+             ), "dynamics"),
+    RuleSpec("float_margin", f"{_R}.float_margin:measure", "Float margin",
+             "speed of first separation - highest operating speed", "rpm", "min", (
+                 Setting("fail", 100.0 * RPM, "speed", "rpm", "Race Engine Technology, 'Peace and harmony': float "
+                         "a couple of hundred rpm above the highest engine speed (200 engine rpm = 100 camshaft rpm "
+                         "on a four-stroke)", "trade practice", minimum=0.0),
+                 Setting("warn", None, "speed", "rpm", "none by default", "-", minimum=0.0),
+             ), "dynamics"),
+    RuleSpec("seat_bounce", f"{_R}.seat_bounce:measure", "Seat bounce", "bounces per revolution", "", "max", (
+                 Setting("fail", 0.0, "number", "", "Schenker 1902, sec. 4: a valve that leaves its prescribed "
+                         "motion 'may land and jump off again'; it should land once", "judgement", minimum=0.0),
+                 Setting("warn", None, "number", "", "none by default", "-", minimum=0.0),
+                 Setting("min_height", 5e-6, "length", "um", "bounces lower than this are not counted (judgement: "
+                         "the order of a seat face's flatness)", "judgement", minimum=0.0),
+             ), "dynamics"),
+    RuleSpec("hertz_stress", f"{_R}.hertz_stress:measure", "Contact (Hertz) stress", "largest Hertz pressure", "MPa",
+             "max", (
+                 Setting("material", "scene", "choice", "", "'scene': the [contact] allowable (seed 004's by "
+                         "engine, or allowable_stress); others: explorer/mechanics/materials.py",
+                         "material-specific", choices=("scene", "large-gas", "diesel", "through-hardened-300HB",
+                                                       "carburized-grade-1", "carburized-grade-2")),
+                 Setting("fail", None, "pressure", "MPa", "the material's allowable (setting `material`)",
+                         "material-specific", minimum=0.0),
+                 Setting("warn", None, "pressure", "MPa", "none by default", "-", minimum=0.0),
+             ), "contact"),
+    RuleSpec("film_parameter", f"{_R}.film_parameter:measure", "Film parameter (lambda)",
+             "smallest h_min / composite roughness over the loaded contact", "", "min", (
+                 Setting("fail", 1.0, "number", "", HAMROCK + ": below 1 the asperities carry the load",
+                         "regime boundary, not a limit: flat-tappet noses run at 0.2-0.4 on additives", minimum=0.0),
+                 Setting("warn", 3.0, "number", "", HAMROCK + ": full EHL from about 3", "regime boundary",
+                         minimum=0.0),
+             ), "tribology"),
+    RuleSpec("entrainment_reversal", f"{_R}.entrainment_reversal:measure", "Entrainment reversal",
+             "cam angles where the entrainment velocity passes through zero (loaded contact)", "", "max", (
+                 Setting("fail", None, "number", "", "none by default", "-", minimum=0.0),
+                 Setting("warn", 0.0, "number", "", "the steady EHL film vanishes at zero entrainment (squeeze "
+                         "alone carries it): docs/theory/tribology.md", "a flag, not a limit", minimum=0.0),
+             ), "tribology"),
+    RuleSpec("flash_temperature", f"{_R}.flash_temperature:measure", "Flash temperature (Blok)",
+             "largest contact temperature: bulk + Blok's flash", "degC", "max", (
+                 Setting("fail", None, "temperature", "degC", "none by default: the oil's scuffing temperature "
+                         "(FZG test, ISO/TR 13989-1) belongs here", "-"),
+                 Setting("warn", 423.15, "temperature", "degC", "Blok's postulate of a critical contact temperature; "
+                         "150 degC is an order of magnitude for mineral oils without EP additives",
+                         "weak: enter the oil's own"),
+             ), "tribology"),
+    RuleSpec("spring_stress", f"{_R}.spring_stress:measure", "Spring shear stress", "shear stress at full lift",
+             "MPa", "max", (
+                 *SPRING_OPTIONS,
+                 Setting("fail", None, "pressure", "MPa", "45 % of the wire's S_ut (setting `wire`; Katy Spring & "
+                         "Mfg., common spring materials)", "maker's data", minimum=0.0),
+                 Setting("warn", None, "pressure", "MPa", "none by default", "-", minimum=0.0),
+             ), "spring"),
+    RuleSpec("spring_fatigue", f"{_R}.spring_fatigue:measure", "Spring fatigue (Goodman)",
+             "Goodman safety factor with Zimmerli's data", "", "min", (
+                 *SPRING_OPTIONS,
+                 Setting("peened", True, "bool", "", "valve springs are shot-peened (Zimmerli: 398/534 MPa "
+                         "peened, 241/379 MPa unpeened)", "design fact to state"),
+                 Setting("fail", 1.0, "number", "", SHIGLEY_SPRINGS + ": the Goodman line", "criterion", minimum=0.0),
+                 Setting("warn", 1.5, "number", "", SHIGLEY_SPRINGS + ": design factor n_f = 1.5 of its fatigue "
+                         "design examples", "textbook design factor", minimum=0.0),
+             ), "spring"),
+    RuleSpec("coil_bind", f"{_R}.coil_bind:measure", "Coil bind", "fractional overrun to closure at full lift",
+             "", "min", (
+                 Setting("fail", 0.0, "number", "", "coils solid at full lift", "geometric necessity", minimum=0.0),
+                 Setting("warn", 0.15, "number", "", SHIGLEY_SPRINGS + ": fractional overrun to closure xi = 0.15",
+                         "textbook design value", minimum=0.0),
+             ), "spring"),
+    RuleSpec("spring_surge", f"{_R}.spring_surge:measure", "Spring surge",
+             "distance of a surge frequency from a strong cam harmonic (share of the surge frequency)", "", "min", (
+                 Setting("fail", 0.05, "number", "", "judgement: a surge mode within 5 % of a strong harmonic "
+                         "resonates", "judgement", minimum=0.0),
+                 Setting("warn", 0.10, "number", "", "judgement; Shigley quotes Wolford and Smith: the spring's "
+                         "fundamental 15-20 x the forcing frequency", "judgement", minimum=0.0),
+                 Setting("strength", 0.10, "number", "", "a harmonic counts as strong from 10 % of the largest",
+                         "judgement", minimum=0.0),
+                 Setting("modes", 3.0, "number", "", "surge modes checked", "judgement", minimum=1.0),
+             ), "spring"),
+    RuleSpec("trip_latch", f"{_R}.trip_latch:measure", "Trip-gear latch hold",
+             "throw-off speed of the latch - highest operating speed", "rpm", "min", (
+                 Setting("fail", 0.0, "speed", "rpm", "the valve leaves the latch before the trip above its throw-off "
+                         "speed (seeds 000, 003)", "geometric necessity", minimum=0.0),
+                 Setting("warn", None, "speed", "rpm", "none by default", "-", minimum=0.0),
+             ), "gear"),
+    RuleSpec("rocking_cam_swing", f"{_R}.rocking_cam_swing:measure", "Rocking-cam swing",
+             "swing beyond the top arc's reach", "deg", "min", (
+                 Setting("fail", None, "angle", "deg", "none by default", "-"),
+                 Setting("warn", 0.0, "angle", "deg", SEED_004 + ": one contour serves opening and closing; a swing "
+                         "that ends on the flank never reaches its full rise", "geometric fact"),
+             ), "gear"),
+)
+
+RULE_NAMES = tuple(r.name for r in RULES)
+_BY_NAME = {r.name: r for r in RULES}
+
+
+def rule(name: str) -> RuleSpec:
+    return _BY_NAME[name]
+
+
+def measure_function(spec: RuleSpec) -> "Rule":
+    return resolve(spec.measure)  # the one resolver of plug-in references (explorer.core.plugins)
+
+
+def show(value, unit: str) -> float:
+    """An SI value in a display unit of UNITS."""
+    factor, offset = UNITS[unit]
+    return value * factor + offset
+
+
+def rules_markdown() -> str:
+    """The rule table as markdown (docs/guide/checks.md)."""
+    lines = ["| rule | judges | setting | default | source | firmness |", "|---|---|---|---|---|---|"]
+    for spec in RULES:
+        first = True
+        for s in spec.settings:
+            if s.default is None:
+                default = "-"
+            elif s.dimension in ("choice", "bool"):
+                default = str(s.default).lower() if isinstance(s.default, bool) else str(s.default)
+            else:
+                default = f"{show(s.default, s.unit):.6g} {s.unit}".strip()
+            judged = f"`{spec.name}`" if first else ""
+            what = f"{spec.title}: {spec.quantity} ({'at most' if spec.sense == 'max' else 'at least'})" if first else ""
+            cells = [judged, what, s.name, default, s.source, s.firmness]
+            lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+            first = False
+    return "\n".join(lines) + "\n"
+

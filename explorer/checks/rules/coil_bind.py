@@ -1,0 +1,27 @@
+"""Coil bind: the fractional overrun to closure at full lift, xi = (L2 - Ls)/(L0 - L2), with the
+spring installed at L1 = L0 - F1/k and compressed by the valve's lift to L2 (< 0: the coils go
+solid; Shigley designs for xi >= 0.15)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..rule import Measure
+from . import _spring
+
+
+def measure(case, settings) -> Measure:
+    sp = case.scene.spring
+    if sp is None or sp.free_length is None or sp.solid_height is None:
+        return Measure.not_applicable("needs [spring] free_length and solid_height")
+    if not sp.rate > 0.0:
+        return Measure.not_applicable("needs a spring rate > 0")
+    lift, angle = _spring.full_lift(case)
+    preload = np.ravel(np.asarray(case.param("spring.preload"), dtype=float))
+    rate = np.ravel(np.asarray(case.param("spring.rate"), dtype=float))
+    l2 = sp.free_length - preload / rate - lift
+    xi = (l2 - sp.solid_height) / (sp.free_length - l2)
+    xi = np.broadcast_to(xi, (case.n,))
+    gap = float(np.ravel(l2 - sp.solid_height)[0])
+    return Measure.of(xi[:, None], np.full((case.n, 1), angle), None, settings,
+                      note=f"{gap * 1e3:.4g} mm between the coils and solid at full lift")

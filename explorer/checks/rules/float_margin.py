@@ -1,0 +1,93 @@
+"""Float margin: the lowest speed at which the valve leaves the cam (the elastic linkage's first
+separation, found on the speed grid and refined by bisection; without a linkage the rigid float
+speed) less the highest operating speed.
+
+With tolerance draws each draw runs at the speeds its Case gives the rule (the nominal first
+separation, if within reach, and the highest speed plus the margin; over the whole range for the
+draws the checks verify): its first separation among them. A draw that separates at none of them
+passes there, though it may separate at a speed it did not run: the measure says so
+(speed_exact = False) and the checks bound that share (explorer.checks.run)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...mechanics.gear_contact import NotApplicable
+from ..case import RPM
+from ..rule import Measure
+
+BISECTIONS = 12  # ~(grid step) / 4096: well under an rpm on any range
+MAX_BEYOND = 8  # speeds above the range, up to the highest speed + 1.5 margins
+
+
+def measure(case, settings) -> Measure:
+    if case.scene.valve is None or case.scene.spring is None:
+        return Measure.not_applicable("needs [valve] and [spring]")
+    margin = settings["fail"] if settings["fail"] is not None else 0.0
+    high = float(case.speeds.max())
+    reach = high + 1.5 * margin / RPM
+    try:
+        case.needs_linkage()
+    except NotApplicable:
+        return _rigid(case, settings, high)
+    if case.sampling:
+        speeds = case.rule_speeds("float_margin", extra=[high + margin / RPM])
+        speeds = speeds[speeds <= reach]
+        sep = case.elastic(speeds)["separations"] > 0
+        first = np.where(sep, speeds[None, :], np.inf).min(axis=1)
+        value = np.where(np.isfinite(first), (first - high) * RPM, np.inf)
+        return Measure.of(value[:, None], np.full((case.n, 1), np.nan), None, settings, speed_exact=False,
+                          note=f"draws run at {speeds.size} speed{'s' if speeds.size != 1 else ''} up to the highest "
+                               "+ margin (elastic)")
+    grid = np.asarray(case.speeds, dtype=float)
+    step = float(np.median(np.diff(grid))) if grid.size > 1 else max(1.0, 0.02 * high)
+    count = int(min(MAX_BEYOND, max(1, math.ceil((reach - high) / step)))) if reach > high else 0
+    beyond = np.linspace(high, reach, count + 1)[1:]  # the speeds above the range up to the margin's reach
+    speeds = np.unique(np.concatenate([grid, beyond, [reach]]))
+    fig = case.elastic(speeds)
+    sep = fig["separations"][0] > 0
+    if not sep.any():
+        return Measure.of([[(speeds[-1] - high) * RPM]], [[np.nan]], None, settings,
+                          note=f"no separation up to {speeds[-1]:.6g} rpm (searched): the margin is at least this")
+    k = int(np.argmax(sep))
+    lo, hi = (speeds[k - 1], speeds[k]) if k > 0 else (None, speeds[k])
+    angle = fig["first_separation_deg"][0, k]
+    if lo is not None:
+        for _ in range(BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            f = case.elastic([mid])
+            if f["separations"][0, 0] > 0:
+                hi, angle = mid, f["first_separation_deg"][0, 0]
+            else:
+                lo = mid
+    note = f"first separation at {hi:.6g} rpm, cam angle {angle:.4g} deg (elastic)"
+    if k == 0:
+        note += "; already at the lowest speed checked"
+    return Measure(np.array([[(hi - high) * RPM]]), np.array([[angle]]), np.array([hi]), settings["fail"],
+                   settings["warn"], note=note)
+
+
+def _rigid(case, settings, high) -> Measure:
+    """The rigid float speed: exact for the nominal design (explorer.mechanics.forces.float_speed);
+    for draws the grid's min of G/(-A) over the open, decelerating samples."""
+    from ...mechanics.forces import TrainLoads, float_speed
+
+    if not case.sampling:
+        jump = float_speed(case.lift, TrainLoads.from_scene(case.scene), case.scene.follower.ratio,
+                           case.scene.valve.lash)
+        value = jump.omega - high * RPM
+        angle = math.degrees(jump.theta) if math.isfinite(jump.theta) else math.nan
+        return Measure(np.array([[value]]), np.array([[angle]]), np.array([jump.rpm]) if math.isfinite(jump.omega)
+                       else None, settings["fail"], settings["warn"],
+                       note=f"rigid float speed {jump.rpm:.6g} rpm (no [linkage])" if math.isfinite(jump.omega)
+                       else "rigid: the valve never floats (no [linkage])")
+    a_coef, g_part, is_open = case.force_parts(slice(None))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w2 = np.where(is_open & (a_coef < 0.0), g_part / -a_coef, np.inf)
+    w2 = np.where(np.isnan(w2), np.inf, w2)
+    omega = np.sqrt(np.maximum(w2.min(axis=1), 0.0))
+    value = omega - high * RPM
+    return Measure.of(np.broadcast_to(value[:, None], (case.n, 1)), np.full((case.n, 1), np.nan), None, settings,
+                      note="rigid float speed on the grid (no [linkage])")

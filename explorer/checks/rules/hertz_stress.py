@@ -1,0 +1,61 @@
+"""Contact (Hertz) stress: the largest peak pressure of the line contact over the operating range,
+sigma = sqrt(N E* (1/r1 + 1/r2) / (pi b)) with N the cam's normal force of the rigid train
+(explorer.mechanics.contact's statics) and b the contact width, against the allowable of the
+material pair."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...mechanics.gear_contact import NotApplicable
+from ...mechanics.materials import CONTACT_MATERIALS
+from ..case import reduce_angles
+from ..rule import Measure
+
+
+def allowable(case, settings) -> tuple[float, str]:
+    """(allowable Pa, its source) from the settings: an explicit fail limit, a named material or
+    the scene's [contact] allowable."""
+    if settings["fail"] is not None:
+        return settings["fail"], "the rule's fail setting"
+    material = settings["material"]
+    if material != "scene":
+        m = CONTACT_MATERIALS[material]
+        return m.allowable, f"{m.name}: {m.source}"
+    spec = case.contact_spec
+    contact = case.scene.contact
+    given = contact is not None and not math.isclose(spec.allowable_stress, CONTACT_MATERIALS[spec.engine].allowable)
+    if given:
+        return spec.allowable_stress, "[contact] allowable_stress"
+    m = CONTACT_MATERIALS[spec.engine]
+    return m.allowable, f"[contact] engine = {spec.engine!r}: {m.source}"
+
+
+def measure(case, settings) -> Measure:
+    try:
+        contact = case.contact()
+        case.needs_train()
+    except NotApplicable as exc:
+        return Measure.not_applicable(str(exc))
+    g = contact.geometry
+    width, how = case.width
+    if not width > 0.0:
+        return Measure.not_applicable("no contact width (the cam carries no load at the scene's speed)")
+    with np.errstate(divide="ignore"):
+        curvature = 1.0 / np.asarray(g.counter_radius, dtype=float) + 1.0 / np.asarray(g.contour_radius, dtype=float)
+    curvature = np.broadcast_to(curvature, case.theta.shape)
+    speeds = case.rule_speeds("hertz_stress", ends=True)
+    value = np.empty((case.n, speeds.size))
+    angle = np.empty_like(value)
+    for rows, force, _ in case.blocks(speeds):
+        normal = case.normal(force)
+        with np.errstate(invalid="ignore", over="ignore"):
+            sigma = np.sqrt(normal * case.e_star * np.maximum(curvature, 0.0) / (math.pi * width))
+        sigma = np.where((normal > 0.0) & (curvature <= 0.0), np.inf, np.where(normal > 0.0, sigma, 0.0))
+        w, a = reduce_angles(sigma, "max", case.theta_deg)
+        value[rows], angle[rows] = w, a
+    limit, source = allowable(case, settings)
+    return Measure.of(value, angle, speeds, settings, fail=limit, limit_source=source,
+                      note=f"rigid train; contact width {width * 1e3:.4g} mm ({how}); E* {case.e_star / 1e9:.4g} GPa")

@@ -1,0 +1,29 @@
+"""Seat bounce: how often the valve lands again after its first seat impact in a revolution
+(elastic linkage, sweep engine), counted when its largest bounce rises above `min_height`."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...mechanics.gear_contact import NotApplicable
+from ..rule import Measure, worst_index
+
+
+def measure(case, settings) -> Measure:
+    try:
+        case.needs_linkage()
+    except NotApplicable as exc:
+        return Measure.not_applicable(str(exc))
+    speeds = case.rule_speeds("seat_bounce")
+    fig = case.elastic(speeds)
+    impacts = fig["seat_impacts"]
+    high = fig["largest_bounce_m"] > settings["min_height"]
+    bounces = np.where(np.isnan(impacts), np.nan, np.where(high, np.maximum(impacts - 1.0, 0.0), 0.0))
+    angle = np.full(bounces.shape, np.nan)
+    i = worst_index(bounces, "max")
+    if i is not None and not case.sampling and bounces.ravel()[i] > 0:
+        r, j = np.unravel_index(i, bounces.shape)
+        angle[r, j] = case.elastic_event_angle(float(speeds[j]), "seat", "second")
+    return Measure.of(bounces, angle, speeds, settings,
+                      note=f"bounces rising above {settings['min_height'] * 1e6:.3g} um are counted",
+                      speed_exact=not case.sampling)
