@@ -387,23 +387,39 @@ def test_typing_into_unit_fields_at_human_speed_uses_what_was_typed(tmp_path):
                 assert sum(1 for o in app.current.request.overrides if o.startswith(key + "=")) == 1
 
 
+LEGEND_VALUES = ("() => { const v = [...(document.querySelector('.uplot')?.querySelectorAll('.u-series .u-value')"
+                 " ?? [])].map(e => e.textContent); return v.length > 1 && v[0] !== '--' && v[1] !== '--' ? v : null; }")
+
+
 def test_hovering_a_plot_shows_the_values_under_the_pointer(tmp_path):
     """Issue #13.4: the legend follows the pointer. Hovering the lift plot at a cam angle shows
-    that angle and the valve lift there (the values the server computed) in its legend."""
+    that angle and the valve lift there (the values the server computed) in its legend.
+
+    The plots a page first gets are made anew REPLOT_AFTER_S after it connects (#28.4), and a
+    chart made under a pointer that does not move shows no values: uPlot fills its legend on a
+    mousemove. A single move before that replot left the legend at '--' for good (the test's
+    timeout in a loaded full run, where the first layout took longer than the replot's delay). So
+    the test waits for the replot, then moves the pointer over the first plot there is (again
+    after each look, as a hand does) until its legend has values."""
     sync_api = pytest.importorskip("playwright.sync_api")
 
     with _running_explorer(ROOT / "assets" / "scenes" / "cycloidal_demo.toml") as (server, app):
         assert app.wait_applied(WAIT_S)
         with _connected_page(sync_api, tmp_path, server) as page:
-            over = page.locator(".uplot .u-over").first
-            over.wait_for(timeout=WAIT_MS)
-            box = over.bounding_box()
-            page.mouse.move(box["x"] + 0.4 * box["width"], box["y"] + 0.5 * box["height"])
-            # the first plot's legend: angle, then valve s, as numbers (no "--")
-            values = page.wait_for_function(
-                "() => { const v = [...document.querySelector('.uplot').querySelectorAll('.u-series .u-value')]"
-                ".map(e => e.textContent); return v.length > 1 && v[0] !== '--' && v[1] !== '--' ? v : null; }",
-                timeout=WAIT_MS).json_value()
+            _wait_until(lambda: app.plots.replots >= 1, "the connecting page's plots were not made anew")
+            deadline, values, k = time.monotonic() + WAIT_S, None, 0
+            while values is None:
+                assert time.monotonic() < deadline, "the legend showed no values under the pointer"
+                over = page.locator(".uplot .u-over").first
+                over.wait_for(timeout=WAIT_MS)
+                box = over.bounding_box()
+                if box is not None:
+                    k += 1  # a pixel to and fro: every look is a new mousemove
+                    page.mouse.move(box["x"] + 0.4 * box["width"] + k % 2, box["y"] + 0.5 * box["height"])
+                # the first plot's legend: angle, then valve s, as numbers (no "--")
+                values = page.evaluate(LEGEND_VALUES)
+                if values is None:
+                    page.wait_for_timeout(200)
         angle, lift_mm = float(values[0].replace(",", "")), float(values[1].replace(",", ""))
         assert 0.0 <= angle <= 360.0
         plot = app.current.plots[0]

@@ -91,6 +91,7 @@ class Plots:
         self._settle_until = 0.0  # no cursor data before this (time.perf_counter())
         self._cursor_at = 0.0  # when the cursor was last redrawn (it is throttled to PLOT_CURSOR_HZ)
         self._cursor_step = -1
+        self.replots = 0  # how often the plots were made anew for pages that connected
         with tab:
             self.stale = gui.add_markdown("", visible=False, order=-2.0)
             self.note = gui.add_markdown("", visible=False, order=-1.0)
@@ -105,6 +106,7 @@ class Plots:
             handle.remove()
         self.handles = []
         self.show(prepared, angle)
+        self.replots += 1
 
     def show(self, prepared, angle: float | None) -> None:
         """The plots of a new result: replaced where their titles or curves differ, else new data."""
