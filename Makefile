@@ -12,8 +12,13 @@ CONSTRAINTS := constraints.txt
 # kernels, compiled once here, after install and whenever their source changes, into
 # explorer/dynamics/__pycache__, so that no sweep, chain scene or test worker pays the ~30 s and
 # ~10 s of compilation; numba replaces its cache files atomically, so concurrent test workers
-# that find it stale each compile and none breaks.
-KERNEL := explorer/dynamics/exact_kernel.py explorer/dynamics/chain_kernels.py
+# that find it stale each compile and none breaks. The exact solver's kernel is several modules
+# that read constants of the Python solver's: any of those sources changing discards its cache
+# (explorer/dynamics/kernel_stamp.py), so they are all listed here.
+KERNEL := $(wildcard explorer/dynamics/kernel_*.py) explorer/dynamics/exact_kernel.py explorer/dynamics/free_vibration.py \
+	explorer/dynamics/exact.py explorer/dynamics/exact_events.py explorer/dynamics/exact_grid.py \
+	explorer/dynamics/exact_phase.py explorer/dynamics/exact_steps.py explorer/dynamics/phases.py \
+	explorer/dynamics/chain_kernels.py
 KERNEL_STAMP := $(VENV)/.kernel-compiled
 
 .PHONY: run test bench docs lock clean

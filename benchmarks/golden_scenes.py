@@ -156,9 +156,15 @@ def check(directory: Path) -> int:
 
 
 if __name__ == "__main__":
-    mode = sys.argv[1] if len(sys.argv) > 1 else "check"
-    where = Path(sys.argv[2]) if len(sys.argv) > 2 else Path("/tmp/gears-golden")
-    if mode == "save":
-        save(where)
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("mode", nargs="?", choices=("save", "check"), default="check",
+                        help="save from the unchanged code, or check after a change (default)")
+    parser.add_argument("dir", nargs="?", type=Path, default=Path("/tmp/gears-golden"),
+                        help="where the golden data is (default /tmp/gears-golden)")
+    args = parser.parse_args()
+    if args.mode == "save":
+        save(args.dir)
     else:
-        sys.exit(check(where))
+        sys.exit(check(args.dir))

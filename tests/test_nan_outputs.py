@@ -24,11 +24,6 @@ from conftest import ROOT, SCENES
 BUILT_IN = sorted(SCENES.glob("*.toml"))
 DOC = ROOT / "docs" / "reference" / "validity.md"
 
-# Issue #22 item 1 (residual_amplitude_m is NaN for every law but the polydyne) is fixed by another
-# engineer; this exclusion is theirs to remove at merge, and nothing else is excluded.
-SUMMARY_EXCLUDED_FOR_ITEM_1 = {"residual_amplitude_m"}
-
-
 def nan_figures(value, path: str = "") -> list[str]:
     """Dotted paths of every NaN float in a (nested) summary."""
     if isinstance(value, Mapping):
@@ -59,7 +54,7 @@ def test_no_undocumented_nan_in_columns(results, name):
 
 @pytest.mark.parametrize("name", [p.stem for p in BUILT_IN])
 def test_no_nan_in_summary_figures(results, name):
-    found = [p for p in nan_figures(results[name].summary) if p.split(".")[-1] not in SUMMARY_EXCLUDED_FOR_ITEM_1]
+    found = nan_figures(results[name].summary)
     assert found == [], f"{name}: NaN summary figures {found}"
 
 

@@ -301,10 +301,10 @@ def test_failing_runs_are_marked_on_the_compiled_path():
 
 
 def test_numba_is_imported_by_the_kernel_module_only():
-    """numba (~0.3 s to import) only in explorer/dynamics/exact_kernel.py, which only the sweep's
-    compiled path imports, and in dynamics/chain_kernels.py, which only the spring chain's exact
-    solver imports (scenes with spring.elements > 0): `import explorer`, loading and simulating a
-    massless scene leave it out."""
+    """numba (~0.3 s to import) only in the compiled exact solver's modules (dynamics/kernel_*.py,
+    imported only by dynamics/exact_kernel.py, which only the sweep's compiled path imports), and
+    in dynamics/chain_kernels.py, which only the spring chain's exact solver imports (scenes with
+    spring.elements > 0): `import explorer`, loading and simulating a massless scene leave it out."""
     import ast
     import subprocess
     import sys
@@ -318,7 +318,14 @@ def test_numba_is_imported_by_the_kernel_module_only():
                      else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
             if any(n.split(".")[0] == "numba" for n in names):
                 users.add(path.relative_to(package).as_posix())
-    assert users == {"dynamics/exact_kernel.py", "dynamics/chain_kernels.py"}
+    kernel = {f"dynamics/kernel_{part}.py" for part in ("steps", "events", "grid", "phase", "figures")}
+    assert users == kernel | {"dynamics/chain_kernels.py"}
+    importers = set()
+    for path in package.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[-1].startswith("kernel_"):
+                importers.add(path.relative_to(package).as_posix())
+    assert importers <= kernel | {"dynamics/exact_kernel.py"}
     code = ("import sys, explorer; explorer.simulate(explorer.load_scene(sys.argv[1])); "
             "print('numba' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code, str(SCENES / "elastic_float.toml")], capture_output=True,
@@ -371,3 +378,15 @@ def test_rigid_figures_do_not_depend_on_how_the_runs_are_chunked():
         expected = reference_row(scene_for(base, keys, v), names)
         assert whole[i, names.index("min_contact_force_N")] == expected["min_contact_force_N"]
         assert whole[i, names.index("max_camshaft_torque_Nm")] == pytest.approx(expected["max_camshaft_torque_Nm"], rel=1e-9)
+
+
+def test_every_sweep_key_sets_a_run_parameter_of_the_compiled_path():
+    """The compiled path builds its runs' parameters from the sweep keys' values (no scene per
+    run): every sweepable key has its column, and a key without one is refused, not ignored."""
+    from explorer.effects.elastic_batch import KEY_PARAMETERS, BatchCache, elastic_chunk_values
+    from explorer.studies.sweep_spec import SWEEP_KEYS
+
+    assert set(KEY_PARAMETERS) == set(SWEEP_KEYS)
+    base = load_scene(SCENES / "elastic_float.toml")
+    with pytest.raises(ValueError, match="follower.ratio"):
+        elastic_chunk_values(base, ("follower.ratio",), np.ones((1, 1)), BatchCache())

@@ -83,6 +83,7 @@ from .phases import (AFTER_CROSSING, CONTACT, SEATED, STUCK, phase_of_state, rel
                      seat_rebound, velocity_zero)
 
 MAX_SAME_TIME = 60  # events at one instant before the phase logic is declared looping
+LAST_U = 1.0 - 1e-16  # the largest position within a step an advance lands on (the node after is the next step's)
 
 
 class _Solver(PhaseStepper):
@@ -107,7 +108,7 @@ class _Solver(PhaseStepper):
         if j >= self.h.size:
             self._record_static(start, j, s_star, SEATED)
             return j, 0.0
-        u_new = max(0.0, min((t_new - self.nodes[j]) / self.h[j], 1.0 - 1e-16))
+        u_new = max(0.0, min((t_new - self.nodes[j]) / self.h[j], LAST_U))
         self._record_static(start, j + (1 if u_new > 0.0 else 0), s_star, SEATED)
         return j, u_new
 

@@ -17,6 +17,12 @@ from .series import horner
 
 EPS = float(np.finfo(float).eps)
 ZERO_START = 1e-11  # |e(0)| below this fraction of its terms' size: the function starts on its zero
+NEWTON_STEPS = 100  # most Newton steps of root_rising (each at least halves a stalled bracket)
+ILLINOIS_STEPS = 200  # most steps of illinois and of the bisection off a zero in _search's polish
+SIGN_MARGIN = 1e-12  # positive_at: a value beyond this fraction of its terms' size has a certain sign
+NEGLIGIBLE_LEAD = 1e-9  # start_clearance: leading coefficients below this fraction of the largest
+CLEARANCE_BISECTIONS = 12  # start_clearance's bisection (coarse is enough)
+TIE_RELATIVE, TIE_EPS = 1e-9, 64.0  # earliest: two events closer than this are at the same instant
 
 
 BOUND_WEIGHTS = np.array([[n, n * (n - 1), n * (n - 1) * (n - 2)] for n in range(6)], dtype=float).T
@@ -199,7 +205,7 @@ def root_rising(e, lo: float, hi: float, xtol: float, flo: float | None = None,
         if not lo <= x < hi:
             x = lo
     rev = e[::-1]
-    for _ in range(100):
+    for _ in range(NEWTON_STEPS):
         fx, dx = rev[0], 0.0
         for ck in rev[1:]:  # value and slope in one Horner pass
             dx = dx * x + fx
@@ -224,7 +230,7 @@ def illinois(f, lo: float, hi: float, flo: float, fhi: float, xtol: float) -> fl
     """First point past the zero of f in [lo, hi] (f(lo) <= 0 < f(hi)): regula falsi with the
     Illinois modification (superlinear), bisection when it stalls."""
     side = 0
-    for _ in range(200):
+    for _ in range(ILLINOIS_STEPS):
         if hi - lo <= xtol + 4.0 * EPS * abs(hi):
             break
         x = hi - fhi * (hi - lo) / (fhi - flo) if fhi != flo else 0.5 * (lo + hi)
@@ -254,7 +260,7 @@ def positive_at(lists, comb: str, w: float) -> bool:
         for en in reversed(e):
             val = val * w + en
             mag = mag * w + abs(en)
-        if not abs(val) > 1e-12 * mag:
+        if not abs(val) > SIGN_MARGIN * mag:
             return False
         vals.append(val)
     return (min(vals) if comb == "min" else max(vals)) > 0.0
@@ -267,7 +273,7 @@ def start_clearance(e) -> float:
     # leading terms far below the rest are rounding left by the event that began the phase
     # (they would decide the sign only for w below ~1e-9 of the step)
     big = max(abs(en) for en in e)
-    k = next((n for n, en in enumerate(e) if abs(en) > 1e-9 * big), None)
+    k = next((n for n, en in enumerate(e) if abs(en) > NEGLIGIBLE_LEAD * big), None)
     if k is None or e[k] > 0.0:
         return 0.0
     tail = [max(en, 0.0) for en in e[k + 1:]]
@@ -278,7 +284,7 @@ def start_clearance(e) -> float:
     if phi(1.0) < 0.0:
         return 1.0
     lo, hi = 0.0, 1.0  # phi rises with w: bisect for its zero (coarse is enough)
-    for _ in range(12):
+    for _ in range(CLEARANCE_BISECTIONS):
         mid = 0.5 * (lo + hi)
         if phi(mid) < 0.0:
             lo = mid
@@ -478,7 +484,7 @@ def earliest(events, coeff_sets, zero_flags, t_abs: float, h_loc: float, stats: 
             continue
         # the seat is rigid: when the valve lands in the same instant as another event
         # (zero lash on the base circle: gap and lift close together) the seat decides
-        tie = best is not None and abs(w - best[1]) <= 1e-9 * max(w, 1e-300) + 64.0 * EPS
+        tie = best is not None and abs(w - best[1]) <= TIE_RELATIVE * max(w, 1e-300) + TIE_EPS * EPS
         if best is None or w < best[1] and not (tie and best[0] == "seat") or tie and ev.kind == "seat":
             best = (ev.kind, w)
     return best
@@ -556,7 +562,7 @@ def _brent(E, comb, lo, hi, xtol):
     if flo > 0.0:
         return lo
     if flo == 0.0:  # leave the zero: bisect on the sign for the first point where f > 0
-        for _ in range(200):
+        for _ in range(ILLINOIS_STEPS):
             mid = 0.5 * (lo + hi)
             if mid <= lo or mid >= hi:
                 break

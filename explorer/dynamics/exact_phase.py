@@ -25,6 +25,8 @@ from .phases import CONTACT, FLIGHT, moving_events, rest_events
 from .series import horner
 
 _MAX = np.maximum.reduce  # the ufunc itself: ndarray.max adds a Python layer per call
+RELEASE_RESIDUAL = 1e-12  # a release's net force below this fraction of its terms is rounding
+MAX_BOUND_Q = 0.5  # the step bound's q = H (c + K H) / m: its series for |a| converges below 1 (margin: 0.5)
 
 
 class PhaseStepper:
@@ -301,7 +303,7 @@ class PhaseStepper:
             # valve the wrong way. Such a residual is removed from this first step's forcing.
             f0 = 2.0 * lin.m * a[2] / (h_loc * h_loc)
             terms = abs(lin.kc * P[0]) + abs(lin.cc * P[1] / h_loc) + abs(Fc) + abs(lin.K * s)
-            if sigma * f0 < 0.0 and abs(f0) <= 1e-12 * terms:
+            if sigma * f0 < 0.0 and abs(f0) <= RELEASE_RESIDUAL * terms:
                 a = expand_step(lin, P, h_loc, s, v, Fc + f0, N)
         da = deriv_list(a, h_loc)
         dP = deriv_list(P, h_loc) if self.c else None  # (S' enters the events with damping only)
@@ -367,7 +369,7 @@ class PhaseStepper:
         m, c, K = lin.m, lin.c, lin.K
         H = self.h_max if self.window_h_is_max else float(_MAX(self.h[j:j + n]))
         q = H * (c + K * H) / m
-        if q < 0.5:
+        if q < MAX_BOUND_Q:
             S1b, S2b, S3b = _MAX(self.Sb[:, j:j + n], axis=1).tolist()
             Sw, Vw = S[:n], V[:n]
             Vn = float(_MAX(np.abs(Vw)))

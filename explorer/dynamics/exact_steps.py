@@ -196,13 +196,18 @@ def expand_step(lin: LinearPhase, P, h: float, s: float, v: float, Fc: float, n_
 
 _INV_PAIR = tuple(1.0 / ((n + 1) * (n + 2)) for n in range(64))
 _ZEROS = [0.0] * 64
+TAYLOR_MIN_TERMS = 9  # fewest terms of a step's series
+TAYLOR_TRUNCATION = 1e-19  # relative truncation error of a step's series
+TAYLOR_MAX_TERMS = 60  # the series is cut here whatever x (never reached for x <= MAX_RHO_H)
+
+
 def taylor_terms(x: float) -> int:
     """Taylor terms for a relative truncation error below 1e-19 at rho*h = x (<= MAX_RHO_H)."""
     n, term = 1, x
     bound = math.exp(x)
-    while n < 9 or term * bound > 1e-19:
+    while n < TAYLOR_MIN_TERMS or term * bound > TAYLOR_TRUNCATION:
         n += 1
         term *= x / n
-        if n > 60:
+        if n > TAYLOR_MAX_TERMS:
             break
     return n

@@ -181,17 +181,12 @@ def elastic_effect(ctx) -> EffectOutput:
         "elastic_steps_per_natural_period": model.natural_period() / (period / n),
         "lift_off_compression_m": (model.seated_resistance + model.friction) / _stiffness_at_lift_off(model, events),
         **motion,
-        **residual_figures(ctx.lift, ratio, model.lash, omega, _contact_wn(model), ctx.theta, s, v),
+        **residual_figures(ctx.lift, ratio, model, ctx.theta, s, v),
         "elastic_solver": stats,
     }
     if phase is not None:
         columns["valve_phase"] = phase.astype(float)
     return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
-
-
-def _contact_wn(model: LinkageModel) -> float:
-    """Undamped natural frequency in contact (rad/s): sqrt((k + rate) / M1), k its largest value."""
-    return math.sqrt((model.stiffness + model.spring_rate) / model.oscillating_mass)
 
 
 def _stiffness_at_lift_off(model: LinkageModel, events) -> float:

@@ -46,26 +46,17 @@ class BatchCache:
 
 
 def _residual_reference(shared, lift, ratio: float, lash: float, n: int):
-    """The residual figures' reference lift at the n output angles (value and slope per radian)
-    and the dwell's first sample (-1: none): effects/residual.py's, per lever ratio and lash."""
-    from .residual import dwell_sample, reference_lift
+    """The residual figures' reference lift at the n output angles, the dwell's first sample (-1:
+    none) and the drive there: effects/residual.residual_reference, per lever ratio and lash."""
+    from .residual import lash_reference, reference_parts
     from ..core.memo import remember
 
     def base():  # what does not depend on the lash (a tolerance study draws a new lash every run)
-        theta = np.arange(n) * (2.0 * math.pi / n)
-        i = dwell_sample(lift, theta)
-        if getattr(lift, "wanted_valve_lift", None) is not None:  # a polydyne's wanted lift: no lash in it
-            return np.ascontiguousarray(reference_lift(lift, ratio, lash, theta, 1)), (-1 if i is None else i), True
-        return lift.derivatives(theta)[:2] * ratio, (-1 if i is None else i), False
+        return reference_parts(lift, ratio, np.arange(n) * (2.0 * math.pi / n))
 
     def make():
-        d, i, fixed = remember(shared.grids, ("residual", ratio, n), base)
-        if fixed:
-            return d, i
-        d = d.copy()  # reference_lift's arithmetic on its lift derivatives: the same floats
-        is_open = d[0] - lash > 0.0
-        d[0] -= lash
-        return np.ascontiguousarray(np.where(is_open, d, 0.0)), i
+        d, i, S, less_lash = remember(shared.grids, ("residual", ratio, n), base)
+        return (lash_reference(d, lash) if less_lash else d), i, S
 
     return remember(shared.take_ups, ("residual", ratio, lash, n), make)
 
@@ -109,8 +100,8 @@ def elastic_run(scene, shared):
         shared.grids, (ratio, n, parts.tobytes()), lambda: kernel.revolution_grid(lift, ratio, n, rho_theta, base))
     ups = _remember(shared.take_ups, (ratio, lash), lambda: lash_crossings(lift, ratio, lash)[0])
     take_up = ups[0] / omega if len(ups) else math.nan
-    ref, dwell = _residual_reference(shared, lift, ratio, lash, n)
-    fig, lift_column, rev = kernel.run_revolution(grid, omega, model, ratio, take_up, ref, dwell)
+    ref, dwell, S_dwell = _residual_reference(shared, lift, ratio, lash, n)
+    fig, lift_column, rev = kernel.run_revolution(grid, omega, model, ratio, take_up, ref, dwell, S_dwell)
     return dict(zip(ELASTIC, fig.tolist())), lift_column, rev
 
 
@@ -118,28 +109,86 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     """The ELASTIC figures (runs x figures) of many runs and which failed (as elastic_run would
     raise: a speed beyond the step budget, a motion that does not settle), the runs on one grid
     in one compiled call (exact_kernel.revolutions: no Python per run but its scene's values)."""
+    kernel = solvers.solver(scenes[0].solver.method).batch_module()
+    params = np.empty((len(scenes), len(kernel.RUN_PARAMETERS)))
+    group = np.empty((len(scenes), 2))  # per run: lever ratio, steps per revolution
+    for r, scene in enumerate(scenes):
+        v, sp, link = scene.valve, scene.spring, scene.linkage
+        M1 = v.oscillating_mass if v.oscillating_mass is not None else v.mass
+        closing = scene.loads.closing_total
+        params[r, :11] = (scene.drive.omega, v.mass, M1, link.stiffness, link.damping, v.lash, sp.preload + closing,
+                          sp.rate, scene.loads.friction, scene.seat.restitution, sp.preload + closing)
+        group[r] = scene.follower.ratio, scene.solver.steps_per_revolution
+    return _chunk(kernel, params, group, shared)
+
+
+# the run parameters a sweep key sets (studies.sweep_spec.SWEEP_KEYS; drive.rpm sets omega, and
+# spring.preload both columns that add the closing loads to it)
+KEY_PARAMETERS = {"drive.rpm": "omega", "valve.mass": "mass", "valve.oscillating_mass": "oscillating_mass",
+                  "linkage.stiffness": "stiffness", "linkage.damping": "damping", "valve.lash": "lash",
+                  "spring.preload": "seated_resistance", "spring.rate": "spring_rate", "loads.friction": "friction",
+                  "seat.restitution": "restitution"}
+
+
+def elastic_chunk_values(base, keys, values, shared) -> tuple[np.ndarray, np.ndarray]:
+    """elastic_chunk of the runs of the scene `base` with `values` (runs x keys, SI) in place of
+    its own (studies.sweep_spec.scene_for's runs), the run parameters built column by column
+    with the same arithmetic as elastic_chunk's per scene, no scene built per run. keys: sweep keys
+    (KEY_PARAMETERS)."""
+    unknown = [key for key in keys if key not in KEY_PARAMETERS]
+    if unknown:  # a key this table does not map would be silently left at the base scene's value
+        raise ValueError(f"elastic_chunk_values: no run parameter for the sweep keys {unknown}")
+    values = np.asarray(values, dtype=float)
+    R = values.shape[0]
+    col = {key: values[:, j] for j, key in enumerate(keys)}
+    v, sp, link = base.valve, base.spring, base.linkage
+
+    def column(key, default):
+        return col[key] if key in col else np.full(R, float(default))
+
+    closing = base.loads.closing_total
+    kernel = solvers.solver(base.solver.method).batch_module()
+    params = np.empty((R, len(kernel.RUN_PARAMETERS)))
+    params[:, 0] = column("drive.rpm", base.drive.rpm) * 2.0 * math.pi / 60.0  # (Drive.omega's operations)
+    params[:, 1] = column("valve.mass", v.mass)
+    if "valve.oscillating_mass" in col or v.oscillating_mass is not None:
+        params[:, 2] = column("valve.oscillating_mass", v.oscillating_mass)
+    else:
+        params[:, 2] = params[:, 1]
+    params[:, 3] = column("linkage.stiffness", link.stiffness)
+    params[:, 4] = column("linkage.damping", link.damping)
+    params[:, 5] = column("valve.lash", v.lash)
+    params[:, 6] = column("spring.preload", sp.preload) + closing
+    params[:, 7] = column("spring.rate", sp.rate)
+    params[:, 8] = column("loads.friction", base.loads.friction)
+    params[:, 9] = column("seat.restitution", base.seat.restitution)
+    params[:, 10] = params[:, 6]
+    group = np.empty((R, 2))
+    group[:, 0] = base.follower.ratio
+    group[:, 1] = base.solver.steps_per_revolution
+    return _chunk(kernel, params, group, shared)
+
+
+def _chunk(kernel, params, group, shared) -> tuple[np.ndarray, np.ndarray]:
+    """elastic_chunk from the run parameters (the batch module `kernel`'s RUN_PARAMETERS but
+    take_up_s, filled here) and per run its lever ratio and steps per revolution: the runs of one
+    grid and lash in one call."""
     from .elastic import MAX_SOLVER_NODES
     from ..core.memo import remember
 
     lift = shared.lift
-    kernel = solvers.solver(scenes[0].solver.method).batch_module()
-    R = len(scenes)
+    R = params.shape[0]
     figures = np.full((R, len(ELASTIC)), math.nan)
     failed = np.zeros(R, bool)
-    params = np.empty((R, len(kernel.RUN_PARAMETERS)))
     groups: dict = {}
-    ups_of = _take_ups(scenes, shared)
-    for r, scene in enumerate(scenes):
-        v, sp, link = scene.valve, scene.spring, scene.linkage
-        ratio, lash = scene.follower.ratio, v.lash
-        omega = scene.drive.omega
-        M1 = v.oscillating_mass if v.oscillating_mass is not None else v.mass
-        closing = scene.loads.closing_total
+    pairs = list(zip(group[:, 0].tolist(), params[:, 5].tolist()))
+    ups_of = _take_ups(pairs, shared)
+    for r, ((ratio, lash), n) in enumerate(zip(pairs, group[:, 1].tolist())):  # runs of one grid and lash
+        groups.setdefault((ratio, int(n), lash), []).append(r)
+    omega = params[:, 0]
+    for (ratio, n, lash), members in groups.items():
         ups = ups_of[(ratio, lash)]
-        params[r] = (omega, v.mass, M1, link.stiffness, link.damping, lash, sp.preload + closing, sp.rate,
-                     scene.loads.friction, scene.seat.restitution, sp.preload + closing,
-                     ups[0] / omega if len(ups) else math.nan)
-        groups.setdefault((ratio, scene.solver.steps_per_revolution, lash), []).append(r)
+        params[members, 11] = ups[0] / omega[members] if len(ups) else math.nan
     # the fastest rate of each run: the step budget (effects.elastic.check_resolution) and the split
     M, M1, k, c, rate = (params[:, i] for i in (1, 2, 3, 4, 7))
     alpha = 0.5 * c / M1
@@ -147,11 +196,10 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
     over = alpha * alpha > w2
     rho = np.where(over, alpha + np.sqrt(np.where(over, alpha * alpha - w2, 0.0)), np.sqrt(np.abs(w2)))
     rho = np.maximum(rho, np.sqrt(rate / M))
-    omega = params[:, 0]
     failed |= ~(rho * (2.0 * math.pi / omega) / 0.5 <= MAX_SOLVER_NODES)
     for (ratio, n, lash), members in groups.items():
         base = remember(shared.grids, (ratio, n), lambda: kernel.revolution_grid(lift, ratio, n))
-        ref, dwell = _residual_reference(shared, lift, ratio, lash, n)
+        ref, dwell, S_dwell = _residual_reference(shared, lift, ratio, lash, n)
         members = np.array([m for m in members if not failed[m]], dtype=np.int64)
         if not members.size:
             continue
@@ -159,23 +207,23 @@ def elastic_chunk(scenes, shared) -> tuple[np.ndarray, np.ndarray]:
         split = rho_theta * base.h_max / kernel.MAX_RHO_H > 1.0
         plain = members[~split]
         if plain.size:
-            figs, status = kernel.run_batch(base, ratio, params[plain], ref, dwell)
+            figs, status = kernel.run_batch(base, ratio, params[plain], ref, dwell, S_dwell)
             figures[plain] = figs
             failed[plain] = status != kernel.OK
         for m, rt in zip(members[split].tolist(), rho_theta[split].tolist()):
             parts = kernel.split_parts(base, rt)
             grid = remember(shared.grids, (ratio, n, parts.tobytes()),
                             lambda: kernel.revolution_grid(lift, ratio, n, rt, base))
-            figs, status = kernel.run_batch(grid, ratio, params[m:m + 1], ref, dwell)
+            figs, status = kernel.run_batch(grid, ratio, params[m:m + 1], ref, dwell, S_dwell)
             figures[m] = figs[0]
             failed[m] = status[0] != kernel.OK
     figures[failed] = math.nan
     return figures, failed
 
 
-def _take_ups(scenes, shared) -> dict:
-    """{(ratio, lash): [first take-up angle]} of a chunk's runs, the lashes found together
-    (mechanics.kinematics.lash_take_ups: lash_crossings' root to brentq's tolerance): a tolerance
+def _take_ups(pairs, shared) -> dict:
+    """{(ratio, lash): [first take-up angle]} of a chunk's runs (pairs: their (ratio, lash)), the
+    lashes found together (mechanics.kinematics.lash_take_ups: lash_crossings' root to brentq's tolerance): a tolerance
     study's runs each draw their own lash, and one Brent search per lash cost ten times the
     compiled revolution. Every lash takes this one search whatever else its chunk holds, so a table
     does not depend on how it was cut into chunks (each lane of the search is elementwise)."""
@@ -184,8 +232,7 @@ def _take_ups(scenes, shared) -> dict:
 
     out: dict = {}
     wanted: dict[float, set] = {}
-    for scene in scenes:
-        ratio, lash = scene.follower.ratio, scene.valve.lash
+    for ratio, lash in pairs:
         cached = shared.take_ups.get(("batched", ratio, lash))
         if cached is not None:
             out[(ratio, lash)] = cached

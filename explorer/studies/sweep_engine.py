@@ -38,7 +38,8 @@ Columns (SI units in the names, as in `simulate`'s CSV), by effect:
            impact, < 0; NaN: none), seat_impacts, largest_bounce_m (highest rise after a seat
            impact before the next event, on the output grid; 0: none), residual_deviation_m and
            residual_amplitude_m (from the lift the cam is made for: explorer.effects.residual; NaN
-           where the effect does not compute them, the spring chain's)
+           where the effect does not compute them, the spring chain's, and the amplitude where the
+           lift has no dwell after the rise)
 and always run_failed (1: the run raised; its figures NaN) after the varied inputs.
 """
 
@@ -54,7 +55,7 @@ from ..core.errors import InputError
 from ..core.memo import CACHE_ENTRIES  # noqa: F401 (the tests')
 from ..core.plugins import resolve
 from ..effects import registry as effects
-from ..effects.elastic_batch import BatchCache, ELASTIC, accepts, elastic_chunk, elastic_run
+from ..effects.elastic_batch import BatchCache, ELASTIC, accepts, elastic_chunk_values, elastic_run
 from ..effects.pipeline import RunCache, figures, simulate
 from .sweep_rigid import RIGID, rigid_over_speeds
 from .sweep_spec import scene_for
@@ -112,8 +113,9 @@ class RowEngine:
     name: str
     accepts: Any
     row: Any
-    # optional: chunk(scenes, names, shared, groups) -> (runs x names) figures with run_failed, all
-    # the runs at once (the compiled engine's batches; groups: speed_groups); None: row by row
+    # optional: chunk(base, keys, values, names, shared, groups) -> (runs x names) figures with
+    # run_failed, all the runs at once (the compiled engine's batches; groups: speed_groups); None:
+    # row by row
     chunk: Any = None
     # fewest runs for which a local pool of processes beats one process: a worker pays its start
     # (fork, and for the compiled engine ~1.3 s to import numba and load the compiled solver)
@@ -153,28 +155,30 @@ def _kernel_row(scene, names, shared) -> dict[str, float]:
     return row
 
 
-def _kernel_chunk(scenes, names, shared, groups=None) -> np.ndarray:
-    """The rows of many runs: the elastic figures in compiled batches (elastic_batch.elastic_chunk),
-    the rigid ones (forces, contact) per group of runs that differ in speed only, all its speeds at
-    once (sweep_rigid.py; groups: index arrays, default each run alone). Every run's rigid figures
-    take the same arithmetic whatever else its chunk holds, so a table does not depend on how it
-    was cut into chunks (the cluster's equals the serial one bit for bit)."""
+def _kernel_chunk(base, keys, values, names, shared, groups=None) -> np.ndarray:
+    """The rows of the runs `values` (runs x keys, SI) of scene `base`: the elastic figures in
+    compiled batches from the runs' parameters (elastic_batch.elastic_chunk_values: no scene built
+    per run), the rigid ones (forces, contact) per group of runs that differ in speed only, all its
+    speeds at once (sweep_rigid.py; groups: index arrays, default each run alone). Every run's rigid
+    figures take the same arithmetic whatever else its chunk holds, so a table does not depend on
+    how it was cut into chunks (the cluster's equals the serial one bit for bit)."""
     names = tuple(names)
-    out = np.full((len(scenes), len(names)), math.nan)
+    values = np.asarray(values, dtype=float)
+    out = np.full((len(values), len(names)), math.nan)
     fail = names.index("run_failed")
-    failed = np.zeros(len(scenes), bool)
+    failed = np.zeros(len(values), bool)
     rigid = [n for n in names if n not in ELASTIC and n != "run_failed"]
     if rigid:
-        for group in (groups if groups is not None else [np.array([i]) for i in range(len(scenes))]):
+        for group in (groups if groups is not None else [np.array([i]) for i in range(len(values))]):
             try:
-                figures = rigid_over_speeds([scenes[i] for i in group], rigid, shared)
+                figures = rigid_over_speeds([scene_for(base, keys, values[i]) for i in group], rigid, shared)
             except (InputError, RuntimeError, ValueError, ArithmeticError):
                 failed[group] = True
                 continue
-            for name, values in figures.items():
-                out[group, names.index(name)] = values
+            for name, column in figures.items():
+                out[group, names.index(name)] = column
     if any(n in ELASTIC for n in names):
-        figures, elastic_failed = elastic_chunk(scenes, shared)
+        figures, elastic_failed = elastic_chunk_values(base, keys, values, shared)
         for j, name in enumerate(ELASTIC):
             if name in names:
                 out[:, names.index(name)] = figures[:, j]
@@ -211,8 +215,7 @@ def compute_chunk(base, keys, values: np.ndarray, names, shared: _Shared | None 
     shared = shared if shared is not None else _Shared()
     engine = engine if engine is not None else engine_for(base, shared)
     if engine.chunk is not None:
-        scenes = [scene_for(base, keys, row_values) for row_values in np.asarray(values, dtype=float)]
-        return engine.chunk(scenes, names, shared, speed_groups(keys, values))
+        return engine.chunk(base, keys, values, names, shared, speed_groups(keys, values))
     for i, row_values in enumerate(np.asarray(values, dtype=float)):
         scene = scene_for(base, keys, row_values)
         try:

@@ -1,0 +1,254 @@
+"""The compiled exact solver's figures of a revolution (the elastic effect's summary as the sweep's
+rows read it: effects/elastic.py, elastic_events.py, residual.py; studies/sweep_engine.row_scalars)
+from one run over a RevolutionGrid (revolution), and of many runs on one grid (revolutions). Part
+of the compiled solver (explorer.dynamics.exact_kernel)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from . import kernel_stamp  # noqa: F401 (the cache is stale when a source it depends on changed)
+from .free_vibration import free_amplitude
+from .kernel_events import LIFT_OFF, SEAT, SEPARATION
+from .kernel_grid import grid_bounds
+from .kernel_phase import borrowed, borrowed_buffers, run_buffers, run_nodes
+from .kernel_steps import phase_rate, taylor_terms
+from .phases import CONTACT, FLIGHT
+
+_free_amplitude = njit(cache=True)(free_amplitude)  # the elastic effect's residual amplitude, compiled
+
+# the figures revolution() returns, in this order (the elastic effect's, as the sweep's rows read
+# them: explorer/studies/sweep_engine.row_scalars)
+FIGURES = ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
+           "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
+           "largest_bounce_m", "residual_deviation_m", "residual_amplitude_m")
+
+
+@njit(cache=True)
+def _first_sample(n, omega, t, after):
+    """The first output sample i (of n; n: none) whose time i (2 pi / n) / omega (the effect's
+    time_s column, the same operations as np.arange(n) * (2 pi / n) / omega) is > t (after) or
+    >= t: np.searchsorted without the array of times."""
+    step = 2.0 * math.pi / n
+    lo = 0
+    hi = n
+    while lo < hi:
+        mid = (lo + hi) // 2
+        ti = float(mid) * step / omega
+        if (ti > t) if after else (ti >= t):
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
+@njit(cache=True, inline="always")
+def _sample(out_s, out_v, out_phase, Dn, q, omega, k, c, lash, rate, R, preload_closing):
+    """Node q's linkage force (exact_output.solution's), its distance from S - lash - W/k while the
+    valve is open (else 0) and whether it is open with the linkage unloaded (1, else 0)."""
+    s = out_s[q]
+    v = out_v[q]
+    ph = out_phase[q]
+    x = Dn[0, q] - lash - s
+    if c != 0.0:
+        if ph == CONTACT:
+            force = max(0.0, k * x + c * (Dn[1, q] * omega - v))
+        elif ph == FLIGHT:
+            force = 0.0
+        else:
+            force = max(0.0, k * x + c * (Dn[1, q] * omega)) if x >= 0.0 else 0.0
+    else:
+        force = max(k * x, 0.0) * (0.0 if ph == FLIGHT else 1.0)
+    if s > 0.0:
+        W = preload_closing + rate * s + R * (-1.0 if v < 0.0 else 1.0)
+        return force, abs(s - (Dn[0, q] - lash - W / k)), 0 if force > 0.0 else 1
+    return force, 0.0, 0
+
+
+@njit(cache=True, inline="always")
+def _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, r_lo, r_hi, col0, omega, k, c, lash, rate, R,
+             preload_closing, acc):
+    """The run samples r in [r_lo, r_hi) (output column r + col0) into the running maxima acc:
+    [0, 1] the linkage force, [2, 3] the distance from S - lash - W/k while open, [4, 5] |s - ref|
+    (two of each, a sample to each in turn: one would be a chain of dependent compares; max is
+    exact in any order); returns the samples open with the linkage unloaded."""
+    separated = 0
+    pk0, pk1, dv0, dv1, rs0, rs1 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5]
+    r = r_lo
+    while r + 1 < r_hi:
+        q0 = out_nodes[r]
+        q1 = out_nodes[r + 1]
+        f0, d0, o0 = _sample(out_s, out_v, out_phase, Dn, q0, omega, k, c, lash, rate, R, preload_closing)
+        f1, d1, o1 = _sample(out_s, out_v, out_phase, Dn, q1, omega, k, c, lash, rate, R, preload_closing)
+        pk0 = max(pk0, f0)
+        pk1 = max(pk1, f1)
+        dv0 = max(dv0, d0)
+        dv1 = max(dv1, d1)
+        rs0 = max(rs0, abs(out_s[q0] - ref[r + col0]))
+        rs1 = max(rs1, abs(out_s[q1] - ref[r + 1 + col0]))
+        separated += o0 + o1
+        r += 2
+    if r < r_hi:
+        q0 = out_nodes[r]
+        f0, d0, o0 = _sample(out_s, out_v, out_phase, Dn, q0, omega, k, c, lash, rate, R, preload_closing)
+        pk0 = max(pk0, f0)
+        dv0 = max(dv0, d0)
+        rs0 = max(rs0, abs(out_s[q0] - ref[r + col0]))
+        separated += o0
+    acc[0], acc[1], acc[2], acc[3], acc[4], acc[5] = pk0, pk1, dv0, dv1, rs0, rs1
+    return separated
+
+
+@njit(cache=True, inline="always")
+def _largest_open(out_s, out_nodes, r_lo, r_hi, init):
+    """max(init, the valve lift at the run samples [r_lo, r_hi)) (four running maxima: one would be a chain of n dependent compares)."""
+    m0 = m1 = m2 = m3 = init
+    r = r_lo
+    while r + 4 <= r_hi:
+        m0 = max(m0, out_s[out_nodes[r]])
+        m1 = max(m1, out_s[out_nodes[r + 1]])
+        m2 = max(m2, out_s[out_nodes[r + 2]])
+        m3 = max(m3, out_s[out_nodes[r + 3]])
+        r += 4
+    while r < r_hi:
+        m0 = max(m0, out_s[out_nodes[r]])
+        r += 1
+    return max(max(m0, m1), max(m2, m3))
+
+
+@njit(cache=True)
+def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1, k, c, lash, W0, rate, R, e,
+               zeno_height, max_events, N, ratio, preload_closing, take_up_s, ref, dwell, S_dwell, blk, win, buffers,
+               acc):
+    """One revolution of the elastic effect at the speed omega, on a grid built in cam angle
+    (RevolutionGrid: the n output samples from the drive's lowest point, out_nodes their nodes):
+    the FIGURES, the events of the revolution (rows: code, time within the revolution, velocity,
+    cam angle in degrees; in time order) and the solver status; the node records are left in
+    `buffers` (kernel_phase.run_buffers for the grid), the valve lift at output column c is
+    out_s[out_nodes[(c - i0) mod n]]. acc: 6 scratch values.
+    The figures are the elastic effect's summary read as sweep_engine.row_scalars reads it:
+    force, deviation from S - lash - W/k, separation on the output samples, events from the start
+    of the run for one period, times modulo the period (effects/elastic.py, elastic_events.py);
+    the residual figures from the lift the cam is made for at the output angles, ref, the dwell's
+    first sample (-1: none) and the valve-referred drive there, S_dwell
+    (effects/residual.residual_reference); blk, win: grid_bounds of the grid in cam angle."""
+    inv = 1.0 / omega  # the grid at this speed: times theta / omega, S' times omega
+    ev, status, n_detail = run_nodes(nodes, h, inv, PT, Dn, Sb, omega, hidx, h_unique, M, M1, k, c, lash, W0, rate,
+                                     R, e, zeno_height, max_events, N, blk, win, buffers)
+    out_s, out_v, out_phase = buffers[0], buffers[1], buffers[3]
+    n = out_nodes.size
+    fig = np.full(len(FIGURES), np.nan)
+    period = 2.0 * math.pi / omega
+    # the output samples in run order: run sample r is output column r + i0 (r < n - i0), else
+    # r - (n - i0)
+    acc[0] = acc[1] = -np.inf
+    acc[2] = acc[3] = acc[4] = acc[5] = 0.0
+    separated = _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, 0, n - i0, i0, omega, k, c, lash, rate, R,
+                         preload_closing, acc)
+    separated += _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, n - i0, n, -(n - i0), omega, k, c, lash, rate,
+                          R, preload_closing, acc)
+    peak = max(acc[0], acc[1])
+    fig[1] = 0.0
+    fig[8] = 0.0
+    fig[2] = 360.0 * separated / n / 360.0 * period
+    fig[3] = max(acc[2], acc[3])
+    fig[4] = peak
+    fig[5] = ratio * peak  # = max(ratio force): the product rounds monotonically (the scene has ratio > 0)
+    fig[10] = max(acc[4], acc[5])
+    # the events of the revolution (elastic_events.revolution_events), in time order
+    t_start = nodes[out_nodes[0]] * inv
+    n_ev = ev.shape[0]
+    rev = np.empty((n_ev, 4))
+    m = 0
+    for q in range(n_ev):
+        if not ev[q, 1] < t_start + period:
+            continue
+        t_ev = np.fmod(ev[q, 1], period)
+        rev[m, 0] = ev[q, 0]
+        rev[m, 1] = t_ev
+        rev[m, 2] = ev[q, 2]
+        rev[m, 3] = math.degrees(omega * t_ev) % 360.0
+        m += 1
+    rev = rev[:m]
+    order = np.argsort(rev[:, 1], kind="mergesort")  # (stable: equal instants keep the solver's order)
+    rev = rev[order]
+    best_bounce = 0.0
+    seat_v = np.inf
+    delay = np.inf
+    for q in range(m):
+        code = int(rev[q, 0])
+        if code == SEPARATION:
+            if fig[1] == 0.0:
+                fig[0] = rev[q, 3]
+            fig[1] += 1.0
+        elif code == SEAT:
+            fig[8] += 1.0
+            seat_v = min(seat_v, rev[q, 2])
+            t0 = rev[q, 1]
+            t1 = np.inf
+            for p in range(m):
+                if rev[p, 1] > t0:
+                    t1 = min(t1, rev[p, 1])
+            if t1 == np.inf:
+                t1 = (n - 1) * (2.0 * math.pi / n) / omega + 1.0
+            # the samples after t0 and before t1 (the first after t0 up to the first at or after t1):
+            # output columns [lo, hi), the run samples of those at or after i0 and of those before
+            lo = _first_sample(n, omega, t0, True)
+            hi = _first_sample(n, omega, t1, False)
+            if hi > max(lo, i0):
+                best_bounce = _largest_open(out_s, out_nodes, max(lo, i0) - i0, hi - i0, best_bounce)
+            if min(hi, i0) > lo:
+                best_bounce = _largest_open(out_s, out_nodes, lo + n - i0, min(hi, i0) + n - i0, best_bounce)
+        elif code == LIFT_OFF and not math.isnan(take_up_s):
+            delay = min(delay, np.fmod(rev[q, 1] - take_up_s + period, period))
+    fig[6] = delay if delay < np.inf else np.nan
+    fig[7] = seat_v if fig[8] > 0.0 else np.nan
+    fig[9] = best_bounce
+    # residual vibration (effects/residual.residual_figures)
+    if dwell >= 0:
+        q = out_nodes[dwell - i0 if dwell >= i0 else dwell + n - i0]
+        fig[11] = _free_amplitude(out_s[q], out_v[q], S_dwell, k, lash, W0, rate, R, M1)
+    return fig, rev, status
+
+
+# the columns of a batch's run parameters (revolutions())
+RUN_PARAMETERS = ("omega", "mass", "oscillating_mass", "stiffness", "damping", "lash", "seated_resistance",
+                  "spring_rate", "friction", "restitution", "preload_closing", "take_up_s")
+
+
+@njit(cache=True)
+def revolutions(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, h_max, ratio, runs, zeno_height, max_events,
+                ref, dwell, S_dwell):
+    """revolution() for many runs on one grid (runs: one row of RUN_PARAMETERS each): the FIGURES
+    per run and the solver status per run (a batch costs no Python per run; its runs share the
+    grid's bounds and the buffers)."""
+    R = runs.shape[0]
+    figs = np.empty((R, len(FIGURES)))
+    status = np.empty(R, dtype=np.int64)
+    blk_owned, win_owned = grid_bounds(h, Dn, Sb)  # once for the batch: they do not depend on the speed
+    terms = np.empty(R, dtype=np.int64)
+    for r in range(R):
+        p = runs[r]
+        terms[r] = taylor_terms(phase_rate(p[1], p[2], p[3], p[4], p[7]) * h_max / p[0])
+    owned = run_buffers(h.size + 1, terms.max() if R else 1, h_unique.size)
+    acc_owned = np.empty(6)
+    # every array the runs read or write, borrowed (kernel_phase.borrowed: no reference counting in
+    # the runs); the owners live to the end of this function
+    buffers = borrowed_buffers(owned)
+    acc = borrowed(acc_owned)
+    nodes, h, PT, Dn, Sb = borrowed(nodes), borrowed(h), borrowed(PT), borrowed(Dn), borrowed(Sb)
+    hidx, h_unique, out_nodes, ref = borrowed(hidx), borrowed(h_unique), borrowed(out_nodes), borrowed(ref)
+    blk, win = borrowed(blk_owned), borrowed(win_owned)
+    for r in range(R):
+        p = runs[r]
+        fig, rev, st = revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, p[0], p[1], p[2], p[3], p[4],
+                                  p[5], p[6], p[7], p[8], p[9], zeno_height, max_events, terms[r], ratio, p[10], p[11],
+                                  ref, dwell, S_dwell, blk, win, buffers, acc)
+        figs[r] = fig
+        status[r] = st
+    # (the owners of the borrowed arrays, used last here)
+    owned[0][0] = acc_owned[0] = blk_owned[0, 0] = win_owned[0, 0] = 0.0
+    return figs, status
