@@ -1,6 +1,6 @@
 """Benchmark of today's valve trains' kinematics (issue #24: one revolution at 3600 steps <= 5 ms).
 
-    .venv/bin/python benchmarks/bench_modern_gears.py [--repeat 15]
+    .venv/bin/python benchmarks/bench_modern_gears.py [--repeat 15] [--speeds 1000] [--sweep-repeat 3]
 
 For each gear, the median time of its full kinematics over one revolution of 3600 cam angles:
 valve lift with v, a, jerk (jets), the cam's contour, radius of curvature and contact point, the
@@ -12,6 +12,15 @@ and explorer.lift.contours.translating's closed-form profile), the gear the proj
 The machine is shared (the load average is printed with the table): the times are CPU times of
 this process (time.process_time), which a busy machine inflates far less than wall-clock times;
 the wall-clock medians are printed beside them.
+
+The built-in scenes of the gears (assets/scenes/bucket_tappet.toml, finger_follower.toml,
+pushrod_rocker.toml; phase B): the kinematics effect of one revolution at 3600 steps through the pipeline (the gear's lift
+built anew for every run, so that its kinematics memo is not what is timed; baseline: the same
+effect on the translating roller's scene cycloidal_demo at 3600 steps), and a 1000-speed sweep
+(0.5 to 1.5 times the scene's speed, every figure of the scene's sweep row) through the sweep
+engine the scene takes, after one warm-up chunk (numba's import and the compiled solver's load).
+
+    .venv/bin/python benchmarks/bench_modern_gears.py --scenes-only [--repeat 15] [--speeds 1000]
 """
 
 from __future__ import annotations
@@ -83,10 +92,66 @@ def analysed(name, gear):
                          check=False)
 
 
+SCENES = ("bucket_tappet", "finger_follower", "pushrod_rocker")
+
+
+def scenes(repeat: int, speeds: int, sweeps: int) -> None:
+    """The built-in scenes' kinematics effect and 1000-speed sweeps (module docstring)."""
+    from pathlib import Path
+
+    from explorer.effects.pipeline import simulate
+    from explorer.scene.scene import load_scene
+    from explorer.studies.sweep_engine import _Shared, compute_chunk, engine_for, result_columns
+
+    root = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+    loaded = {name: load_scene(root / f"{name}.toml", ["solver.steps_per_revolution=3600"])
+              for name in ("cycloidal_demo", *SCENES)}
+    only = {name: scene.with_changes(effects=("kinematics",)) for name, scene in loaded.items()}
+    built = {name: scene.gear_plugin.build_lift(scene) for name, scene in only.items()}
+
+    def fresh(name):
+        lift = built[name]
+        if not hasattr(lift, "gear"):
+            return lambda: simulate(only[name], lift)
+        return lambda: simulate(only[name], type(lift)(lift.gear, lift.law))  # the geometry, an empty memo
+
+    cpu = median_times({name: fresh(name) for name in only}, repeat, clock=time.process_time)
+    base = cpu["cycloidal_demo"]
+    rows = [[name + (" (baseline)" if name == "cycloidal_demo" else ""), loaded[name].follower.type,
+             f"{cpu[name] * 1e3:.2f}", f"{cpu[name] / base:.1f}"] for name in only]
+    print(f"kinematics effect through the pipeline, one revolution at 3600 steps; CPU-time medians of {repeat} runs")
+    print_table(["scene", "follower type", "ms", "x roller"], rows)
+    rows = []
+    for name in SCENES:
+        scene = loaded[name]
+        names = result_columns(scene)
+        values = np.linspace(0.5, 1.5, speeds)[:, None] * scene.drive.rpm
+        shared = _Shared()
+        engine = engine_for(scene, shared).name
+        compute_chunk(scene, ("drive.rpm",), values[:8], names, shared)  # warm-up: imports, the compiled solver
+        times = []
+        for _ in range(sweeps):
+            started = time.perf_counter()
+            table = compute_chunk(scene, ("drive.rpm",), values, names, _Shared())
+            times.append(time.perf_counter() - started)
+        failed = int(np.nansum(table[:, names.index("run_failed")]))
+        rows.append([name, engine, str(speeds), f"{np.median(times):.3f}", f"{min(times):.3f}", str(failed)])
+    print(f"{speeds}-speed sweep (0.5-1.5 x the scene's speed, every row figure), wall-clock median of {sweeps} "
+          "(after a warm-up chunk)")
+    print_table(["scene", "engine", "speeds", "median s", "best s", "failed runs"], rows)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeat", type=int, default=15)
+    parser.add_argument("--speeds", type=int, default=1000, help="speeds of the scenes' sweeps")
+    parser.add_argument("--sweeps", type=int, default=3, help="sweeps timed per scene")
+    parser.add_argument("--scenes-only", action="store_true", help="only the built-in scenes' table")
     args = parser.parse_args()
+    if args.scenes_only:
+        scenes(args.repeat, args.speeds, args.sweeps)
+        print(f"load average (1, 5, 15 min): {', '.join(f'{x:.2f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
+        return
 
     from explorer.lift.contours.translating import profile_from_derivatives
 
@@ -114,6 +179,8 @@ def main() -> None:
                      f"{slow[name] * 1e3:.1f}", f"{slow[name] / base:.0f}"])
     print(f"one revolution, 3600 cam angles; CPU-time medians of {args.repeat} runs (analysis: of {few})")
     print_table(["gear", "synthesis ms", "x roller", "wall ms", "analysis ms", "x roller"], rows)
+    print()
+    scenes(args.repeat, args.speeds, args.sweeps)
     print(f"load average (1, 5, 15 min): {', '.join(f'{x:.2f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
 
 

@@ -3,10 +3,19 @@ elements against the massless exact model and against scipy DOP853 (rtol 1e-10) 
 chain model, medians of alternating runs in one process (ratios measured in one run). The
 chain solver's first call (its numba kernels loaded or compiled) is timed apart.
 
+--scaling (issue #27, item 6): the exact chain solver's cost per revolution against the number of
+elements (8, 16, 24, 32, 48, 64), medians of alternating runs, each as a ratio to 8 elements and
+per element, with the load; the target is <= 4x the 8-element cost at 64.
+
     .venv/bin/python benchmarks/bench_spring_chain.py [--repeat 5] [--rpm 3000] [--elements 8]
+    .venv/bin/python benchmarks/bench_spring_chain.py --scaling [--repeat 7]
 """
 
 from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one core: LAPACK's threads would share it
 
 import argparse
 import math
@@ -33,7 +42,11 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--rpm", type=float, default=3000.0)
     ap.add_argument("--elements", type=int, default=8)
+    ap.add_argument("--scaling", action="store_true", help="cost against the number of elements (issue #27)")
     args = ap.parse_args()
+    if args.scaling:
+        scaling(args.repeat, args.rpm)
+        return
     scene = load_scene(ROOT / "assets" / "scenes" / "spring_surge.toml", overrides=[f"spring.elements={args.elements}"])
     omega = args.rpm * math.pi / 30.0
     drive = Drive(build_lift(scene), 1.0, omega)
@@ -68,6 +81,34 @@ def main() -> None:
     print(f"  scipy / chain exact:          {med['chain scipy DOP853'] / med['chain exact']:.1f}x")
     print(f"  events: {len(out['chain exact'].events)}; max |s_exact - s_scipy| = {err:.2e} m")
     print(f"  first chain call (numba kernels from the disk cache, or compiled): {first:.2f} s wall")
+
+
+def scaling(repeat: int, rpm: float, counts=(8, 16, 24, 32, 48, 64)) -> None:
+    """The chain solver's median CPU per revolution against the number of elements."""
+    omega = rpm * math.pi / 30.0
+    t = np.linspace(0.0, 2.0 * math.pi / omega, 3601)
+    runs = {}
+    for N in counts:
+        scene = load_scene(ROOT / "assets" / "scenes" / "spring_surge.toml", overrides=[f"spring.elements={N}"])
+        chain = ChainModel.from_scene(scene)
+        drive = Drive(build_lift(scene), 1.0, omega)
+        runs[N] = (lambda chain=chain, drive=drive: chain_exact.solve(chain, drive, t))
+    for run in runs.values():  # the kernels and the structured path's compiled root finder
+        run()
+    times: dict[int, list[float]] = {N: [] for N in runs}
+    for _ in range(repeat):
+        for N, run in runs.items():
+            t0 = time.process_time()
+            run()
+            times[N].append(time.process_time() - t0)
+    med = {N: statistics.median(v) for N, v in times.items()}
+    base = med[counts[0]]
+    print(f"{rpm:g} rpm, 3600 steps, median CPU of {repeat} alternating runs, load {os.getloadavg()[0]:.2f} "
+          f"(1 min) on {os.cpu_count()} cores")
+    print(f"  {'elements':>8s} {'ms/rev':>8s} {'x 8 el.':>8s} {'us/el.':>8s}")
+    for N, v in med.items():
+        print(f"  {N:8d} {v * 1e3:8.2f} {v / base:8.2f} {v / N * 1e6:8.1f}")
+    print(f"  64 elements / 8 elements: {med[counts[-1]] / base:.2f}x (target <= 4)")
 
 
 if __name__ == "__main__":

@@ -98,7 +98,7 @@ def test_arm_and_pushrod_carry_their_points(case):
             assert np.allclose(top[[0, 2]], k.upper_ball[i], atol=1e-12)
     if hasattr(gear, "arm"):
         k = gear.kinematics(TH)
-        part = "finger" if gear.kind == "finger-follower" else "rocker"
+        part = gear.kind  # "finger" or "rocker"
         pos, q = poses[part]
         d = gear.valve.drive
         local = np.array([d.arm * math.cos(d.angle), 0.0, d.arm * math.sin(d.angle)])

@@ -104,7 +104,7 @@ def scene_keys_reference() -> str:
         return original["reject_unknown"](self, known)
 
     scenes = sorted(builtin_scenes())
-    scenes += sorted((ROOT / "docs" / "examples").glob("*.toml"))  # docs/scenes-draft holds scenes that do not load yet
+    scenes += sorted((ROOT / "docs" / "examples").glob("*.toml"))
     try:
         for name, fn in (("quantity", quantity), ("number", number), ("string", string),
                          ("raw", raw), ("reject_unknown", reject_unknown)):

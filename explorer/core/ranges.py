@@ -43,6 +43,8 @@ RANGES: dict[str, tuple[float, float]] = {
     "pressure_viscosity": (1e-12, 1e-6),  # 1/Pa: mineral oils ~2e-8
     "temperature": (1.0, 2000.0),  # K
     "lift_rate": (1e-12, 10.0),  # m/rad
+    "volume": (1e-15, 1.0),  # m**3: a cubic micrometre to a cubic metre
+    "inertia": (1e-12, 1e4),  # kg*m**2
 }
 SHOWN_UNITS: dict[str, tuple[str, float]] = {
     "angle": ("deg", 180.0 / math.pi),
@@ -52,6 +54,7 @@ SHOWN_UNITS: dict[str, tuple[str, float]] = {
     "velocity": ("m/s", 1.0), "acceleration": ("m/s**2", 1.0), "jerk": ("m/s**3", 1.0), "torque": ("N*m", 1.0),
     "viscosity": ("Pa*s", 1.0), "pressure_viscosity": ("1/Pa", 1.0), "temperature": ("K", 1.0),
     "lift_rate": ("m/rad", 1.0),
+    "volume": ("m**3", 1.0), "inertia": ("kg*m**2", 1.0), "density": ("kg/m**3", 1.0),
 }
 # dotted key (glob) -> (smallest non-zero size, largest size) in SI, narrower than the dimension's
 KEY_RANGES: dict[str, tuple[float, float]] = {

@@ -39,6 +39,8 @@ DIMENSIONS: dict[str, tuple[str, str, str]] = {
     "pressure_viscosity": ("1/[pressure]", "1/Pa", "1/Pa"),
     "temperature": ("[temperature]", "K", "K"),  # absolute: "90 degC" is 363.15 K
     "lift_rate": ("[length]", "m/rad", "m/rad"),  # lift per cam angle ("0.002 in/deg"); pint counts angles as 1
+    "volume": ("[length]**3", "m**3", "m**3"),  # a hydraulic lash adjuster's chamber
+    "inertia": ("[mass]*[length]**2", "kg*m**2", "kg*m**2"),  # a rocker's about its pivot
     "dimensionless": ("", "", ""),
 }
 
@@ -327,6 +329,10 @@ _FAST_UNITS: dict[str, tuple[str, float]] = {
     "m/s**2": ("acceleration", 1.0), "m/s^2": ("acceleration", 1.0),
     "N*m": ("torque", 1.0), "kgf*m": ("torque", _G),
     "kg/m**3": ("density", 1.0), "kg/m^3": ("density", 1.0),
+    "m**3": ("volume", 1.0), "mm**3": ("volume", 1e-9),
+    "Pa*s": ("viscosity", 1.0), "mPa*s": ("viscosity", 1e-3),
+    "kg*m**2": ("inertia", 1.0), "kg*cm**2": ("inertia", 1e-4), "kg*mm**2": ("inertia", 1e-6),
+    "g*mm**2": ("inertia", 1e-9),
 }
 _NUMBER = re.compile(r"([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*)")
 _OPERATOR_SPACES = re.compile(r"\s*([*/^])\s*")

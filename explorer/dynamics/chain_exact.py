@@ -1,5 +1,7 @@
-"""The exact solver of the spring-chain model (chain.py): each phase's linear ODE solved in
-closed form through the eigen-decomposition of its state matrix.
+"""The exact solver of piecewise-linear models: the spring chain (chain.py, through ChainPhases)
+and the valve train of parts with its lash adjuster (train.py), any PhaseSystem
+(phase_system.py): each phase's linear ODE solved in closed form through the eigen-decomposition
+of its state matrix.
 
 Method. A phase (linkage loaded or not, seat engaged or not, the valve moving up or down with
 its friction, or held by it) is y' = A y + B [S, S', 1] with
@@ -40,7 +42,9 @@ import numpy as np
 
 from . import chain_kernels as kernels
 from .chain import ChainModel, static_equilibrium
+from .chain_modes import chain_phase_modes
 from .model import Drive, DynamicsSolution
+from .phase_system import Event, PhaseModes, Transition, decompose, held_modes, reduce_pairs, state_matrix
 from .series import hermite5, taylor_shift
 
 FACT = np.array([math.factorial(k) for k in range(7)], dtype=float)
@@ -86,43 +90,15 @@ _INV_FACT = [1.0 / math.factorial(k) for k in range(8)]
 _PHI_SERIES_C = _PHI_SERIES.astype(complex)
 
 
-@dataclass(frozen=True)
-class PhaseModes:
-    contact: bool
-    seat: bool
-    lam: np.ndarray  # (2n,) eigenvalues
-    phys: np.ndarray  # (2n, 2n): y = Re(phys @ z)
-    inv: np.ndarray  # (2n, 2n): z = inv @ y
-    mB: np.ndarray  # (2n, 3): modal forcing per unit S, S', 1
-    A: np.ndarray  # (2n, 2n) physical state matrix
-    B: np.ndarray  # (2n, 3)
-    mode: int = 1  # the valve moving up (+1: friction -R) or down (-1), or held by friction (0)
-
-
 def _decompose(M: np.ndarray, K: np.ndarray, C: np.ndarray):
-    """(lam, phys, inv) of y' = A y (y = [x, x'], M x'' + C x' + K x = 0, K positive definite) in
-    mass-normalised coordinates Y = [K~^(1/2) q, q'] (q = M^(1/2) x), where the undamped A is
-    skew-symmetric and its eigenvectors orthogonal: y = phys @ z, z = inv @ y."""
-    n = M.size
-    mh, ms = 1.0 / np.sqrt(M), np.sqrt(M)
-    Kt = mh[:, None] * K * mh[None, :]
-    Ct = mh[:, None] * C * mh[None, :]
-    w2, Q = np.linalg.eigh(0.5 * (Kt + Kt.T))
-    w = np.sqrt(w2)
-    Sq = (Q * w) @ Q.T
-    Sqi = (Q / w) @ Q.T
-    AY = np.block([[np.zeros((n, n)), Sq], [-Sq, -Ct]])
-    lam, V = np.linalg.eig(AY)
-    Vi = np.linalg.inv(V)
-    T = np.zeros((2 * n, 2 * n))
-    T[:n, :n] = mh[:, None] * Sqi
-    T[n:, n:] = np.diag(mh)
-    Ti = np.zeros((2 * n, 2 * n))
-    Ti[:n, :n] = Sq * ms[None, :]
-    Ti[n:, n:] = np.diag(ms)
-    # a purely imaginary pair must not drift into the right half plane by rounding
-    lam = np.where(lam.real > 0.0, 1j * lam.imag, lam)
-    return lam, T @ V, Vi @ Ti
+    """(lam, phys, inv) of the chain's phase (phase_system.decompose without first-order states)."""
+    return decompose(M, K, C)
+
+
+# from this many coil elements on, a moving phase is decomposed from the chain's structure
+# (chain_modes.py: O(n^2)) rather than by the dense eig (O(n^3)); below it the dense one, which is
+# as fast there (measured: 8 elements 0.3 vs 0.6 ms, 16: 0.5 vs 1.5 ms, 64: 14-24 vs 2 ms per phase type)
+STRUCTURED_FROM = 24
 
 
 def phase_modes(model: ChainModel, contact: bool, seat: bool, mode: int = 1) -> PhaseModes:
@@ -133,44 +109,96 @@ def phase_modes(model: ChainModel, contact: bool, seat: bool, mode: int = 1) -> 
     n = model.n
     M = model.masses
     K, C = model.phase_matrices(contact, seat)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K / M[:, None], -C / M[:, None]]])
-    B = np.zeros((2 * n, 3))
+    key = (contact, seat, mode)
     if mode != 0:
-        lam, phys, inv = _decompose(M, K, C)
+        A = state_matrix(M, K, C)
+        B = np.zeros((2 * n, 3))
+        structured = chain_phase_modes(model, contact, seat) if model.elements >= STRUCTURED_FROM else None
+        lam, phys, inv = structured if structured is not None else _decompose(M, K, C)
         B[n:] = model.forcing_vectors(contact, float(mode)) / M[:, None]
-        return PhaseModes(contact, seat, lam, phys, inv, inv @ B, A, B, mode)
-    # held valve: the rows of s and v are 0 (s' = 0, v' = 0: s stays s*, v stays 0); the coils
-    # u = G s + w with G the static shape (K_cc G = -K_c0), w the chain with held ends
-    A[0] = 0.0
-    A[n] = 0.0
-    A[:, n] = 0.0  # v = 0: its damping couplings do not act (and e_v is then a mode of eigenvalue 0)
-    m = n - 1
-    cs = np.r_[1:n, n + 1:2 * n]  # the coils' rows of y
-    z = np.zeros((2 * n, 2 * n), dtype=complex)
-    phys = z.copy()
-    inv = z.copy()
-    lam = np.zeros(2 * n, dtype=complex)
-    if m:
-        lc, pc, ic = _decompose(M[1:], K[1:, 1:], C[1:, 1:])
-        G = -np.linalg.solve(K[1:, 1:], K[1:, 0])
-        lam[:2 * m] = lc
-        phys[np.ix_(cs, np.arange(2 * m))] = pc
-        inv[np.ix_(np.arange(2 * m), cs)] = ic
-        # y_u = G s + w: the s column of phys adds G; z_w = ic [u - G s; u']
-        phys[1:n, 2 * m] = G
-        inv[:2 * m, 0] = -ic[:, :m] @ G
-    phys[0, 2 * m] = phys[n, 2 * m + 1] = 1.0
-    inv[2 * m, 0] = inv[2 * m + 1, n] = 1.0
-    return PhaseModes(contact, seat, lam, phys, inv, np.zeros((2 * n, 3), dtype=complex), A, B, 0)
+        return PhaseModes(key, lam, phys, inv, inv @ B, A, B, mode)
+    # held valve: its forcing acts on the valve's rows only, which are held (B = 0)
+    return held_modes(key, M, K, C, np.zeros((2 * n, 3)), 0)
 
 
-class _Event:
-    """g = coef . y + alpha S + beta S' + const, crossing in direction sign (+1 up, -1 down)."""
+class ChainPhases:
+    """The spring-chain model (chain.py) as a PhaseSystem (phase_system.py): phase types
+    (linkage loaded, seat engaged, valve mode), keyed (contact, seat, mode)."""
 
-    def __init__(self, kind: str, coef: np.ndarray, alpha: float, beta: float, const: float, sign: float,
-                 index: int = -1):
-        self.kind, self.coef, self.alpha, self.beta, self.const = kind, coef, alpha, beta, const
-        self.sign, self.index = sign, index
+    def __init__(self, model: ChainModel):
+        self.model = model
+        self.n = model.n
+        self.size = 2 * model.n
+        self.velocity_index = model.n
+        # a long chain: half the modes (conjugate pairs) and the outputs' rows only (a short one
+        # keeps the arithmetic its results were made with: golden scenes)
+        self.reduce_pairs = model.elements >= STRUCTURED_FROM
+
+    def phase_modes(self, key) -> PhaseModes:
+        return phase_modes(self.model, *key)
+
+    def event_functions(self, key) -> list[Event]:
+        m, n = self.model, self.n
+        contact, seat, mode = key
+        ev = []
+        e_s = np.zeros(2 * n)
+        e_s[0] = 1.0
+        e_v = np.zeros(2 * n)
+        e_v[n] = 1.0
+        if contact:  # linkage force k (S - lash - s) + c (S' - v) falls to 0
+            ev.append(Event("separation", -m.stiffness * e_s - m.damping * e_v, m.stiffness, m.damping,
+                            -m.stiffness * m.lash, -1.0))
+        else:  # the gap S - lash - s closes
+            ev.append(Event("re-contact", -e_s, 1.0, 0.0, -m.lash, +1.0, guard=True))
+        if mode == 0:
+            # held by friction: released when the net force leaves the band [-R, R] (the seat's
+            # state cannot change while the valve stands)
+            coef, alpha, beta, const = m.net_force_row(contact, seat)
+            ev.append(Event("release", coef, alpha, beta, const - m.friction, +1.0, index=+1))
+            ev.append(Event("release", coef, alpha, beta, const + m.friction, -1.0, index=-1))
+        elif seat:
+            ev.append(Event("lift-off", e_s, 0.0, 0.0, 0.0, +1.0))
+        else:
+            ev.append(Event("seat", e_s, 0.0, 0.0, 0.0, -1.0, guard=True))
+        if mode != 0 and m.friction > 0.0:  # the velocity reaches 0: the valve sticks or turns
+            ev.append(Event("velocity-zero", -mode * e_v, 0.0, 0.0, 0.0, +1.0))
+        if math.isfinite(m.clash_compression):
+            for j in range(n):  # element j: x_j - x_(j+1) reaches the clash compression
+                c = np.zeros(2 * n)
+                c[j] = 1.0
+                if j + 1 < n:
+                    c[j + 1] = -1.0
+                ev.append(Event("coil-clash", c, 0.0, 0.0, -m.clash_compression, +1.0, index=j, grouped=True))
+        return ev
+
+    def apply_event(self, key, e: Event, y: np.ndarray, S: float, S1: float) -> Transition:
+        kind = e.kind
+        contact, seat, mode = key
+        if kind == "velocity-zero":
+            kind, mode = stick_or_turn(self.model, y, S, S1, contact, seat)
+            y[self.n] = 0.0  # (a rounding away from 0)
+        elif kind == "release":
+            mode = e.index
+        item = {"kind": kind}
+        if kind == "seat":
+            item["velocity_m_s"] = float(y[self.n])
+        if kind == "coil-clash":
+            item["element"] = e.index
+        contact = {"separation": False, "re-contact": True}.get(kind, contact)
+        seat = {"lift-off": False, "seat": True}.get(kind, seat)
+        # the valve starts from v = 0 with an acceleration that may be a rounding of 0 (the net
+        # force has just left the band): its velocity-zero function waits until the valve has
+        # moved in its direction, or a rounding would read as a stop at once
+        disarm = ("velocity-zero",) if kind in ("release", "turn") else ()
+        return Transition(item, (contact, seat, mode), y, disarm)
+
+    def start_state(self, drive, t0: float):
+        x0, v0, key = start_state(self.model, drive, t0)
+        return np.concatenate([x0, v0]), key
+
+    def outputs(self, t, y, keys, codes, events, stats, matrices, D):
+        return chain_outputs(self.model, None, t, y, codes, events, stats, matrices, D=D, keys=keys,
+                             rows_only=self.reduce_pairs)
 
 
 @dataclass(frozen=True)
@@ -178,23 +206,29 @@ class _PhaseData:
     """What the compiled loops need of one phase type, as contiguous arrays (built once)."""
     modes: PhaseModes
     events: tuple
-    mB: np.ndarray  # (3, 2n) complex: modal forcing per unit S, S', 1
-    rows: np.ndarray  # (E, 2n) complex: event function e = Re(rows[e] . z) + ...
-    absrows: np.ndarray  # (E, 2n)
-    absmB: np.ndarray  # (2, 2n): |mB| of S and S' (the bound of the forcing's second derivative)
+    mB: np.ndarray  # (3, N) complex: modal forcing per unit S, S', 1
+    rows: np.ndarray  # (E, N) complex: event function e = Re(rows[e] . z) + ...
+    absrows: np.ndarray  # (E, N)
+    absmB: np.ndarray  # (2, N): |mB| of S and S' (the bound of the forcing's second derivative)
     ev: np.ndarray  # (4, E): alpha, beta, const, sign of each event function
-    W: np.ndarray  # (6, G, 2n) complex: hh k! phi_(k+1)(lambda hh) per group of equal steps
-    E0: np.ndarray  # (G, 2n) complex: e^(lambda hh)
+    W: np.ndarray  # (6, G, N) complex: hh k! phi_(k+1)(lambda hh) per group of equal steps
+    E0: np.ndarray  # (G, N) complex: e^(lambda hh)
+    gs: int  # the grouped functions (certified together) are those from gs on
+    colmax: np.ndarray  # (N,): max over the grouped functions of |rows[e, i]|
 
 
-class ChainSolver:
-    def __init__(self, model: ChainModel, drive, t: np.ndarray, max_events: int = 10_000):
-        self.model, self.drive, self.max_events = model, drive, max_events
+class PhaseSolver:
+    """The event loop over the steps of the output grid for any PhaseSystem (phase_system.py):
+    the spring chain (ChainPhases) and the valve train (train.TrainModel)."""
+
+    def __init__(self, system, drive, t: np.ndarray, max_events: int = 10_000):
+        self.system, self.drive, self.max_events = system, drive, max_events
         self._modes: dict = {}
         self._data: dict = {}
         self._build_grid(drive, t)
         self.events: list[dict] = []
-        self.n = model.n
+        self.keys: list = []  # the phase types met, numbered in that order (key_nodes holds the numbers)
+        self._codes: dict = {}
 
     # ------------------------------------------------------------------ grid and drive
     def _build_grid(self, drive, t: np.ndarray) -> None:
@@ -244,10 +278,13 @@ class ChainSolver:
         self.h_group = np.array(means)
 
     # ------------------------------------------------------------------ phases
-    def modes(self, key: tuple[bool, bool, int]) -> PhaseModes:
+    def modes(self, key) -> PhaseModes:
         md = self._modes.get(key)
         if md is None:
-            md = self._modes[key] = phase_modes(self.model, *key)
+            md = self.system.phase_modes(key)
+            if getattr(self.system, "reduce_pairs", False):
+                md = reduce_pairs(md)
+            self._modes[key] = md
         return md
 
     def data(self, key) -> _PhaseData:
@@ -255,50 +292,41 @@ class ChainSolver:
         pd = self._data.get(key)
         if pd is None:
             md = self.modes(key)
-            events = tuple(self._make_event_functions(key))
-            rows = np.ascontiguousarray(np.array([e.coef @ md.phys for e in events]))  # (E, 2n)
+            events = tuple(self.system.event_functions(key))
+            rows = np.ascontiguousarray(np.array([e.coef @ md.phys for e in events]))  # (E, N)
             ev = np.array([[getattr(e, f) for e in events] for f in ("alpha", "beta", "const", "sign")])
-            F = phi_functions(md.lam[None, :] * self.h_group[:, None])  # (7, G, 2n)
+            F = phi_functions(md.lam[None, :] * self.h_group[:, None])  # (7, G, N)
             W = np.ascontiguousarray(F[1:] * (self.h_group[None, :, None] * FACT[:6, None, None]))
             mB = np.ascontiguousarray(md.mB.T)
-            pd = self._data[key] = _PhaseData(md, events, mB, rows, np.abs(rows), np.abs(mB[:2]), ev, W,
-                                              np.ascontiguousarray(F[0]))
+            grouped = [e.grouped for e in events]
+            gs = grouped.index(True) if any(grouped) else len(events)
+            if not all(grouped[gs:]) or any(e.alpha or e.beta for e in events[gs:]):
+                raise ValueError("grouped event functions must come last and depend on the state alone")
+            absrows = np.abs(rows)
+            colmax = absrows[gs:].max(axis=0) if gs < len(events) else np.zeros(md.lam.size)
+            pd = self._data[key] = _PhaseData(md, events, mB, rows, absrows, np.abs(mB[:2]), ev, W,
+                                              np.ascontiguousarray(F[0]), gs, np.ascontiguousarray(colmax))
         return pd
 
+    def code(self, key) -> int:
+        c = self._codes.get(key)
+        if c is None:
+            c = self._codes[key] = len(self.keys)
+            self.keys.append(key)
+        return c
+
     # ------------------------------------------------------------------ events
-    def _make_event_functions(self, key) -> list[_Event]:
-        m, n = self.model, self.n
-        contact, seat, mode = key
-        ev = []
-        e_s = np.zeros(2 * n)
-        e_s[0] = 1.0
-        e_v = np.zeros(2 * n)
-        e_v[n] = 1.0
-        if contact:  # linkage force k (S - lash - s) + c (S' - v) falls to 0
-            ev.append(_Event("separation", -m.stiffness * e_s - m.damping * e_v, m.stiffness, m.damping,
-                             -m.stiffness * m.lash, -1.0))
-        else:  # the gap S - lash - s closes
-            ev.append(_Event("re-contact", -e_s, 1.0, 0.0, -m.lash, +1.0))
-        if mode == 0:
-            # held by friction: released when the net force leaves the band [-R, R] (the seat's
-            # state cannot change while the valve stands)
-            coef, alpha, beta, const = m.net_force_row(contact, seat)
-            ev.append(_Event("release", coef, alpha, beta, const - m.friction, +1.0, index=+1))
-            ev.append(_Event("release", coef, alpha, beta, const + m.friction, -1.0, index=-1))
-        elif seat:
-            ev.append(_Event("lift-off", e_s, 0.0, 0.0, 0.0, +1.0))
-        else:
-            ev.append(_Event("seat", e_s, 0.0, 0.0, 0.0, -1.0))
-        if mode != 0 and m.friction > 0.0:  # the velocity reaches 0: the valve sticks or turns
-            ev.append(_Event("velocity-zero", -mode * e_v, 0.0, 0.0, 0.0, +1.0))
-        if math.isfinite(m.clash_compression):
-            for j in range(n):  # element j: x_j - x_(j+1) reaches the clash compression
-                c = np.zeros(2 * n)
-                c[j] = 1.0
-                if j + 1 < n:
-                    c[j + 1] = -1.0
-                ev.append(_Event("coil-clash", c, 0.0, 0.0, -m.clash_compression, +1.0, index=j))
-        return ev
+    @staticmethod
+    def _forcing(pd: _PhaseData, z) -> np.ndarray:
+        """The modal forcing of this phase from the state z: the phase type's, with each free
+        group's velocity V as the constant forcing of its position X (X' = V; V is constant
+        while the phase lasts, so any state of it gives the same)."""
+        if not pd.modes.rigid:
+            return pd.mB
+        mB = pd.mB.copy()
+        for a, b in pd.modes.rigid:
+            mB[2, a] = z[b]
+        return mB
 
     def _arm(self, pd: _PhaseData, z, j: int, u: float, previous=None) -> np.ndarray:
         """An event function is armed while it is on the near side of its crossing; right after
@@ -307,25 +335,25 @@ class ChainSolver:
         if j >= self.h.size:
             return np.ones(len(pd.events), bool)
         out = np.empty(len(pd.events), bool)
-        kernels.arm(pd.modes.lam, pd.mB, pd.rows, pd.ev, z, self.PT[j], float(self.h[j]), u,
+        kernels.arm(pd.modes.lam, self._forcing(pd, z), pd.rows, pd.ev, z, self.PT[j], float(self.h[j]), u,
                     _NONE if previous is None else previous, out)
         return out
 
     def _search(self, pd: _PhaseData, armed, z, j: int, u0: float):
         """The first crossing of an armed function in (u0, 1] of step j: (u, index) or None."""
-        u, i = kernels.search_step(pd.modes.lam, pd.mB, pd.rows, pd.absrows, pd.absmB, pd.ev, armed, z, self.PT[j],
-                                   float(self.h[j]), float(self.S2b[j]), float(self.S3b[j]), float(self.nodes[j]),
-                                   u0, 1.0)
+        u, i = kernels.search_step(pd.modes.lam, self._forcing(pd, z), pd.rows, pd.absrows, pd.absmB, pd.ev, armed, z,
+                                   self.PT[j], float(self.h[j]), float(self.S2b[j]), float(self.S3b[j]),
+                                   float(self.nodes[j]), u0, 1.0)
         return None if i < 0 else (u, i)
 
     # ------------------------------------------------------------------ the run
-    def run(self, x0: np.ndarray, v0: np.ndarray, key) -> None:
+    def run(self, y0: np.ndarray, key) -> None:
         nodes, h = self.nodes, self.h
         steps = h.size
-        self.z_nodes = np.empty((nodes.size, 2 * self.n), dtype=complex)
-        self.key_nodes = np.empty(nodes.size, dtype=np.int8)
+        self.z_nodes = np.empty((nodes.size, self.system.size), dtype=complex)
+        self.key_nodes = np.empty(nodes.size, dtype=np.int16)
         pd = self.data(key)
-        z = pd.modes.inv @ np.concatenate([x0, v0])
+        z = pd.modes.inv @ y0
         self._store(0, z, key)
         armed = None
         j, u = 0, 0.0  # the state z is at node j + u of its step
@@ -337,7 +365,7 @@ class ChainSolver:
             if u > 0.0:  # the rest of a step after an event
                 hit = self._search(pd, armed, z, j, u)
                 if hit is None:
-                    z = kernels.advance_to(lam, pd.mB, z, self.PT[j], u, 1.0, float(h[j]))
+                    z = kernels.advance_to(lam, self._forcing(pd, z), z, self.PT[j], u, 1.0, float(h[j]))
                     j, u = j + 1, 0.0
                     self._store(j, z, key)
                     armed = self._arm(pd, z, j, 0.0, previous=armed)
@@ -345,12 +373,14 @@ class ChainSolver:
                 key, z, u, armed = self._apply(hit, pd, key, j, z, u)
                 continue
             # step on while every step is certified free of events (the compiled recurrence)
-            done, zend = kernels.scan(j, z, steps, lam, pd.mB, pd.rows, pd.absrows, pd.absmB, pd.ev, pd.W, pd.E0,
-                                      self.group, self.P, h, self.S2b, self.S3b, self.z_nodes, armed)
+            done, zend = kernels.scan(j, z, steps, lam, self._forcing(pd, z), pd.rows, pd.absrows, pd.absmB, pd.ev,
+                                      pd.W, pd.E0,
+                                      self.group, self.P, h, self.S2b, self.S3b, self.z_nodes, armed, pd.gs,
+                                      pd.colmax)
             if done:
-                self.key_nodes[j + 1:j + done + 1] = key_code(key)
+                self.key_nodes[j + 1:j + done + 1] = self.code(key)
                 j += done
-                z = self.z_nodes[j]
+                z = self.z_nodes[j, :lam.size]
             if j >= steps:
                 break
             hit = self._search(pd, armed, z, j, 0.0)
@@ -363,8 +393,8 @@ class ChainSolver:
             key, z, u, armed = self._apply(hit, pd, key, j, z, 0.0)
 
     def _store(self, i: int, z, key) -> None:
-        self.z_nodes[i] = z
-        self.key_nodes[i] = key_code(key)
+        self.z_nodes[i, :z.size] = z
+        self.key_nodes[i] = self.code(key)
 
     def _apply(self, hit, pd: _PhaseData, key, j, z0, u0):
         """The event `hit` = (u, function index) in step j (state z0 at u0): record it, switch
@@ -372,41 +402,31 @@ class ChainSolver:
         u, i = hit
         e = pd.events[i]
         hj = float(self.h[j])
-        z = kernels.advance_to(pd.modes.lam, pd.mB, z0, self.PT[j], u0, u, hj)
+        z = kernels.advance_to(pd.modes.lam, self._forcing(pd, z0), z0, self.PT[j], u0, u, hj)
         y = (pd.modes.phys @ z).real
-        kind = e.kind
-        contact, seat, mode = key
-        if kind == "velocity-zero":
-            S, S1, _, _ = kernels.drive_at(self.PT[j], hj, u)
-            kind, mode = stick_or_turn(self.model, y, S, S1, contact, seat)
-            y[self.n] = 0.0  # (a rounding away from 0)
-        elif kind == "release":
-            mode = e.index
-        item = {"kind": kind, "time_s": float(self.nodes[j]) + u * hj}
-        if kind == "seat":
-            item["velocity_m_s"] = float(y[self.n])
-        if kind == "coil-clash":
-            item["element"] = e.index
-        self.events.append(item)
-        if len(self.events) > self.max_events:
-            raise RuntimeError(f"more than {self.max_events} events in one run")
-        contact = {"separation": False, "re-contact": True}.get(kind, contact)
-        seat = {"lift-off": False, "seat": True}.get(kind, seat)
-        new = (contact, seat, mode)
+        S, S1, _, _ = kernels.drive_at(self.PT[j], hj, u)
+        tr = self.system.apply_event(key, e, y, S, S1)
+        if tr.record is not None:
+            item = {"kind": tr.record["kind"], "time_s": float(self.nodes[j]) + u * hj}
+            item.update((k, v) for k, v in tr.record.items() if k != "kind")
+            self.events.append(item)
+            if len(self.events) > self.max_events:
+                raise RuntimeError(f"more than {self.max_events} events in one run")
+        new = tr.key
         if new == key:  # a clash: that function waits until it has come back
             armed = self._arm(pd, z, j, u)
             armed[i] = False
             return key, z, u, armed
         pd_new = self.data(new)
-        z = pd_new.modes.inv @ y
-        if kind in ("release", "turn"):
-            # the valve starts from v = 0 with an acceleration that may be a rounding of 0 (the net
-            # force has just left the band): its velocity-zero function waits until the valve has
-            # moved in its direction, or a rounding would read as a stop at once
+        z = pd_new.modes.inv @ tr.y
+        if tr.disarm:
             armed = self._arm(pd_new, z, j, u)
-            armed[[e.kind == "velocity-zero" for e in pd_new.events]] = False
+            armed[[e.kind in tr.disarm for e in pd_new.events]] = False
             return new, z, u, armed
         return new, z, u, None
+
+
+ChainSolver = PhaseSolver  # (its name when it ran the spring chain only)
 
 
 _NONE = np.zeros(0, bool)  # "no previous flags" for the compiled arm
@@ -449,26 +469,45 @@ def key_code(key) -> int:
     return 2 * int(key[0]) + int(key[1]) + 4 * MODE_INDEX[key[2]]
 
 
+def valve_derivatives(y, codes, keys, modes, D, row: int, rows_only: bool = False):
+    """(y', y'') of state row `row` (a velocity: the acceleration and the jerk) from the phase ODE,
+    y' = A y + B u, y'' = A y' + B u' (u = [S, S', 1]). rows_only: from A's row and A^2's row
+    alone, O(N T) (long chains); else the whole y' (the arithmetic the short chain's results
+    were made with)."""
+    if not rows_only:
+        yd = np.empty_like(y)
+        ydd = np.empty_like(y)
+    acc = np.empty(y.shape[1])
+    jerk = np.empty(y.shape[1])
+    for code in np.unique(codes).tolist():
+        idx = codes == code
+        A, B = modes(keys[code])
+        u = np.array([D[0, idx], D[1, idx], np.ones(int(idx.sum()))])
+        u1 = np.array([D[1, idx], D[2, idx], np.zeros(int(idx.sum()))])
+        if rows_only:
+            a_row, b_row = A[row], B[row]
+            acc[idx] = a_row @ y[:, idx] + b_row @ u
+            jerk[idx] = (a_row @ A) @ y[:, idx] + (a_row @ B) @ u + b_row @ u1
+        else:
+            yd[:, idx] = A @ y[:, idx] + B @ u
+            ydd[:, idx] = A @ yd[:, idx] + B @ u1
+    if not rows_only:
+        return yd[row], ydd[row]
+    return acc, jerk
+
+
 def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes: np.ndarray, events, stats,
-                  modes, D: np.ndarray | None = None) -> ChainSolution:
-    """The solution's columns from the physical states y (2n, T) and the phase code of each
-    sample (key_code); D: the drive (3+, T) at t when the caller has it."""
+                  modes, D: np.ndarray | None = None, keys=KEYS, rows_only: bool = False) -> ChainSolution:
+    """The solution's columns from the physical states y (2n, T) and the phase of each sample,
+    keys[codes[i]] (default: key_code's numbering); modes(key) -> (A, B); D: the drive (3+, T)
+    at t when the caller has it; rows_only: valve_derivatives'."""
     n = model.n
     if D is None:
         D = np.asarray(drive(t), dtype=float)
     codes = np.asarray(codes)
-    contact = (codes % 4) >= 2
-    seat = (codes % 2) == 1
-    held = codes >= 8
-    yd = np.empty_like(y)
-    ydd = np.empty_like(y)
-    for code in np.unique(codes).tolist():
-        idx = codes == code
-        A, B = modes(KEYS[code])
-        u = np.array([D[0, idx], D[1, idx], np.ones(int(idx.sum()))])
-        u1 = np.array([D[1, idx], D[2, idx], np.zeros(int(idx.sum()))])
-        yd[:, idx] = A @ y[:, idx] + B @ u
-        ydd[:, idx] = A @ yd[:, idx] + B @ u1
+    table = np.array([[k[0], k[1], k[2] == 0] for k in keys], dtype=bool).reshape(-1, 3)
+    contact, seat, held = table[codes, 0], table[codes, 1], table[codes, 2]
+    acc, jerk = valve_derivatives(y, codes, keys, modes, D, n, rows_only)
     s, v = y[0], y[n]
     force = np.where(contact, model.stiffness * (D[0] - model.lash - s) + model.damping * (D[1] - v), 0.0)
     force = np.maximum(force, 0.0)
@@ -476,29 +515,68 @@ def chain_outputs(model: ChainModel, drive, t: np.ndarray, y: np.ndarray, codes:
     phase = np.where(seat, 0, np.where(held, 3, np.where(contact, 1, 2)))
     seat_force = np.where(seat, -model.seat_stiffness * s - model.seat_damping * v, 0.0)
     return ChainSolution(
-        t=t, s=s, v=v, a=yd[n], linkage_force=force, contact=contact, events=tuple(events), stats=stats,
-        jerk=ydd[n], phase=phase, coils=y[1:n], coil_velocities=y[n + 1:],
+        t=t, s=s, v=v, a=acc, linkage_force=force, contact=contact, events=tuple(events), stats=stats,
+        jerk=jerk, phase=phase, coils=y[1:n], coil_velocities=y[n + 1:],
         retainer_force=model.retainer_force(y[:n], y[n:]), seat_force=seat_force,
     )
 
 
-def solve(model: ChainModel, drive, t: np.ndarray, initial_state=None, max_events: int = 10_000) -> ChainSolution:
-    """The chain model over the times t, from rest in static equilibrium at t[0] (or from
-    initial_state = (x0, v0, (contact, seat)))."""
-    t = np.asarray(t, dtype=float)
-    solver = ChainSolver(model, drive, t, max_events=max_events)
-    x0, v0, key = initial_state if initial_state is not None else start_state(model, drive, float(t[0]))
-    solver.run(np.asarray(x0, float), np.asarray(v0, float), key)
+def as_system(model):
+    """The PhaseSystem of a model: a ChainModel wrapped (ChainPhases), any other taken as it is."""
+    return ChainPhases(model) if isinstance(model, ChainModel) else model
+
+
+def run_states(system, drive, t: np.ndarray, y0: np.ndarray, key, max_events: int = 10_000):
+    """Run the solver: (solver, physical states (N, T) at t, the phase code of each sample)."""
+    solver = PhaseSolver(system, drive, t, max_events=max_events)
+    solver.run(np.asarray(y0, float), key)
     out = solver.is_out
     zs = solver.z_nodes[out]
     codes = solver.key_nodes[out]
-    y = np.empty((2 * model.n, zs.shape[0]))
+    if getattr(system, "reduce_pairs", False):
+        # Re(phys z) as one real product of the modal states' (re, im) pairs (a view of the
+        # complex array) with [Re phys', -Im phys'] interleaved: half the arithmetic of the complex
+        # product; phase by phase over the nodes (a phase's nodes follow each other: no copies)
+        zf = solver.z_nodes.view(np.float64)
+        every = solver.key_nodes
+        yT = np.empty((every.size, system.size))
+        mats: dict = {}
+        cuts = np.flatnonzero(np.diff(every)) + 1
+        for a, b in zip(np.r_[0, cuts], np.r_[cuts, every.size]):
+            code = int(every[a])
+            P = mats.get(code)
+            if P is None:
+                phys = solver.modes(solver.keys[code]).phys
+                P = mats[code] = np.empty((2 * phys.shape[1], system.size))
+                P[0::2] = phys.real.T
+                P[1::2] = -phys.imag.T
+            np.matmul(zf[a:b, :P.shape[0]], P, out=yT[a:b])
+        return solver, (yT if bool(np.all(out)) else yT[out]).T, codes
+    y = np.empty((system.size, zs.shape[0]))
     for code in np.unique(codes).tolist():
         idx = codes == code
-        y[:, idx] = (solver.modes(KEYS[code]).phys @ zs[idx].T).real
+        y[:, idx] = (solver.modes(solver.keys[code]).phys @ zs[idx].T).real
+    return solver, y, codes
+
+
+def solve(model, drive, t: np.ndarray, initial_state=None, max_events: int = 10_000):
+    """The model (a ChainModel, or a PhaseSystem such as train.TrainModel) over the times t, from
+    rest in static equilibrium at t[0], or from initial_state: (x0, v0, key) for the chain,
+    (y0, key) for a PhaseSystem."""
+    t = np.asarray(t, dtype=float)
+    system = as_system(model)
+    if initial_state is None:
+        y0, key = system.start_state(drive, float(t[0]))
+    elif isinstance(model, ChainModel):
+        x0, v0, key = initial_state
+        y0 = np.concatenate([np.asarray(x0, float), np.asarray(v0, float)])
+    else:
+        y0, key = initial_state
+    solver, y, codes = run_states(system, drive, t, y0, key, max_events)
+    out = solver.is_out
     stats = {"steps": int(solver.h.size), "events": len(solver.events), "phase_types": len(solver._modes)}
-    return chain_outputs(model, drive, t, y, codes, solver.events, stats,
-                         lambda key: (solver.modes(key).A, solver.modes(key).B), D=solver.D_nodes[:, out])
+    return system.outputs(t, y, solver.keys, codes, solver.events, stats,
+                          lambda key: (solver.modes(key).A, solver.modes(key).B), solver.D_nodes[:, out])
 
 
 class _CosineLift:
@@ -525,6 +603,8 @@ def warm() -> int:
                        clash_compression=2e-3)
     omega = 600.0
     sol = solve(model, Drive(_CosineLift(4e-3), 1.0, omega), np.linspace(0.0, 2.0 * math.pi / omega, 721))
+    # the long chains' root finder (chain_modes.py), on a one-mode problem
+    kernels.aberth(np.array([1j]), np.array([2j]), np.array([0.1]), 1.0, 0.1, 1.0, 4)
     return [e["kind"] for e in sol.events]
 
 

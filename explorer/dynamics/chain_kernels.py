@@ -27,6 +27,8 @@ INV_FACT = np.array([1.0 / math.factorial(k) for k in range(8)])
 FACT = np.array([float(math.factorial(k)) for k in range(7)])
 EPS = np.finfo(np.float64).eps
 STACK = 512  # bisection depth is bounded by the step's width over 1e-15 of the time: ~60 levels
+MAX_INTERVALS = 200_000  # intervals one event search may bisect (a few dozen in practice)
+NOISE = 1e-12  # an event function's rounding, relative to the size of its terms
 
 
 @njit(cache=True)
@@ -139,6 +141,25 @@ def local(lam, mB, rows, ev, z, P, hh, u, g, g1, ddz_abs):
 
 
 @njit(cache=True)
+def local_one(lam, mB, rows, ev, e, z, P, hh, u, ddz_abs):
+    """(g_e, g_e') of one event function and |z''| of every mode at u of a step: `local` for one
+    function (the same operations), O(modes) rather than O(modes x functions)."""
+    S, S1, S2, S3 = drive_at(P, hh, u)
+    m = lam.size
+    a = 0.0
+    b = 0.0
+    for i in range(m):
+        gam = mB[0, i] * S + mB[1, i] * S1 + mB[2, i]
+        gam1 = mB[0, i] * S1 + mB[1, i] * S2
+        dzi = lam[i] * z[i] + gam
+        ddz_abs[i] = abs(lam[i] * dzi + gam1)
+        r = rows[e, i]
+        a += r.real * z[i].real - r.imag * z[i].imag
+        b += r.real * dzi.real - r.imag * dzi.imag
+    return a + ev[0, e] * S + ev[1, e] * S1 + ev[2, e], b + ev[0, e] * S1 + ev[1, e] * S2
+
+
+@njit(cache=True)
 def bound(absmB, absrows, ev, e, ddz_abs, hh, S2b, S3b):
     """M2 >= |g_e''| over a (sub)step of length hh from its start's |z''| (|z_i''(tau)| <=
     |z_i''(0)| + tau max|Gamma_i''|, Re lambda <= 0)."""
@@ -189,11 +210,51 @@ def arm(lam, mB, rows, ev, z, P, hh, u, previous, out):
 
 
 @njit(cache=True)
-def scan(j, z, steps, lam, mB, rows, absrows, absmB, ev, W, E0, group, P, h, S2b, S3b, z_nodes, armed):
+def _group_margin(rows, ev, gs, z):
+    """min |g_e| over the grouped functions e >= gs (functions of the state alone) at the state z,
+    and the size of the terms that made them (their rounding)."""
+    mu = math.inf
+    scale = 0.0
+    for e in range(gs, rows.shape[0]):
+        a = 0.0
+        t = 0.0
+        for i in range(z.size):
+            r = rows[e, i]
+            x = r.real * z[i].real - r.imag * z[i].imag
+            a += x
+            t += abs(x)
+        a += ev[2, e]
+        t += abs(ev[2, e])
+        mu = min(mu, abs(a))
+        scale = max(scale, t)
+    return mu, scale
+
+
+@njit(cache=True)
+def _group_bound(colmax, za, zanc, dza, ddza_abs, mb, hk):
+    """max over the grouped functions of |g_e(tau) - g_e(anchor)| for tau in the step from za:
+    sum_i colmax_i |z_i(tau) - z_i(anchor)|, with |z_i(tau) - z_i(a)| <= tau |z_i'(a)| +
+    tau^2 / 2 (|z_i''(a)| + tau max|Gamma_i''|) (complex moduli bounded by |re| + |im|)."""
+    acc = 0.0
+    for i in range(za.size):
+        d = abs(za[i].real - zanc[i].real) + abs(za[i].imag - zanc[i].imag)
+        d += hk * (abs(dza[i].real) + abs(dza[i].imag)) + 0.5 * hk * hk * (ddza_abs[i] + hk * mb[i])
+        acc += colmax[i] * d
+    return acc
+
+
+@njit(cache=True)
+def scan(j, z, steps, lam, mB, rows, absrows, absmB, ev, W, E0, group, P, h, S2b, S3b, z_nodes, armed, gs, colmax):
     """From the state z at node j, step on while each step is certified free of a sign change of
     every event function: z_(k+1) = E z_k + Q_k with the step's tables, stored in z_nodes[k + 1].
     Returns (number of clear steps, state at the end of the first step that is not clear). The
-    armed flags are updated at the last clear node."""
+    armed flags are updated at the last clear node.
+
+    The functions e < gs are certified one by one (the parabola bounds of `excluded`); those from
+    gs on (functions of the state alone, such as the coil clashes: one per element) together: their
+    smallest distance from zero at an anchor node against one bound of how far all of them can move
+    from there (colmax_i = max_e |rows[e, i]|), O(modes) per step whatever their number; a step that
+    bound does not clear is anchored anew at its start, then tested one by one."""
     m = lam.size
     nE = rows.shape[0]
     za = z.copy()
@@ -206,6 +267,13 @@ def scan(j, z, steps, lam, mB, rows, absrows, absmB, ev, W, E0, group, P, h, S2b
     g1b = np.empty(nE)
     gb_last = np.empty(nE)
     g1b_last = np.empty(nE)
+    zanc = z.copy()
+    anchor_k = -1  # the node whose state zanc holds (-1: none yet), mu its grouped functions' margin
+    mu = 0.0
+    gscale = 0.0
+    const_max = 0.0
+    for e in range(gs, nE):
+        const_max = max(const_max, abs(ev[2, e]))
     done = 0
     k = j
     while k < steps:
@@ -230,10 +298,28 @@ def scan(j, z, steps, lam, mB, rows, absrows, absmB, ev, W, E0, group, P, h, S2b
             gam1_a = mB[0, i] * S10 + mB[1, i] * S20
             dza[i] = lam[i] * za[i] + gam_a
             dzb[i] = lam[i] * zb[i] + gam_b
-            ddza_abs[i] = abs(lam[i] * dza[i] + gam1_a)
+            # |z''| bounded by |re| + |im| (<= sqrt 2 times the modulus): a certificate's bound
+            # needs no square root, and this is the scan's costliest line with one
+            dd = lam[i] * dza[i] + gam1_a
+            ddza_abs[i] = abs(dd.real) + abs(dd.imag)
             mb[i] = absmB[0, i] * s2b + absmB[1, i] * s3b
         clear = True
-        for e in range(nE):
+        one_by_one = gs
+        if gs < nE:
+            if anchor_k < 0:
+                mu, gscale = _group_margin(rows, ev, gs, za)
+                zanc[:] = za
+                anchor_k = k
+            B = _group_bound(colmax, za, zanc, dza, ddza_abs, mb, hk)
+            if not B * (1.0 + 1e-9) + 1e-12 * gscale < mu and anchor_k != k:
+                # anchored at an earlier node: anchor at this step's start and try again
+                mu, gscale = _group_margin(rows, ev, gs, za)
+                zanc[:] = za
+                anchor_k = k
+                B = _group_bound(colmax, za, zanc, dza, ddza_abs, mb, hk)
+            if not B * (1.0 + 1e-9) + 1e-12 * gscale < mu:
+                one_by_one = nE
+        for e in range(one_by_one):
             ga = 0.0
             gbe = 0.0
             g1a = 0.0
@@ -262,14 +348,46 @@ def scan(j, z, steps, lam, mB, rows, absrows, absmB, ev, W, E0, group, P, h, S2b
         for i in range(m):
             z_nodes[k + 1, i] = zb[i]
             za[i] = zb[i]
-        for e in range(nE):
+        for e in range(one_by_one):
             gb_last[e] = gb[e]
             g1b_last[e] = g1b[e]
+        for e in range(one_by_one, nE):
+            gb_last[e] = math.nan  # certified together: their values at the last clear node come below
+        if one_by_one > gs:
+            # tested one by one: their values at the step's end anchor the next step for free
+            mu = math.inf
+            for e in range(gs, nE):
+                mu = min(mu, abs(gb[e]))
+            gscale = const_max
+            for i in range(m):
+                gscale += colmax[i] * (abs(zb[i].real) + abs(zb[i].imag))
+            zanc[:] = zb
+            anchor_k = k + 1
         done += 1
         k += 1
     if done > 0:
+        kl = j + done - 1
+        if gs < nE and math.isnan(gb_last[nE - 1]):
+            # the grouped functions' values and slopes at the last clear node (the end of step
+            # kl), in the one-by-one test's arithmetic
+            hk = h[kl]
+            p0, p1, p2, p3, p4, p5 = P[0, kl], P[1, kl], P[2, kl], P[3, kl], P[4, kl], P[5, kl]
+            Se = p0 + p1 + p2 + p3 + p4 + p5
+            S1e = (p1 + 2.0 * p2 + 3.0 * p3 + 4.0 * p4 + 5.0 * p5) / hk
+            for i in range(m):
+                dzb[i] = lam[i] * za[i] + (mB[0, i] * Se + mB[1, i] * S1e + mB[2, i])
+            for e in range(gs, nE):
+                gbe = 0.0
+                g1be = 0.0
+                for i in range(m):
+                    rr, ri = rows[e, i].real, rows[e, i].imag
+                    gbe += rr * za[i].real - ri * za[i].imag
+                    g1be += rr * dzb[i].real - ri * dzb[i].imag
+                al, be = ev[0, e], ev[1, e]
+                gb_last[e] = gbe + (al * Se + be * S1e + ev[2, e])
+                g1b_last[e] = g1be + (al * S1e + be * ((2.0 * p2 + 6.0 * p3 + 12.0 * p4 + 20.0 * p5) / hk**2))
         # the functions' values at the last clear node arm or disarm them
-        armed_from(ev, gb_last, g1b_last, h[j + done - 1], armed, armed)
+        armed_from(ev, gb_last, g1b_last, h[kl], armed, armed)
     return done, zb
 
 
@@ -313,8 +431,8 @@ def _hermite_root(a, b, fa, fb, da, db):
 def _g_one(lam, mB, rows, ev, e, z0, P, u0, u, hj, F, c, zs, g, g1, dd):
     """(sign g_e, sign g_e') at u, the state from z0 at u0."""
     _state(lam, mB, z0, P, u0, u, hj, F, c, zs)
-    local(lam, mB, rows, ev, zs, P, hj, u, g, g1, dd)
-    return g[e] * ev[3, e], g1[e] * ev[3, e]
+    ge, g1e = local_one(lam, mB, rows, ev, e, zs, P, hj, u, dd)
+    return ge * ev[3, e], g1e * ev[3, e]
 
 
 @njit(cache=True)
@@ -348,9 +466,16 @@ def _newton(lam, mB, rows, ev, e, z0, P, u0, hj, a, b, fa, fb, start, F, c, zs, 
 
 @njit(cache=True)
 def _first_crossing(lam, mB, rows, absrows, absmB, ev, e, armed, z0, P, u0, u1, hj, S2b, S3b, tnode,
-                    F, c, g, g1, dd):
+                    F, c, g, g1, dd, noise):
     """First u in (u0, u1] where event e crosses in its direction while armed (NaN: none).
-    Bisection of the intervals not certified free, Newton on a certified monotone crossing."""
+    Bisection of the intervals not certified free, Newton on a certified monotone crossing.
+
+    noise: the function's rounding (NOISE times the size of its terms). A function within it of
+    zero throughout an interval is zero there to the arithmetic's resolution: not armed, it
+    cannot arm (it would have to reach below -noise), armed it cannot fire (above +noise); such
+    intervals are done. (Two parts flying free side by side keep their gap at 0 to within a
+    rounding: without this the bisection would split that interval to its last digit.) The
+    intervals are bounded by MAX_INTERVALS all the same."""
     m = lam.size
     sa = np.empty(STACK)
     sb = np.empty(STACK)
@@ -366,21 +491,30 @@ def _first_crossing(lam, mB, rows, absrows, absmB, ev, e, armed, z0, P, u0, u1, 
     za_s[0] = z0
     _state(lam, mB, z0, P, u0, u1, hj, F, c, zb_s[0])
     top = 1
+    intervals = 0
     while top > 0:
+        intervals += 1
+        if intervals > MAX_INTERVALS:
+            raise RuntimeError("chain event search: too many intervals (an event function stuck at its zero)")
         top -= 1
         a, b = sa[top], sb[top]
         za[:] = za_s[top]
         zb[:] = zb_s[top]
-        local(lam, mB, rows, ev, za, P, hj, a, g, g1, dda)
-        ga, g1a = g[e] * sign, g1[e] * sign
+        ga, g1a = local_one(lam, mB, rows, ev, e, za, P, hj, a, dda)
+        ga, g1a = ga * sign, g1a * sign
         if not armed and ga < 0.0 and abs(ga) > 1e-9 * abs(g1a) * hj:
             # on the near side, by more than a rounding (armed_from's rule): armed from here on
             # (the intervals come in time order)
             armed = True
-        local(lam, mB, rows, ev, zb, P, hj, b, g, g1, dd)
-        gb, g1b = g[e] * sign, g1[e] * sign
+        gb, g1b = local_one(lam, mB, rows, ev, e, zb, P, hj, b, dd)
+        gb, g1b = gb * sign, g1b * sign
         width = (b - a) * hj
         M2 = bound(absmB, absrows, ev, e, dda, width, S2b, S3b)
+        reach = 0.5 * M2 * width * width * (1.0 + 1e-9)
+        if not armed and min(ga, ga + g1a * width) - reach >= -noise:
+            continue  # cannot get below -noise here: cannot arm, so cannot fire
+        if armed and max(ga, ga + g1a * width) + reach <= noise:
+            continue  # cannot rise above +noise here
         if not armed:
             if ga >= 0.0 and gb > 0.0 and excluded(ga, g1a, gb, g1b, M2, width):
                 continue
@@ -448,12 +582,16 @@ def search_step(lam, mB, rows, absrows, absmB, ev, armed, z, P, hj, S2b, S3b, tn
     best_e = -1
     g = np.empty(nE)
     g1 = np.empty(nE)
+    S0, S10, _, _ = drive_at(P, hj, u0)
     for e in range(nE):
         M2 = bound(absmB, absrows, ev, e, dda, width, S2b, S3b)
         if excluded(ga[e], g1a[e], gb[e], g1b[e], M2, width):
             continue
+        size = abs(ev[0, e] * S0) + abs(ev[1, e] * S10) + abs(ev[2, e])
+        for i in range(m):
+            size += absrows[e, i] * abs(z[i])
         r = _first_crossing(lam, mB, rows, absrows, absmB, ev, e, armed[e], z, P, u0, u1, hj, S2b, S3b, tnode,
-                            F, c, g, g1, dd)
+                            F, c, g, g1, dd, NOISE * size)
         if not math.isnan(r) and r < best:
             best, best_e = r, e
     return best, best_e
@@ -467,3 +605,65 @@ def advance_to(lam, mB, z0, P, u0, u, hj):
     out = np.empty(lam.size, dtype=np.complex128)
     _state(lam, mB, z0, P, u0, u, hj, F, c, out)
     return out
+
+
+@njit(cache=True)
+def aberth(lam, p, b2, ms, c0, k0, max_iterations):
+    """The roots of the long chain's secular function (chain_modes.py) in the upper half plane by
+    Aberth's iteration from the starts lam (changed in place): each root's Newton correction
+    P/P' of the characteristic polynomial P = f prod_k d_k, from g = d_k f with its nearest pole
+    p_k removed (d factored, (lambda - p)(lambda - conj p): nothing cancels near a pole), repelled
+    from the other roots' approximations and their conjugates. Returns the iterations taken
+    (max_iterations + 1: not converged to 4 eps of each root)."""
+    n = lam.size
+    N = p.size
+    eps = np.finfo(np.float64).eps
+    step = np.empty(n, dtype=np.complex128)
+    for it in range(max_iterations):
+        done = True
+        for i in range(n):
+            L = lam[i]
+            k = 0
+            best = math.inf
+            for l in range(N):
+                dist = abs(L - p[l])
+                if dist < best:
+                    best, k = dist, l
+            S = 0.0j
+            S1 = 0.0j
+            rest = 0.0j
+            dk = 0.0j
+            ddk = 0.0j
+            for l in range(N):
+                a = L - p[l]
+                c = L - p[l].conjugate()
+                D = a * c
+                dD = a + c
+                if l == k:
+                    dk, ddk = D, dD
+                    continue
+                iD = 1.0 / D
+                q = b2[l] * iD
+                r = dD * iD
+                S += q
+                S1 += q * r
+                rest += r
+            l2 = L * L
+            fk = ms * l2 + c0 * L + k0 - l2 * l2 * S
+            dfk = 2.0 * ms * L + c0 - 4.0 * l2 * L * S + l2 * l2 * S1
+            g = dk * fk - l2 * l2 * b2[k]
+            dg = ddk * fk + dk * dfk - 4.0 * l2 * L * b2[k]
+            Nw = 1.0 / (dg / g + rest)
+            rep = 0.0j
+            for j in range(n):
+                if j != i:
+                    rep += 1.0 / (L - lam[j])
+                rep += 1.0 / (L - lam[j].conjugate())
+            step[i] = Nw / (1.0 - Nw * rep)
+        for i in range(n):
+            lam[i] -= step[i]
+            if not (abs(step[i]) <= 4.0 * eps * abs(lam[i])):
+                done = False
+        if done:
+            return it + 1
+    return max_iterations + 1

@@ -1,13 +1,21 @@
-"""The spring-chain model (chain.py) with scipy's solve_ivp: the reference for chain_exact.py.
+"""The models of the piecewise-exact solver (chain_exact.py) with scipy's solve_ivp: its reference.
 
-The same phases and rules: in each phase y' = A y + B [S, S', 1] with the analytic drive (not
-its step polynomials), integrated by solve_ivp (DOP853 by default) with the phase's event
-functions; at an event the phase switches and the integration restarts there. The step is
-bounded by a quarter of the fastest period of the phase, and the integration restarts at the
-valve's apex in flight and at the gap's minimum while the linkage is unloaded (solve_ivp sees
-crossings only between its steps: a hop shorter than a step would go unseen). With friction:
-the valve's velocity reaching 0 (stick or turn by chain_exact.stick_or_turn) and the held
-valve's release by its net force, the held phase's state matrix that of chain_exact."""
+Any PhaseSystem (phase_system.py: the spring chain, the valve train) runs here with the same
+phase types, event functions and transitions: in each phase y' = A y + B [S, S', 1] with the
+analytic drive (not its step polynomials), integrated by solve_ivp (DOP853 by default) with the
+phase's event functions; at an event the model's apply_event decides the next phase and the
+integration restarts there. The step is bounded by a quarter of the fastest period of the phase
+(its oscillating modes; a real eigenvalue's decay is left to the error control).
+
+solve_ivp sees a crossing only between its steps. Two guards keep a short excursion from going
+unseen: (1) a function the model marks `guard` (a seat, a contact's re-contact) gets a restart at
+its turning point towards its crossing (g' = 0 crossing in the event's direction: the valve's
+apex in flight, the gap's minimum while a contact is open), so a hop shorter than a step is split;
+not right after a guard's own restart (it is 0 there and would fire again at once); (2) a function
+that has just fired without changing the phase (a coil clash) waits for its return to the near side
+(a restart there), as the exact solver disarms it; so does a function that starts a phase within
+rounding of its zero (chain_kernels.NOISE of the size of its terms) and not moving to its near
+side (the check valve on its threshold at rest): the exact solver's arming rule."""
 
 from __future__ import annotations
 
@@ -17,24 +25,36 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from .chain import ChainModel
-from .chain_exact import chain_outputs, key_code, phase_modes, start_state, stick_or_turn
+from .chain_exact import as_system
+from .chain_kernels import NOISE
 
 
-def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float = 1e-10,
+def solve(model, drive, t: np.ndarray, scipy_method: str = "DOP853", rtol: float = 1e-10,
           atol: float = 1e-13, max_step_fraction: float = 0.25, initial_state=None, max_events: int = 10_000):
+    """The model (a ChainModel or a PhaseSystem) over the times t; initial_state as chain_exact.solve."""
     t = np.asarray(t, dtype=float)
-    n = model.n
-    x0, v0, key = initial_state if initial_state is not None else start_state(model, drive, float(t[0]))
-    y = np.concatenate([x0, v0])
+    system = as_system(model)
+    N = system.size
+    if initial_state is None:
+        y, key = system.start_state(drive, float(t[0]))
+    elif isinstance(model, ChainModel):
+        x0, v0, key = initial_state
+        y = np.concatenate([np.asarray(x0, float), np.asarray(v0, float)])
+    else:
+        y, key = initial_state
+        y = np.asarray(y, float).copy()
     cache: dict = {}
 
     def modes(k):
         if k not in cache:
-            md = phase_modes(model, *k)
-            cache[k] = (md.A, md.B, float(np.max(np.abs(md.lam))))
+            md = system.phase_modes(k)
+            # the step bound: a quarter of the fastest period; a real eigenvalue (a leak's, a
+            # refill's decay) has no period, and DOP853's error control follows its decay itself
+            osc = np.abs(md.lam[np.abs(md.lam.imag) > 1e-6 * np.abs(md.lam)])
+            cache[k] = (md.A, md.B, float(np.max(osc)) if osc.size else float(np.max(np.abs(md.lam))))
         return cache[k]
 
-    out = np.empty((2 * n, t.size))
+    out = np.empty((N, t.size))
     keys: list = [None] * t.size
     events: list[dict] = []
     t_now = float(t[0])
@@ -43,102 +63,114 @@ def solve(model: ChainModel, drive, t: np.ndarray, scipy_method: str = "DOP853",
     i_next = 1
     nfev = 0
     last_guard = None
-    clashed: set[int] = set()
+    # (kind, index) -> margin of the functions waiting for their return to the near side (a function
+    # that fired without a phase change, or one that began its phase on its zero): the return is
+    # where it is back by more than its rounding (margin), as the exact solver arms
+    waiting: dict = {}
+    fresh = True  # a phase begins (the run's start, or an event): its functions are armed by the rule below
     while i_next < t.size:
         A, B, rho = modes(key)
-        contact, seat, mode = key
+        functions = system.event_functions(key)
 
         def rhs(tt, yy, A=A, B=B):
             D = drive(np.array([tt]))
             return A @ yy + B @ np.array([D[0, 0], D[1, 0], 1.0])
 
-        funcs, kinds = [], []
+        # a phase's function within rounding of its zero and not moving to its near side is not
+        # armed (the exact solver's rule): it waits for its return, or it would fire on a rounding
+        D0 = drive(np.array([t_now]))
+        u0 = np.array([D0[0, 0], D0[1, 0], 1.0])
+        yd0 = A @ y + B @ u0
+        yd0_size = np.abs(A) @ np.abs(y) + np.abs(B) @ np.abs(u0)
+        for e in functions:
+            if not fresh and (e.kind, e.index) not in waiting:
+                continue
+            g0 = float(e.coef @ y) + e.alpha * float(D0[0, 0]) + e.beta * float(D0[1, 0]) + e.const
+            g1 = float(e.coef @ yd0) + e.alpha * float(D0[1, 0]) + e.beta * float(D0[2, 0])
+            size = (float(np.abs(e.coef) @ np.abs(y)) + abs(e.alpha * float(D0[0, 0])) + abs(e.beta * float(D0[1, 0]))
+                    + abs(e.const))
+            # (the slope's rounding: that of the terms making y', not y' itself, which is a rounding at rest)
+            size1 = float(np.abs(e.coef) @ yd0_size) + abs(e.alpha * float(D0[1, 0])) + abs(e.beta * float(D0[2, 0]))
+            if (e.kind, e.index) in waiting:
+                waiting[(e.kind, e.index)] = NOISE * size
+            elif abs(g0) <= NOISE * size and not e.sign * g1 < -NOISE * size1:
+                # on its zero and not moving in by more than a rounding (parts at rest against
+                # each other with no force between them)
+                waiting[(e.kind, e.index)] = NOISE * size
+        funcs, roles = [], []
 
-        def add(kind, func, direction):
+        def add(role, func, direction):
             func.terminal, func.direction = True, direction
             funcs.append(func)
-            kinds.append(kind)
+            roles.append(role)
 
-        if contact:
-            add("separation", lambda tt, yy: _link_force(model, drive, tt, yy), -1.0)
-        else:
-            add("re-contact", lambda tt, yy: float(drive(np.array([tt]))[0, 0]) - model.lash - yy[0], 1.0)
-        if mode == 0:  # held by friction: released when the net force leaves [-R, R]
-            coef, alpha, beta, const = model.net_force_row(contact, seat)
-
-            def net(tt, yy, coef=coef, alpha=alpha, beta=beta, const=const):
+        for e in functions:
+            def g(tt, yy, e=e):
                 D = drive(np.array([tt]))
-                return float(coef @ yy) + alpha * float(D[0, 0]) + beta * float(D[1, 0]) + const
+                return float(e.coef @ yy) + e.alpha * float(D[0, 0]) + e.beta * float(D[1, 0]) + e.const
 
-            add("release:1", lambda tt, yy: net(tt, yy) - model.friction, 1.0)
-            add("release:-1", lambda tt, yy: net(tt, yy) + model.friction, -1.0)
-        elif seat:
-            add("lift-off", lambda tt, yy: yy[0], 1.0)
-        else:
-            add("seat", lambda tt, yy: yy[0], -1.0)
-        if mode != 0 and model.friction > 0.0:
-            add("velocity-zero", lambda tt, yy: yy[n], -float(mode))
-        # guards: solve_ivp sees a crossing only between its steps, and a hop of the valve off its
-        # seat (or a touch of the linkage) shorter than a step goes unseen. A restart at the
-        # extremum in between (the valve's apex, the gap's minimum) splits such a pair
-        # (not right after a guard's restart: it is 0 there and would fire again at once, and on
-        # the base circle, S' = 0, both are 0 at the valve's apex)
-        if not seat and mode != 0 and last_guard is None:
-            add("guard-apex", lambda tt, yy: yy[n], -1.0)
-        if not contact and last_guard is None:
-            add("guard-gap", lambda tt, yy: float(drive(np.array([tt]))[1, 0]) - yy[n], 1.0)
+            if (e.kind, e.index) in waiting:
+                margin = e.sign * waiting[(e.kind, e.index)]
+
+                def back(tt, yy, g=g, margin=margin):
+                    return g(tt, yy) + margin
+
+                add(("return", e), back, -e.sign)
+                continue
+            add(("event", e), g, e.sign)
+        # the guards after every event function: at a tie (the valve's apex is where its velocity
+        # reaches 0) the event wins
+        for e in functions:
+            if e.guard and last_guard is None and (e.kind, e.index) not in waiting:
+                def dg(tt, yy, e=e, A=A, B=B):
+                    D = drive(np.array([tt]))
+                    yd = A @ yy + B @ np.array([D[0, 0], D[1, 0], 1.0])
+                    return float(e.coef @ yd) + e.alpha * float(D[1, 0]) + e.beta * float(D[2, 0])
+
+                add(("guard", e), dg, e.sign)
         last_guard = None
-        if math.isfinite(model.clash_compression):
-            for j in range(n):
-                # an element that has clashed waits until it comes back below the clash
-                # compression (a restart there), as the exact solver disarms its function
-                add(f"guard-unclash:{j}" if j in clashed else f"coil-clash:{j}",
-                    (lambda tt, yy, j=j: yy[j] - (yy[j + 1] if j + 1 < n else 0.0) - model.clash_compression),
-                    -1.0 if j in clashed else 1.0)
         t_eval = t[i_next:]
         sol = solve_ivp(rhs, (t_now, float(t[-1])), y, method=scipy_method, t_eval=t_eval, events=funcs,
                         rtol=rtol, atol=atol, max_step=max_step_fraction * 2.0 * math.pi / rho)
         nfev += sol.nfev
         m = int(np.size(sol.t))  # (scipy returns lists when a segment ends before any t_eval)
         if m:
-            out[:, i_next:i_next + m] = np.asarray(sol.y).reshape(2 * n, m)
+            out[:, i_next:i_next + m] = np.asarray(sol.y).reshape(N, m)
         keys[i_next:i_next + m] = [key] * m
         i_next += m
         if sol.status != 1:
             break
-        hit = min((float(te[0]), k) for k, te in enumerate(sol.t_events) if te.size)
-        t_ev, k = hit
+        t_ev, k = min((float(te[0]), k) for k, te in enumerate(sol.t_events) if te.size)
         y = sol.y_events[k][0].copy()
-        kind = kinds[k]
-        if kind.startswith("guard"):
-            if kind.startswith("guard-unclash"):
-                clashed.discard(int(kind.split(":")[1]))
-            t_now, last_guard = t_ev, kind
-            continue
-        if kind == "velocity-zero":
-            D = drive(np.array([t_ev]))
-            kind, mode = stick_or_turn(model, y, float(D[0, 0]), float(D[1, 0]), contact, seat)
-            y[n] = 0.0
-        elif kind.startswith("release"):
-            mode = int(kind.split(":")[1])
-        item = {"kind": kind.split(":")[0], "time_s": t_ev}
-        if kind == "seat":
-            item["velocity_m_s"] = float(y[n])
-        if kind.startswith("coil-clash"):
-            item["element"] = int(kind.split(":")[1])
-            clashed.add(item["element"])
-        events.append(item)
-        if len(events) > max_events:
-            raise RuntimeError(f"more than {max_events} events in one run")
-        key = ({"separation": False, "re-contact": True}.get(kind, contact),
-               {"lift-off": False, "seat": True}.get(kind, seat), mode)
+        role, e = roles[k]
         t_now = t_ev
+        fresh = role == "event"
+        if role == "guard":
+            last_guard = e
+            continue
+        if role == "return":
+            waiting.pop((e.kind, e.index), None)
+            continue
+        D = drive(np.array([t_ev]))
+        tr = system.apply_event(key, e, y, float(D[0, 0]), float(D[1, 0]))
+        if tr.record is not None:
+            item = {"kind": tr.record["kind"], "time_s": t_ev}
+            item.update((kk, v) for kk, v in tr.record.items() if kk != "kind")
+            events.append(item)
+            if len(events) > max_events:
+                raise RuntimeError(f"more than {max_events} events in one run")
+        if tr.key == key:
+            waiting[(e.kind, e.index)] = 0.0  # (its margin is set at the segment's start)
+        y = tr.y
+        key = tr.key
     stats = {"rhs_evaluations": int(nfev), "events": len(events)}
-    codes = np.array([key_code(k) for k in keys])
-    return chain_outputs(model, drive, t, out, codes, events, stats, lambda k: modes(k)[:2])
-
-
-def _link_force(model, drive, tt, yy) -> float:
-    D = drive(np.array([tt]))
-    n = model.n
-    return model.stiffness * (float(D[0, 0]) - model.lash - yy[0]) + model.damping * (float(D[1, 0]) - yy[n])
+    table: list = []
+    index: dict = {}
+    codes = np.empty(t.size, dtype=np.int16)
+    for i, k in enumerate(keys):
+        if k not in index:
+            index[k] = len(table)
+            table.append(k)
+        codes[i] = index[k]
+    D_out = np.asarray(drive(t), dtype=float)
+    return system.outputs(t, out, table, codes, events, stats, lambda k: modes(k)[:2], D_out)

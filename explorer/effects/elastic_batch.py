@@ -71,6 +71,8 @@ def accepts(scene, shared) -> bool:
         return False
     if scene.spring.elements > 0 or solvers.solver(scene.solver.method).batch_entry is None:
         return False
+    if scene.linkage.elements or getattr(scene, "hla", None) is not None:  # a train of parts: the shared path
+        return False
     if shared.lift is None:
         shared.lift = scene.gear_plugin.build_lift(scene)
     return getattr(shared.lift, "linkage_stiffness", None) is None

@@ -17,6 +17,15 @@ from ..core.plugins import Registration, Registry, resolve
 
 
 @dataclass(frozen=True)
+class SectionFigures:
+    """Sweep figures an effect gives when the scene has an owned section (EffectSpec item 6)."""
+
+    section: str  # a Scene field (an OWNED_SECTIONS name): the figures when it is not None
+    figures: tuple[str, ...]
+    row: Callable | str  # "module:function" (a Result) -> {figure: float}, NaN where there is none
+
+
+@dataclass(frozen=True)
 class EffectSpec:
     """One line of the effect table: an effect a scene may list.
 
@@ -44,6 +53,9 @@ class EffectSpec:
        its figures-only form "module:function" (ctx, cache) -> EffectOutput, which computes just what
        rows and later effects read and keeps across the runs of a sweep what does not change between
        them in `cache` (explorer.effects.pipeline.figures); None: the sweep runs the effect itself.
+       `section_figures` (SectionFigures): figures a row holds only when the scene has an owned
+       section, with the row function that gives them (the elastic effect's adjuster figures with
+       [hla]); a scene without the section has neither.
     7. Import nothing heavy at module level: the table names the module.
     """
 
@@ -56,6 +68,7 @@ class EffectSpec:
     sweep_figures: tuple[str, ...] = ()  # item 6
     row: Callable | str | None = None
     figures: Callable | str | None = None
+    section_figures: tuple[SectionFigures, ...] = ()
     description: str = ""
 
     def run(self) -> Callable:
@@ -64,11 +77,20 @@ class EffectSpec:
     def declares(self, column: str) -> bool:
         return declared(column, self.columns)
 
+    def section_figures_of(self, scene) -> tuple[SectionFigures, ...]:
+        """Its section_figures whose section the scene has."""
+        return tuple(extra for extra in self.section_figures if getattr(scene, extra.section, None) is not None)
+
 
 _KIN = "explorer.effects.kinematics"
 _ELASTIC_FIGURES = ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
                     "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
                     "largest_bounce_m", "residual_deviation_m", "residual_amplitude_m")
+# with a hydraulic lash adjuster ([hla], effects/train_elastic.py): how far the valve stays off its seat over
+# the last revolution's base circle (0: it seats; where a speed sweep shows pump-up beginning), the lash the
+# adjuster took up, its plunger's travel over that revolution and its chamber's peak pressure
+_HLA_FIGURES = ("pump_up_valve_lift_m", "hla_lash_taken_up_m", "hla_plunger_travel_per_revolution_m",
+                "hla_chamber_pressure_max_Pa")
 
 EFFECTS: Registry[EffectSpec] = Registry("effect", {spec.name: spec for spec in (
     EffectSpec("kinematics", f"{_KIN}:kinematics_effect",
@@ -95,8 +117,12 @@ EFFECTS: Registry[EffectSpec] = Registry("effect", {spec.name: spec for spec in 
                columns=("valve_lift_m", "valve_velocity_m_s", "valve_accel_m_s2", "valve_jerk_m_s3", "linkage_force_N",
                         "camshaft_back_pressure_N", "deviation_from_drive_m", "valve_in_contact", "valve_phase",
                         "spring_force_retainer_N", "spring_force_static_N", "surge_force_N", "seat_force_N",
-                        "coil_*_displacement_m"),
+                        "coil_*_displacement_m",
+                        # a train of parts and its joints, an adjuster (effects/train_elastic.py, issue #25)
+                        "part_*_displacement_m", "part_*_velocity_m_s", "part_*_accel_m_s2", "contact_*_force_N",
+                        "contact_*_closed", "hla_plunger_travel_m", "hla_chamber_pressure_Pa", "hla_check_valve_open"),
                sweep_figures=_ELASTIC_FIGURES, row="explorer.effects.elastic_events:elastic_row",
+               section_figures=(SectionFigures("hla", _HLA_FIGURES, "explorer.effects.train_elastic:hla_row"),),
                description="the valve driven through the elastic linkage (lift-off, float, bounce, seat impact, surge)"),
     EffectSpec("gear", "explorer.effects.gear:gear_effect", depends=("kinematics",),
                description="what is particular to the scene's gear (its report)"),
@@ -139,7 +165,14 @@ def order(effects) -> list[str]:
     return out
 
 
-def sweep_figures(effects) -> tuple[str, ...]:
-    """The sweep-row figures of the effects (with their dependencies), in table order."""
+def sweep_figures(effects, scene=None) -> tuple[str, ...]:
+    """The sweep-row figures of the effects (with their dependencies), in table order; with the
+    scene, those of the sections it has too (EffectSpec.section_figures) after each effect's own."""
     wanted = set(order(effects))
-    return tuple(f for name, spec in EFFECTS.items() if name in wanted for f in spec.sweep_figures)
+    out: list[str] = []
+    for name, spec in EFFECTS.items():
+        if name in wanted:
+            out.extend(spec.sweep_figures)
+            if scene is not None:
+                out.extend(f for extra in spec.section_figures_of(scene) for f in extra.figures)
+    return tuple(out)

@@ -73,7 +73,7 @@ from .valve_end import TipContact, ValveEnd, make_valve_end
 
 TWO_PI = 2.0 * math.pi
 ROLLER, PAD = "roller", "pad"
-KINDS = ("finger-follower", "rocker")
+KINDS = ("finger", "rocker")  # the arm: an end-pivot finger or a centre-pivot rocker (its part name)
 
 
 @dataclass(frozen=True)
@@ -225,7 +225,7 @@ class ArmGear:
     law: Any = None  # LiftCurve: the valve-referred lift, lash included (synthesis)
     motion: Any = None  # ContourMotion of psi (analysis)
     contour: Any = None
-    kind: str = "finger-follower"
+    kind: str = "finger"  # KINDS
 
     def arm_angle(self, theta) -> Jet:
         theta = np.asarray(theta, dtype=float)
@@ -424,7 +424,7 @@ def tip_stress(valve: ValveEnd, tip: TipContact, force, e_star: float, width: fl
 def make_arm_gear(*, base_radius: float, pivot, cam_side: CamSide, branch: int, valve_arm: float,
                   valve_angle: float, valve_pad_radius: float, valve_axis: float | None = None,
                   valve_axis_point=None, tip_radius: float | None = None, law=None, contour=None,
-                  kind: str = "finger-follower", file: str = "<memory>", arm_key: str = "gear.arm",
+                  kind: str = "finger", file: str = "<memory>", arm_key: str = "gear.arm",
                   pad_key: str = "gear.valve_pad", radius_key: str = "", check: bool = True,
                   n: int = 3600) -> ArmGear:
     """The arm gear from its geometry and either a valve-lift law (synthesis) or a contour

@@ -1,20 +1,21 @@
-"""Scene keys of today's valve trains (proposed, issue #24 phase A): [gear.*] sub-tables read
-into SI dicts, and the gears built from them.
-
-Phase B wires these into the scene loader and the gear registry; until then the draft scenes in
-docs/scenes-draft/ are read by the tests through `parse_parts` and `build_modern_gear`. The keys,
+"""Scene keys of today's valve trains (issue #24): [gear.*] sub-tables read into SI dicts, and the
+gears built from them; the gear plug-ins (gears/bucket_tappet.py, finger_follower.py,
+rocker_arm.py) call them, keyed by part name ("bucket", "finger", "rocker"), so no follower type is
+named here. The keys,
 units, ranges and defaults are listed in docs/theory/modern-gears.md. Points are [x, y] pairs
 from the camshaft's centre (x to the right, y up, the cam turning counter-clockwise), angles
 counter-clockwise from +x, lengths with units as everywhere.
 
-bucket-tappet    follower.base_radius; [gear.tappet] face_diameter, face_radius (absent: a flat
+bucket           follower.base_radius; [gear.tappet] face_diameter, face_radius (absent: a flat
                  face), offset (along the camshaft), cam_width, face_margin
-finger-follower  follower.base_radius, follower.roller_radius (cam_side = "roller");
+finger           follower.base_radius, follower.roller_radius (cam_side = "roller");
                  [gear.finger] pivot (the lash adjuster's ball), arm, side, cam_side, pad_radius
-                 (cam_side = "pad"; absent: flat), face_angle, width; [gear.valve_pad] arm, angle,
+                 (cam_side = "pad"; absent: flat), face_angle, width, stiffness (the arm's and the lash
+                 adjuster's, at the roller or pad along its travel); [gear.valve_pad] arm, angle,
                  radius; [gear.valve] axis, axis_point, tip_radius; [gear.lash_adjuster] (drawing)
 rocker           with [gear.lifter] the OHV pushrod train: [gear.lifter] type, face_radius,
-                 roller_radius, offset, socket_height, width; [gear.rocker] pivot, cup (the
+                 roller_radius, offset, socket_height, width, stiffness (lifter and pushrod, along the
+                 lifter's axis); [gear.rocker] pivot, cup (the
                  pushrod's upper ball with the valve closed); without it the OHC rocker:
                  [gear.rocker] as [gear.finger]. [gear.valve_pad] angle is measured from the
                  rocker's reference direction (pivot -> roller, pad crown or cup).
@@ -30,7 +31,10 @@ from ..core.ranges import check_range
 from ..core.reader import Table
 from ..core.units import to_si
 
-MODERN_TYPES = ("bucket-tappet", "finger-follower", "rocker")
+# what parse_parts and build_modern_gear take (part names, not follower types: this module is shared
+# by the gears, and the plug-in check keeps a follower type out of shared modules): the bucket, or the arm (an end-pivot finger, a
+# centre-pivot rocker with or without [gear.lifter]); the follower types are their gears' to name
+MODERN_TYPES = ("bucket", "finger", "rocker")
 SIDES = {"left": 1, "right": -1}
 CAM_SIDES = ("roller", "pad")
 LIFTER_TYPES = ("flat", "roller")
@@ -67,7 +71,7 @@ def _tappet(t: Table) -> dict:
 
 
 def _arm(t: Table) -> dict:
-    t.reject_unknown(("pivot", "arm", "side", "cam_side", "pad_radius", "face_angle", "width"))
+    t.reject_unknown(("pivot", "arm", "side", "cam_side", "pad_radius", "face_angle", "width", "stiffness"))
     cam_side = t.string("cam_side", "roller", choices=CAM_SIDES)
     if cam_side == "roller":
         for name in ("pad_radius", "face_angle"):
@@ -81,6 +85,7 @@ def _arm(t: Table) -> dict:
         "pad_radius": _optional(t, "pad_radius", positive=True),
         "face_angle": t.quantity("face_angle", "angle", -0.5 * math.pi),
         "width": _optional(t, "width", positive=True),
+        "stiffness": _optional(t, "stiffness", "stiffness", positive=True),
     }
 
 
@@ -111,9 +116,9 @@ def _lash_adjuster(t: Table) -> dict:
 def _lifter(t: Table) -> dict:
     kind = t.string("type", "flat", choices=LIFTER_TYPES)
     if kind == "flat":
-        t.reject_unknown(("type", "face_radius", "socket_height", "width"))
+        t.reject_unknown(("type", "face_radius", "socket_height", "width", "stiffness"))
     else:
-        t.reject_unknown(("type", "roller_radius", "offset", "socket_height", "width"))
+        t.reject_unknown(("type", "roller_radius", "offset", "socket_height", "width", "stiffness"))
     return {
         "type": kind,
         "face_radius": _optional(t, "face_radius", positive=True),
@@ -121,6 +126,7 @@ def _lifter(t: Table) -> dict:
         "offset": t.quantity("offset", "length", 0.0),
         "socket_height": t.quantity("socket_height", "length", nonnegative=True),
         "width": _optional(t, "width", positive=True),
+        "stiffness": _optional(t, "stiffness", "stiffness", positive=True),
     }
 
 
@@ -133,9 +139,9 @@ def parse_parts(table: Table, kind: str) -> dict[str, Mapping[str, Any]]:
     """[gear] of a modern gear -> {sub-table: SI dict}; one-line InputErrors naming the key."""
     if kind not in MODERN_TYPES:
         raise InputError(table.file, "follower.type", f"not one of today's valve trains: {kind!r}")
-    if kind == "bucket-tappet":
+    if kind == "bucket":
         parsers, optional = {"tappet": _tappet}, set()
-    elif kind == "finger-follower":
+    elif kind == "finger":
         parsers = {"finger": _arm, "valve_pad": _valve_pad, "valve": _valve, "lash_adjuster": _lash_adjuster}
         optional = {"valve", "lash_adjuster"}
     else:
@@ -164,7 +170,7 @@ def build_modern_gear(kind: str, parts: Mapping[str, Mapping[str, Any]], *, base
     from .pushrod import Lifter, make_pushrod_train
 
     law = None if contour is not None else lift
-    if kind == "bucket-tappet":
+    if kind == "bucket":
         p = parts["tappet"]
         tappet = Tappet(base_radius=base_radius, face_radius=p["face_radius"] or math.inf,
                         face_diameter=p["face_diameter"], offset=p["offset"], cam_width=p["cam_width"],
@@ -187,7 +193,7 @@ def build_modern_gear(kind: str, parts: Mapping[str, Mapping[str, Any]], *, base
         common.pop("n")
         return make_pushrod_train(base_radius=base_radius, lifter=lifter, rocker_pivot=r["pivot"], cup=r["cup"],
                                   valve_pad_centre=centre, n=n, **common)
-    name = "finger" if kind == "finger-follower" else "rocker"
+    name = kind
     a = parts[name]
     if a["cam_side"] == "roller":
         if not roller_radius > 0.0:

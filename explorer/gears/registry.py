@@ -18,6 +18,9 @@ GEARS: Registry[Gear] = Registry("gear", {
     "rocking-cam": "explorer.gears.rocking_cam:GEAR",
     "rolling-lever": "explorer.gears.rolling_lever:GEAR",
     "trip": "explorer.gears.trip_gear:GEAR",
+    "bucket-tappet": "explorer.gears.bucket_tappet:GEAR",
+    "finger-follower": "explorer.gears.finger_follower:GEAR",
+    "rocker-arm": "explorer.gears.rocker_arm:GEAR",
 })
 
 DEFAULT = "translating-roller"  # the follower.type of a scene that names none

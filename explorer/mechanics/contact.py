@@ -49,6 +49,9 @@ Scene section [contact] (all optional):
     width_rule_k          k of b = P/(k D) (default 40 kgf/cm^2 exhaust, 10 kgf/cm^2 intake)
     engine                "large-gas" (default, 3500 kgf/cm^2) or "diesel" (4000 kgf/cm^2)
     allowable_stress      explicit allowable contact stress (replaces the engine's)
+    sliding_friction      mu of a face or pad sliding on the cam (default 0; read by the gears
+                          whose follower slides on the cam: docs/theory/modern-gears.md)
+    tip_friction          mu of a valve pad sliding on the valve tip (default 0)
 """
 
 from __future__ import annotations
@@ -80,6 +83,8 @@ class ContactSpec:
     width_rule_k: float = WIDTH_RULE_K["exhaust"]  # Pa
     engine: str = "large-gas"
     allowable_stress: float = ALLOWABLE["large-gas"]  # Pa
+    sliding_friction: float = 0.0  # mu of a face or pad sliding on the cam (the gears of #24; rollers take none)
+    tip_friction: float = 0.0  # mu of a valve pad sliding on the valve tip
 
 
 

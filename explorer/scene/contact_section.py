@@ -25,6 +25,7 @@ def parse_contact_section(table, fields) -> ContactSpec:
     table.reject_unknown((
         "friction_angle", "friction_coefficient", "youngs_modulus", "poisson_ratio", "roller_youngs_modulus",
         "roller_poisson_ratio", "width", "valve", "width_rule_k", "engine", "allowable_stress",
+        "sliding_friction", "tip_friction",
     ))
     if table.has("friction_angle") and table.has("friction_coefficient"):
         raise table.error("friction_coefficient", "give friction_angle or friction_coefficient, not both")
@@ -51,4 +52,6 @@ def parse_contact_section(table, fields) -> ContactSpec:
         width_rule_k=table.quantity("width_rule_k", "pressure", WIDTH_RULE_K[valve], positive=True),
         engine=engine,
         allowable_stress=table.quantity("allowable_stress", "pressure", ALLOWABLE[engine], positive=True),
+        sliding_friction=table.number("sliding_friction", 0.0, minimum=0.0, maximum=1.0),
+        tip_friction=table.number("tip_friction", 0.0, minimum=0.0, maximum=1.0),
     )

@@ -27,6 +27,7 @@ from ..gears import registry as gear_table
 from ..gears.base import Gear, GearSpec
 from ..lift import registry as laws
 from .builtin import find_scene
+from .train_section import CONTACTS, LinkageElement, check_train, parse_elements
 
 if TYPE_CHECKING:
     from ..lift.contours.spec import CamSpec
@@ -34,6 +35,7 @@ if TYPE_CHECKING:
     from ..mechanics.springs import SpringDesign
     from ..mechanics.tribology import LubricantSpec
     from .checks_section import ChecksSpec
+    from .train_section import HLASection
 
 MIN_STEPS = 36
 # Plausibility limits: far outside any valve gear, they keep the arithmetic finite (the jerk
@@ -52,6 +54,7 @@ OWNED_SECTIONS: dict[str, str] = {
     "spring_design": "explorer.mechanics.springs:parse_spring_design_section",
     "lubricant": "explorer.mechanics.tribology:parse_lubricant_section",
     "checks": "explorer.scene.checks_section:parse_checks_section",
+    "hla": "explorer.scene.train_section:parse_hla_section",
 }
 # what a section needs, for the message when an effect requires a scene without it
 SECTION_KEYS = {"valve": "mass", "spring": "preload and rate", "linkage": "stiffness"}
@@ -134,6 +137,11 @@ class Loads:
 class Linkage:
     stiffness: float  # N/m referred to the valve
     damping: float = 0.0  # N*s/m, viscous, in parallel with the stiffness
+    # the valve train as parts (issue #25, explorer/scene/train_section.py): the parts from the cam,
+    # each with its cam-side joint; stiffness and damping above are then the joint at the valve,
+    # one-sided (it can open: valve.lash is its gap) or bonded
+    elements: tuple[LinkageElement, ...] = ()
+    one_sided: bool = True
 
 
 @dataclass(frozen=True)
@@ -176,6 +184,7 @@ class Scene:
     lubricant: LubricantSpec | None = None  # owned by explorer.mechanics.tribology (the design rules' film and flash temperature)
     checks: ChecksSpec | None = None  # owned by explorer.scene.checks_section (design-rule settings, read by explorer.checks)
     gear: GearSpec | None = None  # the [gear] section, owned by the follower's gear
+    hla: HLASection | None = None  # owned by explorer.scene.train_section (a hydraulic lash adjuster under the lever)
 
     @property
     def gear_plugin(self) -> Gear:
@@ -326,7 +335,7 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>", folder: str
     valve = _parse_valve(top.table("valve", required=False))
     spring = _parse_spring(top.table("spring", required=False))
     loads = _parse_loads(top.table("loads", required=False), file)
-    linkage = _parse_linkage(top.table("linkage", required=False))
+    linkage = _parse_linkage(top.table("linkage", required=False), follower.ratio)
     seat = _parse_seat(top.table("seat", required=False) or Table({}, file, "seat"))
     solver = _parse_solver(top.table("solver", required=False) or Table({}, file, "solver"))
 
@@ -347,6 +356,7 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>", folder: str
     for section, target in OWNED_SECTIONS.items():
         table = top.table(section, required=False)
         fields[section] = resolve(target)(table, fields) if table is not None or section in needs else None
+    check_train(fields, file)  # [[linkage.elements]] and [hla] against the valve and the seat (issue #25)
     fields["gear"] = _parse_gear(top.table("gear", required=False), fields)
     law = laws.law_spec(lift.law)
     if law.parser is not None:
@@ -546,13 +556,15 @@ def _parse_loads(t: Table | None, file: str) -> Loads:
     return Loads(friction=friction, closing=MappingProxyType(closing))
 
 
-def _parse_linkage(t: Table | None) -> Linkage | None:
+def _parse_linkage(t: Table | None, follower_ratio: float = 1.0) -> Linkage | None:
     if t is None:
         return None
-    t.reject_unknown(("stiffness", "damping"))
+    t.reject_unknown(("stiffness", "damping", "elements", "contact"))
     return Linkage(
         stiffness=t.quantity("stiffness", "stiffness", positive=True),
         damping=t.quantity("damping", "damping", 0.0, nonnegative=True),
+        elements=parse_elements(t, follower_ratio),
+        one_sided=t.string("contact", "one-sided", choices=CONTACTS) == "one-sided",
     )
 
 

@@ -64,7 +64,7 @@ from .sweep_spec import scene_for
 def result_columns(scene) -> tuple[str, ...]:
     """The figures a row of this scene holds: those of the effects it computes (the effect table's
     sweep_figures), and run_failed."""
-    return effects.sweep_figures(scene.effects) + ("run_failed",)
+    return effects.sweep_figures(scene.effects, scene) + ("run_failed",)
 
 
 def row_figures(names, result) -> dict[str, float]:
@@ -76,6 +76,9 @@ def row_figures(names, result) -> dict[str, float]:
         spec = effects.effect_spec(name)
         if spec.row is not None and names & set(spec.sweep_figures):
             row.update(resolve(spec.row)(result))
+        for extra in spec.section_figures_of(result.scene):  # those of a section the scene has ([hla])
+            if names & set(extra.figures):
+                row.update(resolve(extra.row)(result))
     return row
 
 

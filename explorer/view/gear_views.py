@@ -20,6 +20,9 @@ VIEWS: Registry[GearView] = Registry("gear view", {
     "rocking-cam": "explorer.view.rocking_cam:VIEW",
     "rolling-lever": "explorer.view.rolling_lever:VIEW",
     "trip": "explorer.view.trip_gear:VIEW",
+    "bucket-tappet": "explorer.view.bucket_tappet:VIEW",
+    "finger-follower": "explorer.view.finger_follower:VIEW",
+    "rocker-arm": "explorer.view.rocker_arm:VIEW",
 })
 
 

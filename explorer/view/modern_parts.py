@@ -31,7 +31,7 @@ import numpy as np
 import trimesh
 
 from .gear_parts import extrude_contour
-from .parts import quat_about_y
+from .drawing import quat_about_y
 
 TWO_PI = 2.0 * math.pi
 
@@ -271,10 +271,10 @@ def arm_drawing(gear, *, width: float | None = None, n: int = 720, frame: float 
                               foot + 0.5 * span * t - depth * normal, foot - 0.5 * span * t - depth * normal])
             body.append(_prism(block, w, frame))
     body.append(_prism(_sector(pad_c, valve.pad_radius, math.atan2(tip_dir[1], tip_dir[0]), 0.6), w, frame))
-    name = "finger" if gear.kind == "finger-follower" else "rocker"
+    name = gear.kind  # the arm's part: "finger" or "rocker"
     parts[name] = trimesh.util.concatenate(body)
     ball = 0.3 * half + 0.004
-    if gear.kind == "finger-follower":
+    if gear.kind == "finger":
         # the hydraulic lash adjuster: its ball is the pivot, its body stands along the valve's axis
         down = valve.axis
         adjuster = [_sphere(ball), _cylinder_along((0.0, 0.0) + ball * down, down, 8.0 * ball, 1.6 * ball, frame)]
@@ -294,7 +294,7 @@ def arm_poses(gear, theta, *, valve_lift=None, lash: float = 0.0, frame: float =
     n = theta.size
     psi = k.arm_angle[0]
     pivot = to_world(np.asarray(gear.arm.pivot)[None, :], frame)[0]
-    name = "finger" if gear.kind == "finger-follower" else "rocker"
+    name = gear.kind  # the arm's part: "finger" or "rocker"
     poses = {
         "cam": (_fixed(n, 0.0), quat_about_y(-theta)),
         "camshaft": (_fixed(n, 0.0), quat_about_y(-theta)),
@@ -305,7 +305,7 @@ def arm_poses(gear, theta, *, valve_lift=None, lash: float = 0.0, frame: float =
     }
     if k.roller_rate is not None:
         poses["roller"] = (to_world(k.centre, frame), quat_about_y(-(psi + _spin(theta, k.roller_rate))))
-    if gear.kind == "finger-follower":
+    if gear.kind == "finger":
         poses["lash_adjuster"] = (_fixed(n, 0.0), _ident(n))
     return poses
 

@@ -134,7 +134,17 @@ def build_plots(result) -> list[Plot]:
     add("Velocity v", "v [m/s]", [("valve v", cols["valve_velocity_m_s"], 1.0), ("rigid", maybe_rigid("valve_velocity_m_s"), 1.0)])
     add("Acceleration p", "p [m/s²]", [("valve p", cols["valve_accel_m_s2"], 1.0), ("rigid", maybe_rigid("valve_accel_m_s2"), 1.0)])
     add("Forces", "F [N]", [(label, values, 1.0) for label, values in _force_columns(cols)])
+    # a train of parts (issue #25): the force at each joint from the cam to the valve, one curve each
+    add("Contact forces", "F [N]", [(name[len("contact_"):-len("_force_N")], cols[name], 1.0)
+                                    for name in _joint_force_columns(cols)])
     return plots
+
+
+def _joint_force_columns(cols) -> list[str]:
+    # a train's joints report contact_<joint>_force_N with contact_<joint>_closed beside it
+    # (effects/train_elastic.py); in the train's order, cam first
+    return [name for name in cols if name.startswith("contact_") and name.endswith("_force_N")
+            and f"{name[:-len('_force_N')]}_closed" in cols]
 
 
 def _force_columns(cols) -> list[tuple[str, Any]]:
@@ -142,7 +152,9 @@ def _force_columns(cols) -> list[tuple[str, Any]]:
     # the spring; any further force columns after those, up to five curves
     preferred = ("linkage_force_N", "contact_force_N", "spring_force_N", "required_spring_force_N",
                  "camshaft_back_pressure_N")
-    names = [n for n in preferred if n in cols] + sorted(n for n in cols if n.endswith("_N") and n not in preferred)
+    joints = set(_joint_force_columns(cols))  # a train's joints have a plot of their own
+    names = [n for n in preferred if n in cols] + sorted(
+        n for n in cols if n.endswith("_N") and n not in preferred and n not in joints)
     return [(name[:-2].replace("_", " "), cols[name]) for name in names[:5]]
 
 

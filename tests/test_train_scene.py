@@ -1,0 +1,263 @@
+"""The valve train of parts in scenes (issue #25): [[linkage.elements]] and [hla], the elastic
+effect's train variant, the built-in scenes, bad input, and sweeps through the shared engine
+(each row equal to simulate's, bit for bit)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from explorer import load_scene, loads_scene, simulate
+from explorer.core.errors import InputError
+from explorer.dynamics.train import TrainModel
+from explorer.scene.builtin import scenes_dir
+from explorer.scene.train_section import HLA_KEYS, HLA_NUMBERS
+from explorer.effects.registry import effect_spec
+from explorer.studies.sweep_engine import ENGINES, _Shared, compute_chunk, result_columns, row_figures
+from explorer.studies.sweep_spec import scene_for
+
+PUSHROD = scenes_dir() / "pushrod_train.toml"
+FINGER = scenes_dir() / "finger_hla_pumpup.toml"
+SHARED = next(engine for engine in ENGINES if engine.name == "shared")
+# the elastic effect's adjuster figures, a row's with [hla] (its table line's section_figures)
+HLA_COLUMNS = next(extra.figures for extra in effect_spec("elastic").section_figures if extra.section == "hla")
+
+
+def _text(extra: str = "", linkage: str = 'stiffness = "120 N/um"\ndamping = "40 N*s/m"', seat: str = "",
+          follower_ratio: float = 1.5) -> str:
+    return f"""
+effects = ["elastic"]
+[drive]
+rpm = 2000
+[lift]
+law = "polynomial-4567"
+height = "6 mm"
+rise = "80 deg"
+[follower]
+ratio = {follower_ratio}
+[valve]
+mass = "0.07 kg"
+lash = "0.1 mm"
+[spring]
+preload = "400 N"
+rate = "50 N/mm"
+[linkage]
+{linkage}
+[seat]
+{seat or 'stiffness = "250 N/um"'}
+{extra}
+"""
+
+
+ELEMENT = '[[linkage.elements]]\nname = "lifter"\nmass = "60 g"\nstiffness = "150 N/um"\ndamping = "200 N*s/m"\n'
+
+
+def test_elements_are_referred_to_the_valve():
+    scene = loads_scene(_text(ELEMENT + '[[linkage.elements]]\nname = "rocker"\ninertia = "1 kg*cm**2"\narm = "40 mm"\n'
+                                        'stiffness = "60 N/um"\nlash = "0.05 mm"\ncontact = "bonded"\n'))
+    lifter, rocker = scene.linkage.elements
+    assert lifter.ratio == rocker.ratio == 1.5  # follower.ratio by default
+    tr = TrainModel.from_scene(scene)
+    assert [p.mass for p in tr.parts] == pytest.approx([0.06 / 1.5**2, 1e-4 / 0.04**2], rel=1e-15)
+    cam, cup, valve = tr.joints
+    assert cam.stiffness == pytest.approx(150e6 / 2.25) and cam.damping == pytest.approx(200.0 / 2.25)
+    assert cup.stiffness == pytest.approx(60e6 / 2.25) and cup.lash == pytest.approx(0.05e-3 * 1.5)
+    assert not cup.one_sided and valve.one_sided
+    assert valve.stiffness == 120e6 and valve.lash == pytest.approx(0.1e-3)
+
+
+def test_pushrod_scene_reports_each_part_and_contact():
+    r = simulate(load_scene(PUSHROD))
+    for name in ("lifter", "pushrod", "rocker"):
+        for col in ("displacement_m", "velocity_m_s", "accel_m_s2"):
+            assert np.all(np.isfinite(r.columns[f"part_{name}_{col}"]))
+    for name in ("cam", "pushrod", "rocker", "valve"):
+        f = r.columns[f"contact_{name}_force_N"]
+        assert np.all(f >= 0.0) or name == "pushrod"  # the bonded seat can pull
+        assert set(np.unique(r.columns[f"contact_{name}_closed"])) <= {0.0, 1.0}
+    # the lifter follows the cam's lift (its own travel) within the joints' deflection
+    lift = r.columns["rigid_valve_lift_m"] if "rigid_valve_lift_m" in r.columns else None
+    s = r.summary
+    assert len(s["train_natural_frequencies_Hz"]) == 4 and s["train_natural_frequencies_Hz"][0] > 500.0
+    assert r.warnings == ()
+    # the cam contact's force along the lifter is the camshaft's back pressure
+    np.testing.assert_allclose(r.columns["contact_cam_force_N"], r.columns["camshaft_back_pressure_N"], rtol=1e-12)
+    del lift
+
+
+def test_each_contact_force_is_plotted_in_the_browser_and_recorded():
+    # issue #25 item 3 (the plots): the browser draws every joint's force, cam to valve, in a plot
+    # of its own (the generic Forces plot keeps its five curves); the recording puts each under
+    # /forces (the rerun rule for N columns)
+    from explorer.view.browser import model
+    from explorer.view.rerun.recording import entity_path
+
+    r = simulate(load_scene(PUSHROD))
+    plots = {p.title: p for p in model.build_plots(r)}
+    contacts = plots["Contact forces"]
+    assert [label for label, _, _ in contacts.series] == ["cam", "pushrod", "rocker", "valve"]
+    for label, values, _ in contacts.series:  # the decimated curve keeps each column's extremes
+        col = r.columns[f"contact_{label}_force_N"]
+        assert np.nanmax(values) == np.max(col) and np.nanmin(values) == np.min(col)
+    assert not any(label.startswith("contact ") and label != "contact force" for label, _, _ in plots["Forces"].series)
+    assert entity_path("contact_rocker_force_N") == "/forces/contact_rocker"
+    # a scene without parts has no such plot
+    plain = simulate(load_scene(scenes_dir() / "spring_surge.toml"))
+    assert "Contact forces" not in [p.title for p in model.build_plots(plain)]
+
+
+def test_finger_scene_pumps_up():
+    r = simulate(load_scene(FINGER))
+    hla = r.summary["hla"]
+    assert hla["pump_up"] and hla["pump_up_valve_lift_m"] > 1e-5
+    assert not hla["per_revolution"][-1]["seated"]
+    assert any(e["kind"] == "pump-up" for e in r.events)
+    assert any(w.startswith("pump-up") for w in r.warnings)
+    for col in ("hla_plunger_travel_m", "hla_chamber_pressure_Pa", "hla_check_valve_open"):
+        assert np.all(np.isfinite(r.columns[col]))
+    assert hla["check_valve_openings"] > 0
+
+
+def test_finger_scene_below_its_float_speed_seats_every_revolution():
+    r = simulate(load_scene(FINGER, overrides=["drive.rpm=3000", "hla.revolutions=3"]))
+    hla = r.summary["hla"]
+    assert not hla["pump_up"] and hla["pump_up_valve_lift_m"] == 0.0
+    assert all(rev["seated"] for rev in hla["per_revolution"])
+    assert not any(e["kind"] == "pump-up" for e in r.events)
+    # the adjuster leaks down under the lift's load: its plunger sinks over each revolution
+    assert abs(hla["plunger_travel_per_revolution_m"]) < 5e-5
+
+
+def test_scene_without_elements_is_todays_model():
+    # the linkage's explicit default (contact one-sided) changes nothing: the same model, the same numbers
+    base = simulate(load_scene(scenes_dir() / "spring_surge.toml"))
+    same = simulate(load_scene(scenes_dir() / "spring_surge.toml", overrides=['linkage.contact="one-sided"']))
+    for name, values in base.columns.items():
+        assert np.array_equal(values, same.columns[name]), name
+
+
+@pytest.mark.parametrize("extra, linkage, seat, key", [
+    (ELEMENT.replace('mass = "60 g"', 'mass = "60 g"\ninertia = "1 kg*cm**2"\narm = "4 cm"'), None, None,
+     "linkage.elements[0].mass"),
+    (ELEMENT + 'contact = "bonded"\n', None, None, "linkage.elements[0].contact"),
+    (ELEMENT.replace('"lifter"', '"valve"'), None, None, "linkage.elements[0].name"),
+    (ELEMENT.replace('"lifter"', '"Lifter 1"'), None, None, "linkage.elements[0].name"),
+    (ELEMENT + ELEMENT, None, None, "linkage.elements[1].name"),
+    (ELEMENT + 'colour = "red"\n', None, None, "linkage.elements[0].colour"),
+    (ELEMENT.replace('stiffness = "150 N/um"', 'stiffness = "150 kg"'), None, None, "linkage.elements[0].stiffness"),
+    (ELEMENT, None, "restitution = 0.3", "seat.stiffness"),
+    ("", 'stiffness = "120 N/um"\ncontact = "bonded"', None, "linkage.contact"),
+    ("", 'stiffness = "120 N/um"\ncontact = "glued"', None, "linkage.contact"),
+    ('[hla]\nplunger_mass = "12 g"', None, None, "hla.plunger_diameter"),
+])
+def test_train_input_errors_name_the_key(extra, linkage, seat, key):
+    text = _text(extra, linkage or 'stiffness = "120 N/um"\ndamping = "40 N*s/m"', seat or "")
+    with pytest.raises(InputError) as err:
+        loads_scene(text, "train.toml")
+    assert err.value.key == key, str(err.value)
+    assert "\n" not in str(err.value)
+
+
+HLA = """[hla]
+plunger_mass = "12 g"
+plunger_diameter = "12 mm"
+clearance = "6 um"
+leak_length = "8 mm"
+viscosity = "10 mPa*s"
+chamber_volume = "200 mm**3"
+supply_pressure = "3 bar"
+spring_rate = "5 N/mm"
+"""
+
+
+@pytest.mark.parametrize("extra, ratio, key", [
+    (HLA, 1.5, "hla"),  # no elements: nothing to pivot
+    (ELEMENT + HLA, 1.0, "hla.lever"),  # a ratio of 1 has no default lever
+    (ELEMENT + HLA + 'reference_pressure = "2 bar"\n', 1.5, "hla.reference_pressure"),
+    (ELEMENT + HLA + 'clearance_x = "1 um"\n', 1.5, "hla.clearance_x"),
+    (ELEMENT + HLA.replace('clearance = "6 um"', 'clearance = "7 mm"'), 1.5, "hla.clearance"),
+    (ELEMENT + HLA + 'aeration = 1.5\n', 1.5, "hla.aeration"),
+    (ELEMENT + HLA + 'revolutions = 0\n', 1.5, "hla.revolutions"),
+    (ELEMENT + HLA.replace('viscosity = "10 mPa*s"', 'viscosity = "10 mm"'), 1.5, "hla.viscosity"),
+])
+def test_hla_input_errors_name_the_key(extra, ratio, key):
+    with pytest.raises(InputError) as err:
+        loads_scene(_text(extra, follower_ratio=ratio), "train.toml")
+    assert err.value.key == key, str(err.value)
+
+
+_values = st.one_of(st.none(), st.booleans(), st.integers(-10**6, 10**6), st.floats(allow_nan=True),
+                    st.text(max_size=12), st.lists(st.integers(), max_size=2))
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(key=st.sampled_from(["name", "mass", "inertia", "arm", "ratio", "stiffness", "damping", "lash", "contact"]),
+       value=_values)
+def test_any_bad_element_value_is_one_input_error(key, value):
+    # a valid element with one value replaced by anything: it loads, or fails with one InputError
+    import tomllib
+
+    data = tomllib.loads(_text(ELEMENT))
+    element = data["linkage"]["elements"][0]
+    if value is None:
+        element.pop(key, None)
+    else:
+        element[key] = value
+    from explorer.scene.scene import scene_from_dict
+
+    try:
+        scene_from_dict(data, "train.toml")
+    except InputError as err:
+        assert "\n" not in str(err)
+
+
+_quantities = st.sampled_from(["-3 bar", "0 bar", "1e30 Pa", "nan Pa", "inf mm", "12 kg", "5", "abc", "1e-30 m",
+                                "0 mm**3", "-1 mPa*s", "2 N/um"])
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(key=st.sampled_from([*HLA_KEYS, *HLA_NUMBERS, "lever", "revolutions"]), value=st.one_of(_values, _quantities))
+def test_any_bad_hla_value_is_one_input_error(key, value):
+    # a valid [hla] with one value replaced by anything (removed where None): it loads with a
+    # finite adjuster, or fails with one InputError naming an [hla] key, in one line
+    import tomllib
+
+    from explorer.scene.scene import scene_from_dict
+
+    data = tomllib.loads(_text(ELEMENT + HLA))
+    if value is None:
+        data["hla"].pop(key, None)
+    else:
+        data["hla"][key] = value
+    try:
+        scene = scene_from_dict(data, "train.toml")
+    except InputError as err:
+        assert "\n" not in str(err) and err.key.startswith("hla"), str(err)
+        return
+    hla = scene.hla.hla
+    assert all(math.isfinite(v) for v in vars(hla).values() if isinstance(v, float)), hla
+
+
+def test_sweep_rows_equal_simulate_bit_for_bit():
+    # the shared engine (the elastic effect itself) on the finger scene over speed: each row is
+    # simulate's own, the pump-up column where the adjuster holds the valve open
+    base = load_scene(FINGER, overrides=["hla.revolutions=2", "solver.steps_per_revolution=720"])
+    names = result_columns(base)
+    assert set(HLA_COLUMNS) <= set(names)
+    # a scene without [hla] has none of them (its table stays as before: the golden sweeps)
+    assert not set(HLA_COLUMNS) & set(result_columns(load_scene(PUSHROD)))
+    keys = ("drive.rpm",)
+    values = np.array([[3000.0], [5200.0]])
+    table = compute_chunk(base, keys, values, names, _Shared(), engine=SHARED)
+    for row, vals in zip(table, values):
+        r = simulate(scene_for(base, keys, vals))
+        want = row_figures(set(names), r)
+        got = dict(zip(names, row))
+        for name in want:
+            assert (got[name] == want[name]) or (math.isnan(got[name]) and math.isnan(want[name])), name
+    assert table[0][names.index("pump_up_valve_lift_m")] == 0.0
+    assert table[1][names.index("pump_up_valve_lift_m")] > 0.0
