@@ -20,7 +20,11 @@ Rows (default scene unless --scene):
     once the pages leave;
   - a burst of 1000 GUI changes sent over the websocket by the ten clients (cam-angle slider and
     rpm, 100 each, as fast as they can), three times: errors in clients, loop and worker, whether
-    the newest request ends up shown, and process memory after each burst (must not grow).
+    the newest request ends up shown, and process memory after each burst (must not grow);
+  - the float demo (issue #27.1): a speed change until the plots on the server have the new
+    speed's curves, the spring advisor after them (its advice follows once the page is idle);
+    beside it, in the same run, `simulate` of the float demo with the advisor on the path, as
+    every speed change paid it before. Only this row with --float-demo-only.
 Medians of several runs; "ratio" is median / target (<= 1 meets it; for rates target / median),
 "x base" the median over `simulate()` of the same scene, timed in this process.
 """
@@ -123,11 +127,14 @@ def main(argv=None) -> int:
     parser.add_argument("--no-browser", action="store_true", help="skip the rows that need headless Chromium")
     parser.add_argument("--scene", help="scene file (default: the built-in default scene)")
     parser.add_argument("--bursts", type=int, default=4, help="rounds of the 1000-change burst (default 4)")
+    parser.add_argument("--float-demo-only", action="store_true", help="only the float demo's speed-change rows")
     parser.add_argument("--clients", nargs="+", metavar="ARG", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.clients:
         clients_worker(args.clients[0], int(args.clients[1]), float(args.clients[2]), *args.clients[3:])
         return 0
+    if args.float_demo_only:
+        return 1 if float_demo_report(args.repeat) else 0
 
     import numpy as np
     import viser
@@ -281,8 +288,73 @@ def main(argv=None) -> int:
           " 'computed' < 'requests' is the newest-wins coalescing)")
     failed |= client_errors > 0 or any(e or not ok for _, _, e, ok, _, _ in burst_rows) or growth > 2.0
     failed |= per_client_report(path, 10)
+    failed |= float_demo_report(args.repeat)
     print("all targets met" if not failed else "SOME TARGETS MISSED")
     return 0
+
+
+def float_demo_report(repeat: int) -> bool:
+    """Issue #27.1 on valve_float_demo.toml: a speed change (the Camshaft rpm field, as a
+    callback sets it) until the velocity plot on the server holds the new speed's curve, target
+    100 ms; `prepare` alone; and, timed in the same run, `simulate` with the spring advisor on the
+    path (what each change cost before) and `prepare` + the advice. Prints the rows and the load;
+    returns whether the target was missed."""
+    import numpy as np
+    import viser
+
+    from explorer import load_scene
+    from explorer.effects.pipeline import simulate
+    from explorer.view.browser.app import ExplorerApp
+    from explorer.view.browser.model import Request, advice_readout, prepare
+
+    path = str(ROOT / "assets" / "scenes" / "valve_float_demo.toml")
+    scene = load_scene(path)
+    speeds = [3000.0, 3100.0]
+    k = [0]
+    old_path = median_time(lambda: simulate(scene), repeat)  # the advisor inside, as before
+    previous = prepare(Request(path))
+
+    def prepare_change():
+        nonlocal previous
+        k[0] += 1
+        previous = prepare(Request(path, (f"drive.rpm={speeds[k[0] % 2]}",)), previous)
+
+    prepared_alone = median_time(prepare_change, repeat)
+    with_advice = median_time(lambda: (prepare_change(), advice_readout(previous, {})), repeat)
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    app = ExplorerApp(server, path, playing=False)
+    try:
+        assert app.wait_applied(60)
+
+        def change():
+            k[0] += 1
+            rpm = speeds[k[0] % 2]
+            before = np.asarray(app.plots.handles[1].data[1])
+            app.fields["drive.rpm"].value = rpm
+            deadline = time.monotonic() + 30
+            while time.monotonic() < deadline:
+                shown = app.current
+                if shown is not None and shown.scene.drive.rpm == rpm \
+                        and not np.array_equal(np.asarray(app.plots.handles[1].data[1]), before):
+                    return
+                time.sleep(0.0005)
+            raise RuntimeError(f"the plots never showed {rpm} rpm: {app.error_text}")
+
+        changed = median_time(change, repeat)
+    finally:
+        app.stop()
+        server.stop()
+    load = os.getloadavg()
+    print(f"float demo (valve_float_demo.toml), load average {load[0]:.1f} {load[1]:.1f} {load[2]:.1f}:")
+    print(f"{'task':<66} {'median':>11} {'target':>10} {'ratio':>6}")
+    print(f"{'  speed change -> new velocity curve in the plots on the server':<66} {1e3 * changed:9.2f}ms "
+          f"{100:8.0f}ms {changed / 0.1:6.2f}")
+    print(f"{'  prepare (in the compute process): the advice after the plots':<66} {1e3 * prepared_alone:9.2f}ms")
+    print(f"{'  before, in this run: simulate with the advisor on the path':<66} {1e3 * old_path:9.2f}ms "
+          f"{'':>10} {old_path / prepared_alone:6.2f}x")
+    print(f"{'  prepare and then the advice (once the page is idle)':<66} {1e3 * with_advice:9.2f}ms")
+    return changed > 0.1
 
 
 def per_client_report(path: str, pages: int, seconds: float = 8.0) -> bool:

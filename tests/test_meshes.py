@@ -24,7 +24,8 @@ DEMO = SCENES / "cycloidal_demo.toml"
 
 
 def _scene(*overrides):
-    return load_scene(DEMO, list(overrides))
+    # the demo's rigid motion (it opens with forces and the elastic linkage too, #28.10)
+    return load_scene(DEMO, ['effects=["kinematics", "lash"]', *overrides])
 
 
 @pytest.fixture(scope="module")
@@ -393,7 +394,7 @@ def test_the_framed_camera_sees_every_vertex_of_the_revolution(name):
     of a sample of steps is in the picture (a convex frustum holding the box's corners holds
     the box), and the gear fills it: its silhouette spans at least 60 % of the picture's width
     or height."""
-    from explorer.view.browser.app import ASSUMED_ASPECT, CAMERA_FOV
+    from explorer.view.browser.camera import ASSUMED_ASPECT, CAMERA_FOV
 
     lay, parts, poses, lengths = _posed(name)
     lo, hi = meshes.motion_bounds(parts, poses)

@@ -21,7 +21,7 @@ import pytest
 from explorer import load_scene
 from explorer.cli import main
 from explorer.effects.pipeline import simulate
-from explorer.view.rerun.recording import entity_path, series_layout
+from explorer.view.rerun.recording import TIMELINE_ANGLE, entity_path, series_layout
 from explorer.view.rerun.read import read_blueprint_views, read_rrd
 from conftest import process_timeout
 
@@ -110,8 +110,9 @@ def test_series_equal_simulate_output(float_recording):
         assert s.scale == (1e3 if s.column.endswith("_m") else 1.0), s.column  # lengths in mm (#13.8)
         assert np.array_equal(got["step"], np.arange(n))
         assert np.max(np.abs(got["time"] - csv["time_s"] * 1e9)) <= 0.5
-        # the cam-angle timeline is in whole degrees (#13.8: it was millidegrees)
-        assert np.array_equal(got["cam_angle_deg"], np.rint(csv["cam_angle_deg"]).astype(np.int64))
+        # the cam-angle timeline counts hundredths of a degree (#28.11: whole degrees made
+        # staircases, #13.8: millidegrees squeezed the plots into a 1-degree window)
+        assert np.array_equal(got[TIMELINE_ANGLE], np.rint(100.0 * csv["cam_angle_deg"]).astype(np.int64))
     # the headline quantities are where the docstring says
     for path in ("/valve/lift", "/valve/velocity", "/valve/acceleration", "/valve/jerk", "/forces/linkage",
                  "/forces/spring", "/forces/contact", "/torque/camshaft", "/angles/pressure", "/stress/hertz"):
@@ -119,6 +120,24 @@ def test_series_equal_simulate_output(float_recording):
     # every series has its name (with unit) for the legend
     assert run.static["/valve/lift"]["SeriesLines:names"] == ["valve lift [mm]"]
     assert run.static["/forces/linkage"]["SeriesLines:names"] == ["linkage force [N]"]
+
+
+def test_every_sample_has_its_own_place_on_the_cam_angle_timeline(float_recording, tmp_path):
+    """Issue #28.11: in whole degrees, ten of the 3600 samples of a revolution shared each value
+    of the cam-angle timeline and a series plotted against it was a staircase of vertical runs.
+    Read back, every sample has its own position (strictly increasing), within half a hundredth
+    of a degree of its cam angle, at the default 3600 steps and at 36 000, the finest the
+    timeline separates; the timeline's name says its unit."""
+    assert TIMELINE_ANGLE == "cam_angle_0.01deg"
+    out, csv = float_recording
+    got = read_rrd(out)[0].series["/valve/lift"]
+    position = got[TIMELINE_ANGLE]
+    assert position.size == csv["cam_angle_deg"].size == 3600
+    assert np.all(np.diff(position) > 0)  # no two samples share a position
+    assert np.max(np.abs(position / 100.0 - csv["cam_angle_deg"])) <= 0.005 + 1e-9
+    fine = record(tmp_path, str(CYCLOIDAL), "--no-parts", "--set", "solver.steps_per_revolution=36000", name="fine.rrd")
+    position = read_rrd(fine)[0].series["/valve/lift"][TIMELINE_ANGLE]
+    assert position.size == 36000 and np.array_equal(position, np.arange(36000))
 
 
 def test_events_and_warnings_are_logged_at_their_instants(float_recording):
@@ -139,7 +158,7 @@ def test_events_and_warnings_are_logged_at_their_instants(float_recording):
         times = [log["time"][i] for i in rows]
         assert any(abs(t - event["time_s"] * 1e9) <= 0.5 for t in times), event
         i = rows[int(np.argmin([abs(t - event["time_s"] * 1e9) for t in times]))]
-        assert log["cam_angle_deg"][i] == np.rint(event["cam_angle_deg"])
+        assert log[TIMELINE_ANGLE][i] == np.rint(100.0 * event["cam_angle_deg"])
         n = result.columns["time_s"].size  # the step at or before the instant
         assert log["step"][i] == math.floor(event["cam_angle_deg"] / 360 * n + 1e-9)
 
@@ -171,10 +190,10 @@ def test_blueprint_has_3d_beside_s_v_p_and_forces(float_recording):
 
     for v in views:
         if v["class"] == "TimeSeries":
-            assert v["time_ranges"]["cam_angle_deg"] == (0, 360), v["name"]
+            assert v["time_ranges"][TIMELINE_ANGLE] == (0, 36000), v["name"]  # one revolution
     panel = next(v for v in views if v["class"] == "TimePanel")
-    assert panel["timeline"] == "cam_angle_deg" and panel["playback_speed"] == 1.0
-    assert 360.0 / panel["fps"] == pytest.approx(ANGLE_PLAYBACK_S) and 2.0 <= ANGLE_PLAYBACK_S <= 20.0
+    assert panel["timeline"] == TIMELINE_ANGLE and panel["playback_speed"] == 1.0
+    assert 36000.0 / panel["fps"] == pytest.approx(ANGLE_PLAYBACK_S) and 2.0 <= ANGLE_PLAYBACK_S <= 20.0
 
 
 def test_legends_sit_where_the_curves_are_not(float_recording):
@@ -190,7 +209,7 @@ def test_legends_sit_where_the_curves_are_not(float_recording):
         paths = view_paths(name, run.series)
         assert paths, name
         corner = views[name]["legend_corner"]
-        x = np.concatenate([run.series[p]["cam_angle_deg"] for p in paths]).astype(float)
+        x = np.concatenate([run.series[p][TIMELINE_ANGLE] for p in paths]).astype(float) / 100.0
         y = np.concatenate([run.series[p]["value"] for p in paths])
         u, v = x / 360.0, (y - y.min()) / (y.max() - y.min())
         across = u >= 1 - w if corner.startswith("Right") else u <= w
@@ -266,6 +285,7 @@ def test_sweep_and_several_scenes_make_separate_recordings(tmp_path):
 
 def test_two_sweeps_make_every_combination(tmp_path):
     out = record(tmp_path, str(CYCLOIDAL), "--set", "solver.steps_per_revolution=72", "--no-parts",
+                 "--set", 'effects=["kinematics", "lash"]',  # rigid: the lift falls by the lash exactly
                  "--sweep", "drive.rpm=600,1200", "--sweep", 'valve.lash=0.1mm,0.2mm')
     names = sorted(r.name for r in read_rrd(out))
     assert names == sorted([f"drive.rpm={r}, valve.lash={l} · Cycloidal demo"
@@ -297,7 +317,7 @@ def test_a_sweep_has_an_overlay_of_its_runs(tmp_path):
         for path, values in curves.items():
             child = f"{path}/run{k:02d}"
             assert np.array_equal(overlay.series[child]["value"], values), child
-            assert np.array_equal(overlay.series[child]["cam_angle_deg"], np.rint(angle).astype(np.int64))
+            assert np.array_equal(overlay.series[child][TIMELINE_ANGLE], np.rint(100.0 * angle).astype(np.int64))
             assert overlay.static[child]["SeriesLines:names"] == [label]
             # the view that draws `path` in a run draws the overlay's child too
             assert any(c == f"{path}/**" or (c.endswith("/**") and child.startswith(c[:-2])) for cs in views.values()

@@ -32,7 +32,8 @@ CYCLOIDAL = ROOT / "assets" / "scenes" / "cycloidal_demo.toml"
 
 
 def result_at(rpm: float, steps: int = 360):
-    return simulate(load_scene(CYCLOIDAL, [f"drive.rpm={rpm}", f"solver.steps_per_revolution={steps}"]))
+    return simulate(load_scene(CYCLOIDAL, [f"drive.rpm={rpm}", f"solver.steps_per_revolution={steps}",
+                                           'effects=["kinematics", "lash"]']))
 
 
 def assert_same_series(run, result) -> None:

@@ -50,6 +50,40 @@ def test_cycloidal_spectrum_matches_the_fourier_series(overrides):
     assert abs(spectrum.mean) <= bound  # a closed event: no mean acceleration
 
 
+def test_printed_phases_keep_only_the_digits_their_aliasing_error_leaves(tmp_path):
+    """Issue #28.9: a phase printed as 2.43e-06 where the exact phase is 0 (elastic_float, order
+    90: its acceleration jumps, so the FFT's aliasing error falls only as n/N). The printed phase
+    is the FFT's rounded to the decade of its error estimate (core.units.resolved); oracle: the
+    closed-form Fourier series of the cycloidal demo, every printed phase within its own rounding
+    of the exact one, and the orders whose exact phase is 0 print as 0."""
+    table = tmp_path / "s.csv"
+    assert cli.main(["spectrum", str(SCENES / "elastic_float.toml"), "--orders", "100", "-o", str(table)]) == 0
+    rows = {int(r.split(",")[0]): r.split(",") for r in table.read_text().splitlines()[2:]}
+    assert rows[90][3] == "0" and rows[18][3] == "0" and rows[54][3] == "0"
+
+    scene = load_scene(DEMO)
+    spec = scene.lift
+    spectrum = acceleration_spectrum(scene, build_lift(scene), orders=200)
+    factor = scene.follower.ratio * scene.omega**2
+    zeros = 0
+    for n, amplitude, phase in zip(spectrum.orders, spectrum.amplitude, spectrum.phase):
+        c = factor * (arch(n, spec.height, spec.rise, spec.start)
+                      - arch(n, spec.height, spec.ret, spec.start + spec.rise + spec.dwell))
+        if 2 * abs(c) < 1e-6 * spectrum.amplitude.max():
+            continue  # a zero of the series: its phase is undefined
+        exact = cmath.phase(c)
+        # the phase prints with d decimals; its distance from the exact phase (mod 2 pi) is at
+        # most half the last decimal plus the error, which the rounding keeps below one decimal
+        text = f"{phase:.10g}"
+        decimals = len(text.split(".")[1]) if "." in text else 0
+        miss = abs((phase - exact + math.pi) % (2 * math.pi) - math.pi)
+        assert miss <= 10.0 ** -decimals, (n, phase, exact)
+        if abs(exact) < 1e-12:
+            zeros += 1
+            assert phase == 0.0, (n, phase)
+    assert zeros >= 10  # orders 8, 16, ...: n * 90 deg (the event's centre) a multiple of 360 deg
+
+
 def test_natural_frequency_as_cam_order():
     scene = load_scene(DEMO)
     spectrum = acceleration_spectrum(scene, build_lift(scene), orders=10)

@@ -108,17 +108,29 @@ def test_the_markers_stand_at_the_exact_speeds_and_the_curves_are_unchanged():
     assert plots["Speed sweep (rigid)", 500.0] < plots["Speed sweep (rigid)", 2900.0]  # the marker moves with the speed
 
 
-def test_not_yet_computed_elastic_speeds_stay_gaps():
+def test_elastic_speeds_come_coarse_to_fine_and_only_those_computed_are_drawn():
+    """#28.8: the speeds computed one at a time come in an order that spans the range soonest
+    (the top speed, the lowest, then each as far as possible from those taken), so the first few
+    already show the whole range; the plots draw the speeds computed so far, nothing else."""
+    order = ss.coarse_to_fine(24)
+    assert sorted(order) == list(range(24)) and list(order[:3]) == [23, 0, 11]
+    for k in range(2, 24):  # after k speeds, the largest gap between computed neighbours is
+        taken = np.sort(order[:k])  # within a factor 2 of the best possible for k points
+        assert np.max(np.diff(taken)) <= 2 * math.ceil(23 / (k - 1))
     scene, lift = _scene(FLOAT, 'solver.method="taylor"')  # not the compiled solver's: one speed at a time
     sweep = ss.start_sweep(scene, lift, serial=1)
     assert not sweep.batched and sweep.elastic_total == ss.ELASTIC_SPEEDS
+    assert sweep.next_elastic() == sweep.elastic_rpm[-1]  # the top speed first
     sweep = ss.with_elastic(ss.with_elastic(sweep, (10.0, -0.5, 1e-4)), (20.0, -0.7, 2e-4))
-    plots = {title.split(",")[0]: (y_label, x, series, lim) for title, y_label, x, series, _, lim in ss.sweep_plots(sweep, 1000.0)}
+    assert sweep.max_deviation[-1] == 1e-4 and sweep.max_deviation[0] == 2e-4
+    assert np.isnan(sweep.max_deviation[1:-1]).all()
+    plots = {title.split(",")[0]: (y_label, x, series, lim) for title, y_label, x, series, _, lim in ss.sweep_plots(sweep, 1234.5)}
     y_label, x, series, (lo, hi) = plots["Speed sweep (elastic deviation"]
     assert y_label == "Δs [mm]" and len(series) == 1
     deviation = series[0][1]
-    done = x <= sweep.elastic_rpm[1]
-    assert np.isfinite(deviation[done]).all() and np.isnan(deviation[~done]).all()
+    drawn = np.isin(x, sweep.elastic_rpm)
+    np.testing.assert_array_equal(x[drawn], sweep.elastic_rpm[[0, -1]])  # the two computed, nothing between
+    np.testing.assert_allclose(deviation[drawn], [0.2, 0.1])
     assert lo <= 0.1 and hi >= 0.2  # the figures computed so far are in view (mm)
     _, _, seat, (lo, hi) = plots["Speed sweep (elastic seating velocity"]
     assert lo <= -0.7 and hi >= -0.5 and hi < 0.0  # its own axis: not stretched to the other figures
@@ -126,10 +138,45 @@ def test_not_yet_computed_elastic_speeds_stay_gaps():
     assert lo <= 10.0 and hi >= 20.0 and sep[0][0] == "first separation [°]"  # degrees, unscaled
 
 
+def test_elastic_figures_run_only_the_effects_they_need_and_equal_the_full_run():
+    """#28.8: an elastic speed of the sweep runs kinematics, lash and elastic only (the rocking
+    cam's forces and gear figures were 7/8 of each speed's time); oracle: the figures of
+    `simulate` with every effect of the scene, equal bit for bit (no effect reads another's
+    figures but its dependencies')."""
+    for path in (SCENES / "rocking_cam.toml", SCENES / "rolling_lever.toml", SCENES / "trip_gear_dashpot.toml"):
+        scene, lift = _scene(path)
+        rpm = 2.0 * scene.drive.rpm
+        full = simulate(ss.at_speed(scene, rpm), lift=lift)
+        events = [e for e in full.events if e.effect == "elastic"]
+        seps = [float(e["cam_angle_deg"]) for e in events if e["kind"] == "separation"]
+        seats = [float(e["velocity_m_s"]) for e in events if e["kind"] == "seat"]
+        expected = (seps[0] if seps else math.nan, min(seats) if seats else math.nan, full.summary["max_deviation_m"])
+        got = ss.elastic_figures(scene, lift, rpm)
+        assert all((math.isnan(e) and math.isnan(g)) or e == g for e, g in zip(expected, got)), (path.name, got, expected)
+
+
+def test_the_rigid_model_is_checked_against_the_gears_own_forces():
+    """#28.6: the sweep's F = w^2 A + G holds for the translating roller and the lever gears
+    (equal to their forces effect's contact force at the scene's speed), not for the trip gear,
+    whose latch carries the valve only from its pick-up to the trip: that scene gets no sweep and
+    a note saying why, whatever is ticked (it used to say "tick 'forces'" with forces ticked)."""
+    for name in ("valve_float_demo.toml", "pivoted_roller_lever.toml", "rocking_cam.toml", "rolling_lever.toml"):
+        scene, lift = _scene(SCENES / name)
+        assert ss.rigid_model_holds(scene, lift), name
+    scene, lift = _scene(SCENES / "trip_gear_dashpot.toml")
+    assert "forces" in scene.effects
+    assert not ss.rigid_model_holds(scene, lift)
+    for effects in (None, 'effects=["kinematics"]'):
+        scene, lift = _scene(SCENES / "trip_gear_dashpot.toml", *([effects] if effects else []))
+        none = ss.start_sweep(scene, lift, serial=1, result=simulate(scene, lift=lift))
+        assert isinstance(none, ss.NoSweep) and "tick 'forces'" not in none.reason and "trip gear" in none.reason
+
+
 def test_a_scene_without_forces_has_no_sweep():
     scene, lift = _scene(SCENES / "table_demo.toml")
     assert scene.spring is None  # no spring: no rigid contact force to sweep
-    assert ss.start_sweep(scene, lift, serial=1) is None
+    none = ss.start_sweep(scene, lift, serial=1)
+    assert isinstance(none, ss.NoSweep) and "[spring]" in none.reason and "tick 'forces'" not in none.reason
 
 
 def _worker_sweeps(first_overrides, second_overrides, started):
@@ -211,17 +258,18 @@ def test_choosing_a_speed_under_the_sweep_sets_the_requests_rpm():
         while (app.sweep is None or app.sweep_rpm.value != app.current.scene.drive.rpm) and time.monotonic() < deadline:
             time.sleep(0.01)
         assert app.sweep is not None and app.sweep_rpm.value == app.current.scene.drive.rpm
-        assert len(app._sweep_handles) == 5 and not app.sweep_rpm.disabled  # forces, torque, 3 elastic figures
-        before = np.asarray(app._sweep_handles[0].data[-2])
+        handles = app.sweep_view.handles
+        assert len(handles) == 5 and not app.sweep_rpm.disabled  # forces, torque, 3 elastic figures
+        before = np.asarray(handles[0].data[-2])
         app.sweep_rpm.value = 1800.0  # as a page's slider would
         assert app.wait_applied(WAIT_S)
         assert "drive.rpm=1800.0" in app.current.request.overrides
         assert app.current.scene.drive.rpm == 1800.0
         assert app.fields["drive.rpm"].value == 1800.0
         deadline = time.monotonic() + WAIT_S
-        while np.array_equal(np.asarray(app._sweep_handles[0].data[-2]), before) and time.monotonic() < deadline:
+        while np.array_equal(np.asarray(app.sweep_view.handles[0].data[-2]), before) and time.monotonic() < deadline:
             time.sleep(0.01)
-        x, now = np.asarray(app._sweep_handles[0].data[0]), np.asarray(app._sweep_handles[0].data[-2])
+        x, now = np.asarray(app.sweep_view.handles[0].data[0]), np.asarray(app.sweep_view.handles[0].data[-2])
         assert abs(x[np.argmax(now)] - 1800.0) <= x[1] - x[0]  # the marker moved to the speed chosen
     finally:
         app.stop()

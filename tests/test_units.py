@@ -55,3 +55,25 @@ def test_spaces_inside_a_unit_are_not_dropped(value, dim):
 def test_spaces_around_operators_are_fine():
     assert si("2.9 kgf * s**2 / m", "mass") == pytest.approx(2.9 * G0, rel=1e-15)
     assert si("25 N / mm", "stiffness") == pytest.approx(25e3, rel=1e-15)
+
+
+def test_a_printed_figure_has_no_sign_on_zero_and_no_noise():
+    """Issue #28.9: `design` printed a slack of 0 as "+0"; one formatter for signed figures."""
+    from explorer.core.units import figure
+
+    assert figure(0.0, signed=True) == "0" and figure(-0.0, signed=True) == "0"
+    assert figure(-3e-13, signed=True) == "0"  # below the noise floor
+    assert figure(0.25, signed=True) == "+0.25" and figure(-0.25, signed=True) == "-0.25"
+    assert figure(1234.5678) == "1235" and figure(53.400000000000006, 6) == "53.4"
+
+
+def test_resolved_keeps_the_digits_an_error_leaves():
+    import numpy as np
+
+    from explorer.core.units import resolved
+
+    assert resolved(2.43e-06, 1.8e-06) == 0.0  # the issue's phase: 0 within its error
+    assert resolved(1.2217304763960306, 3e-7) == 1.221730  # decade of the error: 1e-6
+    assert resolved(-1e-9, 1e-6) == 0.0 and str(resolved(-1e-9, 1e-6)) == "0.0"  # never -0
+    out = resolved(np.array([3.14159265, 2.0, 5.0]), np.array([1e-3, 0.0, np.inf]))
+    np.testing.assert_array_equal(out, [3.142, 2.0, 5.0])  # no error or no finite one: unchanged

@@ -113,35 +113,46 @@ def test_animation_moves_the_slider_without_feeding_back(app):
     np.testing.assert_allclose(_node(app, "cam").wxyz, app.current.poses["cam"][1][i], atol=1e-7)
 
 
-def test_a_value_whose_callback_is_still_pending_is_not_overwritten(app):
-    """viser stores a browser's new value in the handle, then runs the callback on its thread
-    pool, late on a busy machine. Frames applied in between must leave that value alone: the
-    loop used to set the slider back to the playback angle, the callback then read the loop's
-    value, and the person's click was lost (the real-browser test saw it under load)."""
-    import types
+def _page_sends(app, handle, value):
+    """What viser does with a page's GuiUpdateMessage: store the value (and its time), then run
+    the async callbacks on its event loop, right away (the explorer records the value there)."""
+    import asyncio
+    import inspect
 
-    app._stop.set()  # the test plays the loop: frames come only when it calls tick()
-    app._thread.join(timeout=process_timeout(0.25))
+    from viser._gui_handles import GuiEvent
+
+    handle._impl.value = value
+    handle._impl.update_timestamp = time.time()
+    event = GuiEvent(client=object(), client_id=1, target=handle)
+    loop = handle._impl.gui_api._event_loop
+    for cb in handle._impl.update_cb:
+        if inspect.iscoroutinefunction(cb):
+            asyncio.run_coroutine_threadsafe(cb(event), loop).result(timeout=10)
+
+
+def test_a_value_from_a_page_is_recorded_as_sent_and_never_overwritten_in_flight(app):
+    """A page's value is recorded as it arrives (an async callback on viser's event loop: in
+    order, with the value sent) and applied at the next frame. A thread-pool callback used to
+    run late on a busy machine and read a value the loop had written meanwhile: the click was
+    lost (#28.7). A value that arrives while a frame is being applied is left alone by that
+    frame (viser's update time is newer than the frame's start) and applied by the next."""
+    app.loop.stop()  # the test plays the loop: frames come only when it calls tick()
     app.tick(0.0)
     assert app.angle.value == 0.0 and app.play.value is False
-    # the slider: a value arrives, frames pass, then its callback runs
-    app.angle._impl.value = 200.0  # what viser does first with a browser's GuiUpdateMessage
-    for _ in range(3):
-        app.tick(0.02)
-    assert app.angle.value == 200.0
-    app._angle_changed(types.SimpleNamespace(target=app.angle, client=None))
+    _page_sends(app, app.angle, 200.0)
     app.tick(0.02)
-    assert app.playback.angle_deg == 200.0 and app.angle.value == 200.0
+    assert app.playback.angle_deg == 200.0 and app.angle.value == 200.0 and app.plot_angle.value == 200.0
     i = model.step_index(200.0, len(app.current.result.columns["cam_angle_deg"]))
     np.testing.assert_allclose(_node(app, "valve").position, app.current.poses["valve"][0][i], atol=1e-12)
     # the Play box likewise
-    app.play._impl.value = True
-    for _ in range(3):
-        app.tick(0.02)
-    assert app.play.value is True and not app.playback.playing
-    app._play_changed(types.SimpleNamespace(target=app.play, client=None))
+    _page_sends(app, app.play, True)
     app.tick(0.02)
     assert app.playback.playing and app.play.value is True
+    # a value that arrived after the frame began is not the loop's to overwrite
+    before = time.time()
+    app.plot_angle._impl.value, app.plot_angle._impl.update_timestamp = 300.0, time.time()
+    app.controls.sync((app.angle, app.plot_angle), before)
+    assert app.plot_angle.value == 300.0
     # and the loop still owns both afterwards: the slider follows the animation, a scrub pauses
     app.playback.speed = 0.01
     app.tick(0.05)
@@ -151,9 +162,13 @@ def test_a_value_whose_callback_is_still_pending_is_not_overwritten(app):
     assert app.play.value is False and not app.playback.playing and app.angle.value == 30.0
 
 
+def _plot_labels(app):
+    return [s["label"] for h in app.plots.handles for s in h.series]
+
+
 def test_scene_swap_replaces_the_cam_geometry_and_the_plots(app):
     before = np.array(_node(app, "cam").vertices)
-    titles_before = [label for _, labels in app._plot_signature for label in labels]
+    titles_before = _plot_labels(app)
     app.scene.value = FORCES_SCENE.name
     assert app.wait_applied(60)
     scene = load_scene(FORCES_SCENE)
@@ -165,8 +180,10 @@ def test_scene_swap_replaces_the_cam_geometry_and_the_plots(app):
     # fields now show the new scene, plots gained its force columns
     assert app.fields["drive.rpm"].value == pytest.approx(scene.drive.rpm)
     assert app.effects["forces"].value is True
-    labels = [label for _, labels in app._plot_signature for label in labels]
-    assert "linkage force" in labels and "linkage force" not in titles_before
+    labels = _plot_labels(app)
+    assert "linkage force" in labels and labels != titles_before
+    assert labels == [label for p in app.current.plots
+                      for label in ["cam angle θ [°]", *(s[0] for s in p.series), "now"]]
     assert "forces" in app.readout.content
 
 
@@ -248,7 +265,7 @@ def test_camera_frames_the_whole_revolution_on_load_and_on_scene_swap(app):
     viewer's lens, for a canvas taller than wide; every part at every 40th step is in its
     picture; and it moves with the scene (the trip gear's dashpot used to be cut off, the
     rocking cam's valve group a speck: the camera was aimed alike for every scene)."""
-    from explorer.view.browser.app import ASSUMED_ASPECT, CAMERA_FOV
+    from explorer.view.browser.camera import ASSUMED_ASPECT, CAMERA_FOV
 
     initial = app.server.initial_camera
     positions = []
@@ -282,24 +299,25 @@ def test_a_page_whose_canvas_changes_shape_is_framed_again_until_moved(app):
     viewer put it, the page is framed again; a camera someone moved is left alone."""
     import types
 
+    from explorer.view.browser.camera import Cameras
+
+    cameras = Cameras(app.server)  # the app's part, on its own
     frame = meshes.frame_bounds(*app.current.bounds, fov=0.8, aspect=0.75)
-    app.client_cameras[7] = frame
+    cameras.client_cameras[7] = frame
 
     def report(aspect, position=frame.position, look_at=frame.look_at):
         camera = types.SimpleNamespace(client=types.SimpleNamespace(client_id=7), aspect=aspect,
                                        position=np.array(position), look_at=np.array(look_at))
-        with app._lock:
-            app._aim_pending.clear()
-        app._camera_reported(camera)
-        with app._lock:
-            return 7 in app._aim_pending
+        cameras.pending.clear()
+        cameras.reported(camera)
+        return 7 in cameras.pending
 
     assert report(1.6)  # the canvas widened: frame again
     assert not report(0.75)  # same shape: nothing to do
     moved = np.add(frame.position, (0.0, 0.05, 0.0))
     assert not report(1.6, position=moved)  # moved by hand: theirs
     assert not report(1.6, look_at=np.add(frame.look_at, (0.01, 0.0, 0.0)))
-    app.client_cameras.pop(7)
+    cameras.client_cameras.pop(7)
     assert not report(1.6)  # a page never aimed yet is aimed when it connects, not here
 
 
@@ -309,29 +327,29 @@ def test_a_late_report_of_an_earlier_camera_is_not_a_hand_move(app):
     user moving the camera: the page is framed again (it used to be left unframed for good)."""
     import types
 
+    from explorer.view.browser.camera import Cameras
+
+    cameras = Cameras(app.server)  # the app's part, on its own
+    cameras.camera = app.camera
     older = meshes.frame_bounds(*app.current.bounds, fov=0.8, aspect=0.75)
     newest = meshes.frame_bounds(*app.current.bounds, fov=0.8, aspect=0.9)
     client = types.SimpleNamespace(client_id=8)
-    # what _aim_client records when it aims the page anew: the newest aim, and those before it
-    app._earlier_aims[8] = (older,)
-    app.client_cameras[8] = newest
+    # what aim_client records when it aims the page anew: the newest aim, and those before it
+    cameras.earlier_aims[8] = (older,)
+    cameras.client_cameras[8] = newest
 
     def report(aspect, camera):
         reported = types.SimpleNamespace(client=client, aspect=aspect, position=np.array(camera.position),
                                          look_at=np.array(camera.look_at))
-        with app._lock:
-            app._aim_pending.clear()
-        app._camera_reported(reported)
-        with app._lock:
-            return 8 in app._aim_pending
+        cameras.pending.clear()
+        cameras.reported(reported)
+        return 8 in cameras.pending
 
     assert report(1.6, older)  # the earlier aim, new shape: framed again
     assert report(1.6, app.camera)  # the initial camera (the page had not applied any aim yet)
     assert not report(0.9, older)  # the newest aim's shape: nothing to do
     moved = types.SimpleNamespace(position=np.add(older.position, (0.0, 0.05, 0.0)), look_at=older.look_at)
     assert not report(1.6, moved)  # moved by hand: theirs
-    app.client_cameras.pop(8)
-    app._earlier_aims.pop(8)
 
 
 def test_prepared_parts_after_a_swap_are_the_new_gears_own():
@@ -415,7 +433,7 @@ def test_bad_values_are_rejected_with_a_visible_message(app, key, value, needle)
     # ... and says it is stale, on both tabs (#13.6)
     for banner in (app.stale_plots, app.stale_readout):
         assert banner.visible and "Stale" in banner.content and app.current.label in banner.content
-    assert app._thread.is_alive() and app.worker._thread.is_alive()
+    assert app.loop.alive() and app.worker._thread.is_alive()
     # a good value clears the message
     app.fields[key].value = {"valve.lash": "0.3 mm", "drive.rpm": 3000.0, "solver.steps_per_revolution": 3600,
                              "spring.rate": "25 N/mm", "lift.law": "cycloidal"}[key]
@@ -471,19 +489,24 @@ def test_plots_follow_a_new_result_that_arrives_with_a_magnification_change(app)
     frame, the loop receives one bundle that the worker marked `new_result=False` (only the
     magnification differs from its previous one). The plots and read-outs must still be the new
     result's (they were stale: old series with new data, drawn wrong in the page)."""
-    app._stop.set()  # the test plays the loop: frames come only when it calls tick()
-    app._thread.join(timeout=process_timeout(0.25))
+    for name in ("elastic", "contact", "forces"):  # the rigid kinematics first
+        app.effects[name].value = False
+    assert app.wait_applied(60) and "elastic" not in app.current.result.timings
+    app.loop.stop()  # the test plays the loop: frames come only when it calls tick()
     app.effects["elastic"].value = True
+    app.tick(0.0)  # the request is applied (sent to the compute thread) in a frame
     assert app.worker.wait_idle(60)
     app.magnification.value = 10.0
+    app.tick(0.0)
     assert app.worker.wait_idle(60)
     app.tick(0.0)
     assert app.error_text == "" and app.current.request.magnification == 10.0
     assert not app.current.new_result and "elastic" in app.current.result.timings
-    assert app._plot_signature == [(p.title, tuple(label for label, _, _ in p.series)) for p in app.current.plots]
-    assert "rigid" in app._plot_signature[0][1]
+    shown = [(h.title, tuple(s["label"] for s in h.series[1:-1])) for h in app.plots.handles]
+    assert shown == [(p.title, tuple(label for label, _, _ in p.series)) for p in app.current.plots]
+    assert "rigid" in shown[0][1]
     assert app.readout.content == app.current.readout
-    for handle, plot in zip(app._plot_handles, app.current.plots):
+    for handle, plot in zip(app.plots.handles, app.current.plots):
         assert len(handle.data) == 1 + len(plot.series) + 1  # angle, the series, the cursor
 
 
@@ -493,7 +516,7 @@ def test_effect_checkbox_adds_the_force_effect(app):
     assert app.error_text == ""
     assert "forces" in app.current.scene.effects
     assert "forces" in app.current.result.timings
-    labels = [label for _, labels in app._plot_signature for label in labels]
+    labels = _plot_labels(app)
     assert any(label.endswith("force") for label in labels)
 
 
@@ -855,24 +878,14 @@ def test_decimate_ignores_nan_in_a_bucket_and_keeps_all_nan_buckets_as_gaps():
 # ------------------------------------------------------------------ typing into a field (#13.1)
 
 
-class _PageEvent:
-    """What viser hands a callback for a change made on a page (event.client is set)."""
-
-    def __init__(self, target):
-        self.target, self.client, self.client_id = target, object(), 1
-
-
 def _type_on_page(app, key, text, delay=0.12):
     """Type `text` into a field as a page does: viser stores each new value in the handle, then
-    runs the callback; the loop keeps running meanwhile."""
+    runs the callbacks; the loop keeps running meanwhile."""
     handle = app.fields[key]
-    callback = handle._impl.update_cb[0]
     typed = ""
     for char in text:
         typed += char
-        with app._programmatic():  # the value arriving from the page (no echo of ours)
-            handle.value = typed
-        callback(_PageEvent(handle))
+        _page_sends(app, handle, typed)
         time.sleep(delay)
 
 
@@ -886,8 +899,7 @@ def test_typing_at_human_pace_is_not_rewritten_and_applies_once_paused(app, key,
     written back into the field being typed in ('0.003 N/mm000 N/mm'). Now nothing is applied
     while typing goes on, the field keeps what was typed, and the value used is the one typed."""
     handle = app.fields[key]
-    with app._programmatic():
-        handle.value = ""
+    _page_sends(app, handle, "")  # the field emptied on the page
     computed = app.worker.submitted
     _type_on_page(app, key, text)
     assert handle.value == text  # never rewritten under the typist
@@ -938,7 +950,7 @@ def test_elastic_without_a_stiffness_asks_for_one_instead_of_failing(app):
 
 
 def test_every_plot_names_its_axes_and_keeps_overlapping_curves_apart():
-    from explorer.view.browser.app import PLOT_X_LABEL, plot_options
+    from explorer.view.browser.plots import PLOT_X_LABEL, plot_options
 
     result = simulate(load_scene(SCENES / "trip_gear_dashpot.toml"))
     plots = model.build_plots(result)
@@ -1089,14 +1101,15 @@ def test_each_page_has_its_own_session_and_a_closed_page_frees_it():
         assert b.worker.computed == 1  # nothing of page A's reached B
         assert OWN_NOTE in a.share_note.content and OWN_NOTE in b.share_note.content
         # page A leaves: its session ends, its process and thread with it
-        worker_a, thread_a = psutil.Process(a.worker.process_id), a._thread
+        worker_a, loop_a = psutil.Process(a.worker.process_id), a.loop
         first.close()
         pages.remove(first)
         assert _wait_for(lambda: id_a not in explorer.sessions(), process_timeout())
         assert _wait_for(lambda: not worker_a.is_running() or worker_a.status() == psutil.STATUS_ZOMBIE,
                          process_timeout())
-        assert not thread_a.is_alive()
-        assert a.worker._thread is None or not a.worker._thread.is_alive()
+        assert not loop_a.alive()
+        # the session is dropped before its app is stopped: the thread ends within worker.stop
+        assert _wait_for(lambda: a.worker._thread is None or not a.worker._thread.is_alive(), process_timeout())
         # B still works
         other.set("Camshaft rpm", 2000.0)
         assert _wait_for(lambda: b.current.scene.drive.rpm == 2000.0, process_timeout())
@@ -1106,7 +1119,7 @@ def test_each_page_has_its_own_session_and_a_closed_page_frees_it():
         explorer.stop()
         server.stop()
     assert explorer.sessions() == {}
-    assert not b._thread.is_alive()
+    assert not b.loop.alive()
     for app in (a, b):
         assert app.loop_errors == 0 and app.worker.internal_errors == 0
 
@@ -1116,3 +1129,34 @@ def test_a_shared_session_says_so_on_the_page(app):
     from explorer.view.browser.app import SHARED_NOTE
 
     assert app.client is None and SHARED_NOTE in app.share_note.content
+
+
+def test_the_plots_cursor_is_hidden_while_the_animation_plays():
+    """#28.4: the cursor was the plots' data that changed 8 times a second while the animation
+    played, and a page laying the plots out then kept axes without ticks. While playing, no
+    cursor; paused by a scrub, the cursor stands at the angle chosen."""
+    from explorer.view.browser.app import ExplorerApp
+    from explorer.view.browser.plots import CURSOR_SETTLE_S
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    app = ExplorerApp(server, str(DEMO), playing=True)
+    try:
+        assert app.wait_applied(60)
+        time.sleep(CURSOR_SETTLE_S + 0.5)  # past the settling, while the clock moves on
+        assert app.controls.playback.playing and app.plots.handles
+        for handle in app.plots.handles:
+            assert not np.any(np.asarray(handle.data[-1]))
+        app.angle.value = 90.0
+        assert app.wait_applied(60)
+
+        def at_90():
+            for handle in app.plots.handles:
+                x, cursor = np.asarray(handle.data[0]), np.asarray(handle.data[-1])
+                if cursor.sum() != 1.0 or abs(x[int(np.argmax(cursor))] - 90.0) > 0.5:
+                    return False
+            return True
+
+        assert _wait_for(at_90, process_timeout()) and not app.controls.playback.playing
+    finally:
+        app.stop()
+        server.stop()

@@ -155,7 +155,7 @@ def test_a_slow_value_is_abandoned_and_the_server_stays_responsive():
 
 
 def test_values_out_of_bounds_are_refused_before_any_computation():
-    from explorer.view.browser.app import MAX_GUI_STEPS, MAX_TEXT_LENGTH
+    from explorer.view.browser.parameters import MAX_GUI_STEPS, MAX_TEXT_LENGTH
 
     with running_app() as (server, app):
         steps = app.fields["solver.steps_per_revolution"]
@@ -192,6 +192,11 @@ def test_a_magnification_change_keeps_the_shown_result_across_the_process():
     """The child reuses its simulation when only the magnification changes; the bundle it sends
     back is linked to the objects already shown, so plots and meshes are not redrawn."""
     with running_app() as (server, app):
+        # the speed sweep's steps done: a change that waits on a slow one restarts the child
+        # (explorer.view.browser.compute.SWEEP_YIELD_S), which then has nothing to reuse
+        deadline = time.monotonic() + WAIT_S
+        while not app.worker.sweep_idle() and time.monotonic() < deadline:
+            time.sleep(0.05)
         shown = app.current
         app.magnification.value = 7.0
         assert app.wait_applied(WAIT_S)
@@ -201,6 +206,38 @@ def test_a_magnification_change_keeps_the_shown_result_across_the_process():
         app.fields["drive.rpm"].value = 1500.0
         assert app.wait_applied(WAIT_S)
         assert app.current.new_result and app.current.result is not shown.result
+
+
+def test_a_restarted_child_recomputes_the_same_result_as_the_one_shown():
+    """A child restarted between two requests (a speed-sweep step stopped for a change waiting
+    longer than SWEEP_YIELD_S) has no simulation to reuse when only the magnification changes:
+    it simulates again, and that bundle is linked to the result shown, so the plots are not
+    redrawn and the live stream does not get the same result twice."""
+    from explorer.view.browser.compute import ComputeWorker
+    from explorer.view.browser.model import Request
+
+    ready, errors, logged = [], [], []
+    worker = ComputeWorker(on_ready=ready.append, on_error=lambda r, m: errors.append(m),
+                           on_result=logged.append, time_limit=None).start()
+    try:
+        worker.submit(Request(str(DEMO), serial=1))
+        assert worker.wait_idle(WAIT_S) and len(ready) == 1, errors
+        first = worker.process_id
+        worker._process.kill()  # as a stopped sweep step does; the worker thread reaps it
+        deadline = time.monotonic() + WAIT_S
+        while worker._process.alive() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        worker.submit(Request(str(DEMO), magnification=7.0, serial=2))
+        assert worker.wait_idle(WAIT_S) and len(ready) == 2, errors
+        assert worker.process_id not in (None, first)  # a fresh child computed it
+        assert ready[1].result is ready[0].result and ready[1].plots is ready[0].plots
+        assert ready[1].request.magnification == 7.0 and ready[1].poses is not ready[0].poses
+        assert logged == [ready[0]]
+        worker.submit(Request(str(DEMO), ("drive.rpm=1500",), serial=3))  # another scene: its own result
+        assert worker.wait_idle(WAIT_S) and len(ready) == 3 and ready[2].result is not ready[0].result
+        assert logged == [ready[0], ready[2]]
+    finally:
+        worker.stop()
 
 
 def test_memory_budget_stops_a_huge_computation():

@@ -20,8 +20,8 @@ every other column the scene's effects compute, the 3D parts moving step by step
 log, and a default layout. Several scenes, or a --sweep over a scene value, become separate
 recordings in the same file, so the runs can be compared in one viewer (`explorer view FILE`).
 
-Timelines: cam_angle_deg (whole degrees; the default: plots span 0-360 deg and a revolution
-plays in 6 s at 1x), time (s), step (index). Lengths in mm as in the browser explorer, the rest
+Timelines: cam_angle_0.01deg (hundredths of a degree, 12345 = 123.45 deg, every sample its own
+place; the default: plots span one revolution, which plays in 6 s at 1x), time (s), step (index). Lengths in mm as in the browser explorer, the rest
 SI. Entity paths: /valve/lift, /valve/velocity, /valve/acceleration, /valve/jerk, /follower/...,
 /forces/<name>, /torque/..., /stress/..., /angles/..., /parts/<part>, /events, /summary
 (full mapping: `python -c "import explorer.view.rerun.recording as r; help(r)"`). Sweep recordings are

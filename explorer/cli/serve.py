@@ -80,6 +80,7 @@ def run(args) -> int:
 
     from ..view.browser import callbacks
     from ..view.browser.app import ExplorerApp
+    from ..view.browser.kernels import KernelWarmup
     from ..view.browser.sessions import PerClientExplorer
 
     with Supervisor("explorer serve") as supervisor:
@@ -90,14 +91,18 @@ def run(args) -> int:
             server = viser.ViserServer(host=args.host, port=args.port, verbose=False)
             callbacks.use_for(server)  # idle callback threads end (the sessions' crowd leaves none behind)
             on_result = (lambda prepared: stream.log(prepared.result, prepared.label)) if stream is not None else None
+            # the compiled solvers are prepared once the page is served, not before (#27.2)
+            kernels = KernelWarmup()
             if args.shared:
-                app = ExplorerApp(server, scene.source, args.overrides, playing=not args.paused, on_result=on_result)
+                app = ExplorerApp(server, scene.source, args.overrides, playing=not args.paused, on_result=on_result,
+                                  kernels=kernels)
             else:
                 app = PerClientExplorer(server, scene.source, args.overrides, playing=not args.paused,
-                                        on_result=on_result)
+                                        on_result=on_result, kernels=kernels)
             shown_host = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
             if not supervisor.stopping.is_set():
                 print(f"Valve-Gear Explorer: http://{shown_host}:{server.get_port()}  (Ctrl-C stops)", flush=True)
+                kernels.start(supervisor.spawn)
             while not supervisor.stopping.wait(0.5):
                 pass
             print("stopping", file=sys.stderr)

@@ -10,11 +10,24 @@ from __future__ import annotations
 
 import os
 import stat
+from pathlib import Path
 
 from .errors import InputError
 
 MAX_DATA_FILE_BYTES = 50 * 1024 * 1024  # a lift table or a contour: 50 MB is millions of rows
 MAX_SCENE_FILE_BYTES = 10 * 1024 * 1024  # a scene is a page of TOML
+
+
+def data_folder(fields) -> Path:
+    """The folder a scene's relative data paths ([lift] file, [cam] file) are taken from: the
+    folder of the scene file as found (`folder`, set by load_scene: a built-in scene given by its
+    name lives in the package, not in the working directory), else the folder of `source`, else
+    the working directory (a scene from memory)."""
+    folder = fields.get("folder") or ""
+    if folder:
+        return Path(folder)
+    source = fields.get("source", "<memory>")
+    return Path(source).parent if source != "<memory>" else Path.cwd()
 
 
 def _kind(mode: int) -> str:

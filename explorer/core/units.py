@@ -392,3 +392,27 @@ def printable(value: float, key: str = "") -> float:
         return 0.0
     value = float(f"{value:.{PRINTED_DIGITS}g}")
     return value + 0.0  # -0.0 + 0.0 is +0.0
+
+
+def figure(value: float, digits: int = 4, *, signed: bool = False, key: str = "") -> str:
+    """The printed text of a computed figure: `printable` (round-off noise is 0, never -0), then
+    `digits` significant digits; with `signed` a "+" before a positive figure, none before 0 (a
+    constraint exactly at its limit has a slack of 0, not of "+0")."""
+    value = printable(float(value), key)
+    text = f"{value:.{digits}g}"
+    return f"+{text}" if signed and value > 0.0 else text
+
+
+def resolved(value, error):
+    """`value` (scalar or array) rounded to the decade of its uncertainty `error` (>= 0, same
+    shape): only the digits that mean something are kept, so a figure whose true value is 0 and
+    whose computed value is its error (an FFT phase off by its aliasing, 2.4e-06 rad) prints as
+    0. Where `error` is 0 or not finite the value is returned unchanged; never -0."""
+    import numpy as np
+
+    value = np.asarray(value, dtype=float)
+    error = np.broadcast_to(np.asarray(error, dtype=float), value.shape)
+    ok = np.isfinite(error) & (error > 0.0) & np.isfinite(value)
+    step = np.where(ok, 10.0 ** np.ceil(np.log10(np.where(ok, error, 1.0))), 1.0)
+    out = np.where(ok, np.round(value / step) * step, value) + 0.0
+    return out if out.ndim else float(out)

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..core.errors import InputError, echo
 from ..core.reader import Table
-from ..core.files import read_text
+from ..core.files import data_folder, read_text
 from ..core.ranges import RANGES
 from ..core.units import to_si, unit_scale
 from .validity import MAX_LIFT, check_computed
@@ -78,9 +78,7 @@ def parse_table_options(table: Table, fields: dict[str, Any]) -> TableOptions:
     name = table.string("file")
     if not name.strip():
         raise table.error("file", "empty file name")
-    source = fields.get("source", "<memory>")
-    base = Path(source).parent if source != "<memory>" else Path.cwd()
-    path = (base / name).resolve() if not Path(name).is_absolute() else Path(name)
+    path = (data_folder(fields) / name).resolve() if not Path(name).is_absolute() else Path(name)
     angle_unit = table.string("angle_unit", "deg")
     lift_unit = table.string("lift_unit", "mm")
     angle_scale = unit_scale(angle_unit, "angle", file=table.file, key=table.key("angle_unit"))

@@ -18,7 +18,7 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Mapping
 
 from ..core.errors import InputError, echo
-from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
+from ..core.files import MAX_SCENE_FILE_BYTES, data_folder, read_regular
 from ..core.plugins import resolve
 from ..core.reader import Table, toml_loads
 from ..dynamics import solvers
@@ -173,7 +173,10 @@ class Scene:
     linkage: Linkage | None
     seat: Seat
     solver: Solver
-    source: str = "<memory>"  # file the scene came from, for messages and relative paths
+    source: str = "<memory>"  # the file the scene came from as the user named it, for messages
+    # where its relative paths start: the found file's folder ("": source's folder). Not compared:
+    # the data files it names are read into the sections when the scene loads
+    folder: str = field(default="", compare=False)
     description: str = ""
     cam: CamSpec | None = None  # owned by explorer.lift.contours.spec
     contact: ContactSpec | None = None  # owned by explorer.scene.contact_section
@@ -191,7 +194,7 @@ class Scene:
 
     @property
     def directory(self) -> Path:
-        return Path(self.source).parent if self.source != "<memory>" else Path.cwd()
+        return data_folder({"source": self.source, "folder": self.folder})
 
     @property
     def omega(self) -> float:
@@ -210,7 +213,11 @@ TOP_KEYS = (
 
 def load_scene(path: str | os.PathLike, overrides: list[str] | tuple[str, ...] = ()) -> Scene:
     """Read and validate a scene file; `overrides` are "section.key=value" strings (TOML values)."""
-    return scene_from_dict(read_scene_data(path, overrides), str(path))
+    # errors name the file as given; its relative data files are found beside the file itself
+    # (`explorer simulate table_demo.toml` from any directory reads the package's data)
+    data = read_scene_data(path, overrides)
+    folder = os.path.dirname(os.path.abspath(find_scene(path)))
+    return scene_from_dict(data, str(path), folder=folder)
 
 
 def read_scene_data(path: str | os.PathLike, overrides=()) -> dict:
@@ -297,7 +304,7 @@ def apply_overrides(data: dict, overrides, file: str) -> dict:
     return data
 
 
-def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
+def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>", folder: str = "") -> Scene:
     top = Table(data, file, "")
     top.reject_unknown(TOP_KEYS)
     name = top.string("name", default=Path(file).stem if file != "<memory>" else "scene")
@@ -344,6 +351,7 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>") -> Scene:
     fields: dict[str, Any] = dict(
         name=name, description=description, effects=effects, drive=drive, lift=lift, follower=follower,
         valve=valve, spring=spring, loads=loads, linkage=linkage, seat=seat, solver=solver, source=file,
+        folder=folder,
     )
     for section, target in OWNED_SECTIONS.items():
         table = top.table(section, required=False)

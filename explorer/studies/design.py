@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.errors import InputError
+from ..core.units import figure
 from ..lift.contours.translating import pitch_geometry
 from ..lift.curves import LawLift
 from ..lift.spline import NAMES, UNITS, solve_spline, with_values
@@ -579,10 +580,10 @@ def report_text(scene, report: DesignReport) -> str:
         lines.append(f"  station {i} {NAMES[k]} = {value * w**k:.9g} {UNITS[k]}")
     lines.append("  constraint slacks (>= 0 met):")
     for name, slack in report.slacks.items():
-        lines.append(f"    {name:<16s} {slack:+.4g}")
+        lines.append(f"    {name:<16s} {figure(slack, signed=True)}")
     lines.append(f"  standard laws on the same event ({report.objective}; slacks):")
     for law_name, (value, slacks) in report.comparison.items():
-        cells = "  ".join(f"{name.split(' [')[0]} {slack:+.4g}" for name, slack in slacks.items())
+        cells = "  ".join(f"{name.split(' [')[0]} {figure(slack, signed=True)}" for name, slack in slacks.items())
         lines.append(f"    {law_name:<20s} {value:11.6g} {unit}   {cells}{'  VIOLATES' if min(slacks.values()) < 0 else ''}")
     return "\n".join(lines) + "\n"
 

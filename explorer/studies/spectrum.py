@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import InputError
+from ..core.units import resolved
 from ..dynamics.chain import chain_frequencies, continuous_frequencies
 from .charts import figure, png
 
@@ -37,7 +38,7 @@ MAX_ORDERS = 5000
 class Spectrum:
     orders: np.ndarray  # 1, 2, ...
     amplitude: np.ndarray  # m/s^2, 2 |C_n|
-    phase: np.ndarray  # rad, of C_n
+    phase: np.ndarray  # rad, of C_n, to the digits its aliasing error leaves (core.units.resolved)
     mean: float  # C_0, m/s^2 (0 for a closed event)
     rpm: float
     natural_order: float | None  # wn / w of the linkage in contact (None without [linkage])
@@ -53,14 +54,21 @@ def acceleration_spectrum(scene, lift, orders: int = 100, samples: int | None = 
     w = scene.omega
     accel = scene.follower.ratio * w**2 * lift.derivatives(theta)[2]
     c = np.fft.rfft(accel) / n
+    # the aliasing error of each coefficient, estimated from the FFT of every second sample (its
+    # own error is at least as large as the full one's; conservative): a phase is known only to
+    # error / |C_n| and is printed to that (core.units.resolved), so a phase that is 0 reads 0
+    half = np.fft.rfft(accel[::2]) / (n // 2)
     natural = None
     if scene.linkage is not None and scene.valve is not None:
         mass = scene.valve.oscillating_mass if scene.valve.oscillating_mass is not None else scene.valve.mass
         rate = scene.spring.rate if scene.spring is not None else 0.0
         natural = math.sqrt((scene.linkage.stiffness + rate) / mass) / w
     k = np.arange(1, orders + 1)
-    return Spectrum(k, 2.0 * np.abs(c[k]), np.angle(c[k]), float(c[0].real), scene.drive.rpm, natural, n,
-                    spring_surge_orders(scene.spring, w, orders))
+    error = np.abs(c[k] - half[k]) if 2 * orders < n // 2 else np.zeros(orders)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        phase_error = np.where(np.abs(c[k]) > error, error / np.abs(c[k]), math.pi)
+    return Spectrum(k, 2.0 * np.abs(c[k]), resolved(np.angle(c[k]), phase_error), float(c[0].real), scene.drive.rpm,
+                    natural, n, spring_surge_orders(scene.spring, w, orders))
 
 
 def spring_surge_orders(spring, omega: float, orders: int) -> tuple[float, ...]:

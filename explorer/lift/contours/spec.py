@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from ...core.errors import InputError, echo
-from ...core.files import read_text
+from ...core.files import data_folder, read_text
 from ...core.reader import Table
 from ...core.units import plain_number, to_si, unit_scale
 from .arcs import Arc, ArcContour, ContourError, build_arc_contour
@@ -228,9 +228,7 @@ def _parse_points(table: Table, rotation: float, fields: dict) -> CamSpec:
     else:
         key = table.key("file")
         name = table.string("file")
-        source_file = fields.get("source", "<memory>")
-        base = Path(source_file).parent if source_file != "<memory>" else Path.cwd()
-        path = (base / name) if not Path(name).is_absolute() else Path(name)
+        path = (data_folder(fields) / name) if not Path(name).is_absolute() else Path(name)
         pts = _read_points_file(path, file, key, scale)
         source = str(path)
     if len(pts) >= 2 and np.allclose(pts[0], pts[-1], rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(pts).max()))):

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 import time
 import traceback
@@ -46,7 +47,12 @@ class ComputeWorker:
     on_result: Callable[[Prepared], None] | None = None  # e.g. the rerun live stream
     # the speed sweep of each new result (explorer.view.browser.speedsweep), computed in the same
     # child between requests, one step at a time; None: no sweep
-    on_sweep: Callable[[int, Any], None] | None = None  # (serial, SpeedSweep or None: nothing to sweep)
+    on_sweep: Callable[[int, Any], None] | None = None  # (serial, SpeedSweep or NoSweep)
+    # the read-out with the spring advice of a result whose advice was left out of the path to
+    # its plots (Prepared.advice_pending), computed in the child once nothing newer waits
+    on_advice: Callable[[int, str], None] | None = None  # (serial, read-out markdown)
+    # whether the compiled solver may be called (explorer.view.browser.kernels); None: always
+    compiled: Callable[[], bool] | None = None
     time_limit: float | None = COMPUTE_TIME_LIMIT_S
     memory_limit: int = MEMORY_LIMIT_BYTES
     _pending: Request | None = None
@@ -64,6 +70,8 @@ class ComputeWorker:
     sweep_steps: int = 0  # speed-sweep steps computed (for tests)
     _pending_at: float = 0.0  # when the waiting request came
     _sweep: Any = None  # the SpeedSweep being filled in, or a SweepTask still to start
+    _advice: int | None = None  # serial of the result whose spring advice is still to compute
+    _background: bool = False  # an advice or sweep step is being computed
     _span: tuple[str, tuple[float, float]] | None = None  # (scene path, speed range) last swept
 
     def start(self) -> "ComputeWorker":
@@ -123,7 +131,7 @@ class ComputeWorker:
             while True:
                 with self._cond:
                     while self._pending is None and not self._stop:
-                        if self._sweep is None:
+                        if self._sweep is None and self._advice is None:
                             self._cond.wait()
                             continue
                         quiet = time.monotonic() - self._pending_at
@@ -133,15 +141,26 @@ class ComputeWorker:
                     if self._stop:
                         return
                     if self._pending is None:
-                        # nothing newer to compute: one step of the speed sweep (not counted as
-                        # busy: the result shown is complete; the sweep fills in behind it)
+                        # nothing newer to compute: the spring advice, then one step of the speed
+                        # sweep (not counted as busy: the result shown is complete; these fill in
+                        # behind it)
+                        advice, self._advice = self._advice, None
                         sweep = self._sweep
                         request = None
+                        self._background = True
                     else:
                         request, self._pending = self._pending, None
                         self._busy = True
                 if request is None:
-                    self._sweep_step(sweep)
+                    try:
+                        if advice is not None:
+                            self._advice_step(advice)
+                        else:
+                            self._sweep_step(sweep)
+                    finally:
+                        with self._cond:
+                            self._background = False
+                            self._cond.notify_all()
                     continue
                 try:
                     self._compute(request)
@@ -193,9 +212,15 @@ class ComputeWorker:
             self.on_error(request, payload)
         else:
             prepared = self._relink(*payload)
+            # a result not shown before (a magnification change is the same result; so is a
+            # fresh child's recomputation of it, linked by _relink)
+            fresh = self._last is None or prepared.result is not self._last.result
             self._last = prepared
             self.computed += 1
             self.on_ready(prepared)
+            if self.on_advice is not None and prepared.new_result:
+                with self._cond:
+                    self._advice = prepared.request.serial if prepared.advice_pending else None
             if self.on_sweep is not None and prepared.new_result:
                 from .speedsweep import SweepTask
 
@@ -203,27 +228,65 @@ class ComputeWorker:
                 span = self._span[1] if self._span is not None and self._span[0] == path else None
                 with self._cond:
                     self._sweep = SweepTask(prepared.request.serial, None, span)
-            if self.on_result is not None and prepared.new_result:
+            if self.on_result is not None and fresh:
                 try:
                     self.on_result(prepared)
                 except Exception:
                     traceback.print_exc()
 
     def sweep_idle(self) -> bool:
-        """Whether nothing is waiting and the speed sweep of the newest result is complete."""
+        """Whether nothing is waiting and the advice and speed sweep of the newest result are complete."""
         with self._cond:
-            return self._pending is None and not self._busy and self._sweep is None
+            return (self._pending is None and not self._busy and self._sweep is None and self._advice is None
+                    and not self._background)
+
+    def resweep(self) -> None:
+        """Sweep the newest result again (the compiled solver became ready: all speeds at once)."""
+        from .speedsweep import SweepTask
+
+        with self._cond:
+            if self._last is not None and self.on_sweep is not None:
+                span = self._span[1] if self._span is not None and self._span[0] == self._last.request.path else None
+                self._sweep = SweepTask(self._last.request.serial, None, span)
+                self._cond.notify_all()
+
+    def _advice_step(self, serial: int) -> None:
+        """The read-out with the spring advice, from the child; dropped when a newer request
+        stops it (the newer result asks again)."""
+        from .model import AdviceTask
+        from .worker import Superseded, TimeLimitExceeded, WorkerDied
+
+        def superseded() -> bool:
+            return self._stop or (self._pending is not None and time.monotonic() - self._pending_at > SWEEP_YIELD_S)
+
+        try:
+            kind, payload = self._process.call(AdviceTask(serial), self.time_limit, superseded)
+        except (Superseded, TimeLimitExceeded, WorkerDied):
+            return
+        except Exception:
+            traceback.print_exc()
+            self._process.kill()
+            self._process.reap()
+            return
+        if kind == "advice":
+            try:
+                self.on_advice(serial, payload)
+            except Exception:
+                traceback.print_exc()
+        elif kind == "internal":
+            self.internal_errors += 1
+            traceback.print_exc()
 
     def _sweep_step(self, sweep) -> None:
         """Start the sweep (rigid figures at every speed) or compute its next elastic speed,
         in the child; hand the sweep so far to `on_sweep`. A request waiting for more than
         SWEEP_YIELD_S stops a slow step (the child is restarted); the sweep then ends (the new
         result starts its own)."""
-        from .speedsweep import SpeedSweep, SweepTask, with_elastic
+        from .speedsweep import NoSweep, SpeedSweep, SweepTask, with_elastic
         from .worker import Superseded, TimeLimitExceeded, WorkerDied
 
         if isinstance(sweep, SweepTask):
-            task = sweep
+            task = dataclasses.replace(sweep, compiled=self.compiled is None or self.compiled())
         elif sweep.batched:
             task = SweepTask(sweep.serial, rpms=tuple(sweep.elastic_rpm.tolist()))
         else:
@@ -244,20 +307,22 @@ class ComputeWorker:
             self._process.reap()
             kind, payload = "stopped", None
         self.sweep_steps += 1
-        if kind == "sweep" and isinstance(payload, SpeedSweep):
+        if kind == "sweep" and isinstance(payload, NoSweep):
+            done = payload
+        elif kind == "sweep" and isinstance(payload, SpeedSweep):
             self._span = (self._last.request.path if self._last is not None else "", payload.span)
             done = payload
         elif kind == "sweep" and isinstance(sweep, SpeedSweep):
             done = with_elastic(sweep, payload)
         else:
             done = None  # stale, failed or stopped: this sweep ends here
+        unfinished = isinstance(done, SpeedSweep) and done.next_elastic() is not None
         with self._cond:
             if self._sweep is sweep:  # no newer result meanwhile
-                self._sweep = done if done is not None and done.next_elastic() is not None else None
+                self._sweep = done if unfinished else None
             current = self._sweep is None or self._sweep is done
             self._cond.notify_all()
-        nothing = kind == "sweep" and payload is None  # the scene has no rigid forces to sweep
-        if (done is not None or nothing) and current:
+        if done is not None and current:
             try:
                 self.on_sweep(task.serial, done)
             except Exception:
@@ -267,12 +332,18 @@ class ComputeWorker:
         """A bundle that reused the previous simulation (only the magnification changed) shares
         the previous bundle's objects again, as it did in the child: the viewer tells what to
         redraw by identity, and a pickled copy would redraw the plots and every mesh. `reused`
-        is the serial of the bundle the child reused; only that one may be linked to."""
-        last = self._last
-        if reused is None or last is None or last.request.serial != reused:
-            return prepared
-        import dataclasses
+        is the serial of the bundle the child reused; only that one may be linked to.
 
+        A child restarted meanwhile (a sweep step stopped for this request, SWEEP_YIELD_S) has
+        nothing to reuse and simulates again; its bundle for the same scene and overrides is
+        linked too, by the child's own criterion (model.prepare), but stays `new_result`: the
+        sweep and the advice, whose child state was lost, start again."""
+        last = self._last
+        if last is None:
+            return prepared
+        same = (last.request.path, last.request.overrides) == (prepared.request.path, prepared.request.overrides)
+        if last.request.serial != reused and not (reused is None and same):
+            return prepared
         return dataclasses.replace(
             prepared, scene=last.scene, result=last.result, layout=last.layout, lift=last.lift,
             meshes=last.meshes, plots=last.plots, readout=last.readout, values=last.values,

@@ -8,8 +8,8 @@ Nothing here imports viser, so it is testable and reusable (the benchmark drives
 
 from __future__ import annotations
 
+import dataclasses
 import functools
-import json
 import math
 import time
 from dataclasses import dataclass
@@ -18,18 +18,7 @@ from typing import Any
 
 import numpy as np
 
-
-# Parameters the GUI edits: scene key -> (label, kind, display unit). Values typed with units
-# are passed to the scene reader as strings, so the GUI accepts exactly what a scene file does.
-PARAMETERS: dict[str, tuple[str, str, str]] = {
-    "lift.law": ("Lift law", "choice", ""),
-    "drive.rpm": ("Camshaft rpm", "number", "rpm"),
-    "valve.lash": ("Lash", "quantity", "mm"),
-    "linkage.stiffness": ("Linkage stiffness", "quantity", "N/mm"),
-    "spring.preload": ("Spring preload", "quantity", "N"),
-    "spring.rate": ("Spring rate", "quantity", "N/mm"),
-    "solver.steps_per_revolution": ("Steps / revolution", "integer", ""),
-}
+from .parameters import PARAMETERS, override, scene_values  # noqa: F401 - the fields' table, re-exported
 
 
 @dataclass(frozen=True)
@@ -40,42 +29,6 @@ class Request:
     overrides: tuple[str, ...] = ()
     magnification: float = 1.0
     serial: int = 0  # increases with every request, so the newest is known
-
-
-def override(key: str, value: Any) -> str:
-    """A "section.key=value" override whose value the TOML reader reads back unchanged."""
-    if isinstance(value, bool):
-        return f"{key}={'true' if value else 'false'}"
-    if isinstance(value, (list, tuple)):
-        return f"{key}=[{', '.join(json.dumps(str(v)) for v in value)}]"
-    if isinstance(value, int):
-        return f"{key}={value}"
-    if isinstance(value, float):
-        return f"{key}={value!r}" if math.isfinite(value) else f"{key}={'nan' if math.isnan(value) else ('inf' if value > 0 else '-inf')}"
-    return f"{key}={json.dumps(str(value))}"
-
-
-def scene_values(scene) -> dict[str, Any]:
-    """The scene's current value of each editable parameter, in the GUI's display units
-    (None where the scene has no such section)."""
-    per_si = {"mm": 1e3, "N/mm": 1e-3, "N": 1.0}  # exact factors: no unit registry on this path
-
-    def q(value, unit):
-        return None if value is None else f"{_round(value * per_si[unit])} {unit}"
-
-    return {
-        "lift.law": scene.lift.law,
-        "drive.rpm": float(scene.drive.rpm),
-        "valve.lash": q(scene.valve.lash if scene.valve else None, "mm"),
-        "linkage.stiffness": q(scene.linkage.stiffness if scene.linkage else None, "N/mm"),
-        "spring.preload": q(scene.spring.preload if scene.spring else None, "N"),
-        "spring.rate": q(scene.spring.rate if scene.spring else None, "N/mm"),
-        "solver.steps_per_revolution": int(scene.solver.steps_per_revolution),
-    }
-
-
-def _round(x: float) -> str:
-    return f"{x:.6g}"
 
 
 # The spring is resent every frame while the valve moves: a coarser tube than the default keeps
@@ -280,9 +233,14 @@ def events_html(result) -> str:
             + "".join(rows) + "</tbody></table></div>")
 
 
-def spring_advice_lines(summary) -> list[str]:
-    """The spring advisor's advice (forces effect, [spring_design]) as read-out lines."""
-    design = summary.get("spring_design")
+ADVICE_PENDING = "pending"  # readout_markdown's `advice` while the advisor is still to run
+
+
+def spring_advice_lines(design) -> list[str]:
+    """The spring advisor's advice (the [spring_design] block of the forces summary) as
+    read-out lines; ADVICE_PENDING: a line saying it is being computed."""
+    if design == ADVICE_PENDING:
+        return ["", "**Spring advice:** computing… (after the plots, once the page is idle)"]
     advice = design.get("advice") if isinstance(design, dict) else None
     if not isinstance(advice, dict):
         return []
@@ -300,21 +258,41 @@ def spring_advice_lines(summary) -> list[str]:
     return lines
 
 
-def readout_markdown(result, label: str = "") -> str:
-    """Compute times, events, key figures (peaks, jump speed, impact speeds...) and warnings."""
+def float_warning(result, float_rpm: float) -> str | None:
+    """The float warning of a result whose effects did not judge float themselves (no 'forces'
+    ticked), by the same definition: the rigid float (jump) speed of the scene's forces effect
+    (rigid_float_rpm). None when the forces effect ran (its own warning says it) or no float."""
+    if "jump_speed_rpm" in result.summary or not math.isfinite(float_rpm):
+        return None
+    rpm = float(result.summary.get("rpm", 0.0))
+    if rpm < float_rpm:
+        return None
+    return (f"valve float: {rpm:.6g} rpm is at or above the rigid float (jump) speed {float_rpm:.6g} rpm "
+            "(of the rigid forces; tick 'forces' under Scene → Effects for the contact forces)")
+
+
+def readout_markdown(result, label: str = "", float_rpm: float = math.nan, advice=None) -> str:
+    """Compute times, events, key figures (peaks, jump speed, impact speeds...) and warnings;
+    `float_rpm` the page's float speed (rigid_float_rpm), `advice` the [spring_design] block
+    (ADVICE_PENDING while it is computed; None: the result's own)."""
     s = result.summary
     lines = [f"**{s.get('scene', '')}** at {s.get('rpm', 0):g} rpm, {s.get('steps_per_revolution', 0)} steps"]
     if label:
         lines.append(f"<small>{label}</small>")
     # warnings first: undercut, self-locking, float... are what a designer must not miss
     warnings = list(result.warnings)
+    extra = float_warning(result, float_rpm)
+    if extra is not None:
+        warnings.append(extra)
     lines += ["", f"**Warnings** ({len(warnings)})", ""]
     lines += [f"- ⚠ {w}" for w in warnings] or ["none"]
+    if math.isfinite(float_rpm) and "jump_speed_rpm" not in s:
+        lines += ["", f"Rigid float (jump) speed: {float_rpm:.6g} rpm"]
     lines += ["", "| effect | compute |", "|---|---:|"]
     for name, timing in result.timings.items():
         lines.append(f"| {name} | {1e3 * timing.compute_time_s:.2f} ms |")
     # the events are a table of their own beside this text (events_html) with "Go to event"
-    lines += spring_advice_lines(s)
+    lines += spring_advice_lines(s.get("spring_design") if advice is None else advice)
     figures = []
     for key, value in s.items():
         if key in SKIP_SUMMARY or isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -326,6 +304,49 @@ def readout_markdown(result, label: str = "") -> str:
         lines += ["", "**Key figures**", "", "| quantity | value |", "|---|---:|"]
         lines += [f"| {name} | {text} |" for name, text in figures]
     return "\n".join(lines)
+
+
+def rigid_float_rpm(scene, lift, result=None) -> float:
+    """The page's one float speed (#28.5), whichever effects are ticked: the rigid train's float
+    (jump) speed as the scene's 'forces' effect defines it (the gear's own variant where it has
+    one: the trip gear's latch), from the result when that effect ran, else from a run of that
+    effect alone. NaN when the scene has none (no [valve] mass or [spring]: InputError) or never
+    floats; 0 when it floats at any speed."""
+    from ...core.errors import InputError
+    from ...effects.pipeline import simulate
+
+    summary = result.summary if result is not None else {}
+    if "jump_speed_rpm" not in summary:
+        rigid = dataclasses.replace(scene, effects=("forces",), spring_design=None)
+        try:
+            summary = simulate(rigid, lift=lift).summary
+        except InputError:
+            return math.nan
+    value = summary.get("jump_speed_rpm")
+    return float(value) if isinstance(value, (int, float)) else math.nan
+
+
+def float_key(scene):
+    """What the rigid float speed depends on: the scene without its speed, effects and advice
+    (a speed change reuses the previous float speed)."""
+    return dataclasses.replace(scene, drive=None, effects=(), spring_design=None, name="", description="")
+
+
+def advice_key(scene):
+    """What the spring advice depends on: everything, except the speed when [spring_design]
+    names a target_rpm of its own."""
+    design = scene.spring_design
+    if design is not None and design.target_rpm is not None:
+        return dataclasses.replace(scene, drive=None, name="", description="")
+    return dataclasses.replace(scene, name="", description="")
+
+
+def equal_scenes(a, b) -> bool:
+    """a == b for scenes that may hold arrays (point contours), whose == is ambiguous: False."""
+    try:
+        return bool(a == b)
+    except (ValueError, TypeError):
+        return False
 
 
 # ---------------------------------------------------------------------------------------------
@@ -353,6 +374,8 @@ class Prepared:
     events: tuple[tuple[str, float], ...] = ()  # event_choices(result)
     events_html: str = ""
     spring_surge: np.ndarray | None = None  # (N, coils): the coils' surge as drawn (spring as masses)
+    float_rpm: float = math.nan  # the page's one float speed (rigid_float_rpm)
+    advice_pending: bool = False  # the spring advice ([spring_design]) is computed after, off the path to the plots
 
     @functools.cached_property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -416,10 +439,21 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
         plot_note = previous.plot_note
         lift = previous.lift
         events, table = previous.events, previous.events_html
+        float_rpm, advice_pending = previous.float_rpm, previous.advice_pending
     else:
         scene = load_scene(request.path, list(request.overrides))
         lift = build_lift(scene)
-        result = simulate(scene, lift=lift)
+        # the spring advisor (73 % of simulate on the float demo) is not on the path to the
+        # plots: the compute thread asks for it once the page is idle (advice_readout)
+        advice_pending = scene.spring_design is not None and "forces" in scene.effects
+        run = dataclasses.replace(scene, spring_design=None) if advice_pending else scene
+        result = simulate(run, lift=lift)
+        if "jump_speed_rpm" in result.summary:
+            float_rpm = rigid_float_rpm(scene, lift, result)
+        elif previous is not None and equal_scenes(float_key(previous.scene), float_key(scene)):
+            float_rpm = previous.float_rpm  # it does not depend on the speed
+        else:
+            float_rpm = rigid_float_rpm(scene, lift, result)
         lay = meshes.layout(scene, result)
         # only the cam depends on more than the layout: keep the other meshes when it is unchanged,
         # and the cam too when its lift and geometry are (an edit of speed, lash, springs...).
@@ -443,7 +477,8 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
             )
         plots = build_plots(result)
         plot_note = plots_note(result)
-        readout = readout_markdown(result, _request_label(request))
+        readout = readout_markdown(result, _request_label(request), float_rpm,
+                                   ADVICE_PENDING if advice_pending else None)
         values = scene_values(scene)
         events, table = tuple(event_choices(result)), events_html(result)
     if previous is not None and previous.request.path == request.path and previous.laws:
@@ -457,11 +492,36 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
         spring_lengths=np.asarray(lengths, dtype=float), plots=plots, readout=readout,
         spring_surge=meshes.spring_surge(result, request.magnification),
         label=_request_label(request), values=values, new_result=not same, seconds=time.perf_counter() - started,
-        plot_note=plot_note, laws=laws, events=events, events_html=table,
+        plot_note=plot_note, laws=laws, events=events, events_html=table, float_rpm=float_rpm,
+        advice_pending=advice_pending,
     )
     if previous is None or Path(previous.request.path) != Path(request.path):
         prepared.bounds  # another scene file: the viewer aims its camera at it, here off the GUI's loop
     return prepared
+
+
+@dataclass(frozen=True)
+class AdviceTask:
+    """A message to the compute child: the read-out of request `serial`'s result with the spring
+    advice in it (advice_readout)."""
+
+    serial: int
+
+
+def advice_readout(prepared: Prepared, cache: dict) -> str:
+    """The read-out of `prepared` with the spring advice in it (the [spring_design] block,
+    explorer.effects.spring_design), reusing `cache` {"key": advice_key, "block": block} when
+    the advice depends on nothing that changed (the speed, when it has a target_rpm of its own)."""
+    from ...effects.spring_design import spring_design_summary
+
+    key = advice_key(prepared.scene)
+    if "key" in cache and equal_scenes(cache["key"], key):
+        block = cache["block"]
+    else:
+        block, _ = spring_design_summary(prepared.scene, prepared.lift)
+        cache.clear()
+        cache.update(key=key, block=block)
+    return readout_markdown(prepared.result, prepared.label, prepared.float_rpm, block)
 
 
 # ---------------------------------------------------------------------------------------------

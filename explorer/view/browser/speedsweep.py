@@ -7,13 +7,21 @@ speeds are one broadcast min/max over (speeds x open samples). These are grid va
 as `simulate`'s contact_force_N column at that speed (tests/test_speedsweep.py); the float speed
 marked is the exact one (explorer.mechanics.forces.float_speed).
 
+The vectorised rigid figures hold where the scene's rigid contact force is F = w^2 A + G over the
+revolution: `rigid_model_holds` checks it against the forces effect's own column at the scene's
+speed. A gear whose forces are its own (the trip gear's latch carries the valve only from its
+pick-up to the trip) gets no sweep and a note that says why (#28.6). The float speed marked is the
+page's one float speed (explorer.view.browser.model.rigid_float_rpm, #28.5).
+
 Elastic figures (first separation, seating velocity, largest deviation from the rigid lift) need
 the elastic solver at each speed. Where the compiled exact solver takes the scene
 (explorer.effects.elastic_batch: the translating roller with the `exact` solver, the sweep's
-compiled path), `elastic_batch` computes ELASTIC_BATCH_SPEEDS speeds in one call (tens of ms);
-otherwise `elastic_figures` runs `simulate` at one speed and the compute thread asks the compute
+compiled path) and is compiled (explorer.view.browser.kernels), `elastic_batch` computes
+ELASTIC_BATCH_SPEEDS speeds in one call (tens of ms); otherwise `elastic_figures` runs `simulate`
+of the effects the elastic figures need at one speed, and the compute thread asks the compute
 child for them one speed at a time while it has nothing newer to do
-(explorer.view.browser.compute), so a parameter change waits at most one such run.
+(explorer.view.browser.compute), so a parameter change waits at most one such run. Those speeds
+come coarse to fine (`coarse_to_fine`): the first few already span the whole range (#28.8).
 
 This lives in view/ rather than reusing explorer.studies.sweeps: view/ and studies/ must not
 import each other (issue #12 layers), and both build on explorer.mechanics.forces.
@@ -34,6 +42,31 @@ _BLOCK_CELLS = 2_000_000  # speeds x samples per block (16 MB of float64)
 
 
 @dataclass(frozen=True)
+class NoSweep:
+    """Why a scene has no speed sweep (a line under the plots)."""
+
+    reason: str
+
+
+def coarse_to_fine(count: int) -> np.ndarray:
+    """Indices 0..count-1 in the order that covers their range soonest: the top speed, the
+    lowest, then each next one as far as possible from those already taken (ties: the lower)."""
+    order = [count - 1] if count else []
+    taken = np.zeros(count, dtype=bool)
+    if count:
+        taken[-1] = True
+    index = np.arange(count)
+    while len(order) < count:
+        chosen = np.asarray(order)
+        distance = np.min(np.abs(index[:, None] - chosen[None, :]), axis=1)
+        distance[taken] = -1
+        k = int(np.argmax(distance))
+        order.append(k)
+        taken[k] = True
+    return np.asarray(order, dtype=int)
+
+
+@dataclass(frozen=True)
 class SpeedSweep:
     """The sweep of one result (`serial`: its request). Elastic entries are NaN until computed."""
 
@@ -48,22 +81,35 @@ class SpeedSweep:
     seating_velocity: np.ndarray  # m/s, hardest seat impact, < 0 (nan: none)
     max_deviation: np.ndarray  # m, largest deviation of the valve from the rigid lift
     peak_torque: np.ndarray | None = None  # N m, rigid camshaft torque peak (None: no contact effect)
-    elastic_done: int = 0  # how many elastic speeds are computed (in order)
+    elastic_done: int = 0  # how many elastic speeds are computed (in elastic_order)
     note: str = ""  # why a part is missing
     batched: bool = False  # the elastic speeds come all at once (elastic_batch), not one by one
+    elastic_order: np.ndarray | None = None  # the order the elastic speeds are computed in (coarse_to_fine)
 
     @property
     def elastic_total(self) -> int:
         return int(self.elastic_rpm.size)
 
+    def _order(self) -> np.ndarray:
+        return self.elastic_order if self.elastic_order is not None else np.arange(self.elastic_total)
+
     def next_elastic(self) -> float | None:
         """The next elastic speed to compute (None: all done)."""
-        return float(self.elastic_rpm[self.elastic_done]) if self.elastic_done < self.elastic_total else None
+        if self.elastic_done >= self.elastic_total:
+            return None
+        return float(self.elastic_rpm[self._order()[self.elastic_done]])
+
+    def elastic_computed(self) -> np.ndarray:
+        """Which elastic speeds are computed (a figure may still be NaN: none at that speed)."""
+        done = np.zeros(self.elastic_total, dtype=bool)
+        done[self._order()[:self.elastic_done]] = True
+        return done
 
     def progress(self) -> str:
         if self.elastic_total == 0:
             return self.note or "rigid figures at every speed"
-        return f"elastic figures: {self.elastic_done} of {self.elastic_total} speeds done"
+        text = f"elastic figures: {self.elastic_done} of {self.elastic_total} speeds done"
+        return f"{text}; {self.note}" if self.note else text
 
 
 def sweep_span(rpm: float, float_rpm: float, previous: tuple[float, float] | None = None) -> tuple[float, float]:
@@ -112,6 +158,28 @@ def torque_sweep(scene, lift, result, rpms) -> np.ndarray:
     return peak_torques(a_coef, g_part, is_open, push, pull, np.asarray(rpms, dtype=float) / RPM_PER_RAD_S)
 
 
+def rigid_model_holds(scene, lift, result=None) -> bool:
+    """Whether the sweep's F = w^2 A + G on the grid is this scene's rigid contact force: checked
+    against the 'forces' effect's own contact_force_N at the scene's speed (from `result` when it
+    has the column, else from a run of that effect), to 1e-9 of the largest force. It is for the
+    translating roller and the lever gears (1e-16 measured); the trip gear's latch force is not."""
+    from ...effects.pipeline import simulate
+    from ...mechanics.forces import RPM_PER_RAD_S, grid_load_parts
+
+    if result is None or "contact_force_N" not in result.columns:
+        result = simulate(dataclasses.replace(scene, effects=("forces",), spring_design=None), lift=lift)
+    _, a_coef, g_part, is_open = grid_load_parts(scene, lift)
+    force = np.asarray(result.columns["contact_force_N"], dtype=float)
+    if force.shape != a_coef.shape:
+        return False
+    if not is_open.any():
+        return True
+    w = float(scene.drive.rpm) / RPM_PER_RAD_S
+    model = w * w * a_coef[is_open] + g_part[is_open]
+    scale = max(float(np.max(np.abs(force[is_open]))), 1.0)
+    return bool(np.all(np.abs(model - force[is_open]) <= 1e-9 * scale))
+
+
 def has_contact(scene) -> bool:
     from ...effects.registry import order
 
@@ -145,30 +213,49 @@ def has_elastic(scene) -> bool:
     return "elastic" in order(scene.effects)
 
 
-def start_sweep(scene, lift, serial: int, previous: tuple[float, float] | None = None, result=None) -> SpeedSweep | None:
-    """The rigid part of the sweep of this scene (elastic entries NaN); None when the scene has
-    no rigid forces (no [valve] mass or [spring]): then there is nothing to sweep."""
+NO_FORCES = ("**Speed sweep:** none; it needs the rigid forces: a [valve] mass and a [spring] in the scene "
+             "(whichever effects are ticked)")
+OWN_FORCES = ("**Speed sweep:** none for this gear: its rigid forces are not F = ω²A + G over the revolution, which "
+              "the sweep computes at every speed (checked against its own forces at this speed: the trip gear's "
+              "latch carries the valve only from the pick-up to the trip); its float speed is in the Read-outs")
+
+
+def start_sweep(scene, lift, serial: int, previous: tuple[float, float] | None = None, result=None,
+                float_rpm: float | None = None, compiled: bool = True) -> SpeedSweep | NoSweep:
+    """The rigid part of the sweep of this scene (elastic entries NaN), or NoSweep saying why
+    there is none. `float_rpm`: the page's float speed (model.rigid_float_rpm; computed here when
+    None); `compiled`: whether the compiled solver may be called (kernels.KernelWarmup.ready)."""
     from ...core.errors import InputError
-    from ...mechanics.forces import TrainLoads, float_speed
+    from ...mechanics.forces import TrainLoads
+    from .model import rigid_float_rpm
 
     try:
-        loads = TrainLoads.from_scene(scene)
-        lash = scene.valve.lash if scene.valve is not None else 0.0
-        jump = float_speed(lift, loads, scene.follower.ratio, lash,
-                           n_grid=max(4096, scene.solver.steps_per_revolution))
-        float_rpm = jump.rpm if math.isfinite(jump.omega) else math.nan
+        TrainLoads.from_scene(scene)
+    except (InputError, AttributeError):
+        return NoSweep(NO_FORCES)
+    try:
+        if not rigid_model_holds(scene, lift, result):
+            return NoSweep(OWN_FORCES)
+        if float_rpm is None:
+            float_rpm = rigid_float_rpm(scene, lift, result)
         span = sweep_span(float(scene.drive.rpm), float_rpm, previous)
         rpm = np.linspace(span[0], span[1], RIGID_SPEEDS)
         low, high = rigid_sweep(scene, lift, rpm)
         torque = torque_sweep(scene, lift, result, rpm) if result is not None and has_contact(scene) else None
-    except (InputError, ValueError, AttributeError):
-        return None
-    batched = has_elastic(scene) and batch_accepts(scene, lift)
+    except (InputError, ValueError):
+        return NoSweep(NO_FORCES)
+    elastic = has_elastic(scene)
+    takes = elastic and batch_accepts(scene, lift)
+    batched = takes and compiled
     count = ELASTIC_BATCH_SPEEDS if batched else ELASTIC_SPEEDS
-    elastic = np.linspace(span[1] / count, span[1], count) if has_elastic(scene) else np.empty(0)
-    nan = np.full(elastic.shape, np.nan)
-    return SpeedSweep(serial, rpm, low, high, float_rpm, span, elastic, nan, nan.copy(), nan.copy(), peak_torque=torque,
-                      note="" if elastic.size else "no elastic effect: rigid figures only", batched=batched)
+    speeds = np.linspace(span[1] / count, span[1], count) if elastic else np.empty(0)
+    nan = np.full(speeds.shape, np.nan)
+    note = "" if elastic else "no elastic effect: rigid figures only"
+    if takes and not compiled:
+        note = (f"{ELASTIC_SPEEDS} speeds one at a time while the compiled solver is being prepared "
+                f"(first start; then {ELASTIC_BATCH_SPEEDS} at once)")
+    return SpeedSweep(serial, rpm, low, high, float_rpm, span, speeds, nan, nan.copy(), nan.copy(), peak_torque=torque,
+                      note=note, batched=batched, elastic_order=None if batched else coarse_to_fine(speeds.size))
 
 
 def batch_accepts(scene, lift) -> bool:
@@ -199,12 +286,15 @@ def at_speed(scene, rpm: float):
 
 def elastic_figures(scene, lift, rpm: float) -> tuple[float, float, float]:
     """(first separation [deg], seating velocity [m/s], largest deviation [m]) of `simulate` at
-    `rpm`: NaN where there is none, all NaN when the run fails (too slow for the step budget)."""
+    `rpm`: NaN where there is none, all NaN when the run fails (too slow for the step budget).
+    Only the effects the elastic figures need run (elastic and what it depends on): the rocking
+    cam's forces and gear figures took 7 of every 8 parts of a speed's time (0.63 s -> 0.09 s),
+    and the figures are the same (no effect reads another's figures but its dependencies')."""
     from ...core.errors import InputError
     from ...effects.pipeline import simulate
 
     try:
-        result = simulate(at_speed(scene, rpm), lift=lift)
+        result = simulate(at_speed(dataclasses.replace(scene, effects=("elastic",), spring_design=None), rpm), lift=lift)
     except (InputError, RuntimeError, ValueError, ArithmeticError):
         return (math.nan, math.nan, math.nan)
     events = [e for e in result.events if e.effect == "elastic"]
@@ -222,11 +312,11 @@ def with_elastic(sweep: SpeedSweep, figures: tuple) -> SpeedSweep:
         sep, seat, dev = (np.asarray(f, dtype=float).copy() for f in figures)
         return dataclasses.replace(sweep, first_separation_deg=sep, seating_velocity=seat, max_deviation=dev,
                                    elastic_done=sweep.elastic_total)
-    k = sweep.elastic_done
+    k = int(sweep._order()[sweep.elastic_done])
     sep, seat, dev = sweep.first_separation_deg.copy(), sweep.seating_velocity.copy(), sweep.max_deviation.copy()
     sep[k], seat[k], dev[k] = figures
     return dataclasses.replace(sweep, first_separation_deg=sep, seating_velocity=seat, max_deviation=dev,
-                               elastic_done=k + 1)
+                               elastic_done=sweep.elastic_done + 1)
 
 
 def with_markers(x: np.ndarray, values: list[np.ndarray], at: list[float]):
@@ -284,14 +374,19 @@ def sweep_plots(sweep: SpeedSweep, current_rpm: float) -> list[tuple]:
                       [("peak camshaft torque", sweep.peak_torque, "#17a589")]))
     if sweep.elastic_total:
         # one plot per figure: three units on one axis would need a scaled series ([°/100]) that
-        # reads wrong under the pointer
+        # reads wrong under the pointer. Only the speeds computed so far are drawn (they come
+        # coarse to fine): the curve through them, a NaN a gap where a figure does not apply
         done = f"{sweep.elastic_done}/{sweep.elastic_total} speeds"
-        specs += [(f"Speed sweep (elastic first separation, {done})", "θ [°]", sweep.elastic_rpm,
-                   [("first separation [°]", sweep.first_separation_deg, "#d68910")]),
-                  (f"Speed sweep (elastic seating velocity, {done})", "v [m/s]", sweep.elastic_rpm,
-                   [("seating velocity [m/s]", sweep.seating_velocity, "#8e44ad")]),
-                  (f"Speed sweep (elastic deviation, {done})", "Δs [mm]", sweep.elastic_rpm,
-                   [("largest deviation from the rigid lift [mm]", sweep.max_deviation * 1e3, "#27ae60")])]
+        computed = sweep.elastic_computed()
+        if computed.sum() < 2:
+            computed = np.ones(sweep.elastic_total, dtype=bool)  # nothing to draw yet: NaN everywhere
+        x = sweep.elastic_rpm[computed]
+        specs += [(f"Speed sweep (elastic first separation, {done})", "θ [°]", x,
+                   [("first separation [°]", sweep.first_separation_deg[computed], "#d68910")]),
+                  (f"Speed sweep (elastic seating velocity, {done})", "v [m/s]", x,
+                   [("seating velocity [m/s]", sweep.seating_velocity[computed], "#8e44ad")]),
+                  (f"Speed sweep (elastic deviation, {done})", "Δs [mm]", x,
+                   [("largest deviation from the rigid lift [mm]", sweep.max_deviation[computed] * 1e3, "#27ae60")])]
     out = []
     for title, y_label, x, series in specs:
         xs, ys, markers = with_markers(x, [v for _, v, _ in series], [current_rpm, sweep.float_rpm])
@@ -309,12 +404,14 @@ class SweepTask:
     rpm: float | None = None
     span: tuple[float, float] | None = None
     rpms: tuple[float, ...] | None = None  # every elastic speed at once (a batched sweep)
+    compiled: bool = True  # the compiled solver may be called (explorer.view.browser.kernels)
 
 
-def run_task(task: SweepTask, scene, lift, result=None):
-    """What the child answers a SweepTask with, for the scene and lift of that result."""
+def run_task(task: SweepTask, prepared):
+    """What the child answers a SweepTask with, for that result (a model.Prepared)."""
+    scene, lift = prepared.scene, prepared.lift
     if task.rpms is not None:
         return elastic_batch(scene, lift, task.rpms)
     if task.rpm is None:
-        return start_sweep(scene, lift, task.serial, task.span, result)
+        return start_sweep(scene, lift, task.serial, task.span, prepared.result, prepared.float_rpm, task.compiled)
     return elastic_figures(scene, lift, task.rpm)

@@ -212,22 +212,26 @@ def _limit_memory(memory_bytes: int) -> None:
         resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
 
 
-def _sweep_reply(task, last, result_serial: int):
-    """("sweep", figures) for a speed-sweep task on the result held, ("stale", None) when the
-    child no longer holds that result (a newer one came, or the child was restarted)."""
+def _background_reply(task, last, result_serial: int, advice_cache: dict):
+    """("sweep", figures) for a speed-sweep task, ("advice", read-out) for an advice task, on the
+    result held; ("stale", None) when the child no longer holds that result (a newer one came, or
+    the child was restarted)."""
+    from .model import AdviceTask, advice_readout
     from .speedsweep import run_task
 
     if last is None or task.serial != result_serial:
         return ("stale", None)
     try:
-        return ("sweep", run_task(task, last.scene, last.lift, last.result))
+        if isinstance(task, AdviceTask):
+            return ("advice", advice_readout(last, advice_cache))
+        return ("sweep", run_task(task, last))
     except MemoryError:
         return ("memory", "")
-    except Exception as exc:  # a sweep that fails must not end the child: the viewer shows why
+    except Exception as exc:  # a background task that fails must not end the child: the viewer shows why
         import traceback
 
         traceback.print_exc()
-        return ("internal", f"internal error in the speed sweep: {type(exc).__name__}: {exc}")
+        return ("internal", f"internal error in {type(task).__name__}: {type(exc).__name__}: {exc}")
 
 
 def main(argv: list[str]) -> int:
@@ -236,7 +240,7 @@ def main(argv: list[str]) -> int:
     pipe = _Pipe(read_fd, write_fd)
 
     from ...core.errors import InputError
-    from .model import prepare
+    from .model import AdviceTask, prepare
     from .speedsweep import SweepTask
 
     # what `prepare` imports on first use, imported before the first time limit starts counting
@@ -250,13 +254,14 @@ def main(argv: list[str]) -> int:
     pipe.send(READY)
     last = None
     result_serial = -1  # the request whose simulation `last` holds (a magnification reuses it)
+    advice_cache: dict = {}  # the last spring advice and what it depends on (model.advice_readout)
     while True:
         try:
             request = pipe.recv()
         except (EOFError, OSError):
             return 0  # the server closed the pipe: it is done with us
-        if isinstance(request, SweepTask):
-            pipe.send(_sweep_reply(request, last, result_serial))
+        if isinstance(request, (SweepTask, AdviceTask)):
+            pipe.send(_background_reply(request, last, result_serial, advice_cache))
             continue
         try:
             prepared = prepare(request, last)

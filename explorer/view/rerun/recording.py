@@ -7,11 +7,14 @@ so the viewer shows them side by side and can compare them.
 Timelines (every per-step row carries all three):
 - `time`            duration, t = θ/ω in seconds from the start of the revolution (the CSV's time_s)
 - `step`            sequence, the step index 0 … N−1 of the revolution
-- `cam_angle_deg`   sequence, the cam angle in whole degrees, round(θ/°) — comparable between runs
-                    at different speeds or step counts; the default timeline. Its plots span 0 to
-                    360°, and at 1× a revolution plays in ANGLE_PLAYBACK_S seconds (a sequence
-                    timeline plays `fps` values a second: fps = 360 / ANGLE_PLAYBACK_S). The
-                    steps within one degree share its value; `step` has every step.
+- `cam_angle_0.01deg` sequence, the cam angle in hundredths of a degree, round(100·θ/°): 12 345
+                    is 123.45° — comparable between runs at different speeds or step counts; the
+                    default timeline. Its plots span one revolution (0 to 36 000), and at 1× a
+                    revolution plays in ANGLE_PLAYBACK_S seconds (a sequence timeline plays `fps`
+                    values a second: fps = 36 000 / ANGLE_PLAYBACK_S). Every sample has its own
+                    position up to 36 000 steps per revolution (the default is 3 600): a series
+                    plotted against the cam angle is the curve, not a staircase of samples sharing
+                    a whole degree (#28.11); finer runs share hundredths, `step` has every step.
 
 Entity paths of the series (one scalar per step; the values of `explorer simulate`'s CSV in the
 browser explorer's display units: lengths in mm (the CSV's metres times 1000), everything else
@@ -93,7 +96,9 @@ APP_ID = "valve-gear-explorer"
 MERGE_TIMEOUT_S = 600.0  # `rerun rrd merge` of a long live session; it is killed past this
 TIMELINE_TIME = "time"
 TIMELINE_STEP = "step"
-TIMELINE_ANGLE = "cam_angle_deg"
+TIMELINE_ANGLE = "cam_angle_0.01deg"
+ANGLE_UNITS_PER_DEG = 100  # the cam-angle timeline counts hundredths of a degree
+ANGLE_UNITS_PER_REV = 360 * ANGLE_UNITS_PER_DEG
 ANGLE_PLAYBACK_S = 6.0  # one revolution at 1x on the cam-angle timeline
 OVERLAY_PATH_PREFIX = "run"
 # lengths in the browser explorer's unit (mm); unit suffix -> (factor, shown unit)
@@ -178,7 +183,7 @@ def series_layout(columns: Iterable[str]) -> list[Series]:
 
 
 def step_indexes(result) -> dict[str, np.ndarray]:
-    """The three timelines of the per-step rows: time in s, step index, cam angle in degrees."""
+    """The three timelines of the per-step rows: time in s, step index, cam angle in hundredths of a degree."""
     angle = np.asarray(result.columns["cam_angle_deg"], dtype=float)
     return {
         TIMELINE_TIME: np.asarray(result.columns["time_s"], dtype=float),
@@ -188,8 +193,8 @@ def step_indexes(result) -> dict[str, np.ndarray]:
 
 
 def angle_sequence(angle_deg) -> np.ndarray:
-    """Cam angles in degrees as the cam-angle timeline's integers (nearest whole degree)."""
-    return np.rint(np.asarray(angle_deg, dtype=float)).astype(np.int64)
+    """Cam angles in degrees as the cam-angle timeline's integers (nearest hundredth of a degree)."""
+    return np.rint(np.asarray(angle_deg, dtype=float) * ANGLE_UNITS_PER_DEG).astype(np.int64)
 
 
 def duration_ns(seconds) -> np.ndarray:
@@ -519,7 +524,7 @@ def blueprint(paths: Iterable[str], bounds=None, corners: Mapping[str, str] | No
         return [p for p in paths if p.startswith(prefix + "/")]
 
     revolution = [rrb.VisibleTimeRange(TIMELINE_ANGLE, start=rrb.TimeRangeBoundary.absolute(seq=0),
-                                       end=rrb.TimeRangeBoundary.absolute(seq=360))]
+                                       end=rrb.TimeRangeBoundary.absolute(seq=ANGLE_UNITS_PER_REV))]
     for timeline in (TIMELINE_STEP, TIMELINE_TIME):
         revolution.append(rrb.VisibleTimeRange(timeline, start=rrb.TimeRangeBoundary.infinite(),
                                                end=rrb.TimeRangeBoundary.infinite()))
@@ -548,7 +553,7 @@ def blueprint(paths: Iterable[str], bounds=None, corners: Mapping[str, str] | No
     right = rrb.Vertical(*main, rrb.Tabs(*tabs), row_shares=[1, 1, 1, 1])
     return rrb.Blueprint(
         rrb.Horizontal(left, right, column_shares=[1, 1]),
-        rrb.TimePanel(timeline=TIMELINE_ANGLE, fps=360.0 / ANGLE_PLAYBACK_S, playback_speed=1.0),
+        rrb.TimePanel(timeline=TIMELINE_ANGLE, fps=ANGLE_UNITS_PER_REV / ANGLE_PLAYBACK_S, playback_speed=1.0),
         collapse_panels=False,
     )
 

@@ -1,0 +1,176 @@
+"""What the page and the compute thread ask of the explorer, recorded for the frame loop.
+
+The pattern of viser's examples and of mjlab's viewer: callbacks (viser's event loop and thread
+pool, the compute thread) only record a request here; one loop (explorer.view.browser.loop)
+takes them all once a frame and applies them, in the order they came, under `server.atomic()`.
+So every piece of state is the loop's alone, and nothing a callback does can interleave with a
+frame half applied.
+
+A page's value is recorded by an `async` callback, which viser runs on its event loop right after
+storing the value the page sent: in arrival order, at arrival time, and with the value sent (a
+thread-pool callback ran late on a busy machine and could read a value the loop had written
+meanwhile: a click on a slider was lost, issue #28.7).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass
+from typing import Any, Callable
+
+
+@dataclass(frozen=True)
+class Edited:
+    """A field's new value. `page`: sent by a page as typed (applied once the typing pauses or
+    Enter is pressed), else set from Python or a dropdown (applied at once)."""
+
+    key: str
+    value: Any
+    page: bool = False
+    at: float = 0.0  # time.monotonic() when it came
+
+
+@dataclass(frozen=True)
+class Submitted:
+    """Enter pressed in a field: apply what was typed now."""
+
+
+@dataclass(frozen=True)
+class EffectsTicked:
+    names: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class SceneChosen:
+    label: str
+
+
+@dataclass(frozen=True)
+class ResetClicked:
+    pass
+
+
+@dataclass(frozen=True)
+class Magnified:
+    value: float
+
+
+@dataclass(frozen=True)
+class Played:
+    on: bool
+
+
+@dataclass(frozen=True)
+class SpeedChosen:
+    label: str
+
+
+@dataclass(frozen=True)
+class Scrubbed:
+    """Show this cam angle, animation paused (a slider, an event chosen)."""
+
+    angle: float
+
+
+@dataclass(frozen=True)
+class EventChosen:
+    label: str
+
+
+@dataclass(frozen=True)
+class SweepSpeedChosen:
+    rpm: float
+
+
+@dataclass(frozen=True)
+class Computed:
+    prepared: Any  # model.Prepared
+
+
+@dataclass(frozen=True)
+class Failed:
+    request: Any  # model.Request, or None for a value refused before any computation
+    message: str
+    serial: int
+
+
+@dataclass(frozen=True)
+class SweepArrived:
+    serial: int
+    sweep: Any  # speedsweep.SpeedSweep or NoSweep
+
+
+@dataclass(frozen=True)
+class AdviceArrived:
+    serial: int
+    readout: str
+
+
+@dataclass(frozen=True)
+class ClientConnected:
+    client: Any
+
+
+@dataclass(frozen=True)
+class ClientLeft:
+    client_id: int
+
+
+@dataclass(frozen=True)
+class CameraMoved:
+    camera: Any  # viser's camera handle of a page
+
+
+class Inbox:
+    """The requests recorded and not yet applied, in arrival order (any thread may `put`)."""
+
+    def __init__(self):
+        self._cond = threading.Condition()
+        self._items: deque = deque()
+        self._recorded = 0
+        self._applied = 0
+        self.arrived = threading.Event()  # set by `put`: the frame loop waits on it (loop.FrameLoop)
+
+    def put(self, item) -> None:
+        with self._cond:
+            self._items.append(item)
+            self._recorded += 1
+        self.arrived.set()
+
+    def take(self) -> list:
+        """Every request recorded so far, oldest first (the loop calls `done` once applied)."""
+        with self._cond:
+            out = list(self._items)
+            self._items.clear()
+            return out
+
+    def done(self, count: int) -> None:
+        with self._cond:
+            self._applied += count
+            self._cond.notify_all()
+
+    def settled(self) -> bool:
+        """Whether every request recorded so far has been applied."""
+        with self._cond:
+            return self._applied == self._recorded
+
+
+def wire(handle, inbox, make: Callable[[Any, bool, float], Any], echo: Callable[[], bool]) -> None:
+    """Record a handle's changes as requests: a page's with an async callback (viser runs it on
+    its event loop as the value arrives: order, time and value as sent), one made from Python
+    with a plain one (run at once in the assigning thread), except the loop's own writes."""
+
+    async def from_page(event) -> None:
+        if event.client is not None:
+            inbox.put(make(event.target.value, True, time.monotonic()))
+
+    def from_python(event) -> None:
+        if event.client is None and not echo():
+            inbox.put(make(event.target.value, False, time.monotonic()))
+
+    # the plain one first: viser calls a handle's callbacks in order, and scheduling the async
+    # one on the event loop lets other threads run; the value set from Python is read before
+    handle.on_update(from_python)
+    handle.on_update(from_page)
