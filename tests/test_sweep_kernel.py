@@ -305,7 +305,8 @@ def test_numba_is_imported_by_the_kernel_module_only():
     imported only by dynamics/exact_kernel.py, which only the sweep's compiled path imports), and
     in dynamics/chain_kernels.py, which only the spring chain's exact solver imports (scenes with
     spring.elements > 0), and in mechanics/sweep_kernels.py, imported inside the two functions of the
-    compiled sweep's rigid figures (forces.min_contact_forces, contact.peak_torques): `import
+    compiled sweep's rigid figures (forces.min_contact_forces; contact.peak_torques when compiled=True,
+    the browser's speed sweep calls its numpy form): `import
     explorer`, loading and simulating a massless scene leave it out."""
     import ast
     import subprocess
@@ -432,6 +433,12 @@ def test_rigid_kernels_equal_numpy_forms_bit_for_bit():
             torque = values * np.where(values > 0.0, push[None, :], pull[None, :])
         expected = np.maximum(floor, np.where(np.isfinite(torque), torque, -np.inf).max(axis=1))
         assert np.array_equal(peak_torques(w2, a, g, push, pull, floor), expected)
+    from explorer.effects import contact
+
+    for is_open in (np.ones(400, bool), rng.uniform(size=400) > 0.3):
+        numpy_form = contact.peak_torques(a, g, is_open, push, pull, np.sqrt(w2))
+        assert np.array_equal(contact.peak_torques(a, g, is_open, push, pull, np.sqrt(w2), compiled=True), numpy_form,
+                              equal_nan=True)
 
 
 def test_speeds_of_is_drive_omega():

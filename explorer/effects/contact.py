@@ -110,6 +110,8 @@ def contact_row(result) -> dict[str, float]:
 
 # --- the peak camshaft torque at many speeds at once -------------------------------------------
 
+BLOCK_CELLS = 2_000_000  # speeds x samples per block (16 MB of float64)
+
 
 
 def torque_factors(ctx) -> tuple[np.ndarray, np.ndarray]:
@@ -131,17 +133,31 @@ def torque_factors(ctx) -> tuple[np.ndarray, np.ndarray]:
     return push, pull
 
 
-def peak_torques(a_coef, g_part, is_open, push, pull, omegas) -> np.ndarray:
+def peak_torques(a_coef, g_part, is_open, push, pull, omegas, compiled: bool = False) -> np.ndarray:
     """max_camshaft_torque_Nm (N m) at each speed of `omegas` (rad/s) from F = w^2 A + G on the
     scene's grid (explorer.mechanics.forces.grid_load_parts) and the torque factors: the largest
-    finite torque (closed samples carry no force: 0 there; NaN where none is finite)."""
+    finite torque (closed samples carry no force: 0 there; NaN where none is finite). `compiled`:
+    the same floats from one numba loop (mechanics/sweep_kernels.py; the compiled sweep, whose
+    process has numba loaded anyway), else numpy in blocks (the browser's speed sweep, which must
+    not load numba)."""
     w2 = np.asarray(omegas, dtype=float).ravel() ** 2
     a_coef, g_part, push, pull = a_coef[is_open], g_part[is_open], push[is_open], pull[is_open]
     if a_coef.size == 0:
         return np.zeros(w2.size)
-    from ..mechanics.sweep_kernels import peak_torques as compiled  # numba: the compiled sweep's path only
+    floor = 0.0 if not is_open.all() else -np.inf
+    if compiled:
+        from ..mechanics.sweep_kernels import peak_torques as kernel  # numba: the compiled sweep's path only
 
-    # one pass per speed over the open samples (no (speeds x samples) temporaries)
-    out = compiled(w2, np.ascontiguousarray(a_coef), np.ascontiguousarray(g_part), np.ascontiguousarray(push),
-                   np.ascontiguousarray(pull), 0.0 if not is_open.all() else -np.inf)
+        out = kernel(w2, np.ascontiguousarray(a_coef), np.ascontiguousarray(g_part), np.ascontiguousarray(push),
+                     np.ascontiguousarray(pull), floor)
+        return np.where(np.isfinite(out), out, np.nan)
+    out = np.full(w2.size, floor)
+    block = max(1, BLOCK_CELLS // a_coef.size)
+    for start in range(0, w2.size, block):
+        end = min(w2.size, start + block)
+        forces = w2[start:end, None] * a_coef[None, :] + g_part[None, :]
+        with np.errstate(invalid="ignore"):
+            torque = forces * np.where(forces > 0.0, push[None, :], pull[None, :])
+        torque = np.where(np.isfinite(torque), torque, -np.inf)  # self-locked samples: no finite torque
+        out[start:end] = np.maximum(out[start:end], torque.max(axis=1))
     return np.where(np.isfinite(out), out, np.nan)

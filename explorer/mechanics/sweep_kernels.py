@@ -7,11 +7,13 @@ each is six to eight passes over a (speeds x samples) temporary; here each is on
 temporary (issue #27.5: they were 40 % of a 1000-speed sweep of valve_float_demo.toml). The same
 floats as numpy's: F is one product and one sum (numba does not fuse them without fastmath), a
 minimum keeps the first of equal values (np.argmin), a NaN wins (np.minimum, np.argmin), and the
-torque keeps the finite values only (contact.peak_torques). tests/test_sweep_kernels.py compares
+torque keeps the finite values only (contact.peak_torques). tests/test_sweep_kernel.py compares
 them with the numpy forms bit for bit.
 
-Imported only on the compiled sweep path (forces.min_contact_forces and contact.peak_torques, which only studies/sweep_rigid.py calls, whose runs load numba for the elastic
-kernel anyway); cached on disk (cache=True) beside this file, compiled by `make`
+Imported only on the compiled sweep's path, whose process loads numba for the elastic kernel
+anyway: by forces.min_contact_forces and by contact.peak_torques with compiled=True, both called
+from studies/sweep_rigid.py (the browser's speed sweep uses peak_torques' numpy form: its first
+page must not load numba). Cached on disk (cache=True) beside this file, compiled by `make`
 (`python -m explorer.mechanics.sweep_kernels`).
 """
 

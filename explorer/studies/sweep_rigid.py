@@ -74,5 +74,5 @@ def rigid_over_speeds(scene, omegas, names, shared, group=None) -> dict[str, np.
             return torque_factors(ctx)
 
         push, pull = factors() if group is None else remember(shared.of("torque factors"), (key, group), factors)
-        out["max_camshaft_torque_Nm"] = peak_torques(a_coef, g_part, is_open, push, pull, omegas)
+        out["max_camshaft_torque_Nm"] = peak_torques(a_coef, g_part, is_open, push, pull, omegas, compiled=True)
     return out
