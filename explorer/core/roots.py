@@ -82,7 +82,9 @@ def brent(f: Callable[[float], float], a: float, b: float, fa: float, fb: float,
     x_pre, x_cur, f_pre, f_cur = a, b, fa, fb
     x_blk = f_blk = s_pre = s_cur = 0.0
     for _ in range(maxiter):
-        if f_pre * f_cur < 0.0:  # the bracket is [x_pre, x_cur]: x_blk is its other end
+        # the bracket is [x_pre, x_cur]: x_blk is its other end (signs compared by their bits, as
+        # scipy's C does: a product of two tiny values underflows to -0.0 and would hide the change)
+        if f_pre != 0.0 and f_cur != 0.0 and (math.copysign(1.0, f_pre) < 0.0) != (math.copysign(1.0, f_cur) < 0.0):
             x_blk, f_blk = x_pre, f_pre
             s_pre = s_cur = x_cur - x_pre
         if abs(f_blk) < abs(f_cur):  # x_cur: the end with the smaller value
