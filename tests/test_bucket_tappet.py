@@ -303,3 +303,21 @@ def test_analysis_of_a_contour_scene_returns_the_synthesised_lift(tmp_path):
     with pytest.raises(InputError) as info:
         loads_scene(text.replace('base_radius = "18 mm"', 'base_radius = "17 mm"'), "contour.toml")
     assert info.value.key == "follower.base_radius"
+
+
+def test_the_hertz_rule_judges_the_crown_as_its_ellipse_and_the_flat_face_as_a_line():
+    """A crowned face touches the cam in a Hertz ellipse: the design rule judges the gear's own
+    pressure (the contact effect's face_hertz_stress_Pa, the same rigid force at the scene's speed),
+    not the line contact over [contact] width, which gives about half of it (525 against 910 MPa
+    here). A flat face over the lobe's width is a line contact: the rule's generic formula."""
+    from explorer.checks.run import check
+
+    crowned = load_scene(SCENE)
+    column = simulate(crowned).columns["face_hertz_stress_Pa"]
+    rule = check(crowned, rpm=crowned.drive.rpm, only=("hertz_stress",)).result("hertz_stress")
+    assert rule.value == pytest.approx(float(np.max(column)), rel=1e-9)
+    flat = loads_scene(SCENE.read_text().replace('face_radius = "3 m"', ""), "flat.toml")
+    line = check(flat, rpm=flat.drive.rpm, only=("hertz_stress",)).result("hertz_stress")
+    flat_column = simulate(flat).columns["face_hertz_stress_Pa"]  # the line contact over cam_width = contact.width
+    assert line.value == pytest.approx(float(np.max(flat_column)), rel=1e-9)
+    assert rule.value > 1.5 * line.value

@@ -256,8 +256,10 @@ class BucketTappet(Gear):
         geometry = face_geometry(k, gear.tappet.base_radius, gear.tappet.face_radius, spec.sliding_friction)
         motion = SurfaceMotion(k.velocities.first, k.velocities.second)
         d = gear.tappet.face_diameter
+        # a crown touches the cam in an ellipse, not the line the generic rule assumes
+        stress = (lambda normal, e_star: gear.hertz_stress(k, normal, e_star)) if gear.tappet.crowned else None
         return GearContact(geometry, motion, oscillating=False, pitch_radius=None, face_offset=k.contact_offset,
-                           face_half_width=None if d is None else 0.5 * d)
+                           face_half_width=None if d is None else 0.5 * d, stress=stress)
 
     # -- 8. the 'gear' effect --------------------------------------------------------------------
     def report(self, ctx) -> EffectOutput:

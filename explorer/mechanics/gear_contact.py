@@ -24,6 +24,7 @@ Everything per angle is an array of the grid's shape; SI.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -40,6 +41,10 @@ class GearContact:
     face_offset: np.ndarray | None = None
     face_half_width: float | None = None
     motion_note: str = ""  # why motion is None
+    # the gear's own peak contact pressure (normal force per angle, any leading axes; E*) -> Pa,
+    # where a line contact over [contact] width does not describe the contact: a crowned face on
+    # the cam is a Hertz ellipse, about twice the line contact's pressure (the hertz_stress rule)
+    stress: Callable[[np.ndarray, float], np.ndarray] | None = None
 
     @property
     def roller_radius(self) -> float | None:

@@ -1,7 +1,8 @@
 """Contact (Hertz) stress: the largest peak pressure of the line contact over the operating range,
 sigma = sqrt(N E* (1/r1 + 1/r2) / (pi b)) with N the cam's normal force of the rigid train
 (explorer.mechanics.contact's statics) and b the contact width, against the allowable of the
-material pair."""
+material pair. A gear whose contact is no line contact (a crowned face: an ellipse) gives its own
+pressure (GearContact.stress), which the rule judges instead."""
 
 from __future__ import annotations
 
@@ -51,11 +52,17 @@ def measure(case, settings) -> Measure:
     angle = np.empty_like(value)
     for rows, force, _ in case.blocks(speeds):
         normal = case.normal(force)
-        with np.errstate(invalid="ignore", over="ignore"):
-            sigma = np.sqrt(normal * case.e_star * np.maximum(curvature, 0.0) / (math.pi * width))
-        sigma = np.where((normal > 0.0) & (curvature <= 0.0), np.inf, np.where(normal > 0.0, sigma, 0.0))
+        if contact.stress is not None:
+            with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+                sigma = np.where(normal > 0.0, contact.stress(normal, case.e_star), 0.0)
+        else:
+            with np.errstate(invalid="ignore", over="ignore"):
+                sigma = np.sqrt(normal * case.e_star * np.maximum(curvature, 0.0) / (math.pi * width))
+            sigma = np.where((normal > 0.0) & (curvature <= 0.0), np.inf, np.where(normal > 0.0, sigma, 0.0))
         w, a = reduce_angles(sigma, "max", case.theta_deg)
         value[rows], angle[rows] = w, a
     limit, source = allowable(case, settings)
     return Measure.of(value, angle, speeds, settings, fail=limit, limit_source=source,
-                      note=f"rigid train; contact width {width * 1e3:.4g} mm ({how}); E* {case.e_star / 1e9:.4g} GPa")
+                      note=(f"rigid train; the gear's own contact (a Hertz ellipse); E* {case.e_star / 1e9:.4g} GPa"
+                            if contact.stress is not None else
+                            f"rigid train; contact width {width * 1e3:.4g} mm ({how}); E* {case.e_star / 1e9:.4g} GPa"))
