@@ -357,3 +357,18 @@ def test_the_browser_and_a_recording_draw_the_train(path, arm, tmp_path):
     quaternion = run.temporal[f"/parts/{arm}"]["Transform3D:quaternion"]  # x y z w
     turned = 2.0 * np.arctan2(-quaternion[:, 1], quaternion[:, 3])
     assert np.max(np.abs(np.angle(np.exp(1j * (turned - angle))))) < 1e-6
+
+
+def test_the_hertz_rule_judges_a_crowned_lifter_as_its_ellipse():
+    """The pushrod scene's crowned flat lifter touches the lobe in a Hertz ellipse: the design rule
+    judges the gear's own pressure (the contact effect's hertz_stress_Pa at the scene's speed, the
+    same rigid force), not a line contact over the lifter's width (about 650 MPa against 1.05 GPa)."""
+    from explorer.checks.run import check
+
+    scene = load_scene(PUSHROD)
+    column = simulate(scene).columns["hertz_stress_Pa"]
+    rule = check(scene, rpm=scene.drive.rpm, only=("hertz_stress",)).result("hertz_stress")
+    assert rule.value == pytest.approx(float(np.max(column)), rel=1e-6)
+    line = loads_scene(PUSHROD.read_text().replace('face_radius = "1.5 m"', ""), "flat.toml")
+    flat = check(line, rpm=line.drive.rpm, only=("hertz_stress",)).result("hertz_stress")
+    assert rule.value > 1.3 * flat.value

@@ -352,7 +352,13 @@ class ArmTrainGear(Gear):
         motion = SurfaceMotion(k.cam_velocities.first, k.cam_velocities.second)
         r = self.roller_radius(train)
         pitch = k.surface.radius + r if r > 0.0 else None
-        return GearContact(geometry, motion, oscillating=self.oscillating(train), pitch_radius=pitch)
+        return GearContact(geometry, motion, oscillating=self.oscillating(train), pitch_radius=pitch,
+                           stress=self.point_stress(train, k))
+
+    def point_stress(self, train, k):
+        """The cam contact's own pressure for the design rule where it is no line contact (a crowned
+        face: an ellipse), as GearContact.stress; None: the rule's line contact."""
+        return None
 
     def oscillating(self, train) -> bool:
         return True

@@ -78,6 +78,12 @@ class RockerArm(ArmTrainGear):
             return crown_stress(normal, train.lifter.radius, k.surface.radius, e_star, width)[0]
         return super().cam_hertz(train, k, normal, e_star, width)
 
+    def point_stress(self, train, k):
+        if _pushrod(train) and train.lifter.kind == "flat" and math.isfinite(train.lifter.radius):
+            width = self.cam_width(train)
+            return lambda normal, e_star: self.cam_hertz(train, k, normal, e_star, width)
+        return None
+
     def extra_contact(self, train, k, forces) -> dict:
         return {"pushrod_force_N": train.pushrod_force(k, forces)} if _pushrod(train) else {}
 
