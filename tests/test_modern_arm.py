@@ -447,3 +447,14 @@ def test_the_ratio_jet_is_the_ratio_and_its_derivatives(name):
 def away_from(marks, theta, distance):
     gap = np.abs(np.mod(theta[:, None] - np.asarray(marks)[None, :] + math.pi, 2.0 * math.pi) - math.pi)
     return np.all(gap > distance, axis=1)
+
+
+def test_a_contour_drawn_for_another_base_circle_names_follower_base_radius():
+    """Analysis over a given contour: the arm rests where follower.base_radius says, or one line
+    names that key and the rest's offset (gears.contour_follow.check_base_circle, shared with the
+    pushrod train's lifter)."""
+    finger(law=None, contour=arc_cam(), check=False)  # drawn for RB: accepted
+    with pytest.raises(InputError) as info:
+        finger(law=None, contour=arc_cam(rb=RB + 0.0005), check=False)
+    assert info.value.key == "follower.base_radius" and "the valve would rest" in info.value.reason
+    assert "\n" not in str(info.value)

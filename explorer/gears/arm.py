@@ -51,7 +51,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from . import jet as J
-from .contour_follow import as_parametric, contour_jets, contour_sign, make_contour_motion
+from .contour_follow import as_parametric, check_base_circle, contour_jets, contour_sign, make_contour_motion
 from .envelope import (
     CamSurface,
     EnvelopeContour,
@@ -444,10 +444,7 @@ def make_arm_gear(*, base_radius: float, pivot, cam_side: CamSide, branch: int, 
         motion = make_contour_motion(arm_relation(arm, param), param, file=file, key="cam",
                                      what="the arm's " + ("roller" if cam_side.kind == ROLLER else "pad"))
         gear = replace(gear, motion=motion, contour=contour)
-        base = float(np.min(gear.valve_lift(np.linspace(0.0, TWO_PI, 2048, endpoint=False))[0]))
-        if abs(base) > 1e-6:
-            raise InputError(file, "follower.base_radius", f"the contour's base circle does not match follower.base_radius "
-                             f"(the valve would rest {base * 1e3:.4g} mm off its seat)")
+        check_base_circle(lambda theta: gear.valve_lift(theta)[0], file=file, rests="the valve would rest {} off its seat")
     if check:
         gear.check(n)
     return gear

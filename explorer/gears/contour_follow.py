@@ -186,3 +186,18 @@ def make_contour_motion(relation: Relation, contour, *, file: str, key: str, wha
 def contour_sign(contour) -> float:
     """+1 if the contour's parameter runs counter-clockwise, -1 clockwise."""
     return orientation(contour)
+
+
+BASE_SAMPLES = 2048  # angles at which a given contour's lowest lift is found
+BASE_TOLERANCE = 1e-6  # m: a rest this far off is a contour drawn for another base circle
+
+
+def check_base_circle(lift_of: Callable[[np.ndarray], np.ndarray], *, file: str, rests: str) -> None:
+    """A gear analysed over a given contour rests where follower.base_radius says: its lowest lift
+    over a revolution (`lift_of(theta)` -> lift) is 0 within BASE_TOLERANCE, else one line naming
+    follower.base_radius; `rests` says what would rest off what ("the valve would rest {} off its
+    seat", the offset in mm filled in)."""
+    base = float(np.min(lift_of(np.linspace(0.0, TWO_PI, BASE_SAMPLES, endpoint=False))))
+    if abs(base) > BASE_TOLERANCE:
+        raise InputError(file, "follower.base_radius", "the contour's base circle does not match follower.base_radius "
+                         f"({rests.format(f'{base * 1e3:.4g} mm')})")

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from . import jet as J
-from .contour_follow import as_parametric, make_contour_motion
+from .contour_follow import as_parametric, check_base_circle, make_contour_motion
 from .envelope import (
     CamSurface,
     EnvelopeContour,
@@ -334,10 +334,7 @@ def make_pushrod_train(*, base_radius: float, lifter: Lifter, rocker_pivot, cup,
     train = replace(train0, valve=valve, law=law)
     if contour is not None:
         train = replace(train, motion=_lifter_motion(train, contour), contour=contour)
-        base = float(np.min(train.lifter_lift(np.linspace(0.0, TWO_PI, 2048, endpoint=False)).c[0]))
-        if abs(base) > 1e-6:
-            raise InputError(file, "follower.base_radius", f"the contour's base circle does not match follower.base_radius "
-                             f"(the lifter would rest {base * 1e3:.4g} mm off it)")
+        check_base_circle(lambda theta: train.lifter_lift(theta).c[0], file=file, rests="the lifter would rest {} off it")
     if check:
         train.check(n)
     return train
