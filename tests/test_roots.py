@@ -62,3 +62,18 @@ def test_nan_raises_and_no_bracket():
         root_in(lambda x: -1.0 if x < 0.25 else (math.nan if x < 0.9 else 1.0), 0.0, 1.0)
     with pytest.raises(NoBracket):
         root_in(lambda x: 1.0 + x, 0.0, 1.0)
+
+
+def test_an_overflowing_interpolation_step_is_silent_with_numpy_tolerances():
+    """A caller's tolerance as a numpy scalar makes the iterates numpy scalars; an interpolation
+    whose divided differences overflow then divides inf by inf. As in C (and scipy's brentq) that
+    NaN step must fall back to bisection without a RuntimeWarning (the rocking cam's bad-target
+    search warned here)."""
+    import warnings
+
+    from explorer.core.roots import _div
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert math.isnan(_div(np.float64(np.inf), np.float64(np.inf)))
+        assert _div(np.float64(1.0), np.float64(0.0)) == np.inf

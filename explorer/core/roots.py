@@ -65,6 +65,7 @@ def root_in(f: Callable[[float], float], a: float, b: float, *, fa: float | None
 def _div(n: float, d: float) -> float:
     """n / d as C divides doubles (IEEE 754: +-inf or NaN by zero, where Python raises): a
     quotient of underflowed values (a very flat f) then makes the step a bisection, as in C."""
+    n, d = float(n), float(d)  # numpy scalars (a caller's tolerance) would warn on inf / inf
     try:
         return n / d
     except ZeroDivisionError:
