@@ -287,3 +287,37 @@ def test_random_arc_cams_load_or_name_a_key(rb, nose, lift, flank):
     lift_curve = build_lift(scene)
     d = lift_curve.derivatives(FULL[::10])
     assert np.isfinite(d).all() and abs(d[0].min()) < 1e-6
+
+
+# --------------------------------------------------------------------------------------------
+# exports and drawing of an analysed gear, the OHC rocker's parts
+# --------------------------------------------------------------------------------------------
+
+
+def test_the_exports_of_an_analysed_cam_are_the_given_contour():
+    """The cam to make of a contour scene is the contour itself: every exported point lies on one
+    of the given arcs (|P - c| = R to rounding, 1e-12 m), the normals are unit vectors, and the
+    point table, DXF and grinding table are written."""
+    from explorer.view.exports import cam_source, dxf_text, grinding_table, point_table
+
+    scene = loads_scene(contour_text(OHC.read_text(), arcs_cam(lobe())), "arcs.toml")
+    src = cam_source(scene)
+    g = src.at(np.linspace(0.0, 2.0 * math.pi, 720, endpoint=False))
+    off = np.min([np.abs(np.hypot(g.contour[:, 0] - a.x, g.contour[:, 1] - a.y) - a.radius) for a in scene.cam.arcs.arcs],
+                 axis=0)
+    assert np.max(off) < 1e-12
+    assert np.allclose(np.hypot(*g.normal.T), 1.0, atol=1e-12)
+    assert "POLYLINE" in dxf_text(src, 1e-6)
+    assert len(point_table(src, 360).splitlines()) > 360
+    assert grinding_table(src, 0.2, 720) is not None
+
+
+def test_the_ohc_rocker_is_drawn_without_a_pushrod():
+    from explorer.view.parts import build_parts, part_poses
+
+    scene = load_scene(OHC)
+    result = simulate(scene.with_changes(effects=("kinematics",)))
+    parts, poses = build_parts(scene, result), part_poses(scene, result)
+    assert set(parts) == set(poses)
+    assert {"cam", "camshaft", "rocker", "roller", "valve", "spring", "seat", "cam_contact", "tip_contact"} <= set(parts)
+    assert not {"pushrod", "lifter"} & set(parts)
