@@ -97,6 +97,7 @@ SCENES = ("bucket_tappet", "finger_follower", "ohc_rocker", "pushrod_rocker")
 
 def scenes(repeat: int, speeds: int, sweeps: int) -> None:
     """The built-in scenes' kinematics effect and 1000-speed sweeps (module docstring)."""
+    from dataclasses import replace
     from pathlib import Path
 
     from explorer.effects.pipeline import simulate
@@ -111,9 +112,9 @@ def scenes(repeat: int, speeds: int, sweeps: int) -> None:
 
     def fresh(name):
         lift = built[name]
-        if not hasattr(lift, "gear"):
+        if not hasattr(lift, "memo"):  # no kinematics memo (the roller's law, the bucket's lift)
             return lambda: simulate(only[name], lift)
-        return lambda: simulate(only[name], type(lift)(lift.gear, lift.law))  # the geometry, an empty memo
+        return lambda: simulate(only[name], replace(lift, memo={}))  # the geometry, an empty memo
 
     cpu = median_times({name: fresh(name) for name in only}, repeat, clock=time.process_time)
     base = cpu["cycloidal_demo"]
