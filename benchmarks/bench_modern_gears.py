@@ -13,7 +13,7 @@ The machine is shared (the load average is printed with the table): the times ar
 this process (time.process_time), which a busy machine inflates far less than wall-clock times;
 the wall-clock medians are printed beside them.
 
-The built-in scenes of the gears (assets/scenes/bucket_tappet.toml, finger_follower.toml,
+The built-in scenes of the gears (assets/scenes/bucket_tappet.toml, finger_follower.toml, ohc_rocker.toml,
 pushrod_rocker.toml; phase B): the kinematics effect of one revolution at 3600 steps through the pipeline (the gear's lift
 built anew for every run, so that its kinematics memo is not what is timed; baseline: the same
 effect on the translating roller's scene cycloidal_demo at 3600 steps), and a 1000-speed sweep
@@ -92,11 +92,12 @@ def analysed(name, gear):
                          check=False)
 
 
-SCENES = ("bucket_tappet", "finger_follower", "pushrod_rocker")
+SCENES = ("bucket_tappet", "finger_follower", "ohc_rocker", "pushrod_rocker")
 
 
 def scenes(repeat: int, speeds: int, sweeps: int) -> None:
     """The built-in scenes' kinematics effect and 1000-speed sweeps (module docstring)."""
+    from dataclasses import replace
     from pathlib import Path
 
     from explorer.effects.pipeline import simulate
@@ -111,9 +112,9 @@ def scenes(repeat: int, speeds: int, sweeps: int) -> None:
 
     def fresh(name):
         lift = built[name]
-        if not hasattr(lift, "gear"):
+        if not hasattr(lift, "memo"):  # no kinematics memo (the roller's law, the bucket's lift)
             return lambda: simulate(only[name], lift)
-        return lambda: simulate(only[name], type(lift)(lift.gear, lift.law))  # the geometry, an empty memo
+        return lambda: simulate(only[name], replace(lift, memo={}))  # the geometry, an empty memo
 
     cpu = median_times({name: fresh(name) for name in only}, repeat, clock=time.process_time)
     base = cpu["cycloidal_demo"]

@@ -10,7 +10,11 @@ The lift: [lift] is the wanted valve lift (valve-referred, lash included); the c
 from it (Schenker's backwards construction), so the valve's lift, velocity, acceleration and jerk
 are the law's, exactly, and the geometry gives the ratio (valve travel per travel of the cam-side
 point: the roller's centre, a pad's crown, or the lifter) with its derivatives in the cam angle as
-jets, the pressure angle and the cam's radius of curvature.
+jets, the pressure angle and the cam's radius of curvature. With law = "contour" the cam is the
+[cam] contour (arcs or points) and the geometry is analysed over it (explorer.gears.arm: the
+roller's or curved pad's centre on the contour's offset, a flat pad's support function;
+explorer.gears.pushrod: the lifter's lift): the valve's motion is then the geometry's
+(ContourValveLift), with the same figures.
 
 Contact statics (explorer.gears.train_statics, virtual work on the one-degree-of-freedom train):
 the cam's normal force N per newton of valve force F and the camshaft torque per newton of N, with
@@ -41,6 +45,7 @@ from ..mechanics.tribology import SurfaceMotion
 from ..result import EffectOutput
 from .base import Gear, GearSpec
 from .common import section, spec_of
+from .contour_follow import cam_contour
 from .modern_spec import build_modern_gear, parse_parts
 
 TWO_PI = 2.0 * math.pi
@@ -98,6 +103,22 @@ class TrainLift:
 
     def breakpoints(self) -> np.ndarray:
         return np.asarray(self.law.breakpoints())
+
+
+@dataclass(frozen=True)
+class ContourValveLift:
+    """The valve-referred lift of a train analysed over a given contour (a LiftCurve in place of
+    the law): the geometry's valve travel with its exact derivatives (ArmGear / PushrodTrain
+    .valve_lift), the breakpoints where the contour's curvature jumps (arc junctions, a cubic
+    spline's knots) as the follower's motion over it found them."""
+
+    gear: Any
+
+    def derivatives(self, theta) -> np.ndarray:
+        return self.gear.valve_lift(np.asarray(theta, dtype=float))
+
+    def breakpoints(self) -> np.ndarray:
+        return np.asarray(self.gear.motion.breakpoints(), dtype=float)
 
 
 @dataclass(frozen=True)
@@ -164,15 +185,22 @@ class ArmTrainGear(Gear):
         self.make(spec, fields)
         return spec
 
+    def takes_law(self, law) -> bool:
+        """A closed form (the wanted valve lift: the cam is synthesised) or a [cam] contour (analysed)."""
+        return law.closed_form or law.from_contour
+
     def law_refusal(self, law) -> str:
         return (f"the {self.type} gear synthesises its cam from one of the laws {', '.join(closed_form_names())} "
-                f"(the wanted valve lift), not from law \"{law.name}\"")
+                f"(the wanted valve lift) or analyses a [cam] contour (law = \"contour\"), not law \"{law.name}\"")
 
     def check(self, spec, fields) -> None:
         super().check(spec, fields)
-        if law_spec(fields["lift"].law).gear_made:
-            raise InputError(fields.get("source", "<memory>"), "lift.law",
-                             f"the {self.type} gear needs a lift law (the wanted valve lift)")
+        file, law = fields.get("source", "<memory>"), law_spec(fields["lift"].law)
+        if law.gear_made:
+            raise InputError(file, "lift.law", f"the {self.type} gear needs a lift law (the wanted valve lift) or "
+                             "law = \"contour\"")
+        if law.from_contour and fields.get("cam") is None:
+            raise InputError(file, "cam", "missing section: lift.law = \"contour\" needs the [cam] contour")
         if spec is not None and self.side_stiffness(spec) is not None and "elastic" in fields["effects"]:
             from ..dynamics.solvers import varying_stiffness
 
@@ -184,18 +212,24 @@ class ArmTrainGear(Gear):
                                  + " or ".join(f'"{m}"' for m in varying))
 
     def make(self, spec, source):
-        """The train's geometry with its synthesised cam, checked over a revolution (undercut or
-        cusp, the arm through the cam, the pad off the valve tip, a dead point of the pushrod)."""
-        follower = section(source, "follower")
+        """The train's geometry with its synthesised cam, or analysed over the [cam] contour
+        (law = "contour"), checked over a revolution (undercut or cusp, the arm through the cam,
+        the pad off the valve tip, a dead point of the pushrod; a given contour: the follower
+        following it round, its base circle follower.base_radius)."""
+        follower, lift = section(source, "follower"), section(source, "lift")
+        if law_spec(lift.law).from_contour:
+            return build_modern_gear(self.arm_kind, spec.parts, base_radius=follower.base_radius,
+                                     roller_radius=follower.roller_radius, lift=None,
+                                     contour=cam_contour(section(source, "cam")), file=spec.file)
         return build_modern_gear(self.arm_kind, spec.parts, base_radius=follower.base_radius,
-                                 roller_radius=follower.roller_radius, lift=law_lift(section(source, "lift")),
-                                 file=spec.file)
+                                 roller_radius=follower.roller_radius, lift=law_lift(lift), file=spec.file)
 
     # -- 5: the lift -------------------------------------------------------------------------------
     def build_lift(self, scene) -> TrainLift:
         spec = spec_of(self, scene)
         gear = self.make(spec, scene)
-        return TrainLift(gear, gear.law, side_stiffness=self.side_stiffness(spec))
+        law = gear.law if gear.law is not None else ContourValveLift(gear)
+        return TrainLift(gear, law, side_stiffness=self.side_stiffness(spec))
 
     def side_stiffness(self, spec) -> float | None:
         """The [gear.*] stiffness of its cam side (N/m), or None."""

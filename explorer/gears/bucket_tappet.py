@@ -51,6 +51,7 @@ from ..mechanics.tribology import SurfaceMotion
 from ..result import EffectOutput
 from .base import Gear
 from .common import section, spec_of
+from .contour_follow import cam_contour
 from .envelope import _rotate_to_cam
 from .flat_face import AXIS, BucketTappetGear, Tappet, TappetKinematics, analyse_bucket, synthesise_bucket
 from .modern_spec import _tappet as tappet_keys
@@ -95,12 +96,6 @@ class BucketCam:
 
     def breakpoints(self) -> np.ndarray:
         return np.mod(np.asarray(self.gear.lift.breakpoints(), dtype=float), TWO_PI)
-
-
-def contour_of(cam):
-    """The [cam] contour (explorer.lift.contours.spec.CamSpec) as analyse_bucket takes it: the
-    arcs, or the parametric contour through the points."""
-    return cam.arcs if cam.kind == "arcs" else cam.contour_geometry()
 
 
 def face_geometry(k: TappetKinematics, base_radius: float, face_radius: float, mu: float) -> ContactGeometry:
@@ -168,7 +163,7 @@ class BucketTappet(Gear):
         follower, lift = section(source, "follower"), section(source, "lift")
         tappet = self.tappet(spec, follower.base_radius)
         if law_spec(lift.law).from_contour:
-            return analyse_bucket(tappet, contour_of(section(source, "cam")), CHECK_STEPS)
+            return analyse_bucket(tappet, cam_contour(section(source, "cam")), CHECK_STEPS)
         return synthesise_bucket(tappet, law_lift(lift), CHECK_STEPS)
 
     # -- 5. the lift -----------------------------------------------------------------------------

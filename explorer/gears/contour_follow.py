@@ -83,6 +83,12 @@ class ArcChain:
         return self.edges[:-1].copy() if len(self._table) > 1 else np.zeros(0)
 
 
+def cam_contour(cam):
+    """The scene's [cam] contour (explorer.lift.contours.spec.CamSpec) as the gears' analyses take
+    it: the arcs, or the parametric contour through the points."""
+    return cam.arcs if cam.kind == "arcs" else cam.contour_geometry()
+
+
 def as_parametric(contour):
     """ArcContour -> ArcChain; a parametric contour (SplineContour, ...) as it is."""
     from ..lift.contours.arcs import ArcContour

@@ -6,6 +6,8 @@ ends and opens the valve with its curved pad at the other end; most of today's p
                       pad_radius, face_angle), width
 [gear.valve_pad]      arm, angle, radius        [gear.valve]  axis, axis_point, tip_radius
 [gear.lash_adjuster]  body_diameter, body_length (the drawing)
+[lift]                the wanted valve lift (a closed form: the cam is synthesised) or law = "contour"
+                      with a [cam] contour (arcs or points: the finger analysed over it)
 [contact]             tip_friction (the pad on the valve tip), sliding_friction (a pad on the cam)
 Keys, units and ranges: explorer.gears.modern_spec and docs/theory/modern-gears.md; the geometry
 is explorer.gears.arm, its gear hooks explorer.gears.arm_train.

@@ -12,6 +12,8 @@ with [gear.lifter]     [gear.lifter] type ("flat": face_radius; "roller": roller
 without                [gear.rocker] as the finger's [gear.finger]
 both                   [gear.valve_pad] arm, angle, radius; [gear.valve] axis, axis_point, tip_radius;
                        [contact] sliding_friction (a flat lifter or a pad on the cam), tip_friction
+[lift]                 the wanted valve lift (a closed form: the cam is synthesised) or law = "contour"
+                       with a [cam] contour (arcs or points: the rocker, or the lifter, analysed over it)
 The geometry is explorer.gears.pushrod (PushrodTrain) and explorer.gears.arm (ArmGear), built by
 explorer.gears.modern_spec; the gear hooks are explorer.gears.arm_train's.
 """
