@@ -48,6 +48,8 @@ MODERN_PART_COLORS: dict[str, tuple[int, int, int]] = {
     "valve": (200, 70, 70),
     "cam_contact": (240, 220, 40),
     "tip_contact": (240, 220, 40),
+    "hla_body": (95, 100, 110),  # a train's lash adjuster (explorer.view.train_motion): its body
+    "hla_plunger": (205, 175, 70),  # and its plunger, moving
 }
 STATIC_PARTS = ("lash_adjuster",)  # parts that never move (their pose is the same at every step)
 

@@ -35,6 +35,7 @@ from .base import GearView
 from .drawing import (ROLLER_MARKS, SPRING_ACTIVE_COILS, SPRING_DEAD_COILS, Layout, _drop_duplicates, box, concat,
                       cylinder_y, cylinder_z, displayed_valve_lift, extrude_contour, loop_spin, quat_about_y,
                       signed_area, stadium_bar, tube_z, valve_group)
+from .train_motion import train_shape
 
 # Display colours (RGB 0-255) of its parts, shared by the viewers so parts look the same everywhere.
 COLORS = MappingProxyType({
@@ -142,8 +143,9 @@ def _roller_mesh(lay: Layout) -> trimesh.Trimesh:
     return concat([rim, hub, *marks])
 
 
-def _follower_mesh(lay: Layout) -> trimesh.Trimesh:
-    """Fork around the roller and the rod up to the lever; local origin at the roller centre."""
+def _follower_mesh(lay: Layout, rod: bool = True) -> trimesh.Trimesh:
+    """Fork around the roller and the rod up to the lever (without it: the lifter of a train
+    whose pushrod is a mass of its own, `_pushrod_mesh`); local origin at the roller centre."""
     r, w = lay.roller_draw_radius, lay.roller_width
     rod_top = lay.pivot[2] - lay.lever_half_thickness - lay.prime_y  # rod top at zero lift
     plate_t = 0.12 * w
@@ -153,9 +155,43 @@ def _follower_mesh(lay: Layout) -> trimesh.Trimesh:
         for sgn in (-1.0, 1.0)
     ]
     bridge = box([1.3 * r, w + 2.6 * plate_t, plate_t * 1.5], [0.0, 0.0, 0.35 * plate_h + 0.5 * plate_h])
-    rod = cylinder_z(lay.rod_radius, 0.35 * plate_h + 0.5 * plate_h, rod_top, 32)
     pin = cylinder_y(0.22 * r, w + 3.0 * plate_t, 16)
-    return concat([*plates, bridge, rod, pin])
+    if not rod:
+        return concat([*plates, bridge, pin])
+    return concat([*plates, bridge, _pushrod_mesh(lay), pin])
+
+
+def _pushrod_mesh(lay: Layout) -> trimesh.Trimesh:
+    """The follower's rod from its fork's bridge up to the lever; local origin at the roller
+    centre (at zero lift), as the follower's."""
+    r, w = lay.roller_draw_radius, lay.roller_width
+    rod_top = lay.pivot[2] - lay.lever_half_thickness - lay.prime_y  # rod top at zero lift
+    plate_t, plate_h = 0.12 * w, 1.6 * r
+    return cylinder_z(lay.rod_radius, 0.35 * plate_h + 0.5 * plate_h, rod_top, 32)
+
+
+# The lash adjuster of a train with [hla], drawn as a pedestal over the lever's pivot: its body
+# hangs from the head, its plunger bears on the pivot's shaft (which it carries). Extending
+# (pump-up) pushes the pivot down, so both lever ends go down and the valve opens -- as an
+# adjuster under an end-pivot finger holds its valve open. Sizes in the lever's half-thickness.
+HLA_PLUNGER_RADIUS, HLA_PLUNGER_TOP = 1.1, 4.2  # the plunger's radius; its top above the pivot at rest
+HLA_BODY_RADII, HLA_BODY_SPAN = (1.2, 1.7), (2.2, 7.4)  # the body's bore and outside; its bottom and top
+
+
+def _hla_plunger_mesh(lay: Layout) -> trimesh.Trimesh:
+    """The plunger with the pivot's shaft it carries; local origin at the pivot's centre."""
+    half, w = lay.lever_half_thickness, 0.7 * lay.cam_width
+    plunger = cylinder_z(HLA_PLUNGER_RADIUS * half, 0.0, HLA_PLUNGER_TOP * half, 32)
+    return concat([plunger, cylinder_y(0.7 * half, 2.2 * w, 24)])
+
+
+def _hla_body_mesh(lay: Layout) -> trimesh.Trimesh:
+    """The adjuster's body over the pivot (world frame): a bore the plunger slides in, closed on top."""
+    half = lay.lever_half_thickness
+    px, _, pz = lay.pivot
+    (r_in, r_out), (z0, z1) = HLA_BODY_RADII, HLA_BODY_SPAN
+    return concat([tube_z(r_in * half, r_out * half, pz + z0 * half, pz + z1 * half, 32, px),
+                   cylinder_z(r_out * half, pz + z1 * half, pz + (z1 + 0.5) * half, 32, px)])
 
 
 def _follower_guide_mesh(lay: Layout) -> trimesh.Trimesh:
@@ -209,16 +245,22 @@ def parts(scene, result=None, lay: Layout | None = None, lift=None, contour_samp
     lever: origin at the pivot; adjuster: ball centre; valve: stem top; spring: its bottom
     (at rest length); static parts (follower_guide, lever_pivot, seat): world frame."""
     lay = lay or layout(scene, result)
+    elements, hla = train_shape(scene)
     builders = {
         "cam": lambda: extrude_contour(cam_contour(scene, lift, contour_samples), lay.cam_width),
         "camshaft": lambda: _camshaft_mesh(lay),
         "roller": lambda: _roller_mesh(lay),
-        "follower": lambda: _follower_mesh(lay),
+        "follower": lambda: _follower_mesh(lay, rod=not elements),
         "follower_guide": lambda: _follower_guide_mesh(lay),
         "lever": lambda: _lever_mesh(lay),
         "lever_pivot": lambda: _pivot_mesh(lay),
         "adjuster": lambda: _adjuster_mesh(lay),
     }
+    if elements:  # a train of masses: the rod is the pushrod, moving with its own mass
+        builders["pushrod"] = lambda: _pushrod_mesh(lay)
+    if hla:  # the adjuster carries the pivot's shaft
+        del builders["lever_pivot"]
+        builders.update(hla_body=lambda: _hla_body_mesh(lay), hla_plunger=lambda: _hla_plunger_mesh(lay))
     parts = {name: build() for name, build in builders.items() if only is None or name in only}
     parts.update(valve_group(lay, only))
     return parts
@@ -279,7 +321,7 @@ def poses(scene, result, magnification: float = 1.0, lay: Layout | None = None, 
     gap = (scene.valve.lash if scene.valve is not None else 0.0) + s_true - lay.ratio * L
     ball_bottom = stem_top + magnification * gap
     ball_x = px + lay.arm_valve * np.cos(phi)
-    return {
+    poses = {
         "cam": (fixed(0.0, 0.0, 0.0), cam_q),
         "camshaft": (fixed(0.0, 0.0, 0.0), cam_q),
         "roller": (roller_pos, quat_about_y(-spin)),
@@ -292,10 +334,59 @@ def poses(scene, result, magnification: float = 1.0, lay: Layout | None = None, 
         "spring": (fixed(lay.valve_x, 0.0, lay.spring_seat_z), ident.copy()),
         "seat": (fixed(0.0, 0.0, 0.0), ident.copy()),
     }
+    elements, hla = train_shape(scene)
+    if elements:  # the rod drawn as a part of its own (train_poses moves it with its mass)
+        poses["pushrod"] = (roller_pos.copy(), ident.copy())
+    if hla:  # rigid: the plunger at rest, carrying the pivot's shaft
+        del poses["lever_pivot"]
+        poses.update(hla_body=(fixed(0.0, 0.0, 0.0), ident.copy()), hla_plunger=(fixed(px, py, pz), ident.copy()))
+    return poses
+
+
+# The train's masses on the drawing, cam first (explorer.view.train_motion): the follower with its
+# roller (a lifter, or a finger's roller), the rod (a pushrod), the lever with its screw.
+STATIONS = (("roller", "follower"), ("pushrod",), ("lever", "adjuster"))
+
+
+def train_poses(scene, result, motion, rigid, lay: Layout | None = None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The poses of the train's masses (explorer.view.train_motion.TrainMotion over STATIONS):
+    roller and follower, and the rod, rise by their displayed travel / ratio (the drawing's
+    follower lift); the lever turns so that its follower end is at its own displayed travel,
+    about a pivot the adjuster's plunger moves (displayed plunger travel, up into its body); the
+    screw shows the pad's true gap to the stem, magnified, as for the rigid drawing."""
+    lay = lay or layout(scene, result)
+    cols = result.columns
+    m = motion.magnification
+    n = len(motion.drive)
+    lift_f, lift_rod, lift_lever = (np.asarray(d, dtype=float) / lay.ratio for d in motion.displayed)
+    ident = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
+    out = {}
+    for name, lift_at in (("roller", lift_f), ("follower", lift_f), ("pushrod", lift_rod)):
+        pos = np.column_stack([np.full(n, lay.offset), np.zeros(n), lay.prime_y + lift_at])
+        out[name] = (pos, rigid[name][1] if name in rigid else ident.copy())
+    px, py, pz = lay.pivot
+    dz = np.zeros(n) if motion.plunger is None else motion.plunger  # the pivot rides on the plunger
+    phi = np.arcsin(np.clip((lift_lever - dz) / lay.arm_follower, -1.0, 1.0))
+    pivot = np.column_stack([np.full(n, px), np.full(n, py), pz + dz])
+    out["lever"] = (pivot, quat_about_y(phi))
+    if motion.plunger is not None:
+        out["hla_plunger"] = (pivot.copy(), ident.copy())
+    s_true = np.asarray(cols["valve_lift_m"], dtype=float)
+    stem_top = lay.stem_top_rest - displayed_valve_lift(result, m)
+    gap = (scene.valve.lash if scene.valve is not None else 0.0) + s_true - motion.travel[-1]
+    ball_x = pivot[:, 0] + lay.arm_valve * np.cos(phi)
+    out["adjuster"] = (np.column_stack([ball_x, np.zeros(n), stem_top + m * gap + lay.ball_radius]), quat_about_y(phi))
+    return out
 
 
 class TranslatingRollerView(GearView):
     colors = COLORS
+
+    def train_stations(self, scene):
+        return STATIONS
+
+    def train_poses(self, scene, result, motion, rigid, lay=None, lift=None):
+        return train_poses(scene, result, motion, rigid, lay)
 
     def layout(self, scene, result=None, lift=None) -> Layout:
         return layout(scene, result)
