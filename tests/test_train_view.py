@@ -9,12 +9,11 @@ lift, the largest deviation of the part, a step on the base circle."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
 from conftest import ROOT
+from explorer.effects.lift import build_lift
 from explorer.effects.pipeline import simulate
 from explorer.scene.builtin import builtin_scenes
 from explorer.scene.scene import load_scene
@@ -179,3 +178,106 @@ def test_a_train_opens_magnified_and_the_recording_logs_each_mass(tmp_path, push
     z = recorded["hla"].temporal["/parts/hla_plunger"]["Transform3D:translation"][:, 2]
     np.testing.assert_allclose(z - lay.pivot[2], TRAIN_MAGNIFICATION * np.asarray(result.columns["hla_plunger_travel_m"]),
                                atol=2e-6)
+
+
+TRAIN_TOML = '''
+[linkage]
+stiffness = "150 N/um"
+damping = "50 N*s/m"
+contact = "one-sided"
+{elements}
+[seat]
+stiffness = "200 N/um"
+damping = "400 N*s/m"
+'''
+ELEMENT = '''
+[[linkage.elements]]
+name = "{name}"
+mass = "{mass}"
+stiffness = "{stiffness}"
+damping = "80 N*s/m"
+{contact}
+'''
+HLA_TOML = '''
+[hla]
+plunger_mass = "12 g"
+plunger_diameter = "12 mm"
+clearance = "6 um"
+leak_length = "8 mm"
+viscosity = "10 mPa*s"
+chamber_volume = "200 mm**3"
+supply_pressure = "3 bar"
+spring_rate = "5 N/mm"
+spring_preload = "15 N"
+lever = 0.7
+revolutions = 2
+'''
+
+
+def _gear_train_scene(tmp_path, stem: str, elements, hla: bool = False):
+    """A built-in modern-gear scene with its [linkage] replaced by a train of `elements`
+    (name, mass, stiffness, contact) and optionally an adjuster."""
+    import re
+
+    text = (SCENES / f"{stem}.toml").read_text()
+    text = re.sub(r"\n\[linkage\]\n(?:[^\[\n][^\n]*\n|\n)*", "\n", text)
+    text = re.sub(r"^effects = .*$", 'effects = ["kinematics", "lash", "forces", "elastic"]', text, flags=re.M)
+    body = "".join(ELEMENT.format(name=n, mass=m, stiffness=k, contact=f'contact = "{c}"' if c else "")
+                   for n, m, k, c in elements)
+    path = tmp_path / f"{stem}_train.toml"
+    path.write_text(text + TRAIN_TOML.format(elements=body) + (HLA_TOML if hla else ""))
+    return load_scene(path, ["solver.steps_per_revolution=720"])
+
+
+def _d_dS(coordinate, S, i):
+    """The rigid coordinate's derivative by the drive at step i, by central differences of the
+    gear's own kinematics over the revolution (an oracle independent of the view's fit)."""
+    return float((coordinate[i + 1] - coordinate[i - 1]) / (S[i + 1] - S[i - 1]))
+
+
+def test_a_finger_on_an_adjuster_turns_by_its_own_motion_and_rides_on_the_plunger(tmp_path):
+    scene = _gear_train_scene(tmp_path, "finger_follower", [("finger", "25 g", "100 N/um", "")], hla=True)
+    result = simulate(scene)
+    c = result.columns
+    lay = meshes.layout(scene, result)
+    parts = meshes.build_parts(scene, result, lay=lay)
+    assert {"hla_plunger", "lash_adjuster", "finger", "roller"} <= set(parts)
+    rigid = meshes.part_poses(scene, result, magnification=0.0, lay=lay)
+    shown = meshes.part_poses(scene, result, magnification=M, lay=lay)
+    S = np.asarray(c["follower_lift_m"]) * scene.follower.ratio
+    x = np.asarray(c["part_finger_displacement_m"])
+    p = np.asarray(c["hla_plunger_travel_m"])
+    psi = -2.0 * np.arctan2(rigid["finger"][1][:, 2], rigid["finger"][1][:, 0])
+    shown_psi = -2.0 * np.arctan2(shown["finger"][1][:, 2], shown["finger"][1][:, 0])
+    axis = np.array([0.0, 0.0, -1.0])  # the scene's valve axis, -90 deg: the plunger's travel into its body is down
+    for i in (int(np.argmax(S)) - 40, int(np.argmax(S)) + 40):  # on the flanks, where the ratio is defined
+        expected = M * (x[i] - S[i]) * _d_dS(psi, S, i)
+        assert shown_psi[i] - psi[i] == pytest.approx(expected, rel=0.05, abs=1e-9)
+        np.testing.assert_allclose(shown["hla_plunger"][0][i] - rigid["hla_plunger"][0][i], M * p[i] * axis, atol=1e-12)
+        np.testing.assert_allclose(shown["finger"][0][i] - rigid["finger"][0][i], M * p[i] * axis, atol=1e-12)
+    np.testing.assert_array_equal(np.ptp(shown["lash_adjuster"][0], axis=0), 0.0)  # the body stays
+
+
+def test_the_pushrod_rocker_gear_moves_lifter_pushrod_and_rocker_each_by_its_own(tmp_path):
+    scene = _gear_train_scene(tmp_path, "pushrod_rocker", [("lifter", "60 g", "160 N/um", ""),
+                                                          ("pushrod", "40 g", "300 N/um", "bonded"),
+                                                          ("rocker", "50 g", "45 N/um", "")])
+    result = simulate(scene)
+    c = result.columns
+    lay = meshes.layout(scene, result)
+    rigid = meshes.part_poses(scene, result, magnification=0.0, lay=lay)
+    shown = meshes.part_poses(scene, result, magnification=M, lay=lay)
+    S = np.asarray(c["follower_lift_m"]) * scene.follower.ratio
+    theta = np.radians(np.asarray(c["cam_angle_deg"]))
+    k = build_lift(scene).gear.kinematics(theta)
+    lifter, rocker = np.asarray(k.lifter_lift[0]), np.asarray(k.rocker_angle[0])
+    rise = shown["lifter"][0][:, 2] - rigid["lifter"][0][:, 2]
+    rod = shown["pushrod"][0][:, 2] - rigid["pushrod"][0][:, 2]
+    turn = 2.0 * (np.arctan2(rigid["rocker"][1][:, 2], rigid["rocker"][1][:, 0])
+                  - np.arctan2(shown["rocker"][1][:, 2], shown["rocker"][1][:, 0]))
+    for i in (int(np.argmax(S)) - 40, int(np.argmax(S)) + 40):
+        for part, moved, coordinate in (("lifter", rise, lifter), ("pushrod", rod, lifter), ("rocker", turn, rocker)):
+            x = np.asarray(c[f"part_{part}_displacement_m"])[i]
+            assert moved[i] == pytest.approx(M * (x - S[i]) * _d_dS(coordinate, S, i), rel=0.05, abs=1e-9), part
+
+
