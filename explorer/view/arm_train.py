@@ -66,10 +66,10 @@ class ArmTrainView(LeverGearView):
 
     # items 7, 8: the train's masses (explorer.view.train_motion)
     def train_stations(self, scene):
-        train = build_lift(scene).gear
-        if _pushrod(train):
+        parts = scene.gear.parts  # the gear's tables ([gear.lifter], [gear.finger] or [gear.rocker])
+        if "lifter" in parts:
             return (("lifter", "roller"), ("pushrod",), ("rocker",))
-        return (("roller", train.kind),)
+        return (("roller", "finger" if "finger" in parts else "rocker"),)
 
     def train_poses(self, scene, result, motion, rigid, lay=None, lift=None):
         """Each station's parts moved by its mass's displayed deviation from the drive, turned into

@@ -69,7 +69,7 @@ def part_poses(scene, result, magnification: float = 1.0, lay: Layout | None = N
     its deviation from the rigid motion times `magnification` (the view's items 7 and 8)."""
     view = view_of(scene)
     poses = view.poses(scene, result, magnification=magnification, lay=lay, lift=lift)
-    motion = train_motion(scene, result, len(view.train_stations(scene)), magnification)
+    motion = train_motion(scene, result, len(view.train_stations(scene)), magnification) if train_shape(scene)[0] else None
     if motion is not None:
         poses.update(view.train_poses(scene, result, motion, poses, lay=lay, lift=lift))
     return poses
