@@ -96,12 +96,17 @@ class ArmTrainView(LeverGearView):
             return out
         name = train.kind
         psi = k.arm_angle[0]
-        turn = per_valve_travel(psi, drive) * (motion.displayed[0] - drive)
         pivot = np.asarray(train.arm.pivot, dtype=float)
         shift = np.zeros((len(drive), 3))
+        moved = np.zeros(len(drive))  # the pad's travel (valve-referred) the pivot's shift brings
         if motion.plunger is not None and "lash_adjuster" in rigid:  # plunger travel: into the body, along the valve axis
             shift = motion.plunger[:, None] * to_world(np.asarray(train.valve.axis)[None, :], 0.0)
             out["hla_plunger"] = (rigid["hla_plunger"][0] + shift, rigid["hla_plunger"][1])
+            moved = motion.plunger
+        # the finger's travel holds the adjuster's part (train.py: -g p at the cam joint); the
+        # shifted pivot brings the pad p of it, the turn about the pivot the rest (which keeps the
+        # roller on the cam: g + 1 = the finger's ratio)
+        turn = per_valve_travel(psi, drive) * (motion.displayed[0] - drive - moved)
         pos, q = rigid[name]
         out[name] = (pos + shift, quat_about_y(_about_y(q) - turn))
         if "roller" in rigid:

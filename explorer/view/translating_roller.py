@@ -35,7 +35,7 @@ from .base import GearView
 from .drawing import (ROLLER_MARKS, SPRING_ACTIVE_COILS, SPRING_DEAD_COILS, Layout, _drop_duplicates, box, concat,
                       cylinder_y, cylinder_z, displayed_valve_lift, extrude_contour, loop_spin, quat_about_y,
                       signed_area, stadium_bar, tube_z, valve_group)
-from .train_motion import train_shape
+from .train_motion import TRAIN_MAGNIFICATION, train_shape
 
 # Display colours (RGB 0-255) of its parts, shared by the viewers so parts look the same everywhere.
 COLORS = MappingProxyType({
@@ -170,28 +170,39 @@ def _pushrod_mesh(lay: Layout) -> trimesh.Trimesh:
     return cylinder_z(lay.rod_radius, 0.35 * plate_h + 0.5 * plate_h, rod_top, 32)
 
 
-# The lash adjuster of a train with [hla], drawn as a pedestal over the lever's pivot: its body
-# hangs from the head, its plunger bears on the pivot's shaft (which it carries). Extending
-# (pump-up) pushes the pivot down, so both lever ends go down and the valve opens -- as an
-# adjuster under an end-pivot finger holds its valve open. Sizes in the lever's half-thickness.
-HLA_PLUNGER_RADIUS, HLA_PLUNGER_TOP = 1.1, 4.2  # the plunger's radius; its top above the pivot at rest
-HLA_BODY_RADII, HLA_BODY_SPAN = (1.2, 1.7), (2.2, 7.4)  # the body's bore and outside; its bottom and top
+# The lash adjuster of a train with [hla], drawn over the lever's pivot: a body, and a plunger
+# coming out of it towards the pivot (extending: down). The drawing is the scene's ratio, not the
+# finger's geometry, and the finger's own travel (its column) already holds what the adjuster adds
+# to the valve's lift (train.py: the cam joint's -g p): so the lever turns about its fixed pivot
+# by its own travel, and the plunger shows the adjuster's travel in its body. At rest it hangs
+# above the pivot by what the revolution's largest extension comes to at the default
+# magnification, so that at x20 the pumped-up plunger just reaches the pivot (hla_clearance).
+# Sizes in the lever's half-thickness; both meshes in their own frame, origin at the plunger's
+# end at rest (so a new result moves them without new meshes).
+HLA_PLUNGER_RADIUS, HLA_PLUNGER_LENGTH = 1.1, 3.5
+HLA_BODY_RADII, HLA_BODY_SPAN = (1.2, 1.7), (1.0, 5.5)  # the bore and the outside; bottom and top above the plunger's end
+
+
+def hla_clearance(lay: Layout, result) -> float:
+    """Height of the plunger's end at rest above the pivot's shaft (see above)."""
+    half = lay.lever_half_thickness
+    p = None if result is None else result.columns.get("hla_plunger_travel_m")
+    extension = 0.0 if p is None else max(0.0, -float(np.min(p)))
+    return 0.7 * half + 0.3 * half + TRAIN_MAGNIFICATION * extension
 
 
 def _hla_plunger_mesh(lay: Layout) -> trimesh.Trimesh:
-    """The plunger with the pivot's shaft it carries; local origin at the pivot's centre."""
-    half, w = lay.lever_half_thickness, 0.7 * lay.cam_width
-    plunger = cylinder_z(HLA_PLUNGER_RADIUS * half, 0.0, HLA_PLUNGER_TOP * half, 32)
-    return concat([plunger, cylinder_y(0.7 * half, 2.2 * w, 24)])
+    half = lay.lever_half_thickness
+    return concat([cylinder_z(HLA_PLUNGER_RADIUS * half, 0.0, HLA_PLUNGER_LENGTH * half, 32),
+                   trimesh.creation.icosphere(subdivisions=2, radius=0.6 * half)])
 
 
 def _hla_body_mesh(lay: Layout) -> trimesh.Trimesh:
-    """The adjuster's body over the pivot (world frame): a bore the plunger slides in, closed on top."""
+    """A bore the plunger slides in, closed on top."""
     half = lay.lever_half_thickness
-    px, _, pz = lay.pivot
     (r_in, r_out), (z0, z1) = HLA_BODY_RADII, HLA_BODY_SPAN
-    return concat([tube_z(r_in * half, r_out * half, pz + z0 * half, pz + z1 * half, 32, px),
-                   cylinder_z(r_out * half, pz + z1 * half, pz + (z1 + 0.5) * half, 32, px)])
+    return concat([tube_z(r_in * half, r_out * half, z0 * half, z1 * half, 32),
+                   cylinder_z(r_out * half, z1 * half, (z1 + 0.5) * half, 32)])
 
 
 def _follower_guide_mesh(lay: Layout) -> trimesh.Trimesh:
@@ -258,8 +269,7 @@ def parts(scene, result=None, lay: Layout | None = None, lift=None, contour_samp
     }
     if elements:  # a train of masses: the rod is the pushrod, moving with its own mass
         builders["pushrod"] = lambda: _pushrod_mesh(lay)
-    if hla:  # the adjuster carries the pivot's shaft
-        del builders["lever_pivot"]
+    if hla:  # the adjuster over the pivot
         builders.update(hla_body=lambda: _hla_body_mesh(lay), hla_plunger=lambda: _hla_plunger_mesh(lay))
     parts = {name: build() for name, build in builders.items() if only is None or name in only}
     parts.update(valve_group(lay, only))
@@ -337,9 +347,9 @@ def poses(scene, result, magnification: float = 1.0, lay: Layout | None = None, 
     elements, hla = train_shape(scene)
     if elements:  # the rod drawn as a part of its own (train_poses moves it with its mass)
         poses["pushrod"] = (roller_pos.copy(), ident.copy())
-    if hla:  # rigid: the plunger at rest, carrying the pivot's shaft
-        del poses["lever_pivot"]
-        poses.update(hla_body=(fixed(0.0, 0.0, 0.0), ident.copy()), hla_plunger=(fixed(px, py, pz), ident.copy()))
+    if hla:  # rigid: the plunger at rest in its body
+        rest = fixed(px, py, pz + hla_clearance(lay, result))
+        poses.update(hla_body=(rest, ident.copy()), hla_plunger=(rest.copy(), ident.copy()))
     return poses
 
 
@@ -351,9 +361,9 @@ STATIONS = (("roller", "follower"), ("pushrod",), ("lever", "adjuster"))
 def train_poses(scene, result, motion, rigid, lay: Layout | None = None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """The poses of the train's masses (explorer.view.train_motion.TrainMotion over STATIONS):
     roller and follower, and the rod, rise by their displayed travel / ratio (the drawing's
-    follower lift); the lever turns so that its follower end is at its own displayed travel,
-    about a pivot the adjuster's plunger moves (displayed plunger travel, up into its body); the
-    screw shows the pad's true gap to the stem, magnified, as for the rigid drawing."""
+    follower lift); the lever turns so that its follower end is at its own displayed travel; the
+    screw shows the pad's true gap to the stem, magnified, as for the rigid drawing; the
+    adjuster's plunger moves by its displayed travel (into its body: up)."""
     lay = lay or layout(scene, result)
     cols = result.columns
     m = motion.magnification
@@ -365,12 +375,12 @@ def train_poses(scene, result, motion, rigid, lay: Layout | None = None) -> dict
         pos = np.column_stack([np.full(n, lay.offset), np.zeros(n), lay.prime_y + lift_at])
         out[name] = (pos, rigid[name][1] if name in rigid else ident.copy())
     px, py, pz = lay.pivot
-    dz = np.zeros(n) if motion.plunger is None else motion.plunger  # the pivot rides on the plunger
-    phi = np.arcsin(np.clip((lift_lever - dz) / lay.arm_follower, -1.0, 1.0))
-    pivot = np.column_stack([np.full(n, px), np.full(n, py), pz + dz])
+    phi = np.arcsin(np.clip(lift_lever / lay.arm_follower, -1.0, 1.0))
+    pivot = np.column_stack([np.full(n, px), np.full(n, py), np.full(n, pz)])
     out["lever"] = (pivot, quat_about_y(phi))
-    if motion.plunger is not None:
-        out["hla_plunger"] = (pivot.copy(), ident.copy())
+    if motion.plunger is not None and "hla_plunger" in rigid:
+        pos, q = rigid["hla_plunger"]
+        out["hla_plunger"] = (pos + np.column_stack([np.zeros(n), np.zeros(n), motion.plunger]), q)
     s_true = np.asarray(cols["valve_lift_m"], dtype=float)
     stem_top = lay.stem_top_rest - displayed_valve_lift(result, m)
     gap = (scene.valve.lash if scene.valve is not None else 0.0) + s_true - motion.travel[-1]
