@@ -30,6 +30,16 @@ class GearView:
     5. Say whether parts other than the cam change with the cam's lift (`parts_follow_cam`: levers
        drawn from the gear's geometry): a viewer then rebuilds them when the lift changes.
     6. Import trimesh and the drawing kit only: the view layer is imported by the viewers alone.
+    7. Say which of its parts the masses of an elastic train carry (`train_stations(scene)`: a
+       tuple of stations from the cam to the valve, each a tuple of part names; () when the
+       drawing shows no train's masses: its rigid poses stand). explorer.view.train_motion lays
+       the train's elements on the stations.
+    8. Pose those parts from the masses' motion (`train_poses(scene, result, motion, rigid, lay,
+       lift)` -> {name: (positions, wxyz)}; `motion` a train_motion.TrainMotion with one
+       displayed valve-referred travel per station, and the displayed plunger travel when there
+       is an adjuster; `rigid` the poses of item 3): the parts of each station where its
+       displayed travel puts them, the adjuster's plunger (a part of `parts` when the scene has
+       [hla]) at its displayed travel. What it returns replaces those parts' poses of item 3.
     """
 
     colors: Mapping[str, tuple[int, int, int]] = MappingProxyType({})  # item 4
@@ -43,3 +53,9 @@ class GearView:
 
     def poses(self, scene, result, magnification: float = 1.0, lay=None, lift=None) -> dict:
         raise NotImplementedError
+
+    def train_stations(self, scene) -> tuple[tuple[str, ...], ...]:  # item 7
+        return ()
+
+    def train_poses(self, scene, result, motion, rigid, lay=None, lift=None) -> dict:  # item 8
+        return {}

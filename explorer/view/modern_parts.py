@@ -48,6 +48,8 @@ MODERN_PART_COLORS: dict[str, tuple[int, int, int]] = {
     "valve": (200, 70, 70),
     "cam_contact": (240, 220, 40),
     "tip_contact": (240, 220, 40),
+    "hla_body": (95, 100, 110),  # a train's lash adjuster (explorer.view.train_motion): its body
+    "hla_plunger": (205, 175, 70),  # and its plunger, moving
 }
 STATIC_PARTS = ("lash_adjuster",)  # parts that never move (their pose is the same at every step)
 
@@ -230,6 +232,29 @@ def _arm_frame(points: np.ndarray, pivot, psi: np.ndarray) -> np.ndarray:
     return np.column_stack([c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1]])
 
 
+def arm_half_width(gear) -> float:
+    """Half the width of the arm's bars (from the roller's radius, or the pad's arm)."""
+    side = gear.arm.cam_side
+    return 0.35 * (side.radius if side.kind == "roller" else 0.25 * side.arm)
+
+
+def adjuster_ball(gear) -> float:
+    """Radius of the lash adjuster's ball (the finger's pivot); its body is 1.6 times as wide."""
+    return 0.3 * arm_half_width(gear) + 0.004
+
+
+def hla_parts(gear, frame: float = 0.0) -> dict[str, trimesh.Trimesh]:
+    """A finger's lash adjuster as a train with [hla] draws it: the body (world frame, fixed) and
+    the plunger with the ball (the pivot) it carries, origin at the pivot, sliding along the
+    valve's axis (into the body)."""
+    ball, down = adjuster_ball(gear), gear.valve.axis
+    pivot = to_world(np.asarray(gear.arm.pivot)[None, :], frame)[0]
+    body = _cylinder_along((0.0, 0.0) + 2.5 * ball * down, down, 6.5 * ball, 1.6 * ball, frame)
+    body.apply_translation(pivot)
+    plunger = trimesh.util.concatenate([_sphere(ball), _cylinder_along((0.0, 0.0), down, 4.0 * ball, 1.2 * ball, frame)])
+    return _colour({"lash_adjuster": body, "hla_plunger": plunger})
+
+
 def arm_drawing(gear, *, width: float | None = None, n: int = 720, frame: float = 0.0) -> Drawing:
     arm, side, valve = gear.arm, gear.arm.cam_side, gear.valve
     theta = np.linspace(0.0, TWO_PI, n, endpoint=False)
@@ -239,7 +264,7 @@ def arm_drawing(gear, *, width: float | None = None, n: int = 720, frame: float 
     rest = arm.rest
     pad_c = valve.drive.arm * np.array([math.cos(valve.drive.angle), math.sin(valve.drive.angle)])
     tip_dir = _turn(valve.axis[None, :], -rest)[0]
-    half = 0.35 * (side.radius if side.kind == "roller" else 0.25 * side.arm)
+    half = arm_half_width(gear)
     plate = 0.25 * w
     body = []
     element = np.array([side.arm, 0.0])  # the roller's centre or the pad's crown
@@ -273,7 +298,7 @@ def arm_drawing(gear, *, width: float | None = None, n: int = 720, frame: float 
     body.append(_prism(_sector(pad_c, valve.pad_radius, math.atan2(tip_dir[1], tip_dir[0]), 0.6), w, frame))
     name = gear.kind  # the arm's part: "finger" or "rocker"
     parts[name] = trimesh.util.concatenate(body)
-    ball = 0.3 * half + 0.004
+    ball = adjuster_ball(gear)
     if gear.kind == "finger":
         # the hydraulic lash adjuster: its ball is the pivot, its body stands along the valve's axis
         down = valve.axis

@@ -19,12 +19,14 @@ from .drawing import (ROLLER_MARKS, SPRING_ACTIVE_COILS, SPRING_DEAD_COILS, SPRI
                       coil_points, displayed_valve_lift, extrude_contour, frame_bounds, loop_spin, motion_bounds,
                       quat_about_y, spring_faces, spring_length, spring_surge, spring_vertices)
 from .gear_views import VIEWS, view_of
+from .train_motion import TRAIN_MAGNIFICATION, default_magnification, train_motion, train_shape
 
 __all__ = [  # the drawing kit's names the viewers read from here, and this module's own
     "ROLLER_MARKS", "SPRING_ACTIVE_COILS", "SPRING_DEAD_COILS", "SPRING_SEGMENTS_PER_TURN", "SPRING_WIRE_SEGMENTS",
     "VIEW_DIRECTION", "VIEW_UP", "CameraFrame", "Layout", "camera_axes", "coil_points", "displayed_valve_lift",
     "extrude_contour", "frame_bounds", "loop_spin", "motion_bounds", "quat_about_y", "spring_faces", "spring_length",
     "spring_surge", "spring_vertices",
+    "TRAIN_MAGNIFICATION", "default_magnification", "train_shape",
     "STATIC_PARTS", "PART_COLORS", "layout", "build_parts", "part_poses", "spring_axial_scale", "parts_follow_cam",
 ]
 
@@ -62,8 +64,15 @@ def build_parts(scene, result=None, lay: Layout | None = None, lift=None, contou
 def part_poses(scene, result, magnification: float = 1.0, lay: Layout | None = None, lift=None) -> dict:
     """One world pose per step of `result.columns` for every part: name -> (positions (N, 3),
     wxyz (N, 4)). The spring's pose is fixed; its shape follows `spring_length(lay,
-    displayed_valve_lift(result, magnification))`."""
-    return view_of(scene).poses(scene, result, magnification=magnification, lay=lay, lift=lift)
+    displayed_valve_lift(result, magnification))`. A result of an elastic train of parts
+    (explorer.view.train_motion) poses the parts each mass carries from that mass's own motion,
+    its deviation from the rigid motion times `magnification` (the view's items 7 and 8)."""
+    view = view_of(scene)
+    poses = view.poses(scene, result, magnification=magnification, lay=lay, lift=lift)
+    motion = train_motion(scene, result, len(view.train_stations(scene)), magnification) if train_shape(scene)[0] else None
+    if motion is not None:
+        poses.update(view.train_poses(scene, result, motion, poses, lay=lay, lift=lift))
+    return poses
 
 
 def spring_axial_scale(scene, result, magnification: float = 1.0, lay: Layout | None = None) -> np.ndarray:

@@ -35,6 +35,7 @@ from .base import GearView
 from .drawing import (ROLLER_MARKS, SPRING_ACTIVE_COILS, SPRING_DEAD_COILS, Layout, _drop_duplicates, box, concat,
                       cylinder_y, cylinder_z, displayed_valve_lift, extrude_contour, loop_spin, quat_about_y,
                       signed_area, stadium_bar, tube_z, valve_group)
+from .train_motion import TRAIN_MAGNIFICATION, train_shape
 
 # Display colours (RGB 0-255) of its parts, shared by the viewers so parts look the same everywhere.
 COLORS = MappingProxyType({
@@ -142,8 +143,9 @@ def _roller_mesh(lay: Layout) -> trimesh.Trimesh:
     return concat([rim, hub, *marks])
 
 
-def _follower_mesh(lay: Layout) -> trimesh.Trimesh:
-    """Fork around the roller and the rod up to the lever; local origin at the roller centre."""
+def _follower_mesh(lay: Layout, rod: bool = True) -> trimesh.Trimesh:
+    """Fork around the roller and the rod up to the lever (without it: the lifter of a train
+    whose pushrod is a mass of its own, `_pushrod_mesh`); local origin at the roller centre."""
     r, w = lay.roller_draw_radius, lay.roller_width
     rod_top = lay.pivot[2] - lay.lever_half_thickness - lay.prime_y  # rod top at zero lift
     plate_t = 0.12 * w
@@ -153,9 +155,54 @@ def _follower_mesh(lay: Layout) -> trimesh.Trimesh:
         for sgn in (-1.0, 1.0)
     ]
     bridge = box([1.3 * r, w + 2.6 * plate_t, plate_t * 1.5], [0.0, 0.0, 0.35 * plate_h + 0.5 * plate_h])
-    rod = cylinder_z(lay.rod_radius, 0.35 * plate_h + 0.5 * plate_h, rod_top, 32)
     pin = cylinder_y(0.22 * r, w + 3.0 * plate_t, 16)
-    return concat([*plates, bridge, rod, pin])
+    if not rod:
+        return concat([*plates, bridge, pin])
+    return concat([*plates, bridge, _pushrod_mesh(lay), pin])
+
+
+def _pushrod_mesh(lay: Layout) -> trimesh.Trimesh:
+    """The follower's rod from its fork's bridge up to the lever; local origin at the roller
+    centre (at zero lift), as the follower's."""
+    r, w = lay.roller_draw_radius, lay.roller_width
+    rod_top = lay.pivot[2] - lay.lever_half_thickness - lay.prime_y  # rod top at zero lift
+    plate_t, plate_h = 0.12 * w, 1.6 * r
+    return cylinder_z(lay.rod_radius, 0.35 * plate_h + 0.5 * plate_h, rod_top, 32)
+
+
+# The lash adjuster of a train with [hla], drawn over the lever's pivot: a body, and a plunger
+# coming out of it towards the pivot (extending: down). The drawing is the scene's ratio, not the
+# finger's geometry, and the finger's own travel (its column) already holds what the adjuster adds
+# to the valve's lift (train.py: the cam joint's -g p): so the lever turns about its fixed pivot
+# by its own travel, and the plunger shows the adjuster's travel in its body. At rest it hangs
+# above the pivot by what the revolution's largest extension comes to at the default
+# magnification, so that at x20 the pumped-up plunger just reaches the pivot (hla_clearance).
+# Sizes in the lever's half-thickness; both meshes in their own frame, origin at the plunger's
+# end at rest (so a new result moves them without new meshes).
+HLA_PLUNGER_RADIUS, HLA_PLUNGER_LENGTH = 1.1, 3.5
+HLA_BODY_RADII, HLA_BODY_SPAN = (1.2, 1.7), (1.0, 5.5)  # the bore and the outside; bottom and top above the plunger's end
+
+
+def hla_clearance(lay: Layout, result) -> float:
+    """Height of the plunger's end at rest above the pivot's shaft (see above)."""
+    half = lay.lever_half_thickness
+    p = None if result is None else result.columns.get("hla_plunger_travel_m")
+    extension = 0.0 if p is None else max(0.0, -float(np.min(p)))
+    return 0.7 * half + 0.3 * half + TRAIN_MAGNIFICATION * extension
+
+
+def _hla_plunger_mesh(lay: Layout) -> trimesh.Trimesh:
+    half = lay.lever_half_thickness
+    return concat([cylinder_z(HLA_PLUNGER_RADIUS * half, 0.0, HLA_PLUNGER_LENGTH * half, 32),
+                   trimesh.creation.icosphere(subdivisions=2, radius=0.6 * half)])
+
+
+def _hla_body_mesh(lay: Layout) -> trimesh.Trimesh:
+    """A bore the plunger slides in, closed on top."""
+    half = lay.lever_half_thickness
+    (r_in, r_out), (z0, z1) = HLA_BODY_RADII, HLA_BODY_SPAN
+    return concat([tube_z(r_in * half, r_out * half, z0 * half, z1 * half, 32),
+                   cylinder_z(r_out * half, z1 * half, (z1 + 0.5) * half, 32)])
 
 
 def _follower_guide_mesh(lay: Layout) -> trimesh.Trimesh:
@@ -209,16 +256,21 @@ def parts(scene, result=None, lay: Layout | None = None, lift=None, contour_samp
     lever: origin at the pivot; adjuster: ball centre; valve: stem top; spring: its bottom
     (at rest length); static parts (follower_guide, lever_pivot, seat): world frame."""
     lay = lay or layout(scene, result)
+    elements, hla = train_shape(scene)
     builders = {
         "cam": lambda: extrude_contour(cam_contour(scene, lift, contour_samples), lay.cam_width),
         "camshaft": lambda: _camshaft_mesh(lay),
         "roller": lambda: _roller_mesh(lay),
-        "follower": lambda: _follower_mesh(lay),
+        "follower": lambda: _follower_mesh(lay, rod=not elements),
         "follower_guide": lambda: _follower_guide_mesh(lay),
         "lever": lambda: _lever_mesh(lay),
         "lever_pivot": lambda: _pivot_mesh(lay),
         "adjuster": lambda: _adjuster_mesh(lay),
     }
+    if elements:  # a train of masses: the rod is the pushrod, moving with its own mass
+        builders["pushrod"] = lambda: _pushrod_mesh(lay)
+    if hla:  # the adjuster over the pivot
+        builders.update(hla_body=lambda: _hla_body_mesh(lay), hla_plunger=lambda: _hla_plunger_mesh(lay))
     parts = {name: build() for name, build in builders.items() if only is None or name in only}
     parts.update(valve_group(lay, only))
     return parts
@@ -279,7 +331,7 @@ def poses(scene, result, magnification: float = 1.0, lay: Layout | None = None, 
     gap = (scene.valve.lash if scene.valve is not None else 0.0) + s_true - lay.ratio * L
     ball_bottom = stem_top + magnification * gap
     ball_x = px + lay.arm_valve * np.cos(phi)
-    return {
+    poses = {
         "cam": (fixed(0.0, 0.0, 0.0), cam_q),
         "camshaft": (fixed(0.0, 0.0, 0.0), cam_q),
         "roller": (roller_pos, quat_about_y(-spin)),
@@ -292,10 +344,59 @@ def poses(scene, result, magnification: float = 1.0, lay: Layout | None = None, 
         "spring": (fixed(lay.valve_x, 0.0, lay.spring_seat_z), ident.copy()),
         "seat": (fixed(0.0, 0.0, 0.0), ident.copy()),
     }
+    elements, hla = train_shape(scene)
+    if elements:  # the rod drawn as a part of its own (train_poses moves it with its mass)
+        poses["pushrod"] = (roller_pos.copy(), ident.copy())
+    if hla:  # rigid: the plunger at rest in its body
+        rest = fixed(px, py, pz + hla_clearance(lay, result))
+        poses.update(hla_body=(rest, ident.copy()), hla_plunger=(rest.copy(), ident.copy()))
+    return poses
+
+
+# The train's masses on the drawing, cam first (explorer.view.train_motion): the follower with its
+# roller (a lifter, or a finger's roller), the rod (a pushrod), the lever with its screw.
+STATIONS = (("roller", "follower"), ("pushrod",), ("lever", "adjuster"))
+
+
+def train_poses(scene, result, motion, rigid, lay: Layout | None = None) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The poses of the train's masses (explorer.view.train_motion.TrainMotion over STATIONS):
+    roller and follower, and the rod, rise by their displayed travel / ratio (the drawing's
+    follower lift); the lever turns so that its follower end is at its own displayed travel; the
+    screw shows the pad's true gap to the stem, magnified, as for the rigid drawing; the
+    adjuster's plunger moves by its displayed travel (into its body: up)."""
+    lay = lay or layout(scene, result)
+    cols = result.columns
+    m = motion.magnification
+    n = len(motion.drive)
+    lift_f, lift_rod, lift_lever = (np.asarray(d, dtype=float) / lay.ratio for d in motion.displayed)
+    ident = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
+    out = {}
+    for name, lift_at in (("roller", lift_f), ("follower", lift_f), ("pushrod", lift_rod)):
+        pos = np.column_stack([np.full(n, lay.offset), np.zeros(n), lay.prime_y + lift_at])
+        out[name] = (pos, rigid[name][1] if name in rigid else ident.copy())
+    px, py, pz = lay.pivot
+    phi = np.arcsin(np.clip(lift_lever / lay.arm_follower, -1.0, 1.0))
+    pivot = np.column_stack([np.full(n, px), np.full(n, py), np.full(n, pz)])
+    out["lever"] = (pivot, quat_about_y(phi))
+    if motion.plunger is not None and "hla_plunger" in rigid:
+        pos, q = rigid["hla_plunger"]
+        out["hla_plunger"] = (pos + np.column_stack([np.zeros(n), np.zeros(n), motion.plunger]), q)
+    s_true = np.asarray(cols["valve_lift_m"], dtype=float)
+    stem_top = lay.stem_top_rest - displayed_valve_lift(result, m)
+    gap = (scene.valve.lash if scene.valve is not None else 0.0) + s_true - motion.travel[-1]
+    ball_x = pivot[:, 0] + lay.arm_valve * np.cos(phi)
+    out["adjuster"] = (np.column_stack([ball_x, np.zeros(n), stem_top + m * gap + lay.ball_radius]), quat_about_y(phi))
+    return out
 
 
 class TranslatingRollerView(GearView):
     colors = COLORS
+
+    def train_stations(self, scene):
+        return STATIONS
+
+    def train_poses(self, scene, result, motion, rigid, lay=None, lift=None):
+        return train_poses(scene, result, motion, rigid, lay)
 
     def layout(self, scene, result=None, lift=None) -> Layout:
         return layout(scene, result)

@@ -111,7 +111,7 @@ class ExplorerApp:
             self.scene_paths[label] = str(p)
         self.scene_label = next(k for k, v in self.scene_paths.items() if Path(v).resolve() == given)
         self.base_overrides: tuple[str, ...] = tuple(overrides)
-        self.magnification_value = 1.0
+        self.magnification_value: float | None = None  # None: the scene's default (until the user moves the slider)
 
         # what is shown (the loop's)
         self.current: Prepared | None = None
@@ -302,6 +302,7 @@ class ExplorerApp:
                 self.scene_label, self.base_overrides = item.label, ()
                 fields.cleared()
                 self.controls.speed_chosen = False
+                self.magnification_value = None  # the new scene opens at its own
                 self._loading = self._submit()
         elif isinstance(item, ResetClicked):
             fields.cleared()
@@ -370,6 +371,7 @@ class ExplorerApp:
             self.plots.show(prepared, None if playback.playing else playback.angle_deg)
             self.readouts.show(prepared)
         self.fields.show(prepared, since)
+        self.controls.show_magnification(prepared.request.magnification, since)
         if previous is None or Path(previous.request.path) != Path(prepared.request.path):
             self.cameras.aim(prepared)
         if self._loading and prepared.request.serial >= self._loading:

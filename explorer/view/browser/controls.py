@@ -7,6 +7,14 @@ from .model import SPEEDS, Playback
 from .requests import Magnified, Played, Scrubbed, SpeedChosen, wire
 
 MAGNIFICATION_RANGE = (1.0, 50.0)
+# A scene opens at its drawing's default (explorer.view.parts.default_magnification: x20 for a
+# train of masses, x1 else) until the user moves the slider; the label says what is drawn.
+MAGNIFICATION_HINT = ("enlarges the lash gap and each mass's deviation from rigid motion (the valve; a train's "
+                      "lifter, pushrod, rocker or finger and the adjuster's plunger)")
+
+
+def magnification_label(value: float) -> str:
+    return f"Magnification ×{value:g}"
 SCRUB_HINT = "scrub: pauses the animation at this angle"
 
 
@@ -22,9 +30,9 @@ class PlaybackControls:
                                           hint="playback speed relative to the real camshaft speed")
             self.angle = gui.add_slider("Cam angle [°]", min=0.0, max=360.0, step=0.1, initial_value=0.0,
                                         hint=SCRUB_HINT)
-            self.magnification = gui.add_slider("Magnification", min=MAGNIFICATION_RANGE[0],
+            self.magnification = gui.add_slider(magnification_label(1.0), min=MAGNIFICATION_RANGE[0],
                                                 max=MAGNIFICATION_RANGE[1], step=1.0, initial_value=1.0,
-                                                hint="enlarges the lash gap and the valve's deviation from rigid motion")
+                                                hint=MAGNIFICATION_HINT)
         wire(self.play, inbox, lambda v, page, at: Played(bool(v)), echo)
         wire(self.speed, inbox, lambda v, page, at: SpeedChosen(str(v)), echo)
         wire(self.angle, inbox, lambda v, page, at: Scrubbed(float(v)), echo)
@@ -46,6 +54,15 @@ class PlaybackControls:
             self.playback.speed = dict(SPEEDS)[label]
             if self.speed.value != label:
                 self.speed.value = label
+
+    def show_magnification(self, value: float, since: float) -> None:
+        """The magnification a result is drawn at (its scene's default until the user chose one),
+        on the slider and in its label, unless the page moved the slider since the frame began."""
+        label = magnification_label(value)
+        if self.magnification.label != label:
+            self.magnification.label = label
+        if self.magnification.value != value and self.magnification.update_timestamp <= since:
+            self.magnification.value = value
 
     def sync(self, sliders, since: float) -> None:
         """Play box and cam-angle sliders (`sliders`: this folder's and the one under the plots)

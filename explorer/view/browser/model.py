@@ -23,11 +23,13 @@ from .parameters import PARAMETERS, override, scene_values  # noqa: F401 - the f
 
 @dataclass(frozen=True)
 class Request:
-    """One thing to show: a scene file, overrides ("section.key=value"), a magnification."""
+    """One thing to show: a scene file, overrides ("section.key=value"), a magnification (None:
+    the scene's default, explorer.view.parts.default_magnification; the Prepared bundle's request
+    holds the one used)."""
 
     path: str
     overrides: tuple[str, ...] = ()
-    magnification: float = 1.0
+    magnification: float | None = 1.0
     serial: int = 0  # increases with every request, so the newest is known
 
 
@@ -460,7 +462,7 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
         # Another kind of gear has other parts; a gear whose levers and links are drawn from its
         # own geometry (its view's parts_follow_cam) keeps parts only with the same cam.
         keep = previous is not None and previous.scene.follower.type == scene.follower.type \
-            and previous.layout == lay
+            and previous.layout == lay and meshes.train_shape(previous.scene) == meshes.train_shape(scene)
         keep_cam = keep and _same_cam(previous.scene, scene)
         if keep and not keep_cam and meshes.parts_follow_cam(scene):
             keep = False
@@ -485,6 +487,8 @@ def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
         laws = previous.laws if scene.lift.law in previous.laws else (*previous.laws, scene.lift.law)
     else:
         laws = offered_laws(request.path, request.overrides, scene.lift.law)
+    if request.magnification is None:  # the scene's default: x20 for a train of masses
+        request = dataclasses.replace(request, magnification=meshes.default_magnification(scene))
     poses = meshes.part_poses(scene, result, magnification=request.magnification, lay=lay, lift=lift)
     lengths = meshes.spring_length(lay, meshes.displayed_valve_lift(result, request.magnification))
     prepared = Prepared(

@@ -222,8 +222,10 @@ def recording_paths(result, part_names: Iterable[str] = ()) -> list[str]:
 
 
 def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Mapping | None = None,
-               scales: Mapping | None = None, colors: Mapping | None = None, points: Mapping | None = None) -> None:
-    """Log one simulation into the recording stream `rec` (series, parts, events, summary)."""
+               scales: Mapping | None = None, colors: Mapping | None = None, points: Mapping | None = None,
+               magnification: float = 1.0) -> None:
+    """Log one simulation into the recording stream `rec` (series, parts, events, summary; the
+    parts' magnification in the summary and as the recording's property "parts")."""
     import rerun as rr
 
     rec.send_recording_name(label)
@@ -240,6 +242,7 @@ def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Map
         values = series.values(result.columns)
         rec.send_columns(series.path, indexes=times, columns=rr.Scalars.columns(scalars=values))
     if parts:
+        rec.send_property("parts", rr.AnyValues(magnification=float(magnification)))
         _log_parts(rec, rr, parts, poses or {}, scales or {}, colors or {}, times)
         for name, pts in (points or {}).items():  # child of the part: its pose and scale apply
             pts = np.asarray(pts, dtype=np.float64)
@@ -247,7 +250,8 @@ def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Map
                              columns=rr.Points3D.columns(positions=pts.reshape(-1, 3)).partition(
                                  lengths=[pts.shape[1]] * pts.shape[0]))
     _log_events(rec, rr, result, index)
-    rec.log(SUMMARY_PATH, rr.TextDocument(summary_markdown(result, label), media_type="text/markdown"), static=True)
+    rec.log(SUMMARY_PATH, rr.TextDocument(summary_markdown(result, label, magnification if parts else None),
+                                          media_type="text/markdown"), static=True)
 
 
 def _log_parts(rec, rr, parts: Mapping, poses: Mapping, scales: Mapping, colors: Mapping, times) -> None:
@@ -333,13 +337,16 @@ def _log_events(rec, rr, result, index: Mapping[str, np.ndarray]) -> None:
     )
 
 
-def summary_markdown(result, label: str) -> str:
-    """The summary as a short markdown page: scalar entries, effect timings, warnings."""
+def summary_markdown(result, label: str, magnification: float | None = None) -> str:
+    """The summary as a short markdown page: scalar entries, effect timings, warnings (and the
+    3D parts' magnification when they are drawn)."""
     s = result.summary
     lines = [f"# {label}", ""]
     source = getattr(result.scene, "source", "")
     if source:
         lines += [f"scene file: `{source}`", ""]
+    if magnification is not None:
+        lines += [f"3D parts: each mass's deviation from rigid motion (and the lash) drawn ×{magnification:g}", ""]
     lines += ["| quantity | value |", "|---|---|"]
     for key, value in s.items():
         if isinstance(value, (dict, list, tuple)):
@@ -573,29 +580,40 @@ class Run:
     scales: Mapping | None = None  # name -> (N, 3) per-step scale of the part's mesh
     colors: Mapping | None = None  # name -> RGB(A) 0-255
     points: Mapping | None = None  # name -> (N, K, 3) per-step points in the part's frame (the coils)
+    magnification: float = 1.0  # the parts' deviations from rigid motion drawn this many times
 
 
-def with_parts(label: str, result) -> Run:
+def with_parts(label: str, result, magnification: float | None = None) -> Run:
     """A Run with the 3D parts, poses and colours of explorer.view.parts (the builders `serve`
-    uses). The spring's rest mesh is scaled along its axis per step (meshes.spring_axial_scale):
+    uses), drawn at `magnification` (None: the scene's default, as the browser opens it:
+    meshes.default_magnification, x20 for a train of masses whose parts move each with its own
+    motion). The spring's rest mesh is scaled along its axis per step (meshes.spring_axial_scale):
     per-step vertices would cost 3600 x thousands of vertices per recording."""
     from .. import parts as meshes
 
     scene = result.scene
+    m = meshes.default_magnification(scene) if magnification is None else float(magnification)
     lay = meshes.layout(scene, result)
     parts = meshes.build_parts(scene, result, lay=lay)
-    poses = meshes.part_poses(scene, result, lay=lay)
+    poses = meshes.part_poses(scene, result, magnification=m, lay=lay)
     scales = {}
     if "spring" in parts and hasattr(meshes, "spring_axial_scale"):
-        sz = np.asarray(meshes.spring_axial_scale(scene, result, lay=lay), dtype=np.float64)
+        sz = np.asarray(meshes.spring_axial_scale(scene, result, magnification=m, lay=lay), dtype=np.float64)
         scales["spring"] = np.column_stack([np.ones_like(sz), np.ones_like(sz), sz])
     colors = dict(getattr(meshes, "PART_COLORS", {}))
+    for name in parts:  # a part of another gear's table (a train's pushrod, an adjuster's plunger)
+        if name not in colors:
+            try:
+                colors[name] = meshes.PART_COLORS[name]
+            except KeyError:
+                pass
     points = {}
     if "spring" in parts and hasattr(meshes, "coil_points"):
-        coils = meshes.coil_points(lay, result)  # the spring as masses: its surge, visible
+        coils = meshes.coil_points(lay, result, magnification=m)  # the spring as masses: its surge, visible
         if coils is not None:
             points["spring"] = coils
-    return Run(label=label, result=result, parts=parts, poses=poses, scales=scales, colors=colors, points=points)
+    return Run(label=label, result=result, parts=parts, poses=poses, scales=scales, colors=colors, points=points,
+               magnification=m)
 
 
 def new_recording(label: str):
