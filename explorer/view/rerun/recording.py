@@ -49,6 +49,9 @@ Other entities:
                   seat, lash-take-up, … from result.events) at level INFO, and the
                   result's warnings at level WARN at t = 0.
 - /summary        TextDocument (static, markdown): scene, label, peaks, effect timings, warnings.
+- /events/checks and <series>/limit_*   with design checks (`explorer record --checks`): each
+                  rule that warns or fails as a marker at the cam angle of its worst, each limit a
+                  line beside its series (explorer.view.rerun.check_marks).
 
 The default blueprint puts the 3D view (over the event log) beside time-series views of lift s,
 velocity v, acceleration p and the forces (with tabs for jerk, torque, stress, angles, follower).
@@ -214,17 +217,24 @@ def _time_columns(rr, index: Mapping[str, np.ndarray]) -> list:
 # what goes into one recording
 
 
-def recording_paths(result, part_names: Iterable[str] = ()) -> list[str]:
-    """Entity paths a recording of `result` holds (used to build the blueprint before logging)."""
+def recording_paths(result, part_names: Iterable[str] = (), checks=None) -> list[str]:
+    """Entity paths a recording of `result` holds (used to build the blueprint before logging);
+    `checks` (explorer.view.verdicts.CheckSummary): the design checks' limits and markers too."""
+    from .check_marks import check_paths
+
     paths = [s.path for s in series_layout(result.columns)]
     paths += [f"{PARTS_PATH}/{name}" for name in part_names]
-    return paths + [EVENTS_PATH, SUMMARY_PATH]
+    return paths + [EVENTS_PATH, SUMMARY_PATH] + check_paths(result, checks)
 
 
 def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Mapping | None = None,
-               scales: Mapping | None = None, colors: Mapping | None = None, points: Mapping | None = None) -> None:
-    """Log one simulation into the recording stream `rec` (series, parts, events, summary)."""
+               scales: Mapping | None = None, colors: Mapping | None = None, points: Mapping | None = None,
+               checks=None) -> None:
+    """Log one simulation into the recording stream `rec` (series, parts, events, summary; the
+    design checks' markers and limits when `checks`, a CheckSummary, is given)."""
     import rerun as rr
+
+    from .check_marks import log_checks
 
     rec.send_recording_name(label)
     scene = result.scene
@@ -247,6 +257,7 @@ def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Map
                              columns=rr.Points3D.columns(positions=pts.reshape(-1, 3)).partition(
                                  lengths=[pts.shape[1]] * pts.shape[0]))
     _log_events(rec, rr, result, index)
+    log_checks(rec, rr, result, checks, index)
     rec.log(SUMMARY_PATH, rr.TextDocument(summary_markdown(result, label), media_type="text/markdown"), static=True)
 
 
@@ -573,6 +584,7 @@ class Run:
     scales: Mapping | None = None  # name -> (N, 3) per-step scale of the part's mesh
     colors: Mapping | None = None  # name -> RGB(A) 0-255
     points: Mapping | None = None  # name -> (N, K, 3) per-step points in the part's frame (the coils)
+    checks: object = None  # explorer.view.verdicts.CheckSummary of the run's scene: markers and limits
 
 
 def with_parts(label: str, result) -> Run:
@@ -629,7 +641,7 @@ def write_recordings(path, runs: Iterable[Run], on_run=None) -> None:
     second = next(it, None)
     with output_path(out) as tmp, helper.RecordingWorker() as worker:
         if second is None:
-            paths = recording_paths(first.result, (first.parts or {}).keys())
+            paths = recording_paths(first.result, (first.parts or {}).keys(), first.checks)
             bounds = parts_bounds(first.parts, first.poses or {}) if first.parts else None
             corners = legend_corners([plotted_curves(first.result)])
             helper.write_file(worker, tmp, first, (paths, bounds, corners))
@@ -649,7 +661,7 @@ def _write_merged(worker, out, tmp: Path, runs: Iterable[Run], on_run) -> None:
         boxes = []
         overlay = []  # each run's thinned main curves: the overlay recording and the legends
         for run in runs:
-            paths += recording_paths(run.result, (run.parts or {}).keys())
+            paths += recording_paths(run.result, (run.parts or {}).keys(), run.checks)
             if run.parts:
                 boxes.append(parts_bounds(run.parts, run.poses or {}))
             overlay.append(overlay_entry(run.label, run.result))
