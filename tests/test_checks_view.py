@@ -141,12 +141,12 @@ def test_the_checks_panel_shows_each_rule_and_a_click_goes_to_its_worst():
         _wait(lambda: isinstance(app.checks_panel.summary, CheckSummary), "no checks arrived")
         summary = app.checks_panel.summary
         assert app.checks_panel.serial == first.request.serial
-        # one button per rule, in its colour; a rule that locates nothing cannot be clicked
+        # one button per rule, in its colour; a rule that cannot judge is greyed out
         assert list(app.checks_panel.buttons) == [line.rule for line in summary.lines]
         for line in summary.lines:
             button = app.checks_panel.buttons[line.rule]
             assert (button.color, button.label, button.disabled) == \
-                   (line.colour, line.label(), line.target() == (None, None))
+                   (line.colour, line.label(), not line.judged)
         assert "FAIL" in app.checks_panel.header.content and "1000..4000 rpm" in app.checks_panel.header.content
         # the velocity plot carries the seating velocity's limits
         velocity = next(p for p in app.plots.drawn if p.title == "Velocity v")

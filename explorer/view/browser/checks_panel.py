@@ -146,8 +146,10 @@ class ChecksPanel:
         self.buttons = {}
         with self.tab:
             for line in lines:
+                # a judged rule keeps its colour even where it locates nothing (a click then does
+                # nothing); a rule that cannot judge is greyed out
                 button = self.gui.add_button(line.label(), color=line.colour, hint=line_hint(line),
-                                             disabled=line.target() == (None, None))
+                                             disabled=not line.judged)
                 button.on_click(_recorder(self.inbox, line.rule))
                 self.buttons[line.rule] = button
 
