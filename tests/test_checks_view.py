@@ -116,6 +116,18 @@ def test_limits_are_dashed_lines_on_the_plots_of_their_columns():
         assert [colour for _, _, colour in extra] == ["#c0392b", "#d68910"]
         assert len(after.styles) == len(after.series) and after.styles[-1]["dash"]
     assert with_limits(prepared.plots, "error: no checks") == list(prepared.plots)
+    # with the result: a plot for each limited quantity the page has no plot of, with its limits
+    more = with_limits(prepared.plots, summary, prepared.result)
+    assert [p.title for p in more] == titles + ["Pressure angle α", "Contact stress σ (Hertz)"]
+    angle, stress = more[-2:]
+    assert [label for label, _, _ in angle.series] == ["pressure angle", "Pressure angle fail -30", "Pressure angle fail 30"]
+    cols = prepared.result.columns
+    assert np.nanmax(angle.series[0][1]) == pytest.approx(np.max(cols["pressure_angle_deg"]))
+    fail = summary.line("hertz_stress").thresholds[0].values[0]
+    assert stress.series[1][1][0] == pytest.approx(fail * 1e-6)  # MPa
+    assert np.nanmax(stress.series[0][1]) == pytest.approx(np.max(cols["hertz_stress_Pa"]) * 1e-6)
+    # a scene whose checks limit neither gets neither plot
+    assert len(with_limits(prepared.plots, CheckSummary("s", "", ()), prepared.result)) == len(titles)
 
 
 # -- the browser app, driven from Python -------------------------------------------------------------
@@ -152,6 +164,7 @@ def test_the_checks_panel_shows_each_rule_and_a_click_goes_to_its_worst():
         velocity = next(p for p in app.plots.drawn if p.title == "Velocity v")
         assert any(label.startswith("Seating velocity fail") for label, _, _ in velocity.series)
         assert len(app.plots.handles) == len(app.plots.drawn)
+        assert [p.title for p in app.plots.drawn][-2:] == ["Pressure angle α", "Contact stress σ (Hertz)"]
 
         seat = summary.line("seating_velocity")
         assert seat.colour == "red" and seat.speed_rpm != first.scene.drive.rpm

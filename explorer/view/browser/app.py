@@ -269,7 +269,8 @@ class ExplorerApp:
             if frame.checks is not None and frame.checks.serial != self._result_serial:
                 frame.checks = None  # of a result no longer shown
             if frame.checks is not None and not isinstance(frame.checks.summary, str):
-                self.plots.limits = lambda plots, summary=frame.checks.summary: with_limits(plots, summary)
+                self.plots.limits = lambda prepared, summary=frame.checks.summary: with_limits(
+                    prepared.plots, summary, prepared.result)
             if frame.incoming is not None:
                 self.handled_serial = max(self.handled_serial, frame.incoming.request.serial)
                 if self._error is not None and self._error[0] < frame.incoming.request.serial:

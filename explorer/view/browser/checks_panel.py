@@ -31,6 +31,14 @@ PLOT_COLUMNS: dict[str, tuple[tuple[str, float], ...]] = {
     "Acceleration p": (("valve_accel_m_s2", 1.0),),
 }
 LIMIT_DASH = [3, 3]
+# Plots the page draws only to carry a rule's limits (build_plots has none of these quantities):
+# (title, y label, [(column, label)], display factor), added after the others when the result has
+# one of the columns and the checks put a limit on it.
+LIMIT_PLOTS: tuple[tuple[str, str, tuple[tuple[str, str], ...], float], ...] = (
+    ("Pressure angle α", "α [°]", (("pressure_angle_deg", "pressure angle"),), 1.0),
+    ("Contact stress σ (Hertz)", "σ [MPa]", (("hertz_stress_Pa", "Hertz"), ("face_hertz_stress_Pa", "face (crown)"),
+                                            ("tip_hertz_stress_Pa", "lifter tip")), 1e-6),
+)
 
 
 @dataclass(frozen=True)
@@ -70,16 +78,45 @@ def hex_colour(rgb) -> str:
     return "#" + "".join(f"{int(c):02x}" for c in rgb)
 
 
-def with_limits(plots, summary: CheckSummary | None) -> list:
+def limit_plots(result, summary: CheckSummary) -> list:
+    """The plots of LIMIT_PLOTS whose columns the result has and the checks limit."""
+    from .model import DASHES, SERIES_COLORS, WIDTHS, Plot, decimate
+
+    cols = result.columns
+    x = np.asarray(cols["cam_angle_deg"], dtype=float)
+    out = []
+    for title, y_label, entries, factor in LIMIT_PLOTS:
+        present = [(column, label) for column, label in entries if column in cols]
+        if not any(summary.thresholds(column) for column, _ in present):
+            continue
+        xs, ys = decimate(x, [np.asarray(cols[column], dtype=float) * factor for column, _ in present])
+        series = tuple((label, y, SERIES_COLORS[i % len(SERIES_COLORS)]) for i, ((_, label), y) in enumerate(zip(present, ys)))
+        styles = tuple({"width": WIDTHS[i % len(WIDTHS)], "dash": list(DASHES[i % len(DASHES)])} for i in range(len(series)))
+        out.append(Plot(title, xs, series, y_label, styles))
+    return out
+
+
+def plot_columns(title: str) -> tuple[tuple[str, float], ...]:
+    """The result columns a plot draws and their display factor (PLOT_COLUMNS, LIMIT_PLOTS)."""
+    for name, _, entries, factor in LIMIT_PLOTS:
+        if name == title:
+            return tuple((column, factor) for column, _ in entries)
+    return PLOT_COLUMNS.get(title, ())
+
+
+def with_limits(plots, summary: CheckSummary | None, result=None) -> list:
     """The plots with each limit of `summary` on a column a plot draws as one more series: a
     dashed horizontal line in the colour of the limit (red fail, amber warn), labelled with the
-    rule, the limit and its value."""
+    rule, the limit and its value. With the `result`, the plots of LIMIT_PLOTS that carry a limit
+    are added after the others."""
     if summary is None or isinstance(summary, str):
         return list(plots)
+    if result is not None:
+        plots = list(plots) + limit_plots(result, summary)
     out = []
     for plot in plots:
         extra, styles = [], []
-        for column, factor in PLOT_COLUMNS.get(plot.title, ()):
+        for column, factor in plot_columns(plot.title):
             for line, threshold in summary.thresholds(column):
                 for value in threshold.values:
                     height = value * factor

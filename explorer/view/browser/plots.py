@@ -92,8 +92,9 @@ class Plots:
         self._cursor_at = 0.0  # when the cursor was last redrawn (it is throttled to PLOT_CURSOR_HZ)
         self._cursor_step = -1
         self.replots = 0  # how often the plots were made anew for pages that connected
-        # plots -> the plots drawn: the Checks panel's limits as more series (checks_panel.with_limits)
-        self.limits = lambda plots: list(plots)
+        # prepared -> the plots drawn: the result's, with the Checks panel's limits as more series
+        # and plots (checks_panel.with_limits)
+        self.limits = lambda prepared: list(prepared.plots)
         self.drawn: list = []  # the plots as drawn (the result's, with the limits)
         with tab:
             self.stale = gui.add_markdown("", visible=False, order=-2.0)
@@ -116,7 +117,7 @@ class Plots:
         if self.note.content != prepared.plot_note:
             self.note.content = prepared.plot_note
             self.note.visible = bool(prepared.plot_note)
-        self.drawn = plots = self.limits(prepared.plots)
+        self.drawn = plots = self.limits(prepared)
         wanted = [plot_options(plot) for plot in plots]
         same = len(wanted) == len(self.handles) and all(
             h.title == o["title"] and _labels(h.series) == _labels(o["series"]) for h, o in zip(self.handles, wanted))
