@@ -11,16 +11,14 @@ marker on the timelines, each limit a line beside the quantity it concerns.
                   and last step) at the limit's height, in the series' display unit, as a child of
                   the series it concerns (/valve/velocity, /angles/pressure, /stress/hertz):
                   drawn in the same plot, red for fail, amber for warn.
-The checks come as an explorer.view.verdicts.CheckSummary (the checks layer builds it).
+The checks come as an explorer.view.verdicts.CheckSummary (the checks layer builds it). What to
+log is worked out here; explorer.view.rerun.recording logs it (log_result's `checks`).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import Mapping
-
-import numpy as np
+from typing import Iterable
 
 from ..verdicts import LEVELS, RGB, CheckSummary
 
@@ -42,20 +40,18 @@ class Marker:
     angle_deg: float
 
 
-def limit_series(result, checks: CheckSummary | None) -> list[LimitSeries]:
-    """The limits of `checks` on the series the recording of `result` has."""
-    from .recording import series_layout
-
+def limit_series(series: Iterable, checks: CheckSummary | None) -> list[LimitSeries]:
+    """The limits of `checks` on the recording's series (recording.Series: column, path, scale)."""
     if checks is None:
         return []
     out = []
-    for series in series_layout(result.columns):
-        for line, threshold in checks.thresholds(series.column):
+    for s in series:
+        for line, threshold in checks.thresholds(s.column):
             values = threshold.values
             for k, value in enumerate(values):
                 suffix = f"_{k + 1}" if len(values) > 1 else ""
-                shown = value * series.scale
-                out.append(LimitSeries(f"{series.path}/limit_{line.rule}_{threshold.limit}{suffix}",
+                shown = value * s.scale
+                out.append(LimitSeries(f"{s.path}/limit_{line.rule}_{threshold.limit}{suffix}",
                                        f"{line.title}: {threshold.limit} limit {shown:.4g}", shown,
                                        RGB[threshold.limit]))
     return out
@@ -80,41 +76,8 @@ def markers(checks: CheckSummary | None) -> list[Marker]:
     return out
 
 
-def check_paths(result, checks: CheckSummary | None) -> list[str]:
+def check_paths(series: Iterable, checks: CheckSummary | None) -> list[str]:
     """The entity paths the checks add (for the layout)."""
     if checks is None:
         return []
-    return [s.path for s in limit_series(result, checks)] + [CHECKS_PATH]
-
-
-def log_checks(rec, rr, result, checks: CheckSummary | None, index: Mapping[str, np.ndarray]) -> None:
-    """Log the markers and the limit lines of `checks` into the recording `rec` of `result`
-    (`index`: its timelines, recording.step_indexes)."""
-    from .recording import TIMELINE_ANGLE, TIMELINE_STEP, TIMELINE_TIME, angle_sequence, duration_ns
-
-    if checks is None:
-        return
-    steps = index[TIMELINE_STEP]
-    ends = np.array([0, steps.size - 1])
-    ends_index = [rr.TimeColumn(TIMELINE_TIME, duration=duration_ns(index[TIMELINE_TIME][ends])),
-                  rr.TimeColumn(TIMELINE_STEP, sequence=steps[ends]),
-                  rr.TimeColumn(TIMELINE_ANGLE, sequence=index[TIMELINE_ANGLE][ends])]
-    for series in limit_series(result, checks):
-        rec.log(series.path, rr.SeriesLines(names=series.name, colors=[series.rgb], widths=1.0), static=True)
-        rec.send_columns(series.path, indexes=ends_index,
-                         columns=rr.Scalars.columns(scalars=np.full(2, series.value, dtype=np.float64)))
-    marks = markers(checks)
-    if not marks:
-        return
-    angle = np.asarray(result.columns["cam_angle_deg"], dtype=float)
-    time_s = np.asarray(result.columns["time_s"], dtype=float)
-    n = steps.size
-    at = np.array([m.angle_deg for m in marks])
-    step = np.array([min(n - 1, max(0, int(math.floor(a / 360.0 * n + 1e-9)))) for a in at], dtype=np.int64)
-    rec.send_columns(
-        CHECKS_PATH,
-        indexes=[rr.TimeColumn(TIMELINE_TIME, duration=duration_ns(np.interp(at, angle, time_s))),
-                 rr.TimeColumn(TIMELINE_STEP, sequence=step),
-                 rr.TimeColumn(TIMELINE_ANGLE, sequence=angle_sequence(at))],
-        columns=rr.TextLog.columns(text=[m.text for m in marks], level=[m.level for m in marks]),
-    )
+    return [s.path for s in limit_series(series, checks)] + [CHECKS_PATH]

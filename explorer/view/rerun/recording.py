@@ -94,6 +94,7 @@ import numpy as np
 from ...core.outputs import as_output, check_output, output_path
 from ...core.processes import run_child
 from . import worker as helper  # its functions looked up when called (tests replace them)
+from .check_marks import CHECKS_PATH, check_paths, limit_series, markers
 
 APP_ID = "valve-gear-explorer"
 MERGE_TIMEOUT_S = 600.0  # `rerun rrd merge` of a long live session; it is killed past this
@@ -220,11 +221,10 @@ def _time_columns(rr, index: Mapping[str, np.ndarray]) -> list:
 def recording_paths(result, part_names: Iterable[str] = (), checks=None) -> list[str]:
     """Entity paths a recording of `result` holds (used to build the blueprint before logging);
     `checks` (explorer.view.verdicts.CheckSummary): the design checks' limits and markers too."""
-    from .check_marks import check_paths
-
-    paths = [s.path for s in series_layout(result.columns)]
+    series = series_layout(result.columns)
+    paths = [s.path for s in series]
     paths += [f"{PARTS_PATH}/{name}" for name in part_names]
-    return paths + [EVENTS_PATH, SUMMARY_PATH] + check_paths(result, checks)
+    return paths + [EVENTS_PATH, SUMMARY_PATH] + check_paths(series, checks)
 
 
 def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Mapping | None = None,
@@ -233,8 +233,6 @@ def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Map
     """Log one simulation into the recording stream `rec` (series, parts, events, summary; the
     design checks' markers and limits when `checks`, a CheckSummary, is given)."""
     import rerun as rr
-
-    from .check_marks import log_checks
 
     rec.send_recording_name(label)
     scene = result.scene
@@ -257,7 +255,7 @@ def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Map
                              columns=rr.Points3D.columns(positions=pts.reshape(-1, 3)).partition(
                                  lengths=[pts.shape[1]] * pts.shape[0]))
     _log_events(rec, rr, result, index)
-    log_checks(rec, rr, result, checks, index)
+    _log_checks(rec, rr, result, checks, index)
     rec.log(SUMMARY_PATH, rr.TextDocument(summary_markdown(result, label), media_type="text/markdown"), static=True)
 
 
@@ -341,6 +339,38 @@ def _log_events(rec, rr, result, index: Mapping[str, np.ndarray]) -> None:
                  rr.TimeColumn(TIMELINE_STEP, sequence=np.asarray(step, dtype=np.int64)),
                  rr.TimeColumn(TIMELINE_ANGLE, sequence=np.asarray(degrees, dtype=np.int64))],
         columns=rr.TextLog.columns(text=texts, level=levels),
+    )
+
+
+def _log_checks(rec, rr, result, checks, index: Mapping[str, np.ndarray]) -> None:
+    """The design checks' limit lines (two rows each: the revolution's first and last step) and
+    their markers at the cam angle of each worst (explorer.view.rerun.check_marks)."""
+    if checks is None:
+        return
+    steps = index[TIMELINE_STEP]
+    ends = np.array([0, steps.size - 1])
+    ends_index = [rr.TimeColumn(TIMELINE_TIME, duration=duration_ns(index[TIMELINE_TIME][ends])),
+                  rr.TimeColumn(TIMELINE_STEP, sequence=steps[ends]),
+                  rr.TimeColumn(TIMELINE_ANGLE, sequence=index[TIMELINE_ANGLE][ends])]
+    for line in limit_series(series_layout(result.columns), checks):
+        rec.log(line.path, rr.SeriesLines(names=line.name, colors=[line.rgb], widths=1.0), static=True)
+        rec.send_columns(line.path, indexes=ends_index,
+                         columns=rr.Scalars.columns(scalars=np.full(2, line.value, dtype=np.float64)))
+    marks = markers(checks)
+    if not marks:
+        return
+    n = steps.size
+    at = np.array([m.angle_deg for m in marks])
+    # the step at or before the angle, as the events; on `time` the instant of that angle in this run
+    step = np.array([min(n - 1, max(0, int(math.floor(a / 360.0 * n + 1e-9)))) for a in at], dtype=np.int64)
+    instant = np.interp(at, np.asarray(result.columns["cam_angle_deg"], dtype=float),
+                        np.asarray(result.columns["time_s"], dtype=float))
+    rec.send_columns(
+        CHECKS_PATH,
+        indexes=[rr.TimeColumn(TIMELINE_TIME, duration=duration_ns(instant)),
+                 rr.TimeColumn(TIMELINE_STEP, sequence=step),
+                 rr.TimeColumn(TIMELINE_ANGLE, sequence=angle_sequence(at))],
+        columns=rr.TextLog.columns(text=[m.text for m in marks], level=[m.level for m in marks]),
     )
 
 
