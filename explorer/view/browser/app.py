@@ -266,7 +266,7 @@ class ExplorerApp:
             if replot:
                 self._replot_at = None
             playback = self.controls.playback
-            if frame.checks is not None and frame.checks.serial != self._result_serial:
+            if frame.checks is not None and (self.checks_panel is None or frame.checks.serial != self._result_serial):
                 frame.checks = None  # of a result no longer shown
             if frame.checks is not None and not isinstance(frame.checks.summary, str):
                 self.plots.limits = lambda prepared, summary=frame.checks.summary: with_limits(
@@ -280,12 +280,14 @@ class ExplorerApp:
             if prepared is not None and not frame.scrubbed:
                 playback.advance(dt, prepared.result.summary["revolution_time_s"])
             with self.target.atomic():
-                if frame.checks is not None and self.checks_panel is not None:
-                    self.checks_panel.show(frame.checks.serial, frame.checks.summary)
-                    if self.current is not None and frame.incoming is None and not replot:
-                        self.plots.show(self.current, None if playback.playing else playback.angle_deg)
                 if frame.incoming is not None:
                     self._show(frame.incoming, since)
+                if frame.checks is not None:
+                    if self.current is not None and not replot:
+                        self.plots.show(self.current, None if playback.playing else playback.angle_deg)  # the limits
+                    self.checks_panel.show(frame.checks.serial, frame.checks.summary)
+                    if frame.checks.serial != self._result_serial:  # a newer result came in this frame
+                        self.checks_panel.checking(self.current.label)
                 if replot:
                     self.plots.replot(self.current, None if playback.playing else playback.angle_deg)
                 if frame.advice is not None and self.current is not None \

@@ -175,12 +175,13 @@ class ChecksPanel:
         self.header.content = header_html(self.summary, label, checking=self.summary is not None)
 
     def show(self, serial: int, summary) -> None:
-        self.serial, self.summary = serial, summary
+        """The checks of request `serial`'s result (the loop's; `summary` and `serial` are set
+        last: another thread that sees them sees the buttons too)."""
         self.header.content = header_html(summary)
         lines = summary.lines if isinstance(summary, CheckSummary) else ()
         for handle in self.buttons.values():
             handle.remove()
-        self.buttons = {}
+        buttons = {}
         with self.tab:
             for line in lines:
                 # a judged rule keeps its colour even where it locates nothing (a click then does
@@ -188,7 +189,9 @@ class ChecksPanel:
                 button = self.gui.add_button(line.label(), color=line.colour, hint=line_hint(line),
                                              disabled=not line.judged)
                 button.on_click(_recorder(self.inbox, line.rule))
-                self.buttons[line.rule] = button
+                buttons[line.rule] = button
+        self.buttons = buttons
+        self.serial, self.summary = serial, summary
 
 
 def _recorder(inbox, rule: str) -> Callable:
