@@ -30,7 +30,8 @@ Rows (default scene unless --scene):
     operating range of 200 speeds; in the browser (the float demo over that range) the first
     result and a speed change until the plots show it, with the Checks panel and without it, in
     the same run (the checks must not delay the result), then how long after the result its
-    checks are in the panel (they wait for the page to be quiet, SWEEP_QUIET_S, and the advice)
+    checks are in the panel (they wait for the page to be quiet, SWEEP_QUIET_S, the advice and the
+    speed sweep)
     and how long they took in the compute child.
 Medians of several runs; "ratio" is median / target (<= 1 meets it; for rates target / median),
 "x base" the median over `simulate()` of the same scene, timed in this process.
@@ -439,7 +440,7 @@ def checks_report(repeat: int) -> None:
     print(f"    {'speed change -> new velocity curve on the server, without':<70} {1e3 * change0:9.1f} ms")
     print(f"    {'speed change -> new velocity curve on the server, with':<70} {1e3 * change1:9.1f} ms  "
           f"{change1 / change0:5.2f}x")
-    print(f"    {'... then its checks in the panel (after the quiet wait and the advice)':<70} "
+    print(f"    {'... then its checks in the panel (after the quiet wait, advice and sweep)':<70} "
           f"{1e3 * statistics.median(panel):9.1f} ms")
     print(f"    {'    of which the checks in the compute child (200 speeds, 19 rules)':<70} "
           f"{1e3 * statistics.median(child):9.1f} ms")

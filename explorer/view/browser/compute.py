@@ -54,7 +54,7 @@ class ComputeWorker:
     # whether the compiled solver may be called (explorer.view.browser.kernels); None: always
     compiled: Callable[[], bool] | None = None
     # the design checks of each new result (explorer.view.verdicts.CheckRunner, run in the child
-    # after the advice and before the sweep, once the compiled solver is ready) and where their
+    # after the advice and the speed sweep, once the compiled solver is ready) and where their
     # summary goes: (serial, CheckSummary or the reason there is none); None: no checks
     checks: Any = None
     on_checks: Callable[[int, Any], None] | None = None
@@ -151,8 +151,10 @@ class ComputeWorker:
                         # sweep (not counted as busy: the result shown is complete; these fill in
                         # behind it)
                         advice, self._advice = self._advice, None
+                        # the checks last: one that runs past the time limit loses the child and
+                        # with it the result the advice and the sweep are computed on
                         checks = None
-                        if advice is None and self._checks_due():
+                        if advice is None and self._sweep is None and self._checks_due():
                             checks, self._checks = self._checks, None
                         sweep = self._sweep
                         request = None
