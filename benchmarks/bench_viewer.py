@@ -25,6 +25,14 @@ Rows (default scene unless --scene):
     speed's curves, the spring advisor after them (its advice follows once the page is idle);
     beside it, in the same run, `simulate` of the float demo with the advisor on the path, as
     every speed change paid it before. Only this row with --float-demo-only.
+  - the design checks on the float demo (issue #26.3; only these rows with --checks-only):
+    `explorer.checks.viewer.evaluate` in this process at the scene's own speed and over an
+    operating range of 200 speeds; in the browser (the float demo over that range) the first
+    result and a speed change until the plots show it, with the Checks panel and without it, in
+    the same run (the checks must not delay the result), then how long after the result its
+    checks are in the panel (they wait for the page to be quiet, SWEEP_QUIET_S, the advice and the
+    speed sweep)
+    and how long they took in the compute child.
 Medians of several runs; "ratio" is median / target (<= 1 meets it; for rates target / median),
 "x base" the median over `simulate()` of the same scene, timed in this process.
 """
@@ -128,6 +136,7 @@ def main(argv=None) -> int:
     parser.add_argument("--scene", help="scene file (default: the built-in default scene)")
     parser.add_argument("--bursts", type=int, default=4, help="rounds of the 1000-change burst (default 4)")
     parser.add_argument("--float-demo-only", action="store_true", help="only the float demo's speed-change rows")
+    parser.add_argument("--checks-only", action="store_true", help="only the design checks' rows (float demo)")
     parser.add_argument("--clients", nargs="+", metavar="ARG", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.clients:
@@ -135,6 +144,9 @@ def main(argv=None) -> int:
         return 0
     if args.float_demo_only:
         return 1 if float_demo_report(args.repeat) else 0
+    if args.checks_only:
+        checks_report(args.repeat)
+        return 0
 
     import numpy as np
     import viser
@@ -360,6 +372,83 @@ def float_demo_report(repeat: int) -> bool:
           f"{'':>10} {old_path / prepared_alone:6.2f}x")
     print(f"{'  prepare and then the advice (once the page is idle)':<66} {1e3 * with_advice:9.2f}ms")
     return changed > 0.1
+
+
+def checks_report(repeat: int) -> None:
+    """The design checks in the browser (issue #26.3) on valve_float_demo.toml; prints the rows
+    and the load (module docstring)."""
+    import numpy as np
+    import viser
+
+    from explorer import load_scene
+    from explorer.checks.viewer import evaluate
+    from explorer.view.browser.app import ExplorerApp
+    from explorer.view.verdicts import CheckSummary
+
+    path = str(ROOT / "assets" / "scenes" / "valve_float_demo.toml")
+    ranged = ("drive.operating_range=[800, 6500]",)
+    rows = []
+    for label, overrides in (("own speed (4000 rpm, 1 speed)", ()), ("800..6500 rpm, 200 speeds", ranged)):
+        scene = load_scene(path, list(overrides))
+        rows.append((f"evaluate(scene) in this process, {label}", median_time(lambda: evaluate(scene), repeat)))
+    speeds = [3000.0, 3100.0]
+    k = [0]
+    browser = {}
+    for name, checks in (("without", None), ("with", evaluate)):
+        firsts, changes, panel, child = [], [], [], []
+        for _ in range(max(1, repeat // 2)):
+            server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+            started = time.perf_counter()
+            app = ExplorerApp(server, path, ranged, playing=False, checks=checks)
+            try:
+                assert app.wait_applied(120)
+                firsts.append(time.perf_counter() - started)
+                for _ in range(3):
+                    # the same for both: the background work of the result shown (advice, checks,
+                    # speed-sweep steps) under way when the change comes
+                    time.sleep(1.5)
+                    k[0] += 1
+                    rpm = speeds[k[0] % 2]
+                    before = np.asarray(app.plots.handles[1].data[1])
+                    t0 = time.perf_counter()
+                    app.fields["drive.rpm"].value = rpm
+                    deadline = time.monotonic() + 60
+                    while not (app.current.scene.drive.rpm == rpm
+                               and not np.array_equal(np.asarray(app.plots.handles[1].data[1]), before)):
+                        if time.monotonic() > deadline:
+                            raise RuntimeError(f"the plots never showed {rpm} rpm: {app.error_text}")
+                        time.sleep(0.0005)
+                    shown = time.perf_counter()
+                    changes.append(shown - t0)
+                    if checks is None:
+                        continue
+                    while not (app.checks_panel.serial == app.current.request.serial
+                               and isinstance(app.checks_panel.summary, CheckSummary)):
+                        if time.monotonic() > deadline:
+                            raise RuntimeError(f"no checks for {rpm} rpm: {app.checks_panel.summary}")
+                        time.sleep(0.001)
+                    panel.append(time.perf_counter() - shown)
+                    child.append(app.checks_panel.summary.seconds)
+            finally:
+                app.stop()
+                server.stop()
+        browser[name] = (statistics.median(firsts), statistics.median(changes), panel, child)
+    load = os.getloadavg()
+    print(f"design checks on the float demo (valve_float_demo.toml), load average {load[0]:.1f} {load[1]:.1f} "
+          f"{load[2]:.1f}; medians:")
+    for label, value in rows:
+        print(f"  {label:<72} {1e3 * value:9.1f} ms")
+    (first0, change0, _, _), (first1, change1, panel, child) = browser["without"], browser["with"]
+    print(f"  browser, {ranged[0]}:")
+    print(f"    {'first result shown, without the Checks panel':<70} {1e3 * first0:9.1f} ms")
+    print(f"    {'first result shown, with it':<70} {1e3 * first1:9.1f} ms  {first1 / first0:5.2f}x")
+    print(f"    {'speed change -> new velocity curve on the server, without':<70} {1e3 * change0:9.1f} ms")
+    print(f"    {'speed change -> new velocity curve on the server, with':<70} {1e3 * change1:9.1f} ms  "
+          f"{change1 / change0:5.2f}x")
+    print(f"    {'... then its checks in the panel (after the quiet wait, advice and sweep)':<70} "
+          f"{1e3 * statistics.median(panel):9.1f} ms")
+    print(f"    {'    of which the checks in the compute child (200 speeds, 19 rules)':<70} "
+          f"{1e3 * statistics.median(child):9.1f} ms")
 
 
 def per_client_report(path: str, pages: int, seconds: float = 8.0) -> bool:

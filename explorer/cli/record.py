@@ -62,6 +62,10 @@ def register(sub) -> None:
         help="one recording per value, V1,V2,... or START:STOP:COUNT[:log] (repeatable: every combination)",
     )
     p.add_argument("--no-parts", action="store_true", help="leave out the 3D parts (series and events only)")
+    p.add_argument("--checks", action="store_true",
+                   help="also the design checks of each run's scene (as `explorer check SCENE`): each rule that warns "
+                        "or fails a marker in the event log at the cam angle of its worst, the limits as lines beside "
+                        "the velocity, pressure angle and Hertz stress")
     p.set_defaults(run=run)
 
 
@@ -147,6 +151,9 @@ def _with_parts_or_warn(label: str, result):
 
 
 def run(args) -> int:
+    from dataclasses import replace
+
+    from ..checks.viewer import evaluate as check_design
     from ..effects.pipeline import simulate
     from ..view.rerun.recording import Run, check_rrd_path, write_recordings
 
@@ -157,7 +164,8 @@ def run(args) -> int:
     def runs():
         for label, scene in plans:
             result = simulate(scene)
-            yield Run(label=label, result=result) if args.no_parts else _with_parts_or_warn(label, result)
+            run = Run(label=label, result=result) if args.no_parts else _with_parts_or_warn(label, result)
+            yield replace(run, checks=check_design(scene)) if args.checks else run
 
     def written(r) -> None:
         done.append((r.label, len(r.result.columns["time_s"]), len(r.result.events), len(r.result.warnings)))

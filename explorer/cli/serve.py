@@ -78,6 +78,7 @@ def run(args) -> int:
 
     import viser
 
+    from ..checks.viewer import evaluate as check_design
     from ..view.browser import callbacks
     from ..view.browser.app import ExplorerApp
     from ..view.browser.kernels import KernelWarmup
@@ -95,10 +96,10 @@ def run(args) -> int:
             kernels = KernelWarmup()
             if args.shared:
                 app = ExplorerApp(server, scene.source, args.overrides, playing=not args.paused, on_result=on_result,
-                                  kernels=kernels)
+                                  kernels=kernels, checks=check_design)
             else:
                 app = PerClientExplorer(server, scene.source, args.overrides, playing=not args.paused,
-                                        on_result=on_result, kernels=kernels)
+                                        on_result=on_result, kernels=kernels, checks=check_design)
             shown_host = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
             if not supervisor.stopping.is_set():
                 print(f"Valve-Gear Explorer: http://{shown_host}:{server.get_port()}  (Ctrl-C stops)", flush=True)

@@ -16,7 +16,9 @@ The page is made of parts with one job each, all the loop's:
 - plots.Plots: s, v, p and forces over the revolution, the cursor, the slider under them;
 - sweep_view.SweepView: the speed sweep under the plots;
 - readouts.Readouts: the status box, the "Stale" lines, the Read-outs tab with the events;
-- camera.Cameras: each page's camera framed for its canvas.
+- camera.Cameras: each page's camera framed for its canvas;
+- checks_panel.ChecksPanel: the design checks' verdicts (when the app is given a CheckRunner),
+  a click going to a rule's worst; their limits on the plots.
 What can be derived is: what a plot or field shows is read from its handle, and a control the
 page changed since a frame began is told by viser's own update time, so no copy of "what the
 loop last wrote" is kept.
@@ -32,6 +34,7 @@ from typing import Callable
 
 from . import origin
 from .camera import Cameras
+from .checks_panel import CheckChosen, ChecksArrived, ChecksPanel, with_limits
 from .compute import ComputeWorker
 from .controls import MAGNIFICATION_RANGE, SCRUB_HINT, PlaybackControls
 from .fields import Fields
@@ -59,7 +62,9 @@ OWN_NOTE = "Your own session: your changes are yours; others on this server do n
 class ExplorerApp:
     """Everything `explorer serve` shows, on an existing viser server (or one page of it:
     `client`). `kernels` (explorer.view.browser.kernels.KernelWarmup) tells whether the compiled
-    solver is ready; None: it is taken to be (the tests compile it before they run)."""
+    solver is ready; None: it is taken to be (the tests compile it before they run). `checks`
+    (explorer.view.verdicts.CheckRunner, e.g. explorer.checks.viewer.evaluate): the design checks
+    of every new result in a Checks tab; None: no tab."""
 
     def __init__(
         self,
@@ -74,6 +79,7 @@ class ExplorerApp:
         time_limit: float | None = COMPUTE_TIME_LIMIT_S,
         client=None,
         kernels=None,
+        checks=None,
     ):
         from ...scene.builtin import builtin_scenes, find_scene
 
@@ -94,6 +100,7 @@ class ExplorerApp:
         self.client = client
         self.target = client if client is not None else server
         self.kernels = kernels
+        self.checks = checks
         self.inbox = Inbox()
         self._ticking: int | None = None  # the thread applying a frame (its GUI writes are no requests)
         self._serial_lock = threading.Lock()
@@ -122,6 +129,7 @@ class ExplorerApp:
         self._loading = 0  # serial of a scene load whose result opens at its own playback speed
         self._compiled = kernels is None or kernels.ready()
         self._replot_at: float | None = None  # when to make the plots anew for a page that connected
+        self._result_serial = -1  # the request whose result (not magnification) is shown: what checks judge
 
         self._build_gui(playing)
         if client is None:
@@ -136,6 +144,8 @@ class ExplorerApp:
             on_sweep=lambda serial, sweep: self.inbox.put(SweepArrived(serial, sweep)),
             on_advice=lambda serial, readout: self.inbox.put(AdviceArrived(serial, readout)),
             compiled=None if kernels is None else kernels.ready,
+            checks=checks,
+            on_checks=lambda serial, summary: self.inbox.put(ChecksArrived(serial, summary)),
             time_limit=time_limit).start()
         self._loading = self._submit()
         self.loop = FrameLoop(self.tick, fps, wake=self.inbox.arrived).start()
@@ -160,6 +170,7 @@ class ExplorerApp:
         self.plots = Plots(gui, plots_tab, SCRUB_HINT + " (click or drag)")
         self.sweep_view = SweepView(gui, plots_tab)
         self.readouts = Readouts(self.status, gui, self.side_panel.add_tab("Read-outs"), inbox, echo)
+        self.checks_panel = ChecksPanel(gui, self.side_panel.add_tab("Checks"), inbox) if self.checks is not None else None
         self.side_panel.dock_left()
         self.side_panel.set_width(440)
         wire(self.plots.angle, inbox, lambda v, page, at: Scrubbed(float(v)), echo)
@@ -255,6 +266,11 @@ class ExplorerApp:
             if replot:
                 self._replot_at = None
             playback = self.controls.playback
+            if frame.checks is not None and (self.checks_panel is None or frame.checks.serial != self._result_serial):
+                frame.checks = None  # of a result no longer shown
+            if frame.checks is not None and not isinstance(frame.checks.summary, str):
+                self.plots.limits = lambda prepared, summary=frame.checks.summary: with_limits(
+                    prepared.plots, summary, prepared.result)
             if frame.incoming is not None:
                 self.handled_serial = max(self.handled_serial, frame.incoming.request.serial)
                 if self._error is not None and self._error[0] < frame.incoming.request.serial:
@@ -266,6 +282,12 @@ class ExplorerApp:
             with self.target.atomic():
                 if frame.incoming is not None:
                     self._show(frame.incoming, since)
+                if frame.checks is not None:
+                    if self.current is not None and not replot:
+                        self.plots.show(self.current, None if playback.playing else playback.angle_deg)  # the limits
+                    self.checks_panel.show(frame.checks.serial, frame.checks.summary)
+                    if frame.checks.serial != self._result_serial:  # a newer result came in this frame
+                        self.checks_panel.checking(self.current.label)
                 if replot:
                     self.plots.replot(self.current, None if playback.playing else playback.angle_deg)
                 if frame.advice is not None and self.current is not None \
@@ -346,6 +368,10 @@ class ExplorerApp:
             frame.sweep = True
         elif isinstance(item, AdviceArrived):
             frame.advice = item
+        elif isinstance(item, ChecksArrived):
+            frame.checks = item
+        elif isinstance(item, CheckChosen):
+            self._go_to_check(item.rule, frame)
         elif isinstance(item, ClientConnected):
             self.cameras.connected(item.client)
             self.plots.settle()
@@ -363,6 +389,10 @@ class ExplorerApp:
             return
         self.current = prepared
         self.applied_serial = prepared.request.serial
+        if previous is None or prepared.result is not previous.result:
+            self._result_serial = prepared.request.serial
+            if self.checks_panel is not None:
+                self.checks_panel.checking(prepared.label)
         self.gear.show(prepared)
         # compared with what is shown, not with the worker's previous bundle (`new_result`): a
         # new result and a magnification change computed together come as one bundle
@@ -377,6 +407,21 @@ class ExplorerApp:
         if self._loading and prepared.request.serial >= self._loading:
             self._loading = 0
             self.controls.default_speed(default_speed(prepared.result.summary["revolution_time_s"]))
+
+    def _go_to_check(self, rule: str, frame: "_Frame") -> None:
+        """A line of the Checks panel clicked: the speed of its rule's worst value as if typed
+        into Camshaft rpm (a new result at that speed), its cam angle as if scrubbed."""
+        line = self.checks_panel.line(rule) if self.checks_panel is not None else None
+        if line is None:
+            return
+        speed, angle = line.target()
+        current = self.current
+        shown_rpm = current.scene.drive.rpm if current is not None else None
+        if speed is not None and (shown_rpm is None or abs(speed - shown_rpm) > 1e-9 * speed):
+            self.fields.apply("drive.rpm", float(speed), self._submit, self.reject, current, forced=True)
+        if angle is not None:
+            self.controls.scrub(angle)
+            frame.scrubbed = True
 
     def _compiling(self) -> str:
         return "" if self.kernels is None else self.kernels.note()
@@ -420,4 +465,5 @@ class _Frame:
         self.scrubbed = False  # the angle was set: the clock does not advance this frame
         self.sweep = False  # a sweep (or a step of it) came
         self.advice = None  # the read-out with the spring advice that came
+        self.checks = None  # the design checks that came (checks_panel.ChecksArrived)
         self.resweep = False

@@ -53,6 +53,11 @@ class ComputeWorker:
     on_advice: Callable[[int, str], None] | None = None  # (serial, read-out markdown)
     # whether the compiled solver may be called (explorer.view.browser.kernels); None: always
     compiled: Callable[[], bool] | None = None
+    # the design checks of each new result (explorer.view.verdicts.CheckRunner, run in the child
+    # after the advice and the speed sweep, once the compiled solver is ready) and where their
+    # summary goes: (serial, CheckSummary or the reason there is none); None: no checks
+    checks: Any = None
+    on_checks: Callable[[int, Any], None] | None = None
     time_limit: float | None = COMPUTE_TIME_LIMIT_S
     memory_limit: int = MEMORY_LIMIT_BYTES
     _pending: Request | None = None
@@ -71,6 +76,7 @@ class ComputeWorker:
     _pending_at: float = 0.0  # when the waiting request came
     _sweep: Any = None  # the SpeedSweep being filled in, or a SweepTask still to start
     _advice: int | None = None  # serial of the result whose spring advice is still to compute
+    _checks: int | None = None  # serial of the result whose design checks are still to run
     _background: bool = False  # an advice or sweep step is being computed
     _span: tuple[str, tuple[float, float]] | None = None  # (scene path, speed range) last swept
 
@@ -131,7 +137,7 @@ class ComputeWorker:
             while True:
                 with self._cond:
                     while self._pending is None and not self._stop:
-                        if self._sweep is None and self._advice is None:
+                        if self._sweep is None and self._advice is None and not self._checks_due():
                             self._cond.wait()
                             continue
                         quiet = time.monotonic() - self._pending_at
@@ -145,6 +151,11 @@ class ComputeWorker:
                         # sweep (not counted as busy: the result shown is complete; these fill in
                         # behind it)
                         advice, self._advice = self._advice, None
+                        # the checks last: one that runs past the time limit loses the child and
+                        # with it the result the advice and the sweep are computed on
+                        checks = None
+                        if advice is None and self._sweep is None and self._checks_due():
+                            checks, self._checks = self._checks, None
                         sweep = self._sweep
                         request = None
                         self._background = True
@@ -155,7 +166,9 @@ class ComputeWorker:
                     try:
                         if advice is not None:
                             self._advice_step(advice)
-                        else:
+                        elif checks is not None:
+                            self._checks_step(checks)
+                        elif sweep is not None:
                             self._sweep_step(sweep)
                     finally:
                         with self._cond:
@@ -221,6 +234,9 @@ class ComputeWorker:
             if self.on_advice is not None and prepared.new_result:
                 with self._cond:
                     self._advice = prepared.request.serial if prepared.advice_pending else None
+            if self.checks is not None and self.on_checks is not None and prepared.new_result:
+                with self._cond:
+                    self._checks = prepared.request.serial
             if self.on_sweep is not None and prepared.new_result:
                 from .speedsweep import SweepTask
 
@@ -238,7 +254,51 @@ class ComputeWorker:
         """Whether nothing is waiting and the advice and speed sweep of the newest result are complete."""
         with self._cond:
             return (self._pending is None and not self._busy and self._sweep is None and self._advice is None
-                    and not self._background)
+                    and self._checks is None and not self._background)
+
+    def _checks_due(self) -> bool:
+        """Whether design checks wait and may run: the elastic rules call the compiled solver,
+        which a child must not compile itself (minutes) while the server warms it up."""
+        return self._checks is not None and (self.compiled is None or self.compiled())
+
+    def checks_idle(self) -> bool:
+        """Whether no design checks wait or run (for tests)."""
+        with self._cond:
+            return self._checks is None and not self._background
+
+    def _checks_step(self, serial: int) -> None:
+        """The design checks of request `serial`'s result, from the child (explorer.view.
+        browser.checks_panel); a newer request stops them (the newer result asks again); past the
+        time limit the panel says so."""
+        from .checks_panel import ChecksTask
+        from .worker import Superseded, TimeLimitExceeded, WorkerDied
+
+        def superseded() -> bool:
+            return self._stop or (self._pending is not None and time.monotonic() - self._pending_at > SWEEP_YIELD_S)
+
+        try:
+            kind, payload = self._process.call(ChecksTask(serial, self.checks), self.time_limit, superseded)
+        except TimeLimitExceeded:
+            kind, payload = "checks", (f"the design checks took longer than {self.time_limit:g} s and were stopped; "
+                                       "`explorer check SCENE` has no time limit")
+        except (Superseded, WorkerDied):
+            return
+        except Exception:
+            traceback.print_exc()
+            self._process.kill()
+            self._process.reap()
+            return
+        if kind == "checks":
+            try:
+                self.on_checks(serial, payload)
+            except Exception:
+                traceback.print_exc()
+        elif kind == "internal":
+            self.internal_errors += 1
+            try:
+                self.on_checks(serial, payload)
+            except Exception:
+                traceback.print_exc()
 
     def resweep(self) -> None:
         """Sweep the newest result again (the compiled solver became ready: all speeds at once)."""

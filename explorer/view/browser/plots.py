@@ -92,6 +92,10 @@ class Plots:
         self._cursor_at = 0.0  # when the cursor was last redrawn (it is throttled to PLOT_CURSOR_HZ)
         self._cursor_step = -1
         self.replots = 0  # how often the plots were made anew for pages that connected
+        # prepared -> the plots drawn: the result's, with the Checks panel's limits as more series
+        # and plots (checks_panel.with_limits)
+        self.limits = lambda prepared: list(prepared.plots)
+        self.drawn: list = []  # the plots as drawn (the result's, with the limits)
         with tab:
             self.stale = gui.add_markdown("", visible=False, order=-2.0)
             self.note = gui.add_markdown("", visible=False, order=-1.0)
@@ -113,7 +117,8 @@ class Plots:
         if self.note.content != prepared.plot_note:
             self.note.content = prepared.plot_note
             self.note.visible = bool(prepared.plot_note)
-        wanted = [plot_options(plot) for plot in prepared.plots]
+        self.drawn = plots = self.limits(prepared)
+        wanted = [plot_options(plot) for plot in plots]
         same = len(wanted) == len(self.handles) and all(
             h.title == o["title"] and _labels(h.series) == _labels(o["series"]) for h, o in zip(self.handles, wanted))
         if not same:
@@ -121,10 +126,10 @@ class Plots:
                 handle.remove()
             with self.tab:
                 self.handles = [self.gui.add_uplot(data=plot_data(plot, angle), **options)
-                                for plot, options in zip(prepared.plots, wanted)]
+                                for plot, options in zip(plots, wanted)]
             self.settle()
         else:
-            for handle, plot, options in zip(self.handles, prepared.plots, wanted):
+            for handle, plot, options in zip(self.handles, plots, wanted):
                 handle.data = plot_data(plot, angle)
                 if handle.scales != options["scales"]:
                     handle.scales = options["scales"]
@@ -141,6 +146,6 @@ class Plots:
             return
         step = -2 if angle is None else step
         if force or (step != self._cursor_step and now - self._cursor_at >= 1.0 / PLOT_CURSOR_HZ):
-            for handle, plot in zip(self.handles, prepared.plots):
+            for handle, plot in zip(self.handles, self.drawn or prepared.plots):
                 handle.data = plot_data(plot, angle)
             self._cursor_at, self._cursor_step = now, step

@@ -213,15 +213,18 @@ def _limit_memory(memory_bytes: int) -> None:
 
 
 def _background_reply(task, last, result_serial: int, advice_cache: dict):
-    """("sweep", figures) for a speed-sweep task, ("advice", read-out) for an advice task, on the
-    result held; ("stale", None) when the child no longer holds that result (a newer one came, or
+    """("sweep", figures) for a speed-sweep task, ("advice", read-out) for an advice task,
+    ("checks", CheckSummary or why none) for a checks task, on the result held; ("stale", None) when the child no longer holds that result (a newer one came, or
     the child was restarted)."""
+    from .checks_panel import ChecksTask, run_checks
     from .model import AdviceTask, advice_readout
     from .speedsweep import run_task
 
     if last is None or task.serial != result_serial:
         return ("stale", None)
     try:
+        if isinstance(task, ChecksTask):
+            return run_checks(task, last.scene)
         if isinstance(task, AdviceTask):
             return ("advice", advice_readout(last, advice_cache))
         return ("sweep", run_task(task, last))
@@ -240,6 +243,7 @@ def main(argv: list[str]) -> int:
     pipe = _Pipe(read_fd, write_fd)
 
     from ...core.errors import InputError
+    from .checks_panel import ChecksTask
     from .model import AdviceTask, prepare
     from .speedsweep import SweepTask
 
@@ -260,7 +264,7 @@ def main(argv: list[str]) -> int:
             request = pipe.recv()
         except (EOFError, OSError):
             return 0  # the server closed the pipe: it is done with us
-        if isinstance(request, (SweepTask, AdviceTask)):
+        if isinstance(request, (SweepTask, AdviceTask, ChecksTask)):
             pipe.send(_background_reply(request, last, result_serial, advice_cache))
             continue
         try:

@@ -43,7 +43,7 @@ def _execute(job: dict) -> None:
         if layout is not None and job.get("send_blueprint"):
             rec.send_blueprint(layout, make_active=job.get("make_active", True), make_default=True)
         log_result(rec, run.result, run.label, run.parts, run.poses, run.scales, run.colors, run.points,
-                   run.magnification)
+                   run.magnification, getattr(run, "checks", None))
         timeout = job.get("flush_timeout")
         if timeout is None:
             rec.flush()

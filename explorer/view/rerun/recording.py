@@ -49,6 +49,9 @@ Other entities:
                   seat, lash-take-up, … from result.events) at level INFO, and the
                   result's warnings at level WARN at t = 0.
 - /summary        TextDocument (static, markdown): scene, label, peaks, effect timings, warnings.
+- /events/checks and <series>/limit_*   with design checks (`explorer record --checks`): each
+                  rule that warns or fails as a marker at the cam angle of its worst, each limit a
+                  line beside its series (explorer.view.rerun.check_marks).
 
 The default blueprint puts the 3D view (over the event log) beside time-series views of lift s,
 velocity v, acceleration p and the forces (with tabs for jerk, torque, stress, angles, follower).
@@ -91,6 +94,7 @@ import numpy as np
 from ...core.outputs import as_output, check_output, output_path
 from ...core.processes import run_child
 from . import worker as helper  # its functions looked up when called (tests replace them)
+from .check_marks import CHECKS_PATH, check_paths, limit_series, markers
 
 APP_ID = "valve-gear-explorer"
 MERGE_TIMEOUT_S = 600.0  # `rerun rrd merge` of a long live session; it is killed past this
@@ -214,18 +218,21 @@ def _time_columns(rr, index: Mapping[str, np.ndarray]) -> list:
 # what goes into one recording
 
 
-def recording_paths(result, part_names: Iterable[str] = ()) -> list[str]:
-    """Entity paths a recording of `result` holds (used to build the blueprint before logging)."""
-    paths = [s.path for s in series_layout(result.columns)]
+def recording_paths(result, part_names: Iterable[str] = (), checks=None) -> list[str]:
+    """Entity paths a recording of `result` holds (used to build the blueprint before logging);
+    `checks` (explorer.view.verdicts.CheckSummary): the design checks' limits and markers too."""
+    series = series_layout(result.columns)
+    paths = [s.path for s in series]
     paths += [f"{PARTS_PATH}/{name}" for name in part_names]
-    return paths + [EVENTS_PATH, SUMMARY_PATH]
+    return paths + [EVENTS_PATH, SUMMARY_PATH] + check_paths(series, checks)
 
 
 def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Mapping | None = None,
                scales: Mapping | None = None, colors: Mapping | None = None, points: Mapping | None = None,
-               magnification: float = 1.0) -> None:
+               magnification: float = 1.0, checks=None) -> None:
     """Log one simulation into the recording stream `rec` (series, parts, events, summary; the
-    parts' magnification in the summary and as the recording's property "parts")."""
+    parts' magnification in the summary and as the recording's property "parts"; the design
+    checks' markers and limits when `checks`, a CheckSummary, is given)."""
     import rerun as rr
 
     rec.send_recording_name(label)
@@ -250,6 +257,7 @@ def log_result(rec, result, label: str, parts: Mapping | None = None, poses: Map
                              columns=rr.Points3D.columns(positions=pts.reshape(-1, 3)).partition(
                                  lengths=[pts.shape[1]] * pts.shape[0]))
     _log_events(rec, rr, result, index)
+    _log_checks(rec, rr, result, checks, index)
     rec.log(SUMMARY_PATH, rr.TextDocument(summary_markdown(result, label, magnification if parts else None),
                                           media_type="text/markdown"), static=True)
 
@@ -334,6 +342,38 @@ def _log_events(rec, rr, result, index: Mapping[str, np.ndarray]) -> None:
                  rr.TimeColumn(TIMELINE_STEP, sequence=np.asarray(step, dtype=np.int64)),
                  rr.TimeColumn(TIMELINE_ANGLE, sequence=np.asarray(degrees, dtype=np.int64))],
         columns=rr.TextLog.columns(text=texts, level=levels),
+    )
+
+
+def _log_checks(rec, rr, result, checks, index: Mapping[str, np.ndarray]) -> None:
+    """The design checks' limit lines (two rows each: the revolution's first and last step) and
+    their markers at the cam angle of each worst (explorer.view.rerun.check_marks)."""
+    if checks is None:
+        return
+    steps = index[TIMELINE_STEP]
+    ends = np.array([0, steps.size - 1])
+    ends_index = [rr.TimeColumn(TIMELINE_TIME, duration=duration_ns(index[TIMELINE_TIME][ends])),
+                  rr.TimeColumn(TIMELINE_STEP, sequence=steps[ends]),
+                  rr.TimeColumn(TIMELINE_ANGLE, sequence=index[TIMELINE_ANGLE][ends])]
+    for line in limit_series(series_layout(result.columns), checks):
+        rec.log(line.path, rr.SeriesLines(names=line.name, colors=[line.rgb], widths=1.0), static=True)
+        rec.send_columns(line.path, indexes=ends_index,
+                         columns=rr.Scalars.columns(scalars=np.full(2, line.value, dtype=np.float64)))
+    marks = markers(checks)
+    if not marks:
+        return
+    n = steps.size
+    at = np.array([m.angle_deg for m in marks])
+    # the step at or before the angle, as the events; on `time` the instant of that angle in this run
+    step = np.array([min(n - 1, max(0, int(math.floor(a / 360.0 * n + 1e-9)))) for a in at], dtype=np.int64)
+    instant = np.interp(at, np.asarray(result.columns["cam_angle_deg"], dtype=float),
+                        np.asarray(result.columns["time_s"], dtype=float))
+    rec.send_columns(
+        CHECKS_PATH,
+        indexes=[rr.TimeColumn(TIMELINE_TIME, duration=duration_ns(instant)),
+                 rr.TimeColumn(TIMELINE_STEP, sequence=step),
+                 rr.TimeColumn(TIMELINE_ANGLE, sequence=angle_sequence(at))],
+        columns=rr.TextLog.columns(text=[m.text for m in marks], level=[m.level for m in marks]),
     )
 
 
@@ -581,6 +621,7 @@ class Run:
     colors: Mapping | None = None  # name -> RGB(A) 0-255
     points: Mapping | None = None  # name -> (N, K, 3) per-step points in the part's frame (the coils)
     magnification: float = 1.0  # the parts' deviations from rigid motion drawn this many times
+    checks: object = None  # explorer.view.verdicts.CheckSummary of the run's scene: markers and limits
 
 
 def with_parts(label: str, result, magnification: float | None = None) -> Run:
@@ -647,7 +688,7 @@ def write_recordings(path, runs: Iterable[Run], on_run=None) -> None:
     second = next(it, None)
     with output_path(out) as tmp, helper.RecordingWorker() as worker:
         if second is None:
-            paths = recording_paths(first.result, (first.parts or {}).keys())
+            paths = recording_paths(first.result, (first.parts or {}).keys(), first.checks)
             bounds = parts_bounds(first.parts, first.poses or {}) if first.parts else None
             corners = legend_corners([plotted_curves(first.result)])
             helper.write_file(worker, tmp, first, (paths, bounds, corners))
@@ -667,7 +708,7 @@ def _write_merged(worker, out, tmp: Path, runs: Iterable[Run], on_run) -> None:
         boxes = []
         overlay = []  # each run's thinned main curves: the overlay recording and the legends
         for run in runs:
-            paths += recording_paths(run.result, (run.parts or {}).keys())
+            paths += recording_paths(run.result, (run.parts or {}).keys(), run.checks)
             if run.parts:
                 boxes.append(parts_bounds(run.parts, run.poses or {}))
             overlay.append(overlay_entry(run.label, run.result))

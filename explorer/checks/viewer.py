@@ -1,0 +1,80 @@
+"""The checks as the viewers read them (explorer.view.verdicts, issue #26.3): `evaluate(scene)` is
+the CheckRunner `explorer serve` hands the browser and `explorer record --checks` the
+recordings -- `check(scene)` over the scene's operating range, as `explorer check SCENE` does,
+each rule's result a CheckLine with its limits on the plotted columns they concern (PLOTTED).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+from ..view.verdicts import CheckLine, CheckSummary, Threshold
+from .report import CheckReport, RuleResult
+from .run import check
+
+
+@dataclass(frozen=True)
+class Plotted:
+    """A result column a rule's limits are drawn on: line height = sign * factor * limit (the
+    limit in SI; `factor` to the column's unit), and at -height too when `mirrored` (a limit on
+    a magnitude, |alpha|, of a signed column)."""
+
+    column: str
+    factor: float = 1.0
+    sign: float = 1.0
+    mirrored: bool = False
+
+
+# rule -> the columns its limits are drawn on (each where the result has it). A rule not here
+# judges a quantity no result column holds (a margin, a ratio, lift per degree, a film parameter
+# the effects do not output): its line in the panel still moves the gear to its worst.
+PLOTTED: dict[str, tuple[Plotted, ...]] = {
+    "pressure_angle": (Plotted("pressure_angle_deg", 180.0 / math.pi, mirrored=True),),
+    # the seating velocity is the closing (negative) velocity of the valve at the seat
+    "seating_velocity": (Plotted("valve_velocity_m_s", sign=-1.0),),
+    # the line contact's, a bucket tappet's crown, a pushrod train's lifter tip
+    "hertz_stress": (Plotted("hertz_stress_Pa"), Plotted("face_hertz_stress_Pa"), Plotted("tip_hertz_stress_Pa")),
+}
+
+
+def thresholds(result: RuleResult) -> tuple[Threshold, ...]:
+    out = []
+    for plotted in PLOTTED.get(result.name, ()):
+        for limit in ("fail", "warn"):
+            value = getattr(result, limit)
+            if value is None or not math.isfinite(value):
+                continue
+            height = plotted.sign * plotted.factor * value
+            values = (-height, height) if plotted.mirrored else (height,)
+            out.append(Threshold(plotted.column, values, limit))
+    return tuple(out)
+
+
+def line(result: RuleResult) -> CheckLine:
+    shown = result.shown(result.value)
+    text = "" if shown is None else (f"{shown:.4g} {result.unit}".strip() if math.isfinite(shown) else str(shown))
+    limits = [f"{name} {result.shown(v):.4g}" for name, v in (("fail", result.fail), ("warn", result.warn))
+              if v is not None and math.isfinite(v)]
+    return CheckLine(
+        rule=result.name, title=result.title, verdict=result.verdict, value=result.value, shown=text,
+        speed_rpm=result.speed_rpm, cam_angle_deg=result.cam_angle_deg,
+        limit=(" / ".join(limits) + f" {result.unit}").strip() if limits else "",
+        source=result.source, reason=result.reason, thresholds=thresholds(result))
+
+
+def summary(report: CheckReport, seconds: float | None = None) -> CheckSummary:
+    low, high, count = min(report.speeds_rpm), max(report.speeds_rpm), len(report.speeds_rpm)
+    span = f"{low:g} rpm" if count == 1 else f"{low:g}..{high:g} rpm, {count} speeds"
+    return CheckSummary(scene=report.scene, range_text=f"{span} (from {report.range_from})",
+                        lines=tuple(line(r) for r in report.results),
+                        seconds=report.seconds if seconds is None else seconds)
+
+
+def evaluate(scene) -> CheckSummary:
+    """The CheckRunner: every rule over the scene's operating range, one worker process (the
+    browser's compute child is one process already; the sweep engine runs in it)."""
+    started = time.perf_counter()
+    report = check(scene, workers=1)
+    return summary(report, time.perf_counter() - started)

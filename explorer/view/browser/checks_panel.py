@@ -1,0 +1,202 @@
+"""The Checks tab (issue #26.3): one line per design rule in traffic-light colours, each a button
+that moves the gear and the plots to the speed and cam angle of the rule's worst value, and the
+rules' limits drawn as horizontal lines on the plots of the columns they concern.
+
+The checks are the design's (explorer.checks, through the CheckRunner `explorer serve` hands the
+app: explorer.view.verdicts); they run in the compute child after the result is shown, like the
+spring advice (explorer.view.browser.compute), so they never delay the first result. What a click
+asks is recorded (CheckChosen) and applied by the frame loop like any other request: the speed as
+if typed into Camshaft rpm, the angle as if scrubbed.
+
+Nothing here imports viser: the panel is given the GUI and its tab.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import html
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from ..verdicts import RGB, CheckLine, CheckRunner, CheckSummary
+
+# The browser's cam-angle plots (explorer.view.browser.model.build_plots) by title: the result
+# column each draws and its display factor (a limit in the column's unit times this is the line's
+# height). tests/test_checks_view.py holds this to build_plots.
+PLOT_COLUMNS: dict[str, tuple[tuple[str, float], ...]] = {
+    "Valve lift s": (("valve_lift_m", 1e3),),
+    "Velocity v": (("valve_velocity_m_s", 1.0),),
+    "Acceleration p": (("valve_accel_m_s2", 1.0),),
+}
+LIMIT_DASH = [3, 3]
+# Plots the page draws only to carry a rule's limits (build_plots has none of these quantities):
+# (title, y label, [(column, label)], display factor), added after the others when the result has
+# one of the columns and the checks put a limit on it.
+LIMIT_PLOTS: tuple[tuple[str, str, tuple[tuple[str, str], ...], float], ...] = (
+    ("Pressure angle α", "α [°]", (("pressure_angle_deg", "pressure angle"),), 1.0),
+    ("Contact stress σ (Hertz)", "σ [MPa]", (("hertz_stress_Pa", "Hertz"), ("face_hertz_stress_Pa", "face (crown)"),
+                                            ("tip_hertz_stress_Pa", "lifter tip")), 1e-6),
+)
+
+
+@dataclass(frozen=True)
+class ChecksTask:
+    """A message to the compute child: check the scene of request `serial`'s result with `runner`
+    (a module-level function: it pickles by reference, and the child imports its module)."""
+
+    serial: int
+    runner: CheckRunner
+
+
+@dataclass(frozen=True)
+class ChecksArrived:
+    serial: int  # the request whose result was checked
+    summary: Any  # CheckSummary, or a str: why there are none (time limit, bad [checks])
+
+
+@dataclass(frozen=True)
+class CheckChosen:
+    """A line of the Checks panel clicked: go to its rule's worst."""
+
+    rule: str
+
+
+def run_checks(task: ChecksTask, scene) -> tuple[str, Any]:
+    """The child's side: ("checks", CheckSummary) or ("checks", message) for a scene whose checks
+    cannot run (bad [checks]: the scene file's own error line)."""
+    from ...core.errors import InputError
+
+    try:
+        return ("checks", task.runner(scene))
+    except InputError as exc:
+        return ("checks", f"error: {exc}")
+
+
+def hex_colour(rgb) -> str:
+    return "#" + "".join(f"{int(c):02x}" for c in rgb)
+
+
+def limit_plots(result, summary: CheckSummary) -> list:
+    """The plots of LIMIT_PLOTS whose columns the result has and the checks limit."""
+    from .model import DASHES, SERIES_COLORS, WIDTHS, Plot, decimate
+
+    cols = result.columns
+    x = np.asarray(cols["cam_angle_deg"], dtype=float)
+    out = []
+    for title, y_label, entries, factor in LIMIT_PLOTS:
+        present = [(column, label) for column, label in entries if column in cols]
+        if not any(summary.thresholds(column) for column, _ in present):
+            continue
+        xs, ys = decimate(x, [np.asarray(cols[column], dtype=float) * factor for column, _ in present])
+        series = tuple((label, y, SERIES_COLORS[i % len(SERIES_COLORS)]) for i, ((_, label), y) in enumerate(zip(present, ys)))
+        styles = tuple({"width": WIDTHS[i % len(WIDTHS)], "dash": list(DASHES[i % len(DASHES)])} for i in range(len(series)))
+        out.append(Plot(title, xs, series, y_label, styles))
+    return out
+
+
+def plot_columns(title: str) -> tuple[tuple[str, float], ...]:
+    """The result columns a plot draws and their display factor (PLOT_COLUMNS, LIMIT_PLOTS)."""
+    for name, _, entries, factor in LIMIT_PLOTS:
+        if name == title:
+            return tuple((column, factor) for column, _ in entries)
+    return PLOT_COLUMNS.get(title, ())
+
+
+def with_limits(plots, summary: CheckSummary | None, result=None) -> list:
+    """The plots with each limit of `summary` on a column a plot draws as one more series: a
+    dashed horizontal line in the colour of the limit (red fail, amber warn), labelled with the
+    rule, the limit and its value. With the `result`, the plots of LIMIT_PLOTS that carry a limit
+    are added after the others."""
+    if summary is None or isinstance(summary, str):
+        return list(plots)
+    if result is not None:
+        plots = list(plots) + limit_plots(result, summary)
+    out = []
+    for plot in plots:
+        extra, styles = [], []
+        for column, factor in plot_columns(plot.title):
+            for line, threshold in summary.thresholds(column):
+                for value in threshold.values:
+                    height = value * factor
+                    extra.append((f"{line.title} {threshold.limit} {height:.4g}",
+                                  np.full(len(plot.x), height), hex_colour(RGB[threshold.limit])))
+                    styles.append({"width": 1.2, "dash": LIMIT_DASH})
+        if extra:
+            base = tuple(plot.styles) + ({"width": 1.5},) * (len(plot.series) - len(plot.styles))
+            plot = dataclasses.replace(plot, series=tuple(plot.series) + tuple(extra), styles=base + tuple(styles))
+        out.append(plot)
+    return out
+
+
+def header_html(summary, label: str = "", checking: bool = False) -> str:
+    if summary is None:
+        return "<div style='font-size:0.85em'>checking the design…</div>"
+    if isinstance(summary, str):
+        return f"<div style='font-size:0.85em;color:#c0392b'>{html.escape(summary)}</div>"
+    counts = summary.counts()
+    state = " · checking the new result…" if checking else ""
+    return (f"<div style='font-size:0.85em'><b>{html.escape(summary.scene)}</b>: "
+            f"<b style='color:{hex_colour(RGB.get(summary.verdict, (90, 90, 90)))}'>{summary.verdict.upper()}</b> "
+            f"({counts['fail']} fail, {counts['warn']} warn, {counts['pass']} pass, {counts['n/a']} n/a) over "
+            f"{html.escape(summary.range_text)}; {1e3 * summary.seconds:.0f} ms{state}<br>"
+            "A line moves the gear and the plots to its worst value (speed and cam angle); the limits are "
+            "dashed lines on the plots of the quantities they concern.</div>")
+
+
+def line_hint(line: CheckLine) -> str:
+    if not line.judged:
+        return line.reason or line.verdict
+    parts = [f"{line.verdict}: worst {line.shown}" + (f" at {line.where()}" if line.where() else "")]
+    if line.limit:
+        parts.append(f"limits {line.limit}")
+    if line.source:
+        parts.append(f"source: {line.source}")
+    return "; ".join(parts)
+
+
+class ChecksPanel:
+    """The Checks tab: a header and one button per rule (`buttons`: rule -> handle)."""
+
+    def __init__(self, gui, tab, inbox):
+        self.gui, self.tab, self.inbox = gui, tab, inbox
+        self.summary: CheckSummary | str | None = None
+        self.serial = -1  # the request whose result `summary` checked
+        self.buttons: dict[str, Any] = {}
+        with tab:
+            self.header = gui.add_html(header_html(None))
+
+    def line(self, rule: str) -> CheckLine | None:
+        return self.summary.line(rule) if isinstance(self.summary, CheckSummary) else None
+
+    def checking(self, label: str) -> None:
+        """A new result is shown: its checks are on their way."""
+        self.header.content = header_html(self.summary, label, checking=self.summary is not None)
+
+    def show(self, serial: int, summary) -> None:
+        """The checks of request `serial`'s result (the loop's; `summary` and `serial` are set
+        last: another thread that sees them sees the buttons too)."""
+        self.header.content = header_html(summary)
+        lines = summary.lines if isinstance(summary, CheckSummary) else ()
+        for handle in self.buttons.values():
+            handle.remove()
+        buttons = {}
+        with self.tab:
+            for line in lines:
+                # a judged rule keeps its colour even where it locates nothing (a click then does
+                # nothing); a rule that cannot judge is greyed out
+                button = self.gui.add_button(line.label(), color=line.colour, hint=line_hint(line),
+                                             disabled=not line.judged)
+                button.on_click(_recorder(self.inbox, line.rule))
+                buttons[line.rule] = button
+        self.buttons = buttons
+        self.serial, self.summary = serial, summary
+
+
+def _recorder(inbox, rule: str) -> Callable:
+    # async: viser runs it on its event loop as the click arrives (explorer.view.browser.requests)
+    async def clicked(event) -> None:
+        inbox.put(CheckChosen(rule))
+
+    return clicked
