@@ -26,8 +26,8 @@ from . import kernel_stamp  # noqa: F401 (the cache is stale when a source it de
 from .exact import LAST_U, MAX_SAME_TIME
 from .exact_phase import MAX_BOUND_Q, RELEASE_RESIDUAL
 from .exact_events import MAX_DEPTH
-from .kernel_events import (LIFT_OFF, MIN, RECONTACT, SEAT, SEPARATION, UP, VZERO, coeffs, earliest, moving_table,
-                            static_table, zero_flags)
+from .kernel_events import (LIFT_OFF, MIN, RECONTACT, SEARCH_ROWS, SEAT, SEPARATION, UP, VZERO, coeffs, earliest,
+                            moving_table, static_table, zero_flags)
 from .kernel_grid import BLOCK, WINDOW, drive_at, node_time
 from .kernel_steps import deriv_into, expand, fsum, horner, shift_into, step, step_tables
 from .phases import CONTACT, FLIGHT, SEATED, STUCK
@@ -143,7 +143,7 @@ def run_buffers(nn, N, U):
     and coefficients, per row: started on its zero, cleared; per event: kind, first row, rows,
     combination, started on its zero, to be searched; per step length the bound's H, q,
     1 / (1 - q), H^2/8; the step lengths in time; the window's row maxima; the drive at a point;
-    the event search's stack.)"""
+    the event search's stack: kernel_events._search.)"""
     NC = N + 1
     return (np.full(nn, np.nan), np.full(nn, np.nan), np.ones(nn), np.full(nn, -1, dtype=np.int8),
             np.full((16, 4), np.nan), np.zeros((3, U, 18)),
@@ -151,7 +151,8 @@ def run_buffers(nn, N, U):
              np.zeros((4, 5)), np.zeros((4, NC)), np.zeros(4, dtype=np.bool_), np.zeros(4, dtype=np.bool_),
              np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.int64),
              np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.bool_), np.zeros(4, dtype=np.bool_),
-             np.empty((4, U)), np.empty(U), np.empty(4), np.zeros(6), np.zeros((4, MAX_DEPTH + 1))))
+             np.empty((4, U)), np.empty(U), np.empty(4), np.zeros(6),
+             np.zeros((SEARCH_ROWS + max(6, NC), MAX_DEPTH + 2))))
 
 
 @njit(cache=True, inline="always")
