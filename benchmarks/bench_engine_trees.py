@@ -111,7 +111,7 @@ def analysis(root: str, repeat: int, speeds: int) -> None:
 
         shared.lift = build_lift(scene)
         _, column, _ = elastic_run(scene, shared)
-        (grid,) = [g for key, g in shared.grids.items()][-1:]
+        grid = shared.grids[(scene.follower.ratio, scene.solver.steps_per_revolution)]  # (the unsplit grid)
         sp, v, link = scene.spring, scene.valve, scene.linkage
         W0 = sp.preload + scene.loads.closing_total
         params = np.array([scene.drive.omega, v.mass, v.oscillating_mass if v.oscillating_mass is not None else v.mass,
