@@ -9,7 +9,8 @@ phases, the windows, a step) count to their caller, kernel_phase.run_nodes.
 
 The map is read from the object code numba loads from its cache (kept as it is loaded: numba
 drops it after linking) with `objdump -t` (binutils), its load address from the entry point of
-kernel_figures.revolutions.
+kernel_figures.revolutions. perf reads the map after the process has ended, so it stays in /tmp
+(delete it after `perf report`).
 """
 
 from __future__ import annotations
