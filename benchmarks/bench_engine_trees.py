@@ -21,6 +21,11 @@ numba RK4 of the same model (benchmarks/_rk4_valve.py: events located by bisecti
 solver's grid cut into m substeps) at the smallest m = 1, 2, 4, ... whose valve lift is within
 RK4_TOLERANCE of the exact solver's at every output sample of RK4_SPEEDS speeds, timed on those
 speeds against the engine in the same process.
+
+--stages (no checkout before needed) prints where a revolution's CPU goes in this checkout, at
+1800, 3600 and 7200 steps with each stage's fixed cost and per-step cost: the Python of a chunk
+around its compiled call, the compiled call, and within it the stepping and the events alone
+(kernel_phase.run_nodes called per speed) against the figures.
 """
 
 from __future__ import annotations
@@ -35,6 +40,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 from _timing import ROOT, print_table
 
 
@@ -105,7 +111,7 @@ def analysis(root: str, repeat: int, speeds: int) -> None:
 
         shared.lift = build_lift(scene)
         _, column, _ = elastic_run(scene, shared)
-        (grid,) = [g for key, g in shared.grids.items()][-1:]
+        grid = shared.grids[(scene.follower.ratio, scene.solver.steps_per_revolution)]  # (the unsplit grid)
         sp, v, link = scene.spring, scene.valve, scene.linkage
         W0 = sp.preload + scene.loads.closing_total
         params = np.array([scene.drive.omega, v.mass, v.oscillating_mass if v.oscillating_mass is not None else v.mass,
@@ -135,6 +141,74 @@ def analysis(root: str, repeat: int, speeds: int) -> None:
                       "engine_s": statistics.median(engine_times)}))
 
 
+def stages(root: str, repeat: int, speeds: int) -> None:
+    """Where a revolution's CPU goes (the checkout at root, a child), per revolution at 3600 steps:
+    the whole chunk (compute_chunk), the compiled batch call in it (exact_kernel.run_batch), the
+    compiled run alone (kernel_phase.run_nodes called per speed from Python: the stepping and the
+    events, without the figures), each at 1800, 3600 and 7200 steps; the intercept of each against
+    the steps is its fixed per-run cost."""
+    sys.path.insert(0, root)
+    import math
+    from dataclasses import replace
+
+    import numpy as np
+
+    from explorer.dynamics import exact_kernel
+    from explorer.dynamics.kernel_grid import grid_bounds
+    from explorer.dynamics.kernel_phase import run_buffers, run_nodes
+    from explorer.dynamics.kernel_steps import phase_rate, taylor_terms
+    from explorer.scene.scene import load_scene
+    from explorer.studies.sweep_engine import _Shared, compute_chunk, result_columns
+
+    flt = load_scene(Path(root) / "assets" / "scenes" / "elastic_float.toml")
+    rpm = np.linspace(3000.0, 5000.0, speeds)[:, None]
+    batch = {"t": 0.0}
+    run_batch = exact_kernel.run_batch
+
+    def timed(*args, **kwargs):
+        t = time.process_time()
+        try:
+            return run_batch(*args, **kwargs)
+        finally:
+            batch["t"] += time.process_time() - t
+
+    exact_kernel.run_batch = timed
+    out = {}
+    for n in (1800, 3600, 7200):
+        scene = replace(flt, solver=replace(flt.solver, steps_per_revolution=n))
+        names = result_columns(scene)
+        shared = _Shared()
+        compute_chunk(scene, ("drive.rpm",), rpm[:2], names, shared)
+        grid = shared.grids[(scene.follower.ratio, n)]
+        blk, win = grid_bounds(grid.h, grid.Dn, grid.Sb)
+        v, sp, link = scene.valve, scene.spring, scene.linkage
+        M, M1, k, c, rate = v.mass, v.oscillating_mass, link.stiffness, link.damping, sp.rate
+        W0 = sp.preload + scene.loads.closing_total
+        omegas = rpm[:, 0] * 2.0 * math.pi / 60.0
+        terms = [taylor_terms(phase_rate(M, M1, k, c, rate) * grid.h_max / w) for w in omegas]
+        buffers = run_buffers(grid.h.size + 1, max(terms), grid.h_unique.size)
+
+        def nodes_only():
+            for w, N in zip(omegas, terms):
+                run_nodes(grid.nodes, grid.h, 1.0 / w, grid.PT, grid.Dn, grid.Sb, w, grid.hidx, grid.h_unique, M, M1,
+                          k, c, v.lash, W0, rate, scene.loads.friction, scene.seat.restitution, 1e-12, 100_000, N, blk,
+                          win, buffers)
+
+        nodes_only()
+        chunk, call, alone = [], [], []
+        for _ in range(repeat):
+            batch["t"] = 0.0
+            t = time.process_time()
+            compute_chunk(scene, ("drive.rpm",), rpm, names, shared)
+            chunk.append((time.process_time() - t) / speeds)
+            call.append(batch["t"] / speeds)
+            t = time.process_time()
+            nodes_only()
+            alone.append((time.process_time() - t) / speeds)
+        out[n] = [statistics.median(x) for x in (chunk, call, alone)]
+    print(json.dumps(out))
+
+
 def measure(root: Path, repeat: int, speeds: int) -> dict:
     out = subprocess.run([sys.executable, __file__, "--child", str(root), "--repeat", str(repeat),
                           "--speeds", str(speeds)], capture_output=True, text=True, check=True, cwd=root)
@@ -149,7 +223,9 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--speeds", type=int, default=400)
     parser.add_argument("--analysis", action="store_true", help="the fixed cost, the limit and the RK4 ratio")
+    parser.add_argument("--stages", action="store_true", help="where a revolution's CPU goes (the checkout after)")
     parser.add_argument("--child", help=argparse.SUPPRESS)
+    parser.add_argument("--stages-child", help=argparse.SUPPRESS)
     parser.add_argument("--analysis-child", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -157,6 +233,30 @@ def main() -> None:
         return
     if args.analysis_child:
         analysis(args.analysis_child, args.repeat, args.speeds)
+        return
+    if args.stages_child:
+        stages(args.stages_child, args.repeat, args.speeds)
+        return
+    if args.stages:
+        root = Path(args.after).resolve()
+        load0 = os.getloadavg()[0]
+        out = subprocess.run([sys.executable, __file__, "--stages-child", str(root), "--repeat", str(args.repeat),
+                              "--speeds", str(args.speeds)], capture_output=True, text=True, check=True, cwd=root)
+        got = {int(n): v for n, v in json.loads(out.stdout.strip().splitlines()[-1]).items()}
+        print(f"bench_engine_trees --stages: {root}, elastic_float.toml, {args.speeds} speeds 3000-5000 rpm; CPU per "
+              f"revolution, medians of {args.repeat} sweeps; load average {load0:.1f} -> {os.getloadavg()[0]:.1f}")
+        ns = sorted(got)
+        rows = []
+        parts = [("whole chunk (compute_chunk)", lambda n: got[n][0]),
+                 ("  Python around the compiled call", lambda n: got[n][0] - got[n][1]),
+                 ("  compiled call (run_batch: revolutions)", lambda n: got[n][1]),
+                 ("    stepping and events (run_nodes alone)", lambda n: got[n][2]),
+                 ("    figures and the rest (call - run_nodes)", lambda n: got[n][1] - got[n][2])]
+        for label, f in parts:  # the fixed cost a and the per-step cost b: least squares a + b n
+            vals = [f(n) for n in ns]
+            b, a = np.polyfit(np.array(ns, dtype=float), np.array(vals), 1)
+            rows.append([label] + [f"{x * 1e6:.1f} us" for x in vals] + [f"{a * 1e6:.1f} us", f"{b * 1e9:.2f} ns"])
+        print_table(["stage", *[f"{n} steps" for n in ns], "fixed a", "per step b"], rows)
         return
     trees = {"before": Path(args.before).resolve(), "after": Path(args.after).resolve()}
     for root in trees.values():  # compile (or load) each checkout's kernels before the clock runs

@@ -147,6 +147,7 @@ def main() -> None:
     parser.add_argument("--speeds", type=int, default=1000)
     parser.add_argument("--pool", action="store_true", help="also time 20 000 runs on 1 and 2 local workers")
     parser.add_argument("--stages", action="store_true", help="only: a fresh process's first sweep by stage")
+    parser.add_argument("--sweep-only", action="store_true", help="only the #27.5 row (the 1000-speed sweep)")
     parser.add_argument("--child", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.stages:
@@ -169,6 +170,8 @@ def main() -> None:
             root = trees[label]
             f = figures[label]
             f.setdefault("sweep", []).append(run_child(root, "sweep", args.speeds, 3))
+            if args.sweep_only:
+                continue
             f.setdefault("first", []).append(process_cpu(root, [sys.executable, "-c", FIRST]))
             f.setdefault("cli_sweep", []).append(process_cpu(root, [
                 sys.executable, "-m", "explorer", "sweep", "assets/scenes/valve_float_demo.toml", "--vary",
@@ -183,6 +186,14 @@ def main() -> None:
     load1 = os.getloadavg()[0]
     med = {label: {k: statistics.median(v) for k, v in f.items()} for label, f in figures.items()}
     b, a = med["before"], med["after"]
+    if args.sweep_only:
+        print(f"bench_wait: before {trees['before']}, after {trees['after']}; medians of {args.rounds} rounds "
+              f"(alternating child processes, each the median of 3 sweeps), CPU time; load average {load0:.1f} -> "
+              f"{load1:.1f} on {os.cpu_count()} cores")
+        print_table(["case", "before", "after", "after/before", "target"], [
+            [f"#27.5 {args.speeds}-speed sweep, valve_float_demo, all effects, 1 core", f"{b['sweep']:.3f} s",
+             f"{a['sweep']:.3f} s", f"{a['sweep'] / b['sweep']:.2f}x", "after/before <= 0.5"]])
+        return
     print(f"bench_wait: before {trees['before']}, after {trees['after']}; medians of {args.rounds} rounds "
           f"(alternating child processes), CPU time; load average {load0:.1f} -> {load1:.1f} on {os.cpu_count()} cores")
     rows = [

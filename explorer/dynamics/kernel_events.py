@@ -21,6 +21,7 @@ from .phases import CONTACT
 # (velocity zero with friction), UP and DOWN (a resting valve starts to move) end a phase only
 LIFT_OFF, SEPARATION, RECONTACT, SEAT, VZERO, UP, DOWN = 0, 1, 2, 3, 4, 5, 6
 ONE, MIN, MAX = 0, 1, 2  # how an event's rows combine (exact_events' "one", "min", "max")
+SEARCH_ROWS = 12  # _search's stack: 4 rows per level, then each event row's value and slope (4 x 2)
 
 
 # ---------------------------------------------------------------- bounds and roots
@@ -276,9 +277,15 @@ def _search(E, r0, nr, comb, n, a, b, xtol, stack):
     > 0, or -1.0. Each level splits an interval into SUBDIVISIONS pieces; a piece is skipped when
     the coefficient bound excludes a zero there, else refined (to MAX_DEPTH levels) and polished.
     The recursion of exact_events._search with an explicit stack (numba's cache does not keep
-    recursive functions): stack (4, MAX_DEPTH + 1), per level its interval's ends, the next piece
-    and whether it brackets a crossing (1.0)."""
+    recursive functions): stack (SEARCH_ROWS + n - 2 rows, MAX_DEPTH + 2 columns; run_buffers), per
+    level (column) its interval's ends, the next piece and whether it brackets a crossing (1.0)
+    (rows 0-3), and what the piece looked at last found at its end, which is the next piece's
+    start (_piece: the same float): each event row's value and slope there (rows 4 + 2 r,
+    5 + 2 r) and its powers end ** (i - 2), i = 2 .. n - 1 (rows SEARCH_ROWS + i - 2; column
+    MAX_DEPTH + 1 holds a piece's new ones). A piece thus evaluates its end only: the same floats
+    as evaluating both ends, half the work."""
     sa, sb, sp, sbrent = stack[0], stack[1], stack[2], stack[3]
+    new = MAX_DEPTH + 1
     d = 0
     sa[0] = a
     sb[0] = b
@@ -289,21 +296,31 @@ def _search(E, r0, nr, comb, n, a, b, xtol, stack):
             if d >= 0 and sbrent[d] != 0.0:  # its interval brackets a crossing: polish it
                 return _brent(E, r0, nr, comb, n, sa[d + 1], sb[d + 1], xtol)
             continue
-        lo, hi = _piece(sa[d], sb[d], int(sp[d]))
+        p = int(sp[d])
+        lo, hi = _piece(sa[d], sb[d], p)
         sp[d] += 1.0
         sbrent[d] = 0.0
+        kept = p > 0  # the start's values are the previous piece's end's, kept in column d
+        for i in range(2, n):
+            stack[SEARCH_ROWS + i - 2, new] = hi ** (i - 2)
+            if not kept:
+                stack[SEARCH_ROWS + i - 2, d] = lo ** (i - 2)
         ex_all = True
         ex_any = False
         cv0 = 0.0
         cv1 = 0.0
         d_lo = 0.0
         for r in range(nr):
-            f0, d0 = _value_slope(E[r0 + r], n, lo)
+            if kept:
+                f0, d0 = stack[4 + 2 * r, d], stack[5 + 2 * r, d]
+            else:
+                f0, d0 = _value_slope(E[r0 + r], n, lo)
             f1, d1 = _value_slope(E[r0 + r], n, hi)
+            stack[4 + 2 * r, d], stack[5 + 2 * r, d] = f1, d1
             B2 = 0.0
             for i in range(2, n):
                 w2 = E[r0 + r, i] * (i * (i - 1.0))
-                B2 += max(lo ** (i - 2) * w2, hi ** (i - 2) * w2)
+                B2 += max(stack[SEARCH_ROWS + i - 2, d] * w2, stack[SEARCH_ROWS + i - 2, new] * w2)
             ex = _excluded(f0, d0, f1, d1, B2, hi - lo)
             ex_all = ex_all and ex
             ex_any = ex_any or ex
@@ -313,6 +330,8 @@ def _search(E, r0, nr, comb, n, a, b, xtol, stack):
                 cv0, cv1 = min(cv0, f0), min(cv1, f1)
             else:
                 cv0, cv1 = max(cv0, f0), max(cv1, f1)
+        for i in range(2, n):
+            stack[SEARCH_ROWS + i - 2, d] = stack[SEARCH_ROWS + i - 2, new]
         if (ex_any if comb == MIN else ex_all):
             continue
         if cv0 > 0.0:

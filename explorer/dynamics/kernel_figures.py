@@ -79,24 +79,26 @@ def _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, r_lo, r_hi, col0, omeg
     pk0, pk1, dv0, dv1, rs0, rs1 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5]
     r = r_lo
     while r + 1 < r_hi:
-        q0 = out_nodes[r]
-        q1 = out_nodes[r + 1]
+        # (node and column indices as unsigned: numba then reads them without the negative
+        # index wraparound, a third of this loop's instructions; all are >= 0)
+        q0 = np.uint64(out_nodes[r])
+        q1 = np.uint64(out_nodes[r + 1])
         f0, d0, o0 = _sample(out_s, out_v, out_phase, Dn, q0, omega, k, c, lash, rate, R, preload_closing)
         f1, d1, o1 = _sample(out_s, out_v, out_phase, Dn, q1, omega, k, c, lash, rate, R, preload_closing)
         pk0 = max(pk0, f0)
         pk1 = max(pk1, f1)
         dv0 = max(dv0, d0)
         dv1 = max(dv1, d1)
-        rs0 = max(rs0, abs(out_s[q0] - ref[r + col0]))
-        rs1 = max(rs1, abs(out_s[q1] - ref[r + 1 + col0]))
+        rs0 = max(rs0, abs(out_s[q0] - ref[np.uint64(r + col0)]))
+        rs1 = max(rs1, abs(out_s[q1] - ref[np.uint64(r + 1 + col0)]))
         separated += o0 + o1
         r += 2
     if r < r_hi:
-        q0 = out_nodes[r]
+        q0 = np.uint64(out_nodes[r])
         f0, d0, o0 = _sample(out_s, out_v, out_phase, Dn, q0, omega, k, c, lash, rate, R, preload_closing)
         pk0 = max(pk0, f0)
         dv0 = max(dv0, d0)
-        rs0 = max(rs0, abs(out_s[q0] - ref[r + col0]))
+        rs0 = max(rs0, abs(out_s[q0] - ref[np.uint64(r + col0)]))
         separated += o0
     acc[0], acc[1], acc[2], acc[3], acc[4], acc[5] = pk0, pk1, dv0, dv1, rs0, rs1
     return separated
@@ -119,7 +121,7 @@ def _largest_open(out_s, out_nodes, r_lo, r_hi, init):
     return max(max(m0, m1), max(m2, m3))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")  # (numpy's: no zero check at the samples' W / k; k > 0)
 def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1, k, c, lash, W0, rate, R, e,
                zeno_height, max_events, N, ratio, preload_closing, take_up_s, ref, dwell, S_dwell, blk, win, buffers,
                acc):

@@ -26,8 +26,8 @@ from . import kernel_stamp  # noqa: F401 (the cache is stale when a source it de
 from .exact import LAST_U, MAX_SAME_TIME
 from .exact_phase import MAX_BOUND_Q, RELEASE_RESIDUAL
 from .exact_events import MAX_DEPTH
-from .kernel_events import (LIFT_OFF, MIN, RECONTACT, SEAT, SEPARATION, UP, VZERO, coeffs, earliest, moving_table,
-                            static_table, zero_flags)
+from .kernel_events import (LIFT_OFF, MIN, RECONTACT, SEARCH_ROWS, SEAT, SEPARATION, UP, VZERO, coeffs, earliest,
+                            moving_table, static_table, zero_flags)
 from .kernel_grid import BLOCK, WINDOW, drive_at, node_time
 from .kernel_steps import deriv_into, expand, fsum, horner, shift_into, step, step_tables
 from .phases import CONTACT, FLIGHT, SEATED, STUCK
@@ -143,7 +143,7 @@ def run_buffers(nn, N, U):
     and coefficients, per row: started on its zero, cleared; per event: kind, first row, rows,
     combination, started on its zero, to be searched; per step length the bound's H, q,
     1 / (1 - q), H^2/8; the step lengths in time; the window's row maxima; the drive at a point;
-    the event search's stack.)"""
+    the event search's stack: kernel_events._search.)"""
     NC = N + 1
     return (np.full(nn, np.nan), np.full(nn, np.nan), np.ones(nn), np.full(nn, -1, dtype=np.int8),
             np.full((16, 4), np.nan), np.zeros((3, U, 18)),
@@ -151,7 +151,8 @@ def run_buffers(nn, N, U):
              np.zeros((4, 5)), np.zeros((4, NC)), np.zeros(4, dtype=np.bool_), np.zeros(4, dtype=np.bool_),
              np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.int64),
              np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.bool_), np.zeros(4, dtype=np.bool_),
-             np.empty((4, U)), np.empty(U), np.empty(4), np.zeros(6), np.zeros((4, MAX_DEPTH + 1))))
+             np.empty((4, U)), np.empty(U), np.empty(4), np.zeros(6),
+             np.zeros((SEARCH_ROWS + max(6, NC), MAX_DEPTH + 2))))
 
 
 @njit(cache=True, inline="always")
@@ -219,9 +220,10 @@ def _rest_phase(phase, s_star, j, u, nodes, h, inv, PT, Dn, Sb, sw1, k, c, lash,
             bk = i // BLOCK
             if ap_ * (blk[0, bk] + blk[2, bk]) + bp_ * ((blk[1, bk] + blk[3, bk]) * sw1) + kp_ <= 0.0:
                 for q in range(i, i + BLOCK):
-                    out_s[q] = s_star
-                    out_v[q] = 0.0
-                    out_phase[q] = phase
+                    uq = np.uint64(q)
+                    out_s[uq] = s_star
+                    out_v[uq] = 0.0
+                    out_phase[uq] = phase
                 i += BLOCK
                 if i < nn:
                     D0, D1 = Dn[0, i], Dn[1, i] * sw1
@@ -230,14 +232,16 @@ def _rest_phase(phase, s_star, j, u, nodes, h, inv, PT, Dn, Sb, sw1, k, c, lash,
                     e0c = a2_ * D0 + b2_ * D1 + k2_
                     e0d = a3_ * D0 + b3_ * D1 + k3_
                 continue
-        out_s[i] = s_star
-        out_v[i] = 0.0
-        out_phase[i] = phase
-        h_i = h[i] * inv
-        b2 = Sb[1, i] * sw2
-        b3 = Sb[2, i] * sw3
+        ui = np.uint64(i)  # (unsigned: read without numba's negative index wraparound)
+        ui1 = np.uint64(i + 1)
+        out_s[ui] = s_star
+        out_v[ui] = 0.0
+        out_phase[ui] = phase
+        h_i = h[ui] * inv
+        b2 = Sb[1, ui] * sw2
+        b3 = Sb[2, ui] * sw3
         H8 = h_i * h_i / 8.0
-        D0, D1 = Dn[0, i + 1], Dn[1, i + 1] * sw1
+        D0, D1 = Dn[0, ui1], Dn[1, ui1] * sw1
         e1a = a0_ * D0 + b0_ * D1 + k0_
         e1b = a1_ * D0 + b1_ * D1 + k1_
         e1c = a2_ * D0 + b2_ * D1 + k2_
@@ -279,10 +283,12 @@ def _window_contact(PT, Dn, hidx, tab, out_s, out_v, i, s, v, Fc, sw1, k0, l0, m
     Vm = abs(v)
     q = i
     while q < i + WINDOW:
-        out_s[q] = ss
-        out_v[q] = vv
-        ss, vv = step(tab, hidx[q], PT, q, Fc, ss, vv)
-        P = kc * Dn[0, q + 1] + cc * (Dn[1, q + 1] * sw1)
+        uq = np.uint64(q)  # (unsigned: read without numba's negative index wraparound)
+        uq1 = np.uint64(q + 1)
+        out_s[uq] = ss
+        out_v[uq] = vv
+        ss, vv = step(tab, hidx[uq], PT, uq, Fc, ss, vv)
+        P = kc * Dn[0, uq1] + cc * (Dn[1, uq1] * sw1)
         cv = m0 * vv
         ta = max(ta, ((-P + k0) + l0 * ss) + cv)
         tb = max(tb, -ss)
@@ -305,14 +311,16 @@ def _window_flight(PT, Dn, hidx, tab, out_s, out_v, i, s, v, Fc, sw1, a0, k0, l0
     Vm = abs(v)
     q = i
     while q < i + WINDOW:
-        out_s[q] = ss
-        out_v[q] = vv
-        ss, vv = step(tab, hidx[q], PT, q, Fc, ss, vv)
-        kS = a0 * Dn[0, q + 1]
+        uq = np.uint64(q)  # (unsigned: read without numba's negative index wraparound)
+        uq1 = np.uint64(q + 1)
+        out_s[uq] = ss
+        out_v[uq] = vv
+        ss, vv = step(tab, hidx[uq], PT, uq, Fc, ss, vv)
+        kS = a0 * Dn[0, uq1]
         ks = l0 * ss
         ta = max(ta, (kS + k0) + ks)
         if force_row:
-            tb = max(tb, ((kS + b1 * (Dn[1, q + 1] * sw1)) + k0) + ks + m1 * vv)
+            tb = max(tb, ((kS + b1 * (Dn[1, uq1] * sw1)) + k0) + ks + m1 * vv)
             tc = max(tc, -ss)
             if nrow > 3:
                 td = max(td, m3 * vv)
@@ -447,34 +455,36 @@ def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, s
                 e0c = a2_ * S0 + b2_ * S10 + k2_ + l2_ * s + m2_ * v
                 e0d = a3_ * S0 + b3_ * S10 + k3_ + l3_ * s + m3_ * v
                 continue
-        out_s[i] = s
-        out_v[i] = v
-        out_phase[i] = kind
-        out_sigma[i] = sigma
-        PTi = PT[i]
-        gi = hidx[i]
-        s1, v1 = step(tabs[kind], gi, PT, i, Fc, s, v)
+        ui = np.uint64(i)  # (unsigned: read without numba's negative index wraparound)
+        ui1 = np.uint64(i + 1)
+        out_s[ui] = s
+        out_v[ui] = v
+        out_phase[ui] = kind
+        out_sigma[ui] = sigma
+        PTi = PT[ui]
+        ug = np.uint64(hidx[ui])
+        s1, v1 = step(tabs[kind], ug, PT, ui, Fc, s, v)
         # event values at both nodes; the step is cleared by max(ends) + h^2/8 sup|e''|, sup|e''|
         # from bounds of |S''|, |S'''| over the step and of |a|, |jerk| from the left node and the
         # ODE (exact_phase._scan_window's per-step bound)
-        Sn, S1n = Dn[0, i + 1], Dn[1, i + 1] * sw1
+        Sn, S1n = Dn[0, ui1], Dn[1, ui1] * sw1
         e1a = a0_ * Sn + b0_ * S1n + k0_ + l0_ * s1 + m0_ * v1
         e1b = a1_ * Sn + b1_ * S1n + k1_ + l1_ * s1 + m1_ * v1
         e1c = a2_ * Sn + b2_ * S1n + k2_ + l2_ * s1 + m2_ * v1
         e1d = a3_ * Sn + b3_ * S1n + k3_ + l3_ * s1 + m3_ * v1
-        q_ = grp[1, gi]
+        q_ = grp[1, ug]
         ca = cb = cc = cd = False
         if q_ < MAX_BOUND_Q:
-            H = grp[0, gi]
-            b1 = Sb[0, i] * sw1
-            b2 = Sb[1, i] * sw2
-            b3 = Sb[2, i] * sw3
+            H = grp[0, ug]
+            b1 = Sb[0, ui] * sw1
+            b2 = Sb[1, ui] * sw2
+            b3 = Sb[2, ui] * sw3
             Vi = abs(v)
             Ac = abs(kc_ * S0 + cc_ * S10 - Fc - K_ * s - c_ * v)
             F1 = kc_ * b1 + cc_ * b2
-            Ai = (Ac + H * (F1 + K_ * Vi)) * inv_m * grp[2, gi]
+            Ai = (Ac + H * (F1 + K_ * Vi)) * inv_m * grp[2, ug]
             Ji = (F1 + c_ * Ai + K_ * (Vi + H * Ai)) * inv_m
-            H8 = grp[3, gi]
+            H8 = grp[3, ug]
             ca = max(e0a, e1a) + H8 * (abs(a0_) * b2 + abs(b0_) * b3 + abs(l0_) * Ai + abs(m0_) * Ji) <= 0.0
             cb = max(e0b, e1b) + H8 * (abs(a1_) * b2 + abs(b1_) * b3 + abs(l1_) * Ai + abs(m1_) * Ji) <= 0.0
             cc = max(e0c, e1c) + H8 * (abs(a2_) * b2 + abs(b2_) * b3 + abs(l2_) * Ai + abs(m2_) * Ji) <= 0.0

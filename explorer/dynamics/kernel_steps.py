@@ -176,13 +176,16 @@ def step(tab, g, PT, q, Fc, s, v):
     step's length and the drive PT[q]. The drive's and the constant force's part does not depend
     on the state: summed first, so that the chain carried from step to step (s, v -> s1, v1) is
     one multiply and two adds long, not nine operations (the adds are not reassociated for us: no
-    fastmath)."""
-    ds = -Fc * tab[g, 4]
-    dv = -Fc * tab[g, 5]
+    fastmath). The indices are read as unsigned (both are >= 0): numba then drops the negative
+    index wraparound from every read."""
+    ug = np.uint64(g)
+    uq = np.uint64(q)
+    ds = -Fc * tab[ug, 4]
+    dv = -Fc * tab[ug, 5]
     for p in range(6):
-        ds += tab[g, 6 + p] * PT[q, p]
-        dv += tab[g, 12 + p] * PT[q, p]
-    return (tab[g, 0] * s + tab[g, 1] * v) + ds, (tab[g, 2] * s + tab[g, 3] * v) + dv
+        ds += tab[ug, 6 + p] * PT[uq, p]
+        dv += tab[ug, 12 + p] * PT[uq, p]
+    return (tab[ug, 0] * s + tab[ug, 1] * v) + ds, (tab[ug, 2] * s + tab[ug, 3] * v) + dv
 
 
 @njit(cache=True)

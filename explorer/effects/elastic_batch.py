@@ -182,11 +182,8 @@ def _chunk(kernel, params, group, shared) -> tuple[np.ndarray, np.ndarray]:
     R = params.shape[0]
     figures = np.full((R, len(ELASTIC)), math.nan)
     failed = np.zeros(R, bool)
-    groups: dict = {}
-    pairs = list(zip(group[:, 0].tolist(), params[:, 5].tolist()))
-    ups_of = _take_ups(pairs, shared)
-    for r, ((ratio, lash), n) in enumerate(zip(pairs, group[:, 1].tolist())):  # runs of one grid and lash
-        groups.setdefault((ratio, int(n), lash), []).append(r)
+    groups = _run_groups(group[:, 0], group[:, 1], params[:, 5])  # runs of one grid and lash
+    ups_of = _take_ups([(ratio, lash) for ratio, _, lash in groups], shared)
     omega = params[:, 0]
     for (ratio, n, lash), members in groups.items():
         ups = ups_of[(ratio, lash)]
@@ -202,7 +199,7 @@ def _chunk(kernel, params, group, shared) -> tuple[np.ndarray, np.ndarray]:
     for (ratio, n, lash), members in groups.items():
         base = remember(shared.grids, (ratio, n), lambda: kernel.revolution_grid(lift, ratio, n))
         ref, dwell, S_dwell = _residual_reference(shared, lift, ratio, lash, n)
-        members = np.array([m for m in members if not failed[m]], dtype=np.int64)
+        members = members[~failed[members]]
         if not members.size:
             continue
         rho_theta = rho[members] / omega[members]
@@ -221,6 +218,20 @@ def _chunk(kernel, params, group, shared) -> tuple[np.ndarray, np.ndarray]:
             failed[m] = status[0] != kernel.OK
     figures[failed] = math.nan
     return figures, failed
+
+
+def _run_groups(ratio, n, lash) -> dict:
+    """{(ratio, n, lash): its runs (int64 indices, in run order)} of a chunk's runs, the groups in
+    the order of their first run (as a dict filled run by run would hold them): one lexsort for
+    the chunk, no Python per run."""
+    order = np.lexsort((lash, n, ratio))  # stable: each group's runs stay in run order
+    a, b, c = ratio[order], n[order], lash[order]
+    new = np.ones(order.size, bool)
+    new[1:] = (a[1:] != a[:-1]) | (b[1:] != b[:-1]) | (c[1:] != c[:-1])
+    starts = np.nonzero(new)[0]
+    ends = np.append(starts[1:], order.size)
+    groups = sorted(zip(order[starts].tolist(), starts.tolist(), ends.tolist()))  # by first run
+    return {(float(ratio[f]), int(n[f]), float(lash[f])): order[i:j].astype(np.int64) for f, i, j in groups}
 
 
 def _take_ups(pairs, shared) -> dict:
