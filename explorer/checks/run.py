@@ -34,7 +34,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from .case import RPM, Case, Draws
-from .registry import RULES, measure_function
+from .registry import measure_function, rules as all_rules
 from .report import CheckReport, RuleResult
 from .rule import NOT_APPLICABLE, VERDICTS, Measure, verdicts, wilson_interval, worst_index
 
@@ -102,33 +102,34 @@ def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | 
         if isinstance(verify, bool) or not isinstance(verify, (int, np.integer)) or verify < 1:
             raise InputError("--verify", str(verify), "a whole number of draws, at least 1")
 
+    specs = all_rules()  # the table as it is now (a plug-in may have registered a rule)
     nominal = Case(scene, speeds, workers=workers, progress=progress)
     measures: dict[str, Measure] = {}
-    for spec in RULES:
+    for spec in specs:
         if spec.name not in off:
             measures[spec.name] = measure_function(spec)(nominal, settings[spec.name])
     results = {spec.name: _result(spec, settings[spec.name], measures.get(spec.name), spec.name in off)
-               for spec in RULES}
+               for spec in specs}
 
     if draws is not None:
-        focus = {spec.name: _focus_speeds(spec, measures[spec.name], speeds) for spec in RULES
+        focus = {spec.name: _focus_speeds(spec, measures[spec.name], speeds) for spec in specs
                  if spec.name in measures and measures[spec.name].applicable}
         ends = np.array([speeds.min(), speeds.max()])
         sampled = Case(scene, ends, draws, focus, workers, progress)
-        drawn = {spec.name: measure_function(spec)(sampled, settings[spec.name]) for spec in RULES
+        drawn = {spec.name: measure_function(spec)(sampled, settings[spec.name]) for spec in specs
                  if spec.name in measures and measures[spec.name].applicable}
         # one speed: every draw ran at it (and the float margin above it as every draw would)
-        inexact = [spec for spec in RULES if spec.name in drawn and drawn[spec.name].applicable
+        inexact = [spec for spec in specs if spec.name in drawn and drawn[spec.name].applicable
                    and not drawn[spec.name].speed_exact] if speeds.size > 1 else []
         verified = _whole_range(scene, speeds, ends, draws, focus, inexact, settings, workers, progress, seed, verify)
-        for spec in RULES:
+        for spec in specs:
             if spec.name in drawn:
                 results[spec.name] = _with_probability(results[spec.name], spec, drawn[spec.name],
                                                        draws.values.shape[0], verified.get(spec.name),
                                                        one_speed=speeds.size == 1)
     return CheckReport(
         scene=scene.name, source=scene.source, speeds_rpm=tuple(float(s) for s in speeds), range_from=range_from,
-        results=tuple(results[spec.name] for spec in RULES),
+        results=tuple(results[spec.name] for spec in specs),
         samples=draws.text if draws is not None else (), runs=int(draws.values.shape[0]) if draws is not None else 0,
         seed=seed, seconds=time.perf_counter() - started,
     )
