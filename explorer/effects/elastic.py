@@ -124,7 +124,7 @@ def linkage_model(scene, lift, omega: float) -> LinkageModel:
 
 def elastic_effect(ctx) -> EffectOutput:
     scene = ctx.scene
-    if scene.linkage.elements or getattr(scene, "hla", None) is not None:  # a train of parts, an adjuster (#25)
+    if scene.linkage.elements or scene.hla is not None:  # a train of parts, an adjuster (#25)
         from .train_elastic import train_elastic_effect
 
         return train_elastic_effect(ctx)

@@ -44,7 +44,7 @@ TRAIN_KINDS = ("lift-off", "separation", "re-contact", "seat", "contact-opens", 
 
 def is_train(scene) -> bool:
     """The scene's linkage is a train of parts, or carries an adjuster."""
-    return bool(scene.linkage is not None and scene.linkage.elements) or getattr(scene, "hla", None) is not None
+    return bool(scene.linkage is not None and scene.linkage.elements) or scene.hla is not None
 
 
 def _event(ev: dict, period: float, omega: float) -> Event:
@@ -64,7 +64,7 @@ def train_elastic_effect(ctx) -> EffectOutput:
     scene = ctx.scene
     omega = ctx.omega
     model = TrainModel.from_scene(scene)
-    section = getattr(scene, "hla", None)
+    section = scene.hla
     revolutions = section.revolutions if section is not None else 1
     ratio = scene.follower.ratio
     drive = Drive(ctx.lift, ratio, omega)

@@ -41,10 +41,13 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, fields
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 from ..core.errors import InputError
 from ..core.reader import Table
+
+if TYPE_CHECKING:  # imported when an [hla] section is read: a scene without one loads no dynamics
+    from ..dynamics.hla import HLA
 
 MAX_ELEMENTS = 32  # parts between the cam and the valve: a train has a handful
 MAX_REVOLUTIONS = 200  # the adjuster's revolutions: each costs one revolution's solve
@@ -76,7 +79,7 @@ class LinkageElement:
 
 @dataclass(frozen=True)
 class HLASection:
-    hla: Any  # explorer.dynamics.hla.HLA (imported when an [hla] section is read: a scene without one loads no dynamics)
+    hla: HLA
     revolutions: int = 6
 
 
