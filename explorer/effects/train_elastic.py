@@ -32,10 +32,10 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..dynamics.hla import ATMOSPHERE
-from ..dynamics.model import Drive
 from ..dynamics.train import TrainModel
 from ..result import EffectOutput, Event
-from .chain_elastic import chain_solver, check_solid, exciting_orders
+from .chain_elastic import exciting_orders
+from .chain_run import chain_run
 from .elastic_events import linkage_outputs, output_order
 
 TRAIN_KINDS = ("lift-off", "separation", "re-contact", "seat", "contact-opens", "contact-closes", "coil-clash",
@@ -67,21 +67,14 @@ def train_elastic_effect(ctx) -> EffectOutput:
     section = scene.hla
     revolutions = section.revolutions if section is not None else 1
     ratio = scene.follower.ratio
-    drive = Drive(ctx.lift, ratio, omega)
     n = ctx.time.size
-    period = 2.0 * math.pi / omega
-    D = drive(ctx.time)
-    check_solid(scene, float(D[0].max()))
-    solve = chain_solver(scene.solver.method, scene.source)
-    options = dict(scene.solver.options)
-    i0 = int(np.argmin(D[0]))
-    one = np.concatenate([ctx.time[i0:], ctx.time[:i0] + period])
-    t_run = np.concatenate([one + k * period for k in range(revolutions)])
+    run = chain_run(ctx, revolutions)
+    drive, period, D, i0, t_run = run.drive, run.period, run.D, run.i0, run.t_run
     try:
         model.start_state(drive, float(t_run[0]))
     except ValueError as exc:  # no rest for the train on the base circle: its joints contradict each other
         raise InputError(scene.source, "linkage.elements", f"{exc}: check the joints' lash and contacts") from None
-    sol = solve(model, drive, t_run, **options)
+    sol = run.solve(model, drive, t_run, **run.options)
     rotate, _ = output_order(n, i0)
     last = slice((revolutions - 1) * n, revolutions * n)
     t_last = float(t_run[(revolutions - 1) * n])
