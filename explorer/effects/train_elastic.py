@@ -42,11 +42,6 @@ TRAIN_KINDS = ("lift-off", "separation", "re-contact", "seat", "contact-opens", 
                "check-valve-open", "check-valve-close", "stick", "turn", "release", "pump-up")
 
 
-def is_train(scene) -> bool:
-    """The scene's linkage is a train of parts, or carries an adjuster."""
-    return bool(scene.linkage is not None and scene.linkage.elements) or scene.hla is not None
-
-
 def _event(ev: dict, period: float, omega: float) -> Event:
     """A solver's event (a dict of the phase system) as the result lists it: the time within the
     revolution, the cam angle, the joint (contact) and the impact speed or coil where known."""
