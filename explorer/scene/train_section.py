@@ -156,7 +156,7 @@ HLA_NUMBERS: dict[str, tuple[float, float, float, bool]] = {  # key -> (default,
 
 def parse_hla_section(t: Table, fields_so_far: dict) -> HLASection:
     """[hla] -> HLASection (the adjuster's parameters in SI and how many revolutions to run)."""
-    from ..dynamics.hla import HLA
+    from ..dynamics.hla import HLA  # local: the adjuster model (numpy) loads only for a scene with [hla]
 
     t.reject_unknown((*HLA_KEYS, *HLA_NUMBERS, "lever", "revolutions"))
     values: dict = {}
