@@ -21,6 +21,7 @@ import tomllib
 from typing import Any, Mapping
 
 from ..core.errors import InputError
+from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
 from ..core.units import plain_number, short_repr, to_si
 from ..scene.checks_section import ChecksSpec, freeze_settings, shown_key
 from .registry import rule_names, rules
@@ -29,8 +30,6 @@ from .rule import RuleSpec, Setting, Settings
 
 def load_rules_file(path) -> ChecksSpec:
     """A --rules FILE (TOML) as settings; a bad file is one InputError."""
-    from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
-
     file = str(path)
     data = read_regular(path, file=file, key="-", limit=MAX_SCENE_FILE_BYTES)
     try:
