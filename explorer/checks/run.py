@@ -33,10 +33,13 @@ from typing import Callable
 import numpy as np
 
 from ..core.errors import InputError
+from ..scene.scene import load_scene
+from ..studies.sweep_spec import check_scene, make_plan, parse_axis, parse_sample
 from .case import RPM, Case, Draws
 from .registry import measure_function, rules as all_rules
 from .report import CheckReport, RuleResult
 from .rule import NOT_APPLICABLE, VERDICTS, Measure, verdicts, wilson_interval, worst_index
+from .settings import load_rules_file, resolve
 
 DEFAULT_SPEEDS = 200
 # Phase two's runs (verified draws x speeds): at ~0.25 ms a compiled elastic run, ~2.5 s on one
@@ -48,8 +51,6 @@ Z_975 = 2.241402727604947  # two-sided 97.5 % normal quantile: two such interval
 
 def operating_speeds(scene, rpm=None) -> tuple[np.ndarray, str]:
     """(speeds in rev/min, where they came from)."""
-    from ..studies.sweep_spec import parse_axis
-
     if rpm is not None:
         if isinstance(rpm, str) and ":" not in rpm and "," not in rpm:
             values = np.array([parse_axis("drive.rpm", [rpm], file="--rpm").values[0]])
@@ -70,13 +71,8 @@ def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | 
     the names of the rules to judge (the others are reported "off"); `verify`: how many draws
     phase two runs over every speed of the range (default: as many as CHECK_RUNS runs allow, at
     least VERIFY_MIN; all of them: exact). Bad input raises InputError before any work."""
-    from ..studies.sweep_spec import check_scene, make_plan, parse_sample
-    from .settings import load_rules_file, resolve
-
     started = time.perf_counter()
     if not hasattr(scene, "effects"):
-        from ..scene.scene import load_scene
-
         scene = load_scene(scene)
     speeds, range_from = operating_speeds(scene, rpm)
     settings, off = resolve([scene.checks, load_rules_file(rules) if rules is not None else None])
