@@ -30,6 +30,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
+from ...scene.builtin import builtin_scenes, find_scene
 from . import origin
 from .camera import Cameras
 from .compute import ComputeWorker
@@ -75,8 +76,6 @@ class ExplorerApp:
         client=None,
         kernels=None,
     ):
-        from ...scene.builtin import builtin_scenes, find_scene
-
         scene_path = str(find_scene(scene_path))  # a built-in scene named as the Scene list shows it
         port = server.get_port()
         if not origin.guarded(port):

@@ -216,6 +216,7 @@ def _background_reply(task, last, result_serial: int, advice_cache: dict):
     """("sweep", figures) for a speed-sweep task, ("advice", read-out) for an advice task, on the
     result held; ("stale", None) when the child no longer holds that result (a newer one came, or
     the child was restarted)."""
+    # local: this module is the parent's handle on the child too; the computing modules load in the child
     from .model import AdviceTask, advice_readout
     from .speedsweep import run_task
 
@@ -239,6 +240,7 @@ def main(argv: list[str]) -> int:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server handles Ctrl-C and stops us
     pipe = _Pipe(read_fd, write_fd)
 
+    # local: imported in the child, after SIGINT is ignored and before its memory limit
     from ...core.errors import InputError
     from .model import AdviceTask, prepare
     from .speedsweep import SweepTask
