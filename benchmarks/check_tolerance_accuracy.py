@@ -30,7 +30,7 @@ def study(scene_file: str, rpm: str, runs: int, sample: dict, seed: int = 1) -> 
     import explorer
     from explorer import load_scene
     from explorer.checks.case import Case, Draws
-    from explorer.checks.registry import RULES, measure_function
+    from explorer.checks.registry import measure_function, rules
     from explorer.checks.rule import verdicts
     from explorer.checks.run import _focus_speeds, operating_speeds
     from explorer.checks.settings import resolve
@@ -49,7 +49,7 @@ def study(scene_file: str, rpm: str, runs: int, sample: dict, seed: int = 1) -> 
     ends = speeds[[0, -1]]
     rows = []
     started = time.process_time()
-    for spec in RULES:
+    for spec in rules():
         r = report.result(spec.name)
         if r.samples is None or not r.sample_method or r.sample_method.startswith("exact: every draw's worst"):
             continue  # not judged, or exact in phase one

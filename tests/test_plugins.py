@@ -536,3 +536,55 @@ def test_a_toy_solver_is_one_table_line(tmp_path):
         assert mine.summary["elastic_method"] == "toy-exact"
         assert engine_for(scene, _Shared()).name == "shared"
         assert engine_for(scene.with_changes(solver=replace(scene.solver, method="exact")), _Shared()).name == "compiled"
+
+
+# a toy design rule: the valve's largest travel, defined here and registered with one call
+
+
+def _toy_travel(case, settings):
+    """ratio L - lash at its largest, per run (N, 1): independent of the speed."""
+    from explorer.checks.rule import Measure
+
+    travel = case.valve_lift()
+    worst = np.argmax(travel, axis=1)
+    return Measure.of(travel[np.arange(travel.shape[0]), worst][:, None], case.theta_deg[worst][:, None], None,
+                      settings, note="the plug-in tests' toy")
+
+
+def _toy_rule():
+    from explorer.checks.rule import RuleSpec, Setting
+
+    return RuleSpec("toy_valve_travel", _toy_travel, "Valve travel (toy)", "largest ratio L - lash", "mm", "max", (
+        Setting("fail", 0.020, "length", "mm", "the plug-in tests' toy", "test"),
+        Setting("warn", None, "length", "mm", "none by default", "-", minimum=0.0),
+    ), "kinematics")
+
+
+def test_a_toy_design_rule_is_one_call_and_is_judged_by_check(tmp_path):
+    """register_rule: `explorer.check` judges the rule with the others; its value is the rigid
+    valve lift's peak of simulate (the same L - lash on the same grid, to the bit); a rules file
+    sets its limits (refused before it is registered: an unknown rule); undone, the table is as it
+    was."""
+    import explorer
+    from explorer.checks.registry import register_rule, rule_names
+
+    path = str(SCENES / "valve_float_demo.toml")
+    scene = load_scene(path)
+    peak = float(simulate(scene).columns["rigid_valve_lift_m"].max())
+    limits = tmp_path / "toy.toml"
+    limits.write_text(f'[toy_valve_travel]\nfail = "{peak * 1e3 * 0.99} mm"\nwarn = "{peak * 1e3 * 0.5} mm"\n')
+    before = rule_names()
+    with pytest.raises(InputError, match="unknown rule"):
+        explorer.check(scene, rpm="2000", rules=str(limits), workers=1)
+    with register_rule(_toy_rule()):
+        assert rule_names() == (*before, "toy_valve_travel")
+        report = explorer.check(scene, rpm="2000:4000:3", only=("toy_valve_travel", "pressure_angle"), workers=1)
+        toy = report.result("toy_valve_travel")
+        assert toy.verdict == "pass" and toy.value == peak  # below the default 20 mm
+        assert report.result("seat_bounce").verdict == "off"
+        strict = explorer.check(scene, rpm="2000:4000:3", rules=str(limits), only=("toy_valve_travel",), workers=1)
+        assert strict.result("toy_valve_travel").verdict == "fail" and strict.verdict == "fail"
+        with pytest.raises(ValueError, match="registered already"):
+            register_rule(_toy_rule())
+    assert rule_names() == before
+    assert "toy_valve_travel" not in {r.name for r in explorer.check(scene, rpm="2000", workers=1).results}

@@ -27,7 +27,15 @@ from typing import Callable, Iterator
 import numpy as np
 
 from ..core.errors import InputError
+from ..effects.lift import build_lift
+from ..effects.pipeline import simulate
+from ..mechanics.contact import ContactSpec, effective_modulus, hertz_width
+from ..mechanics.forces import friction_direction
 from ..mechanics.gear_contact import GearContact, NotApplicable
+from ..mechanics.kinematics import lash_crossings
+from ..studies.sweep_engine import _Shared, compute_chunk, result_columns
+from ..studies.sweep_run import run_plan
+from ..studies.sweep_spec import Plan, scene_for
 
 RPM = 2.0 * math.pi / 60.0
 BLOCK_CELLS = 4_000_000  # draws x speeds x angles per block of the force arrays (32 MB of float64)
@@ -93,8 +101,6 @@ class Case:
     # -- geometry -----------------------------------------------------------------------------
     @cached_property
     def lift(self):
-        from ..effects.lift import build_lift
-
         return build_lift(self.scene)
 
     @cached_property
@@ -125,14 +131,10 @@ class Case:
 
     @cached_property
     def contact_spec(self):
-        from ..mechanics.contact import ContactSpec
-
         return self.scene.contact if self.scene.contact is not None else ContactSpec()
 
     @cached_property
     def e_star(self) -> float:
-        from ..mechanics.contact import effective_modulus
-
         s = self.contact_spec
         return effective_modulus(s.youngs_modulus, s.poisson_ratio, s.roller_youngs_modulus, s.roller_poisson_ratio)
 
@@ -160,8 +162,6 @@ class Case:
 
     def force_parts(self, rows=slice(None)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(A, G, open), each (b, n) for the draws `rows`: F = w^2 A + G where open."""
-        from ..mechanics.forces import friction_direction
-
         self.needs_train()
         d = self.derivs
         ratio = self.scene.follower.ratio
@@ -202,8 +202,6 @@ class Case:
     def width(self) -> tuple[float, str]:
         """(contact width, how it was found): [contact] width, else the contact effect's width rule
         at the scene's own speed (the width the design has; it does not change with speed)."""
-        from ..mechanics.contact import hertz_width
-
         spec = self.contact_spec
         if spec.width is not None:
             return spec.width, "[contact] width"
@@ -228,10 +226,6 @@ class Case:
         directly with one cache for the whole check (the lift, the lash take-up: a gear's lift is
         built once, not once per step). Either way each run's figures are the engine's, which do
         not depend on how the runs were cut into chunks (tests/test_sweep_engine.py)."""
-        from ..studies.sweep_engine import compute_chunk, result_columns
-        from ..studies.sweep_run import run_plan
-        from ..studies.sweep_spec import Plan
-
         self.needs_linkage()
         speeds = np.asarray(speeds, dtype=float).ravel()
         missing = np.array(sorted({float(v) for v in speeds} - set(self._elastic)))
@@ -264,15 +258,10 @@ class Case:
 
     @cached_property
     def _shared(self):
-        from ..studies.sweep_engine import _Shared
-
         return _Shared()
 
     def elastic_event_angle(self, rpm: float, kind: str, pick: str = "first", draw: int = 0) -> float:
         """Cam angle (deg) of an elastic event of one run, from `simulate` (for "where")."""
-        from ..effects.pipeline import simulate
-        from ..studies.sweep_spec import scene_for
-
         scene = self.elastic_scene
         if self.draws is not None:
             scene = scene_for(scene, self.draws.keys, self.draws.values[draw])
@@ -309,8 +298,6 @@ def lash_crossing_angles(case: Case, kind: str) -> np.ndarray:
     lash_crossings' (Brent on the analytic lift); the draws' are Newton steps from it on the same
     lift, vectorised (a draw's lash differs by a tolerance: the crossing moves along the ramp).
     NaN where the valve never opens."""
-    from ..mechanics.kinematics import lash_crossings
-
     lift, ratio = case.lift, case.scene.follower.ratio
     lash0 = case.scene.valve.lash if case.scene.valve is not None else 0.0
     ups, downs = lash_crossings(lift, ratio, lash0)

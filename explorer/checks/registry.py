@@ -1,8 +1,12 @@
-"""The design rules: one line each (explorer.checks.rule.RuleSpec: the contract), with every
-default limit, its source and how firm it is. docs/guide/checks.md's rule table is generated from
-this table (`python -m explorer.checks`; tests/test_checks.py holds the page to it).
+"""The table of design rules: one line each (explorer.checks.rule.RuleSpec; explorer.checks.rule.Rule
+lists, numbered, what a rule must provide), with every default limit, its source and how firm it
+is. Adding a rule: its module under explorer/checks/rules/ and one line of RULES (or
+`register_rule(spec)`, whose Registration undoes it). docs/guide/checks.md's rule table is
+generated from the built-in lines (`python -m explorer.checks`; tests/test_checks.py holds the page
+to it).
 
-Import-light: names and numbers only; a rule's measure is imported when a design is checked.
+Import-light: names and numbers only; a rule's measure is a "module:function" reference, imported
+when a design is checked.
 """
 
 from __future__ import annotations
@@ -11,7 +15,7 @@ import math
 from types import MappingProxyType
 from typing import Mapping
 
-from ..core.plugins import resolve
+from ..core.plugins import Registration, Registry, resolve
 from .rule import Rule, RuleSpec, Setting  # noqa: F401 (Rule: the type measure_function returns)
 
 _R = "explorer.checks.rules"
@@ -40,7 +44,7 @@ SPRING_OPTIONS = (
             "textbook", choices=("wahl", "bergstrasser", "direct-shear")),
 )
 
-RULES: tuple[RuleSpec, ...] = (
+_BUILTIN: tuple[RuleSpec, ...] = (
     RuleSpec("pressure_angle", f"{_R}.pressure_angle:measure", "Pressure angle", "largest |pressure angle|", "deg",
              "max", (
                  Setting("fail_translating", 30.0 * DEG, "angle", "deg", NORTON_DOM + ": translating roller follower "
@@ -183,12 +187,26 @@ RULES: tuple[RuleSpec, ...] = (
              ), "gear"),
 )
 
-RULE_NAMES = tuple(r.name for r in RULES)
-_BY_NAME = {r.name: r for r in RULES}
+RULES: Registry[RuleSpec] = Registry("design rule", {spec.name: spec for spec in _BUILTIN})
+
+
+def register_rule(spec: RuleSpec, *, replace: bool = False) -> Registration:
+    """Add a design rule to the table (one call; `.undo()` or a `with` block removes it again)."""
+    return RULES.register(spec.name, spec, replace=replace)
+
+
+def rules() -> tuple[RuleSpec, ...]:
+    """Every rule of the table, in table order (the order of the report)."""
+    return tuple(RULES.entries())
+
+
+def rule_names() -> tuple[str, ...]:
+    return RULES.names()
 
 
 def rule(name: str) -> RuleSpec:
-    return _BY_NAME[name]
+    """The rule `name` (KeyError naming the known ones)."""
+    return RULES[name]
 
 
 def measure_function(spec: RuleSpec) -> "Rule":
@@ -202,9 +220,9 @@ def show(value, unit: str) -> float:
 
 
 def rules_markdown() -> str:
-    """The rule table as markdown (docs/guide/checks.md)."""
+    """The built-in rules' table as markdown (docs/guide/checks.md)."""
     lines = ["| rule | judges | setting | default | source | firmness |", "|---|---|---|---|---|---|"]
-    for spec in RULES:
+    for spec in _BUILTIN:
         first = True
         for s in spec.settings:
             if s.default is None:

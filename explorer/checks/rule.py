@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Callable, Protocol
 
 import numpy as np
 
@@ -36,8 +36,9 @@ class Rule(Protocol):
    few speeds (case.rule_speeds: where the nominal design was worst); unless its worst over those
    speeds is provably its worst over the range it says so (Measure.speed_exact = False) and the
    checks judge a random subset of the draws over the whole range to bound what it misses.
-    3. One line of RULES (explorer/checks/registry.py): a RuleSpec with the rule's name (the key of
-       [checks] and --rules files), the "module:function" of its measure, its title, the quantity
+    3. One line of RULES (explorer/checks/registry.py), or one call `register_rule(spec)`: a
+       RuleSpec with the rule's name (the key of [checks] and --rules files), the
+       "module:function" of its measure (or the function), its title, the quantity
        and the unit it is shown in, its sense ("max": the value must stay at or below the limits, a
        stress; "min": at or above, a margin) and its settings.
     4. Each Setting: a name ("fail" and "warn" are the limits; others are options: a margin, a
@@ -72,7 +73,7 @@ class RuleSpec:
     """One line of the rule table."""
 
     name: str
-    measure: str  # "module:function"
+    measure: str | Callable  # "module:function" (a built-in rule), or the function itself (a plug-in)
     title: str
     quantity: str  # what the value is
     unit: str  # display unit of the value (a key of UNITS)

@@ -33,10 +33,13 @@ from typing import Callable
 import numpy as np
 
 from ..core.errors import InputError
+from ..scene.scene import load_scene
+from ..studies.sweep_spec import check_scene, make_plan, parse_axis, parse_sample
 from .case import RPM, Case, Draws
-from .registry import RULES, measure_function
+from .registry import measure_function, rules as all_rules
 from .report import CheckReport, RuleResult
 from .rule import NOT_APPLICABLE, VERDICTS, Measure, verdicts, wilson_interval, worst_index
+from .settings import load_rules_file, resolve
 
 DEFAULT_SPEEDS = 200
 # Phase two's runs (verified draws x speeds): at ~0.25 ms a compiled elastic run, ~2.5 s on one
@@ -48,8 +51,6 @@ Z_975 = 2.241402727604947  # two-sided 97.5 % normal quantile: two such interval
 
 def operating_speeds(scene, rpm=None) -> tuple[np.ndarray, str]:
     """(speeds in rev/min, where they came from)."""
-    from ..studies.sweep_spec import parse_axis
-
     if rpm is not None:
         if isinstance(rpm, str) and ":" not in rpm and "," not in rpm:
             values = np.array([parse_axis("drive.rpm", [rpm], file="--rpm").values[0]])
@@ -70,13 +71,8 @@ def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | 
     the names of the rules to judge (the others are reported "off"); `verify`: how many draws
     phase two runs over every speed of the range (default: as many as CHECK_RUNS runs allow, at
     least VERIFY_MIN; all of them: exact). Bad input raises InputError before any work."""
-    from ..studies.sweep_spec import check_scene, make_plan, parse_sample
-    from .settings import load_rules_file, resolve
-
     started = time.perf_counter()
     if not hasattr(scene, "effects"):
-        from ..scene.scene import load_scene
-
         scene = load_scene(scene)
     speeds, range_from = operating_speeds(scene, rpm)
     settings, off = resolve([scene.checks, load_rules_file(rules) if rules is not None else None])
@@ -102,33 +98,34 @@ def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | 
         if isinstance(verify, bool) or not isinstance(verify, (int, np.integer)) or verify < 1:
             raise InputError("--verify", str(verify), "a whole number of draws, at least 1")
 
+    specs = all_rules()  # the table as it is now (a plug-in may have registered a rule)
     nominal = Case(scene, speeds, workers=workers, progress=progress)
     measures: dict[str, Measure] = {}
-    for spec in RULES:
+    for spec in specs:
         if spec.name not in off:
             measures[spec.name] = measure_function(spec)(nominal, settings[spec.name])
     results = {spec.name: _result(spec, settings[spec.name], measures.get(spec.name), spec.name in off)
-               for spec in RULES}
+               for spec in specs}
 
     if draws is not None:
-        focus = {spec.name: _focus_speeds(spec, measures[spec.name], speeds) for spec in RULES
+        focus = {spec.name: _focus_speeds(spec, measures[spec.name], speeds) for spec in specs
                  if spec.name in measures and measures[spec.name].applicable}
         ends = np.array([speeds.min(), speeds.max()])
         sampled = Case(scene, ends, draws, focus, workers, progress)
-        drawn = {spec.name: measure_function(spec)(sampled, settings[spec.name]) for spec in RULES
+        drawn = {spec.name: measure_function(spec)(sampled, settings[spec.name]) for spec in specs
                  if spec.name in measures and measures[spec.name].applicable}
         # one speed: every draw ran at it (and the float margin above it as every draw would)
-        inexact = [spec for spec in RULES if spec.name in drawn and drawn[spec.name].applicable
+        inexact = [spec for spec in specs if spec.name in drawn and drawn[spec.name].applicable
                    and not drawn[spec.name].speed_exact] if speeds.size > 1 else []
         verified = _whole_range(scene, speeds, ends, draws, focus, inexact, settings, workers, progress, seed, verify)
-        for spec in RULES:
+        for spec in specs:
             if spec.name in drawn:
                 results[spec.name] = _with_probability(results[spec.name], spec, drawn[spec.name],
                                                        draws.values.shape[0], verified.get(spec.name),
                                                        one_speed=speeds.size == 1)
     return CheckReport(
         scene=scene.name, source=scene.source, speeds_rpm=tuple(float(s) for s in speeds), range_from=range_from,
-        results=tuple(results[spec.name] for spec in RULES),
+        results=tuple(results[spec.name] for spec in specs),
         samples=draws.text if draws is not None else (), runs=int(draws.values.shape[0]) if draws is not None else 0,
         seed=seed, seconds=time.perf_counter() - started,
     )

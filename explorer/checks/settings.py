@@ -21,16 +21,15 @@ import tomllib
 from typing import Any, Mapping
 
 from ..core.errors import InputError
+from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
 from ..core.units import plain_number, short_repr, to_si
 from ..scene.checks_section import ChecksSpec, freeze_settings, shown_key
-from .registry import RULE_NAMES, RULES
+from .registry import rule_names, rules
 from .rule import RuleSpec, Setting, Settings
 
 
 def load_rules_file(path) -> ChecksSpec:
     """A --rules FILE (TOML) as settings; a bad file is one InputError."""
-    from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
-
     file = str(path)
     data = read_regular(path, file=file, key="-", limit=MAX_SCENE_FILE_BYTES)
     try:
@@ -49,17 +48,18 @@ def load_rules_file(path) -> ChecksSpec:
 
 def resolve(sources: list[ChecksSpec | None]) -> tuple[dict[str, Settings], tuple[str, ...]]:
     """(rule -> Settings, the rules switched off), from the defaults and the `sources` in order."""
-    values: dict[str, dict[str, Any]] = {r.name: {s.name: s.default for s in r.settings} for r in RULES}
-    origin: dict[str, dict] = {r.name: {s.name: "default" for s in r.settings} for r in RULES}
-    enabled = {r.name: True for r in RULES}
+    table = rules()
+    values: dict[str, dict[str, Any]] = {r.name: {s.name: s.default for s in r.settings} for r in table}
+    origin: dict[str, dict] = {r.name: {s.name: "default" for s in r.settings} for r in table}
+    enabled = {r.name: True for r in table}
     for source in sources:
         if source is None:
             continue
         for name, entry in source.settings.items():
             key = f"{source.prefix}.{shown_key(name)}" if source.prefix else shown_key(name)
             if name not in enabled:
-                raise InputError(source.file, key, f"unknown rule; known: {', '.join(RULE_NAMES)}")
-            spec = next(r for r in RULES if r.name == name)
+                raise InputError(source.file, key, f"unknown rule; known: {', '.join(rule_names())}")
+            spec = next(r for r in table if r.name == name)
             if isinstance(entry, bool):
                 enabled[name] = entry
                 continue
@@ -76,10 +76,10 @@ def resolve(sources: list[ChecksSpec | None]) -> tuple[dict[str, Settings], tupl
                                      f"known: {known}")
                 values[name][setting_name] = parse_setting(setting, raw, source.file, f"{key}.{setting_name}")
                 origin[name][setting_name] = (source.file, f"{key}.{setting_name}")
-    settings = {r.name: Settings(values[r.name], origin[r.name]) for r in RULES}
-    for r in RULES:
+    settings = {r.name: Settings(values[r.name], origin[r.name]) for r in table}
+    for r in table:
         _check_order(r, settings[r.name], sources)
-    return settings, tuple(n for n in RULE_NAMES if not enabled[n])
+    return settings, tuple(r.name for r in table if not enabled[r.name])
 
 
 def parse_setting(setting: Setting, raw, file: str, key: str):

@@ -9,6 +9,8 @@ import sys
 
 from ..core.errors import InputError, echo
 from ..core.plugins import resolve
+from ..core.processes import Stopped, stop_signals_raise
+from ..core.version import __version__
 
 COMMAND_MODULES = [
     "explorer.cli.simulate",
@@ -88,8 +90,6 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="explorer", description=DESCRIPTION, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    from ..core.version import __version__
-
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
@@ -103,8 +103,6 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "run", None):
         parser.print_help()
         return 0
-    from ..core.processes import Stopped, stop_signals_raise
-
     try:
         with stop_signals_raise():  # SIGTERM/SIGHUP unwind like Ctrl-C: temporaries go, workers end
             return int(args.run(args) or 0)

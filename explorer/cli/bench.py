@@ -8,6 +8,9 @@ import sys
 from pathlib import Path
 
 from ..core.errors import InputError
+from ..core.files import check_path
+from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, write_checked
+from .simulate import add_scene_arguments, scene_from_args
 
 HELP = """\
 Time every dynamics solver on the scene's elastic model over one revolution and measure its
@@ -28,10 +31,6 @@ solver takes its place everywhere, up to 36 000 steps.
 
 
 def register(sub) -> None:
-    from .simulate import add_scene_arguments
-
-    from ..core.outputs import HELP as OUTPUT_HELP
-
     p = sub.add_parser("bench", help="accuracy versus time of the dynamics solvers (table, CSV, chart)",
                        description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
@@ -48,13 +47,9 @@ def _slug(name: str) -> str:
 
 
 def run(args) -> int:
-    from .simulate import scene_from_args
-
     if args.repeats < 1:
         raise InputError("<command line>", "--repeats", f"must be at least 1, got {args.repeats}")
     scene = scene_from_args(args)
-    from ..core.files import check_path
-
     check_path(args.output_dir, file="<command line>", key="--output-dir")
     out_dir = Path(args.output_dir)
     if out_dir.exists() and not out_dir.is_dir():
@@ -75,9 +70,8 @@ def run(args) -> int:
 
 
 def _bench(args, scene, out_dir: Path) -> int:
+    # local: loads when the command runs, not at `explorer --help`
     from ..studies.bench import ProgressBar, chart_png, differentiation_png, run_bench
-    from ..core.outputs import all_or_none, check_output, write_checked
-
     stem = Path(scene.source).stem if scene.source != "<memory>" else _slug(scene.name)
     base = out_dir / f"bench_{stem}"
     names = [".csv", ".txt", ".png"]

@@ -8,6 +8,9 @@ import sys
 from pathlib import Path
 
 from ..core.errors import InputError
+from ..core.outputs import HELP as OUTPUT_HELP, check_output, write_checked
+from .simulate import add_scene_arguments, scene_from_args
+from .sweep import Progress, _split
 
 HELP = """\
 Check a design against the rules of the field (explorer/checks/registry.py): pressure angle and
@@ -46,9 +49,6 @@ FORMATS = (".json", ".csv")
 
 
 def register(sub) -> None:
-    from .simulate import add_scene_arguments
-    from ..core.outputs import HELP as OUTPUT_HELP
-
     p = sub.add_parser("check", help="is this design acceptable? design rules over the speed range and tolerances",
                        description=HELP + "\n" + OUTPUT_HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -69,11 +69,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..checks import check
-    from ..core.outputs import check_output, write_checked
-    from .simulate import scene_from_args
-    from .sweep import Progress, _split
-
+    from ..checks import check  # local: loads when the command runs, not at `explorer --help`
     sample = {}
     for text in args.sample:
         key, value = _split(text, "--sample")

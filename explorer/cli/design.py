@@ -6,6 +6,9 @@ import argparse
 import sys
 
 from ..core.errors import InputError, echo
+from ..core.units import to_si
+from ..studies.design import MAX_EVALUATIONS, OBJECTIVES
+from .simulate import add_scene_arguments, scene_from_args
 
 HELP = """\
 Choose the "free" station values of a spline lift (law = "spline") to minimise an objective at
@@ -26,9 +29,6 @@ is then reported as not met, exit status 1); from the first second a line on std
 
 
 def register(sub) -> None:
-    from .simulate import add_scene_arguments
-    from ..studies.design import MAX_EVALUATIONS, OBJECTIVES
-
     p = sub.add_parser("design", help="optimise a spline lift (peak acceleration, jerk, residual vibration)",
                        description=HELP.format(budget=MAX_EVALUATIONS), formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
@@ -69,8 +69,6 @@ class EvaluationProgress:
 
 
 def _quantity(text, dimension, option):
-    from ..core.units import to_si
-
     if text is None:
         return None
     value = to_si(text, dimension, file="<command line>", key=option)
@@ -82,7 +80,8 @@ def _quantity(text, dimension, option):
 def _speeds(text: str, option: str, interval: bool = False):
     """Speeds in rev/min (a bare number) or with a unit, each in drive.rpm's valid range: one
     speed, or an interval A:B in the range grammar of every command."""
-    from ..core import grids
+    from ..core import grids  # local: loads when the command runs, not at `explorer --help`
+    # local: loads when the command runs, not at `explorer --help`
     from ..studies.sweep_spec import SWEEP_KEYS, check_values, quantity
 
     info = SWEEP_KEYS["drive.rpm"]
@@ -98,7 +97,7 @@ def _speeds(text: str, option: str, interval: bool = False):
 def run(args) -> int:
     import math
 
-    from .simulate import scene_from_args
+    # local: loads when the command runs, not at `explorer --help`
     from ..studies.design import MAX_EVALUATIONS, DesignLimits, design, report_text, stations_toml
 
     angle = _quantity(args.max_pressure_angle, "angle", "--max-pressure-angle")

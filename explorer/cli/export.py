@@ -7,6 +7,10 @@ import sys
 from pathlib import Path
 
 from ..core.errors import InputError, echo
+from ..core.outputs import HELP as OUTPUT_HELP, check_output, write_checked
+from ..core.units import to_si
+from ..view.exports import FORMATS
+from .simulate import add_scene_arguments, scene_from_args
 
 HELP = """\
 Export a scene's cam (translating roller follower) to make it:
@@ -27,10 +31,6 @@ EXTENSIONS = {"csv": ".csv", "dxf": ".dxf", "stl": ".stl", "glb": ".glb", "grind
 
 
 def register(sub) -> None:
-    from .simulate import add_scene_arguments
-    from ..view.exports import FORMATS
-    from ..core.outputs import HELP as OUTPUT_HELP
-
     p = sub.add_parser("export", help="the cam as a point table, DXF, STL/GLB solid or grinding table",
                        description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
@@ -46,8 +46,6 @@ def register(sub) -> None:
 
 
 def _length(text: str | None, option: str, default: str | None = None) -> float | None:
-    from ..core.units import to_si
-
     if text is None and default is None:
         return None
     value = to_si(text if text is not None else default, "length", file="<command line>", key=option)
@@ -57,6 +55,7 @@ def _length(text: str | None, option: str, default: str | None = None) -> float 
 
 
 def _check_options(args) -> tuple[float, float | None, float | None, int]:
+    # local: loads when the command runs, not at `explorer --help`
     from ..view.exports import MAX_POINTS, MAX_TOLERANCE, MIN_POINTS, MIN_TOLERANCE
 
     fmt = args.format
@@ -88,10 +87,7 @@ def _check_options(args) -> tuple[float, float | None, float | None, int]:
 
 
 def run(args) -> int:
-    from ..view import exports
-    from .simulate import scene_from_args
-    from ..core.outputs import check_output, write_checked
-
+    from ..view import exports  # local: loads when the command runs, not at `explorer --help`
     tolerance, width, wheel, points = _check_options(args)
     scene = scene_from_args(args)
     name = args.output if args.output is not None else f"{Path(scene.source).stem if scene.source != '<memory>' else 'cam'}{EXTENSIONS[args.format]}"
@@ -103,7 +99,7 @@ def run(args) -> int:
         data = exports.dxf_text(src, tolerance)
     elif args.format in ("stl", "glb"):
         if width is None:
-            from ..view.parts import layout
+            from ..view.parts import layout  # heavy (PIL, scipy, trimesh): imported on use
 
             width = layout(scene).cam_width
         data = (exports.stl_bytes if args.format == "stl" else exports.glb_bytes)(src, tolerance, width)

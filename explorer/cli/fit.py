@@ -8,8 +8,11 @@ import math
 import sys
 
 from ..core.errors import InputError, echo
+from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
+from ..core.reader import toml_loads
 from ..effects.context import sample_grid
 from ..gears.registry import GEARS
+from ..scene.scene import apply_overrides, load_scene
 
 HELP = """\
 Choose the contour of a rocking cam (follower.type = "rocking-cam", seed 004 "Schwingdaumen")
@@ -68,11 +71,6 @@ def register(sub) -> None:
 def _follower_type(path: str, overrides: list[str]):
     """follower.type as written (after --set), or None when the file cannot tell: then loading
     the scene reports what is wrong with it."""
-    from ..scene.scene import apply_overrides
-
-    from ..core.files import MAX_SCENE_FILE_BYTES, read_regular
-    from ..core.reader import toml_loads
-
     try:
         text = read_regular(path, file=path, key="-", limit=MAX_SCENE_FILE_BYTES).decode("utf-8")
         data = apply_overrides(toml_loads(text, path), overrides, path)
@@ -83,8 +81,6 @@ def _follower_type(path: str, overrides: list[str]):
 
 def load_target_scene(args):
     """The scene with its [gear.target] completed by --lift/--open-angle/--max-pressure-angle."""
-    from ..scene.scene import load_scene
-
     kind = _follower_type(args.scene, args.overrides)
     fitters = [name for name, gear in GEARS.items() if gear.fits_target]
     if kind is not None and kind not in fitters:

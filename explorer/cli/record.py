@@ -8,6 +8,8 @@ import math
 import sys
 
 from ..core.errors import InputError
+from ..core.outputs import HELP as OUTPUT_HELP
+from ..scene.builtin import default_scene
 
 # Each recording costs ~0.1-0.3 s and ~1-4 MB of the file at 3600 steps with the parts: a thousand
 # is minutes and gigabytes, and a viewer that shows them side by side. Wider sweeps are a typo
@@ -45,8 +47,6 @@ examples:
 
 
 def register(sub) -> None:
-    from ..core.outputs import HELP as OUTPUT_HELP
-
     p = sub.add_parser("record", help="simulations to a rerun .rrd file (series, 3D motion, events)",
                        description=HELP.format(max_runs=MAX_RUNS) + "\n" + OUTPUT_HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -77,7 +77,7 @@ MAX_SWEEP_POINTS = 10_000_000
 
 def sweep_shape(text: str):
     """(key, shape) of one --sweep in the range grammar of every command (explorer.core.grids)."""
-    from ..core import grids
+    from ..core import grids  # local: loads when the command runs, not at `explorer --help`
 
     if "=" not in text:
         raise InputError("--sweep", text, "a sweep must look like section.key=v1,v2,... or section.key=START:STOP:COUNT")
@@ -90,7 +90,7 @@ def sweep_shape(text: str):
 
 
 def _size(shape) -> int:
-    from ..core import grids
+    from ..core import grids  # local: loads when the command runs, not at `explorer --help`
 
     return len(shape.values) if isinstance(shape, grids.Listed) else int(shape.count)
 
@@ -98,7 +98,7 @@ def _size(shape) -> int:
 def parse_sweep(text: str) -> tuple[str, list[str]]:
     """'drive.rpm=100,200' -> ('drive.rpm', ['100', '200']); 'drive.rpm=100:300:3' -> ('drive.rpm',
     ['100', '200', '300']): each value in the unit it was written in, checked by the scene loader."""
-    from ..core import grids
+    from ..core import grids  # local: loads when the command runs, not at `explorer --help`
 
     key, shape = sweep_shape(text)
     return key, grids.texts(shape, file="--sweep", key=key)
@@ -106,10 +106,8 @@ def parse_sweep(text: str) -> tuple[str, list[str]]:
 
 def plan_runs(scene_paths: list[str], overrides: list[str], sweeps: list[str]):
     """(label, scene) for every scene and every combination of sweep values; all validated here."""
-    from ..core import grids
-    from ..scene.scene import load_scene
-    from ..scene.builtin import default_scene
-
+    from ..core import grids  # local: loads when the command runs, not at `explorer --help`
+    from ..scene.scene import load_scene  # local: loads when the command runs, not at `explorer --help`
     scene_paths = scene_paths or [str(default_scene())]
     shapes = [sweep_shape(s) for s in sweeps]
     count = len(scene_paths) * math.prod(_size(shape) for _, shape in shapes)
@@ -141,7 +139,7 @@ def plan_runs(scene_paths: list[str], overrides: list[str], sweeps: list[str]):
 def _with_parts_or_warn(label: str, result):
     """The run with its 3D parts; if the meshes cannot be built for this gear, the series and
     events are still worth recording: say so and leave the parts out."""
-    from ..view.rerun.recording import Run, with_parts
+    from ..view.rerun.recording import Run, with_parts  # local: loads when the command runs, not at `explorer --help`
 
     try:
         return with_parts(label, result)
@@ -151,6 +149,7 @@ def _with_parts_or_warn(label: str, result):
 
 
 def run(args) -> int:
+    # local: loads when the command runs, not at `explorer --help`
     from dataclasses import replace
 
     from ..checks.viewer import evaluate as check_design

@@ -5,6 +5,10 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, write_checked
+from .simulate import add_scene_arguments, scene_from_args
+from .sweep import Progress, check_workers
+
 
 HELP = """\
 A sweep of drive.rpm (the engine and table of `explorer sweep`) with the elastic effect's residual
@@ -19,9 +23,6 @@ design speed. The table as CSV (stdout without -o) or Parquet (-o X.parquet), wi
 
 
 def register(sub) -> None:
-    from .simulate import add_scene_arguments
-    from ..core.outputs import HELP as OUTPUT_HELP
-
     p = sub.add_parser("residual", help="residual vibration of the elastic valve over a speed range (table, plot)",
                        description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
@@ -33,12 +34,9 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..core.outputs import all_or_none, check_output, write_checked
+    # local: loads when the command runs, not at `explorer --help`
     from ..studies.residual import chart_png, parse_speeds, residual_table
-    from ..studies.sweep_table import table_format
-    from .simulate import scene_from_args
-    from .sweep import Progress, check_workers
-
+    from ..studies.sweep_table import table_format  # local: loads when the command runs, not at `explorer --help`
     speeds = parse_speeds(args.rpm)
     scene = scene_from_args(args)
     if args.output is not None:

@@ -8,6 +8,7 @@ import sys
 
 from ..core.errors import InputError
 from ..core.processes import Supervisor
+from .simulate import add_scene_arguments, scene_from_args
 
 HELP = """\
 Open the 3D explorer in the browser: the cam turns, the roller, lever, spring and valve move
@@ -30,8 +31,6 @@ complete .rrd each.
 
 
 def register(sub) -> None:
-    from .simulate import add_scene_arguments
-
     p = sub.add_parser("serve", help="3D explorer in the browser (viser)", description=HELP,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
@@ -62,8 +61,6 @@ def _is_loopback(host: str) -> bool:
 
 
 def run(args) -> int:
-    from .simulate import scene_from_args
-
     scene = scene_from_args(args)  # bad scene or --set: the usual one-line error, before any server
     if not 0 <= args.port <= 65535:
         raise InputError("--port", "--port", f"must be between 0 and 65535, got {args.port}")
@@ -72,12 +69,14 @@ def run(args) -> int:
               file=sys.stderr)
     if args.rerun or args.rerun_save:
         try:
+            # local: rerun is optional (the ImportError below) and loads only with --rerun
             from ..view.rerun.live import open_live_stream
         except ImportError as exc:
             raise InputError("--rerun", "--rerun", f"rerun streaming is not available ({exc})") from None
 
     import viser
 
+    # local: the browser (viser, trimesh, scipy) and its threads load when the command runs
     from ..checks.viewer import evaluate as check_design
     from ..view.browser import callbacks
     from ..view.browser.app import ExplorerApp

@@ -5,6 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, write_checked
+from ..scene.builtin import default_scene
+
 
 HELP = """\
 Simulate one revolution of a scene: every effect the scene lists, nothing else.
@@ -28,16 +31,12 @@ def add_scene_arguments(parser: argparse.ArgumentParser, optional: bool = True) 
 
 
 def scene_from_args(args):
-    from ..scene.scene import load_scene
-    from ..scene.builtin import default_scene
-
+    from ..scene.scene import load_scene  # local: loads when the command runs, not at `explorer --help`
     path = args.scene if args.scene is not None else str(default_scene())
     return load_scene(path, args.overrides)
 
 
 def register(sub) -> None:
-    from ..core.outputs import HELP as OUTPUT_HELP
-
     p = sub.add_parser("simulate", help="one revolution to CSV + JSON summary", description=HELP + "\n" + OUTPUT_HELP,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
@@ -47,9 +46,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..effects.pipeline import simulate
-    from ..core.outputs import all_or_none, check_output, write_checked
-
+    from ..effects.pipeline import simulate  # local: loads when the command runs, not at `explorer --help`
     scene = scene_from_args(args)
     # both outputs before any work, so that a bad --summary does not leave the CSV written
     # and the summary missing

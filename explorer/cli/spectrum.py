@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 
 from ..core.errors import InputError
+from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, write_checked
+from .simulate import add_scene_arguments, scene_from_args
 
 HELP = """\
 Harmonic content of the drive acceleration ratio * w^2 * L'' of the scene at its speed, against
@@ -14,9 +16,6 @@ frequency marked as a cam order. Table as CSV (stdout without -o), chart as PNG.
 
 
 def register(sub) -> None:
-    from .simulate import add_scene_arguments
-    from ..core.outputs import HELP as OUTPUT_HELP
-
     p = sub.add_parser("spectrum", help="harmonics of the valve acceleration against cam order (table, plot)",
                        description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
@@ -27,9 +26,8 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from .simulate import scene_from_args
-    from ..core.outputs import all_or_none, check_output, write_checked
-    from ..effects.lift import build_lift
+    from ..effects.lift import build_lift  # local: loads when the command runs, not at `explorer --help`
+    # local: loads when the command runs, not at `explorer --help`
     from ..studies.spectrum import MAX_ORDERS, acceleration_spectrum, chart_png, table_text
 
     if not 1 <= args.orders <= MAX_ORDERS:

@@ -7,6 +7,9 @@ import sys
 import time
 
 from ..core.errors import InputError
+from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output
+from ..scene.builtin import default_scene
+from ..studies.sweep_spec import SWEEP_KEYS
 
 HELP = """\
 Sweep a scene over grids of its values and random samples: one run (one revolution, the scene's
@@ -56,9 +59,6 @@ class _Vary(argparse.Action):
 
 
 def register(sub) -> None:
-    from ..core.outputs import HELP as OUTPUT_HELP
-    from ..studies.sweep_spec import SWEEP_KEYS
-
     p = sub.add_parser("sweep", help="many runs of a scene: a table of figures per run (Parquet/CSV), maps, tolerances",
                        description=HELP.format(keys=", ".join(SWEEP_KEYS)) + "\n" + OUTPUT_HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -118,7 +118,7 @@ class Progress:
 def check_workers(workers: int | None, scheduler: str | None = None) -> int | None:
     """--workers: at least 1, at most the usable cores (capped, with a note on stderr); not with
     --scheduler (the cluster has its own)."""
-    from ..studies.sweep_run import worker_count
+    from ..studies.sweep_run import worker_count  # local: loads when the command runs, not at `explorer --help`
 
     if workers is None:
         return None
@@ -134,11 +134,10 @@ def check_workers(workers: int | None, scheduler: str | None = None) -> int | No
 
 
 def run(args) -> int:
-    from ..core.outputs import all_or_none, check_output
-    from ..scene.scene import load_scene
-    from ..scene.builtin import default_scene
+    from ..scene.scene import load_scene  # local: loads when the command runs, not at `explorer --help`
+    # local: loads when the command runs, not at `explorer --help`
     from ..studies.sweep_run import SweepResult, plan_from, run_plan
-    from ..studies.sweep_table import table_format
+    from ..studies.sweep_table import table_format  # local: loads when the command runs, not at `explorer --help`
 
     if getattr(args, "stray_log", False):
         raise InputError("--log", "-", "--log follows the --vary it applies to")

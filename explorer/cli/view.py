@@ -12,6 +12,7 @@ import urllib.parse
 from pathlib import Path
 
 from ..core.errors import InputError
+from ..core.files import check_regular
 from ..core.processes import Supervisor
 
 HELP = """\
@@ -69,8 +70,6 @@ def _check_source(source: str) -> str:
         raise InputError(source, "-", "file not found")
     if path.is_dir():
         raise InputError(source, "-", "is a directory, not a .rrd file")
-    from ..core.files import check_regular
-
     check_regular(path, file=source, key="-")  # a FIFO would block the open below
     try:
         with open(path, "rb") as handle:
@@ -106,7 +105,7 @@ def run(args) -> int:
     grpc_port = 0 if _is_url(source) else _check_port(args.grpc_port, "--grpc-port")
     if web_port == grpc_port:
         raise InputError("--grpc-port", "--grpc-port", "must differ from --port")
-    from ..view.rerun.recording import rerun_executable
+    from ..view.rerun.recording import rerun_executable  # local: loads when the command runs, not at `explorer --help`
 
     try:
         executable = rerun_executable()

@@ -358,14 +358,6 @@ def _fast_to_si(text: str, dimension: str) -> float | None:
     return value if math.isfinite(value) else None
 
 
-def _si_unit_for(unit: str, ureg) -> str:
-    dims = ureg.Quantity(1.0, unit).dimensionality
-    for dim, _bare, si in DIMENSIONS.values():
-        if dim and ureg.Quantity(1.0, si).dimensionality == dims:
-            return si
-    return str(ureg.Quantity(1.0, unit).to_base_units().units)
-
-
 # Exact conversion factors, used where pint's overhead is not wanted (hot paths, tests of the seeds).
 G0 = 9.80665  # m/s^2, standard gravity: 1 kgf = G0 N exactly
 KGF = G0  # N per kgf

@@ -134,7 +134,7 @@ def chain_phase_modes(model, contact: bool, seat: bool):
     # Aberth's iteration for the n roots in the upper half plane (their conjugates are the other n):
     # Newton's correction N = P/P' of each, repelled from the others' (all 2n) approximations
     # (compiled: chain_kernels.aberth; the same formulas as _local's)
-    from .chain_kernels import aberth
+    from .chain_kernels import aberth  # numba: compiled kernels load on first use
 
     lam = np.ascontiguousarray(lam)
     if aberth(lam, p, b2, ms, c0, k0, MAX_ITERATIONS) > MAX_ITERATIONS:

@@ -49,7 +49,7 @@ from .kernel_events import SEAT  # noqa: F401
 from .kernel_figures import FIGURES, RUN_PARAMETERS, revolution, revolutions  # noqa: F401
 from .kernel_grid import RevolutionGrid, grid_bounds, revolution_grid, split_parts  # noqa: F401
 from .kernel_phase import NO_PROGRESS, OK, TOO_MANY_EVENTS, run_buffers, solve_nodes
-from .model import DynamicsSolution, LinkageModel
+from .model import Drive, DynamicsSolution, LinkageModel
 from .phases import CONTACT, FLIGHT
 
 EVENT_NAMES = ("lift-off", "separation", "re-contact", "seat")  # model.EVENT_KINDS: the kernel's codes 0-3
@@ -164,8 +164,6 @@ def warm() -> None:
 
         def breakpoints(self):
             return [1.0]
-
-    from .model import Drive
 
     model = LinkageModel(mass=0.1, oscillating_mass=0.09, stiffness=3e6, damping=8.0, lash=1e-4, preload=50.0,
                          spring_rate=3e4, friction=5.0, restitution=0.5)

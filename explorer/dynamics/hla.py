@@ -41,6 +41,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .phase_system import Event, PhaseModes, Transition, decompose, state_matrix
+
 ATMOSPHERE = 101_325.0  # Pa: absolute = gauge + this (the air's polytropic law needs absolute pressure)
 
 
@@ -164,24 +166,18 @@ class LeakdownRig:
         return B
 
     def phase_modes(self, key):
-        from .phase_system import PhaseModes, decompose, state_matrix
-
         M, K, C, H, cap, G = self.matrices(key)
         lam, phys, inv = decompose(M, K, C, H, cap, G)
         B = self.forcing(key)
         return PhaseModes(key, lam, phys, inv, inv @ B, state_matrix(M, K, C, H, cap, G), B, 1)
 
     def event_functions(self, key):
-        from .phase_system import Event
-
         e_w = np.array([0.0, 0.0, 1.0])
         if key:
             return [Event("check-valve-close", e_w, 0.0, 0.0, -self.hla.check_threshold, +1.0)]
         return [Event("check-valve-open", e_w, 0.0, 0.0, -self.hla.check_threshold, -1.0)]
 
     def apply_event(self, key, event, y, S, S1):
-        from .phase_system import Transition
-
         return Transition({"kind": event.kind}, event.kind == "check-valve-open", y)
 
     def start_state(self, drive, t0: float):

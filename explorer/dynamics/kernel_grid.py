@@ -17,6 +17,7 @@ from numba import njit
 from . import kernel_stamp  # noqa: F401 (the cache is stale when a source it depends on changed)
 from .exact_grid import MAX_RHO_H, build_grid
 from .kernel_steps import deriv_into, horner
+from .model import Drive
 
 BLOCK = 8  # steps a seated valve's bound clears at once (small: a seated stretch starts anywhere, and
 # its bound fails near the lift-off; 8 measured faster than 16 and 64)
@@ -97,8 +98,6 @@ def revolution_grid(lift, ratio: float, n: int, rho_theta: float = 0.0, base: "R
     """The RevolutionGrid of a lift curve at `ratio` and n samples per revolution (as the elastic
     effect builds its run: effects/elastic.py), split for the rate rho_theta (0: not split).
     base: the unsplit grid, when known (its start angle and drive values are reused)."""
-    from .model import Drive
-
     drive = Drive(lift, ratio, 1.0)
     theta = np.arange(n) * (2.0 * math.pi / n)
     if base is None:

@@ -27,11 +27,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .phases import PHASE_CODES, phase_of_state, release_from_rest  # noqa: F401 (re-exported)
+
+if TYPE_CHECKING:
+    from ..lift.curves import LiftCurve
 
 EVENT_KINDS = ("lift-off", "separation", "re-contact", "seat")
 @dataclass(frozen=True)
@@ -86,7 +89,7 @@ class LinkageModel:
 class Drive:
     """Linkage end motion referred to the valve: S(t) = ratio * L(omega t), analytic derivatives."""
 
-    lift: Any  # LiftCurve
+    lift: LiftCurve
     ratio: float
     omega: float  # rad/s
 

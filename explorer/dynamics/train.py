@@ -46,7 +46,9 @@ from functools import cached_property
 import numpy as np
 
 from .chain import ChainModel
+from .chain_exact import STRUCTURED_FROM, valve_derivatives
 from .chain_kernels import NOISE
+from .chain_modes import chain_phase_modes
 from .hla import HLA
 from .phase_system import Event, PhaseModes, Transition, decompose_free, held_modes, state_matrix
 
@@ -145,10 +147,6 @@ class TrainModel:
         return not self.parts and self.hla is None
 
     @property
-    def n_chain(self) -> int:
-        return self.chain.n
-
-    @property
     def n(self) -> int:
         return self.chain.n + len(self.parts) + (1 if self.hla is not None else 0)
 
@@ -170,8 +168,6 @@ class TrainModel:
 
     @property
     def reduce_pairs(self) -> bool:
-        from .chain_exact import STRUCTURED_FROM
-
         return self.chain.elements >= STRUCTURED_FROM if self.bare else True
 
     @cached_property
@@ -320,8 +316,6 @@ class TrainModel:
         A = state_matrix(M, K, C, H, cap, G)
         structured = None
         if self.bare and self.reduce_pairs:
-            from .chain_modes import chain_phase_modes
-
             structured = chain_phase_modes(self.chain, bool(contacts[0]), seat)
         if structured is not None:
             lam, phys, inv = structured
@@ -518,8 +512,6 @@ class TrainModel:
         return jt.stiffness * gap + jt.damping * rate
 
     def outputs(self, t, y, keys, codes, events, stats, matrices, D) -> TrainSolution:
-        from .chain_exact import valve_derivatives
-
         n, nc, L = self.n, self.chain.n, len(self.parts)
         c = self.chain
         codes = np.asarray(codes)

@@ -22,34 +22,10 @@ import math
 
 import numpy as np
 
-from ..core.errors import InputError, echo
-from ..dynamics import solvers as registry
-from ..dynamics.chain import CHAIN_EVENT_KINDS, FRICTION_EVENT_KINDS, ChainModel, solid_travel
-from ..dynamics.model import Drive
+from ..dynamics.chain import CHAIN_EVENT_KINDS, FRICTION_EVENT_KINDS, ChainModel
 from ..result import EffectOutput
+from .chain_run import chain_run
 from .elastic_events import linkage_outputs, output_order, revolution_events
-
-
-def chain_solver(method: str, file: str):
-    """The chain function of the registry's solver `method`, or InputError naming solver.method."""
-    function = registry.solver(method).chain_function()
-    if function is None:
-        able = [name for name, info in registry.SOLVERS.items() if info.chain_entry]
-        raise InputError(file, "solver.method", f"{echo(method)} takes only the massless spring; with spring.elements > 0 "
-                         f"use {' or '.join(map(repr, able))}")
-    return function
-
-
-def check_solid(scene, drive_lift_max: float) -> None:
-    """InputError when the static lift alone compresses the spring to its solid height."""
-    sp = scene.spring
-    if sp.free_length is None or sp.solid_height is None:
-        return
-    travel = solid_travel(sp)
-    lift = drive_lift_max - scene.valve.lash
-    if lift >= travel:
-        raise InputError(scene.source, "spring.solid_height", f"the valve lift {lift * 1e3:.4g} mm alone compresses "
-                         f"the spring to its solid height (travel to solid {travel * 1e3:.4g} mm from closed)")
 
 
 def exciting_orders(frequencies_hz: np.ndarray, omega: float, drive_values: np.ndarray, count: int = 3) -> list:
@@ -73,16 +49,10 @@ def chain_elastic_effect(ctx) -> EffectOutput:
     omega = ctx.omega
     model = ChainModel.from_scene(scene)
     ratio = scene.follower.ratio
-    drive = Drive(ctx.lift, ratio, omega)
     n = ctx.time.size
-    period = 2.0 * math.pi / omega
-    D = drive(ctx.time)
-    check_solid(scene, float(D[0].max()))
-    solve = chain_solver(scene.solver.method, scene.source)
-    options = dict(scene.solver.options)
-    i0 = int(np.argmin(D[0]))
-    t_run = np.concatenate([ctx.time[i0:], ctx.time[:i0] + period])
-    sol = solve(model, drive, t_run, **options)
+    run = chain_run(ctx)
+    period, D, i0, t_run = run.period, run.D, run.i0, run.t_run
+    sol = run.solve(model, run.drive, t_run, **run.options)
     rotate, _ = output_order(n, i0)
 
     s, v, a, jerk = rotate(sol.s), rotate(sol.v), rotate(sol.a), rotate(sol.jerk)

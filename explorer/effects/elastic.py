@@ -124,8 +124,8 @@ def linkage_model(scene, lift, omega: float) -> LinkageModel:
 
 def elastic_effect(ctx) -> EffectOutput:
     scene = ctx.scene
-    if scene.linkage.elements or getattr(scene, "hla", None) is not None:  # a train of parts, an adjuster (#25)
-        from .train_elastic import train_elastic_effect
+    if scene.linkage.elements or scene.hla is not None:  # a train of parts, an adjuster (#25)
+        from .train_elastic import train_elastic_effect  # numba, scipy: only for a train of parts or [hla]
 
         return train_elastic_effect(ctx)
     if scene.spring.elements > 0:  # the spring as a body: its own model and solvers (issue #15)

@@ -28,7 +28,13 @@ from typing import Any
 
 import numpy as np
 
+from ..core.memo import remember, remember as _remember
 from ..dynamics import solvers
+from ..dynamics.model import LinkageModel
+from ..mechanics.kinematics import lash_crossings, lash_take_ups
+from .elastic import MAX_SOLVER_NODES, check_resolution
+from .registry import order
+from .residual import lash_reference, reference_parts
 
 ELASTIC = ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
            "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
@@ -48,9 +54,6 @@ class BatchCache:
 def _residual_reference(shared, lift, ratio: float, lash: float, n: int):
     """The residual figures' reference lift at the n output angles, the dwell's first sample (-1:
     none) and the drive there: effects/residual.residual_reference, per lever ratio and lash."""
-    from .residual import lash_reference, reference_parts
-    from ..core.memo import remember
-
     def base():  # what does not depend on the lash (a tolerance study draws a new lash every run)
         return reference_parts(lift, ratio, np.arange(n) * (2.0 * math.pi / n))
 
@@ -63,8 +66,6 @@ def _residual_reference(shared, lift, ratio: float, lash: float, n: int):
 
 def accepts(scene, shared) -> bool:
     """The elastic effect of this scene is the compiled kernel's model and method."""
-    from .registry import order
-
     if not scene.gear_plugin.batch_sweeps:  # a gear whose runs do not share one lift, or its own effects
         return False
     if "elastic" not in order(scene.effects):
@@ -82,11 +83,6 @@ def elastic_run(scene, shared):
     """(figures as a dict of ELASTIC, valve lift at the output samples, the revolution's elastic
     events) of one run. InputError: a speed beyond the solver's step budget (as the elastic
     effect); RuntimeError: a motion that does not settle (as the exact solver)."""
-    from ..dynamics.model import LinkageModel
-    from .elastic import check_resolution
-    from ..mechanics.kinematics import lash_crossings
-    from ..core.memo import remember as _remember
-
     lift = shared.lift
     ratio, lash = scene.follower.ratio, scene.valve.lash
     n = scene.solver.steps_per_revolution
@@ -175,9 +171,6 @@ def _chunk(kernel, params, group, shared) -> tuple[np.ndarray, np.ndarray]:
     """elastic_chunk from the run parameters (the batch module `kernel`'s RUN_PARAMETERS but
     take_up_s, filled here) and per run its lever ratio and steps per revolution: the runs of one
     grid and lash in one call."""
-    from .elastic import MAX_SOLVER_NODES
-    from ..core.memo import remember
-
     lift = shared.lift
     R = params.shape[0]
     figures = np.full((R, len(ELASTIC)), math.nan)
@@ -240,9 +233,6 @@ def _take_ups(pairs, shared) -> dict:
     study's runs each draw their own lash, and one Brent search per lash cost ten times the
     compiled revolution. Every lash takes this one search whatever else its chunk holds, so a table
     does not depend on how it was cut into chunks (each lane of the search is elementwise)."""
-    from ..core.memo import remember
-    from ..mechanics.kinematics import lash_take_ups
-
     out: dict = {}
     wanted: dict[float, set] = {}
     for ratio, lash in pairs:

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..core import plugins
 from ..core.errors import InputError
+from ..lift.curves import LiftCurve
 from ..result import NAN_MEANINGS, EffectOutput, EffectTiming, Event, Result
 from . import registry
 from .context import Context, sample_grid  # noqa: F401 (Context: the effects' API, imported from here too)
@@ -42,7 +43,7 @@ class RunCache:
     the lift curve (the same cam in every run) and each effect's own bounded memo
     (explorer.core.memo.remember). The sweep engine's cache extends it."""
 
-    lift: Any = None
+    lift: LiftCurve | None = None
     memo: dict = field(default_factory=dict)
 
     def of(self, effect: str) -> dict:

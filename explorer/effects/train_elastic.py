@@ -32,19 +32,14 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..dynamics.hla import ATMOSPHERE
-from ..dynamics.model import Drive
 from ..dynamics.train import TrainModel
 from ..result import EffectOutput, Event
-from .chain_elastic import chain_solver, check_solid, exciting_orders
+from .chain_elastic import exciting_orders
+from .chain_run import chain_run
 from .elastic_events import linkage_outputs, output_order
 
 TRAIN_KINDS = ("lift-off", "separation", "re-contact", "seat", "contact-opens", "contact-closes", "coil-clash",
                "check-valve-open", "check-valve-close", "stick", "turn", "release", "pump-up")
-
-
-def is_train(scene) -> bool:
-    """The scene's linkage is a train of parts, or carries an adjuster."""
-    return bool(scene.linkage is not None and scene.linkage.elements) or getattr(scene, "hla", None) is not None
 
 
 def _event(ev: dict, period: float, omega: float) -> Event:
@@ -64,24 +59,17 @@ def train_elastic_effect(ctx) -> EffectOutput:
     scene = ctx.scene
     omega = ctx.omega
     model = TrainModel.from_scene(scene)
-    section = getattr(scene, "hla", None)
+    section = scene.hla
     revolutions = section.revolutions if section is not None else 1
     ratio = scene.follower.ratio
-    drive = Drive(ctx.lift, ratio, omega)
     n = ctx.time.size
-    period = 2.0 * math.pi / omega
-    D = drive(ctx.time)
-    check_solid(scene, float(D[0].max()))
-    solve = chain_solver(scene.solver.method, scene.source)
-    options = dict(scene.solver.options)
-    i0 = int(np.argmin(D[0]))
-    one = np.concatenate([ctx.time[i0:], ctx.time[:i0] + period])
-    t_run = np.concatenate([one + k * period for k in range(revolutions)])
+    run = chain_run(ctx, revolutions)
+    drive, period, D, i0, t_run = run.drive, run.period, run.D, run.i0, run.t_run
     try:
         model.start_state(drive, float(t_run[0]))
     except ValueError as exc:  # no rest for the train on the base circle: its joints contradict each other
         raise InputError(scene.source, "linkage.elements", f"{exc}: check the joints' lash and contacts") from None
-    sol = solve(model, drive, t_run, **options)
+    sol = run.solve(model, drive, t_run, **run.options)
     rotate, _ = output_order(n, i0)
     last = slice((revolutions - 1) * n, revolutions * n)
     t_last = float(t_run[(revolutions - 1) * n])

@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
+from ..mechanics.contact import hertz_line_stress
 from . import jet as J
 from .contour_follow import as_parametric, check_base_circle, contour_jets, contour_sign, make_contour_motion
 from .envelope import (
@@ -68,6 +69,7 @@ from .envelope import (
 )
 from .jet import Jet
 from .linkage import DEAD_POINT_MARGIN, circle_intersection, wrap
+from .pivoted import analyse_pitch
 from .train_statics import ContactForces, cam_forces, point_velocity_about
 from .valve_end import TipContact, ValveEnd, make_valve_end
 
@@ -129,9 +131,6 @@ class Arm:
     def circle_centre(self, psi):
         a, delta = self.cam_side.centre_polar()
         return self.pivot[0] + a * J.cos(psi + delta), self.pivot[1] + a * J.sin(psi + delta)
-
-    def reference_point(self, psi):
-        return self.pivot[0] + self.cam_side.arm * J.cos(psi), self.pivot[1] + self.cam_side.arm * J.sin(psi)
 
     def face(self, psi):
         """Flat pad: (normal angle phi, support h) of the face line."""
@@ -392,8 +391,6 @@ class ArmGear:
         """Peak Hertz pressure (Pa) at the cam (roller or pad of the given width on the cam: a line
         contact of two cylinders, a flat pad's radius infinite) and at the valve tip (the pad on the
         flat tip, over the chord of the tip's face that the contact line crosses, or `tip_width`)."""
-        from ..mechanics.contact import hertz_line_stress
-
         side = self.arm.cam_side
         if side.width is None:
             raise InputError(self.arm.file, f"{self.arm.key}.width", "the contact stress needs the roller's or pad's width")
@@ -404,8 +401,6 @@ class ArmGear:
 def tip_stress(valve: ValveEnd, tip: TipContact, force, e_star: float, width: float | None) -> np.ndarray:
     """Hertz line stress of the valve pad on the flat tip: the contact line crosses the round tip
     face as a chord 2 sqrt(r_tip^2 - w^2) at the scrub w (or over `width` if given)."""
-    from ..mechanics.contact import hertz_line_stress
-
     if width is None:
         if valve.tip_radius is None:
             raise InputError(valve.file, valve.tip_key, "the tip's contact stress needs the tip's radius")
@@ -452,8 +447,6 @@ def make_arm_gear(*, base_radius: float, pivot, cam_side: CamSide, branch: int, 
 
 def arm_relation(arm: Arm, contour):
     """(theta(t), psi(t)) of the arm over a parametric contour (module docstring)."""
-    from .pivoted import analyse_pitch
-
     sign = contour_sign(contour)
     side = arm.cam_side
     if side.circular:

@@ -37,12 +37,15 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
+from ..dynamics.solvers import varying_stiffness
+from ..lift.contours.cam_profile import CamGeometry
 from ..lift.curves import law_lift
 from ..lift.registry import closed_form_names, law_spec
-from ..mechanics.contact import ContactGeometry, ContactSpec, effective_modulus
+from ..mechanics.contact import ContactGeometry, ContactSpec, effective_modulus, hertz_line_stress
 from ..mechanics.gear_contact import GearContact
 from ..mechanics.tribology import SurfaceMotion
 from ..result import EffectOutput
+from .arm import tip_stress
 from .base import Gear, GearSpec
 from .common import section, spec_of
 from .contour_follow import cam_contour
@@ -134,8 +137,6 @@ class TrainCam:
     law: Any
 
     def at(self, theta):
-        from ..lift.contours.cam_profile import CamGeometry
-
         theta = np.asarray(theta, dtype=float)
         k = self.gear.kinematics(theta)
         s = k.surface
@@ -202,8 +203,6 @@ class ArmTrainGear(Gear):
         if law.from_contour and fields.get("cam") is None:
             raise InputError(file, "cam", "missing section: lift.law = \"contour\" needs the [cam] contour")
         if spec is not None and self.side_stiffness(spec) is not None and "elastic" in fields["effects"]:
-            from ..dynamics.solvers import varying_stiffness
-
             varying = varying_stiffness()
             if fields["solver"].method not in varying:
                 raise InputError(spec.file, "solver.method", f"method \"{fields['solver'].method}\" needs a constant "
@@ -310,8 +309,6 @@ class ArmTrainGear(Gear):
         raise NotImplementedError
 
     def cam_hertz(self, train, k, normal, e_star: float, width: float) -> np.ndarray:
-        from ..mechanics.contact import hertz_line_stress
-
         return hertz_line_stress(normal, width, self.counter_radius(train), k.surface.radius, e_star)
 
     def contact_figures(self, ctx, geometry, columns) -> tuple[dict, dict]:
@@ -319,8 +316,6 @@ class ArmTrainGear(Gear):
         and entrainment velocities of both contacts (m/s), the tip's scrub, the Hertz stress of the
         valve pad on the tip and, when the gear's part gives the contact's width, the cam's own Hertz
         stress for its contact type in place of the generic one."""
-        from .arm import tip_stress
-
         scene, train, k, w = ctx.scene, self._train(ctx), self._kin(ctx), ctx.omega
         spec = scene.contact if scene.contact is not None else ContactSpec()
         mu_c, mu_t = self.frictions(scene)

@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
+from ..lift.contours.cam_profile import CamGeometry
 from ..lift.curves import law_lift
 from ..lift.registry import law_spec
 from ..mechanics.contact import ContactGeometry, ContactSpec, effective_modulus
@@ -85,8 +86,6 @@ class BucketCam:
     source: str
 
     def at(self, theta):
-        from ..lift.contours.cam_profile import CamGeometry
-
         theta = np.asarray(theta, dtype=float)
         k = self.gear.kinematics(theta)
         curvature = 1.0 / k.surface.radius

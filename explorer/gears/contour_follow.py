@@ -26,6 +26,7 @@ from typing import Callable
 import numpy as np
 
 from ..core.errors import InputError
+from ..lift.contours.arcs import ArcContour
 from ..lift.contours.parametric import orientation
 from . import jet as J
 from .envelope import derivatives_along
@@ -91,8 +92,6 @@ def cam_contour(cam):
 
 def as_parametric(contour):
     """ArcContour -> ArcChain; a parametric contour (SplineContour, ...) as it is."""
-    from ..lift.contours.arcs import ArcContour
-
     return ArcChain(contour) if isinstance(contour, ArcContour) else contour
 
 

@@ -50,6 +50,9 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
+from ..lift.contours.arcs import ArcContour, ContourError, make_arc_lift
+from ..lift.contours.parametric import ContourFollowError, make_parametric_lift
+from ..mechanics.contact import hertz_line_stress
 from . import jet as J
 from .contour_follow import as_parametric, contour_jets, contour_sign, make_contour_motion
 from .envelope import (
@@ -271,8 +274,6 @@ class BucketTappetGear:
         edges (`edge_loaded`) at least the line contact over the lobe's width (crown_stress: the
         real pressure is higher still at the edges; a crown is chosen to keep the ellipse on the
         lobe)."""
-        from ..mechanics.contact import hertz_line_stress
-
         t = self.tappet
         b = width if width is not None else t.cam_width
         if t.crowned:
@@ -284,7 +285,7 @@ class BucketTappetGear:
     def contact_ellipse(self, k: TappetKinematics, normal_force, e_star: float):
         """The crown's Hertz ellipse (explorer.mechanics.hertz.PointContact); its semi-major axis
         runs along the camshaft, to be compared with half the lobe's width (edge loading)."""
-        from ..mechanics.hertz import point_contact
+        from ..mechanics.hertz import point_contact  # heavy (scipy): imported on use
 
         rf = self.tappet.face_radius
         across = np.full(len(k.theta), 1.0 / rf)
@@ -308,8 +309,7 @@ def crown_stress(normal_force, crown_radius: float, cam_radius, e_star: float, w
     p0 and the line contact's over the width with the in-plane curvature (explorer.mechanics.
     contact.hertz_line_stress; the edges add more). That larger figure is returned there; as
     Rf -> inf it is the flat face's line contact, where the ellipse's p0 would fall to 0."""
-    from ..mechanics.contact import hertz_line_stress
-    from ..mechanics.hertz import point_contact
+    from ..mechanics.hertz import point_contact  # heavy (scipy): imported on use
 
     rho = np.asarray(cam_radius, dtype=float)
     in_plane = 1.0 / crown_radius + 1.0 / rho
@@ -351,9 +351,6 @@ def flat_face_relation(contour, base_radius: float):
 def analyse_bucket(tappet: Tappet, contour, n: int = 3600) -> BucketTappetGear:
     """The tappet's lift over a given contour (an ArcContour or a parametric contour such as
     explorer.lift.contours.parametric.SplineContour), checked like a synthesised one."""
-    from ..lift.contours.arcs import ArcContour, ContourError, make_arc_lift
-    from ..lift.contours.parametric import ContourFollowError, make_parametric_lift
-
     tappet.validate()
     if tappet.crowned:
         try:

@@ -165,6 +165,7 @@ def build_modern_gear(kind: str, parts: Mapping[str, Mapping[str, Any]], *, base
                       lift, file: str = "<memory>", contour=None, n: int = 3600):
     """The gear for parsed parts and the valve-referred lift law (or a given contour), checked
     over a revolution (its geometry errors name the scene keys)."""
+    # local: this module is the gears' keys (no numpy); a gear's geometry loads when it is built
     from .arm import CamSide, make_arm_gear
     from .flat_face import Tappet, analyse_bucket, synthesise_bucket
     from .pushrod import Lifter, make_pushrod_train

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
+from ..lift.validity import cam_fault, entered_error
 from ..mechanics.contact import ContactGeometry
 from . import jet as J
 from .jet import Jet
@@ -160,8 +161,6 @@ class PivotedRollerGear:
 
     # -- checks -----------------------------------------------------------------------------
     def check(self, n: int = 1440) -> "LeverGeometry":
-        from ..lift.validity import cam_fault, entered_error
-
         theta = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
         g = self.geometry(theta)
         r = self.roller_radius

@@ -33,7 +33,11 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
+from ..lift.contours.arcs import ArcContour, ContourError, make_arc_lift
+from ..lift.contours.parametric import ContourFollowError, make_parametric_lift
+from ..mechanics.contact import hertz_line_stress
 from . import jet as J
+from .arm import tip_stress
 from .contour_follow import as_parametric, check_base_circle, make_contour_motion
 from .envelope import (
     CamSurface,
@@ -47,7 +51,7 @@ from .envelope import (
     line_contact,
     surface_velocities,
 )
-from .flat_face import crowned_contact, crowned_face_surface, flat_face_relation, flat_face_surface
+from .flat_face import crown_stress, crowned_contact, crowned_face_surface, flat_face_relation, flat_face_surface
 from .jet import Jet
 from .linkage import DEAD_POINT_MARGIN, circle_intersection, closure_or_error
 from .train_statics import ContactForces, cam_forces, point_velocity_about
@@ -273,16 +277,11 @@ class PushrodTrain:
         the lifter's width; a crowned face: the point contact as for the bucket tappet, at least the
         line contact where its ellipse would overrun the width, explorer.gears.flat_face.crown_stress)
         and at the valve tip (explorer.gears.arm.tip_stress)."""
-        from ..mechanics.contact import hertz_line_stress
-        from .arm import tip_stress
-
         f = self.lifter
         if f.width is None:
             raise InputError(self.file, f"{self.key}.lifter.width", "the contact stress needs the roller's or lobe's width")
         rho = k.surface.radius
         if f.kind == "flat" and f.circular:
-            from .flat_face import crown_stress
-
             cam = crown_stress(forces.normal, f.radius, rho, e_star, f.width)[0]
         else:
             cam = hertz_line_stress(forces.normal, f.width, f.radius, rho, e_star)
@@ -343,9 +342,6 @@ def make_pushrod_train(*, base_radius: float, lifter: Lifter, rocker_pivot, cup,
 def _lifter_motion(train: PushrodTrain, contour):
     """The lifter's lift over a given contour: a flat face by the support function
     (explorer.gears.flat_face), a roller or a crowned face by explorer.lift.contours' roller analysis."""
-    from ..lift.contours.arcs import ArcContour, ContourError, make_arc_lift
-    from ..lift.contours.parametric import ContourFollowError, make_parametric_lift
-
     f, file = train.lifter, train.file
     if f.circular:
         try:

@@ -26,6 +26,7 @@ from types import MappingProxyType
 import numpy as np
 
 from .arm_train import CONTACT_COLUMNS, KINEMATICS_COLUMNS, ArmTrainGear
+from .flat_face import crown_stress
 from .modern_spec import _arm, _lifter, _valve, _valve_pad
 
 PUSHROD_KINEMATICS = ("lifter_lift_m", "lifter_velocity_per_rad", "pushrod_angle_deg", "rocker_lever_ratio")
@@ -75,8 +76,6 @@ class RockerArm(ArmTrainGear):
         """A crowned lifter face touches the lobe in a point (explorer.gears.flat_face.crown_stress);
         a roller, a pad or a flat face in a line."""
         if _pushrod(train) and train.lifter.kind == "flat" and math.isfinite(train.lifter.radius):
-            from .flat_face import crown_stress
-
             return crown_stress(normal, train.lifter.radius, k.surface.radius, e_star, width)[0]
         return super().cam_hertz(train, k, normal, e_star, width)
 

@@ -43,6 +43,7 @@ from scipy.integrate import solve_ivp
 
 from ..core.errors import InputError
 from ..mechanics.forces import velocity_zeros
+from ..mechanics.kinematics import lash_crossings
 from .dashpot import AirDashpot, OilDashpot
 
 TWO_PI = 2.0 * math.pi
@@ -412,8 +413,6 @@ class LatchedBuffer:
 def latched_buffer(buffer, latch, overtravel: float, start: float, omega: float, phi_pick: float,
                    phi_trip: float, n_grid: int = 4096, rtol: float = 1e-11) -> LatchedBuffer:
     """The buffer's state and force along the rigid latch motion over the carried window."""
-    from ..mechanics.kinematics import lash_crossings
-
     so, w = overtravel, omega
     ups, downs = lash_crossings(latch, 1.0, so + buffer.stroke, n_grid)
     inner = np.concatenate([ups, downs, np.asarray(latch.breakpoints(), dtype=float), velocity_zeros(latch, n_grid)])
@@ -591,8 +590,6 @@ class TripLift:
 
 def build_trip_lift(latch, overtravel: float, trip_angle: float, omega: float, model: ClosingModel,
                     file: str = "<memory>") -> TripLift:
-    from ..mechanics.kinematics import lash_crossings
-
     start = latch.start
     ups, downs = lash_crossings(latch, 1.0, overtravel)
     if ups.size != 1 or downs.size != 1:

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..core.errors import InputError, echo
 from ..core.reader import Table
-from ..core.units import plain_number, registry, short_repr, to_si, unit_scale
+from ..core.units import plain_number, registry, short_repr, unit_scale
 from .validity import MAX_LIFT, check_computed  # MAX_LIFT: a bigger result means wrong units; it guards overflow
 
 TWO_PI = 2.0 * math.pi

@@ -52,7 +52,7 @@ from ..core.errors import InputError, echo
 from ..core.ranges import RANGES
 from .laws import HIGH_ORDER_LAWS, LAWS, law_derivatives
 from .validity import computed_error, lift_fault
-from .spline import MAX_CONTINUITY, SplineLift, SplineOptions, check_spline_shape, parse_stations
+from .spline import MAX_CONTINUITY, SplineLift, SplineOptions, check_spline_shape, parse_stations, solve_spline
 
 TWO_PI = 2.0 * math.pi
 SPLINE = "spline"  # wanted_law: the wanted lift through [[lift.stations]]
@@ -445,8 +445,6 @@ def _round(x: float, direction, digits: int = 3) -> float:
 
 def polydyne_lift(spec, options: PolydyneOptions, valve, spring, loads, linkage, follower) -> PolydyneLift:
     if options.spline is not None:
-        from .spline import solve_spline
-
         o = options.spline
         spline = solve_spline(o.stations, o.continuity, 0.0)
         height = float(spline.local_derivatives(np.linspace(0.0, spline.knots[-1], 2001), 0)[0].max())

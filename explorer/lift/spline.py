@@ -33,6 +33,9 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
+from ..core.units import to_si
+from .curves import LawLift
+from .validity import cam_fault, computed_error, lift_fault
 
 TWO_PI = 2.0 * math.pi
 NAMES = ("s", "v", "a", "j", "snap")
@@ -195,8 +198,6 @@ def parse_stations(table, continuity: int, omega: float) -> tuple[SplineOptions,
     """The [[lift.stations]] (values per radian at reference speed omega) and their lift (event
     coordinates: start 0), solved at load so that a bad set of conditions fails there; shared with
     the polydyne law's wanted spline."""
-    from ..core.units import to_si
-
     raw = table.raw("stations")
     where = table.key("stations")
     if not isinstance(raw, list) or not 2 <= len(raw) <= MAX_STATIONS or not all(isinstance(r, dict) for r in raw):
@@ -250,8 +251,6 @@ def check_spline_shape(table, lift: SplineLift, follower=None, start: float = 0.
     (explorer.lift.validity: finite, lift range; with the follower's geometry when `follower` is
     given: pressure angle and undercut, with the lift placed at cam angle `start`). A polydyne's
     wanted spline, a valve lift and no cam, is checked without a follower."""
-    from .validity import cam_fault, computed_error, lift_fault
-
     where = table.key("stations")
     x = np.linspace(0.0, lift.knots[-1], 20001)
     with np.errstate(over="ignore", invalid="ignore"):
@@ -274,8 +273,6 @@ def _initial_free_values(stations, continuity: int, file: str, key: str) -> list
     constraint-abiding start for `explorer design`, and the lift the scene runs until then."""
     if not any(any(st.free) for st in stations):
         return stations
-    from .curves import LawLift
-
     given = [(st.angle, st.values[0]) for st in stations if st.values[0] is not None and not st.free[0]]
     height = max(v for _, v in given)
     tops = [a for a, v in given if v == height]

@@ -43,7 +43,8 @@ from ..core.errors import InputError, echo
 from ..core.reader import Table
 from ..core.files import data_folder, read_text
 from ..core.ranges import RANGES
-from ..core.units import to_si, unit_scale
+from ..core.roots import root_in
+from ..core.units import unit_scale
 from .validity import MAX_LIFT, check_computed
 
 TWO_PI = 2.0 * math.pi
@@ -237,8 +238,6 @@ def fit_periodic_spline(angles, values, noise: float | None = None, knots: int |
     from scipy import linalg, sparse
     from scipy.interpolate import BSpline
     from scipy.optimize import minimize_scalar
-
-    from ..core.roots import root_in
 
     x = np.mod(np.asarray(angles, dtype=float), TWO_PI)
     y = np.asarray(values, dtype=float)

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.ranges import RANGES
+from .contours.translating import find_undercut, pitch_geometry
 
 TWO_PI = 2.0 * math.pi
 MAX_LIFT = 1.0  # m: no valve gear lifts more; a bigger lift means a wrong unit or an impossible design
@@ -90,8 +91,6 @@ def cam_fault(angle, lift_jet, *, pressure_angle=None, pitch_radius=None, roller
                             f"at {_at(where, angle[i])} (at {math.degrees(MAX_PRESSURE_ANGLE):g} deg the cam cannot "
                             "push the follower)", "lower the lift or lengthen the event", "lift")
     if pitch_radius is not None:
-        from .contours.translating import find_undercut
-
         rho = np.asarray(pitch_radius, dtype=float).reshape(-1)
         at = angle if curvature_angle is None else np.asarray(curvature_angle, dtype=float).reshape(-1)
         i = find_undercut(rho, roller_radius)
@@ -106,8 +105,6 @@ def cam_fault(angle, lift_jet, *, pressure_angle=None, pitch_radius=None, roller
 def translating_fault(theta, d, follower, dip: float = 0.0) -> CamFault | None:
     """cam_fault of a translating-roller cam from its lift derivatives d (4, N) at cam angles theta:
     pressure angle and pitch-curve radius in closed form (explorer.lift.contours.translating)."""
-    from .contours.translating import pitch_geometry
-
     phi, rho = pitch_geometry(d, follower.base_radius, follower.roller_radius, follower.offset)
     return cam_fault(theta, d, pressure_angle=phi, pitch_radius=rho, roller_radius=follower.roller_radius, dip=dip)
 

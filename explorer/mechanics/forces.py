@@ -38,6 +38,8 @@ from typing import Callable
 import numpy as np
 
 from ..core.errors import InputError, echo
+from ..core.roots import root_in
+from .kinematics import lash_crossings
 
 
 TWO_PI = 2.0 * math.pi
@@ -142,8 +144,6 @@ class Pieces:
 
 def velocity_zeros(lift, n_grid: int = 4096) -> np.ndarray:
     """Angles where dL/dtheta changes sign (isolated zeros), polished by Brent's method."""
-    from ..core.roots import root_in
-
     grid = np.linspace(0.0, TWO_PI, n_grid + 1)
     grid = np.unique(np.concatenate([grid, np.asarray(lift.breakpoints(), dtype=float)]))
     d1 = lift.derivatives(grid)[1]
@@ -159,8 +159,6 @@ def velocity_zeros(lift, n_grid: int = 4096) -> np.ndarray:
 
 
 def smooth_pieces(lift, ratio: float, lash: float, n_grid: int = 4096) -> Pieces:
-    from .kinematics import lash_crossings
-
     ups, downs = lash_crossings(lift, ratio, lash, n_grid)
     cuts = np.concatenate([np.asarray(lift.breakpoints(), dtype=float), ups, downs, velocity_zeros(lift, n_grid)])
     cuts = np.unique(np.mod(cuts, TWO_PI))
@@ -483,8 +481,6 @@ def loss_intervals(pieces: Pieces, force_of, n_grid: int = 4096) -> list[tuple[f
     - regain: it rises back above 0 inside a piece, at a piece start, or at the end of the open
       stretch (the valve seats and its seat holds it).
     """
-    from ..core.roots import root_in
-
     n = pieces.start.size
     if n == 0:
         return []

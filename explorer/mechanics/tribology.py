@@ -56,6 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import InputError
+from ..lift.contours.translating import pitch_geometry
 
 # Thermal contact coefficient sqrt(k rho c) of martensitic steels, the average ISO/TR 13989-1
 # uses when the material's own is unknown: 13.6 N/(mm s^0.5 K) (k 41-52 W/(m K), rho c about
@@ -99,8 +100,6 @@ def rolling_roller_motion(pitch_speed, pitch_radius, roller_radius: float) -> Su
 def translating_roller_motion(d, base_radius: float, roller_radius: float, offset: float = 0.0) -> SurfaceMotion:
     """Translating roller (explorer.lift.contours.translating's conventions): the pitch curve's
     tangent T = (y, L' - e) with y = sqrt(Rp^2 - e^2) + L, its radius from pitch_geometry."""
-    from ..lift.contours.translating import pitch_geometry
-
     rp = base_radius + roller_radius
     y = math.sqrt(rp * rp - offset * offset) + np.asarray(d[0], dtype=float)
     speed = np.hypot(y, np.asarray(d[1], dtype=float) - offset)

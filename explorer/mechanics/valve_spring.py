@@ -39,10 +39,6 @@ ZIMMERLI = {  # (S_sa, S_sm), Pa: Zimmerli (1957), as Shigley quotes them
 TORSIONAL_RUPTURE = 0.67  # S_su / S_ut (Shigley)
 
 
-def spring_index(coil_diameter, wire_diameter) -> np.ndarray:
-    return np.asarray(coil_diameter, dtype=float) / np.asarray(wire_diameter, dtype=float)
-
-
 def wahl_factor(index) -> np.ndarray:
     """K_W = (4C - 1)/(4C - 4) + 0.615/C."""
     c = np.asarray(index, dtype=float)

@@ -41,10 +41,13 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, fields
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 from ..core.errors import InputError
 from ..core.reader import Table
+
+if TYPE_CHECKING:  # imported when an [hla] section is read: a scene without one loads no dynamics
+    from ..dynamics.hla import HLA
 
 MAX_ELEMENTS = 32  # parts between the cam and the valve: a train has a handful
 MAX_REVOLUTIONS = 200  # the adjuster's revolutions: each costs one revolution's solve
@@ -76,7 +79,7 @@ class LinkageElement:
 
 @dataclass(frozen=True)
 class HLASection:
-    hla: Any  # explorer.dynamics.hla.HLA (imported when an [hla] section is read: a scene without one loads no dynamics)
+    hla: HLA
     revolutions: int = 6
 
 
@@ -153,7 +156,7 @@ HLA_NUMBERS: dict[str, tuple[float, float, float, bool]] = {  # key -> (default,
 
 def parse_hla_section(t: Table, fields_so_far: dict) -> HLASection:
     """[hla] -> HLASection (the adjuster's parameters in SI and how many revolutions to run)."""
-    from ..dynamics.hla import HLA
+    from ..dynamics.hla import HLA  # local: the adjuster model (numpy) loads only for a scene with [hla]
 
     t.reject_unknown((*HLA_KEYS, *HLA_NUMBERS, "lever", "revolutions"))
     values: dict = {}

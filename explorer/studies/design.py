@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -50,7 +50,9 @@ from ..core.units import figure
 from ..lift.contours.translating import pitch_geometry
 from ..lift.curves import LawLift
 from ..lift.spline import NAMES, UNITS, solve_spline, with_values
+from ..lift.validity import check_computed
 from ..mechanics.forces import TrainLoads, friction_direction, load_parts
+from ..scene.scene import MAX_LIFT
 
 TWO_PI = 2.0 * math.pi
 OBJECTIVES = ("peak-acceleration", "peak-jerk", "jerk-energy", "residual-vibration")
@@ -131,9 +133,6 @@ def infeasible(scene, problem, limits: DesignLimits) -> tuple[str, str] | None:
       station lift: ratio s_k - lash.
     - open area: the valve lift is at most MAX_LIFT (a scene's largest lift) times the ratio,
       less the lash, over at most the event's angle."""
-    from ..mechanics.forces import TrainLoads
-    from ..scene.scene import MAX_LIFT
-
     ratio = scene.follower.ratio
     lash = scene.valve.lash if scene.valve is not None else 0.0
     span = float(problem.knots[-1] - problem.knots[0])  # the event's angle
@@ -530,8 +529,6 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500, *, m
                                                   options={"maxiter": maxiter, "ftol": 1e-14})
     lift = problem.lift(z)
     # the optimum is a computed cam: the checks of every cam (explorer.lift.validity) before it is reported
-    from ..lift.validity import check_computed
-
     check_computed(lift, scene.follower, scene.source, "lift.stations", f"the optimised lift (--objective {objective})",
                    {"undercut": "keep its curvature with --radius-margin (0 or more)",
                     "pressure angle": "limit it with --max-pressure-angle",

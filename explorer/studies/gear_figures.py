@@ -22,6 +22,7 @@ import numpy as np
 from ..core.outputs import write_output
 from ..effects.lift import build_lift
 from ..effects.pipeline import simulate
+from ..gears.rocking import swing_increments
 from ..scene.builtin import scenes_dir
 from ..scene.scene import load_scene
 
@@ -33,8 +34,6 @@ def rocking_cam_figure(scene, path) -> Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from ..gears.rocking import swing_increments
 
     lift = build_lift(scene)
     gear = lift.gear
@@ -100,8 +99,8 @@ def trip_buffers_figure(scene, path) -> Path:
     import matplotlib.pyplot as plt
 
 
-    from ..gears.trip_gear import make_buffer
-    from ..gears.trip import simulate_closing
+    from ..gears.trip_gear import make_buffer  # heavy (scipy): imported on use
+    from ..gears.trip import simulate_closing  # heavy (scipy): imported on use
 
     lift = build_lift(scene)
     spec = scene.gear

@@ -25,13 +25,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core.errors import InputError, echo
+from ..core import grids
+from ..core.errors import InputError
 from ..effects.lift import build_lift
 from ..gears.registry import GEARS
 from ..lift.polydyne import RISE_POLYNOMIALS, residual_amplitude
 from .charts import figure, png
 from .sweep_run import run_plan
-from .sweep_spec import check_scene, make_plan, parse_axis
+from .sweep_spec import SWEEP_KEYS, check_scene, check_values, make_plan, parse_axis, quantity
 from .sweep_table import SweepTable
 
 TWO_PI = 2.0 * math.pi
@@ -157,9 +158,6 @@ def parse_speeds(text: str) -> np.ndarray:
     """--rpm in the range grammar of every command (explorer.core.grids, as `explorer sweep
     --vary drive.rpm=...`): 'A:B:N' (N speeds from A to B, upwards), 'A:B:N:log' or 'A,B,C';
     bare numbers in rev/min, or with a unit; each speed in drive.rpm's valid range."""
-    from ..core import grids
-    from .sweep_spec import SWEEP_KEYS, check_values, quantity
-
     info, key = SWEEP_KEYS["drive.rpm"], "--rpm"
     shape = grids.read(text, file=key, key=info.key, max_points=MAX_SPEEDS)
     speeds = grids.values(shape, lambda value: quantity(value, info, key), file=key, key=info.key)

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..core import grids
 from ..core.errors import InputError, echo
+from ..core.memory import available_bytes, size_text
 from ..core.ranges import check_range
 from ..core.units import to_si
 from ..scene.scene import MAX_RPM
@@ -242,8 +243,6 @@ def make_plan(axes=(), samples=(), runs: int | None = None, seed: int | None = N
     `runs` times with fresh draws of the samples (runs defaults to 1 without samples). `figures`:
     the columns each run adds to the table, for the memory check (a plan whose table would not
     fit in the available memory is refused before anything is allocated, --yes or not)."""
-    from ..core.memory import available_bytes, size_text
-
     axes, samples = tuple(axes), tuple(samples)
     keys = [a.key for a in axes] + [s.key for s in samples]
     if not keys:

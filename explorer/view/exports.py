@@ -154,7 +154,7 @@ def cam_solid(src: CamProfile, tolerance: float, width: float):
     (z), centred on z = 0; metres."""
     import trimesh
 
-    from .parts import extrude_contour
+    from .parts import extrude_contour  # trimesh, scipy: only for the mesh formats (stl, glb)
 
     # float32 in STL and glTF resolves ~4e-9 m at 0.05 m: closer vertices would collapse into
     # degenerate faces

@@ -5,8 +5,6 @@ the smallest over the loaded contact (explorer.mechanics.tribology)."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ...mechanics.gear_contact import NotApplicable

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 
+from ...mechanics.forces import TrainLoads, float_speed
 from ...mechanics.gear_contact import NotApplicable
 from ..case import RPM
 from ..rule import Measure
@@ -72,8 +73,6 @@ def measure(case, settings) -> Measure:
 def _rigid(case, settings, high) -> Measure:
     """The rigid float speed: exact for the nominal design (explorer.mechanics.forces.float_speed);
     for draws the grid's min of G/(-A) over the open, decelerating samples."""
-    from ...mechanics.forces import TrainLoads, float_speed
-
     if not case.sampling:
         jump = float_speed(case.lift, TrainLoads.from_scene(case.scene), case.scene.follower.ratio,
                            case.scene.valve.lash)

@@ -11,14 +11,14 @@ import math
 
 import numpy as np
 
+from ...dynamics.chain import chain_frequencies, continuous_frequencies
+from ...studies.spectrum import MAX_ORDERS, acceleration_spectrum
 from ..case import RPM
 from ..rule import Measure
 
 
 def surge_frequencies(spring, rate, modes: int) -> np.ndarray:
     """The first `modes` surge frequencies (rad/s) per rate (N, modes)."""
-    from ...dynamics.chain import chain_frequencies, continuous_frequencies
-
     rate = np.ravel(np.asarray(rate, dtype=float))
     if spring.elements > 0:
         base = np.asarray(chain_frequencies(spring.elements, 1.0, spring.mass), dtype=float)[:modes]
@@ -28,8 +28,6 @@ def surge_frequencies(spring, rate, modes: int) -> np.ndarray:
 
 
 def measure(case, settings) -> Measure:
-    from ...studies.spectrum import MAX_ORDERS, acceleration_spectrum
-
     sp = case.scene.spring
     if sp is None or not sp.mass > 0.0 or not sp.rate > 0.0:
         return Measure.not_applicable("needs the spring's mass ([spring] mass, or density with its wire geometry)")

@@ -9,13 +9,12 @@ import math
 
 import numpy as np
 
+from ...effects.pipeline import simulate
 from ..case import RPM
 from ..rule import Measure
 
 
 def measure(case, settings) -> Measure:
-    from ...effects.pipeline import simulate
-
     if case.scene.gear_plugin.effect("forces") is None:  # only a gear's own forces report a latch
         return Measure.not_applicable("the gear has no latch")
     if case.scene.valve is None or case.scene.spring is None:

@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...core.errors import InputError, echo
+from ...core.errors import InputError
 from .arcs import ContourError, make_arc_lift
 from .parametric import ContourFollowError, make_parametric_lift, _angle_and_height, pitch_jets
 

@@ -29,6 +29,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ...core.roots import root_in
 from .arcs import Arc, build_arc_contour, make_arc_lift, roller_height_on_arc
 
 RPM = 240.0
@@ -141,8 +142,6 @@ def lift_of(design: Design):
 
 def _inflection(lift, k: int) -> float | None:
     """Cam angle inside arc k where L'' changes sign (the inflection of the lift), if any."""
-    from ...core.roots import root_in
-
     a = float(lift.junction_angles[k])
     b = a + float(np.mod(lift.junction_angles[(k + 1) % lift.contour.n] - a, 2.0 * math.pi))
     f = lambda th: float(lift.arc_candidate(k, np.array([th]))[2, 0])  # noqa: E731

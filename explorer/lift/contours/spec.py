@@ -41,7 +41,7 @@ import numpy as np
 from ...core.errors import InputError, echo
 from ...core.files import data_folder, read_text
 from ...core.reader import Table
-from ...core.units import plain_number, to_si, unit_scale
+from ...core.units import plain_number, unit_scale
 from .arcs import Arc, ArcContour, ContourError, build_arc_contour
 from .parametric import SplineContour
 

@@ -32,6 +32,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
+from ...scene.builtin import builtin_scenes, find_scene
 from . import origin
 from .camera import Cameras
 from .checks_panel import CheckChosen, ChecksArrived, ChecksPanel, with_limits
@@ -81,8 +82,6 @@ class ExplorerApp:
         kernels=None,
         checks=None,
     ):
-        from ...scene.builtin import builtin_scenes, find_scene
-
         scene_path = str(find_scene(scene_path))  # a built-in scene named as the Scene list shows it
         port = server.get_port()
         if not origin.guarded(port):

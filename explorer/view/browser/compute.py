@@ -10,7 +10,9 @@ import traceback
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from .model import COMPUTE_TIME_LIMIT_S, MEMORY_LIMIT_BYTES, Prepared, Request, SUPERSEDE_AFTER_S
+from .model import AdviceTask, COMPUTE_TIME_LIMIT_S, MEMORY_LIMIT_BYTES, Prepared, Request, SUPERSEDE_AFTER_S
+from .speedsweep import NoSweep, SpeedSweep, SweepTask, with_elastic
+from .worker import ComputeProcess, Superseded, TimeLimitExceeded, WorkerDied
 
 
 # How long a parameter change may wait for a speed-sweep step in progress before that step is
@@ -81,8 +83,6 @@ class ComputeWorker:
     _span: tuple[str, tuple[float, float]] | None = None  # (scene path, speed range) last swept
 
     def start(self) -> "ComputeWorker":
-        from .worker import ComputeProcess
-
         self._process = ComputeProcess(memory_bytes=self.memory_limit)
         self._thread = threading.Thread(target=self._run, name="explorer-compute", daemon=True)
         self._thread.start()
@@ -185,8 +185,6 @@ class ComputeWorker:
             self._process.reap()
 
     def _compute(self, request: Request) -> None:
-        from .worker import Superseded, TimeLimitExceeded, WorkerDied
-
         started = time.monotonic()
 
         def superseded() -> bool:
@@ -238,8 +236,6 @@ class ComputeWorker:
                 with self._cond:
                     self._checks = prepared.request.serial
             if self.on_sweep is not None and prepared.new_result:
-                from .speedsweep import SweepTask
-
                 path = prepared.request.path
                 span = self._span[1] if self._span is not None and self._span[0] == path else None
                 with self._cond:
@@ -302,8 +298,6 @@ class ComputeWorker:
 
     def resweep(self) -> None:
         """Sweep the newest result again (the compiled solver became ready: all speeds at once)."""
-        from .speedsweep import SweepTask
-
         with self._cond:
             if self._last is not None and self.on_sweep is not None:
                 span = self._span[1] if self._span is not None and self._span[0] == self._last.request.path else None
@@ -313,9 +307,6 @@ class ComputeWorker:
     def _advice_step(self, serial: int) -> None:
         """The read-out with the spring advice, from the child; dropped when a newer request
         stops it (the newer result asks again)."""
-        from .model import AdviceTask
-        from .worker import Superseded, TimeLimitExceeded, WorkerDied
-
         def superseded() -> bool:
             return self._stop or (self._pending is not None and time.monotonic() - self._pending_at > SWEEP_YIELD_S)
 
@@ -342,9 +333,6 @@ class ComputeWorker:
         in the child; hand the sweep so far to `on_sweep`. A request waiting for more than
         SWEEP_YIELD_S stops a slow step (the child is restarted); the sweep then ends (the new
         result starts its own)."""
-        from .speedsweep import NoSweep, SpeedSweep, SweepTask, with_elastic
-        from .worker import Superseded, TimeLimitExceeded, WorkerDied
-
         if isinstance(sweep, SweepTask):
             task = dataclasses.replace(sweep, compiled=self.compiled is None or self.compiled())
         elif sweep.batched:

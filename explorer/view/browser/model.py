@@ -18,6 +18,13 @@ from typing import Any
 
 import numpy as np
 
+from ...core.errors import InputError
+from ...core.units import printable
+from ...effects.lift import build_lift
+from ...effects.pipeline import simulate
+from ...effects.spring_design import spring_design_summary
+from ...lift import registry as laws
+from ...scene.scene import load_scene
 from .parameters import PARAMETERS, override, scene_values  # noqa: F401 - the fields' table, re-exported
 
 
@@ -181,8 +188,6 @@ SKIP_SUMMARY = {"scene", "rpm", "steps_per_revolution", "effects", "events", "wa
 
 
 def _fmt_value(key: str, value) -> tuple[str, str]:
-    from ...core.units import printable
-
     value = printable(float(value), key)  # round-off (4.97e-14, -0) shows as 0
     for suffix, unit, k in UNIT_SUFFIXES:
         if key.endswith(suffix):
@@ -191,8 +196,6 @@ def _fmt_value(key: str, value) -> tuple[str, str]:
 
 
 def _event_speed(event) -> str:
-    from ...core.units import printable
-
     v = event.get("velocity_m_s", event.get("relative_velocity_m_s"))
     return f"{printable(float(v)):+.3f} m/s" if isinstance(v, (int, float)) and not isinstance(v, bool) else ""
 
@@ -314,9 +317,6 @@ def rigid_float_rpm(scene, lift, result=None) -> float:
     one: the trip gear's latch), from the result when that effect ran, else from a run of that
     effect alone. NaN when the scene has none (no [valve] mass or [spring]: InputError) or never
     floats; 0 when it floats at any speed."""
-    from ...core.errors import InputError
-    from ...effects.pipeline import simulate
-
     summary = result.summary if result is not None else {}
     if "jump_speed_rpm" not in summary:
         rigid = dataclasses.replace(scene, effects=("forces",), spring_design=None)
@@ -383,7 +383,7 @@ class Prepared:
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """World box (lo, hi) of every part over the whole revolution, where the camera looks
         (explorer.view.parts.motion_bounds; tens of milliseconds, so computed once, when asked)."""
-        from .. import parts as meshes
+        from .. import parts as meshes  # heavy (PIL, scipy, trimesh): imported on use
 
         return meshes.motion_bounds(self.meshes, self.poses)
 
@@ -407,10 +407,6 @@ def offered_laws(path: str, overrides=(), current: str | None = None) -> tuple[s
     builds a lift with (a table law needs its table, a contour its [cam], "gear" a gear...).
     Any failure, not only bad input, leaves the law out: the dropdown must not offer what cannot
     be computed. The current law is always offered. Tens of milliseconds, once per scene file."""
-    from ...lift import registry as laws
-    from ...effects.lift import build_lift
-    from ...scene.scene import load_scene
-
     others = [o for o in overrides if not o.startswith("lift.law=")]
     offered = []
     for law in laws.names():
@@ -428,11 +424,7 @@ def offered_laws(path: str, overrides=(), current: str | None = None) -> tuple[s
 def prepare(request: Request, previous: Prepared | None = None) -> Prepared:
     """Load, simulate and build everything the viewer needs. Raises InputError on bad input.
     Reuses the previous simulation when only the magnification changed."""
-    from .. import parts as meshes
-    from ...effects.pipeline import simulate
-    from ...effects.lift import build_lift
-    from ...scene.scene import load_scene
-
+    from .. import parts as meshes  # heavy (PIL, scipy, trimesh): imported on use
     started = time.perf_counter()
     same = previous is not None and (previous.request.path, previous.request.overrides) == (request.path, request.overrides)
     if same:
@@ -516,8 +508,6 @@ def advice_readout(prepared: Prepared, cache: dict) -> str:
     """The read-out of `prepared` with the spring advice in it (the [spring_design] block,
     explorer.effects.spring_design), reusing `cache` {"key": advice_key, "block": block} when
     the advice depends on nothing that changed (the speed, when it has a target_rpm of its own)."""
-    from ...effects.spring_design import spring_design_summary
-
     key = advice_key(prepared.scene)
     if "key" in cache and equal_scenes(cache["key"], key):
         block = cache["block"]

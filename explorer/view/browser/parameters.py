@@ -14,6 +14,9 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from ...core.errors import InputError
+from ...core.units import parse_quantity, to_si
+
 # Bounds on what a page may ask for. The page's widgets enforce them too, but any page (or script)
 # on the websocket can send any value, so the server checks again. 100 000 steps per revolution
 # (28 times the default) take about 1 s and 100 MB; the scene reader's own maxima are far larger.
@@ -90,9 +93,6 @@ def field_value(parameter: Parameter, value: Any, options: tuple[str, ...] = (),
 
 def quantity_text(parameter: Parameter, text: str) -> str:
     """`text` as a complete quantity of the parameter's dimension, with its unit."""
-    from ...core.errors import InputError
-    from ...core.units import parse_quantity, to_si
-
     stripped = text.strip()
     if not stripped:
         raise NotYet("empty", typing=True)

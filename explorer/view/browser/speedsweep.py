@@ -35,6 +35,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...core.errors import InputError
+from ...effects.contact import peak_torques, torque_factors
+from ...effects.elastic_batch import BatchCache, ELASTIC, accepts, elastic_chunk
+from ...effects.pipeline import Context, simulate
+from ...effects.registry import order
+from ...mechanics.forces import RPM_PER_RAD_S, TrainLoads, grid_load_parts
+from .model import rigid_float_rpm
+
 RIGID_SPEEDS = 500
 ELASTIC_SPEEDS = 24  # one simulate per speed (the scenes the compiled solver does not take)
 ELASTIC_BATCH_SPEEDS = 500  # in one compiled call, as many as the rigid figures
@@ -132,8 +140,6 @@ def _round_up(x: float) -> float:
 def speed_parts(scene, lift, open_mask: bool = False):
     """(A, G) on the open samples of the scene's grid: F = w^2 A + G (mechanics.forces.grid_load_parts); with
     `open_mask` also which samples of the grid those are."""
-    from ...mechanics.forces import grid_load_parts
-
     _, a_coef, g_part, is_open = grid_load_parts(scene, lift)
     if open_mask:
         return a_coef[is_open], g_part[is_open], is_open
@@ -145,10 +151,6 @@ def torque_sweep(scene, lift, result, rpms) -> np.ndarray:
     max_camshaft_torque_Nm, explorer.effects.contact.peak_torques), its geometry from `result`'s
     kinematics columns (a simulate result of this scene at any speed)."""
     from types import MappingProxyType
-
-    from ...effects.contact import peak_torques, torque_factors
-    from ...effects.pipeline import Context
-    from ...mechanics.forces import RPM_PER_RAD_S, grid_load_parts
 
     theta, a_coef, g_part, is_open = grid_load_parts(scene, lift)
     cols = result.columns
@@ -163,9 +165,6 @@ def rigid_model_holds(scene, lift, result=None) -> bool:
     against the 'forces' effect's own contact_force_N at the scene's speed (from `result` when it
     has the column, else from a run of that effect), to 1e-9 of the largest force. It is for the
     translating roller and the lever gears (1e-16 measured); the trip gear's latch force is not."""
-    from ...effects.pipeline import simulate
-    from ...mechanics.forces import RPM_PER_RAD_S, grid_load_parts
-
     if result is None or "contact_force_N" not in result.columns:
         result = simulate(dataclasses.replace(scene, effects=("forces",), spring_design=None), lift=lift)
     _, a_coef, g_part, is_open = grid_load_parts(scene, lift)
@@ -181,16 +180,12 @@ def rigid_model_holds(scene, lift, result=None) -> bool:
 
 
 def has_contact(scene) -> bool:
-    from ...effects.registry import order
-
     return "contact" in order(scene.effects)
 
 
 def rigid_sweep(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray]:
     """(smallest contact force, largest linkage force) in N at each speed of `rpms`, on the
     scene's grid (+inf, 0 when the valve never opens)."""
-    from ...mechanics.forces import RPM_PER_RAD_S
-
     rpm = np.asarray(rpms, dtype=float).ravel()
     a_coef, g_part = speed_parts(scene, lift)
     if a_coef.size == 0:
@@ -208,8 +203,6 @@ def rigid_sweep(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray]:
 
 
 def has_elastic(scene) -> bool:
-    from ...effects.registry import order
-
     return "elastic" in order(scene.effects)
 
 
@@ -225,10 +218,6 @@ def start_sweep(scene, lift, serial: int, previous: tuple[float, float] | None =
     """The rigid part of the sweep of this scene (elastic entries NaN), or NoSweep saying why
     there is none. `float_rpm`: the page's float speed (model.rigid_float_rpm; computed here when
     None); `compiled`: whether the compiled solver may be called (kernels.KernelWarmup.ready)."""
-    from ...core.errors import InputError
-    from ...mechanics.forces import TrainLoads
-    from .model import rigid_float_rpm
-
     try:
         TrainLoads.from_scene(scene)
     except (InputError, AttributeError):
@@ -260,8 +249,6 @@ def start_sweep(scene, lift, serial: int, previous: tuple[float, float] | None =
 
 def batch_accepts(scene, lift) -> bool:
     """Whether the compiled exact solver takes this scene's elastic runs."""
-    from ...effects.elastic_batch import BatchCache, accepts
-
     try:
         return accepts(scene, BatchCache(lift))
     except (AttributeError, ValueError):
@@ -272,8 +259,6 @@ def elastic_batch(scene, lift, rpms) -> tuple[np.ndarray, np.ndarray, np.ndarray
     """elastic_figures at every speed of `rpms` in one compiled call (effects.elastic_batch, the
     sweep's compiled path: each equal to simulate's within rounding, tests/test_sweep_kernel.py);
     NaN where there is none or the run fails."""
-    from ...effects.elastic_batch import ELASTIC, BatchCache, elastic_chunk
-
     figures, _ = elastic_chunk([at_speed(scene, r) for r in rpms], BatchCache(lift))
     column = {name: figures[:, i] for i, name in enumerate(ELASTIC)}
     return column["first_separation_deg"], column["seating_velocity_m_s"], column["max_deviation_m"]
@@ -290,9 +275,6 @@ def elastic_figures(scene, lift, rpm: float) -> tuple[float, float, float]:
     Only the effects the elastic figures need run (elastic and what it depends on): the rocking
     cam's forces and gear figures took 7 of every 8 parts of a speed's time (0.63 s -> 0.09 s),
     and the figures are the same (no effect reads another's figures but its dependencies')."""
-    from ...core.errors import InputError
-    from ...effects.pipeline import simulate
-
     try:
         result = simulate(at_speed(dataclasses.replace(scene, effects=("elastic",), spring_design=None), rpm), lift=lift)
     except (InputError, RuntimeError, ValueError, ArithmeticError):

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import math
 
+from .speedsweep import SpeedSweep, sweep_plots
+
 SWEEP_ORDER = 2e6  # the speed sweep below the plots and their slider
 SWEEP_X_LABEL = "camshaft speed [rpm]"
 WIDTH_SWEEP = (2.5, 1.8, 1.8)
@@ -70,8 +72,6 @@ class SweepView:
         """Draw the sweep for the result shown (its speed marked), or say why there is none;
         `compiling`: a line while the compiled solver is prepared (explorer.view.browser.kernels);
         `speed_pending`: a new speed is being computed (the slider keeps it meanwhile)."""
-        from .speedsweep import SpeedSweep, sweep_plots
-
         sweep = self.sweep
         if not isinstance(sweep, SpeedSweep) or current is None:
             for handle in self.handles:

@@ -214,8 +214,9 @@ def _limit_memory(memory_bytes: int) -> None:
 
 def _background_reply(task, last, result_serial: int, advice_cache: dict):
     """("sweep", figures) for a speed-sweep task, ("advice", read-out) for an advice task,
-    ("checks", CheckSummary or why none) for a checks task, on the result held; ("stale", None) when the child no longer holds that result (a newer one came, or
-    the child was restarted)."""
+    ("checks", CheckSummary or why none) for a checks task, on the result held; ("stale", None)
+    when the child no longer holds that result (a newer one came, or the child was restarted)."""
+    # local: this module is the parent's handle on the child too; the computing modules load in the child
     from .checks_panel import ChecksTask, run_checks
     from .model import AdviceTask, advice_readout
     from .speedsweep import run_task
@@ -242,6 +243,7 @@ def main(argv: list[str]) -> int:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server handles Ctrl-C and stops us
     pipe = _Pipe(read_fd, write_fd)
 
+    # local: imported in the child, after SIGINT is ignored and before its memory limit
     from ...core.errors import InputError
     from .checks_panel import ChecksTask
     from .model import AdviceTask, prepare

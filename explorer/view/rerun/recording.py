@@ -411,7 +411,7 @@ def parts_bounds(parts: Mapping, poses: Mapping, step: int | None = None) -> tup
     """World bounding box (lo, hi) of the parts over the whole revolution (explorer.view.parts.
     motion_bounds: the moving parts' sweep, which the 3D camera must see), or posed at `step`."""
     if step is None:
-        from ..parts import motion_bounds
+        from ..parts import motion_bounds  # heavy (PIL, scipy, trimesh): imported on use
 
         try:
             return motion_bounds(parts, poses)
@@ -449,7 +449,7 @@ def eye_for(bounds) -> dict:
     """The camera the browser explorer uses (explorer.view.parts.frame_bounds: in front of the gear,
     which works in the x-z plane, a little from above and the side), as near as it can be while
     seeing the whole box at rerun's field of view."""
-    from ..parts import frame_bounds
+    from ..parts import frame_bounds  # heavy (PIL, scipy, trimesh): imported on use
 
     lo, hi = (np.asarray(b, dtype=float) for b in bounds)
     frame = frame_bounds(lo, hi, fov=RERUN_FOV_Y, aspect=RERUN_VIEW_ASPECT)
@@ -630,7 +630,7 @@ def with_parts(label: str, result, magnification: float | None = None) -> Run:
     meshes.default_magnification, x20 for a train of masses whose parts move each with its own
     motion). The spring's rest mesh is scaled along its axis per step (meshes.spring_axial_scale):
     per-step vertices would cost 3600 x thousands of vertices per recording."""
-    from .. import parts as meshes
+    from .. import parts as meshes  # heavy (PIL, scipy, trimesh): imported on use
 
     scene = result.scene
     m = meshes.default_magnification(scene) if magnification is None else float(magnification)
