@@ -48,7 +48,7 @@ from ..result import EffectOutput
 from .arm import tip_stress
 from .base import Gear, GearSpec
 from .common import section, spec_of
-from .contour_follow import cam_contour
+from .contour_follow import cam_contour, dwell_floors, exact_dwell
 from .modern_spec import build_modern_gear, parse_parts
 
 TWO_PI = 2.0 * math.pi
@@ -116,9 +116,14 @@ class ContourValveLift:
     spline's knots) as the follower's motion over it found them."""
 
     gear: Any
+    floors: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "floors", dwell_floors(self.gear.valve_lift))
 
     def derivatives(self, theta) -> np.ndarray:
-        return self.gear.valve_lift(np.asarray(theta, dtype=float))
+        # the base circle's dwell exactly 0, as a law's (contour_follow.exact_dwell)
+        return exact_dwell(self.gear.valve_lift(np.asarray(theta, dtype=float)), self.floors)
 
     def breakpoints(self) -> np.ndarray:
         return np.asarray(self.gear.motion.breakpoints(), dtype=float)

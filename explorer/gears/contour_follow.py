@@ -109,6 +109,33 @@ def contour_jets(contour, t: np.ndarray, sign: float) -> tuple[Jet, Jet, Jet, Je
     return cx, cy, sign * dy / speed, -sign * dx / speed
 
 
+DWELL_ULPS = 256.0  # a value within this many ulps of its revolution's largest is rounding
+
+
+def dwell_floors(derivatives, n_grid: int = 4096) -> np.ndarray:
+    """Per derivative row of a lift analysed over a contour, the size below which a value is
+    rounding: DWELL_ULPS ulps of the row's largest magnitude over a revolution (a 10 mm lift:
+    ~5e-16 m). On the base circle the geometry's lift and velocity are not exactly zero but
+    +-1e-17 of rounding (the contact solved by Newton, the arm's angle from the loop); their sign
+    changes would each be a take-up, a seating and a velocity zero to polish (hundreds a
+    revolution: tens of seconds of the lash and forces effects)."""
+    theta = np.linspace(0.0, TWO_PI, n_grid, endpoint=False)
+    d = np.asarray(derivatives(theta), dtype=float)
+    return DWELL_ULPS * np.finfo(float).eps * np.max(np.abs(d), axis=1)
+
+
+def exact_dwell(d: np.ndarray, floors: np.ndarray) -> np.ndarray:
+    """`d` (rows: lift and its derivatives at some angles) with the dwell stated exactly: where
+    the lift and the velocity are both rounding (at most `floors`), every row is 0 -- the valve
+    rests on its seat and the base circle, as a lift law's dwell is exactly 0."""
+    rest = (np.abs(d[0]) <= floors[0]) & (np.abs(d[1]) <= floors[1])
+    if not np.any(rest):
+        return d
+    d = np.array(d, dtype=float, copy=True)
+    d[:, rest] = 0.0
+    return d
+
+
 @dataclass(frozen=True, eq=False)
 class ContourMotion:
     """A follower coordinate q(theta) over a contour (a LiftCurve-like: `derivatives(theta)` gives
