@@ -75,8 +75,8 @@ def main() -> int:
     old_t, new_t, ratios = [], [], []
     for _ in range(4 * args.pairs):
         for tree, out in ((base, old_t), (new, new_t)):
-            _, line = run(tree, [sys.executable, "-c", IMPORT], 60)
-            seconds, path = line.split(" ", 1)
+            _, last = run(tree, [sys.executable, "-c", IMPORT], 60)
+            seconds, path = last.split(" ", 1)
             if not path.startswith(str(tree)):
                 raise RuntimeError(f"imported {path}, not the tree {tree}")
             out.append(float(seconds))

@@ -22,7 +22,6 @@ from ...core.errors import InputError
 from ...core.units import printable
 from ...effects.lift import build_lift
 from ...effects.pipeline import simulate
-from ...effects.spring_design import spring_design_summary
 from ...lift import registry as laws
 from ...scene.scene import load_scene
 from .parameters import PARAMETERS, override, scene_values  # noqa: F401 - the fields' table, re-exported
@@ -512,7 +511,8 @@ def advice_readout(prepared: Prepared, cache: dict) -> str:
     if "key" in cache and equal_scenes(cache["key"], key):
         block = cache["block"]
     else:
-        block, _ = spring_design_summary(prepared.scene, prepared.lift)
+        from ...effects import spring_design  # local: looked up on use (tests count its calls)
+        block, _ = spring_design.spring_design_summary(prepared.scene, prepared.lift)
         cache.clear()
         cache.update(key=key, block=block)
     return readout_markdown(prepared.result, prepared.label, prepared.float_rpm, block)
