@@ -13,7 +13,8 @@ import pytest
 
 from conftest import SCENES, process_timeout, run_cli
 from explorer.checks import check
-from explorer.checks.viewer import PLOTTED, evaluate, line as check_line
+from explorer.checks.registry import rules
+from explorer.checks.viewer import evaluate, line as check_line
 from explorer.scene.scene import load_scene
 from explorer.view.verdicts import CheckLine, CheckSummary, Threshold
 
@@ -85,7 +86,8 @@ def test_the_viewers_lines_are_the_reports_with_the_limits_on_the_columns():
     assert check_line(report.result("float_margin")).thresholds == ()
     columns = set(simulate_columns(scene))
     assert {"pressure_angle_deg", "valve_velocity_m_s", "hertz_stress_Pa"} <= columns
-    assert set(PLOTTED) <= {r.name for r in report.results}
+    drawn = {spec.name for spec in rules() if spec.plotted}
+    assert drawn == {"pressure_angle", "seating_velocity", "hertz_stress"} and drawn <= {r.name for r in report.results}
 
 
 def simulate_columns(scene):

@@ -552,12 +552,12 @@ def _toy_travel(case, settings):
 
 
 def _toy_rule():
-    from explorer.checks.rule import RuleSpec, Setting
+    from explorer.checks.rule import Plotted, RuleSpec, Setting
 
     return RuleSpec("toy_valve_travel", _toy_travel, "Valve travel (toy)", "largest ratio L - lash", "mm", "max", (
         Setting("fail", 0.020, "length", "mm", "the plug-in tests' toy", "test"),
         Setting("warn", None, "length", "mm", "none by default", "-", minimum=0.0),
-    ), "kinematics")
+    ), "kinematics", (Plotted("rigid_valve_lift_m"),))
 
 
 def test_a_toy_design_rule_is_one_call_and_is_judged_by_check(tmp_path):
@@ -582,6 +582,11 @@ def test_a_toy_design_rule_is_one_call_and_is_judged_by_check(tmp_path):
         toy = report.result("toy_valve_travel")
         assert toy.verdict == "pass" and toy.value == peak  # below the default 20 mm
         assert report.result("seat_bounce").verdict == "off"
+        # its own line declares where the viewers draw its limit: the fail line on the lift's plot
+        from explorer.checks.viewer import line as check_line
+        from explorer.view.verdicts import Threshold
+
+        assert check_line(toy).thresholds == (Threshold("rigid_valve_lift_m", (0.020,), "fail"),)
         strict = explorer.check(scene, rpm="2000:4000:3", rules=str(limits), only=("toy_valve_travel",), workers=1)
         assert strict.result("toy_valve_travel").verdict == "fail" and strict.verdict == "fail"
         with pytest.raises(ValueError, match="registered already"):

@@ -16,7 +16,7 @@ from types import MappingProxyType
 from typing import Mapping
 
 from ..core.plugins import Registration, Registry, resolve
-from .rule import Rule, RuleSpec, Setting  # noqa: F401 (Rule: the type measure_function returns)
+from .rule import Plotted, Rule, RuleSpec, Setting  # noqa: F401 (Rule: the type measure_function returns)
 
 _R = "explorer.checks.rules"
 DEG = math.pi / 180.0
@@ -52,7 +52,7 @@ _BUILTIN: tuple[RuleSpec, ...] = (
                  Setting("fail_oscillating", 35.0 * DEG, "angle", "deg", NORTON_DOM + ": oscillating (pivoted) "
                          "follower below about 35 deg", "textbook rule of thumb"),
                  Setting("warn", None, "angle", "deg", "none by default", "-"),
-             ), "kinematics"),
+             ), "kinematics", (Plotted("pressure_angle_deg", 180.0 / math.pi, mirrored=True),)),
     RuleSpec("self_locking", f"{_R}.self_locking:measure", "Self-locking margin", "smallest 90 - rho - |alpha|",
              "deg", "min", (
                  Setting("fail", 0.0, "angle", "deg", SEED_004 + ": self-locking at alpha + rho = 90 deg",
@@ -95,7 +95,7 @@ _BUILTIN: tuple[RuleSpec, ...] = (
                          "valve trains", "trade practice", minimum=0.0),
                  Setting("warn", 0.76, "velocity", "m/s", TRADE_CAM + ": about 0.76 m/s (30 in/s) for others",
                          "trade practice", minimum=0.0),
-             ), "dynamics"),
+             ), "dynamics", (Plotted("valve_velocity_m_s", sign=-1.0),)),  # the closing (negative) velocity
     RuleSpec("float_margin", f"{_R}.float_margin:measure", "Float margin",
              "speed of first separation - highest operating speed", "rpm", "min", (
                  Setting("fail", 100.0 * RPM, "speed", "rpm", "Race Engine Technology, 'Peace and harmony': float "
@@ -119,7 +119,9 @@ _BUILTIN: tuple[RuleSpec, ...] = (
                  Setting("fail", None, "pressure", "MPa", "the material's allowable (setting `material`)",
                          "material-specific", minimum=0.0),
                  Setting("warn", None, "pressure", "MPa", "none by default", "-", minimum=0.0),
-             ), "contact"),
+             ), "contact",
+             # the line contact's, a bucket tappet's crown, a pushrod train's lifter tip
+             (Plotted("hertz_stress_Pa"), Plotted("face_hertz_stress_Pa"), Plotted("tip_hertz_stress_Pa"))),
     RuleSpec("film_parameter", f"{_R}.film_parameter:measure", "Film parameter (lambda)",
              "smallest h_min / composite roughness over the loaded contact", "", "min", (
                  Setting("fail", 1.0, "number", "", HAMROCK + ": below 1 the asperities carry the load",

@@ -69,6 +69,18 @@ class Setting:
 
 
 @dataclass(frozen=True)
+class Plotted:
+    """A result column a rule's limits are drawn on in the viewers (explorer.checks.viewer): line
+    height = sign * factor * limit (the limit in SI; `factor` to the column's unit), and at -height
+    too when `mirrored` (a limit on a magnitude, |alpha|, of a signed column)."""
+
+    column: str
+    factor: float = 1.0
+    sign: float = 1.0
+    mirrored: bool = False
+
+
+@dataclass(frozen=True)
 class RuleSpec:
     """One line of the rule table."""
 
@@ -80,6 +92,9 @@ class RuleSpec:
     sense: str  # "max" or "min"
     settings: tuple[Setting, ...]
     group: str = ""  # the issue's family: kinematics, dynamics, contact, tribology, spring, gear
+    # the result columns its limits are drawn on, each where a result has it; none: a quantity no
+    # column holds (a margin, a ratio, a film parameter) -- its line still moves the gear to its worst
+    plotted: tuple[Plotted, ...] = ()
 
     def setting(self, name: str) -> Setting | None:
         return next((s for s in self.settings if s.name == name), None)

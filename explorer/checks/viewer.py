@@ -1,47 +1,30 @@
 """The checks as the viewers read them (explorer.view.verdicts, issue #26.3): `evaluate(scene)` is
 the CheckRunner `explorer serve` hands the browser and `explorer record --checks` the
 recordings -- `check(scene)` over the scene's operating range, as `explorer check SCENE` does,
-each rule's result a CheckLine with its limits on the plotted columns they concern (PLOTTED).
+each rule's result a CheckLine with its limits on the plotted columns they concern (its table
+line's `plotted`: a rule declares them where it is registered).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
 
 from ..view.verdicts import CheckLine, CheckSummary, Threshold
+from .registry import rule, rule_names
 from .report import CheckReport, RuleResult
 from .run import check
 
 
-@dataclass(frozen=True)
-class Plotted:
-    """A result column a rule's limits are drawn on: line height = sign * factor * limit (the
-    limit in SI; `factor` to the column's unit), and at -height too when `mirrored` (a limit on
-    a magnitude, |alpha|, of a signed column)."""
-
-    column: str
-    factor: float = 1.0
-    sign: float = 1.0
-    mirrored: bool = False
-
-
-# rule -> the columns its limits are drawn on (each where the result has it). A rule not here
-# judges a quantity no result column holds (a margin, a ratio, lift per degree, a film parameter
-# the effects do not output): its line in the panel still moves the gear to its worst.
-PLOTTED: dict[str, tuple[Plotted, ...]] = {
-    "pressure_angle": (Plotted("pressure_angle_deg", 180.0 / math.pi, mirrored=True),),
-    # the seating velocity is the closing (negative) velocity of the valve at the seat
-    "seating_velocity": (Plotted("valve_velocity_m_s", sign=-1.0),),
-    # the line contact's, a bucket tappet's crown, a pushrod train's lifter tip
-    "hertz_stress": (Plotted("hertz_stress_Pa"), Plotted("face_hertz_stress_Pa"), Plotted("tip_hertz_stress_Pa")),
-}
+def _plotted(name: str):
+    """The columns rule `name` draws its limits on (its table line's `plotted`; none for a rule
+    no longer in the table)."""
+    return rule(name).plotted if name in rule_names() else ()
 
 
 def thresholds(result: RuleResult) -> tuple[Threshold, ...]:
     out = []
-    for plotted in PLOTTED.get(result.name, ()):
+    for plotted in _plotted(result.name):
         for limit in ("fail", "warn"):
             value = getattr(result, limit)
             if value is None or not math.isfinite(value):
