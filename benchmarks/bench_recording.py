@@ -24,7 +24,8 @@ from _timing import ROOT, median_time, print_table
 from explorer import load_scene
 from explorer.effects.pipeline import simulate
 from explorer.view.rerun.recording import (
-    APP_ID, Run, series_layout, step_indexes, with_parts, write_recordings,
+    APP_ID, TIMELINE_ANGLE, TIMELINE_STEP, TIMELINE_TIME, Run, series_layout, step_indexes, with_parts,
+    write_recordings,
 )
 
 TARGET_S = 0.5
@@ -39,10 +40,10 @@ def loop_baseline(path: Path, result) -> None:
     index = step_indexes(result)
     layout = series_layout(result.columns)
     values = {s.path: np.asarray(result.columns[s.column], dtype=float) for s in layout}
-    for i in range(index["step"].size):
-        rec.set_time("time", duration=float(index["time"][i]))
-        rec.set_time("step", sequence=int(index["step"][i]))
-        rec.set_time("cam_angle_deg", sequence=int(index["cam_angle_deg"][i]))
+    for i in range(index[TIMELINE_STEP].size):
+        rec.set_time(TIMELINE_TIME, duration=float(index[TIMELINE_TIME][i]))
+        rec.set_time(TIMELINE_STEP, sequence=int(index[TIMELINE_STEP][i]))
+        rec.set_time(TIMELINE_ANGLE, sequence=int(index[TIMELINE_ANGLE][i]))
         for path, v in values.items():
             rec.log(path, rr.Scalars(float(v[i])))
     rec.disconnect()
