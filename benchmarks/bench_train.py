@@ -32,7 +32,8 @@ import numpy as np  # noqa: E402
 from _timing import ROOT, median_times, print_table  # noqa: E402
 from explorer import load_scene  # noqa: E402
 from explorer.dynamics import chain_exact, chain_reference  # noqa: E402
-from explorer.dynamics.model import Drive, LinkageModel, solve  # noqa: E402
+from explorer.dynamics.model import Drive, LinkageModel  # noqa: E402
+from explorer.dynamics.solvers import solve  # noqa: E402
 from explorer.dynamics.chain import ChainModel  # noqa: E402
 from explorer.dynamics.train import Joint, Part, TrainModel  # noqa: E402
 from explorer.effects.lift import build_lift  # noqa: E402
