@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
+import sys
 import threading
 import time
 import traceback
@@ -262,35 +263,42 @@ class ComputeWorker:
         with self._cond:
             return self._checks is None and not self._background
 
+    def _yield_to_request(self) -> bool:
+        """Whether a background step must give way: the worker stops, or a request has waited
+        SWEEP_YIELD_S for it (an elastic run at a sweep's top speed, or the checks, can take a
+        second; past that the step is dropped and the child restarted)."""
+        # read without the lock: a stale answer only delays the check by one poll
+        return self._stop or (self._pending is not None and time.monotonic() - self._pending_at > SWEEP_YIELD_S)
+
+    def _background_call(self, task) -> tuple[str, Any]:
+        """(kind, payload) of a background `task` in the child; ("time-limit", None) past the time
+        limit, ("stopped", None) when a request took precedence or the child died or failed (a
+        failed child is restarted on the next call)."""
+        try:
+            return self._process.call(task, self.time_limit, self._yield_to_request)
+        except TimeLimitExceeded:
+            return "time-limit", None
+        except (Superseded, WorkerDied):
+            return "stopped", None
+        except Exception:
+            traceback.print_exc()
+            self._process.kill()
+            self._process.reap()
+            return "stopped", None
+
     def _checks_step(self, serial: int) -> None:
         """The design checks of request `serial`'s result, from the child (explorer.view.
         browser.checks_panel); a newer request stops them (the newer result asks again); past the
         time limit the panel says so."""
         from .checks_panel import ChecksTask
-        from .worker import Superseded, TimeLimitExceeded, WorkerDied
 
-        def superseded() -> bool:
-            return self._stop or (self._pending is not None and time.monotonic() - self._pending_at > SWEEP_YIELD_S)
-
-        try:
-            kind, payload = self._process.call(ChecksTask(serial, self.checks), self.time_limit, superseded)
-        except TimeLimitExceeded:
+        kind, payload = self._background_call(ChecksTask(serial, self.checks))
+        if kind == "time-limit":
             kind, payload = "checks", (f"the design checks took longer than {self.time_limit:g} s and were stopped; "
                                        "`explorer check SCENE` has no time limit")
-        except (Superseded, WorkerDied):
-            return
-        except Exception:
-            traceback.print_exc()
-            self._process.kill()
-            self._process.reap()
-            return
-        if kind == "checks":
-            try:
-                self.on_checks(serial, payload)
-            except Exception:
-                traceback.print_exc()
-        elif kind == "internal":
-            self.internal_errors += 1
+        if kind == "internal":
+            self.internal_errors += 1  # the panel shows the child's message
+        if kind in ("checks", "internal"):
             try:
                 self.on_checks(serial, payload)
             except Exception:
@@ -307,18 +315,7 @@ class ComputeWorker:
     def _advice_step(self, serial: int) -> None:
         """The read-out with the spring advice, from the child; dropped when a newer request
         stops it (the newer result asks again)."""
-        def superseded() -> bool:
-            return self._stop or (self._pending is not None and time.monotonic() - self._pending_at > SWEEP_YIELD_S)
-
-        try:
-            kind, payload = self._process.call(AdviceTask(serial), self.time_limit, superseded)
-        except (Superseded, TimeLimitExceeded, WorkerDied):
-            return
-        except Exception:
-            traceback.print_exc()
-            self._process.kill()
-            self._process.reap()
-            return
+        kind, payload = self._background_call(AdviceTask(serial))
         if kind == "advice":
             try:
                 self.on_advice(serial, payload)
@@ -326,7 +323,7 @@ class ComputeWorker:
                 traceback.print_exc()
         elif kind == "internal":
             self.internal_errors += 1
-            traceback.print_exc()
+            print(payload, file=sys.stderr)  # the child's message (no exception is being handled here)
 
     def _sweep_step(self, sweep) -> None:
         """Start the sweep (rigid figures at every speed) or compute its next elastic speed,
@@ -340,20 +337,7 @@ class ComputeWorker:
         else:
             task = SweepTask(sweep.serial, sweep.next_elastic())
 
-        def superseded() -> bool:
-            # a change must not wait long for a sweep step (an elastic run at the sweep's top
-            # speed can take a second): past SWEEP_YIELD_S the step is dropped, the child restarted
-            return self._stop or (self._pending is not None and time.monotonic() - self._pending_at > SWEEP_YIELD_S)
-
-        try:
-            kind, payload = self._process.call(task, self.time_limit, superseded)
-        except (Superseded, TimeLimitExceeded, WorkerDied):
-            kind, payload = "stopped", None
-        except Exception:
-            traceback.print_exc()
-            self._process.kill()
-            self._process.reap()
-            kind, payload = "stopped", None
+        kind, payload = self._background_call(task)  # "time-limit", "stopped": the sweep ends below
         self.sweep_steps += 1
         if kind == "sweep" and isinstance(payload, NoSweep):
             done = payload
