@@ -30,7 +30,9 @@ PLOT_SLIDER_ORDER = 1e6  # after every plot: the plots are added and removed as 
 
 
 def y_range(values) -> tuple[float, float]:
-    """The y range a plot shows: its finite values with 5 % margin (0..1 when it has none)."""
+    """The y range a plot shows: its finite values with 5 % margin (0..1 when it has none; uPlot's
+    own autorange fails on NaN, which marks an elastic speed not computed yet or a figure that
+    does not apply). The revolution's plots and the speed sweep's use it."""
     finite = np.concatenate([np.asarray(v, dtype=float)[np.isfinite(v)] for v in values] or [np.empty(0)])
     if finite.size == 0:
         return (0.0, 1.0)

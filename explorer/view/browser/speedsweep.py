@@ -42,6 +42,7 @@ from ...effects.pipeline import Context, simulate
 from ...effects.registry import order
 from ...mechanics.forces import RPM_PER_RAD_S, TrainLoads, grid_load_parts
 from .model import rigid_float_rpm
+from .plots import y_range
 
 RIGID_SPEEDS = 500
 ELASTIC_SPEEDS = 24  # one simulate per speed (the scenes the compiled solver does not take)
@@ -331,17 +332,6 @@ def with_markers(x: np.ndarray, values: list[np.ndarray], at: list[float]):
             m[int(np.argmin(np.abs(xs - v)))] = 1.0
         markers.append(m)
     return xs, out, markers
-
-
-def y_range(values: list[np.ndarray]) -> tuple[float, float]:
-    """The y range the plot shows: the finite values with 5 % margin (uPlot's own autorange
-    fails on NaN, which marks an elastic speed not computed yet or a figure that does not apply)."""
-    finite = np.concatenate([np.asarray(v, dtype=float)[np.isfinite(v)] for v in values] or [np.empty(0)])
-    if finite.size == 0:
-        return (0.0, 1.0)
-    lo, hi = float(finite.min()), float(finite.max())
-    pad = 0.05 * (hi - lo) if hi > lo else max(abs(hi), 1.0) * 0.05
-    return (lo - pad, hi + pad)
 
 
 def sweep_plots(sweep: SpeedSweep, current_rpm: float) -> list[tuple]:
