@@ -1,0 +1,50 @@
+"""The README's walkthrough quotes figures the program computes; they are read from the README
+and computed here, so an edit of the scene, the solver or the text that makes them disagree
+fails (issue #27.9: figures come from the program, not typed)."""
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import explorer
+
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text(encoding="utf-8")
+DEMO = ROOT / "assets" / "scenes" / "valve_float_demo.toml"
+
+
+def _quoted(pattern: str) -> re.Match:
+    match = re.search(pattern, " ".join(README.split()))
+    assert match, f"README no longer says {pattern!r}"
+    return match
+
+
+def test_the_float_speed_the_readme_quotes_is_the_computed_one():
+    stated = float(_quoted(r"above the float speed \((\d+) rpm\)").group(1))
+    result = explorer.simulate(explorer.load_scene(DEMO))
+    # the README rounds to whole rpm
+    assert round(result.summary["jump_speed_rpm"]) == stated
+
+
+def test_the_readme_walkthrough_speeds_are_either_side_of_the_float_speed():
+    slow = float(_quoted(r"Type `(\d+)` into \*\*Camshaft rpm\*\*: the warning goes").group(1))
+    fast = float(_quoted(r"it warns that (\d+) rpm is above the float speed").group(1))
+    float_speed = explorer.simulate(explorer.load_scene(DEMO)).summary["jump_speed_rpm"]
+    assert slow < float_speed < fast
+
+
+def test_the_elastic_lift_off_speed_the_readme_quotes_is_the_swept_one():
+    """'the elastic valve leaves the cam from about N rpm': the first speed of the README's own
+    sweep command (drive.rpm=1000:6000:51, 100 rpm apart) with a separation is N."""
+    stated = float(_quoted(r"the elastic valve leaves the cam from about (\d+) rpm").group(1))
+    grid = _quoted(r"--vary drive\.rpm=(\d+):(\d+):(\d+)").groups()
+    table = explorer.sweep(str(DEMO), vary={"drive.rpm": ":".join(grid)})
+    rpm = np.asarray(table.columns["drive_rpm"])
+    separated = np.asarray(table.columns["separations"]) > 0
+    assert separated.any() and not separated[0]
+    # every speed above the first lift-off also lifts off: "from about" is a threshold
+    first = int(np.argmax(separated))
+    assert separated[first:].all()
+    assert rpm[first] == pytest.approx(stated, abs=0.5)
