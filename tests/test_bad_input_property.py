@@ -180,6 +180,7 @@ OPTIONS = [
     (["record", FLOAT, "--sweep", "drive.rpm={v}", "-o", "{tmp}/o.rrd"], RANGES),
     (["record", FLOAT, "--sweep", "{v}=1000", "-o", "{tmp}/o.rrd"], KEYS),
     (["record", FLOAT, "-o", "{v}"], [p.replace("{ext}", "rrd") for p in PATHS]),
+    (["record", FLOAT, "--magnification", "{v}", "-o", "{tmp}/o.rrd"], COUNTS[:1] + QUANTITIES + ["0", "1001"]),
     (["bench", FLOAT, "--repeats", "{v}", "--output-dir", "{tmp}"], COUNTS + ["0"]),
     (["bench", FLOAT, "--output-dir", "{v}"], ["/nonexistent-directory/x", "x" * 5000, "a\x00b", "/proc/self/fd/9999"]),
     (["serve", FLOAT, "--port", "{v}"], COUNTS + ["65536", "99999"]),
@@ -204,6 +205,35 @@ def test_a_hostile_value_for_any_option_is_one_line(case):
         out = Path(tmp)
         filled = [str(a).replace("{v}", value).replace("{tmp}", tmp) for a in argv]
         assert_refused(filled, out)
+
+
+def _not_a_number(text: str) -> bool:
+    try:
+        float(text)
+    except (ValueError, OverflowError):
+        return True
+    return False
+
+
+BAD_MAGNIFICATIONS = st.one_of(
+    st.floats(max_value=0.0).map(repr),  # zero, negative, -inf, and nan among them
+    st.floats(min_value=1000.0, exclude_min=True).map(repr),  # beyond the bound, inf among them
+    st.sampled_from(["nan", "-nan", "inf", "+inf", "x20", "20x", "×20", "20 mm", "", "1" * 4301, "1e999", MEGABYTE]),
+    st.text(max_size=20).filter(_not_a_number),
+)
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(BAD_MAGNIFICATIONS)
+def test_a_bad_record_magnification_is_one_line_naming_the_option(value):
+    """`explorer record --magnification X`: X must be a positive finite number at most
+    MAX_MAGNIFICATION; anything else is one line naming the option, exit 2, nothing written
+    (checked before the scene is simulated)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp)
+        argv = ["record", FLOAT, "--magnification", value, "-o", out / "o.rrd"]
+        assert_refused(argv, out)
+        assert "--magnification" in run(argv)[1], value[:80]
 
 
 # ------------------------------------------------------------------ every data file

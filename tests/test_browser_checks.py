@@ -14,6 +14,7 @@ import time
 import pytest
 
 from conftest import ROOT, SCENES
+from explorer.view.browser.checks_panel import DETAIL_CLASS, button_text, detail_text
 from test_browser import ARGS, CHROMIUM, TWO_FRAMES, WAIT_MS, WAIT_S, _connected_page, _row_input  # noqa: F401
 
 pytestmark = [
@@ -49,6 +50,51 @@ def _wait_until(predicate, what):
 
 
 RGB_OF = "(e) => getComputedStyle(e).backgroundColor.match(/\\d+/g).slice(0, 3).map(Number)"
+# how far an element's text runs past what it shows, in px (0: all of it is shown): its own and its
+# descendants' scroll width over their client width (a clipped button label scrolls), and its
+# box past the right edge of the control panel (the tab's scroll container)
+OVERRUN = """(e) => {
+  const panel = e.closest('.mantine-Tabs-panel') || document.body;
+  const own = [e, ...e.querySelectorAll('*')].filter((x) => x.clientWidth > 0)
+    .map((x) => x.scrollWidth - x.clientWidth);
+  return Math.max(0, ...own, e.getBoundingClientRect().right - panel.getBoundingClientRect().right);
+}"""
+
+
+def test_every_rule_line_is_readable_in_the_panel(tmp_path):
+    """The panel is 440 px wide and viser's buttons clip their label there (the line of the
+    longest built-in title, the opening velocity at the end of the lash ramp, lost its value and
+    where): each rule's button shows its whole button_text, and the text row under it the whole
+    rest of the line, wrapped within the panel."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    from explorer.checks.registry import rules
+    from explorer.view.verdicts import CheckSummary
+
+    longest = max(rules(), key=lambda spec: len(spec.title))
+    with _checked_explorer(SCENES / "valve_float_demo.toml", RANGE) as (server, app):
+        _wait_until(lambda: isinstance(app.checks_panel.summary, CheckSummary), "the checks never arrived")
+        summary = app.checks_panel.summary
+        judged = summary.line(longest.name)
+        assert judged.judged and judged.where() and len(judged.label()) > 70  # the line that was cut
+        with _connected_page(sync_api, tmp_path, server, width=1400, height=1000) as page:
+            page.get_by_role("tab", name="Checks").click()
+            page.get_by_role("button", name=button_text(judged)).wait_for(timeout=WAIT_MS)
+            for line in summary.lines:
+                button = page.get_by_role("button", name=button_text(line), exact=True)
+                button.scroll_into_view_if_needed()
+                assert button.is_visible() and button.inner_text().strip() == button_text(line)
+                assert button.evaluate(OVERRUN) <= 0.5, (line.rule, button.evaluate(OVERRUN))
+                detail = page.locator(f".{DETAIL_CLASS}[data-rule='{line.rule}']")
+                assert detail.is_visible() and " ".join(detail.inner_text().split()) == detail_text(line)
+                assert detail.evaluate(OVERRUN) <= 0.5, line.rule
+                # the text row sits under its own button, inside the panel
+                b, d = button.bounding_box(), detail.bounding_box()
+                assert b["y"] + b["height"] <= d["y"] + 1 and d["y"] - (b["y"] + b["height"]) < 12, line.rule
+            # the whole of the longest line is on the page: its button row and its text row
+            shown = page.get_by_role("button", name=button_text(judged)).inner_text() + " " + \
+                page.locator(f".{DETAIL_CLASS}[data-rule='{longest.name}']").inner_text()
+            for piece in (judged.verdict.upper(), longest.title, judged.shown, judged.where(), judged.limit):
+                assert piece in shown, piece
 
 
 def test_a_red_check_line_clicked_moves_the_speed_and_the_frame_to_its_worst(tmp_path):
@@ -69,7 +115,8 @@ def test_a_red_check_line_clicked_moves_the_speed_and_the_frame_to_its_worst(tmp
             green = page.get_by_role("button", name="Pressure angle").evaluate(RGB_OF)
             assert red[0] > red[1] + 80 and red[0] > red[2] + 80, red  # red
             assert green[1] > green[0] + 60 and green[1] > green[2] + 30, green  # green
-            assert seat.shown in line.inner_text() and f"{seat.speed_rpm:.6g} rpm" in line.inner_text()
+            detail = page.locator(f".{DETAIL_CLASS}[data-rule='seating_velocity']")
+            assert seat.shown in detail.inner_text() and f"{seat.speed_rpm:.6g} rpm" in detail.inner_text()
             angle_id = page.locator("label", has_text="Cam angle [°]").first.get_attribute("for")
             thumb = page.locator(f"[id='{angle_id}'] [role=slider]")
             angle_before = thumb.get_attribute("aria-valuenow")
@@ -100,5 +147,5 @@ def test_a_red_check_line_clicked_moves_the_speed_and_the_frame_to_its_worst(tmp
     if os.environ.get("EXPLORER_UPDATE_SCREENSHOT"):  # the panel and the gear, in 128 colours
         from PIL import Image
 
-        Image.open(shot).convert("RGB").crop((0, 0, 1010, 790)).quantize(colors=128).save(
+        Image.open(shot).convert("RGB").crop((0, 0, 1010, 1000)).quantize(colors=128).save(
             ROOT / "docs" / "img" / "checks_panel.png", optimize=True)

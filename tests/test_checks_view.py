@@ -26,8 +26,8 @@ WAIT_S = process_timeout()
 
 
 def _line(verdict, speed=None, angle=None, **kw):
-    return CheckLine(rule="r", title="Rule", verdict=verdict, value=1.0, shown="1 m/s", speed_rpm=speed,
-                     cam_angle_deg=angle, **kw)
+    return CheckLine(**{"rule": "r", "title": "Rule", "verdict": verdict, "value": 1.0, "shown": "1 m/s",
+                        "speed_rpm": speed, "cam_angle_deg": angle, **kw})
 
 
 # -- the hand-over ---------------------------------------------------------------------------------
@@ -46,6 +46,27 @@ def test_a_click_asks_for_the_worst_speed_and_cam_angle():
     assert _line("fail", 0.0, 12.0).target() == (None, 12.0)  # no speed (a figure of the cam alone)
     assert _line("n/a", 2000.0, 12.0).target() == (None, None)  # not judged: nowhere to go
     assert _line("fail", 3000.0, 10.0).label() == "FAIL · Rule: 1 m/s at 3000 rpm, 10.00°"
+
+
+def test_a_line_is_a_button_row_and_a_text_row_that_hold_all_of_it():
+    """viser's buttons clip their label at the panel's edge: the button holds verdict and title
+    (cut with an ellipsis past BUTTON_CHARS, the whole title then in the text row), the text row
+    the worst, where and the limits (or why the rule cannot judge), the source its tooltip."""
+    from explorer.view.browser.checks_panel import BUTTON_CHARS, button_text, detail_html, detail_text
+
+    line = _line("fail", 3000.0, 10.0, limit="fail 1 m/s", source="a book, p. 3")
+    assert (button_text(line), detail_text(line)) == ("FAIL · Rule", "1 m/s at 3000 rpm, 10.00° · limits fail 1 m/s")
+    assert "title='source: a book, p. 3'" in detail_html(line) and "<b style='color:#c0392b'>1 m/s at 3000 rpm" \
+        in detail_html(line)
+    off = _line("n/a", reason="needs [lubricant]")
+    assert (button_text(off), detail_text(off)) == ("n/a · Rule", "needs [lubricant]")
+    long = _line("warn", None, 12.0, title="A plug-in rule whose title says at length what it judges and where")
+    cut = button_text(long)
+    assert len(cut) <= BUTTON_CHARS and cut.endswith("…") and cut.startswith("WARN · A plug-in rule whose title")
+    assert detail_text(long) == f"{long.title} · 1 m/s at 12.00°"
+    # every built-in rule's title fits its button whole
+    for spec in rules():
+        assert not button_text(_line("warn", title=spec.title)).endswith("…"), spec.title
 
 
 def test_summary_verdict_counts_and_limits_by_column():
@@ -145,7 +166,7 @@ def _wait(predicate, what, timeout=WAIT_S):
 def test_the_checks_panel_shows_each_rule_and_a_click_goes_to_its_worst():
     viser = pytest.importorskip("viser")
     from explorer.view.browser.app import ExplorerApp
-    from explorer.view.browser.checks_panel import CheckChosen
+    from explorer.view.browser.checks_panel import CheckChosen, button_text, detail_html
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     app = ExplorerApp(server, str(FLOAT), RANGE, playing=True, checks=evaluate)
@@ -155,12 +176,13 @@ def test_the_checks_panel_shows_each_rule_and_a_click_goes_to_its_worst():
         _wait(lambda: isinstance(app.checks_panel.summary, CheckSummary), "no checks arrived")
         summary = app.checks_panel.summary
         assert app.checks_panel.serial == first.request.serial
-        # one button per rule, in its colour; a rule that cannot judge is greyed out
-        assert list(app.checks_panel.buttons) == [line.rule for line in summary.lines]
+        # one button per rule, in its colour, and its text row; a rule that cannot judge is greyed out
+        assert list(app.checks_panel.buttons) == list(app.checks_panel.details) == [line.rule for line in summary.lines]
         for line in summary.lines:
             button = app.checks_panel.buttons[line.rule]
             assert (button.color, button.label, button.disabled) == \
-                   (line.colour, line.label(), not line.judged)
+                   (line.colour, button_text(line), not line.judged)
+            assert app.checks_panel.details[line.rule].content == detail_html(line)
         assert "FAIL" in app.checks_panel.header.content and "1000..4000 rpm" in app.checks_panel.header.content
         # the velocity plot carries the seating velocity's limits
         velocity = next(p for p in app.plots.drawn if p.title == "Velocity v")

@@ -421,7 +421,7 @@ def test_killed_midway_never_leaves_a_truncated_target(tmp_path, previous):
 def test_parts_that_cannot_be_built_leave_a_warning_and_the_series(tmp_path, capsys, monkeypatch):
     import explorer.view.rerun.recording as recording
 
-    def no_meshes(label, result):
+    def no_meshes(label, result, magnification=None):  # with_parts's signature
         raise NotImplementedError("no meshes for this gear")
 
     monkeypatch.setattr(recording, "with_parts", no_meshes)

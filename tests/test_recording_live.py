@@ -205,3 +205,136 @@ def test_failed_merge_keeps_every_recording_and_says_where(tmp_path, monkeypatch
     assert [r.name for r in runs] == ["#1 a", "#2 b"]
     assert_same_series(runs[0], first)
     assert_same_series(runs[1], second)
+
+
+# -- the design checks, added when the browser has computed them ---------------------------------
+
+FLOAT = ROOT / "assets" / "scenes" / "valve_float_demo.toml"
+# the float demo over a range of speeds: five rules fail, three draw limits (tests/test_checks_view.py)
+FLOAT_RANGE = ("drive.operating_range=[1000, 4000]", "drive.rpm=2000")
+
+
+def check_entities(run) -> dict:
+    """What the checks put in a recording: the markers' entity and every limit line."""
+    return {path: cols for path, cols in run.temporal.items() if path == "/events/checks" or "/limit_" in path}
+
+
+def assert_same_entities(got: dict, want: dict) -> None:
+    assert sorted(got) == sorted(want)
+    for path, cols in want.items():
+        assert sorted(got[path]) == sorted(cols), path
+        for name, values in cols.items():
+            assert list(got[path][name]) == list(values), (path, name)
+
+
+def test_checks_join_their_results_recording_as_explorer_record_writes_them(tmp_path):
+    """`serve --rerun`/`--rerun-save`: the checks the browser computes after a result go into that
+    result's recording (its id: one recording, its name kept), with the very markers and limit
+    lines `explorer record --checks` writes for the scene; checks sent twice, or of a result never
+    recorded, add nothing."""
+    from conftest import run_cli
+    from explorer.checks.viewer import evaluate
+
+    recorded = tmp_path / "record.rrd"
+    proc = run_cli("record", FLOAT, *sum((["--set", o] for o in FLOAT_RANGE), []), "--checks", "--no-parts",
+                   "-o", recorded)
+    assert proc.returncode == 0, proc.stderr
+    want = check_entities(read_rrd(recorded)[0])
+    assert len(want["/events/checks"]["TextLog:text"]) == 5 and len(want) == 6  # 5 FAIL markers, 5 limit lines
+
+    scene = load_scene(FLOAT, list(FLOAT_RANGE))
+    first, second, never = simulate(scene), simulate(scene), result_at(600)
+    checks = evaluate(scene)
+    out = tmp_path / "live.rrd"
+    with LiveStream(save_path=out, parts=False) as stream:
+        stream.log(first, "float")
+        assert stream.flush(60)
+        stream.log_checks(first, checks)  # written: added to its recording
+        assert stream.flush(60)
+        stream.log_checks(first, checks)  # again (a fresh compute child checks the same result): nothing
+        stream.log_checks(never, checks)  # a result that was never recorded: nothing
+        stream.log(second, "float again")
+        stream.log_checks(second, checks)  # still waiting, or being written: either way its own
+        assert stream.flush(60)
+    assert stream.errors == []
+    runs = {r.name: r for r in read_rrd(out)}
+    assert sorted(runs) == ["#1 float", "#2 float again"]  # the checks made no recording of their own
+    for run, result in ((runs["#1 float"], first), (runs["#2 float again"], second)):
+        assert_same_series(run, result)
+        assert_same_entities(check_entities(run), want)
+    # the layout shows the limit lines of the tabs that name their series one by one
+    stress = next(v for v in read_blueprint_views(out) if v.get("name") == "stress")
+    assert "/stress/hertz/limit_hertz_stress_fail" in stress["contents"]
+
+
+@pytest.mark.filterwarnings("ignore:RRD file has no footer")  # rerun --save streams without one
+def test_checks_reach_a_rerun_viewer_in_the_results_recording(tmp_path):
+    """Over gRPC (`serve --rerun`): the checks sent after the recording arrive in it, one marker at
+    the worst's cam angle, the limit beside the velocity, and a line in the session's index."""
+    from explorer.view.verdicts import CheckLine, CheckSummary, Threshold
+
+    port, viewer_port = free_port(), free_port()
+    received = tmp_path / "received.rrd"
+    result = result_at(900)
+    line = CheckLine("seating_velocity", "Seating velocity", "fail", -2.0, "2 m/s", 900.0, 123.25,
+                     limit="fail 1 m/s", thresholds=(Threshold("valve_velocity_m_s", (-1.0,), "fail"),))
+    checks = CheckSummary("cycloidal", "900 rpm", (line,))
+    stream = open_live_stream(args(rerun=True, rerun_port=port))
+    receiver = None
+    try:
+        stream.log(result, "live run")
+        assert stream.flush(60)
+        stream.log_checks(result, checks)
+        assert stream.flush(60)
+        receiver = spawn(
+            [*rerun_executable(), "--save", str(received), "--bind", "127.0.0.1", "--port", str(viewer_port),
+             stream.url],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + process_timeout(0.5)
+        while time.monotonic() < deadline:
+            time.sleep(0.5)
+            if received.exists() and received.stat().st_size > 20_000:
+                break
+        time.sleep(1.0)
+        receiver.send_signal(signal.SIGINT)
+        receiver.wait(timeout=process_timeout(0.5))
+        runs = {r.name: r for r in read_rrd(received)}
+        run = runs["#1 live run"]
+        assert_same_series(run, result)
+        marks = run.temporal["/events/checks"]
+        assert list(marks["TextLog:level"]) == ["ERROR"] and "Seating velocity" in marks["TextLog:text"][0]
+        assert list(marks["cam_angle_0.01deg"]) == [12325]
+        assert list(run.series["/valve/velocity/limit_seating_velocity_fail"]["value"]) == [-1.0, -1.0]
+        index = list(runs["explorer live session"].temporal["/session"]["TextLog:text"])
+        assert index == ["#1 live run | 900 rpm | 2 events", "#1 live run | checks FAIL: 1 fail, 0 warn"]
+    finally:
+        if receiver is not None:
+            stop_group(receiver, grace=1.0)
+        stream.close()
+
+
+def test_serve_rerun_save_adds_the_checks_the_browser_computed(tmp_path):
+    """`explorer serve --rerun-save` end to end: the browser's compute child checks the first
+    result after showing it, and the checks join that result's recording in the saved file
+    (the serve command's wiring: ComputeWorker.on_checked -> LiveStream.log_checks)."""
+    from conftest import run_cli
+    from test_viewer import _kill, _start_serve, _wait_for
+
+    recorded = tmp_path / "record.rrd"
+    proc = run_cli("record", FLOAT, *sum((["--set", o] for o in FLOAT_RANGE), []), "--checks", "--no-parts",
+                   "-o", recorded)
+    assert proc.returncode == 0, proc.stderr
+    want = check_entities(read_rrd(recorded)[0])
+    target = tmp_path / "live.rrd"
+    proc, _, _ = _start_serve(FLOAT, *sum((["--set", o] for o in FLOAT_RANGE), []), "--shared", "--rerun-save", target)
+    try:
+        # a piece for the recording, then one for its checks (after the compiled solver is ready)
+        assert _wait_for(lambda: len(list(tmp_path.glob(".live.rrd.*.parts/*.rrd"))) >= 2, process_timeout())
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=process_timeout(0.5))
+        assert proc.returncode == 0, err
+        (run,) = read_rrd(target)
+        assert run.name.startswith("#1 valve_float_demo.toml")
+        assert_same_entities(check_entities(run), want)
+    finally:
+        _kill(proc)

@@ -7,7 +7,7 @@ import itertools
 import math
 import sys
 
-from ..core.errors import InputError
+from ..core.errors import InputError, echo
 from ..core.outputs import HELP as OUTPUT_HELP
 from ..scene.builtin import default_scene
 
@@ -15,6 +15,10 @@ from ..scene.builtin import default_scene
 # is minutes and gigabytes, and a viewer that shows them side by side. Wider sweeps are a typo
 # (--sweep 1,2,...,3000; 50 x 50 x 50) or a job for `explorer simulate` in a loop.
 MAX_RUNS = 1000
+# --magnification: the parts' deviations from rigid motion (micrometres) drawn this many times. The
+# browser's slider stops at 50; past a thousand a deviation of tens of micrometres is drawn tens of
+# millimetres off, beyond any lift, and a large factor overflows the file's float32 poses.
+MAX_MAGNIFICATION = 1000.0
 
 HELP = """\
 Record one revolution of each scene into a rerun file (.rrd): the series s, v, p, jerk, forces and
@@ -42,6 +46,7 @@ examples:
   explorer record A.toml B.toml -o compare.rrd
   explorer record SCENE --sweep drive.rpm=1000,2000,3000 -o speeds.rrd
   explorer record SCENE --sweep valve.lash="0.1 mm","0.3 mm" --set linkage.stiffness=1e6 -o lash.rrd
+  explorer record pushrod_train.toml --magnification 50 -o train.rrd
   explorer view speeds.rrd
 """
 
@@ -62,6 +67,12 @@ def register(sub) -> None:
         help="one recording per value, V1,V2,... or START:STOP:COUNT[:log] (repeatable: every combination)",
     )
     p.add_argument("--no-parts", action="store_true", help="leave out the 3D parts (series and events only)")
+    p.add_argument("--magnification", default=None, metavar="X",
+                   help="draw each moving mass of the 3D parts at its rigid pose plus X times its computed deviation "
+                        "from it (an elastic valve, each mass of a train, the lash adjuster's plunger travel), as the "
+                        f"browser's slider does; a positive number up to {MAX_MAGNIFICATION:g}; default: the scene's "
+                        "own (x20 for a train of masses or a lash adjuster, x1 otherwise); written in each "
+                        "recording's summary")
     p.add_argument("--checks", action="store_true",
                    help="also the design checks of each run's scene (as `explorer check SCENE`): each rule that warns "
                         "or fails a marker in the event log at the cam angle of its worst, the limits as lines beside "
@@ -136,13 +147,31 @@ def plan_runs(scene_paths: list[str], overrides: list[str], sweeps: list[str]):
     return plans
 
 
-def _with_parts_or_warn(label: str, result):
-    """The run with its 3D parts; if the meshes cannot be built for this gear, the series and
-    events are still worth recording: say so and leave the parts out."""
+def parse_magnification(text: str | None, no_parts: bool = False) -> float | None:
+    """--magnification as a number (None: the scene's default): positive, finite, at most
+    MAX_MAGNIFICATION; it draws the parts, so --no-parts leaves it nothing to do."""
+    if text is None:
+        return None
+    if no_parts:
+        raise InputError("<command line>", "--magnification", "draws the 3D parts, which --no-parts leaves out")
+    try:
+        value = float(text)
+    except (ValueError, OverflowError):
+        value = None
+    if value is None or not math.isfinite(value) or not 0.0 < value <= MAX_MAGNIFICATION:
+        raise InputError("<command line>", "--magnification",
+                         f"must be a number above 0 and at most {MAX_MAGNIFICATION:g} (1 = true scale), got {echo(text)}")
+    return value
+
+
+def _with_parts_or_warn(label: str, result, magnification: float | None = None):
+    """The run with its 3D parts at `magnification` (None: the scene's default); if the meshes
+    cannot be built for this gear, the series and events are still worth recording: say so and
+    leave the parts out."""
     from ..view.rerun.recording import Run, with_parts  # local: loads when the command runs, not at `explorer --help`
 
     try:
-        return with_parts(label, result)
+        return with_parts(label, result, magnification)
     except Exception as exc:  # noqa: BLE001 - a viewer extra must not lose the recording
         print(f"warning: {label}: 3D parts left out ({type(exc).__name__}: {exc})", file=sys.stderr)
         return Run(label=label, result=result)
@@ -156,6 +185,7 @@ def run(args) -> int:
     from ..effects.pipeline import simulate
     from ..view.rerun.recording import Run, check_rrd_path, write_recordings
 
+    magnification = parse_magnification(args.magnification, args.no_parts)
     out = check_rrd_path(args.output, "--output")
     plans = plan_runs(args.scenes, args.overrides, args.sweep)  # every input error before any work
     done = []  # (label, steps, events, warnings): all that is kept of a run once it is written
@@ -163,7 +193,7 @@ def run(args) -> int:
     def runs():
         for label, scene in plans:
             result = simulate(scene)
-            run = Run(label=label, result=result) if args.no_parts else _with_parts_or_warn(label, result)
+            run = Run(label=label, result=result) if args.no_parts else _with_parts_or_warn(label, result, magnification)
             yield replace(run, checks=check_design(scene)) if args.checks else run
 
     def written(r) -> None:

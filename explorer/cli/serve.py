@@ -91,14 +91,18 @@ def run(args) -> int:
             server = viser.ViserServer(host=args.host, port=args.port, verbose=False)
             callbacks.use_for(server)  # idle callback threads end (the sessions' crowd leaves none behind)
             on_result = (lambda prepared: stream.log(prepared.result, prepared.label)) if stream is not None else None
+            # the checks the browser computes after each result join that result's recording
+            on_checked = (lambda prepared, summary: stream.log_checks(prepared.result, summary)) \
+                if stream is not None else None
             # the compiled solvers are prepared once the page is served, not before (#27.2)
             kernels = KernelWarmup()
             if args.shared:
                 app = ExplorerApp(server, scene.source, args.overrides, playing=not args.paused, on_result=on_result,
-                                  kernels=kernels, checks=check_design)
+                                  kernels=kernels, checks=check_design, on_checked=on_checked)
             else:
                 app = PerClientExplorer(server, scene.source, args.overrides, playing=not args.paused,
-                                        on_result=on_result, kernels=kernels, checks=check_design)
+                                        on_result=on_result, kernels=kernels, checks=check_design,
+                                        on_checked=on_checked)
             shown_host = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
             if not supervisor.stopping.is_set():
                 print(f"Valve-Gear Explorer: http://{shown_host}:{server.get_port()}  (Ctrl-C stops)", flush=True)

@@ -84,7 +84,8 @@ class CheckLine:
         return ", ".join(parts)
 
     def label(self) -> str:
-        """The panel's line: verdict, rule, worst and where."""
+        """The line in one string: verdict, rule, worst and where (the browser's panel shows it in
+        two rows, explorer.view.browser.checks_panel.button_text and detail_text)."""
         if not self.judged:
             return f"{self.verdict} · {self.title}"
         where = self.where()

@@ -65,7 +65,8 @@ class ExplorerApp:
     `client`). `kernels` (explorer.view.browser.kernels.KernelWarmup) tells whether the compiled
     solver is ready; None: it is taken to be (the tests compile it before they run). `checks`
     (explorer.view.verdicts.CheckRunner, e.g. explorer.checks.viewer.evaluate): the design checks
-    of every new result in a Checks tab; None: no tab."""
+    of every new result in a Checks tab; None: no tab. `on_checked(prepared, summary)` gets each
+    result's checks too (the rerun live stream adds them to the result's recording)."""
 
     def __init__(
         self,
@@ -81,6 +82,7 @@ class ExplorerApp:
         client=None,
         kernels=None,
         checks=None,
+        on_checked: Callable[[Prepared, object], None] | None = None,
     ):
         scene_path = str(find_scene(scene_path))  # a built-in scene named as the Scene list shows it
         port = server.get_port()
@@ -145,6 +147,7 @@ class ExplorerApp:
             compiled=None if kernels is None else kernels.ready,
             checks=checks,
             on_checks=lambda serial, summary: self.inbox.put(ChecksArrived(serial, summary)),
+            on_checked=on_checked,
             time_limit=time_limit).start()
         self._loading = self._submit()
         self.loop = FrameLoop(self.tick, fps, wake=self.inbox.arrived).start()

@@ -145,25 +145,74 @@ def header_html(summary, label: str = "", checking: bool = False) -> str:
             "dashed lines on the plots of the quantities they concern.</div>")
 
 
-def line_hint(line: CheckLine) -> str:
+# A rule's line is two rows: a button with its verdict and title, and under it a small text with
+# the rest (the worst, where, the limits; why a rule cannot judge). viser 1.1.1's button neither
+# wraps nor shows its `hint` (client/src/components/Button.tsx: one row 2em high, the label clipped
+# at the panel's edge), so a line in one button lost its end ("... 0.06071 mm/de" in the 440 px
+# panel). A title too long for the button row (BUTTON_CHARS: the 422 px button at size sm holds
+# about 64 characters of Mantine's sans-serif, with room for wide glyphs) is cut with an ellipsis
+# and given whole in the text row; the limit's source is the text row's tooltip (its title).
+BUTTON_CHARS = 56
+DETAIL_CLASS = "explorer-check-detail"
+
+
+def button_text(line: CheckLine, limit: int = BUTTON_CHARS) -> str:
+    """The button row: verdict and title ("FAIL · Seating velocity"), cut to `limit` characters
+    at a word with an ellipsis."""
+    text = f"{line.verdict.upper() if line.judged else line.verdict} · {line.title}"
+    if len(text) <= limit:
+        return text
+    head = text[: limit - 1]
+    cut = head.rsplit(" ", 1)[0] if " " in head[len(line.verdict) + 3:] else head
+    return cut.rstrip(" ·:,;") + "…"
+
+
+def worst_text(line: CheckLine) -> str:
+    """The worst and where it is ("8.007 m/s at 3472.36 rpm, 176.17°"); "" for a rule that
+    cannot judge or shows no value."""
+    if not line.judged or not line.shown:
+        return ""
+    return line.shown + (f" at {line.where()}" if line.where() else "")
+
+
+def _detail_parts(line: CheckLine) -> list[tuple[str, bool]]:
+    """The text row's pieces, each with whether it is the worst (drawn in the verdict's colour)."""
+    parts = [(line.title, False)] if button_text(line).endswith("…") else []
     if not line.judged:
-        return line.reason or line.verdict
-    parts = [f"{line.verdict}: worst {line.shown}" + (f" at {line.where()}" if line.where() else "")]
-    if line.limit:
-        parts.append(f"limits {line.limit}")
-    if line.source:
-        parts.append(f"source: {line.source}")
-    return "; ".join(parts)
+        return parts + [(line.reason or line.verdict, False)]
+    worst = worst_text(line)
+    return parts + ([(worst, True)] if worst else []) + ([(f"limits {line.limit}", False)] if line.limit else [])
+
+
+def detail_text(line: CheckLine) -> str:
+    """The text row under the button: the whole title when the button cut it, then the worst with
+    where, and the limits; for a rule that cannot judge, why."""
+    return " · ".join(text for text, _ in _detail_parts(line))
+
+
+def detail_html(line: CheckLine) -> str:
+    """detail_text as the panel shows it: small, wrapped within the panel, the worst in the
+    verdict's colour, the source of the limits as the row's tooltip."""
+    colour = hex_colour(RGB.get(line.verdict, (90, 90, 90)))
+    text = " · ".join(f"<b style='color:{colour}'>{html.escape(t)}</b>" if worst else html.escape(t)
+                      for t, worst in _detail_parts(line))
+    grey = "#555" if line.judged else "#8a8a8a"  # a rule that cannot judge: as faint as its greyed button
+    tip = f" title='{html.escape('source: ' + line.source, quote=True)}'" if line.judged and line.source else ""
+    return (f"<div class='{DETAIL_CLASS}' data-rule='{html.escape(line.rule, quote=True)}'{tip} "
+            f"style='font-size:0.8em;line-height:1.3;margin:-0.35em 0.75em 0.5em;color:{grey};"
+            f"overflow-wrap:anywhere'>{text}</div>")
 
 
 class ChecksPanel:
-    """The Checks tab: a header and one button per rule (`buttons`: rule -> handle)."""
+    """The Checks tab: a header and, per rule, a button and a text row under it (`buttons`,
+    `details`: rule -> handle)."""
 
     def __init__(self, gui, tab, inbox):
         self.gui, self.tab, self.inbox = gui, tab, inbox
         self.summary: CheckSummary | str | None = None
         self.serial = -1  # the request whose result `summary` checked
         self.buttons: dict[str, Any] = {}
+        self.details: dict[str, Any] = {}
         with tab:
             self.header = gui.add_html(header_html(None))
 
@@ -179,18 +228,18 @@ class ChecksPanel:
         last: another thread that sees them sees the buttons too)."""
         self.header.content = header_html(summary)
         lines = summary.lines if isinstance(summary, CheckSummary) else ()
-        for handle in self.buttons.values():
+        for handle in [*self.buttons.values(), *self.details.values()]:
             handle.remove()
-        buttons = {}
+        buttons, details = {}, {}
         with self.tab:
             for line in lines:
                 # a judged rule keeps its colour even where it locates nothing (a click then does
                 # nothing); a rule that cannot judge is greyed out
-                button = self.gui.add_button(line.label(), color=line.colour, hint=line_hint(line),
-                                             disabled=not line.judged)
+                button = self.gui.add_button(button_text(line), color=line.colour, disabled=not line.judged)
                 button.on_click(_recorder(self.inbox, line.rule))
                 buttons[line.rule] = button
-        self.buttons = buttons
+                details[line.rule] = self.gui.add_html(detail_html(line))
+        self.buttons, self.details = buttons, details
         self.serial, self.summary = serial, summary
 
 

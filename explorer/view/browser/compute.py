@@ -61,6 +61,9 @@ class ComputeWorker:
     # summary goes: (serial, CheckSummary or the reason there is none); None: no checks
     checks: Any = None
     on_checks: Callable[[int, Any], None] | None = None
+    # the checked result and its CheckSummary, when the checks judged one (not why there are
+    # none): e.g. the rerun live stream, which adds them to that result's recording
+    on_checked: Callable[[Prepared, Any], None] | None = None
     time_limit: float | None = COMPUTE_TIME_LIMIT_S
     memory_limit: int = MEMORY_LIMIT_BYTES
     _pending: Request | None = None
@@ -301,6 +304,12 @@ class ComputeWorker:
         if kind in ("checks", "internal"):
             try:
                 self.on_checks(serial, payload)
+            except Exception:
+                traceback.print_exc()
+        # the child judged the result it holds, which is _last's (a newer result makes the task stale)
+        if kind == "checks" and not isinstance(payload, str) and self.on_checked is not None and self._last is not None:
+            try:
+                self.on_checked(self._last, payload)
             except Exception:
                 traceback.print_exc()
 

@@ -12,7 +12,7 @@ import os
 import signal
 from multiprocessing.connection import Connection
 
-from .recording import APP_ID, blueprint, log_overlay, log_result, new_recording
+from .recording import APP_ID, blueprint, log_checks, log_overlay, log_result, new_recording
 
 
 def _execute(job: dict) -> None:
@@ -34,7 +34,9 @@ def _execute(job: dict) -> None:
         return
     sinks = [rr.FileSink(where) if kind == "file" else rr.GrpcSink(where) for kind, where in job["sinks"]]
     run = job["run"]
-    rec = new_recording(run.label)
+    # "checks": the design checks of a run already recorded, added to that recording (its id)
+    appending = job["kind"] == "checks"
+    rec = new_recording(run.label, job.get("recording_id"), send_properties=not appending)
     if layout is not None and job.get("default_blueprint"):
         rec.set_sinks(*sinks, default_blueprint=layout)
     else:
@@ -42,8 +44,11 @@ def _execute(job: dict) -> None:
     try:
         if layout is not None and job.get("send_blueprint"):
             rec.send_blueprint(layout, make_active=job.get("make_active", True), make_default=True)
-        log_result(rec, run.result, run.label, run.parts, run.poses, run.scales, run.colors, run.points,
-                   run.magnification, getattr(run, "checks", None))
+        if appending:
+            log_checks(rec, run.result, run.checks)
+        else:
+            log_result(rec, run.result, run.label, run.parts, run.poses, run.scales, run.colors, run.points,
+                       run.magnification, getattr(run, "checks", None))
         timeout = job.get("flush_timeout")
         if timeout is None:
             rec.flush()

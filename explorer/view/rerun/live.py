@@ -2,7 +2,10 @@
 
 Every result the browser explorer computes (a profile swap, a parameter change) becomes a new
 recording, labelled "#n <label>", with the same content as `explorer record` writes (series,
-3D parts, events, summary, layout; see explorer.view.rerun.recording).
+3D parts, events, summary, layout; see explorer.view.rerun.recording). The design checks, which
+the browser computes after the result is shown, join that recording when they come (`log_checks`):
+the markers and limit lines of `explorer record --checks`, logged by the same functions under the
+recording's id (a second piece of the same recording in the viewer and in the merged file).
 
 - `--rerun`: a gRPC server bound to 127.0.0.1 (rerun's own default is every interface) at
   --rerun-port (default 9876). One hidden host stream owns the server for the whole session;
@@ -17,7 +20,8 @@ recording, labelled "#n <label>", with the same content as `explorer record` wri
 `log()` only hands the result to a background writer and returns: building the meshes and
 logging take a fraction of a second that the explorer's compute thread should not wait for. While
 a recording is being written, a newer result replaces one still waiting (newest wins, as in the
-explorer's own worker), so the stream never falls behind. `flush()` waits for the writer.
+explorer's own worker), so the stream never falls behind; so do checks waiting to be added
+(those of a result not yet written go into its recording). `flush()` waits for the writer.
 
 The recordings are logged in the helper process of explorer.view.rerun.worker (rerun keeps every
 stream made in a process, with its threads, until that process ends; a long session would grow
@@ -29,6 +33,7 @@ the writer, then disconnects the server stream.
 from __future__ import annotations
 
 import atexit
+import dataclasses
 import shutil
 import socket
 import sys
@@ -46,6 +51,9 @@ DEFAULT_PORT = 9876
 BIND_IP = "127.0.0.1"
 FLUSH_TIMEOUT_S = 10.0
 SERVER_MEMORY_LIMIT = "1GiB"
+# recordings whose design checks may still come (the browser computes them after the result, and
+# a newer result stops them): the last few, so that a session holds a bounded number of results
+CHECKABLE_RECORDINGS = 4
 
 
 def add_live_arguments(parser) -> None:
@@ -95,6 +103,12 @@ def check_port(port: int) -> int:
         return s.getsockname()[1]
 
 
+def checks_line(name: str, checks) -> str:
+    """The session index's line for the checks added to recording `name`."""
+    counts = checks.counts()
+    return f"{name} | checks {checks.verdict.upper()}: {counts['fail']} fail, {counts['warn']} warn"
+
+
 def session_line(name: str, result) -> str:
     """One line per recording in the session index: label, speed, events, warnings."""
     parts = [name, f"{result.summary.get('rpm', float('nan')):g} rpm", f"{len(result.events)} events"]
@@ -120,7 +134,10 @@ class LiveStream:
         self._pieces: list[Path] = []
         self._pieces_dir: Path | None = None
         self._cond = threading.Condition()
-        self._pending: tuple | None = None
+        self._pending: tuple | None = None  # (name, result, checks or None): the next recording
+        self._pending_checks: tuple | None = None  # (result, checks): to add to the result's recording
+        # [result, name, recording id, checked] of the last CHECKABLE_RECORDINGS recordings written
+        self._recorded: list[list] = []
         self._busy = False
         self._closed = False
         self._count = 0
@@ -159,7 +176,24 @@ class LiveStream:
                 raise RuntimeError("the live rerun stream is closed")
             self._count += 1
             name = f"#{self._count} {label or getattr(result.scene, 'name', 'run')}"
-            self._pending = (name, result)
+            self._pending = (name, result, None)
+            self._cond.notify_all()
+
+    def log_checks(self, result, checks) -> None:
+        """Add the design checks `checks` (an explorer.view.verdicts.CheckSummary) of `result` to
+        that result's recording: WARN/ERROR markers at each rule's worst cam angle in the event
+        log and the limits as series beside their quantities, as `explorer record --checks`.
+        Checks of a result that is not recorded (replaced before it was written), or whose
+        recording has them already, are dropped; a newer call replaces one still waiting."""
+        if not self.enabled:
+            return
+        with self._cond:
+            if self._closed:
+                raise RuntimeError("the live rerun stream is closed")
+            if self._pending is not None and self._pending[1] is result:
+                self._pending = (*self._pending[:2], checks)  # not written yet: in one recording
+            else:
+                self._pending_checks = (result, checks)
             self._cond.notify_all()
 
     def flush(self, timeout: float | None = None) -> bool:
@@ -167,7 +201,8 @@ class LiveStream:
         if not self.enabled:
             return True
         with self._cond:
-            return self._cond.wait_for(lambda: self._pending is None and not self._busy, timeout)
+            return self._cond.wait_for(lambda: self._pending is None and self._pending_checks is None
+                                       and not self._busy, timeout)
 
     def close(self) -> None:
         """Write what is queued, stop the writer, close the server, merge the file. Idempotent."""
@@ -210,14 +245,24 @@ class LiveStream:
     def _run(self) -> None:
         while True:
             with self._cond:
-                self._cond.wait_for(lambda: self._pending is not None or self._closed)
-                if self._pending is None:  # closed and drained
+                self._cond.wait_for(lambda: self._pending is not None or self._pending_checks is not None
+                                    or self._closed)
+                # a recording first: the checks waiting may be its own
+                job, later = (self._pending, None) if self._pending is not None else (None, self._pending_checks)
+                if job is None and later is None:  # closed and drained
                     return
-                (name, result), self._pending = self._pending, None
+                if job is not None:
+                    self._pending = None
+                else:
+                    self._pending_checks = None
                 self._busy = True
+            name = job[0] if job is not None else "checks"
             try:
-                self._write(name, result)
-                self.labels.append(name)
+                if job is not None:
+                    self._write(*job)
+                    self.labels.append(name)
+                else:
+                    self._write_checks(*later)
             except Exception as exc:  # one bad result must not end the stream
                 self.errors.append(f"{name}: {type(exc).__name__}: {exc}")
             finally:
@@ -225,36 +270,65 @@ class LiveStream:
                     self._busy = False
                     self._cond.notify_all()
 
-    def _write(self, name: str, result) -> None:
-        import rerun as rr
-
-
-        run = recording.with_parts(name, result) if self.parts else recording.Run(name, result)
-        seen = len(self._paths)
-        for path in recording.recording_paths(result, (run.parts or {}).keys()):
-            if path not in self._paths:
-                self._paths.append(path)
-        if self._bounds is None and run.parts:
-            self._bounds = recording.parts_bounds(run.parts, run.poses or {})
-        sinks = []
+    def _sinks(self) -> tuple[list[tuple[str, str]], Path | None]:
+        """Where one write goes: the server, and/or a new piece of the file."""
+        sinks, piece = [], None
         if self.url is not None:
             sinks.append(("grpc", self.url))
-        piece = None
         if self._pieces_dir is not None:
             piece = self._pieces_dir / f"{len(self._pieces):05d}.rrd"
             sinks.append(("file", str(piece)))
+        return sinks, piece
+
+    def _add_paths(self, paths) -> bool:
+        """Entity paths for the layout; whether any was new (the layout then changes)."""
+        seen = len(self._paths)
+        self._paths.extend(dict.fromkeys(p for p in paths if p not in self._paths))
+        return len(self._paths) != seen
+
+    def _write(self, name: str, result, checks=None) -> None:
+        import rerun as rr
+
+        run = recording.with_parts(name, result) if self.parts else recording.Run(name, result)
+        run = dataclasses.replace(run, checks=checks)
+        changed = self._add_paths(recording.recording_paths(result, (run.parts or {}).keys(), checks))
+        if self._bounds is None and run.parts:
+            self._bounds = recording.parts_bounds(run.parts, run.poses or {})
+        sinks, piece = self._sinks()
+        rid = recording.recording_id(name)
         # Logged in the helper process (explorer.view.rerun.worker): a stream made here would stay,
         # with its threads, for the rest of the session. The blueprint is sent explicitly, not as
         # the sinks' default: a viewer that is already showing the session keeps its own layout
         # otherwise. It is made active only when it changes (first recording, new kinds of
         # series), so a user's rearrangement survives a parameter change.
-        send(self._worker, sinks, run, (list(self._paths), self._bounds), make_active=len(self._paths) != seen,
-             flush_timeout=FLUSH_TIMEOUT_S)
+        send(self._worker, sinks, run, (list(self._paths), self._bounds), make_active=changed,
+             flush_timeout=FLUSH_TIMEOUT_S, recording_id=rid)
         if piece is not None:
             self._pieces.append(piece)
+        self._recorded = [*self._recorded, [result, name, rid, checks is not None]][-CHECKABLE_RECORDINGS:]
         if self._host is not None:
             self._host.set_time("recording", sequence=len(self.labels) + 1)
             self._host.log("/session", rr.TextLog(session_line(name, result)))
+            if checks is not None:
+                self._host.log("/session", rr.TextLog(checks_line(name, checks)))
+
+    def _write_checks(self, result, checks) -> None:
+        """The checks of a result already recorded, added to its recording (same id)."""
+        import rerun as rr
+
+        entry = next((e for e in reversed(self._recorded) if e[0] is result), None)
+        if entry is None or entry[3]:  # not recorded (replaced while waiting), or checked already
+            return
+        _, name, rid, _ = entry
+        changed = self._add_paths(recording.recording_paths(result, (), checks))
+        sinks, piece = self._sinks()
+        send(self._worker, sinks, recording.Run(name, result, checks=checks), (list(self._paths), self._bounds),
+             make_active=changed, flush_timeout=FLUSH_TIMEOUT_S, recording_id=rid, checks_only=True)
+        if piece is not None:
+            self._pieces.append(piece)
+        entry[3] = True
+        if self._host is not None:
+            self._host.log("/session", rr.TextLog(checks_line(name, checks)))
 
     def _finish_file(self) -> None:
         pieces_dir, self._pieces_dir = self._pieces_dir, None

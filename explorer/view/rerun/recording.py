@@ -49,7 +49,8 @@ Other entities:
                   seat, lash-take-up, … from result.events) at level INFO, and the
                   result's warnings at level WARN at t = 0.
 - /summary        TextDocument (static, markdown): scene, label, peaks, effect timings, warnings.
-- /events/checks and <series>/limit_*   with design checks (`explorer record --checks`): each
+- /events/checks and <series>/limit_*   with design checks (`explorer record --checks`; the live
+                  stream's once the browser has computed them, log_checks): each
                   rule that warns or fails as a marker at the cam angle of its worst, each limit a
                   line beside its series (explorer.view.rerun.check_marks).
 
@@ -343,6 +344,15 @@ def _log_events(rec, rr, result, index: Mapping[str, np.ndarray]) -> None:
                  rr.TimeColumn(TIMELINE_ANGLE, sequence=np.asarray(degrees, dtype=np.int64))],
         columns=rr.TextLog.columns(text=texts, level=levels),
     )
+
+
+def log_checks(rec, result, checks) -> None:
+    """Only the design checks of `result` (a CheckSummary: markers and limits) into `rec`, as
+    log_result logs them: the live stream adds them to a result's recording when they come,
+    after the recording itself (explorer.view.rerun.live)."""
+    import rerun as rr
+
+    _log_checks(rec, rr, result, checks, step_indexes(result))
 
 
 def _log_checks(rec, rr, result, checks, index: Mapping[str, np.ndarray]) -> None:
@@ -657,11 +667,19 @@ def with_parts(label: str, result, magnification: float | None = None) -> Run:
                magnification=m)
 
 
-def new_recording(label: str):
+def recording_id(label: str) -> str:
+    """A fresh random id: two files opened together must never merge into one recording."""
+    return f"{label}-{uuid.uuid4().hex[:12]}"
+
+
+def new_recording(label: str, rid: str | None = None, send_properties: bool = True):
+    """A stream of a new recording (`rid` None: a fresh id), or with `rid` of an existing one: what
+    it logs joins that recording (the viewer and `rerun rrd merge` put a recording's pieces
+    together); such a stream sends no properties of its own (send_properties=False), so it keeps
+    the recording's name and start."""
     import rerun as rr
 
-    # a fresh random id: two files opened together must never merge into one recording
-    return rr.RecordingStream(APP_ID, recording_id=f"{label}-{uuid.uuid4().hex[:12]}")
+    return rr.RecordingStream(APP_ID, recording_id=rid or recording_id(label), send_properties=send_properties)
 
 
 def union_bounds(boxes):

@@ -156,8 +156,12 @@ def write_blueprint(worker: RecordingWorker, path, layout: tuple) -> None:
 
 
 def send(worker: RecordingWorker, sinks: list[tuple[str, str]], run, layout: tuple, make_active: bool,
-         flush_timeout: float) -> None:
-    """One recording to `sinks` [("file", path) | ("grpc", url)], its blueprint sent explicitly."""
-    worker.run({"kind": "record", "sinks": sinks, "run": portable_run(run), "layout": layout,
-                         "send_blueprint": True, "make_active": make_active, "flush_timeout": flush_timeout},
-                        timeout=JOB_TIMEOUT_S + flush_timeout)
+         flush_timeout: float, recording_id: str | None = None, checks_only: bool = False) -> None:
+    """One recording to `sinks` [("file", path) | ("grpc", url)], its blueprint sent explicitly,
+    under `recording_id` (None: a fresh one). `checks_only`: only the run's design checks
+    (run.checks), added to the recording `recording_id` already holds (the live stream's, once
+    the browser has computed them)."""
+    worker.run({"kind": "checks" if checks_only else "record", "sinks": sinks, "run": portable_run(run),
+                "layout": layout, "send_blueprint": True, "make_active": make_active, "flush_timeout": flush_timeout,
+                "recording_id": recording_id},
+               timeout=JOB_TIMEOUT_S + flush_timeout)
