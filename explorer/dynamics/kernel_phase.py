@@ -29,10 +29,11 @@ from .exact_events import MAX_DEPTH
 from .kernel_events import (LIFT_OFF, MIN, RECONTACT, SEARCH_ROWS, SEAT, SEPARATION, UP, VZERO, coeffs, earliest,
                             moving_table, static_table, zero_flags)
 from .kernel_grid import BLOCK, WINDOW, drive_at, node_time
-from .kernel_steps import deriv_into, expand, fsum, horner, shift_into, step, step_tables
+from .kernel_steps import deriv_into, expand, fsum, horner, shift_into, step, step_tables_into
 from .phases import CONTACT, FLIGHT, SEATED, STUCK
 
 OK, TOO_MANY_EVENTS, NO_PROGRESS = 0, 1, 2  # a run's status (exact.py's RuntimeErrors)
+EVENT_ROWS = 64  # a run's event records before _grow allocates more (a run of elastic_float at 3600 steps has ~16)
 GROUP_MARGIN = 1e-9  # a step group's length bound lies this fraction above its length (the lengths of
 # a group differ by rounding)
 
@@ -146,7 +147,7 @@ def run_buffers(nn, N, U):
     the event search's stack: kernel_events._search.)"""
     NC = N + 1
     return (np.full(nn, np.nan), np.full(nn, np.nan), np.ones(nn), np.full(nn, -1, dtype=np.int8),
-            np.full((16, 4), np.nan), np.zeros((3, U, 18)),
+            np.full((EVENT_ROWS, 4), np.nan), np.zeros((3, U, 18)),
             (np.zeros(NC), np.zeros(NC), np.zeros(max(6, NC)), np.zeros(6), np.zeros(6), np.zeros(NC),
              np.zeros((4, 5)), np.zeros((4, NC)), np.zeros(4, dtype=np.bool_), np.zeros(4, dtype=np.bool_),
              np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.int64),
@@ -335,12 +336,13 @@ def _window_flight(PT, Dn, hidx, tab, out_s, out_v, i, s, v, Fc, sw1, a0, k0, l0
 
 
 @njit(cache=True, inline="always")
-def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, sw1, hidx, lin, tabs, k, c, lash, W0,
-                  R, N, win, out_s, out_v, out_sigma, out_phase, ws):
+def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, sw1, hidx, masses, tabs, k, c, lash,
+                  W0, R, N, win, out_s, out_v, out_sigma, out_phase, ws):
     """A moving valve (contact or flight) from (j, u) with state (s, v) and friction sign sigma
     (exact_phase._run_moving; release: it starts from rest, pushed in the direction sigma): its
     node records, and (event or -1 at the end of the grid, j, u, s, v there, steps searched in
-    detail)."""
+    detail). masses: (M, M1, spring rate) in one argument (a call of more than 30 arguments compiles
+    to CALL_FUNCTION_EX, which numba does not inline)."""
     a, da, f, Pw, dP, zero6, rows, E, zr, clear_row, ev_kind, ev_r0, ev_nr, ev_comb, zeros, check, grp, hu, top, \
         tmp, stack = ws
     ns = h.size
@@ -350,7 +352,12 @@ def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, s
     sw2 = sw1 * sw1
     sw3 = sw2 * sw1
     n_detail = 0
-    m_, c_, K_, kc_, cc_ = lin[kind, 0], lin[kind, 1], lin[kind, 2], lin[kind, 3], lin[kind, 4]
+    # m, c, K, kc, cc of the phase (exact.py's LinearPhase, as run_nodes' tables), without an array per run
+    M, M1, rate = masses
+    if kind == CONTACT:
+        m_, c_, K_, kc_, cc_ = M1, c, k + rate, k, c
+    else:
+        m_, c_, K_, kc_, cc_ = M, 0.0, rate, 0.0, 0.0
     Fc = kc_ * lash + W0 + R * sigma
     n_ev, nrow = moving_table(kind, k, c, lash, R, sigma, rows, ev_kind, ev_r0, ev_nr, ev_comb)
     if j >= ns:
@@ -616,12 +623,10 @@ def run_nodes(nodes, h, inv, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash,
     for g in range(U):
         hu[g] = h_unique[g] * inv
     n_events = 0
-    # per phase kind: m, c, K, kc, cc (exact.py's LinearPhase) and the one-step tables
-    lin = np.empty((3, 5))
-    lin[CONTACT, 0], lin[CONTACT, 1], lin[CONTACT, 2], lin[CONTACT, 3], lin[CONTACT, 4] = M1, c, k + rate, k, c
-    lin[FLIGHT, 0], lin[FLIGHT, 1], lin[FLIGHT, 2], lin[FLIGHT, 3], lin[FLIGHT, 4] = M, 0.0, rate, 0.0, 0.0
-    tabs[CONTACT] = step_tables(M1, c, k + rate, k, c, hu, N)
-    tabs[FLIGHT] = step_tables(M, 0.0, rate, 0.0, 0.0, hu, N)
+    # per phase kind (m, c, K, kc, cc: exact.py's LinearPhase) the one-step tables, written into the
+    # batch's buffer with the stepping's scratch (a, f: not in use yet): no allocation per run
+    step_tables_into(tabs[CONTACT], M1, c, k + rate, k, c, hu, N, ws[0], ws[2])
+    step_tables_into(tabs[FLIGHT], M, 0.0, rate, 0.0, 0.0, hu, N, ws[0], ws[2])
 
     phase = SEATED
     s = 0.0
@@ -653,8 +658,8 @@ def run_nodes(nodes, h, inv, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash,
             release = True
         else:
             which, j, u, s, v, nd = _moving_phase(phase, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, sw1,
-                                                  hidx, lin, tabs, k, c, lash, W0, R, N, win, out_s, out_v,
-                                                  out_sigma, out_phase, ws)
+                                                  hidx, (M, M1, rate), tabs, k, c, lash, W0, R, N, win,
+                                                  out_s, out_v, out_sigma, out_phase, ws)
             n_detail += nd
             release = False
             if which < 0:
