@@ -34,6 +34,7 @@ from .phases import CONTACT, FLIGHT, SEATED, STUCK
 
 OK, TOO_MANY_EVENTS, NO_PROGRESS = 0, 1, 2  # a run's status (exact.py's RuntimeErrors)
 EVENT_ROWS = 64  # a run's event records before _grow allocates more (a run of elastic_float at 3600 steps has ~16)
+WINDOW_LEAD = 4  # steps of a moving phase taken one at a time before its first window
 GROUP_MARGIN = 1e-9  # a step group's length bound lies this fraction above its length (the lengths of
 # a group differ by rounding)
 
@@ -421,6 +422,11 @@ def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, s
     a2_, b2_, k2_, l2_, m2_ = rows[2, 0], rows[2, 1], rows[2, 2], rows[2, 3], rows[2, 4]
     a3_, b3_, k3_, l3_, m3_ = rows[3, 0], rows[3, 1], rows[3, 2], rows[3, 3], rows[3, 4]
     i = j + 1
+    # the first window starts WINDOW_LEAD steps into the phase, at any step (a window across two of
+    # the grid's windows takes the larger of their bounds: still at least every step's); after a
+    # window that does not clear, the next starts after it
+    next_win = i + WINDOW_LEAD
+    n_win = ns // WINDOW
     S0 = 0.0
     S10 = 0.0
     if i < nn:
@@ -430,7 +436,7 @@ def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, s
     e0c = a2_ * S0 + b2_ * S10 + k2_ + l2_ * s + m2_ * v
     e0d = a3_ * S0 + b3_ * S10 + k3_ + l3_ * s + m3_ * v
     while i < ns:
-        if win_ok and i % WINDOW == 0 and i + WINDOW <= ns:
+        if win_ok and i >= next_win and (i + WINDOW - 1) // WINDOW < n_win:
             # the window bound: the states of WINDOW steps propagated first (the same operations
             # as below: the same states), the rows' largest values and the largest |m a| and |v|
             # at its nodes with them, then every event cleared at once by _window_clear. A window
@@ -446,9 +452,18 @@ def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, s
                 ss, vv, ta, tb, tc, td, acm, Vm = _window_flight(
                     PT, Dn, hidx, tabs[FLIGHT], out_s, out_v, i, s, v, Fc, sw1, a0_, k0_, l0_, b1_, m1_, m2_, m3_,
                     K_, c > 0.0, nrow, e0a, e0b, e0c, e0d, acm0)
-            wb = i // WINDOW
+            wa = i // WINDOW
+            wz = (i + WINDOW - 1) // WINDOW
             top[0], top[1], top[2], top[3] = ta, tb, tc, td
-            if _window_clear(top, acm, Vm, win[0, wb] * sw1, win[1, wb] * sw2, win[2, wb] * sw3, c_, K_, kc_, cc_,
+            B1 = win[0, wa]
+            B2 = win[1, wa]
+            B3 = win[2, wa]
+            if wz != wa:
+                B1 = B1 if B1 >= win[0, wz] else win[0, wz]
+                B2 = B2 if B2 >= win[1, wz] else win[1, wz]
+                B3 = B3 if B3 >= win[2, wz] else win[2, wz]
+            next_win = i + WINDOW
+            if _window_clear(top, acm, Vm, B1 * sw1, B2 * sw2, B3 * sw3, c_, K_, kc_, cc_,
                              inv_m, wH, wi1q, wH8, rows, ev_r0, ev_nr, ev_comb, n_ev, clear_row):
                 for q in range(i, i + WINDOW):
                     out_phase[q] = kind
