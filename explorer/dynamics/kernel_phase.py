@@ -29,10 +29,12 @@ from .exact_events import MAX_DEPTH
 from .kernel_events import (LIFT_OFF, MIN, RECONTACT, SEARCH_ROWS, SEAT, SEPARATION, UP, VZERO, coeffs, earliest,
                             moving_table, static_table, zero_flags)
 from .kernel_grid import BLOCK, WINDOW, drive_at, node_time
-from .kernel_steps import deriv_into, expand, fsum, horner, shift_into, step, step_tables
+from .kernel_steps import deriv_into, expand, fsum, horner, shift_into, step, step_tables_into
 from .phases import CONTACT, FLIGHT, SEATED, STUCK
 
 OK, TOO_MANY_EVENTS, NO_PROGRESS = 0, 1, 2  # a run's status (exact.py's RuntimeErrors)
+EVENT_ROWS = 64  # a run's event records before _grow allocates more (a run of elastic_float at 3600 steps has ~16)
+WINDOW_LEAD = 4  # steps of a moving phase taken one at a time before its first window
 GROUP_MARGIN = 1e-9  # a step group's length bound lies this fraction above its length (the lengths of
 # a group differ by rounding)
 
@@ -146,7 +148,7 @@ def run_buffers(nn, N, U):
     the event search's stack: kernel_events._search.)"""
     NC = N + 1
     return (np.full(nn, np.nan), np.full(nn, np.nan), np.ones(nn), np.full(nn, -1, dtype=np.int8),
-            np.full((16, 4), np.nan), np.zeros((3, U, 18)),
+            np.full((EVENT_ROWS, 4), np.nan), np.zeros((3, U, 18)),
             (np.zeros(NC), np.zeros(NC), np.zeros(max(6, NC)), np.zeros(6), np.zeros(6), np.zeros(NC),
              np.zeros((4, 5)), np.zeros((4, NC)), np.zeros(4, dtype=np.bool_), np.zeros(4, dtype=np.bool_),
              np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.int64),
@@ -335,12 +337,13 @@ def _window_flight(PT, Dn, hidx, tab, out_s, out_v, i, s, v, Fc, sw1, a0, k0, l0
 
 
 @njit(cache=True, inline="always")
-def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, sw1, hidx, lin, tabs, k, c, lash, W0,
-                  R, N, win, out_s, out_v, out_sigma, out_phase, ws):
+def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, sw1, hidx, masses, tabs, k, c, lash,
+                  W0, R, N, win, out_s, out_v, out_sigma, out_phase, ws):
     """A moving valve (contact or flight) from (j, u) with state (s, v) and friction sign sigma
     (exact_phase._run_moving; release: it starts from rest, pushed in the direction sigma): its
     node records, and (event or -1 at the end of the grid, j, u, s, v there, steps searched in
-    detail)."""
+    detail). masses: (M, M1, spring rate) in one argument (a call of more than 30 arguments compiles
+    to CALL_FUNCTION_EX, which numba does not inline)."""
     a, da, f, Pw, dP, zero6, rows, E, zr, clear_row, ev_kind, ev_r0, ev_nr, ev_comb, zeros, check, grp, hu, top, \
         tmp, stack = ws
     ns = h.size
@@ -350,7 +353,12 @@ def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, s
     sw2 = sw1 * sw1
     sw3 = sw2 * sw1
     n_detail = 0
-    m_, c_, K_, kc_, cc_ = lin[kind, 0], lin[kind, 1], lin[kind, 2], lin[kind, 3], lin[kind, 4]
+    # m, c, K, kc, cc of the phase (exact.py's LinearPhase, as run_nodes' tables), without an array per run
+    M, M1, rate = masses
+    if kind == CONTACT:
+        m_, c_, K_, kc_, cc_ = M1, c, k + rate, k, c
+    else:
+        m_, c_, K_, kc_, cc_ = M, 0.0, rate, 0.0, 0.0
     Fc = kc_ * lash + W0 + R * sigma
     n_ev, nrow = moving_table(kind, k, c, lash, R, sigma, rows, ev_kind, ev_r0, ev_nr, ev_comb)
     if j >= ns:
@@ -414,6 +422,11 @@ def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, s
     a2_, b2_, k2_, l2_, m2_ = rows[2, 0], rows[2, 1], rows[2, 2], rows[2, 3], rows[2, 4]
     a3_, b3_, k3_, l3_, m3_ = rows[3, 0], rows[3, 1], rows[3, 2], rows[3, 3], rows[3, 4]
     i = j + 1
+    # the first window starts WINDOW_LEAD steps into the phase, at any step (a window across two of
+    # the grid's windows takes the larger of their bounds: still at least every step's); after a
+    # window that does not clear, the next starts after it
+    next_win = i + WINDOW_LEAD
+    n_win = ns // WINDOW
     S0 = 0.0
     S10 = 0.0
     if i < nn:
@@ -423,7 +436,7 @@ def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, s
     e0c = a2_ * S0 + b2_ * S10 + k2_ + l2_ * s + m2_ * v
     e0d = a3_ * S0 + b3_ * S10 + k3_ + l3_ * s + m3_ * v
     while i < ns:
-        if win_ok and i % WINDOW == 0 and i + WINDOW <= ns:
+        if win_ok and i >= next_win and (i + WINDOW - 1) // WINDOW < n_win:
             # the window bound: the states of WINDOW steps propagated first (the same operations
             # as below: the same states), the rows' largest values and the largest |m a| and |v|
             # at its nodes with them, then every event cleared at once by _window_clear. A window
@@ -439,9 +452,18 @@ def _moving_phase(kind, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, s
                 ss, vv, ta, tb, tc, td, acm, Vm = _window_flight(
                     PT, Dn, hidx, tabs[FLIGHT], out_s, out_v, i, s, v, Fc, sw1, a0_, k0_, l0_, b1_, m1_, m2_, m3_,
                     K_, c > 0.0, nrow, e0a, e0b, e0c, e0d, acm0)
-            wb = i // WINDOW
+            wa = i // WINDOW
+            wz = (i + WINDOW - 1) // WINDOW
             top[0], top[1], top[2], top[3] = ta, tb, tc, td
-            if _window_clear(top, acm, Vm, win[0, wb] * sw1, win[1, wb] * sw2, win[2, wb] * sw3, c_, K_, kc_, cc_,
+            B1 = win[0, wa]
+            B2 = win[1, wa]
+            B3 = win[2, wa]
+            if wz != wa:
+                B1 = B1 if B1 >= win[0, wz] else win[0, wz]
+                B2 = B2 if B2 >= win[1, wz] else win[1, wz]
+                B3 = B3 if B3 >= win[2, wz] else win[2, wz]
+            next_win = i + WINDOW
+            if _window_clear(top, acm, Vm, B1 * sw1, B2 * sw2, B3 * sw3, c_, K_, kc_, cc_,
                              inv_m, wH, wi1q, wH8, rows, ev_r0, ev_nr, ev_comb, n_ev, clear_row):
                 for q in range(i, i + WINDOW):
                     out_phase[q] = kind
@@ -616,12 +638,10 @@ def run_nodes(nodes, h, inv, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash,
     for g in range(U):
         hu[g] = h_unique[g] * inv
     n_events = 0
-    # per phase kind: m, c, K, kc, cc (exact.py's LinearPhase) and the one-step tables
-    lin = np.empty((3, 5))
-    lin[CONTACT, 0], lin[CONTACT, 1], lin[CONTACT, 2], lin[CONTACT, 3], lin[CONTACT, 4] = M1, c, k + rate, k, c
-    lin[FLIGHT, 0], lin[FLIGHT, 1], lin[FLIGHT, 2], lin[FLIGHT, 3], lin[FLIGHT, 4] = M, 0.0, rate, 0.0, 0.0
-    tabs[CONTACT] = step_tables(M1, c, k + rate, k, c, hu, N)
-    tabs[FLIGHT] = step_tables(M, 0.0, rate, 0.0, 0.0, hu, N)
+    # per phase kind (m, c, K, kc, cc: exact.py's LinearPhase) the one-step tables, written into the
+    # batch's buffer with the stepping's scratch (a, f: not in use yet): no allocation per run
+    step_tables_into(tabs[CONTACT], M1, c, k + rate, k, c, hu, N, ws[0], ws[2])
+    step_tables_into(tabs[FLIGHT], M, 0.0, rate, 0.0, 0.0, hu, N, ws[0], ws[2])
 
     phase = SEATED
     s = 0.0
@@ -653,8 +673,8 @@ def run_nodes(nodes, h, inv, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash,
             release = True
         else:
             which, j, u, s, v, nd = _moving_phase(phase, s, v, sigma, release, j, u, nodes, h, inv, PT, Dn, Sb, sw1,
-                                                  hidx, lin, tabs, k, c, lash, W0, R, N, win, out_s, out_v,
-                                                  out_sigma, out_phase, ws)
+                                                  hidx, (M, M1, rate), tabs, k, c, lash, W0, R, N, win,
+                                                  out_s, out_v, out_sigma, out_phase, ws)
             n_detail += nd
             release = False
             if which < 0:

@@ -119,10 +119,16 @@ def step_tables(m, c, K, kc, cc, h_unique, N):
     """Per step length: Phi (end value and slope of the responses to s0 = 1 and v0 = 1), g1 (to a
     unit constant forcing) and W_P (to the drive P = u^k): exact_steps' tables at u = 1, in the
     columns [Phi00 Phi01 Phi10 Phi11 g0 g1 W0_0..5 W1_0..5]."""
+    out = np.zeros((h_unique.size, 18))
+    step_tables_into(out, m, c, K, kc, cc, h_unique, N, np.zeros(N + 1), np.zeros(6))
+    return out
+
+
+@njit(cache=True, inline="always")
+def step_tables_into(out, m, c, K, kc, cc, h_unique, N, a, f):
+    """step_tables written into out (U rows, every column written), with the scratch a (N + 1 or
+    more values) and f (6 or more): a run's tables without allocating (the same floats)."""
     U = h_unique.size
-    out = np.zeros((U, 18))
-    a = np.zeros(N + 1)
-    f = np.zeros(6)
     for u in range(U):
         hu = h_unique[u]
         h2 = hu * hu
@@ -167,7 +173,6 @@ def step_tables(m, c, K, kc, cc, h_unique, N):
             else:
                 out[u, 6 + b - 3] = end
                 out[u, 12 + b - 3] = slope
-    return out
 
 
 @njit(cache=True, inline="always")
