@@ -15,16 +15,11 @@ from .free_vibration import free_amplitude
 from .kernel_events import LIFT_OFF, SEAT, SEPARATION
 from .kernel_grid import grid_bounds
 from .kernel_phase import borrowed, borrowed_buffers, run_buffers, run_nodes
+from .kernel_shared import FIGURES, RUN_PARAMETERS  # noqa: F401 (RUN_PARAMETERS: the rows of revolutions())
 from .kernel_steps import phase_rate, taylor_terms
 from .phases import CONTACT, FLIGHT
 
 _free_amplitude = njit(cache=True)(free_amplitude)  # the elastic effect's residual amplitude, compiled
-
-# the figures revolution() returns, in this order (the elastic effect's, as the sweep's rows read
-# them: explorer/studies/sweep_engine.row_scalars)
-FIGURES = ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
-           "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
-           "largest_bounce_m", "residual_deviation_m", "residual_amplitude_m")
 
 
 @njit(cache=True)
@@ -214,11 +209,6 @@ def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1
         q = out_nodes[dwell - i0 if dwell >= i0 else dwell + n - i0]
         fig[11] = _free_amplitude(out_s[q], out_v[q], S_dwell, k, lash, W0, rate, R, M1)
     return fig, rev, status
-
-
-# the columns of a batch's run parameters (revolutions())
-RUN_PARAMETERS = ("omega", "mass", "oscillating_mass", "stiffness", "damping", "lash", "seated_resistance",
-                  "spring_rate", "friction", "restitution", "preload_closing", "take_up_s")
 
 
 @njit(cache=True)
