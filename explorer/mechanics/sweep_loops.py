@@ -19,26 +19,26 @@ SOURCE = Path(__file__).resolve().parent / "sweep_kernels.py"
 
 
 @functools.cache
-def kernels():
-    """The module holding piece_minima and peak_torques: the ahead-of-time one when current, else
-    sweep_kernels (numba)."""
+def kernels() -> tuple:
+    """(piece_minima, peak_torques): the ahead-of-time module's when current, else
+    sweep_kernels' (numba)."""
     module = aot.load(AOT_MODULE, [SOURCE])
     if module is not None:
-        return module
-    from . import sweep_kernels  # numba: only when no current ahead-of-time module
+        return module.piece_minima, module.peak_torques
+    from .sweep_kernels import peak_torques, piece_minima  # numba: only without a current AOT module
 
-    return sweep_kernels
+    return piece_minima, peak_torques
 
 
 def piece_minima(w2, a_coef, g_part, lows, highs):
     """sweep_kernels.piece_minima (the exported signature's types and layout)."""
     c = np.ascontiguousarray
-    return kernels().piece_minima(c(w2, dtype=float), c(a_coef, dtype=float), c(g_part, dtype=float),
-                                  c(lows, dtype=np.intp), c(highs, dtype=np.intp))
+    return kernels()[0](c(w2, dtype=float), c(a_coef, dtype=float), c(g_part, dtype=float), c(lows, dtype=np.intp),
+                        c(highs, dtype=np.intp))
 
 
 def peak_torques(w2, a_coef, g_part, push, pull, floor):
     """sweep_kernels.peak_torques (the exported signature's types and layout)."""
     c = np.ascontiguousarray
-    return kernels().peak_torques(c(w2, dtype=float), c(a_coef, dtype=float), c(g_part, dtype=float),
-                                  c(push, dtype=float), c(pull, dtype=float), float(floor))
+    return kernels()[1](c(w2, dtype=float), c(a_coef, dtype=float), c(g_part, dtype=float), c(push, dtype=float),
+                        c(pull, dtype=float), float(floor))
