@@ -117,7 +117,7 @@ def test_a_sweep_with_the_aot_modules_loads_no_numba(modules, setting, loads_num
 
 def test_a_module_built_from_other_sources_is_not_used(monkeypatch, tmp_path, modules):
     """The digest baked into the module must equal the current sources': one byte changed in any
-    source (a copy here), a source missing, or no module at all -- None, and the caller compiles."""
+    source (a copy here), a source missing, another CPU, or no module at all -- None, and the caller compiles."""
     sources = exact_kernel.aot_sources()
     assert aot.load(exact_kernel.AOT_MODULE, sources) is not None
     for i in (0, len(sources) - 1):
@@ -127,5 +127,8 @@ def test_a_module_built_from_other_sources_is_not_used(monkeypatch, tmp_path, mo
         assert aot.load(exact_kernel.AOT_MODULE, changed) is None
     assert aot.load(exact_kernel.AOT_MODULE, [*sources[:-1], tmp_path / "missing.py"]) is None
     assert aot.load("explorer.dynamics._no_such_module", sources) is None
+    monkeypatch.setattr(aot, "_cpu", lambda: b"another CPU")  # (built for the host CPU, as numba's JIT)
+    assert aot.load(exact_kernel.AOT_MODULE, sources) is None
+    monkeypatch.undo()
     monkeypatch.setenv(aot.ENV, "0")
     assert aot.load(exact_kernel.AOT_MODULE, sources) is None

@@ -10,7 +10,9 @@ A module is used only when the digest it was built with (its exported `source_di
 at build time by explorer/core/aot_build.py) equals the digest of the current sources: a module
 built from other sources is never used, whatever its file's date. The digest covers the kernel's
 sources (the caller's list), the build's code (aot_build.py) and the numba and llvmlite releases
-(their _version.py files, read without importing them). EXPLORER_AOT=0 in the environment: never
+(their _version.py files, read without importing them) and the CPU: the module is compiled for the
+host CPU, as numba's JIT compiles, so a module built on another CPU (a copied checkout) is not used
+either. EXPLORER_AOT=0 in the environment: never
 use one (the benchmark and the tests compare the two paths).
 
 Nothing here imports numba.
@@ -22,6 +24,7 @@ import hashlib
 import importlib
 import importlib.util
 import os
+import platform
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -39,9 +42,21 @@ def _release_files() -> list[Path]:
     return out
 
 
+def _cpu() -> bytes:
+    """The host CPU's identity: its model and instruction-set flags (Linux: /proc/cpuinfo's first
+    processor), else what the platform module reports."""
+    try:
+        text = Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return f"{platform.machine()} {platform.processor()}".encode()
+    first = text.split("\n\n", 1)[0].splitlines()
+    keep = ("vendor_id", "cpu family", "model", "model name", "flags", "Features", "CPU implementer", "CPU part")
+    return "\n".join(line for line in first if line.split(":", 1)[0].strip() in keep).encode()
+
+
 def digest(sources: Iterable[Path]) -> str:
-    """sha256 of the kernel's sources, the build's code and the compiler's releases."""
-    h = hashlib.sha256()
+    """sha256 of the kernel's sources, the build's code, the compiler's releases and the CPU."""
+    h = hashlib.sha256(_cpu())
     for path in [*sources, HERE / "aot_build.py", *_release_files()]:
         h.update(path.name.encode())
         try:

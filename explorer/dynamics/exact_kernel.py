@@ -167,8 +167,9 @@ def run_batch(grid: RevolutionGrid, ratio: float, runs: np.ndarray, ref: np.ndar
 
 
 def aot_sources() -> list:
-    """The sources the ahead-of-time module compiles: the kernel's (kernel_stamp.SOURCES)."""
-    return [kernel_stamp.HERE / name for name in kernel_stamp.SOURCES]
+    """The sources the ahead-of-time module compiles: the kernel's (kernel_stamp.SOURCES) and this
+    file (build_aot's signature)."""
+    return [kernel_stamp.HERE / name for name in kernel_stamp.SOURCES] + [kernel_stamp.HERE / "exact_kernel.py"]
 
 
 @functools.cache
@@ -183,18 +184,19 @@ def batch_function():
     return revolutions
 
 
+# revolutions' exported signature (numba's type names; the types and layouts run_batch passes)
+AOT_SIGNATURE = ("Tuple((float64[:, ::1], int64[::1]))(float64[::1], float64[::1], float64[:, ::1], float64[:, ::1], "
+                 "float64[:, ::1], int64[::1], float64[::1], int64[::1], int64, float64, float64, float64[:, ::1], "
+                 "float64, int64, float64[::1], int64, float64)")
+
+
 def build_aot() -> float:
     """Compile revolutions (with its callees inlined in its object code) ahead of time, for the
-    argument types run_batch passes; the seconds it took."""
-    from numba import types as T
-
+    argument types run_batch passes (kernel_figures.aot_exports); the seconds it took."""
     from ..core.aot_build import build
-    from .kernel_figures import revolutions
+    from .kernel_figures import aot_exports
 
-    A1, A2, I1 = T.float64[::1], T.float64[:, ::1], T.int64[::1]
-    signature = T.Tuple((A2, I1))(A1, A1, A2, A2, A2, I1, A1, I1, T.int64, T.float64, T.float64, A2, T.float64,
-                                  T.int64, A1, T.int64, T.float64)
-    return build(AOT_MODULE, kernel_stamp.HERE, {"revolutions": (signature, revolutions)}, aot_sources())
+    return build(AOT_MODULE, kernel_stamp.HERE, aot_exports(), aot_sources())
 
 
 def revolution_events(rev: np.ndarray) -> list[dict]:

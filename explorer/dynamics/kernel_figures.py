@@ -244,3 +244,14 @@ def revolutions(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, h_max, rati
     # (the owners of the borrowed arrays, used last here)
     owned[0][0] = acc_owned[0] = blk_owned[0, 0] = win_owned[0, 0] = 0.0
     return figs, status
+
+
+def aot_exports() -> dict:
+    """What the ahead-of-time module exports (exact_kernel.build_aot): revolutions, for the types
+    and layouts exact_kernel.run_batch passes."""
+    from numba import types as T
+
+    A1, A2, I1 = T.float64[::1], T.float64[:, ::1], T.int64[::1]
+    signature = T.Tuple((A2, I1))(A1, A1, A2, A2, A2, I1, A1, I1, T.int64, T.float64, T.float64, A2, T.float64,
+                                  T.int64, A1, T.int64, T.float64)
+    return {"revolutions": (signature, revolutions)}
