@@ -12,8 +12,8 @@ built from other sources is never used, whatever its file's date. The digest cov
 sources (the caller's list), the build's code (aot_build.py) and the numba and llvmlite releases
 (their _version.py files, read without importing them) and the CPU: the module is compiled for the
 host CPU, as numba's JIT compiles, so a module built on another CPU (a copied checkout) is not used
-either. EXPLORER_AOT=0 in the environment: never
-use one (the benchmark and the tests compare the two paths).
+either. EXPLORER_AOT=0 in the environment: never use one (the benchmark and the tests compare the
+two paths).
 
 Nothing here imports numba.
 """

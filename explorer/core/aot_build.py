@@ -2,7 +2,7 @@
 exported functions with explicit signatures plus `source_digest()`, which returns the digest of
 the sources the module was built from. Run by `make` (the kernels' modules' `--aot`), never at run
 time. Compiled for the host CPU, as numba's JIT compiles (the module is built on the machine that
-runs it); the floats are the same as the JIT's (tests/test_sweep_kernel.py compares them bit for
+runs it); the floats are the same as the JIT's (tests/test_aot_kernels.py compares them bit for
 bit). The module is written beside a temporary name and moved into place in one step, so a
 process never imports a half-written file."""
 

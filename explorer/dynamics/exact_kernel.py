@@ -167,9 +167,9 @@ def run_batch(grid: RevolutionGrid, ratio: float, runs: np.ndarray, ref: np.ndar
 
 
 def aot_sources() -> list:
-    """The sources the ahead-of-time module compiles: the kernel's (kernel_stamp.SOURCES) and this
-    file (build_aot's signature)."""
-    return [kernel_stamp.HERE / name for name in kernel_stamp.SOURCES] + [kernel_stamp.HERE / "exact_kernel.py"]
+    """The sources the ahead-of-time module compiles: the kernel's (kernel_stamp.SOURCES: every file
+    whose code or constants the compiled code reads, kernel_figures' exported signature among them)."""
+    return [kernel_stamp.HERE / name for name in kernel_stamp.SOURCES]
 
 
 @functools.cache
@@ -182,12 +182,6 @@ def batch_function():
     from .kernel_figures import revolutions
 
     return revolutions
-
-
-# revolutions' exported signature (numba's type names; the types and layouts run_batch passes)
-AOT_SIGNATURE = ("Tuple((float64[:, ::1], int64[::1]))(float64[::1], float64[::1], float64[:, ::1], float64[:, ::1], "
-                 "float64[:, ::1], int64[::1], float64[::1], int64[::1], int64, float64, float64, float64[:, ::1], "
-                 "float64, int64, float64[::1], int64, float64)")
 
 
 def build_aot() -> float:
