@@ -154,16 +154,16 @@ def run_revolution(grid: RevolutionGrid, omega: float, model: LinkageModel, rati
 
 
 def run_batch(grid: RevolutionGrid, ratio: float, runs: np.ndarray, ref: np.ndarray, dwell: int, S_dwell: float,
-              zeno_height: float = 1e-12, max_events: int = 100_000):
+              zeno_height: float = 1e-12, max_events: int = 100_000, kernel=None):
     """revolutions() on a RevolutionGrid: (FIGURES per run, status per run: OK, or the exact
     solver's RuntimeErrors as TOO_MANY_EVENTS, NO_PROGRESS); ref, dwell, S_dwell: revolution()'s,
-    shared by the runs (one lever ratio and lash). The ahead-of-time module's revolutions when it
-    is current, else numba's (batch_function)."""
+    shared by the runs (one lever ratio and lash). kernel: revolutions to call (default
+    batch_function(): the ahead-of-time module's when it is current, else numba's)."""
     c = np.ascontiguousarray  # (the exported signature's layout; the grid's arrays already are)
-    return batch_function()(c(grid.nodes), c(grid.h), c(grid.PT), c(grid.Dn), c(grid.Sb), c(grid.hidx, dtype=np.int64),
-                            c(grid.h_unique), c(grid.out_nodes, dtype=np.int64), int(grid.i0), float(grid.h_max),
-                            float(ratio), c(runs, dtype=float), float(zeno_height), int(max_events),
-                            c(ref, dtype=float), int(dwell), float(S_dwell))
+    return (kernel or batch_function())(
+        c(grid.nodes), c(grid.h), c(grid.PT), c(grid.Dn), c(grid.Sb), c(grid.hidx, dtype=np.int64), c(grid.h_unique),
+        c(grid.out_nodes, dtype=np.int64), int(grid.i0), float(grid.h_max), float(ratio), c(runs, dtype=float),
+        float(zeno_height), int(max_events), c(ref, dtype=float), int(dwell), float(S_dwell))
 
 
 def aot_sources() -> list:
@@ -217,7 +217,9 @@ def warm() -> None:
     grid = revolution_grid(_Lift(), 1.0, 180)
     ref = np.zeros(180)
     run_revolution(grid, omega, model, 1.0, 0.0, ref, -1, math.nan)
-    run_batch(grid, 1.0, np.array([[omega, *model_arguments(model), 50.0, 0.0]]), ref, 3, 1e-3)
+    from .kernel_figures import revolutions  # (numba's, even where the AOT module is current: the fallback)
+
+    run_batch(grid, 1.0, np.array([[omega, *model_arguments(model), 50.0, 0.0]]), ref, 3, 1e-3, kernel=revolutions)
 
 
 if __name__ == "__main__":
