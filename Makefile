@@ -14,11 +14,14 @@ CONSTRAINTS := constraints.txt
 # ~10 s of compilation; numba replaces its cache files atomically, so concurrent test workers
 # that find it stale each compile and none breaks. The exact solver's kernel is several modules
 # that read constants of the Python solver's: any of those sources changing discards its cache
-# (explorer/dynamics/kernel_stamp.py), so they are all listed here.
+# (explorer/dynamics/kernel_stamp.py), so they are all listed here. The sweep's kernels are also
+# compiled ahead of time (numba.pycc, gcc) into extension modules beside their sources, which a
+# sweep uses while they were built from the current sources and then loads no numba (~0.5 s of
+# CPU a process: explorer/core/aot.py, docs/benchmarks/sweep.md #27.3).
 KERNEL := $(wildcard explorer/dynamics/kernel_*.py) explorer/dynamics/exact_kernel.py explorer/dynamics/free_vibration.py \
 	explorer/dynamics/exact.py explorer/dynamics/exact_events.py explorer/dynamics/exact_grid.py \
 	explorer/dynamics/exact_phase.py explorer/dynamics/exact_steps.py explorer/dynamics/phases.py \
-	explorer/dynamics/chain_kernels.py explorer/mechanics/sweep_kernels.py
+	explorer/dynamics/chain_kernels.py explorer/mechanics/sweep_kernels.py explorer/core/aot.py explorer/core/aot_build.py
 KERNEL_STAMP := $(VENV)/.kernel-compiled
 
 .PHONY: run test bench docs lock clean
@@ -39,6 +42,8 @@ $(KERNEL_STAMP): $(KERNEL) $(STAMP)
 	$(BIN)/python -m explorer.dynamics.exact_kernel --warm
 	$(BIN)/python -m explorer.dynamics.chain_exact
 	$(BIN)/python -m explorer.mechanics.sweep_kernels
+	$(BIN)/python -m explorer.dynamics.exact_kernel --aot
+	$(BIN)/python -m explorer.mechanics.sweep_kernels --aot
 	touch $@
 
 # Not after $(KERNEL_STAMP): the first page needs no compiled solver; `explorer serve` compiles
@@ -70,4 +75,4 @@ lock:
 	rm -rf .venv-lock
 
 clean:
-	rm -rf $(VENV) build site *.egg-info
+	rm -rf $(VENV) build site *.egg-info explorer/*/_*_aot.*.so

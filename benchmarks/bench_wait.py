@@ -8,6 +8,7 @@ as long again as it computes, and a wall clock would time the waits).
     (cd /tmp/before && /path/to/.venv/bin/python -m explorer.dynamics.exact_kernel --warm)
     .venv/bin/python benchmarks/bench_wait.py /tmp/before [--rounds 5] [--pool]
     .venv/bin/python benchmarks/bench_wait.py --stages [--rounds 5]   # this checkout's fresh process
+    .venv/bin/python benchmarks/bench_wait.py --aot [--rounds 5]      # this checkout: numba's JIT vs AOT
 
 Rows (medians over the rounds; the ratio after / before or the ratio the target names):
 - #27.5: a 1000-speed sweep of valve_float_demo.toml with all its effects (forces, contact,
@@ -19,6 +20,10 @@ Rows (medians over the rounds; the ratio after / before or the ratio the target 
 - #27.8: `simulate` of one elastic revolution (the float scenes) against scipy DOP853 at rtol
   1e-10 on the same model (explorer.studies.bench.speed_ratio's baseline), and the solver alone
   (solve(method="exact")) against it: the difference is the cost outside the solver;
+- #27.3 (--aot, this checkout only): the #27.5 sweep, elastic revolutions/s of one batch in one
+  process, and the same three whole processes with numba's kernels (from
+  its cache; EXPLORER_AOT=0) and with the kernels compiled ahead of time (explorer/core/aot.py),
+  alternating, and the CPU and wall time of building the AOT modules (make's two steps);
 - #27.7 (--pool, this checkout only): 20 000 runs of elastic_float.toml on 1 and 2 local workers
   (run_plan's pool), wall time (two workers can only gain wall time) and the load.
 """
@@ -93,45 +98,137 @@ def child_single(root: str, repeat: int) -> None:
     print(json.dumps(out))
 
 
+def child_rate(root: str, runs: int, repeat: int) -> None:
+    """Elastic revolutions/s of elastic_float.toml (3600 steps) through exact_kernel.run_batch with
+    numba's revolutions and the AOT module's, alternating in this process (CPU)."""
+    sys.path.insert(0, root)
+    import math
+
+    import numpy as np
+
+    from explorer.core import aot
+    from explorer.dynamics import exact_kernel
+    from explorer.dynamics.kernel_figures import revolutions
+    from explorer.effects.elastic_batch import _residual_reference
+    from explorer.effects.lift import build_lift
+    from explorer.scene.scene import load_scene
+    from explorer.studies.sweep_engine import _Shared
+
+    scene = load_scene(Path(root) / "assets" / "scenes" / "elastic_float.toml")
+    lift = build_lift(scene)
+    grid = exact_kernel.revolution_grid(lift, 1.0, 3600)
+    ref, dwell, S_dwell = _residual_reference(_Shared(), lift, 1.0, scene.valve.lash, 3600)
+    v, sp, link = scene.valve, scene.spring, scene.linkage
+    closing = sp.preload + scene.loads.closing_total
+    rpm = np.linspace(1500.0, 6000.0, runs)
+    params = np.array([[r * 2 * math.pi / 60, v.mass, v.oscillating_mass or v.mass, link.stiffness, link.damping,
+                        v.lash, closing, sp.rate, scene.loads.friction, scene.seat.restitution, closing, 0.0]
+                       for r in rpm])
+    paths = {"jit": revolutions, "aot": aot.load(exact_kernel.AOT_MODULE, exact_kernel.aot_sources()).revolutions}
+    times: dict[str, list[float]] = {k: [] for k in paths}
+    for _ in range(repeat + 1):
+        for label, function in paths.items():
+            exact_kernel.batch_function = lambda function=function: function
+            c = time.process_time()
+            exact_kernel.run_batch(grid, 1.0, params, ref, dwell, S_dwell)
+            times[label].append(time.process_time() - c)
+    print(json.dumps({k: runs / statistics.median(v[1:]) for k, v in times.items()}))
+
+
 STAGES = """
 import time, json, sys
 T = time.process_time; c = [("start", T())]
 import numpy; c.append(("import numpy", T()))
 import explorer.studies.sweep_run, explorer.scene.scene; c.append(("import the sweep's modules (explorer)", T()))
-import numba; c.append(("import numba", T()))
-import explorer.dynamics.exact_kernel; c.append(("import the kernel's modules", T()))
+{numba}import explorer.dynamics.exact_kernel; c.append(("import the kernel's modules", T()))
 import explorer
 s = explorer.load_scene("assets/scenes/valve_float_demo.toml"); c.append(("load the scene", T()))
-explorer.sweep(s, vary={"drive.rpm": "2000:5000:10"}, workers=1)
-c.append(("first sweep: numba's target set-up (its registries, which import scipy.linalg), cache loads, the runs", T()))
-explorer.sweep(s, vary={"drive.rpm": "2000:5000:10"}, workers=1); c.append(("the same sweep again", T()))
-print(json.dumps([[b, y - x] for (a, x), (b, y) in zip(c, c[1:])] + [["modules using scipy", sorted({m.split(".")[1] for m in sys.modules if m.startswith("scipy.") and m.count(".") >= 1})]]))
+explorer.sweep(s, vary={{"drive.rpm": "2000:5000:10"}}, workers=1)
+c.append(("{first}", T()))
+explorer.sweep(s, vary={{"drive.rpm": "2000:5000:10"}}, workers=1); c.append(("the same sweep again", T()))
+total = ["all but the same sweep again (numba loaded: " + str("numba" in sys.modules) + ")", c[-2][1] - c[0][1]]
+print(json.dumps([[b, y - x] for (a, x), (b, y) in zip(c, c[1:])] + [total] + [["modules using scipy", sorted({{m.split(".")[1] for m in sys.modules if m.startswith("scipy.") and m.count(".") >= 1}})]]))
 """
+MODES = {  # the stage script and EXPLORER_AOT of each path
+    "JIT (numba's cache)": (STAGES.format(numba='import numba; c.append(("import numba", T()))\n', first=(
+        "first sweep: numba's target set-up (its registries, which import scipy.linalg), cache loads, the runs")), "0"),
+    "AOT (explorer/core/aot.py)": (STAGES.format(numba="", first="first sweep: the AOT modules' loads, the runs"), "1"),
+}
 
 
 def stages(rounds: int) -> None:
-    """Where a fresh process's first sweep spends its CPU, stage by stage (this checkout)."""
-    runs = []
+    """Where a fresh process's first sweep spends its CPU, stage by stage (this checkout), with
+    numba's JIT kernels and with the ahead-of-time ones (alternating processes)."""
+    runs: dict[str, list] = {mode: [] for mode in MODES}
     for _ in range(rounds):
-        out = subprocess.run([sys.executable, "-c", STAGES], cwd=ROOT, capture_output=True, text=True, check=True, env=ENV)
-        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
-    names = [row[0] for row in runs[0][:-1]]
-    print(f"a fresh process's first sweep, CPU by stage (median of {rounds} processes); load average "
-          f"{os.getloadavg()[0]:.1f}; scipy subpackages loaded: {', '.join(runs[0][-1][1])}")
-    print_table(["stage", "CPU s"], [[name, f"{statistics.median(r[i][1] for r in runs):.3f}"]
-                                     for i, name in enumerate(names)])
+        for mode, (script, setting) in MODES.items():
+            out = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, check=True,
+                                 env={**ENV, "EXPLORER_AOT": setting})
+            runs[mode].append(json.loads(out.stdout.strip().splitlines()[-1]))
+    print(f"a fresh process's first sweep, CPU by stage (median of {rounds} processes a path, alternating); load "
+          f"average {os.getloadavg()[0]:.1f}")
+    for mode, done in runs.items():
+        names = [row[0] for row in done[0][:-1]]
+        print(f"\n{mode}; scipy subpackages loaded: {', '.join(done[0][-1][1]) or 'none'}")
+        print_table(["stage", "CPU s"], [[name, f"{statistics.median(r[i][1] for r in done):.3f}"]
+                                         for i, name in enumerate(names)])
 
 
-def run_child(root: Path, *args) -> object:
+def aot_rows(rounds: int, speeds: int) -> None:
+    """#27.3 in this checkout: whole processes with numba's kernels against the ahead-of-time
+    ones (alternating), and the AOT modules' build."""
+    tmp = Path(os.environ.get("TMPDIR", "/tmp"))
+    load0 = os.getloadavg()[0]
+    f: dict[str, list[float]] = {}
+    for r in range(rounds):
+        for label, setting in (("jit", "0"), ("aot", "1")) if r % 2 == 0 else (("aot", "1"), ("jit", "0")):
+            env = {**ENV, "EXPLORER_AOT": setting}
+            f.setdefault(f"{label}:sweep", []).append(run_child(ROOT, "sweep", speeds, 3, env=env))
+            f.setdefault(f"{label}:first", []).append(process_cpu(ROOT, [sys.executable, "-c", FIRST], env))
+            f.setdefault(f"{label}:cli_sweep", []).append(process_cpu(ROOT, [
+                sys.executable, "-m", "explorer", "sweep", "assets/scenes/valve_float_demo.toml", "--vary",
+                "drive.rpm=1000:6000:200", "--workers", "1", "-o", str(tmp / f"bench_wait_{label}.csv")], env))
+            f.setdefault(f"{label}:cli_simulate", []).append(process_cpu(ROOT, [
+                sys.executable, "-m", "explorer", "simulate", "assets/scenes/valve_float_demo.toml", "-o",
+                str(tmp / f"bench_wait_{label}_sim.csv")], env))
+    rate = run_child(ROOT, "rate", 500, 2 * rounds + 1)
+    build_cpu, build_wall = 0.0, 0.0
+    for module in ("explorer.dynamics.exact_kernel", "explorer.mechanics.sweep_kernels"):
+        wall = time.perf_counter()
+        build_cpu += process_cpu(ROOT, [sys.executable, "-m", module, "--aot"])
+        build_wall += time.perf_counter() - wall
+    load1 = os.getloadavg()[0]
+    m = {k: statistics.median(v) for k, v in f.items()}
+    print(f"bench_wait --aot: {ROOT}; medians of {rounds} rounds (alternating child processes), CPU time (rusage); "
+          f"load average {load0:.1f} -> {load1:.1f} on {os.cpu_count()} cores")
+    print_table(["case", "JIT (numba's cache)", "AOT", "AOT/JIT", "target"], [
+        [f"#27.5 {speeds}-speed sweep, valve_float_demo, all effects, 1 core (after a first sweep)",
+         f"{m['jit:sweep']:.3f} s", f"{m['aot:sweep']:.3f} s", f"{m['aot:sweep'] / m['jit:sweep']:.2f}x", ""],
+        ["#27.3 first sweep in a fresh process (10 speeds, imports included)", f"{m['jit:first']:.2f} s",
+         f"{m['aot:first']:.2f} s", f"{m['aot:first'] / m['jit:first']:.2f}x", "<= 0.5 s"],
+        ["#27.3 whole `explorer sweep` 200 speeds", f"{m['jit:cli_sweep']:.2f} s", f"{m['aot:cli_sweep']:.2f} s",
+         f"{m['aot:cli_sweep'] / m['jit:cli_sweep']:.2f}x", ""],
+        ["#27.3 whole `explorer simulate` (float demo)", f"{m['jit:cli_simulate']:.2f} s",
+         f"{m['aot:cli_simulate']:.2f} s", f"{m['aot:cli_simulate'] / m['jit:cli_simulate']:.2f}x", ""],
+        ["#27.3 sweep 200 / simulate 1 (whole processes)", f"{m['jit:cli_sweep'] / m['jit:cli_simulate']:.2f}x",
+         f"{m['aot:cli_sweep'] / m['aot:cli_simulate']:.2f}x", "", "<= 1.2x"],
+        ["elastic revolutions/s, elastic_float.toml, 3600 steps, 500 runs a batch (one process)",
+         f"{rate['jit']:,.0f}", f"{rate['aot']:,.0f}", f"{rate['aot'] / rate['jit']:.2f}x", ""],
+        ["AOT modules' build (make: exact_kernel --aot, sweep_kernels --aot)", "",
+         f"{build_cpu:.1f} s CPU, {build_wall:.1f} s wall", "", ""],
+    ])
+
+
+def run_child(root: Path, *args, env: dict | None = None) -> object:
     out = subprocess.run([sys.executable, __file__, "--child", str(root), *map(str, args)], capture_output=True,
-                         text=True, check=True, env=ENV)
+                         text=True, check=True, env=env or ENV)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def process_cpu(root: Path, argv: list[str]) -> float:
+def process_cpu(root: Path, argv: list[str], env: dict | None = None) -> float:
     """CPU (user + system, rusage) of one whole child process run in the checkout `root`."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run(argv, cwd=root, check=True, capture_output=True, env=ENV)
+    subprocess.run(argv, cwd=root, check=True, capture_output=True, env=env or ENV)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
 
@@ -147,16 +244,22 @@ def main() -> None:
     parser.add_argument("--speeds", type=int, default=1000)
     parser.add_argument("--pool", action="store_true", help="also time 20 000 runs on 1 and 2 local workers")
     parser.add_argument("--stages", action="store_true", help="only: a fresh process's first sweep by stage")
+    parser.add_argument("--aot", action="store_true", help="only: #27.3 with numba's JIT kernels vs the AOT ones")
     parser.add_argument("--sweep-only", action="store_true", help="only the #27.5 row (the 1000-speed sweep)")
     parser.add_argument("--child", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.stages:
         stages(args.rounds)
         return
+    if args.aot:
+        aot_rows(args.rounds, args.speeds)
+        return
     if args.child:
         root, *rest = args.child
         if rest[0] == "sweep":
             child_sweep(root, int(rest[1]), int(rest[2]))
+        elif rest[0] == "rate":
+            child_rate(root, int(rest[1]), int(rest[2]))
         else:
             child_single(root, int(rest[1]))
         return

@@ -304,9 +304,9 @@ def test_numba_is_imported_by_the_kernel_module_only():
     """numba (~0.3 s to import) only in the compiled exact solver's modules (dynamics/kernel_*.py,
     imported only by dynamics/exact_kernel.py, which only the sweep's compiled path imports), and
     in dynamics/chain_kernels.py, which only the spring chain's exact solver imports (scenes with
-    spring.elements > 0), and in mechanics/sweep_kernels.py, imported inside the two functions of the
-    compiled sweep's rigid figures (forces.min_contact_forces; contact.peak_torques when compiled=True,
-    the browser's speed sweep calls its numpy form): `import
+    spring.elements > 0), and in mechanics/sweep_kernels.py, imported inside sweep_loops.kernels
+    (the compiled sweep's rigid figures when no current ahead-of-time module of them exists), and in
+    core/aot_build.py (make's ahead-of-time build): `import
     explorer`, loading and simulating a massless scene leave it out."""
     import ast
     import subprocess
@@ -322,7 +322,8 @@ def test_numba_is_imported_by_the_kernel_module_only():
             if any(n.split(".")[0] == "numba" for n in names):
                 users.add(path.relative_to(package).as_posix())
     kernel = {f"dynamics/kernel_{part}.py" for part in ("steps", "events", "grid", "phase", "figures")}
-    assert users == kernel | {"dynamics/chain_kernels.py", "mechanics/sweep_kernels.py"}
+    # (core/aot_build.py: the ahead-of-time build, run by make only)
+    assert users == kernel | {"dynamics/chain_kernels.py", "mechanics/sweep_kernels.py", "core/aot_build.py"}
     rigid = {}
     for path in package.rglob("*.py"):
         tree = ast.parse(path.read_text())
@@ -333,7 +334,8 @@ def test_numba_is_imported_by_the_kernel_module_only():
                 for node in ast.walk(fn):
                     if isinstance(node, ast.ImportFrom) and (node.module or "").endswith("sweep_kernels"):
                         rigid[path.relative_to(package).as_posix()] = fn.name
-    assert rigid == {"mechanics/forces.py": "min_contact_forces", "effects/contact.py": "peak_torques"}
+    # (sweep_loops.kernels: only when no current ahead-of-time module of them exists)
+    assert rigid == {"mechanics/sweep_loops.py": "kernels"}
     importers = set()
     for path in package.rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):

@@ -33,24 +33,32 @@ The LinkageModel without stiffness_profile only (constant coefficients): `suppor
 
 `python -m explorer.dynamics.exact_kernel --warm` compiles (and caches beside the modules) every
 compiled function once: `make` runs it at install and when a source changes, so the first sweep
-does not compile.
+does not compile. `--aot` compiles the batch entry point (revolutions) ahead of time into
+_exact_kernel_aot (explorer/core/aot.py), which run_batch uses while it is current: this module
+imports the numba modules (kernel_phase, kernel_figures, kernel_grid, kernel_events) only inside
+the functions that run them.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
-from . import exact_output
+from ..core import aot
+from . import exact_output, kernel_stamp
 from .exact_grid import MAX_RHO_H, build_grid  # noqa: F401 (MAX_RHO_H: elastic_batch's)
 from .exact_steps import LinearPhase, taylor_terms
-from .kernel_events import SEAT  # noqa: F401
-from .kernel_figures import FIGURES, RUN_PARAMETERS, revolution, revolutions  # noqa: F401
-from .kernel_grid import RevolutionGrid, grid_bounds, revolution_grid, split_parts  # noqa: F401
-from .kernel_phase import NO_PROGRESS, OK, TOO_MANY_EVENTS, run_buffers, solve_nodes
+from .kernel_shared import (FIGURES, NO_PROGRESS, OK, RUN_PARAMETERS, TOO_MANY_EVENTS,  # noqa: F401
+                            RevolutionGrid, revolution_grid, split_parts)
 from .model import Drive, DynamicsSolution, LinkageModel
 from .phases import CONTACT, FLIGHT
+
+# the batch entry point (revolutions) compiled ahead of time by `make` (build_aot below): used when
+# it was built from the kernel's current sources (explorer/core/aot.py), so that a sweep's process
+# loads no numba; else numba's revolutions
+AOT_MODULE = "explorer.dynamics._exact_kernel_aot"
 
 EVENT_NAMES = ("lift-off", "separation", "re-contact", "seat")  # model.EVENT_KINDS: the kernel's codes 0-3
 
@@ -102,6 +110,9 @@ def solve(model: LinkageModel, drive, t: np.ndarray, zeno_height: float = 1e-12,
     t_req = np.asarray(t, dtype=float).ravel()
     if t_req.size < 2 or not np.isfinite(t_req).all() or np.any(np.diff(t_req) <= 0.0):
         raise ValueError("output times must be a sorted array of at least two distinct finite times")
+    from .kernel_grid import grid_bounds
+    from .kernel_phase import solve_nodes
+
     hmin = float(np.min(np.diff(t_req)))
     rho = phase_rates(model)
     g = build_grid(drive, t_req, rho, hmin)
@@ -126,6 +137,10 @@ def run_revolution(grid: RevolutionGrid, omega: float, model: LinkageModel, rati
     """revolution() on a RevolutionGrid: (FIGURES, valve lift at the output samples, revolution
     events as the elastic effect lists them). RuntimeError where exact.py raises. ref, dwell,
     S_dwell: the residual figures' (revolution())."""
+    from .kernel_figures import revolution
+    from .kernel_grid import grid_bounds
+    from .kernel_phase import run_buffers
+
     rho = phase_rates(model)
     N = taylor_terms(rho * grid.h_max / omega)
     buffers = run_buffers(grid.nodes.size, int(N), grid.h_unique.size)
@@ -139,14 +154,43 @@ def run_revolution(grid: RevolutionGrid, omega: float, model: LinkageModel, rati
 
 
 def run_batch(grid: RevolutionGrid, ratio: float, runs: np.ndarray, ref: np.ndarray, dwell: int, S_dwell: float,
-              zeno_height: float = 1e-12, max_events: int = 100_000):
+              zeno_height: float = 1e-12, max_events: int = 100_000, kernel=None):
     """revolutions() on a RevolutionGrid: (FIGURES per run, status per run: OK, or the exact
     solver's RuntimeErrors as TOO_MANY_EVENTS, NO_PROGRESS); ref, dwell, S_dwell: revolution()'s,
-    shared by the runs (one lever ratio and lash)."""
-    return revolutions(grid.nodes, grid.h, grid.PT, grid.Dn, grid.Sb, grid.hidx, grid.h_unique, grid.out_nodes,
-                       grid.i0, grid.h_max, float(ratio), np.ascontiguousarray(runs, dtype=float),
-                       float(zeno_height), int(max_events), np.ascontiguousarray(ref, dtype=float), int(dwell),
-                       float(S_dwell))
+    shared by the runs (one lever ratio and lash). kernel: revolutions to call (default
+    batch_function(): the ahead-of-time module's when it is current, else numba's)."""
+    c = np.ascontiguousarray  # (the exported signature's layout; the grid's arrays already are)
+    return (kernel or batch_function())(
+        c(grid.nodes), c(grid.h), c(grid.PT), c(grid.Dn), c(grid.Sb), c(grid.hidx, dtype=np.int64), c(grid.h_unique),
+        c(grid.out_nodes, dtype=np.int64), int(grid.i0), float(grid.h_max), float(ratio), c(runs, dtype=float),
+        float(zeno_height), int(max_events), c(ref, dtype=float), int(dwell), float(S_dwell))
+
+
+def aot_sources() -> list:
+    """The sources the ahead-of-time module compiles: the kernel's (kernel_stamp.SOURCES: every file
+    whose code or constants the compiled code reads, kernel_figures' exported signature among them)."""
+    return [kernel_stamp.HERE / name for name in kernel_stamp.SOURCES]
+
+
+@functools.cache
+def batch_function():
+    """revolutions: the ahead-of-time module's when it was built from the current sources (it
+    imports no numba), else numba's kernel_figures.revolutions."""
+    module = aot.load(AOT_MODULE, aot_sources())
+    if module is not None:
+        return module.revolutions
+    from .kernel_figures import revolutions
+
+    return revolutions
+
+
+def build_aot() -> float:
+    """Compile revolutions (with its callees inlined in its object code) ahead of time, for the
+    argument types run_batch passes (kernel_figures.aot_exports); the seconds it took."""
+    from ..core.aot_build import build
+    from .kernel_figures import aot_exports
+
+    return build(AOT_MODULE, kernel_stamp.HERE, aot_exports(), aot_sources())
 
 
 def revolution_events(rev: np.ndarray) -> list[dict]:
@@ -173,7 +217,9 @@ def warm() -> None:
     grid = revolution_grid(_Lift(), 1.0, 180)
     ref = np.zeros(180)
     run_revolution(grid, omega, model, 1.0, 0.0, ref, -1, math.nan)
-    run_batch(grid, 1.0, np.array([[omega, *model_arguments(model), 50.0, 0.0]]), ref, 3, 1e-3)
+    from .kernel_figures import revolutions  # (numba's, even where the AOT module is current: the fallback)
+
+    run_batch(grid, 1.0, np.array([[omega, *model_arguments(model), 50.0, 0.0]]), ref, 3, 1e-3, kernel=revolutions)
 
 
 if __name__ == "__main__":
@@ -181,3 +227,5 @@ if __name__ == "__main__":
 
     if "--warm" in sys.argv[1:]:
         warm()
+    if "--aot" in sys.argv[1:]:
+        build_aot()

@@ -15,16 +15,11 @@ from .free_vibration import free_amplitude
 from .kernel_events import LIFT_OFF, SEAT, SEPARATION
 from .kernel_grid import grid_bounds
 from .kernel_phase import borrowed, borrowed_buffers, run_buffers, run_nodes
+from .kernel_shared import FIGURES, RUN_PARAMETERS  # noqa: F401 (RUN_PARAMETERS: the rows of revolutions())
 from .kernel_steps import phase_rate, taylor_terms
 from .phases import CONTACT, FLIGHT
 
 _free_amplitude = njit(cache=True)(free_amplitude)  # the elastic effect's residual amplitude, compiled
-
-# the figures revolution() returns, in this order (the elastic effect's, as the sweep's rows read
-# them: explorer/studies/sweep_engine.row_scalars)
-FIGURES = ("first_separation_deg", "separations", "flight_time_s", "max_deviation_m", "peak_linkage_force_N",
-           "peak_camshaft_back_pressure_N", "lift_off_delay_s", "seating_velocity_m_s", "seat_impacts",
-           "largest_bounce_m", "residual_deviation_m", "residual_amplitude_m")
 
 
 @njit(cache=True)
@@ -216,11 +211,6 @@ def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1
     return fig, rev, status
 
 
-# the columns of a batch's run parameters (revolutions())
-RUN_PARAMETERS = ("omega", "mass", "oscillating_mass", "stiffness", "damping", "lash", "seated_resistance",
-                  "spring_rate", "friction", "restitution", "preload_closing", "take_up_s")
-
-
 @njit(cache=True)
 def revolutions(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, h_max, ratio, runs, zeno_height, max_events,
                 ref, dwell, S_dwell):
@@ -254,3 +244,14 @@ def revolutions(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, h_max, rati
     # (the owners of the borrowed arrays, used last here)
     owned[0][0] = acc_owned[0] = blk_owned[0, 0] = win_owned[0, 0] = 0.0
     return figs, status
+
+
+def aot_exports() -> dict:
+    """What the ahead-of-time module exports (exact_kernel.build_aot): revolutions, for the types
+    and layouts exact_kernel.run_batch passes."""
+    from numba import types as T
+
+    A1, A2, I1 = T.float64[::1], T.float64[:, ::1], T.int64[::1]
+    signature = T.Tuple((A2, I1))(A1, A1, A2, A2, A2, I1, A1, I1, T.int64, T.float64, T.float64, A2, T.float64,
+                                  T.int64, A1, T.int64, T.float64)
+    return {"revolutions": (signature, revolutions)}

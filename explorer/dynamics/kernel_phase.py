@@ -29,10 +29,10 @@ from .exact_events import MAX_DEPTH
 from .kernel_events import (LIFT_OFF, MIN, RECONTACT, SEARCH_ROWS, SEAT, SEPARATION, UP, VZERO, coeffs, earliest,
                             moving_table, static_table, zero_flags)
 from .kernel_grid import BLOCK, WINDOW, drive_at, node_time
+from .kernel_shared import NO_PROGRESS, OK, TOO_MANY_EVENTS  # a run's status (exact.py's RuntimeErrors)
 from .kernel_steps import deriv_into, expand, fsum, horner, shift_into, step, step_tables_into
 from .phases import CONTACT, FLIGHT, SEATED, STUCK
 
-OK, TOO_MANY_EVENTS, NO_PROGRESS = 0, 1, 2  # a run's status (exact.py's RuntimeErrors)
 EVENT_ROWS = 64  # a run's event records before _grow allocates more (a run of elastic_float at 3600 steps has ~16)
 WINDOW_LEAD = 4  # steps of a moving phase taken one at a time before its first window
 GROUP_MARGIN = 1e-9  # a step group's length bound lies this fraction above its length (the lengths of

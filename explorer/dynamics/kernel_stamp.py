@@ -22,7 +22,8 @@ KERNEL_MODULES = ("kernel_steps", "kernel_events", "kernel_grid", "kernel_phase"
 RETIRED = ("exact_kernel",)  # modules that held compiled kernels before (their cache files are dropped too)
 # every source the compiled code depends on: the kernel's and those whose constants it reads
 SOURCES = tuple(f"{m}.py" for m in KERNEL_MODULES) + (
-    "kernel_stamp.py", "exact.py", "exact_events.py", "exact_grid.py", "exact_phase.py", "exact_steps.py", "phases.py")
+    "kernel_stamp.py", "kernel_shared.py", "exact.py", "exact_events.py", "exact_grid.py", "exact_phase.py",
+    "exact_steps.py", "phases.py")
 STAMP = "kernel.stamp"
 
 

@@ -137,8 +137,8 @@ def peak_torques(a_coef, g_part, is_open, push, pull, omegas, compiled: bool = F
     """max_camshaft_torque_Nm (N m) at each speed of `omegas` (rad/s) from F = w^2 A + G on the
     scene's grid (explorer.mechanics.forces.grid_load_parts) and the torque factors: the largest
     finite torque (closed samples carry no force: 0 there; NaN where none is finite). `compiled`:
-    the same floats from one numba loop (mechanics/sweep_kernels.py; the compiled sweep, whose
-    process has numba loaded anyway), else numpy in blocks (the browser's speed sweep, which must
+    the same floats from one compiled loop (mechanics/sweep_loops.py: ahead of time or numba; the
+    compiled sweep, whose elastic kernel is compiled the same way), else numpy in blocks (the browser's speed sweep, which must
     not load numba)."""
     w2 = np.asarray(omegas, dtype=float).ravel() ** 2
     a_coef, g_part, push, pull = a_coef[is_open], g_part[is_open], push[is_open], pull[is_open]
@@ -146,7 +146,7 @@ def peak_torques(a_coef, g_part, is_open, push, pull, omegas, compiled: bool = F
         return np.zeros(w2.size)
     floor = 0.0 if not is_open.all() else -np.inf
     if compiled:
-        from ..mechanics.sweep_kernels import peak_torques as kernel  # numba: the compiled sweep's path only
+        from ..mechanics.sweep_loops import peak_torques as kernel  # compiled: the compiled sweep's path only
 
         out = kernel(w2, np.ascontiguousarray(a_coef), np.ascontiguousarray(g_part), np.ascontiguousarray(push),
                      np.ascontiguousarray(pull), floor)

@@ -357,7 +357,7 @@ def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash
     same floats as min_contact_force's. The samples, the lift there and A, G of F = w^2 A + G are
     shared by all speeds; the zoom of every speed's candidate pieces runs as one batch, one lift
     evaluation a round for all of them (minimise_on_pieces and _zoom_minimum, row by row)."""
-    from .sweep_kernels import piece_minima  # numba: the compiled sweep's path only
+    from .sweep_loops import piece_minima  # compiled: the compiled sweep's path only
 
     pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
     w2 = np.asarray(omegas, dtype=float).ravel() ** 2

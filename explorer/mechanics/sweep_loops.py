@@ -1,0 +1,44 @@
+"""The rigid sweep figures' two compiled loops (mechanics/sweep_kernels.py: piece_minima,
+peak_torques) from the module compiled ahead of time by `make` when it was built from
+sweep_kernels.py as it is now (explorer/core/aot.py: then the process loads no numba), else from
+numba (sweep_kernels, loaded from numba's cache). The same floats either way
+(tests/test_sweep_kernel.py). Imported only by the compiled sweep's rigid figures
+(forces.min_contact_forces; contact.peak_torques with compiled=True)."""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+import numpy as np
+
+from ..core import aot
+
+AOT_MODULE = "explorer.mechanics._sweep_kernels_aot"
+SOURCE = Path(__file__).resolve().parent / "sweep_kernels.py"
+
+
+@functools.cache
+def kernels() -> tuple:
+    """(piece_minima, peak_torques): the ahead-of-time module's when current, else
+    sweep_kernels' (numba)."""
+    module = aot.load(AOT_MODULE, [SOURCE])
+    if module is not None:
+        return module.piece_minima, module.peak_torques
+    from .sweep_kernels import peak_torques, piece_minima  # numba: only without a current AOT module
+
+    return piece_minima, peak_torques
+
+
+def piece_minima(w2, a_coef, g_part, lows, highs):
+    """sweep_kernels.piece_minima (the exported signature's types and layout)."""
+    c = np.ascontiguousarray
+    return kernels()[0](c(w2, dtype=float), c(a_coef, dtype=float), c(g_part, dtype=float), c(lows, dtype=np.intp),
+                        c(highs, dtype=np.intp))
+
+
+def peak_torques(w2, a_coef, g_part, push, pull, floor):
+    """sweep_kernels.peak_torques (the exported signature's types and layout)."""
+    c = np.ascontiguousarray
+    return kernels()[1](c(w2, dtype=float), c(a_coef, dtype=float), c(g_part, dtype=float), c(push, dtype=float),
+                        c(pull, dtype=float), float(floor))
