@@ -494,3 +494,45 @@ def test_torque_factors_do_not_depend_on_the_speed_so_chunks_share_them():
     shared = _Shared()
     parts = np.vstack([compute_chunk(demo, keys, values[i:i + 7], names, shared) for i in range(0, 30, 7)])
     assert np.array_equal(whole, parts, equal_nan=True)
+
+
+@pytest.mark.parametrize("scene_file, overrides", [("valve_float_demo.toml", ()),
+                                                   ("valve_float_demo.toml", ('lift.dwell="0 deg"', "valve.lash=0")),
+                                                   ("cycloidal_demo.toml", ()), ("polydyne_demo.toml", ())])
+def test_min_contact_forces_are_min_contact_forces_floats(scene_file, overrides):
+    """forces.min_contact_forces (all speeds at once; its zoom's rows taken in the order of their
+    brackets) against min_contact_force speed by speed, the oracle `simulate`'s forces effect
+    calls: the same value and angle to the bit, at 300 speeds from 'never floats' to far beyond
+    the float speed (several pieces near the minimum at some speeds, one at others)."""
+    from explorer.mechanics.forces import TrainLoads, min_contact_force, min_contact_forces, smooth_pieces
+
+    s = load_scene(SCENES / scene_file, list(overrides))
+    lift, ratio = build_lift(s), s.follower.ratio
+    lash = s.valve.lash if s.valve is not None else 0.0
+    loads = TrainLoads.from_scene(s)
+    pieces = smooth_pieces(lift, ratio, lash, 4096)
+    omegas = np.geomspace(10.0, 2000.0, 300)
+    values, angles = min_contact_forces(lift, loads, omegas, ratio, lash, pieces, 4096)
+    for w, v, a in zip(omegas, values, angles):
+        ev, ea = min_contact_force(lift, loads, float(w), ratio, lash, pieces, 4096)
+        assert v == ev and (a == ea or math.isnan(a) and math.isnan(ea)), (w, v, ev, a, ea)
+
+
+def test_take_ups_several_halvings_an_evaluation_are_one_at_a_times_floats(monkeypatch):
+    """mechanics.kinematics.lash_take_ups halves each bracket BISECT_LEVELS times from one
+    evaluation of the lift (the tree of midpoints, then the path the signs choose). Oracle: the
+    same function one halving an evaluation (BISECT_LEVELS = 1: plain bisection): the same
+    floats for any number of levels, lashes from closed to beyond the top (NaN) and the 80-halving
+    bound reached mid-tree (7 does not divide 80)."""
+    from explorer.mechanics import kinematics
+
+    for scene_file in ("valve_float_demo.toml", "polydyne_demo.toml", "schenker1902_fig2.toml"):
+        s = load_scene(SCENES / scene_file)
+        lift, ratio = build_lift(s), s.follower.ratio
+        top = ratio * float(np.max(lift.derivatives(np.linspace(0, 2 * math.pi, 7200))[0]))
+        lashes = np.concatenate([np.random.default_rng(3).uniform(0.0, 1.1 * top, 40), [0.0, top, 2.5e-4]])
+        monkeypatch.setattr(kinematics, "BISECT_LEVELS", 1)
+        expected = kinematics.lash_take_ups(lift, ratio, lashes)
+        for levels in (2, 4, 6, 7):
+            monkeypatch.setattr(kinematics, "BISECT_LEVELS", levels)
+            assert np.array_equal(kinematics.lash_take_ups(lift, ratio, lashes), expected, equal_nan=True), levels

@@ -59,6 +59,9 @@ def lash_crossings(lift, ratio: float, lash: float, n_grid: int = 4096) -> tuple
 
 
 
+BISECT_LEVELS = 6  # halvings per evaluation of the lift in lash_take_ups (63 angles a bracket)
+
+
 def lash_take_ups(lift, ratio: float, lashes, n_grid: int = 4096) -> np.ndarray:
     """The first take-up angle (rad, [0, 2 pi)) of each lash of `lashes` at once: what
     lash_crossings(lift, ratio, lash)[0][0] gives for one (NaN where the valve never opens), on the
@@ -97,16 +100,39 @@ def lash_take_ups(lift, ratio: float, lashes, n_grid: int = 4096) -> np.ndarray:
     at_a = (level[i] - lashes) == 0.0
     lo, hi = a.copy(), b.copy()
     todo = has & ~at_a
-    for _ in range(80):  # bounded: 2^-80 of a grid cell is far below the tolerance
-        width = hi - lo
-        active = todo & (width > 1e-15 + 4.0 * np.finfo(float).eps * np.abs(hi))
+    tol = 4.0 * np.finfo(float).eps
+    steps = 0
+    while steps < 80:  # bounded: 2^-80 of a grid cell is far below the tolerance
+        active = todo & (hi - lo > 1e-15 + tol * np.abs(hi))
         if not active.any():
             break
-        mid = 0.5 * (lo + hi)
-        f = ratio * lift.derivatives(mid[active])[0] - lashes[active]  # as lash_crossings' f
+        # BISECT_LEVELS halvings of each active bracket from one evaluation of the lift: every
+        # midpoint the next halvings could take (a tree of 2^levels - 1, each 0.5 (lo + hi) of its
+        # bracket, as one halving at a time computes it), then the path the signs choose
+        levels = min(BISECT_LEVELS, 80 - steps)
         idx = np.nonzero(active)[0]
-        right = f > 0.0
-        hi[idx[right]] = mid[active][right]
-        lo[idx[~right]] = mid[active][~right]
+        los, his = lo[idx][:, None], hi[idx][:, None]
+        tree = []
+        for _ in range(levels):
+            mid = 0.5 * (los + his)
+            tree.append(mid)
+            los = np.stack([los, mid], axis=2).reshape(idx.size, -1)  # children (lo, mid), (mid, hi)
+            his = np.stack([mid, his], axis=2).reshape(idx.size, -1)
+        mids = np.concatenate(tree, axis=1)
+        f = ratio * lift.derivatives(mids.ravel())[0].reshape(mids.shape) - lashes[idx][:, None]  # as lash_crossings' f
+        rows = np.arange(idx.size)
+        l, h = lo[idx], hi[idx]
+        alive = np.ones(idx.size, bool)
+        node = np.zeros(idx.size, np.intp)  # the bracket's place in its level
+        for k in range(levels):
+            if k:
+                alive &= h - l > 1e-15 + tol * np.abs(h)
+            col = (1 << k) - 1 + node
+            m, right = mids[rows, col], f[rows, col] > 0.0
+            h = np.where(alive & right, m, h)
+            l = np.where(alive & ~right, m, l)
+            node = 2 * node + ~right
+        lo[idx], hi[idx] = l, h
+        steps += levels
     root = np.where(at_a, a, 0.5 * (lo + hi))
     return np.where(has, np.fmod(root, 2.0 * math.pi), np.nan)
