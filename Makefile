@@ -21,7 +21,7 @@ CONSTRAINTS := constraints.txt
 KERNEL := $(wildcard explorer/dynamics/kernel_*.py) explorer/dynamics/exact_kernel.py explorer/dynamics/free_vibration.py \
 	explorer/dynamics/exact.py explorer/dynamics/exact_events.py explorer/dynamics/exact_grid.py \
 	explorer/dynamics/exact_phase.py explorer/dynamics/exact_steps.py explorer/dynamics/phases.py \
-	explorer/dynamics/chain_kernels.py explorer/mechanics/sweep_kernels.py explorer/core/aot.py explorer/core/aot_build.py
+	explorer/dynamics/chain_kernels.py explorer/mechanics/sweep_kernels.py explorer/mechanics/sweep_loops.py explorer/core/aot.py explorer/core/aot_build.py
 KERNEL_STAMP := $(VENV)/.kernel-compiled
 
 .PHONY: run test bench docs lock clean
@@ -43,7 +43,7 @@ $(KERNEL_STAMP): $(KERNEL) $(STAMP)
 	$(BIN)/python -m explorer.dynamics.chain_exact
 	$(BIN)/python -m explorer.mechanics.sweep_kernels
 	$(BIN)/python -m explorer.dynamics.exact_kernel --aot
-	$(BIN)/python -m explorer.mechanics.sweep_kernels --aot
+	$(BIN)/python -m explorer.mechanics.sweep_loops --aot
 	touch $@
 
 # Not after $(KERNEL_STAMP): the first page needs no compiled solver; `explorer serve` compiles

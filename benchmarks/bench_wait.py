@@ -193,7 +193,7 @@ def aot_rows(rounds: int, speeds: int) -> None:
                 str(tmp / f"bench_wait_{label}_sim.csv")], env))
     rate = run_child(ROOT, "rate", 500, 2 * rounds + 1)
     build_cpu, build_wall = 0.0, 0.0
-    for module in ("explorer.dynamics.exact_kernel", "explorer.mechanics.sweep_kernels"):
+    for module in ("explorer.dynamics.exact_kernel", "explorer.mechanics.sweep_loops"):
         wall = time.perf_counter()
         build_cpu += process_cpu(ROOT, [sys.executable, "-m", module, "--aot"])
         build_wall += time.perf_counter() - wall
@@ -214,7 +214,7 @@ def aot_rows(rounds: int, speeds: int) -> None:
          f"{m['aot:cli_sweep'] / m['aot:cli_simulate']:.2f}x", "", "<= 1.2x"],
         ["elastic revolutions/s, elastic_float.toml, 3600 steps, 500 runs a batch (one process)",
          f"{rate['jit']:,.0f}", f"{rate['aot']:,.0f}", f"{rate['aot'] / rate['jit']:.2f}x", ""],
-        ["AOT modules' build (make: exact_kernel --aot, sweep_kernels --aot)", "",
+        ["AOT modules' build (make: exact_kernel --aot, sweep_loops --aot)", "",
          f"{build_cpu:.1f} s CPU, {build_wall:.1f} s wall", "", ""],
     ])
 

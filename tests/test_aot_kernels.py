@@ -31,7 +31,7 @@ def modules(monkeypatch):
     """The two ahead-of-time modules, which must exist and be current (make builds them)."""
     monkeypatch.delenv(aot.ENV, raising=False)
     elastic = aot.load(exact_kernel.AOT_MODULE, exact_kernel.aot_sources())
-    rigid = aot.load(sweep_loops.AOT_MODULE, [sweep_loops.SOURCE])
+    rigid = aot.load(sweep_loops.AOT_MODULE, list(sweep_loops.SOURCES))
     assert elastic is not None and rigid is not None, "run `make .venv/.kernel-compiled` (it builds them)"
     return elastic, rigid
 

@@ -15,7 +15,7 @@ ahead-of-time module of these loops exists (forces.min_contact_forces and contac
 compiled=True, both called from studies/sweep_rigid.py; the browser's speed sweep uses
 peak_torques' numpy form: its first page must not load numba). Cached on disk (cache=True) beside
 this file, compiled by `make` (`python -m explorer.mechanics.sweep_kernels`), and compiled ahead
-of time by `make` too (`--aot`: explorer/core/aot.py).
+of time by `make` too (`python -m explorer.mechanics.sweep_loops --aot`: explorer/core/aot.py).
 """
 
 from __future__ import annotations
@@ -78,24 +78,15 @@ def warm() -> None:
     peak_torques(x[:2].copy(), x, x, x, x, 0.0)
 
 
-def build_aot() -> float:
-    """Compile both kernels ahead of time (explorer/core/aot.py, mechanics/sweep_loops.py) for the
-    argument types sweep_loops passes; the seconds it took."""
+def aot_exports() -> dict:
+    """What the ahead-of-time module exports (sweep_loops.build_aot): both loops, for the argument
+    types and layouts sweep_loops passes."""
     from numba import types as T
 
-    from ..core.aot_build import build
-    from .sweep_loops import AOT_MODULE, SOURCE
-
     A1, P1 = T.float64[::1], T.intp[::1]
-    return build(AOT_MODULE, SOURCE.parent, {
-        "piece_minima": (T.Tuple((T.float64[:, ::1], T.intp[:, ::1]))(A1, A1, A1, P1, P1), piece_minima),
-        "peak_torques": (A1(A1, A1, A1, A1, A1, T.float64), peak_torques)}, [SOURCE])
+    return {"piece_minima": (T.Tuple((T.float64[:, ::1], T.intp[:, ::1]))(A1, A1, A1, P1, P1), piece_minima),
+            "peak_torques": (A1(A1, A1, A1, A1, A1, T.float64), peak_torques)}
 
 
 if __name__ == "__main__":
-    import sys
-
-    if "--aot" in sys.argv[1:]:
-        build_aot()
-    else:
-        warm()
+    warm()

@@ -16,13 +16,15 @@ from ..core import aot
 
 AOT_MODULE = "explorer.mechanics._sweep_kernels_aot"
 SOURCE = Path(__file__).resolve().parent / "sweep_kernels.py"
+# the module is current when built from both: the loops, and the exported signature below
+SOURCES = (SOURCE, Path(__file__).resolve())
 
 
 @functools.cache
 def kernels() -> tuple:
     """(piece_minima, peak_torques): the ahead-of-time module's when current, else
     sweep_kernels' (numba)."""
-    module = aot.load(AOT_MODULE, [SOURCE])
+    module = aot.load(AOT_MODULE, list(SOURCES))
     if module is not None:
         return module.piece_minima, module.peak_torques
     from .sweep_kernels import peak_torques, piece_minima  # numba: only without a current AOT module
@@ -42,3 +44,20 @@ def peak_torques(w2, a_coef, g_part, push, pull, floor):
     c = np.ascontiguousarray
     return kernels()[1](c(w2, dtype=float), c(a_coef, dtype=float), c(g_part, dtype=float), c(push, dtype=float),
                         c(pull, dtype=float), float(floor))
+
+
+def build_aot() -> float:
+    """Compile sweep_kernels' two loops ahead of time (explorer/core/aot.py) for the argument types
+    the functions above pass (sweep_kernels.aot_exports); the seconds it took. Here rather than in
+    sweep_kernels so that the kernels' module does not import this one (which imports it)."""
+    from ..core.aot_build import build
+    from .sweep_kernels import aot_exports
+
+    return build(AOT_MODULE, SOURCE.parent, aot_exports(), list(SOURCES))
+
+
+if __name__ == "__main__":
+    import sys
+
+    if "--aot" in sys.argv[1:]:
+        build_aot()
