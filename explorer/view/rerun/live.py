@@ -103,6 +103,16 @@ def check_port(port: int) -> int:
         return s.getsockname()[1]
 
 
+@dataclasses.dataclass(slots=True)
+class _Written:
+    """A recording the stream has written, to which its result's design checks may still come."""
+
+    result: object
+    name: str
+    recording_id: str
+    checked: bool  # its checks are in it (with the recording or added since)
+
+
 def checks_line(name: str, checks) -> str:
     """The session index's line for the checks added to recording `name`."""
     counts = checks.counts()
@@ -136,8 +146,8 @@ class LiveStream:
         self._cond = threading.Condition()
         self._pending: tuple | None = None  # (name, result, checks or None): the next recording
         self._pending_checks: tuple | None = None  # (result, checks): to add to the result's recording
-        # [result, name, recording id, checked] of the last CHECKABLE_RECORDINGS recordings written
-        self._recorded: list[list] = []
+        # the last CHECKABLE_RECORDINGS recordings written
+        self._recorded: list[_Written] = []
         self._busy = False
         self._closed = False
         self._count = 0
@@ -305,7 +315,7 @@ class LiveStream:
              flush_timeout=FLUSH_TIMEOUT_S, recording_id=rid)
         if piece is not None:
             self._pieces.append(piece)
-        self._recorded = [*self._recorded, [result, name, rid, checks is not None]][-CHECKABLE_RECORDINGS:]
+        self._recorded = [*self._recorded, _Written(result, name, rid, checks is not None)][-CHECKABLE_RECORDINGS:]
         if self._host is not None:
             self._host.set_time("recording", sequence=len(self.labels) + 1)
             self._host.log("/session", rr.TextLog(session_line(name, result)))
@@ -316,17 +326,17 @@ class LiveStream:
         """The checks of a result already recorded, added to its recording (same id)."""
         import rerun as rr
 
-        entry = next((e for e in reversed(self._recorded) if e[0] is result), None)
-        if entry is None or entry[3]:  # not recorded (replaced while waiting), or checked already
+        entry = next((e for e in reversed(self._recorded) if e.result is result), None)
+        if entry is None or entry.checked:  # not recorded (replaced while waiting), or checked already
             return
-        _, name, rid, _ = entry
+        name, rid = entry.name, entry.recording_id
         changed = self._add_paths(recording.recording_paths(result, (), checks))
         sinks, piece = self._sinks()
         send(self._worker, sinks, recording.Run(name, result, checks=checks), (list(self._paths), self._bounds),
              make_active=changed, flush_timeout=FLUSH_TIMEOUT_S, recording_id=rid, checks_only=True)
         if piece is not None:
             self._pieces.append(piece)
-        entry[3] = True
+        entry.checked = True
         if self._host is not None:
             self._host.log("/session", rr.TextLog(checks_line(name, checks)))
 
