@@ -352,6 +352,11 @@ def _wait_until(predicate, what):
         time.sleep(0.05)
 
 
+def key_of(app, label: str) -> str:
+    """The scene key of the page's field labelled `label`."""
+    return next(k for k, h in app.fields.items() if h.label == label)
+
+
 def test_typing_into_unit_fields_at_human_speed_uses_what_was_typed(tmp_path):
     """Issue #13.1 in a real page: typing '3000 N/mm', '400 N' and '0.5 mm' key by key at a
     person's pace (120 ms a key) used to be computed per keystroke, with each result written
@@ -376,12 +381,20 @@ def test_typing_into_unit_fields_at_human_speed_uses_what_was_typed(tmp_path):
                 field.press("Delete")
                 page.keyboard.type(text, delay=120)
                 # the page's field holds exactly what was typed, and the result uses it
-                _wait_until(lambda: abs(getattr(getattr(app.current.scene, section), attribute) - si) <= 1e-9 * si,
-                            f"{label}: the result never used {text!r}")
+                try:
+                    _wait_until(lambda: abs(getattr(getattr(app.current.scene, section), attribute) - si) <= 1e-9 * si,
+                                f"{label}: the result never used {text!r}")
+                except AssertionError as exc:  # what the page and the compute thread saw, to tell why
+                    worker = app.worker
+                    raise AssertionError(
+                        f"{exc}; field {field.input_value()!r}, applied {app.fields.get(key_of(app, label)).value!r}, "
+                        f"error {app.error_text!r}, worker computed {worker.computed}, superseded "
+                        f"{worker.superseded}, abandoned {worker.abandoned}, internal errors {worker.internal_errors}"
+                    ) from None
                 assert app.wait_applied(WAIT_S)
                 assert app.error_text == "", app.error_text
                 assert field.input_value() == text
-                key = next(k for k, h in app.fields.items() if h.label == label)
+                key = key_of(app, label)
                 assert app.fields[key].value == text
                 # one computation for the whole typing, not one per key
                 assert sum(1 for o in app.current.request.overrides if o.startswith(key + "=")) == 1
