@@ -135,7 +135,9 @@ def test_a_value_from_a_page_is_recorded_as_sent_and_never_overwritten_in_flight
     order, with the value sent) and applied at the next frame. A thread-pool callback used to
     run late on a busy machine and read a value the loop had written meanwhile: the click was
     lost (#28.7). A value that arrives while a frame is being applied is left alone by that
-    frame (viser's update time is newer than the frame's start) and applied by the next."""
+    frame (requests.Inbox.write: its value or update time is not what the loop last heard) and
+    applied by the next. The frame's start time used to decide it, and a full run once saw the
+    loop overwrite a value stored with the same clock reading."""
     app.loop.stop()  # the test plays the loop: frames come only when it calls tick()
     app.tick(0.0)
     assert app.angle.value == 0.0 and app.play.value is False
@@ -148,11 +150,24 @@ def test_a_value_from_a_page_is_recorded_as_sent_and_never_overwritten_in_flight
     _page_sends(app, app.play, True)
     app.tick(0.02)
     assert app.playback.playing and app.play.value is True
-    # a value that arrived after the frame began is not the loop's to overwrite
-    before = time.time()
-    app.plot_angle._impl.value, app.plot_angle._impl.update_timestamp = 300.0, time.time()
-    app.controls.sync((app.angle, app.plot_angle), before)
+    # a page's value on its way (stored by viser, its request not yet taken by a frame) is not
+    # the loop's to overwrite, at each step of viser's arrival: the value stored before its
+    # update time (the old time, or the same clock reading as the frame's start, both once
+    # overwritten under load), then the time, then the request recorded
+    stamp = app.plot_angle.update_timestamp
+    app.plot_angle._impl.value = 300.0
+    app.controls.sync((app.angle, app.plot_angle))
+    assert app.plot_angle.value == 300.0 and app.plot_angle.update_timestamp == stamp
+    app.plot_angle._impl.update_timestamp = time.time()
+    app.controls.sync((app.angle, app.plot_angle))
     assert app.plot_angle.value == 300.0
+    _page_sends(app, app.plot_angle, 300.0)
+    app.controls.sync((app.angle, app.plot_angle))  # recorded, not yet taken by a frame
+    assert app.plot_angle.value == 300.0
+    app.tick(0.0)  # taken: a scrub to 300 degrees, which pauses the animation
+    assert app.playback.angle_deg == 300.0 and app.angle.value == 300.0 and not app.playback.playing
+    app.play.value = True
+    app.tick(0.02)
     # and the loop still owns both afterwards: the slider follows the animation, a scrub pauses
     app.playback.speed = 0.01
     app.tick(0.05)
@@ -160,6 +175,31 @@ def test_a_value_from_a_page_is_recorded_as_sent_and_never_overwritten_in_flight
     app.angle.value = 30.0
     app.tick(0.02)
     assert app.play.value is False and not app.playback.playing and app.angle.value == 30.0
+
+
+def test_a_fields_text_on_its_way_from_a_page_survives_a_result_and_is_then_used(app):
+    """A result shown while a page's text for a field is stored by viser but not yet taken by a
+    frame: the field keeps the text (the loop used to write the result's value over it when
+    viser's update time was older than the frame's start, which it is between viser storing the
+    value and stamping it); once its request is taken, the text is typed, and applied."""
+    from explorer.view.browser.requests import Computed
+
+    app.loop.stop()  # the test plays the loop
+    app.tick(0.0)
+    field = app.fields.handles["spring.preload"]
+    assert field.value != "400 N"
+    stamp = field.update_timestamp
+    field._impl.value = "400 N"  # viser stored the page's text; its time and request not yet
+    app.inbox.put(Computed(app.current))  # a result comes in this frame
+    app.tick(0.0)
+    assert field.value == "400 N" and field.update_timestamp == stamp
+    _page_sends(app, field, "400 N")
+    deadline = time.monotonic() + 60.0
+    while app.current.scene.spring.preload != 400.0:
+        assert time.monotonic() < deadline, "the text typed was never used"
+        app.tick(0.02)
+        time.sleep(0.02)
+    assert field.value == "400 N" and app.error_text == ""
 
 
 def _plot_labels(app):

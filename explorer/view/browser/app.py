@@ -19,9 +19,9 @@ The page is made of parts with one job each, all the loop's:
 - camera.Cameras: each page's camera framed for its canvas;
 - checks_panel.ChecksPanel: the design checks' verdicts (when the app is given a CheckRunner),
   a click going to a rule's worst; their limits on the plots.
-What can be derived is: what a plot or field shows is read from its handle, and a control the
-page changed since a frame began is told by viser's own update time, so no copy of "what the
-loop last wrote" is kept.
+What can be derived is: what a plot or field shows is read from its handle. Whether a page's
+value of a control is on its way is told by the inbox (requests.Inbox.write: the control's value
+and viser's update time against those the loop last heard or wrote).
 """
 
 from __future__ import annotations
@@ -252,7 +252,6 @@ class ExplorerApp:
         """Apply the requests recorded since the last frame and advance the animation by dt
         seconds (one frame)."""
         self._ticking = threading.get_ident()
-        since = time.time()  # viser's update_timestamp clock: a control changed after this is in flight
         try:
             items = self.inbox.take()
             frame = _Frame()
@@ -283,7 +282,7 @@ class ExplorerApp:
                 playback.advance(dt, prepared.result.summary["revolution_time_s"])
             with self.target.atomic():
                 if frame.incoming is not None:
-                    self._show(frame.incoming, since)
+                    self._show(frame.incoming)
                 if frame.checks is not None:
                     if self.current is not None and not replot:
                         self.plots.show(self.current, None if playback.playing else playback.angle_deg)  # the limits
@@ -297,14 +296,14 @@ class ExplorerApp:
                     self.readouts.readout.content = frame.advice.readout
                 self._say()
                 if frame.sweep or frame.incoming is not None:
-                    self.sweep_view.show(self.current, since, self._compiling(),
+                    self.sweep_view.show(self.current, self.inbox.write, self._compiling(),
                                          speed_pending="drive.rpm" in self.fields.sent)
                 if self.current is not None:
                     angle = playback.angle_deg
                     step = self.gear.pose(angle, force=frame.incoming is not None)
                     self.plots.cursor(self.current, None if playback.playing else angle, step,
                                       force=frame.incoming is not None)
-                    self.controls.sync((self.controls.angle, self.plots.angle), since)
+                    self.controls.sync((self.controls.angle, self.plots.angle))
                     self.cameras.aim_pending(self.current)
             self.target.flush()
             self.frames += 1
@@ -383,7 +382,7 @@ class ExplorerApp:
         elif isinstance(item, CameraMoved):
             self.cameras.reported(item.camera)
 
-    def _show(self, prepared: Prepared, since: float) -> None:
+    def _show(self, prepared: Prepared) -> None:
         """A new result (or a new magnification of the one shown): parts, plots, read-outs,
         fields, the camera of a new scene file, and its playback speed."""
         previous = self.current
@@ -402,8 +401,8 @@ class ExplorerApp:
             playback = self.controls.playback
             self.plots.show(prepared, None if playback.playing else playback.angle_deg)
             self.readouts.show(prepared)
-        self.fields.show(prepared, since)
-        self.controls.show_magnification(prepared.request.magnification, since)
+        self.fields.show(prepared)
+        self.controls.show_magnification(prepared.request.magnification)
         if previous is None or Path(previous.request.path) != Path(prepared.request.path):
             self.cameras.aim(prepared)
         if self._loading and prepared.request.serial >= self._loading:

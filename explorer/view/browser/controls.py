@@ -23,6 +23,7 @@ class PlaybackControls:
 
     def __init__(self, gui, inbox, echo, playing: bool):
         self.playback = Playback(playing=playing)
+        self.inbox = inbox  # the loop writes a control only when no page's value is on its way
         self.speed_chosen = False  # the user chose a speed: a new scene keeps it
         with gui.add_folder("Playback"):
             self.play = gui.add_checkbox("Play", initial_value=playing, hint="play / pause the animation")
@@ -55,23 +56,20 @@ class PlaybackControls:
             if self.speed.value != label:
                 self.speed.value = label
 
-    def show_magnification(self, value: float, since: float) -> None:
+    def show_magnification(self, value: float) -> None:
         """The magnification a result is drawn at (its scene's default until the user chose one),
-        on the slider and in its label, unless the page moved the slider since the frame began."""
+        on the slider and in its label, unless a page's move of the slider is on its way."""
         label = magnification_label(value)
         if self.magnification.label != label:
             self.magnification.label = label
-        if self.magnification.value != value and self.magnification.update_timestamp <= since:
-            self.magnification.value = value
+        self.inbox.write(self.magnification, value)
 
-    def sync(self, sliders, since: float) -> None:
+    def sync(self, sliders) -> None:
         """Play box and cam-angle sliders (`sliders`: this folder's and the one under the plots)
-        in step with the playback clock, except a control the page changed since the frame
-        began (`since`): its value is on its way to the loop and must not be overwritten."""
-        playing = self.playback.playing
-        if self.play.value != playing and self.play.update_timestamp <= since:
-            self.play.value = playing
+        in step with the playback clock, except a control whose value from a page is on its way
+        to the loop (requests.Inbox.write): it must not be overwritten."""
+        self.inbox.write(self.play, self.playback.playing)
         shown = round(self.playback.angle_deg, 1) % 360.0
         for handle in sliders:
-            if abs(handle.value - shown) > 1e-9 and handle.update_timestamp <= since:
-                handle.value = shown
+            if abs(handle.value - shown) > 1e-9:
+                self.inbox.write(handle, shown)

@@ -13,14 +13,12 @@ A field is in one of four states (the loop's alone, explorer.view.browser.loop):
 - refused: its text was not used (refused, or its computation failed): the field keeps it while
            the status box says why and which value the result shown uses, until the user edits
            it, a newer result replaces that message, or the scene is loaded or reset.
-The loop writes a field only in the first state, and only when the page has not changed it
-since the frame began (viser's update_timestamp): a value on its way from a page is never
-overwritten.
+The loop writes a field only in the first state, and only when no page's value of it is on its
+way (requests.Inbox.write): a value sent from a page is never overwritten.
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any, Callable
 
 from ...effects import registry as effect_table
@@ -73,6 +71,7 @@ class Fields:
         wire(self.scene, inbox, lambda v, page, at: SceneChosen(str(v)), echo)
         self.reset.on_click(lambda event: inbox.put(ResetClicked()))
 
+        self.inbox = inbox  # the loop writes a field only when no page's value is on its way
         self.typed: dict[str, tuple[Any, float]] = {}  # key -> (text from a page, when): not applied yet
         self.parked: set[str] = set()  # typed keys whose text waits for its unit (nothing happens without the user)
         self.sent: dict[str, int] = {}  # key -> serial of the request that applied its value
@@ -200,9 +199,9 @@ class Fields:
 
     # ---------------------------------------------------------------- what the fields show
 
-    def show(self, prepared, since: float) -> None:
+    def show(self, prepared) -> None:
         """After a result: each field in the `shown` state (module docstring) shows the value
-        the result used, unless the page changed it after `since` (the frame's start)."""
+        the result used, unless a page's value of it is on its way (requests.Inbox.write)."""
         serial = prepared.request.serial
         for key in [k for k, s in self.sent.items() if s <= serial]:
             del self.sent[key]
@@ -214,7 +213,7 @@ class Fields:
                 law.value = prepared.scene.lift.law
             law.options = prepared.laws
         for key, handle in self.handles.items():
-            if key in self.typed or key in self.sent or key in self.refused or handle.update_timestamp > since:
+            if key in self.typed or key in self.sent or key in self.refused:
                 continue
             value = prepared.values.get(key)
             kind = PARAMETERS[key].kind
@@ -224,13 +223,10 @@ class Fields:
                 continue
             elif value is None:
                 continue
-            if not _same(handle.value, value):
-                handle.value = value
+            self.inbox.write(handle, value)
         if "effects" not in self.sent and self.held_effects is None:
             for name, handle in self.effects.items():
-                ticked = name in prepared.scene.effects
-                if handle.value != ticked and handle.update_timestamp <= since:
-                    handle.value = ticked
+                self.inbox.write(handle, name in prepared.scene.effects)
 
 
 def in_use(current, key: str) -> str:
@@ -240,8 +236,3 @@ def in_use(current, key: str) -> str:
     value = current.values.get(key)
     return f"the result shown uses {value if value not in (None, '') else 'none'}"
 
-
-def _same(a, b) -> bool:
-    if isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(a, bool):
-        return float(a) == float(b) or (math.isnan(float(a)) and math.isnan(float(b)))
-    return a == b

@@ -10,10 +10,19 @@ A page's value is recorded by an `async` callback, which viser runs on its event
 storing the value the page sent: in arrival order, at arrival time, and with the value sent (a
 thread-pool callback ran late on a busy machine and could read a value the loop had written
 meanwhile: a click on a slider was lost, issue #28.7).
+
+The loop writes a control (a field showing the result's value, a slider following the animation)
+only when the page is not changing it (`Inbox.write`). It knows each control's last value and
+viser's update time as it last heard them: from its own write, or from a page's request it has
+taken. A control whose value or update time differs from that holds a page's value on its way to
+the loop, and is left alone. (A comparison of viser's update time with the time a frame began
+lost values twice under load: viser stores a page's value before its time, and records the
+request after both, and a frame could run in either gap; two clock readings can also be equal.)
 """
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections import deque
@@ -123,28 +132,62 @@ class CameraMoved:
     camera: Any  # viser's camera handle of a page
 
 
+@dataclass(frozen=True)
+class Heard:
+    """A control's value and viser's update time as the frame loop knows them."""
+
+    handle: Any
+    value: Any
+    stamp: float
+
+
 class Inbox:
-    """The requests recorded and not yet applied, in arrival order (any thread may `put`)."""
+    """The requests recorded and not yet applied, in arrival order (any thread may `put`), and
+    what the frame loop has heard of each control (module docstring; the loop's thread alone
+    calls `take`, `know`, `in_flight` and `write`)."""
 
     def __init__(self):
         self._cond = threading.Condition()
         self._items: deque = deque()
         self._recorded = 0
         self._applied = 0
+        self._known: dict[int, Heard] = {}  # id(handle) ->
         self.arrived = threading.Event()  # set by `put`: the frame loop waits on it (loop.FrameLoop)
 
-    def put(self, item) -> None:
+    def put(self, item, heard: Heard | None = None) -> None:
+        """Record `item`; `heard`: the control's value and update time it was made from."""
         with self._cond:
-            self._items.append(item)
+            self._items.append((item, heard))
             self._recorded += 1
         self.arrived.set()
 
     def take(self) -> list:
-        """Every request recorded so far, oldest first (the loop calls `done` once applied)."""
+        """Every request recorded so far, oldest first (the loop calls `done` once applied); the
+        loop now knows the values they were made from."""
         with self._cond:
             out = list(self._items)
             self._items.clear()
-            return out
+        for _, heard in out:
+            if heard is not None:
+                self.know(heard)
+        return [item for item, _ in out]
+
+    def know(self, heard: Heard) -> None:
+        self._known[id(heard.handle)] = heard
+
+    def in_flight(self, handle) -> bool:
+        """Whether the page changed `handle` since the loop last heard from it or wrote it."""
+        known = self._known[id(handle)]  # KeyError: a control never wired (`wire`)
+        return handle.update_timestamp != known.stamp or not same_value(handle.value, known.value)
+
+    def write(self, handle, value) -> bool:
+        """The loop's write of a control, unless a page's value is on its way (then False: the
+        request that carries it comes to a later frame)."""
+        if self.in_flight(handle):
+            return False
+        if not same_value(handle.value, value):
+            handle.value = value  # the loop's own write: `wire`'s callback makes it known
+        return True
 
     def done(self, count: int) -> None:
         with self._cond:
@@ -164,13 +207,26 @@ def wire(handle, inbox, make: Callable[[Any, bool, float], Any], echo: Callable[
 
     async def from_page(event) -> None:
         if event.client is not None:
-            inbox.put(make(event.target.value, True, time.monotonic()))
+            value = handle.value
+            inbox.put(make(value, True, time.monotonic()), Heard(handle, value, handle.update_timestamp))
 
     def from_python(event) -> None:
-        if event.client is None and not echo():
-            inbox.put(make(event.target.value, False, time.monotonic()))
+        if event.client is None:
+            value, stamp = handle.value, handle.update_timestamp
+            if echo():  # the loop's own write, in its thread, right after viser stored it
+                inbox.know(Heard(handle, value, stamp))
+            else:
+                inbox.put(make(value, False, time.monotonic()), Heard(handle, value, stamp))
 
+    inbox.know(Heard(handle, handle.value, handle.update_timestamp))
     # the plain one first: viser calls a handle's callbacks in order, and scheduling the async
     # one on the event loop lets other threads run; the value set from Python is read before
     handle.on_update(from_python)
     handle.on_update(from_page)
+
+
+def same_value(a, b) -> bool:
+    """Equal control values (numbers by value, NaN equal to NaN)."""
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(a, bool):
+        return float(a) == float(b) or (math.isnan(float(a)) and math.isnan(float(b)))
+    return a == b

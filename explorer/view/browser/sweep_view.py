@@ -68,9 +68,9 @@ class SweepView:
         if serial >= self.serial:
             self.sweep, self.serial = sweep, serial
 
-    def show(self, current, since: float, compiling: str = "", speed_pending: bool = False) -> None:
+    def show(self, current, write, compiling: str = "", speed_pending: bool = False) -> None:
         """Draw the sweep for the result shown (its speed marked), or say why there is none;
-        `compiling`: a line while the compiled solver is prepared (explorer.view.browser.kernels);
+        `write`: the loop's write of a control (requests.Inbox.write); `compiling`: a line while the compiled solver is prepared (explorer.view.browser.kernels);
         `speed_pending`: a new speed is being computed (the slider keeps it meanwhile)."""
         sweep = self.sweep
         if not isinstance(sweep, SpeedSweep) or current is None:
@@ -112,5 +112,5 @@ class SweepView:
             slider.min, slider.max = 0.0, float(sweep.span[1])
             slider.step = float(sweep.span[0])
         slider.disabled = False
-        if slider.value != rpm and slider.update_timestamp <= since and not speed_pending:
-            slider.value = rpm
+        if slider.value != rpm and not speed_pending:
+            write(slider, rpm)
