@@ -171,6 +171,23 @@ def test_summary_document(float_recording):
     assert "jump_speed_rpm" in text and "valve float" in text
 
 
+def test_the_layout_read_from_a_file_is_the_one_sent_last(tmp_path):
+    """A live session's file holds a blueprint per layout sent; rerun's reader lists them in no
+    fixed order (reading its first gave the first, second or third of three from run to run, and
+    a test once read a layout older than the checks). The reader takes the one sent last."""
+    import rerun as rr
+    import rerun.blueprint as rrb
+
+    out = tmp_path / "layouts.rrd"
+    rec = rr.RecordingStream("blueprint-order-test")
+    rec.save(out)
+    for i in range(6):
+        rec.send_blueprint(rrb.Blueprint(rrb.TimeSeriesView(name=f"layout {i}", origin="/")), make_active=True)
+    rec.flush()
+    rec.disconnect()
+    assert [v["name"] for v in read_blueprint_views(out)] == ["layout 5"]
+
+
 def test_blueprint_has_3d_beside_s_v_p_and_forces(float_recording):
     out, _ = float_recording
     views = read_blueprint_views(out)

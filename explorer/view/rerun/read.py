@@ -111,15 +111,16 @@ def read_rrd(path) -> list[RecordedRun]:
 
 
 def read_blueprint_views(path) -> list[dict]:
-    """The views of the file's (first) blueprint: [{"class": "TimeSeries", "origin": "/", "contents": [...], "name": ...}]."""
+    """The views of the blueprint sent last to the file (a live session's file holds one per layout
+    sent): [{"class": "TimeSeries", "origin": "/", "contents": [...], "name": ...}]."""
     from rerun.chunk import RrdReader
 
     reader = RrdReader(str(path))
-    stores = reader.blueprints()
-    if not stores:
+    store = _last_sent(reader, reader.blueprints())
+    if store is None:
         return []
     views: dict[str, dict] = {}
-    for chunk in reader.stream(store=stores[0]):
+    for chunk in reader.stream(store=store):
         entity = chunk.entity_path
         if entity == "/time_panel":
             _time_panel(chunk, views)
@@ -150,6 +151,19 @@ def read_blueprint_views(path) -> list[dict]:
                 view["time_ranges"] = {r["timeline"]: (r["range"]["start"], r["range"]["end"]) for r in last}
     panel = views.pop("__time_panel__", None)
     return list(views.values()) + ([panel] if panel else [])
+
+
+def _last_sent(reader, stores):
+    """The store whose newest row was logged last. `RrdReader.blueprints()` lists a file's
+    blueprints in no fixed order (the first of three was another one from run to run); row ids
+    are rerun's TUIDs, whose big-endian bytes begin with the time they were made."""
+    newest = {}
+    for store in stores:
+        for chunk in reader.stream(store=store):
+            ids = chunk.to_record_batch().column(ROW_ID).to_pylist()
+            if ids:
+                newest[store] = max(newest.get(store, b""), max(ids))
+    return max(newest, key=newest.get) if newest else (stores[0] if stores else None)
 
 
 def _time_panel(chunk, views: dict) -> None:
