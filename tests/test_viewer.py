@@ -202,6 +202,48 @@ def test_a_fields_text_on_its_way_from_a_page_survives_a_result_and_is_then_used
     assert field.value == "400 N" and app.error_text == ""
 
 
+def _tick_until(app, condition, what: str, timeout: float = 60.0) -> float:
+    """Play frames (the loop stopped) until `condition()`; the time.monotonic() it held at."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < deadline, what
+        app.tick(0.02)
+        time.sleep(0.02)
+    return time.monotonic()
+
+
+def test_a_field_typed_in_shows_the_value_used_once_the_typing_settles_or_at_once_after_enter(app):
+    """A pause long enough to apply a value ('0.4' of '0.45') is too short to rewrite the text
+    being typed: the field keeps '0.4' while its value is used, and shows '0.4 mm' only
+    FIELD_SETTLE_S after its last key (a key typed meanwhile goes on from the page's text);
+    after Enter it shows the value used as soon as the result comes."""
+    from explorer.view.browser.fields import FIELD_SETTLE_S, TYPING_PAUSE_S
+    from explorer.view.browser.requests import Submitted
+
+    app.loop.stop()  # the test plays the loop
+    app.tick(0.0)
+    lash = app.fields.handles["valve.lash"]
+    keyed = time.monotonic()
+    _page_sends(app, lash, "0.4")
+    used = _tick_until(app, lambda: app.current.scene.valve.lash == pytest.approx(0.4e-3), "'0.4' was not applied")
+    assert used - keyed >= TYPING_PAUSE_S
+    if used - keyed < FIELD_SETTLE_S - 0.2:  # the result came well within the settling time
+        app.tick(0.02)
+        assert lash.value == "0.4" and app.fields.waiting()
+    # the typing goes on from the page's text, and applies as a whole
+    keyed = time.monotonic()
+    _page_sends(app, lash, "0.45")
+    _tick_until(app, lambda: app.current.scene.valve.lash == pytest.approx(0.45e-3), "'0.45' was not applied")
+    shown = _tick_until(app, lambda: lash.value == "0.45 mm", "the field never showed the value used")
+    assert shown - keyed >= FIELD_SETTLE_S and not app.fields.waiting()
+    # Enter: shown as soon as it is used
+    _page_sends(app, lash, "0.5")
+    app.inbox.put(Submitted())
+    _tick_until(app, lambda: app.current.scene.valve.lash == pytest.approx(0.5e-3), "Enter did not apply '0.5'")
+    app.tick(0.02)
+    assert lash.value == "0.5 mm" and app.error_text == ""
+
+
 def _plot_labels(app):
     return [s["label"] for h in app.plots.handles for s in h.series]
 

@@ -283,6 +283,7 @@ class ExplorerApp:
             with self.target.atomic():
                 if frame.incoming is not None:
                     self._show(frame.incoming)
+                self.fields.settle(now, self.current)
                 if frame.checks is not None:
                     if self.current is not None and not replot:
                         self.plots.show(self.current, None if playback.playing else playback.angle_deg)  # the limits
@@ -401,7 +402,7 @@ class ExplorerApp:
             playback = self.controls.playback
             self.plots.show(prepared, None if playback.playing else playback.angle_deg)
             self.readouts.show(prepared)
-        self.fields.show(prepared)
+        self.fields.show(prepared, time.monotonic())
         self.controls.show_magnification(prepared.request.magnification)
         if previous is None or Path(previous.request.path) != Path(prepared.request.path):
             self.cameras.aim(prepared)

@@ -14,11 +14,15 @@ A field is in one of four states (the loop's alone, explorer.view.browser.loop):
            the status box says why and which value the result shown uses, until the user edits
            it, a newer result replaces that message, or the scene is loaded or reset.
 The loop writes a field only in the first state, and only when no page's value of it is on its
-way (requests.Inbox.write): a value sent from a page is never overwritten.
+way (requests.Inbox.write): a value sent from a page is never overwritten. A field a page typed
+in shows the value used (with its unit, in its display form) only once the typing has paused for
+FIELD_SETTLE_S, or at once after Enter: a pause long enough to apply a value ("3" of "3000") is
+not long enough to rewrite the text under the cursor ("3 N/mm" and then "3 N/mm000").
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any, Callable
 
 from ...effects import registry as effect_table
@@ -29,6 +33,9 @@ from .requests import EffectsTicked, Edited, ResetClicked, SceneChosen, Submitte
 # A value typed into a field on the page applies once the typing pauses this long (newest wins),
 # never per keystroke: viser sends every change of a text or number input. Enter applies at once.
 TYPING_PAUSE_S = 0.6
+# A field typed in keeps its text this long after the last key before the value used is written
+# into it (module docstring): longer than a pause in the middle of typing a number.
+FIELD_SETTLE_S = 2.0
 
 
 class Fields:
@@ -76,6 +83,8 @@ class Fields:
         self.parked: set[str] = set()  # typed keys whose text waits for its unit (nothing happens without the user)
         self.sent: dict[str, int] = {}  # key -> serial of the request that applied its value
         self.refused: dict[str, int] = {}  # key -> serial of the message saying why its text was not used
+        self.keyed: dict[str, float] = {}  # key -> when a page last typed in it (until Enter or shown)
+        self.unsettled: set[str] = set()  # keys whose value used is written once their typing settles
         self.user: dict[str, str] = {}  # key -> override of the next request
         self.held_effects: tuple[str, ...] | None = None  # ticked effects waiting for a linkage stiffness
         self.note = ""  # a remark for the status box that is no error
@@ -103,6 +112,7 @@ class Fields:
         p = PARAMETERS[request.key]
         if request.page and p.kind != "choice":
             self.typed[request.key] = (request.value, request.at)
+            self.keyed[request.key] = request.at
             self.parked.discard(request.key)
             self.refused.pop(request.key, None)
             return
@@ -111,7 +121,9 @@ class Fields:
         self.apply(request.key, request.value, submit, refuse, current, forced=True)
 
     def submitted(self, submit, refuse, current) -> None:
-        """Enter: every typed text applies now (or is refused, saying why)."""
+        """Enter: every typed text applies now (or is refused, saying why), and its field shows
+        the value used as soon as it comes."""
+        self.keyed.clear()
         for key, (value, _) in list(self.typed.items()):
             self.apply(key, value, submit, refuse, current, forced=True)
 
@@ -122,8 +134,9 @@ class Fields:
                 self.apply(key, value, submit, refuse, current, forced=False)
 
     def waiting(self) -> bool:
-        """Whether a typed text may still apply by itself (any thread)."""
-        return bool(set(self.typed) - set(self.parked))
+        """Whether a typed text may still apply by itself, or a field still show its value used
+        once the typing settles (any thread)."""
+        return bool(set(self.typed) - set(self.parked)) or bool(self.unsettled)
 
     def apply(self, key: str, value, submit, refuse, current, forced: bool) -> None:
         p = PARAMETERS[key]
@@ -174,6 +187,8 @@ class Fields:
         self.parked.clear()
         self.sent.clear()
         self.refused.clear()
+        self.keyed.clear()
+        self.unsettled.clear()
         self.held_effects, self.note = None, ""
 
     def failed(self, request, current, message: str) -> str:
@@ -199,9 +214,11 @@ class Fields:
 
     # ---------------------------------------------------------------- what the fields show
 
-    def show(self, prepared) -> None:
+    def show(self, prepared, now: float) -> None:
         """After a result: each field in the `shown` state (module docstring) shows the value
-        the result used, unless a page's value of it is on its way (requests.Inbox.write)."""
+        the result used, unless a page's value of it is on its way (requests.Inbox.write) or a
+        page typed in it less than FIELD_SETTLE_S before `now` (time.monotonic; then `settle`
+        writes it later)."""
         serial = prepared.request.serial
         for key in [k for k, s in self.sent.items() if s <= serial]:
             del self.sent[key]
@@ -212,21 +229,39 @@ class Fields:
             if law.value not in prepared.laws and prepared.scene.lift.law in prepared.laws:
                 law.value = prepared.scene.lift.law
             law.options = prepared.laws
-        for key, handle in self.handles.items():
+        for key in self.handles:
             if key in self.typed or key in self.sent or key in self.refused:
                 continue
-            value = prepared.values.get(key)
-            kind = PARAMETERS[key].kind
-            if kind == "quantity":
-                value = value or ""
-            elif kind == "choice" and value not in handle.options:
+            if now - self.keyed.get(key, -math.inf) < FIELD_SETTLE_S:
+                self.unsettled.add(key)
                 continue
-            elif value is None:
-                continue
-            self.inbox.write(handle, value)
+            self.keyed.pop(key, None)
+            self._show_value(key, prepared)
         if "effects" not in self.sent and self.held_effects is None:
             for name, handle in self.effects.items():
                 self.inbox.write(handle, name in prepared.scene.effects)
+
+    def settle(self, now: float, current) -> None:
+        """Each frame: the fields whose typing has settled since a result came show its value."""
+        for key in list(self.unsettled):
+            if key in self.typed or key in self.sent or key in self.refused or current is None:
+                self.unsettled.discard(key)  # typing again, or another state's: a result writes it
+            elif now - self.keyed.get(key, -math.inf) >= FIELD_SETTLE_S:
+                self.unsettled.discard(key)
+                self.keyed.pop(key, None)
+                self._show_value(key, current)
+
+    def _show_value(self, key: str, prepared) -> None:
+        handle = self.handles[key]
+        value = prepared.values.get(key)
+        kind = PARAMETERS[key].kind
+        if kind == "quantity":
+            value = value or ""
+        elif kind == "choice" and value not in handle.options:
+            return
+        elif value is None:
+            return
+        self.inbox.write(handle, value)
 
 
 def in_use(current, key: str) -> str:
