@@ -400,6 +400,33 @@ def test_typing_into_unit_fields_at_human_speed_uses_what_was_typed(tmp_path):
                 assert sum(1 for o in app.current.request.overrides if o.startswith(key + "=")) == 1
 
 
+def test_a_pause_in_the_middle_of_a_number_applies_it_and_leaves_the_text_being_typed_alone(tmp_path):
+    """Typing '3', pausing until '3' is applied and its result shown, then '000 N/mm': the field
+    used to be rewritten to '3 N/mm' under the cursor when the result of '3' came, and the rest
+    of the keys made '3 N/mm000 N/mm', which was refused (how the human-speed typing test could
+    fail under load, when one key came late). Now the field keeps the text being typed, the
+    result uses 3000 N/mm, and Enter shows it at once. (The settling time is made long here so
+    that a loaded machine's slow result cannot come after it.)"""
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+    with _running_explorer(ROOT / "assets" / "scenes" / "cycloidal_demo.toml") as (server, app):
+        assert app.wait_applied(WAIT_S)
+        app.fields.settle_s = 10 * WAIT_S
+        with _connected_page(sync_api, tmp_path, server) as page:
+            field = _row_input(page, "Linkage stiffness [N/mm]")
+            _type(page, field, "3")
+            _wait_until(lambda: app.current.scene.linkage.stiffness == pytest.approx(3.0e3), "'3' was not applied")
+            page.wait_for_timeout(300)  # whatever the result of '3' sends has reached the page
+            assert field.input_value() == "3" and app.fields["linkage.stiffness"].value == "3"
+            page.keyboard.type("000 N/mm", delay=120)
+            _wait_until(lambda: app.current.scene.linkage.stiffness == pytest.approx(3.0e6),
+                        f"the result never used 3000 N/mm (field {field.input_value()!r}, error {app.error_text!r})")
+            field.press("Enter")
+            assert app.wait_applied(WAIT_S)
+            assert field.input_value() == "3000 N/mm" and app.error_text == ""
+            assert app.current.scene.linkage.stiffness == pytest.approx(3.0e6)
+
+
 LEGEND_VALUES = ("() => { const v = [...(document.querySelector('.uplot')?.querySelectorAll('.u-series .u-value')"
                  " ?? [])].map(e => e.textContent); return v.length > 1 && v[0] !== '--' && v[1] !== '--' ? v : null; }")
 

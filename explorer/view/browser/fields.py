@@ -85,6 +85,7 @@ class Fields:
         self.refused: dict[str, int] = {}  # key -> serial of the message saying why its text was not used
         self.keyed: dict[str, float] = {}  # key -> when a page last typed in it (until Enter or shown)
         self.unsettled: set[str] = set()  # keys whose value used is written once their typing settles
+        self.settle_s = FIELD_SETTLE_S
         self.user: dict[str, str] = {}  # key -> override of the next request
         self.held_effects: tuple[str, ...] | None = None  # ticked effects waiting for a linkage stiffness
         self.note = ""  # a remark for the status box that is no error
@@ -232,7 +233,7 @@ class Fields:
         for key in self.handles:
             if key in self.typed or key in self.sent or key in self.refused:
                 continue
-            if now - self.keyed.get(key, -math.inf) < FIELD_SETTLE_S:
+            if now - self.keyed.get(key, -math.inf) < self.settle_s:
                 self.unsettled.add(key)
                 continue
             self.keyed.pop(key, None)
@@ -246,7 +247,7 @@ class Fields:
         for key in list(self.unsettled):
             if key in self.typed or key in self.sent or key in self.refused or current is None:
                 self.unsettled.discard(key)  # typing again, or another state's: a result writes it
-            elif now - self.keyed.get(key, -math.inf) >= FIELD_SETTLE_S:
+            elif now - self.keyed.get(key, -math.inf) >= self.settle_s:
                 self.unsettled.discard(key)
                 self.keyed.pop(key, None)
                 self._show_value(key, current)
