@@ -82,3 +82,46 @@ def test_the_law_table_states_the_closed_forms_smoothness():
             assert np.abs(ends[k]).max() <= 1e-9 * scale[k], (spec.name, k)
         if spec.smoothness < 3:
             assert np.abs(ends[spec.smoothness + 1]).max() > 1e-3 * scale[spec.smoothness + 1], spec.name
+
+
+@pytest.mark.parametrize("name", COEFFICIENTS)
+def test_a_laws_rows_asked_for_are_its_rows_among_all_four(name):
+    """laws' evaluate(u, rows) (the sweep's zoom asks for f and f'' only): each subset and order
+    of the rows the same floats as those rows of the full evaluation (oracle: LAWS[name](u)), at
+    random u, the ends and the piecewise laws' segment joints."""
+    from explorer.lift.laws import ALL_ROWS
+
+    u = np.concatenate([np.random.default_rng(5).uniform(0.0, 1.0, 5000), [0.0, 0.125, 0.375, 0.625, 0.875, 1.0]])
+    full = LAWS[name](u)
+    for rows in [(0,), (2,), (0, 2), (2, 0), (1, 3), (3, 1, 0), ALL_ROWS]:
+        assert np.array_equal(LAWS[name](u, rows), full[list(rows)]), rows
+
+
+def test_a_law_lifts_derivative_rows_are_its_derivatives_rows():
+    """LawLift.derivative_rows and lift_rows (only the rows asked for) against LawLift.derivatives
+    (oracle: its rows), bit for bit, for every pair of rise and return laws with and without a
+    dwell, at random angles (beyond 0 and 2 pi too), the breakpoints and their neighbouring floats;
+    lift_rows of a lift without derivative_rows (a spline lift) is its derivatives' rows."""
+    import itertools
+
+    from explorer.lift.curves import LawLift, lift_rows
+
+    rng = np.random.default_rng(6)
+    for (rise, ret), dwell in itertools.product(itertools.product(LAWS, repeat=2), (0.0, 0.3)):
+        lift = LawLift(height=0.009, start=0.5, rise=1.3, dwell=dwell, ret=1.1, rise_law=rise, return_law=ret)
+        marks = lift.breakpoints()
+        theta = np.concatenate([rng.uniform(-1.0, 8.0, 3000), marks, np.nextafter(marks, 0.0),
+                                np.nextafter(marks, 7.0)])
+        full = lift.derivatives(theta)
+        for rows in [(0,), (2,), (0, 2), (2, 0), (1, 3), (3, 1, 0), (0, 1, 2, 3)]:
+            assert np.array_equal(lift.derivative_rows(theta, rows), full[list(rows)]), (rise, ret, dwell, rows)
+            assert np.array_equal(lift_rows(lift, theta, rows), full[list(rows)])
+        grid = theta.reshape(3, -1)  # any shape, as derivatives takes it
+        assert np.array_equal(lift.derivative_rows(grid, (0, 2)), lift.derivatives(grid)[[0, 2]])
+
+    class Plain:  # a lift curve with derivatives only (the LiftCurve protocol)
+        def derivatives(self, theta):
+            return LawLift(0.009, 0.5, 1.3, 0.0, 1.1, "cycloidal", "harmonic").derivatives(theta)
+
+    theta = rng.uniform(0.0, 7.0, 500)
+    assert np.array_equal(lift_rows(Plain(), theta, (2, 0)), Plain().derivatives(theta)[[2, 0]])
