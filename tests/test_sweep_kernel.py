@@ -537,3 +537,54 @@ def test_take_ups_several_halvings_an_evaluation_are_one_at_a_times_floats(monke
         for levels in (2, 4, 6, 7):
             monkeypatch.setattr(kinematics, "BISECT_LEVELS", levels)
             assert np.array_equal(kinematics.lash_take_ups(lift, ratio, lashes), expected, equal_nan=True), levels
+
+
+@pytest.mark.parametrize("scene_file", ["valve_float_demo.toml", "cycloidal_demo.toml"])
+def test_zoom_rows_sharing_a_bracket_are_each_rows_own_floats(scene_file):
+    """forces._zoom_minima computes the samples, the lift and A, G of F = w^2 A + G once for the
+    rows of a round that have the same bracket and friction sign (and only the lift and its second
+    derivative: lift_rows). Oracle: _zoom_minimum row by row (min_contact_force's zoom), the same
+    value and angle to the bit, for rows that share a bracket at several speeds (equal speeds
+    too), the same bracket with the other friction sign, and brackets of their own; and the lift
+    is evaluated at fewer angles than the rows would take one by one (the sharing happened)."""
+    from explorer.mechanics import forces
+
+    s = load_scene(SCENES / scene_file)
+    lift, ratio = build_lift(s), s.follower.ratio
+    lash = s.valve.lash if s.valve is not None else 0.0
+    loads = forces.TrainLoads.from_scene(s)
+    pieces = forces.smooth_pieces(lift, ratio, lash, 4096)
+    step = 2.0 * math.pi / 4096
+    open_starts = pieces.start[pieces.is_open] + 10 * step
+    rng = np.random.default_rng(8)
+    lo, w2, sign = [], [], []
+    for start in open_starts[:3]:
+        for t in (start, start + 40 * step):
+            speeds = np.concatenate([rng.uniform(20.0, 900.0, 5), [300.0, 300.0]]) ** 2
+            lo += [t] * (speeds.size + 1)
+            w2 += speeds.tolist() + [300.0**2]
+            sign += [1.0] * speeds.size + [-1.0]
+    lo += rng.uniform(0.0, 2.0 * math.pi, 6).tolist()  # brackets of their own
+    w2 += (rng.uniform(20.0, 900.0, 6) ** 2).tolist()
+    sign += [1.0, -1.0] * 3
+    lo, w2, sign = np.array(lo), np.array(w2), np.array(sign)
+    hi = lo + 2.0 * step
+
+    class Counted:  # the lift, counting the angles the zoom evaluates
+        angles = 0
+
+        def derivative_rows(self, theta, rows):
+            Counted.angles += np.size(theta)
+            return lift.derivative_rows(theta, rows) if hasattr(lift, "derivative_rows") else \
+                lift.derivatives(theta)[list(rows)]
+
+    values, angles = forces._zoom_minima(Counted(), loads, w2, ratio, lash, sign, lo.copy(), hi.copy())
+    for k in range(lo.size):
+        def force(d, direction, w2k=w2[k]):
+            a_coef, g_part, _ = forces.load_parts(d, direction, loads, ratio, lash)
+            return w2k * a_coef + g_part
+
+        ev, ea = forces._zoom_minimum(lift, force, sign[k], float(lo[k]), float(hi[k]))
+        assert values[k] == ev and angles[k] == ea, (k, values[k], ev, angles[k], ea)
+    rounds = 8  # 2 grid steps to below 1e-10 rad, 16-fold a round
+    assert Counted.angles < 0.5 * lo.size * forces.ZOOM_POINTS * rounds, Counted.angles

@@ -39,6 +39,7 @@ import numpy as np
 
 from ..core.errors import InputError, echo
 from ..core.roots import root_in
+from ..lift.curves import lift_rows
 from .kinematics import lash_crossings
 
 
@@ -431,7 +432,14 @@ def _zoom_minima(lift, loads, w2, ratio, lash, direction, lo, hi, xatol: float =
     The rows are zoomed in the order of their brackets' starts (each row's arithmetic is its own,
     so the order changes no float): the samples then come in runs of one stretch of the lift,
     which its derivatives take as slices instead of gathering and scattering by index; the speeds
-    and friction signs broadcast over a row's samples instead of being repeated."""
+    and friction signs broadcast over a row's samples instead of being repeated.
+
+    Rows of one round with the same bracket and friction sign (speeds whose grid minimum, and then
+    whose zoom, fall on the same samples: most of a chunk's slow speeds, and most speeds in the
+    first rounds) share that round's samples, lift and A, G of F = w^2 A + G, computed once: the
+    same floats as each row's own (the samples are a function of the bracket alone, the lift's
+    derivatives and load_parts are elementwise). The rounds look for such rows until one finds
+    none."""
     n = lo.size
     order = np.argsort(lo, kind="stable")
     lo, hi = lo[order], hi[order]
@@ -439,23 +447,42 @@ def _zoom_minima(lift, loads, w2, ratio, lash, direction, lo, hi, xatol: float =
     best_value, best_theta = np.full(n, math.inf), lo.copy()
     idx = np.arange(n)  # the rows still zooming
     steps = np.arange(ZOOM_POINTS, dtype=float)
+    share = True  # look for rows with one bracket (until a round finds none)
     for _ in range(60):
         if idx.size == 0:
             break
-        a, b = lo[idx], hi[idx]
+        a, b, sign = lo[idx], hi[idx], direction[idx]
+        of = None  # per row: its row of the samples computed (None: its own)
+        if share:
+            by = np.lexsort((sign[:, 0], b, a))
+            sa, sb, ss = a[by], b[by], sign[by, 0]
+            new = np.empty(by.size, bool)
+            new[0] = True
+            new[1:] = (sa[1:] != sa[:-1]) | (sb[1:] != sb[:-1]) | (ss[1:] != ss[:-1])
+            if new.all():
+                share = False
+            else:
+                of = np.empty(by.size, np.intp)
+                of[by] = np.cumsum(new) - 1
+                a, b, sign = sa[new], sb[new], ss[new][:, None]  # one row per bracket, by its start
         ts = steps * ((b - a) / (ZOOM_POINTS - 1))[:, None] + a[:, None]  # np.linspace(a, b, 33)
         ts[:, -1] = b
-        d = lift.derivatives(_mod_two_pi(ts))
-        a_coef, g_part, _ = load_parts(d, direction[idx], loads, ratio, lash)
+        # load_parts reads the lift and its second derivative only: those two rows (lift_rows:
+        # the same floats as the lift's derivatives, without the slope and the jerk)
+        d = lift_rows(lift, _mod_two_pi(ts), (0, 2))
+        a_coef, g_part, _ = load_parts((d[0], None, d[1]), sign, loads, ratio, lash)
+        if of is not None:
+            ts, a_coef, g_part = ts[of], a_coef[of], g_part[of]
         values = w2[idx] * a_coef + g_part
-        values[~np.isfinite(values)] = math.inf
+        if not np.isfinite(values).all():
+            values[~np.isfinite(values)] = math.inf
         j = np.argmin(values, axis=1)
         r = np.arange(idx.size)
         v = values[r, j]
         better = v < best_value[idx]
         best_value[idx[better]] = v[better]
         best_theta[idx[better]] = ts[r, j][better]
-        go = ~((b - a) <= xatol)
+        go = ~((hi[idx] - lo[idx]) <= xatol)
         r, j, idx = r[go], j[go], idx[go]
         lo[idx] = ts[r, np.maximum(j - 1, 0)]
         hi[idx] = ts[r, np.minimum(j + 1, ZOOM_POINTS - 1)]
