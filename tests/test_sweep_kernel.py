@@ -444,6 +444,36 @@ def test_rigid_kernels_equal_numpy_forms_bit_for_bit():
                               equal_nan=True)
 
 
+def test_rigid_kernels_speed_by_speed_nans_equal_numpy_forms():
+    """The rigid kernels loop over the speeds inside the samples (independent lanes, vectorised);
+    a NaN that only some speeds meet (w^2 = inf times A = 0), a NaN on a piece's first sample
+    and one after a speed's minimum must end that speed's scan and no other's, as np.argmin and
+    np.minimum.reduceat do (oracle: the numpy forms, as in the test above), through the module
+    the sweep calls (sweep_loops: ahead of time when current, else numba)."""
+    from explorer.mechanics.sweep_loops import peak_torques, piece_minima
+
+    rng = np.random.default_rng(28)
+    a, g = rng.normal(size=300), rng.normal(size=300)
+    a[[40, 41, 150]] = 0.0  # w^2 = inf: NaN there for that speed only
+    a[100] = np.nan  # a piece's first sample
+    g[220] = np.nan  # late in a piece, after most speeds' minimum
+    w2 = np.concatenate([rng.uniform(0.0, 3.0, 30), [np.inf, 0.0, 2.0, 2.0]])
+    lows = np.array([0, 100, 120, 200], dtype=np.intp)
+    highs = np.array([100, 120, 200, 300], dtype=np.intp)
+    with np.errstate(invalid="ignore"):
+        values = w2[:, None] * a[None, :] + g[None, :]
+    minima, where = piece_minima(w2, a, g, lows, highs)
+    assert np.array_equal(minima, np.minimum.reduceat(values, lows, axis=1), equal_nan=True)
+    for k in range(lows.size):
+        assert np.array_equal(where[:, k], np.argmin(values[:, lows[k]:highs[k]], axis=1)), k
+    push, pull = rng.uniform(0.5, 2.0, 300), rng.uniform(-1.0, 2.0, 300)
+    for floor in (0.0, -np.inf):
+        with np.errstate(invalid="ignore"):
+            torque = values * np.where(values > 0.0, push[None, :], pull[None, :])
+        expected = np.maximum(floor, np.where(np.isfinite(torque), torque, -np.inf).max(axis=1))
+        assert np.array_equal(peak_torques(w2, a, g, push, pull, floor), expected)
+
+
 def test_speeds_of_is_drive_omega():
     """The rigid sweep's speeds without a scene per run are each scene's Drive.omega, bit for bit."""
     from explorer.studies.sweep_rigid import speeds_of

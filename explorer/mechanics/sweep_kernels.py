@@ -30,43 +30,50 @@ from numba import njit
 def piece_minima(w2, a_coef, g_part, lows, highs):
     """(minimum, index of its first occurrence from the piece's start) of F = w2[s] A + G over the
     samples lows[k] <= i < highs[k] of each piece k, for every speed s: (speeds x pieces) each;
-    np.minimum.reduceat and np.argmin of each piece's slice (a NaN: the first NaN)."""
+    np.minimum.reduceat and np.argmin of each piece's slice (a NaN: the first NaN).
+
+    The speeds are the inner loop: each speed visits the samples in the same order and compares as
+    a loop of its own would (a smaller value replaces, the first NaN replaces and ends its scan),
+    the same floats, but the speeds' lanes are independent, which the compiler vectorises (five
+    times faster than the samples inside: a running minimum carried from sample to sample)."""
     speeds, pieces = w2.size, lows.size
     minima = np.empty((speeds, pieces))
     where = np.empty((speeds, pieces), dtype=np.intp)
-    for s in range(speeds):
-        w = w2[s]
-        for k in range(pieces):
-            lo, hi = lows[k], highs[k]
-            best = w * a_coef[lo] + g_part[lo]
-            j = 0
-            if best == best:
-                for i in range(lo + 1, hi):
-                    v = w * a_coef[i] + g_part[i]
-                    if v < best:
-                        best, j = v, i - lo
-                    elif v != v:
-                        best, j = v, i - lo
-                        break
-            minima[s, k] = best
-            where[s, k] = j
+    best = np.empty(speeds)
+    at = np.empty(speeds, dtype=np.intp)
+    for k in range(pieces):
+        lo, hi = lows[k], highs[k]
+        a, g = a_coef[lo], g_part[lo]
+        for s in range(speeds):
+            best[s] = w2[s] * a + g
+            at[s] = 0
+        for i in range(lo + 1, hi):
+            a, g = a_coef[i], g_part[i]
+            for s in range(speeds):
+                b = best[s]
+                v = w2[s] * a + g
+                if b == b and (v < b or v != v):  # a NaN best has ended this speed's scan
+                    best[s] = v
+                    at[s] = i - lo
+        for s in range(speeds):
+            minima[s, k] = best[s]
+            where[s, k] = at[s]
     return minima, where
 
 
 @njit(cache=True)
 def peak_torques(w2, a_coef, g_part, push, pull, floor):
     """Largest finite T = F c of each speed, F = w2[s] A + G, c = push where F > 0 else pull, and
-    at least `floor` (0: some samples are closed and carry no force; -inf: none is)."""
-    out = np.empty(w2.size)
-    for s in range(w2.size):
-        w = w2[s]
-        best = floor
-        for i in range(a_coef.size):
-            f = w * a_coef[i] + g_part[i]
-            t = f * (push[i] if f > 0.0 else pull[i])
-            if t > best and math.isfinite(t):
-                best = t
-        out[s] = best
+    at least `floor` (0: some samples are closed and carry no force; -inf: none is). The speeds are
+    the inner loop (as in piece_minima: each speed's samples in the same order, independent lanes)."""
+    out = np.full(w2.size, floor)
+    for i in range(a_coef.size):
+        a, g, p, q = a_coef[i], g_part[i], push[i], pull[i]
+        for s in range(w2.size):
+            f = w2[s] * a + g
+            t = f * (p if f > 0.0 else q)
+            if t > out[s] and math.isfinite(t):
+                out[s] = t
     return out
 
 
