@@ -618,3 +618,48 @@ def test_zoom_rows_sharing_a_bracket_are_each_rows_own_floats(scene_file):
         assert values[k] == ev and angles[k] == ea, (k, values[k], ev, angles[k], ea)
     rounds = 8  # 2 grid steps to below 1e-10 rad, 16-fold a round
     assert Counted.angles < 0.5 * lo.size * forces.ZOOM_POINTS * rounds, Counted.angles
+
+
+@pytest.mark.parametrize("scene_file, overrides", [("valve_float_demo.toml", ()),
+                                                   ("valve_float_demo.toml", ('spring.preload="1 N"', 'loads.friction="50 N"')),
+                                                   ("cycloidal_demo.toml", ()), ("polydyne_demo.toml", ()),
+                                                   ("schenker1902_fig2.toml", ())])
+def test_float_speed_from_shared_samples_is_minimise_on_pieces_floats(scene_file, overrides):
+    """float_speed reads its samples' A and G from sampled_parts (made once a sweep and shared with
+    min_contact_forces) instead of evaluating the lift again. Oracle: the float speed as
+    minimise_on_pieces defines it (the static part G, then G / -A where A < 0, each sampled and
+    zoomed on its own), the same omega and angle to the bit; a spring too weak at standstill
+    (static loss) included; and min_contact_forces given the shared parts equals it without."""
+    from explorer.mechanics import forces
+
+    s = load_scene(SCENES / scene_file, list(overrides))
+    lift, ratio = build_lift(s), s.follower.ratio
+    lash = s.valve.lash if s.valve is not None else 0.0
+    loads = forces.TrainLoads.from_scene(s)
+    pieces = forces.smooth_pieces(lift, ratio, lash, 4096)
+    parts = forces.sampled_parts(lift, loads, ratio, lash, pieces, 4096)
+
+    def static(d, direction):
+        return forces.load_parts(d, direction, loads, ratio, lash)[1]
+
+    def quotient(d, direction):
+        a_coef, g_part, _ = forces.load_parts(d, direction, loads, ratio, lash)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(a_coef < 0.0, g_part / -a_coef, np.inf)
+
+    g_min, g_theta = forces.minimise_on_pieces(lift, pieces, static)
+    if g_min < 0.0:
+        expected = forces.FloatSpeed(0.0, g_theta, True)
+    else:
+        q_min, q_theta = forces.minimise_on_pieces(lift, pieces, quotient)
+        expected = (forces.FloatSpeed(math.inf, math.nan, False) if not math.isfinite(q_min)
+                    else forces.FloatSpeed(math.sqrt(max(q_min, 0.0)), q_theta, False))
+    for got in (forces.float_speed(lift, loads, ratio, lash, pieces, 4096),
+                forces.float_speed(lift, loads, ratio, lash, pieces, 4096, parts)):
+        assert got.omega == expected.omega and got.static_loss == expected.static_loss
+        assert got.theta == expected.theta or math.isnan(got.theta) and math.isnan(expected.theta)
+    assert ("spring.preload" in str(overrides)) == expected.static_loss  # both branches are met
+    omegas = np.geomspace(10.0, 2000.0, 50)
+    alone = forces.min_contact_forces(lift, loads, omegas, ratio, lash, pieces, 4096)
+    shared = forces.min_contact_forces(lift, loads, omegas, ratio, lash, pieces, 4096, parts)
+    assert all(np.array_equal(x, y, equal_nan=True) for x, y in zip(alone, shared))

@@ -222,8 +222,14 @@ def minimise_on_pieces(
     theta, direction, owner, chosen = sample_pieces(pieces, select, n_grid)
     if chosen.size == 0:
         return math.inf, math.nan
-    counts = np.bincount(owner, minlength=chosen.size)
     values = fun(lift.derivatives(np.mod(theta, TWO_PI)), direction)
+    return _minimise_sampled(lift, pieces, fun, theta, owner, chosen, values, refine)
+
+
+def _minimise_sampled(lift, pieces: Pieces, fun, theta, owner, chosen, values, refine: bool = True):
+    """minimise_on_pieces from its samples (sample_pieces: theta, owner, chosen; chosen not empty)
+    and fun's values there."""
+    counts = np.bincount(owner, minlength=chosen.size)
     best_value, best_theta = math.inf, math.nan
     offsets = np.concatenate([[0], np.cumsum(counts)])
     grid_min = np.array([values[offsets[k] : offsets[k + 1]].min() for k in range(chosen.size)])
@@ -316,25 +322,57 @@ def grid_load_parts(scene, lift, n: int | None = None):
     return theta, a_coef, g_part, is_open
 
 
+@dataclass(frozen=True)
+class SampledParts:
+    """The open pieces' samples (sample_pieces) and A, G of F = w^2 A + G there (load_parts of the
+    lift's derivatives): what float_speed and min_contact_forces read at every speed, made once
+    for a sweep's chunks (studies/sweep_rigid.py keeps it with the pieces)."""
+
+    theta: np.ndarray  # rad, the samples (ends just inside their pieces)
+    direction: np.ndarray  # the friction sign per sample
+    owner: np.ndarray  # per sample: its index into chosen
+    chosen: np.ndarray  # the open pieces' indices
+    a_coef: np.ndarray
+    g_part: np.ndarray
+
+
+def sampled_parts(lift, loads: TrainLoads, ratio: float, lash: float, pieces: Pieces, n_grid: int = 4096) -> SampledParts:
+    theta, direction, owner, chosen = sample_pieces(pieces, None, n_grid)
+    if chosen.size == 0:
+        a_coef = g_part = np.zeros(0)
+    else:
+        a_coef, g_part, _ = load_parts(lift.derivatives(np.mod(theta, TWO_PI)), direction, loads, ratio, lash)
+    return SampledParts(theta, direction, owner, chosen, a_coef, g_part)
+
+
 def float_speed(lift, loads: TrainLoads, ratio: float = 1.0, lash: float = 0.0, pieces: Pieces | None = None,
-                n_grid: int = 4096) -> FloatSpeed:
-    """Exact float (jump) speed of the rigid train: w^2 = min over open, decelerating stretches of G/(-A)."""
+                n_grid: int = 4096, parts: SampledParts | None = None) -> FloatSpeed:
+    """Exact float (jump) speed of the rigid train: w^2 = min over open, decelerating stretches of G/(-A).
+    `parts`: sampled_parts of these arguments (a sweep's, shared with min_contact_forces), else made here."""
     pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
+    parts = parts or sampled_parts(lift, loads, ratio, lash, pieces, n_grid)
 
     def static(d, direction):
         return load_parts(d, direction, loads, ratio, lash)[1]
 
-    g_min, g_theta = minimise_on_pieces(lift, pieces, static, n_grid=n_grid)
-    if g_min < 0.0:
-        return FloatSpeed(0.0, g_theta, True)
-
-    def quotient(d, direction):
-        a_coef, g_part, _ = load_parts(d, direction, loads, ratio, lash)
+    def quotient_of(a_coef, g_part):
         with np.errstate(divide="ignore", invalid="ignore"):
             q = g_part / -a_coef
         return np.where(a_coef < 0.0, q, np.inf)
 
-    q_min, q_theta = minimise_on_pieces(lift, pieces, quotient, n_grid=n_grid)
+    def quotient(d, direction):
+        a_coef, g_part, _ = load_parts(d, direction, loads, ratio, lash)
+        return quotient_of(a_coef, g_part)
+
+    if parts.chosen.size == 0:  # no open piece (minimise_on_pieces: nothing applies)
+        g_min, g_theta, q_min, q_theta = math.inf, math.nan, math.inf, math.nan
+    else:  # minimise_on_pieces of each, its samples' values from the parts (the same floats)
+        sampled = (parts.theta, parts.owner, parts.chosen)
+        g_min, g_theta = _minimise_sampled(lift, pieces, static, *sampled, parts.g_part)
+        if g_min >= 0.0:
+            q_min, q_theta = _minimise_sampled(lift, pieces, quotient, *sampled, quotient_of(parts.a_coef, parts.g_part))
+    if g_min < 0.0:
+        return FloatSpeed(0.0, g_theta, True)
     if not math.isfinite(q_min):
         return FloatSpeed(math.inf, math.nan, False)
     return FloatSpeed(math.sqrt(max(q_min, 0.0)), q_theta, False)
@@ -353,20 +391,24 @@ def min_contact_force(lift, loads: TrainLoads, omega: float, ratio: float = 1.0,
 
 
 def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash: float = 0.0,
-                       pieces: Pieces | None = None, n_grid: int = 4096) -> tuple[np.ndarray, np.ndarray]:
+                       pieces: Pieces | None = None, n_grid: int = 4096,
+                       parts: SampledParts | None = None) -> tuple[np.ndarray, np.ndarray]:
     """min_contact_force at every speed of `omegas` at once: (values, angles), each speed's the
     same floats as min_contact_force's. The samples, the lift there and A, G of F = w^2 A + G are
     shared by all speeds; the zoom of every speed's candidate pieces runs as one batch, one lift
-    evaluation a round for all of them (minimise_on_pieces and _zoom_minimum, row by row)."""
+    evaluation a round for all of them (minimise_on_pieces and _zoom_minimum, row by row).
+    `parts`: sampled_parts of these arguments (a sweep's chunks share it), else made here."""
     from .sweep_loops import piece_minima  # compiled: the compiled sweep's path only
 
     pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
     w2 = np.asarray(omegas, dtype=float).ravel() ** 2
     values_out, theta_out = np.full(w2.size, math.inf), np.full(w2.size, math.nan)
-    theta, direction, owner, chosen = sample_pieces(pieces, None, n_grid)
-    if chosen.size == 0 or w2.size == 0:
+    if w2.size == 0:
         return values_out, theta_out
-    a_coef, g_part, _ = load_parts(lift.derivatives(np.mod(theta, TWO_PI)), direction, loads, ratio, lash)
+    parts = parts or sampled_parts(lift, loads, ratio, lash, pieces, n_grid)
+    theta, owner, chosen, a_coef, g_part = parts.theta, parts.owner, parts.chosen, parts.a_coef, parts.g_part
+    if chosen.size == 0:
+        return values_out, theta_out
     counts = np.bincount(owner, minlength=chosen.size)
     offsets = np.concatenate([[0], np.cumsum(counts)])
     # the grid minimum of every (speed, piece) and where it is, compiled (sweep_kernels.piece_minima:
