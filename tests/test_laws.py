@@ -125,3 +125,32 @@ def test_a_law_lifts_derivative_rows_are_its_derivatives_rows():
 
     theta = rng.uniform(0.0, 7.0, 500)
     assert np.array_equal(lift_rows(Plain(), theta, (2, 0)), Plain().derivatives(theta)[[2, 0]])
+
+
+def test_the_wraps_to_one_revolution_are_np_mod_floats():
+    """lift.curves._wrap and mechanics.forces._mod_two_pi (fmod and a correction, or the angles
+    themselves when all are within [0, 2 pi) already) against the general form (fmod, plus 2 pi
+    where negative; np.mod's floats for x >= 0), bit for bit and sign of zero included: arrays
+    all inside (the fast path), with one angle outside (below 0, at 2 pi, beyond), -0.0 (fmod
+    keeps its sign, and so does the fast path), NaN, empty."""
+    from explorer.lift.curves import _wrap
+    from explorer.mechanics.forces import _mod_two_pi
+
+    two_pi = 2.0 * math.pi
+    inside = np.random.default_rng(9).uniform(0.0, two_pi, 1000)
+    cases = [inside, inside.reshape(40, 25), np.append(inside, -1e-3), np.append(inside, two_pi),
+             np.append(inside, 7.5), np.append(inside, np.nextafter(two_pi, 0.0)), np.append(inside, 0.0),
+             np.append(inside, np.nan), np.zeros(0), np.linspace(-20.0, 20.0, 4001)]
+    for x in cases:
+        for wrap in (_wrap, _mod_two_pi):
+            got = wrap(x.copy())
+            expected = np.fmod(x, two_pi)  # the general form (np.mod's floats for x >= 0)
+            expected = np.where(expected < 0.0, expected + two_pi, expected)
+            assert got.shape == x.shape and np.array_equal(got, expected, equal_nan=True)
+            assert np.array_equal(np.signbit(got), np.signbit(expected))
+            if not np.isnan(x).any() and (x >= 0.0).all():
+                assert np.array_equal(got, np.mod(x, two_pi))
+    x = inside.copy()
+    assert _mod_two_pi(x) is not x  # a new array, as fmod's (the zoom keeps its samples)
+    minus_zero = np.append(inside, -0.0)
+    assert np.signbit(_wrap(minus_zero)[-1]) == np.signbit(np.fmod(-0.0, two_pi))  # the general form's sign

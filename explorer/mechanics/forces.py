@@ -462,7 +462,10 @@ def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash
 def _mod_two_pi(x: np.ndarray) -> np.ndarray:
     """np.mod(x, 2 pi) from fmod and one correction: the same floats (np.mod is fmod, plus 2 pi
     where that is negative; a zero is +0 as np.mod makes it, for the zoom's angles, which are
-    >= 0) at a third of np.mod's cost, which also computes the quotient."""
+    >= 0) at a third of np.mod's cost, which also computes the quotient; a copy of x when it is
+    within [0, 2 pi) already (fmod returns such an x exactly), which two reductions tell."""
+    if x.size and x.min() >= 0.0 and x.max() < TWO_PI:  # (a NaN fails both: the general form)
+        return x.copy()
     x = np.fmod(x, TWO_PI)
     np.add(x, TWO_PI, out=x, where=x < 0.0)
     return x
