@@ -147,11 +147,11 @@ def velocity_zeros(lift, n_grid: int = 4096) -> np.ndarray:
     """Angles where dL/dtheta changes sign (isolated zeros), polished by Brent's method."""
     grid = np.linspace(0.0, TWO_PI, n_grid + 1)
     grid = np.unique(np.concatenate([grid, np.asarray(lift.breakpoints(), dtype=float)]))
-    d1 = lift.derivatives(grid)[1]
+    d1 = lift_rows(lift, grid, (1,))[0]  # the slope only (lift_rows: the lift's derivatives' floats)
     sg = np.sign(d1)
     roots = []
     for i in np.nonzero(sg[:-1] * sg[1:] < 0.0)[0]:
-        f = lambda th: float(lift.derivatives(np.array([th]))[1, 0])  # noqa: E731
+        f = lambda th: float(lift_rows(lift, np.array([th]), (1,))[0, 0])  # noqa: E731
         roots.append(root_in(f, grid[i], grid[i + 1], fa=d1[i], fb=d1[i + 1], xtol=1e-15, maxiter=200))
     for i in np.nonzero(sg[1:-1] == 0.0)[0] + 1:  # an exact zero on a grid point between opposite signs
         if sg[i - 1] * sg[i + 1] < 0.0:
@@ -171,7 +171,7 @@ def smooth_pieces(lift, ratio: float, lash: float, n_grid: int = 4096) -> Pieces
         start = cuts
         end = np.append(cuts[1:], cuts[0] + TWO_PI)
     mid = 0.5 * (start + end)
-    d = lift.derivatives(mid)
+    d = lift_rows(lift, mid, (0, 1, 2))
     return Pieces(
         start=start,
         end=end,
@@ -316,7 +316,7 @@ def grid_load_parts(scene, lift, n: int | None = None):
     loads = TrainLoads.from_scene(scene)
     n = n or scene.solver.steps_per_revolution
     theta = np.arange(n) * (TWO_PI / n)  # the floats simulate samples at
-    d = lift.derivatives(theta)
+    d = lift_rows(lift, theta, (0, 1, 2))  # no jerk read (lift_rows: the same floats)
     lash = scene.valve.lash if scene.valve is not None else 0.0
     a_coef, g_part, is_open = load_parts(d, friction_direction(d[1], d[2]), loads, scene.follower.ratio, lash)
     return theta, a_coef, g_part, is_open
@@ -341,7 +341,8 @@ def sampled_parts(lift, loads: TrainLoads, ratio: float, lash: float, pieces: Pi
     if chosen.size == 0:
         a_coef = g_part = np.zeros(0)
     else:
-        a_coef, g_part, _ = load_parts(lift.derivatives(np.mod(theta, TWO_PI)), direction, loads, ratio, lash)
+        d = lift_rows(lift, np.mod(theta, TWO_PI), (0, 2))  # the rows load_parts reads
+        a_coef, g_part, _ = load_parts((d[0], None, d[1]), direction, loads, ratio, lash)
     return SampledParts(theta, direction, owner, chosen, a_coef, g_part)
 
 
