@@ -663,3 +663,39 @@ def test_float_speed_from_shared_samples_is_minimise_on_pieces_floats(scene_file
     alone = forces.min_contact_forces(lift, loads, omegas, ratio, lash, pieces, 4096)
     shared = forces.min_contact_forces(lift, loads, omegas, ratio, lash, pieces, 4096, parts)
     assert all(np.array_equal(x, y, equal_nan=True) for x, y in zip(alone, shared))
+
+
+def test_velocity_zeros_exact_zeros_on_the_grid_as_the_loop_found_them():
+    """forces.velocity_zeros takes the grid points where the slope is exactly 0 between opposite
+    signs vectorised (a base circle is thousands of zero slopes). Oracle: the loop it replaced
+    (each zero point, kept when its neighbours' signs differ, in grid order), on a slope with such
+    zeros (a sign change through an exact 0 on a grid point, both ways), flat stretches of zeros
+    (none kept) and a zero between equal signs (a touch, not kept); and the float demo's lift."""
+    from explorer.mechanics import forces
+
+    grid0 = np.linspace(0.0, 2.0 * math.pi, 4097)
+    c1, c2, c3 = grid0[1000], grid0[2000], grid0[2500]
+
+    class Slope:  # d1 = 0 exactly at c1 (- to +), c2 (+ to -), touching 0 at c3, flat beyond 5 rad
+        def breakpoints(self):
+            return np.zeros(0)
+
+        def derivatives(self, theta):
+            theta = np.asarray(theta, dtype=float)
+            d1 = np.where(theta < c2, theta - c1, c2 - theta)
+            d1 = np.where(theta == c2, 0.0, d1)
+            d1 = np.where((theta > c2) & (theta <= c3 + 1e-9), -(theta - c3) ** 2, d1)
+            d1 = np.where(theta > 5.0, 0.0, d1)
+            return np.stack([np.zeros_like(theta), d1, np.zeros_like(theta), np.zeros_like(theta)])
+
+    for lift in (Slope(), build_lift(load_scene(SCENES / "valve_float_demo.toml"))):
+        grid = np.unique(np.concatenate([grid0, np.asarray(lift.breakpoints(), dtype=float)]))
+        sg = np.sign(lift.derivatives(grid)[1])
+        looped = [grid[i] for i in np.nonzero(sg[1:-1] == 0.0)[0] + 1 if sg[i - 1] * sg[i + 1] < 0.0]
+        got = forces.velocity_zeros(lift, 4096)
+        assert set(looped) <= set(got.tolist())
+        brent = [r for r in got.tolist() if r not in set(looped)]
+        assert np.array_equal(got, np.mod(np.asarray(brent + looped, dtype=float), 2.0 * math.pi))
+        # the synthetic slope's two crossings through an exact 0 (not the touch, not the flat);
+        # the float demo's slope is 0 only on flat stretches (base circle, dwell)
+        assert looped == ([c1, c2] if isinstance(lift, Slope) else [])

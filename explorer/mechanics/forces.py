@@ -153,9 +153,10 @@ def velocity_zeros(lift, n_grid: int = 4096) -> np.ndarray:
     for i in np.nonzero(sg[:-1] * sg[1:] < 0.0)[0]:
         f = lambda th: float(lift_rows(lift, np.array([th]), (1,))[0, 0])  # noqa: E731
         roots.append(root_in(f, grid[i], grid[i + 1], fa=d1[i], fb=d1[i + 1], xtol=1e-15, maxiter=200))
-    for i in np.nonzero(sg[1:-1] == 0.0)[0] + 1:  # an exact zero on a grid point between opposite signs
-        if sg[i - 1] * sg[i + 1] < 0.0:
-            roots.append(grid[i])
+    # an exact zero on a grid point between opposite signs (in grid order, as a loop over them
+    # would append them; vectorised: a base circle is thousands of zeros of the slope)
+    zeros = np.nonzero(sg[1:-1] == 0.0)[0] + 1
+    roots.extend(grid[zeros[sg[zeros - 1] * sg[zeros + 1] < 0.0]].tolist())
     return np.mod(np.asarray(roots, dtype=float), TWO_PI)
 
 
