@@ -474,6 +474,42 @@ def test_rigid_kernels_speed_by_speed_nans_equal_numpy_forms():
         assert np.array_equal(peak_torques(w2, a, g, push, pull, floor), expected)
 
 
+def test_zoom_minima_kernel_is_load_parts_and_argmin_floats():
+    """sweep_kernels.zoom_minima (a round of the zoom: F = w^2 A + G from the lift and L'' at each
+    row's samples, its first minimum) against its numpy form, forces.load_parts then
+    w2 A + G, non-finite values as +inf and np.argmin: the same value and index, bit for bit, for
+    samples open and closed (ratio L - lash on both sides of 0, and 0 itself), both friction signs
+    and none, rows sharing samples (of), NaN and inf in the lift, an infinite speed (inf * 0),
+    equal values (the first), a lever ratio; numba's loop and the module the sweep calls (ahead of
+    time when current)."""
+    from explorer.mechanics import forces, sweep_kernels, sweep_loops
+
+    loads = forces.TrainLoads.from_scene(load_scene(SCENES / "valve_float_demo.toml"))
+    rng = np.random.default_rng(29)
+    lash, ratio = 2.5e-4, 1.3
+    lift_at = rng.uniform(0.0, 2.0 * lash / ratio, (12, 33))
+    accel_at = rng.normal(0.0, 0.02, (12, 33))
+    lift_at[0, 3], accel_at[1, 5], accel_at[2, 7], lift_at[3, :] = np.nan, np.inf, 0.0, lash / ratio
+    accel_at[4, 10:14] = -1.0
+    lift_at[4, 10:14] = lift_at[4, 10]  # equal smallest values: the first one's index
+    accel_at[5, :] = np.nan  # no finite value: +inf at index 0
+    of = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 6, 6, 2, 0], dtype=np.intp)
+    w2 = rng.uniform(1e3, 4e5, of.size)
+    w2[2] = np.inf  # inf * 0 = NaN at accel_at[2, 7]
+    direction = np.array([1.0, -1.0, 0.0, 1.0] * 4)
+    a_coef, g_part, _ = forces.load_parts((lift_at[of], None, accel_at[of]), direction[:, None], loads, ratio, lash)
+    with np.errstate(invalid="ignore"):
+        values = w2[:, None] * a_coef + g_part
+    values[~np.isfinite(values)] = math.inf
+    j = np.argmin(values, axis=1)
+    expected = values[np.arange(of.size), j], j
+    constants = (ratio, lash, loads.mass * ratio, loads.preload, loads.rate, loads.friction, loads.closing)
+    for kernel in (sweep_kernels.zoom_minima, sweep_loops.zoom_minima):
+        v, where = kernel(lift_at, accel_at, of, w2, direction, *constants)
+        assert np.array_equal(v, expected[0]) and np.array_equal(where, expected[1])
+    assert expected[0][5] == math.inf and expected[1][5] == 0 and expected[1][4] == 10  # the cases were met
+
+
 def test_speeds_of_is_drive_omega():
     """The rigid sweep's speeds without a scene per run are each scene's Drive.omega, bit for bit."""
     from explorer.studies.sweep_rigid import speeds_of

@@ -481,51 +481,48 @@ def _zoom_minima(lift, loads, w2, ratio, lash, direction, lo, hi, xatol: float =
     which its derivatives take as slices instead of gathering and scattering by index; the speeds
     and friction signs broadcast over a row's samples instead of being repeated.
 
-    Rows of one round with the same bracket and friction sign (speeds whose grid minimum, and then
-    whose zoom, fall on the same samples: most of a chunk's slow speeds, and most speeds in the
-    first rounds) share that round's samples, lift and A, G of F = w^2 A + G, computed once: the
-    same floats as each row's own (the samples are a function of the bracket alone, the lift's
-    derivatives and load_parts are elementwise). The rounds look for such rows until one finds
-    none."""
+    Rows of one round with the same bracket (speeds whose grid minimum, and then whose zoom, fall
+    on the same samples: most of a chunk's slow speeds, and most speeds in the first rounds) share
+    that round's samples and the lift there, computed once: the same floats as each row's own (the
+    samples are a function of the bracket alone, the lift's derivatives are elementwise). The
+    rounds look for such rows until one finds none. Each row's F = w^2 A + G (load_parts) and
+    its minimum are one compiled pass (sweep_kernels.zoom_minima, the numpy form's floats)."""
+    from .sweep_loops import zoom_minima  # compiled: the compiled sweep's path only
+
     n = lo.size
     order = np.argsort(lo, kind="stable")
     lo, hi = lo[order], hi[order]
-    w2, direction = w2[order][:, None], direction[order][:, None]
+    w2, direction = w2[order], direction[order]
     best_value, best_theta = np.full(n, math.inf), lo.copy()
     idx = np.arange(n)  # the rows still zooming
     steps = np.arange(ZOOM_POINTS, dtype=float)
     share = True  # look for rows with one bracket (until a round finds none)
+    # load_parts' constants as it forms them (loads.mass * ratio first: Python's left to right)
+    constants = (ratio, lash, loads.mass * ratio, loads.preload, loads.rate, loads.friction, loads.closing)
     for _ in range(60):
         if idx.size == 0:
             break
-        a, b, sign = lo[idx], hi[idx], direction[idx]
-        of = None  # per row: its row of the samples computed (None: its own)
+        a, b = lo[idx], hi[idx]
+        of = np.arange(idx.size)  # per row: its row of the samples computed (its own unless shared)
         if share:
-            by = np.lexsort((sign[:, 0], b, a))
-            sa, sb, ss = a[by], b[by], sign[by, 0]
+            by = np.lexsort((b, a))
+            sa, sb = a[by], b[by]
             new = np.empty(by.size, bool)
             new[0] = True
-            new[1:] = (sa[1:] != sa[:-1]) | (sb[1:] != sb[:-1]) | (ss[1:] != ss[:-1])
+            new[1:] = (sa[1:] != sa[:-1]) | (sb[1:] != sb[:-1])
             if new.all():
                 share = False
             else:
-                of = np.empty(by.size, np.intp)
                 of[by] = np.cumsum(new) - 1
-                a, b, sign = sa[new], sb[new], ss[new][:, None]  # one row per bracket, by its start
+                a, b = sa[new], sb[new]  # one row per bracket, by its start
         ts = steps * ((b - a) / (ZOOM_POINTS - 1))[:, None] + a[:, None]  # np.linspace(a, b, 33)
         ts[:, -1] = b
         # load_parts reads the lift and its second derivative only: those two rows (lift_rows:
-        # the same floats as the lift's derivatives, without the slope and the jerk)
+        # the same floats as the lift's derivatives, without the slope and the jerk); F = w^2 A + G
+        # and each row's first minimum compiled (sweep_kernels.zoom_minima: load_parts' arithmetic)
         d = lift_rows(lift, _mod_two_pi(ts), (0, 2))
-        a_coef, g_part, _ = load_parts((d[0], None, d[1]), sign, loads, ratio, lash)
-        if of is not None:
-            ts, a_coef, g_part = ts[of], a_coef[of], g_part[of]
-        values = w2[idx] * a_coef + g_part
-        if not np.isfinite(values).all():
-            values[~np.isfinite(values)] = math.inf
-        j = np.argmin(values, axis=1)
-        r = np.arange(idx.size)
-        v = values[r, j]
+        v, j = zoom_minima(d[0], d[1], of, w2[idx], direction[idx], *constants)
+        r = of  # the row of ts each row's samples are
         better = v < best_value[idx]
         best_value[idx[better]] = v[better]
         best_theta[idx[better]] = ts[r, j][better]

@@ -7,8 +7,10 @@ each is six to eight passes over a (speeds x samples) temporary; here each is on
 temporary (issue #27.5: they were 40 % of a 1000-speed sweep of valve_float_demo.toml). The same
 floats as numpy's: F is one product and one sum (numba does not fuse them without fastmath), a
 minimum keeps the first of equal values (np.argmin), a NaN wins (np.minimum, np.argmin), and the
-torque keeps the finite values only (contact.peak_torques). tests/test_sweep_kernel.py compares
-them with the numpy forms bit for bit.
+torque keeps the finite values only (contact.peak_torques). A third loop takes each round of the
+refining zoom's F and its minimum per row from the lift there (zoom_minima: load_parts' arithmetic
+and np.argmin in one pass instead of some fifteen numpy passes). tests/test_sweep_kernel.py
+compares them with the numpy forms bit for bit.
 
 Imported only on the compiled sweep's path, through mechanics/sweep_loops.py, when no current
 ahead-of-time module of these loops exists (forces.min_contact_forces and contact.peak_torques with
@@ -77,12 +79,41 @@ def peak_torques(w2, a_coef, g_part, push, pull, floor):
     return out
 
 
+@njit(cache=True)
+def zoom_minima(lift_at, accel_at, of, w2, direction, ratio, lash, mass_ratio, preload, rate, friction, closing):
+    """(smallest F, index of its first occurrence) over each row's samples, for a round of the
+    sweep's zoom (forces._zoom_minima): row r reads the lift L and L'' at its samples from row
+    of[r] of lift_at, accel_at (rows that share a bracket share them) and has its own speed w2[r]
+    and friction sign direction[r]. F is forces.load_parts' arithmetic, operation for operation,
+    x = ratio L - lash, s = x where x > 0 else 0, A = (mass ratio) L'', G = preload + rate s +
+    friction direction + closing (left to right), then F = w2 A + G, a value not finite taken as
+    +inf, and the first of equal minima (np.argmin): the same floats as the numpy form."""
+    rows, points = of.size, lift_at.shape[1]
+    best = np.empty(rows)
+    where = np.empty(rows, dtype=np.intp)
+    for r in range(rows):
+        u, w = of[r], w2[r]
+        fd = friction * direction[r]
+        for i in range(points):
+            x = ratio * lift_at[u, i] - lash
+            s = x if x > 0.0 else 0.0
+            f = w * (mass_ratio * accel_at[u, i]) + (((preload + rate * s) + fd) + closing)
+            if not math.isfinite(f):
+                f = math.inf
+            if i == 0 or f < best[r]:
+                best[r] = f
+                where[r] = i
+    return best, where
+
+
 def warm() -> None:
     """Compile (or load) both kernels for the argument types the sweep passes."""
     x = np.linspace(-1.0, 1.0, 8)
     lows, highs = np.array([0, 4], dtype=np.intp), np.array([4, 8], dtype=np.intp)
     piece_minima(x[:2].copy(), x, x, lows, highs)
     peak_torques(x[:2].copy(), x, x, x, x, 0.0)
+    grid = x.reshape(2, 4)
+    zoom_minima(grid, grid, np.arange(2), x[:2].copy(), x[:2].copy(), 1.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0)
 
 
 def aot_exports() -> dict:
@@ -90,9 +121,10 @@ def aot_exports() -> dict:
     types and layouts sweep_loops passes."""
     from numba import types as T
 
-    A1, P1 = T.float64[::1], T.intp[::1]
+    A1, P1, A2, F = T.float64[::1], T.intp[::1], T.float64[:, ::1], T.float64
     return {"piece_minima": (T.Tuple((T.float64[:, ::1], T.intp[:, ::1]))(A1, A1, A1, P1, P1), piece_minima),
-            "peak_torques": (A1(A1, A1, A1, A1, A1, T.float64), peak_torques)}
+            "peak_torques": (A1(A1, A1, A1, A1, A1, T.float64), peak_torques),
+            "zoom_minima": (T.Tuple((A1, P1))(A2, A2, P1, A1, A1, F, F, F, F, F, F, F), zoom_minima)}
 
 
 if __name__ == "__main__":

@@ -22,14 +22,14 @@ SOURCES = (SOURCE, Path(__file__).resolve())
 
 @functools.cache
 def kernels() -> tuple:
-    """(piece_minima, peak_torques): the ahead-of-time module's when current, else
+    """(piece_minima, peak_torques, zoom_minima): the ahead-of-time module's when current, else
     sweep_kernels' (numba)."""
     module = aot.load(AOT_MODULE, list(SOURCES))
     if module is not None:
-        return module.piece_minima, module.peak_torques
-    from .sweep_kernels import peak_torques, piece_minima  # numba: only without a current AOT module
+        return module.piece_minima, module.peak_torques, module.zoom_minima
+    from .sweep_kernels import peak_torques, piece_minima, zoom_minima  # numba: only without a current AOT module
 
-    return piece_minima, peak_torques
+    return piece_minima, peak_torques, zoom_minima
 
 
 def piece_minima(w2, a_coef, g_part, lows, highs):
@@ -44,6 +44,14 @@ def peak_torques(w2, a_coef, g_part, push, pull, floor):
     c = np.ascontiguousarray
     return kernels()[1](c(w2, dtype=float), c(a_coef, dtype=float), c(g_part, dtype=float), c(push, dtype=float),
                         c(pull, dtype=float), float(floor))
+
+
+def zoom_minima(lift_at, accel_at, of, w2, direction, ratio, lash, mass_ratio, preload, rate, friction, closing):
+    """sweep_kernels.zoom_minima (the exported signature's types and layout)."""
+    c = np.ascontiguousarray
+    return kernels()[2](c(lift_at, dtype=float), c(accel_at, dtype=float), c(of, dtype=np.intp), c(w2, dtype=float),
+                        c(direction, dtype=float), float(ratio), float(lash), float(mass_ratio), float(preload),
+                        float(rate), float(friction), float(closing))
 
 
 def build_aot() -> float:
