@@ -117,7 +117,7 @@ def warm() -> None:
 
 
 def aot_exports() -> dict:
-    """What the ahead-of-time module exports (sweep_loops.build_aot): both loops, for the argument
+    """What the ahead-of-time module exports (sweep_loops.build_aot): the three loops, for the argument
     types and layouts sweep_loops passes."""
     from numba import types as T
 

@@ -1,9 +1,9 @@
-"""The rigid sweep figures' two compiled loops (mechanics/sweep_kernels.py: piece_minima,
-peak_torques) from the module compiled ahead of time by `make` when it was built from
+"""The rigid sweep figures' three compiled loops (mechanics/sweep_kernels.py: piece_minima,
+peak_torques, zoom_minima) from the module compiled ahead of time by `make` when it was built from
 sweep_kernels.py as it is now (explorer/core/aot.py: then the process loads no numba), else from
 numba (sweep_kernels, loaded from numba's cache). The same floats either way
 (tests/test_sweep_kernel.py). Imported only by the compiled sweep's rigid figures
-(forces.min_contact_forces; contact.peak_torques with compiled=True)."""
+(forces.min_contact_forces and its _zoom_minima; contact.peak_torques with compiled=True)."""
 
 from __future__ import annotations
 
@@ -55,7 +55,7 @@ def zoom_minima(lift_at, accel_at, of, w2, direction, ratio, lash, mass_ratio, p
 
 
 def build_aot() -> float:
-    """Compile sweep_kernels' two loops ahead of time (explorer/core/aot.py) for the argument types
+    """Compile sweep_kernels' three loops ahead of time (explorer/core/aot.py) for the argument types
     the functions above pass (sweep_kernels.aot_exports); the seconds it took. Here rather than in
     sweep_kernels so that the kernels' module does not import this one (which imports it)."""
     from ..core.aot_build import build
