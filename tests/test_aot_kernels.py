@@ -99,15 +99,14 @@ def test_aot_rigid_loops_equal_jit_on_nan_inf_and_ties(modules):
         for floor in (0.0, -np.inf):
             assert np.array_equal(rigid.peak_torques(w2, a, g, push, pull, floor),
                                   peak_torques(w2, a, g, push, pull, floor), equal_nan=True)
-        # the zoom's round (closed and open samples, NaN, inf, shared rows)
+        # the zoom's round (closed and open samples, NaN, inf)
         lift_at, accel_at = rng.uniform(0.0, 2e-3, (8, 33)), rng.normal(0.0, 0.02, (8, 33))
         lift_at[rng.integers(0, 8), rng.integers(0, 33)] = np.nan
         accel_at[rng.integers(0, 8), rng.integers(0, 33)] = np.inf
-        of = rng.integers(0, 8, 20).astype(np.intp)
-        w2z, direction = rng.uniform(1e3, 4e5, 20), rng.choice([-1.0, 0.0, 1.0], 20)
+        w2z, direction = rng.uniform(1e3, 4e5, 8), rng.choice([-1.0, 0.0, 1.0], 8)
         constants = (1.0, 2.5e-4, 0.1, 220.0, 3e4, 10.0, 15.0)
-        for x, y in zip(rigid.zoom_minima(lift_at, accel_at, of, w2z, direction, *constants),
-                        zoom_minima(lift_at, accel_at, of, w2z, direction, *constants)):
+        for x, y in zip(rigid.zoom_minima(lift_at, accel_at, w2z, direction, *constants),
+                        zoom_minima(lift_at, accel_at, w2z, direction, *constants)):
             assert np.array_equal(x, y)
 
 

@@ -479,7 +479,7 @@ def test_zoom_minima_kernel_is_load_parts_and_argmin_floats():
     row's samples, its first minimum) against its numpy form, forces.load_parts then
     w2 A + G, non-finite values as +inf and np.argmin: the same value and index, bit for bit, for
     samples open and closed (ratio L - lash on both sides of 0, and 0 itself), both friction signs
-    and none, rows sharing samples (of), NaN and inf in the lift, an infinite speed (inf * 0),
+    and none, rows with the same samples, NaN and inf in the lift, an infinite speed (inf * 0),
     equal values (the first), a lever ratio; numba's loop and the module the sweep calls (ahead of
     time when current)."""
     from explorer.mechanics import forces, sweep_kernels, sweep_loops
@@ -493,11 +493,12 @@ def test_zoom_minima_kernel_is_load_parts_and_argmin_floats():
     accel_at[4, 10:14] = -1.0
     lift_at[4, 10:14] = lift_at[4, 10]  # equal smallest values: the first one's index
     accel_at[5, :] = np.nan  # no finite value: +inf at index 0
-    of = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 6, 6, 2, 0], dtype=np.intp)
+    of = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 6, 6, 2, 0], dtype=np.intp)  # rows 12-15: copies
+    lift_at, accel_at = lift_at[of], accel_at[of]
     w2 = rng.uniform(1e3, 4e5, of.size)
     w2[2] = np.inf  # inf * 0 = NaN at accel_at[2, 7]
     direction = np.array([1.0, -1.0, 0.0, 1.0] * 4)
-    a_coef, g_part, _ = forces.load_parts((lift_at[of], None, accel_at[of]), direction[:, None], loads, ratio, lash)
+    a_coef, g_part, _ = forces.load_parts((lift_at, None, accel_at), direction[:, None], loads, ratio, lash)
     with np.errstate(invalid="ignore"):
         values = w2[:, None] * a_coef + g_part
     values[~np.isfinite(values)] = math.inf
@@ -505,7 +506,7 @@ def test_zoom_minima_kernel_is_load_parts_and_argmin_floats():
     expected = values[np.arange(of.size), j], j
     constants = (ratio, lash, loads.mass * ratio, loads.preload, loads.rate, loads.friction, loads.closing)
     for kernel in (sweep_kernels.zoom_minima, sweep_loops.zoom_minima):
-        v, where = kernel(lift_at, accel_at, of, w2, direction, *constants)
+        v, where = kernel(lift_at, accel_at, w2, direction, *constants)
         assert np.array_equal(v, expected[0]) and np.array_equal(where, expected[1])
     assert expected[0][5] == math.inf and expected[1][5] == 0 and expected[1][4] == 10  # the cases were met
 
@@ -606,13 +607,12 @@ def test_take_ups_several_halvings_an_evaluation_are_one_at_a_times_floats(monke
 
 
 @pytest.mark.parametrize("scene_file", ["valve_float_demo.toml", "cycloidal_demo.toml"])
-def test_zoom_rows_sharing_a_bracket_are_each_rows_own_floats(scene_file):
-    """forces._zoom_minima computes the samples, the lift and A, G of F = w^2 A + G once for the
-    rows of a round that have the same bracket and friction sign (and only the lift and its second
-    derivative: lift_rows). Oracle: _zoom_minimum row by row (min_contact_force's zoom), the same
-    value and angle to the bit, for rows that share a bracket at several speeds (equal speeds
-    too), the same bracket with the other friction sign, and brackets of their own; and the lift
-    is evaluated at fewer angles than the rows would take one by one (the sharing happened)."""
+def test_zoom_minima_rows_are_each_rows_own_floats(scene_file):
+    """forces._zoom_minima (all rows at once, in the order of their brackets' starts; only the
+    lift and its second derivative evaluated, lift_rows; F and each row's minimum compiled,
+    sweep_kernels.zoom_minima). Oracle: _zoom_minimum row by row (min_contact_force's zoom), the
+    same value and angle to the bit, for rows on one bracket at several speeds (equal speeds
+    too), the same bracket with the other friction sign, and brackets of their own."""
     from explorer.mechanics import forces
 
     s = load_scene(SCENES / scene_file)
@@ -635,16 +635,7 @@ def test_zoom_rows_sharing_a_bracket_are_each_rows_own_floats(scene_file):
     sign += [1.0, -1.0] * 3
     lo, w2, sign = np.array(lo), np.array(w2), np.array(sign)
     hi = lo + 2.0 * step
-
-    class Counted:  # the lift, counting the angles the zoom evaluates
-        angles = 0
-
-        def derivative_rows(self, theta, rows):
-            Counted.angles += np.size(theta)
-            return lift.derivative_rows(theta, rows) if hasattr(lift, "derivative_rows") else \
-                lift.derivatives(theta)[list(rows)]
-
-    values, angles = forces._zoom_minima(Counted(), loads, w2, ratio, lash, sign, lo.copy(), hi.copy())
+    values, angles = forces._zoom_minima(lift, loads, w2, ratio, lash, sign, lo.copy(), hi.copy())
     for k in range(lo.size):
         def force(d, direction, w2k=w2[k]):
             a_coef, g_part, _ = forces.load_parts(d, direction, loads, ratio, lash)
@@ -652,8 +643,6 @@ def test_zoom_rows_sharing_a_bracket_are_each_rows_own_floats(scene_file):
 
         ev, ea = forces._zoom_minimum(lift, force, sign[k], float(lo[k]), float(hi[k]))
         assert values[k] == ev and angles[k] == ea, (k, values[k], ev, angles[k], ea)
-    rounds = 8  # 2 grid steps to below 1e-10 rad, 16-fold a round
-    assert Counted.angles < 0.5 * lo.size * forces.ZOOM_POINTS * rounds, Counted.angles
 
 
 @pytest.mark.parametrize("scene_file, overrides", [("valve_float_demo.toml", ()),

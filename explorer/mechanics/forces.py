@@ -478,15 +478,11 @@ def _zoom_minima(lift, loads, w2, ratio, lash, direction, lo, hi, xatol: float =
     same samples (np.linspace's floats), the same narrowing and the same stop as on its own.
     The rows are zoomed in the order of their brackets' starts (each row's arithmetic is its own,
     so the order changes no float): the samples then come in runs of one stretch of the lift,
-    which its derivatives take as slices instead of gathering and scattering by index; the speeds
-    and friction signs broadcast over a row's samples instead of being repeated.
-
-    Rows of one round with the same bracket (speeds whose grid minimum, and then whose zoom, fall
-    on the same samples: most of a chunk's slow speeds, and most speeds in the first rounds) share
-    that round's samples and the lift there, computed once: the same floats as each row's own (the
-    samples are a function of the bracket alone, the lift's derivatives are elementwise). The
-    rounds look for such rows until one finds none. Each row's F = w^2 A + G (load_parts) and
-    its minimum are one compiled pass (sweep_kernels.zoom_minima, the numpy form's floats)."""
+    which its derivatives take as slices instead of gathering and scattering by index. Each round
+    evaluates only the lift and its second derivative (lift_rows), and each row's F = w^2 A + G
+    (load_parts) and its minimum are one compiled pass (sweep_kernels.zoom_minima, the numpy
+    form's floats). (Rows of one bracket -- a chunk's slow speeds -- could share the lift there;
+    measured, it did not pay: such rows are a few rounds of a few chunks.)"""
     from .sweep_loops import zoom_minima  # compiled: the compiled sweep's path only
 
     n = lo.size
@@ -496,37 +492,21 @@ def _zoom_minima(lift, loads, w2, ratio, lash, direction, lo, hi, xatol: float =
     best_value, best_theta = np.full(n, math.inf), lo.copy()
     idx = np.arange(n)  # the rows still zooming
     steps = np.arange(ZOOM_POINTS, dtype=float)
-    share = True  # look for rows with one bracket (until a round finds none)
     # load_parts' constants as it forms them (loads.mass * ratio first: Python's left to right)
     constants = (ratio, lash, loads.mass * ratio, loads.preload, loads.rate, loads.friction, loads.closing)
     for _ in range(60):
         if idx.size == 0:
             break
         a, b = lo[idx], hi[idx]
-        of = np.arange(idx.size)  # per row: its row of the samples computed (its own unless shared)
-        if share:
-            by = np.lexsort((b, a))
-            sa, sb = a[by], b[by]
-            new = np.empty(by.size, bool)
-            new[0] = True
-            new[1:] = (sa[1:] != sa[:-1]) | (sb[1:] != sb[:-1])
-            if new.all():
-                share = False
-            else:
-                of[by] = np.cumsum(new) - 1
-                a, b = sa[new], sb[new]  # one row per bracket, by its start
         ts = steps * ((b - a) / (ZOOM_POINTS - 1))[:, None] + a[:, None]  # np.linspace(a, b, 33)
         ts[:, -1] = b
-        # load_parts reads the lift and its second derivative only: those two rows (lift_rows:
-        # the same floats as the lift's derivatives, without the slope and the jerk); F = w^2 A + G
-        # and each row's first minimum compiled (sweep_kernels.zoom_minima: load_parts' arithmetic)
-        d = lift_rows(lift, _mod_two_pi(ts), (0, 2))
-        v, j = zoom_minima(d[0], d[1], of, w2[idx], direction[idx], *constants)
-        r = of  # the row of ts each row's samples are
+        d = lift_rows(lift, _mod_two_pi(ts), (0, 2))  # L and L'': what load_parts reads
+        v, j = zoom_minima(d[0], d[1], w2[idx], direction[idx], *constants)
+        r = np.arange(idx.size)
         better = v < best_value[idx]
         best_value[idx[better]] = v[better]
         best_theta[idx[better]] = ts[r, j][better]
-        go = ~((hi[idx] - lo[idx]) <= xatol)
+        go = ~((b - a) <= xatol)
         r, j, idx = r[go], j[go], idx[go]
         lo[idx] = ts[r, np.maximum(j - 1, 0)]
         hi[idx] = ts[r, np.minimum(j + 1, ZOOM_POINTS - 1)]

@@ -80,24 +80,24 @@ def peak_torques(w2, a_coef, g_part, push, pull, floor):
 
 
 @njit(cache=True)
-def zoom_minima(lift_at, accel_at, of, w2, direction, ratio, lash, mass_ratio, preload, rate, friction, closing):
+def zoom_minima(lift_at, accel_at, w2, direction, ratio, lash, mass_ratio, preload, rate, friction, closing):
     """(smallest F, index of its first occurrence) over each row's samples, for a round of the
-    sweep's zoom (forces._zoom_minima): row r reads the lift L and L'' at its samples from row
-    of[r] of lift_at, accel_at (rows that share a bracket share them) and has its own speed w2[r]
-    and friction sign direction[r]. F is forces.load_parts' arithmetic, operation for operation,
+    sweep's zoom (forces._zoom_minima): row r has the lift L and L'' at its samples in row r of
+    lift_at, accel_at, its speed w2[r] and friction sign direction[r]. F is forces.load_parts'
+    arithmetic, operation for operation,
     x = ratio L - lash, s = x where x > 0 else 0, A = (mass ratio) L'', G = preload + rate s +
     friction direction + closing (left to right), then F = w2 A + G, a value not finite taken as
     +inf, and the first of equal minima (np.argmin): the same floats as the numpy form."""
-    rows, points = of.size, lift_at.shape[1]
+    rows, points = lift_at.shape
     best = np.empty(rows)
     where = np.empty(rows, dtype=np.intp)
     for r in range(rows):
-        u, w = of[r], w2[r]
+        w = w2[r]
         fd = friction * direction[r]
         for i in range(points):
-            x = ratio * lift_at[u, i] - lash
+            x = ratio * lift_at[r, i] - lash
             s = x if x > 0.0 else 0.0
-            f = w * (mass_ratio * accel_at[u, i]) + (((preload + rate * s) + fd) + closing)
+            f = w * (mass_ratio * accel_at[r, i]) + (((preload + rate * s) + fd) + closing)
             if not math.isfinite(f):
                 f = math.inf
             if i == 0 or f < best[r]:
@@ -113,7 +113,7 @@ def warm() -> None:
     piece_minima(x[:2].copy(), x, x, lows, highs)
     peak_torques(x[:2].copy(), x, x, x, x, 0.0)
     grid = x.reshape(2, 4)
-    zoom_minima(grid, grid, np.arange(2), x[:2].copy(), x[:2].copy(), 1.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0)
+    zoom_minima(grid, grid, x[:2].copy(), x[:2].copy(), 1.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0)
 
 
 def aot_exports() -> dict:
@@ -124,7 +124,7 @@ def aot_exports() -> dict:
     A1, P1, A2, F = T.float64[::1], T.intp[::1], T.float64[:, ::1], T.float64
     return {"piece_minima": (T.Tuple((T.float64[:, ::1], T.intp[:, ::1]))(A1, A1, A1, P1, P1), piece_minima),
             "peak_torques": (A1(A1, A1, A1, A1, A1, T.float64), peak_torques),
-            "zoom_minima": (T.Tuple((A1, P1))(A2, A2, P1, A1, A1, F, F, F, F, F, F, F), zoom_minima)}
+            "zoom_minima": (T.Tuple((A1, P1))(A2, A2, A1, A1, F, F, F, F, F, F, F), zoom_minima)}
 
 
 if __name__ == "__main__":

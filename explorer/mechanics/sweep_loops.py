@@ -46,10 +46,10 @@ def peak_torques(w2, a_coef, g_part, push, pull, floor):
                         c(pull, dtype=float), float(floor))
 
 
-def zoom_minima(lift_at, accel_at, of, w2, direction, ratio, lash, mass_ratio, preload, rate, friction, closing):
+def zoom_minima(lift_at, accel_at, w2, direction, ratio, lash, mass_ratio, preload, rate, friction, closing):
     """sweep_kernels.zoom_minima (the exported signature's types and layout)."""
     c = np.ascontiguousarray
-    return kernels()[2](c(lift_at, dtype=float), c(accel_at, dtype=float), c(of, dtype=np.intp), c(w2, dtype=float),
+    return kernels()[2](c(lift_at, dtype=float), c(accel_at, dtype=float), c(w2, dtype=float),
                         c(direction, dtype=float), float(ratio), float(lash), float(mass_ratio), float(preload),
                         float(rate), float(friction), float(closing))
 
