@@ -154,3 +154,24 @@ def test_the_wraps_to_one_revolution_are_np_mod_floats():
     assert _mod_two_pi(x) is not x  # a new array, as fmod's (the zoom keeps its samples)
     minus_zero = np.append(inside, -0.0)
     assert np.signbit(_wrap(minus_zero)[-1]) == np.signbit(np.fmod(-0.0, two_pi))  # the general form's sign
+
+
+def test_derivative_rows_of_a_plug_in_law_without_rows(monkeypatch):
+    """A law registered as a plug-in is u -> (4, ...) only (LawSpec.normalised; it takes no rows):
+    LawLift.derivative_rows selects its rows from all four (laws.law_rows), the same floats as
+    derivatives' rows; the closed forms are marked as taking rows."""
+    from explorer.lift import laws
+    from explorer.lift.curves import LawLift
+
+    def toy(u):  # 3u^2 - 2u^3, as tests/test_plugins.py's toy law
+        u = np.asarray(u, dtype=float)
+        return np.stack([3 * u**2 - 2 * u**3, 6 * u - 6 * u**2, 6 - 12 * u, np.full_like(u, -12.0)])
+
+    monkeypatch.setitem(laws.LAWS, "toy-cubic", toy)
+    lift = LawLift(height=0.008, start=0.0, rise=1.5, dwell=0.5, ret=1.5, rise_law="toy-cubic", return_law="cycloidal")
+    theta = np.random.default_rng(10).uniform(0.0, 2.0 * math.pi, 2000)
+    full = lift.derivatives(theta)
+    for rows in [(0,), (0, 2), (3, 1), (0, 1, 2, 3)]:
+        assert np.array_equal(lift.derivative_rows(theta, rows), full[list(rows)]), rows
+    assert all(getattr(laws.LAWS[name], "takes_rows", False) for name in COEFFICIENTS)
+    assert not getattr(toy, "takes_rows", False)

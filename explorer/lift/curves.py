@@ -14,7 +14,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .laws import ALL_ROWS, law as normalised_law
+from .laws import ALL_ROWS, law_rows
 
 TWO_PI = 2.0 * math.pi
 
@@ -54,7 +54,7 @@ class LawLift:
         x_ret = x_top - self.dwell
         rising = _selection(x_top < 0.0)
         if rising is not None:
-            f = normalised_law(self.rise_law)(x[rising] / self.rise, rows)
+            f = law_rows(self.rise_law, x[rising] / self.rise, rows)
             f *= h
             f /= np.array([self.rise**k for k in rows])[:, None]  # h f[k] / rise**k
             out[:, rising] = f
@@ -63,7 +63,7 @@ class LawLift:
             out[rows.index(0)][top] = h
         falling = _selection((x_ret >= 0.0) & (x_ret < self.ret))
         if falling is not None:
-            g = normalised_law(self.return_law)(x_ret[falling] / self.ret, rows)
+            g = law_rows(self.return_law, x_ret[falling] / self.ret, rows)
             slopes = [i for i, k in enumerate(rows) if k]  # the derivatives' rows
             if len(slopes) < len(rows):
                 out[rows.index(0), falling] = h * (1.0 - g[rows.index(0)])

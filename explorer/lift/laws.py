@@ -145,9 +145,24 @@ LAWS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
 }
 
 
+for _evaluate in LAWS.values():  # the closed forms above take rows (a plug-in's law may not)
+    _evaluate.takes_rows = True
+
+
+def law_rows(name: str, u, rows: tuple[int, ...] = ALL_ROWS) -> np.ndarray:
+    """The rows of the law `name` at u: all four as the law gives them; fewer from the law itself
+    when it takes rows (the closed forms: the same floats), else its four rows' selection (a law
+    registered as a plug-in, explorer.lift.registry.register_law: u -> (4, ...) only)."""
+    function = LAWS[name]
+    if rows == ALL_ROWS:
+        return function(u)
+    if getattr(function, "takes_rows", False):
+        return function(u, rows)
+    return function(u)[list(rows)]
+
+
 def law(name: str) -> Callable[..., np.ndarray]:
-    """The normalised law `name`: u -> array (4, ...) of f, f', f'', f''' (and
-    law(name)(u, rows): the rows asked for, the same floats)."""
+    """The normalised law `name`: u -> array (4, ...) of f, f', f'', f''' (law_rows: some of them)."""
     return LAWS[name]
 
 
