@@ -39,11 +39,11 @@ def modules(monkeypatch):
 def _tables(monkeypatch, base, keys, values, elastic, rigid):
     """compute_chunk's table with the ahead-of-time kernels and with numba's."""
     from explorer.dynamics.kernel_figures import revolutions
-    from explorer.mechanics.sweep_kernels import peak_torques, piece_minima
+    from explorer.mechanics.sweep_kernels import peak_torques, piece_minima, zoom_minima
 
     out = []
-    for batch, loops in ((elastic.revolutions, (rigid.piece_minima, rigid.peak_torques)),
-                         (revolutions, (piece_minima, peak_torques))):
+    for batch, loops in ((elastic.revolutions, (rigid.piece_minima, rigid.peak_torques, rigid.zoom_minima)),
+                         (revolutions, (piece_minima, peak_torques, zoom_minima))):
         monkeypatch.setattr(exact_kernel, "batch_function", lambda batch=batch: batch)
         monkeypatch.setattr(sweep_loops, "kernels", lambda loops=loops: loops)
         shared = _Shared()
@@ -81,7 +81,7 @@ def test_aot_speed_sweep_equals_jit_bit_for_bit(monkeypatch, modules):
 
 def test_aot_rigid_loops_equal_jit_on_nan_inf_and_ties(modules):
     """The rigid loops on test_sweep_kernel's awkward inputs (NaN, inf, equal values)."""
-    from explorer.mechanics.sweep_kernels import peak_torques, piece_minima
+    from explorer.mechanics.sweep_kernels import peak_torques, piece_minima, zoom_minima
 
     rigid = modules[1]
     rng = np.random.default_rng(27)
@@ -99,6 +99,15 @@ def test_aot_rigid_loops_equal_jit_on_nan_inf_and_ties(modules):
         for floor in (0.0, -np.inf):
             assert np.array_equal(rigid.peak_torques(w2, a, g, push, pull, floor),
                                   peak_torques(w2, a, g, push, pull, floor), equal_nan=True)
+        # the zoom's round (closed and open samples, NaN, inf)
+        lift_at, accel_at = rng.uniform(0.0, 2e-3, (8, 33)), rng.normal(0.0, 0.02, (8, 33))
+        lift_at[rng.integers(0, 8), rng.integers(0, 33)] = np.nan
+        accel_at[rng.integers(0, 8), rng.integers(0, 33)] = np.inf
+        w2z, direction = rng.uniform(1e3, 4e5, 8), rng.choice([-1.0, 0.0, 1.0], 8)
+        constants = (1.0, 2.5e-4, 0.1, 220.0, 3e4, 10.0, 15.0)
+        for x, y in zip(rigid.zoom_minima(lift_at, accel_at, w2z, direction, *constants),
+                        zoom_minima(lift_at, accel_at, w2z, direction, *constants)):
+            assert np.array_equal(x, y)
 
 
 SWEEP = ("import sys, explorer; explorer.sweep(sys.argv[1], vary={'drive.rpm': '2000:5000:10'}, workers=1); "

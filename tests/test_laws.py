@@ -82,3 +82,96 @@ def test_the_law_table_states_the_closed_forms_smoothness():
             assert np.abs(ends[k]).max() <= 1e-9 * scale[k], (spec.name, k)
         if spec.smoothness < 3:
             assert np.abs(ends[spec.smoothness + 1]).max() > 1e-3 * scale[spec.smoothness + 1], spec.name
+
+
+@pytest.mark.parametrize("name", COEFFICIENTS)
+def test_a_laws_rows_asked_for_are_its_rows_among_all_four(name):
+    """laws' evaluate(u, rows) (the sweep's zoom asks for f and f'' only): each subset and order
+    of the rows the same floats as those rows of the full evaluation (oracle: LAWS[name](u)), at
+    random u, the ends and the piecewise laws' segment joints."""
+    from explorer.lift.laws import ALL_ROWS
+
+    u = np.concatenate([np.random.default_rng(5).uniform(0.0, 1.0, 5000), [0.0, 0.125, 0.375, 0.625, 0.875, 1.0]])
+    full = LAWS[name](u)
+    for rows in [(0,), (2,), (0, 2), (2, 0), (1, 3), (3, 1, 0), ALL_ROWS]:
+        assert np.array_equal(LAWS[name](u, rows), full[list(rows)]), rows
+
+
+def test_a_law_lifts_derivative_rows_are_its_derivatives_rows():
+    """LawLift.derivative_rows and lift_rows (only the rows asked for) against LawLift.derivatives
+    (oracle: its rows), bit for bit, for every pair of rise and return laws with and without a
+    dwell, at random angles (beyond 0 and 2 pi too), the breakpoints and their neighbouring floats;
+    lift_rows of a lift without derivative_rows (a spline lift) is its derivatives' rows."""
+    import itertools
+
+    from explorer.lift.curves import LawLift, lift_rows
+
+    rng = np.random.default_rng(6)
+    for (rise, ret), dwell in itertools.product(itertools.product(LAWS, repeat=2), (0.0, 0.3)):
+        lift = LawLift(height=0.009, start=0.5, rise=1.3, dwell=dwell, ret=1.1, rise_law=rise, return_law=ret)
+        marks = lift.breakpoints()
+        theta = np.concatenate([rng.uniform(-1.0, 8.0, 3000), marks, np.nextafter(marks, 0.0),
+                                np.nextafter(marks, 7.0)])
+        full = lift.derivatives(theta)
+        for rows in [(0,), (2,), (0, 2), (2, 0), (1, 3), (3, 1, 0), (0, 1, 2, 3)]:
+            assert np.array_equal(lift.derivative_rows(theta, rows), full[list(rows)]), (rise, ret, dwell, rows)
+            assert np.array_equal(lift_rows(lift, theta, rows), full[list(rows)])
+        grid = theta.reshape(3, -1)  # any shape, as derivatives takes it
+        assert np.array_equal(lift.derivative_rows(grid, (0, 2)), lift.derivatives(grid)[[0, 2]])
+
+    class Plain:  # a lift curve with derivatives only (the LiftCurve protocol)
+        def derivatives(self, theta):
+            return LawLift(0.009, 0.5, 1.3, 0.0, 1.1, "cycloidal", "harmonic").derivatives(theta)
+
+    theta = rng.uniform(0.0, 7.0, 500)
+    assert np.array_equal(lift_rows(Plain(), theta, (2, 0)), Plain().derivatives(theta)[[2, 0]])
+
+
+def test_the_wraps_to_one_revolution_are_np_mod_floats():
+    """lift.curves._wrap and mechanics.forces._mod_two_pi (fmod and a correction, or the angles
+    themselves when all are within [0, 2 pi) already) against the general form (fmod, plus 2 pi
+    where negative; np.mod's floats for x >= 0), bit for bit and sign of zero included: arrays
+    all inside (the fast path), with one angle outside (below 0, at 2 pi, beyond), -0.0 (fmod
+    keeps its sign, and so does the fast path), NaN, empty."""
+    from explorer.lift.curves import _wrap
+    from explorer.mechanics.forces import _mod_two_pi
+
+    two_pi = 2.0 * math.pi
+    inside = np.random.default_rng(9).uniform(0.0, two_pi, 1000)
+    cases = [inside, inside.reshape(40, 25), np.append(inside, -1e-3), np.append(inside, two_pi),
+             np.append(inside, 7.5), np.append(inside, np.nextafter(two_pi, 0.0)), np.append(inside, 0.0),
+             np.append(inside, np.nan), np.zeros(0), np.linspace(-20.0, 20.0, 4001)]
+    for x in cases:
+        for wrap in (_wrap, _mod_two_pi):
+            got = wrap(x.copy())
+            expected = np.fmod(x, two_pi)  # the general form (np.mod's floats for x >= 0)
+            expected = np.where(expected < 0.0, expected + two_pi, expected)
+            assert got.shape == x.shape and np.array_equal(got, expected, equal_nan=True)
+            assert np.array_equal(np.signbit(got), np.signbit(expected))
+            if not np.isnan(x).any() and (x >= 0.0).all():
+                assert np.array_equal(got, np.mod(x, two_pi))
+    x = inside.copy()
+    assert _mod_two_pi(x) is not x  # a new array, as fmod's (the zoom keeps its samples)
+    minus_zero = np.append(inside, -0.0)
+    assert np.signbit(_wrap(minus_zero)[-1]) == np.signbit(np.fmod(-0.0, two_pi))  # the general form's sign
+
+
+def test_derivative_rows_of_a_plug_in_law_without_rows(monkeypatch):
+    """A law registered as a plug-in is u -> (4, ...) only (LawSpec.normalised; it takes no rows):
+    LawLift.derivative_rows selects its rows from all four (laws.law_rows), the same floats as
+    derivatives' rows; the closed forms are marked as taking rows."""
+    from explorer.lift import laws
+    from explorer.lift.curves import LawLift
+
+    def toy(u):  # 3u^2 - 2u^3, as tests/test_plugins.py's toy law
+        u = np.asarray(u, dtype=float)
+        return np.stack([3 * u**2 - 2 * u**3, 6 * u - 6 * u**2, 6 - 12 * u, np.full_like(u, -12.0)])
+
+    monkeypatch.setitem(laws.LAWS, "toy-cubic", toy)
+    lift = LawLift(height=0.008, start=0.0, rise=1.5, dwell=0.5, ret=1.5, rise_law="toy-cubic", return_law="cycloidal")
+    theta = np.random.default_rng(10).uniform(0.0, 2.0 * math.pi, 2000)
+    full = lift.derivatives(theta)
+    for rows in [(0,), (0, 2), (3, 1), (0, 1, 2, 3)]:
+        assert np.array_equal(lift.derivative_rows(theta, rows), full[list(rows)]), rows
+    assert all(getattr(laws.LAWS[name], "takes_rows", False) for name in COEFFICIENTS)
+    assert not getattr(toy, "takes_rows", False)

@@ -444,6 +444,73 @@ def test_rigid_kernels_equal_numpy_forms_bit_for_bit():
                               equal_nan=True)
 
 
+def test_rigid_kernels_speed_by_speed_nans_equal_numpy_forms():
+    """The rigid kernels loop over the speeds inside the samples (independent lanes, vectorised);
+    a NaN that only some speeds meet (w^2 = inf times A = 0), a NaN on a piece's first sample
+    and one after a speed's minimum must end that speed's scan and no other's, as np.argmin and
+    np.minimum.reduceat do (oracle: the numpy forms, as in the test above), through the module
+    the sweep calls (sweep_loops: ahead of time when current, else numba)."""
+    from explorer.mechanics.sweep_loops import peak_torques, piece_minima
+
+    rng = np.random.default_rng(28)
+    a, g = rng.normal(size=300), rng.normal(size=300)
+    a[[40, 41, 150]] = 0.0  # w^2 = inf: NaN there for that speed only
+    a[100] = np.nan  # a piece's first sample
+    g[220] = np.nan  # late in a piece, after most speeds' minimum
+    w2 = np.concatenate([rng.uniform(0.0, 3.0, 30), [np.inf, 0.0, 2.0, 2.0]])
+    lows = np.array([0, 100, 120, 200], dtype=np.intp)
+    highs = np.array([100, 120, 200, 300], dtype=np.intp)
+    with np.errstate(invalid="ignore"):
+        values = w2[:, None] * a[None, :] + g[None, :]
+    minima, where = piece_minima(w2, a, g, lows, highs)
+    assert np.array_equal(minima, np.minimum.reduceat(values, lows, axis=1), equal_nan=True)
+    for k in range(lows.size):
+        assert np.array_equal(where[:, k], np.argmin(values[:, lows[k]:highs[k]], axis=1)), k
+    push, pull = rng.uniform(0.5, 2.0, 300), rng.uniform(-1.0, 2.0, 300)
+    for floor in (0.0, -np.inf):
+        with np.errstate(invalid="ignore"):
+            torque = values * np.where(values > 0.0, push[None, :], pull[None, :])
+        expected = np.maximum(floor, np.where(np.isfinite(torque), torque, -np.inf).max(axis=1))
+        assert np.array_equal(peak_torques(w2, a, g, push, pull, floor), expected)
+
+
+def test_zoom_minima_kernel_is_load_parts_and_argmin_floats():
+    """sweep_kernels.zoom_minima (a round of the zoom: F = w^2 A + G from the lift and L'' at each
+    row's samples, its first minimum) against its numpy form, forces.load_parts then
+    w2 A + G, non-finite values as +inf and np.argmin: the same value and index, bit for bit, for
+    samples open and closed (ratio L - lash on both sides of 0, and 0 itself), both friction signs
+    and none, rows with the same samples, NaN and inf in the lift, an infinite speed (inf * 0),
+    equal values (the first), a lever ratio; numba's loop and the module the sweep calls (ahead of
+    time when current)."""
+    from explorer.mechanics import forces, sweep_kernels, sweep_loops
+
+    loads = forces.TrainLoads.from_scene(load_scene(SCENES / "valve_float_demo.toml"))
+    rng = np.random.default_rng(29)
+    lash, ratio = 2.5e-4, 1.3
+    lift_at = rng.uniform(0.0, 2.0 * lash / ratio, (12, 33))
+    accel_at = rng.normal(0.0, 0.02, (12, 33))
+    lift_at[0, 3], accel_at[1, 5], accel_at[2, 7], lift_at[3, :] = np.nan, np.inf, 0.0, lash / ratio
+    accel_at[4, 10:14] = -1.0
+    lift_at[4, 10:14] = lift_at[4, 10]  # equal smallest values: the first one's index
+    accel_at[5, :] = np.nan  # no finite value: +inf at index 0
+    of = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 6, 6, 2, 0], dtype=np.intp)  # rows 12-15: copies
+    lift_at, accel_at = lift_at[of], accel_at[of]
+    w2 = rng.uniform(1e3, 4e5, of.size)
+    w2[2] = np.inf  # inf * 0 = NaN at accel_at[2, 7]
+    direction = np.array([1.0, -1.0, 0.0, 1.0] * 4)
+    a_coef, g_part, _ = forces.load_parts((lift_at, None, accel_at), direction[:, None], loads, ratio, lash)
+    with np.errstate(invalid="ignore"):
+        values = w2[:, None] * a_coef + g_part
+    values[~np.isfinite(values)] = math.inf
+    j = np.argmin(values, axis=1)
+    expected = values[np.arange(of.size), j], j
+    constants = (ratio, lash, loads.mass * ratio, loads.preload, loads.rate, loads.friction, loads.closing)
+    for kernel in (sweep_kernels.zoom_minima, sweep_loops.zoom_minima):
+        v, where = kernel(lift_at, accel_at, w2, direction, *constants)
+        assert np.array_equal(v, expected[0]) and np.array_equal(where, expected[1])
+    assert expected[0][5] == math.inf and expected[1][5] == 0 and expected[1][4] == 10  # the cases were met
+
+
 def test_speeds_of_is_drive_omega():
     """The rigid sweep's speeds without a scene per run are each scene's Drive.omega, bit for bit."""
     from explorer.studies.sweep_rigid import speeds_of
@@ -537,3 +604,123 @@ def test_take_ups_several_halvings_an_evaluation_are_one_at_a_times_floats(monke
         for levels in (2, 4, 6, 7):
             monkeypatch.setattr(kinematics, "BISECT_LEVELS", levels)
             assert np.array_equal(kinematics.lash_take_ups(lift, ratio, lashes), expected, equal_nan=True), levels
+
+
+@pytest.mark.parametrize("scene_file", ["valve_float_demo.toml", "cycloidal_demo.toml"])
+def test_zoom_minima_rows_are_each_rows_own_floats(scene_file):
+    """forces._zoom_minima (all rows at once, in the order of their brackets' starts; only the
+    lift and its second derivative evaluated, lift_rows; F and each row's minimum compiled,
+    sweep_kernels.zoom_minima). Oracle: _zoom_minimum row by row (min_contact_force's zoom), the
+    same value and angle to the bit, for rows on one bracket at several speeds (equal speeds
+    too), the same bracket with the other friction sign, and brackets of their own."""
+    from explorer.mechanics import forces
+
+    s = load_scene(SCENES / scene_file)
+    lift, ratio = build_lift(s), s.follower.ratio
+    lash = s.valve.lash if s.valve is not None else 0.0
+    loads = forces.TrainLoads.from_scene(s)
+    pieces = forces.smooth_pieces(lift, ratio, lash, 4096)
+    step = 2.0 * math.pi / 4096
+    open_starts = pieces.start[pieces.is_open] + 10 * step
+    rng = np.random.default_rng(8)
+    lo, w2, sign = [], [], []
+    for start in open_starts[:3]:
+        for t in (start, start + 40 * step):
+            speeds = np.concatenate([rng.uniform(20.0, 900.0, 5), [300.0, 300.0]]) ** 2
+            lo += [t] * (speeds.size + 1)
+            w2 += speeds.tolist() + [300.0**2]
+            sign += [1.0] * speeds.size + [-1.0]
+    lo += rng.uniform(0.0, 2.0 * math.pi, 6).tolist()  # brackets of their own
+    w2 += (rng.uniform(20.0, 900.0, 6) ** 2).tolist()
+    sign += [1.0, -1.0] * 3
+    lo, w2, sign = np.array(lo), np.array(w2), np.array(sign)
+    hi = lo + 2.0 * step
+    values, angles = forces._zoom_minima(lift, loads, w2, ratio, lash, sign, lo.copy(), hi.copy())
+    for k in range(lo.size):
+        def force(d, direction, w2k=w2[k]):
+            a_coef, g_part, _ = forces.load_parts(d, direction, loads, ratio, lash)
+            return w2k * a_coef + g_part
+
+        ev, ea = forces._zoom_minimum(lift, force, sign[k], float(lo[k]), float(hi[k]))
+        assert values[k] == ev and angles[k] == ea, (k, values[k], ev, angles[k], ea)
+
+
+@pytest.mark.parametrize("scene_file, overrides", [("valve_float_demo.toml", ()),
+                                                   ("valve_float_demo.toml", ('spring.preload="1 N"', 'loads.friction="50 N"')),
+                                                   ("cycloidal_demo.toml", ()), ("polydyne_demo.toml", ()),
+                                                   ("schenker1902_fig2.toml", ())])
+def test_float_speed_from_shared_samples_is_minimise_on_pieces_floats(scene_file, overrides):
+    """float_speed reads its samples' A and G from sampled_parts (made once a sweep and shared with
+    min_contact_forces) instead of evaluating the lift again. Oracle: the float speed as
+    minimise_on_pieces defines it (the static part G, then G / -A where A < 0, each sampled and
+    zoomed on its own), the same omega and angle to the bit; a spring too weak at standstill
+    (static loss) included; and min_contact_forces given the shared parts equals it without."""
+    from explorer.mechanics import forces
+
+    s = load_scene(SCENES / scene_file, list(overrides))
+    lift, ratio = build_lift(s), s.follower.ratio
+    lash = s.valve.lash if s.valve is not None else 0.0
+    loads = forces.TrainLoads.from_scene(s)
+    pieces = forces.smooth_pieces(lift, ratio, lash, 4096)
+    parts = forces.sampled_parts(lift, loads, ratio, lash, pieces, 4096)
+
+    def static(d, direction):
+        return forces.load_parts(d, direction, loads, ratio, lash)[1]
+
+    def quotient(d, direction):
+        a_coef, g_part, _ = forces.load_parts(d, direction, loads, ratio, lash)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(a_coef < 0.0, g_part / -a_coef, np.inf)
+
+    g_min, g_theta = forces.minimise_on_pieces(lift, pieces, static)
+    if g_min < 0.0:
+        expected = forces.FloatSpeed(0.0, g_theta, True)
+    else:
+        q_min, q_theta = forces.minimise_on_pieces(lift, pieces, quotient)
+        expected = (forces.FloatSpeed(math.inf, math.nan, False) if not math.isfinite(q_min)
+                    else forces.FloatSpeed(math.sqrt(max(q_min, 0.0)), q_theta, False))
+    for got in (forces.float_speed(lift, loads, ratio, lash, pieces, 4096),
+                forces.float_speed(lift, loads, ratio, lash, pieces, 4096, parts)):
+        assert got.omega == expected.omega and got.static_loss == expected.static_loss
+        assert got.theta == expected.theta or math.isnan(got.theta) and math.isnan(expected.theta)
+    assert ("spring.preload" in str(overrides)) == expected.static_loss  # both branches are met
+    omegas = np.geomspace(10.0, 2000.0, 50)
+    alone = forces.min_contact_forces(lift, loads, omegas, ratio, lash, pieces, 4096)
+    shared = forces.min_contact_forces(lift, loads, omegas, ratio, lash, pieces, 4096, parts)
+    assert all(np.array_equal(x, y, equal_nan=True) for x, y in zip(alone, shared))
+
+
+def test_velocity_zeros_exact_zeros_on_the_grid_as_the_loop_found_them():
+    """forces.velocity_zeros takes the grid points where the slope is exactly 0 between opposite
+    signs vectorised (a base circle is thousands of zero slopes). Oracle: the loop it replaced
+    (each zero point, kept when its neighbours' signs differ, in grid order), on a slope with such
+    zeros (a sign change through an exact 0 on a grid point, both ways), flat stretches of zeros
+    (none kept) and a zero between equal signs (a touch, not kept); and the float demo's lift."""
+    from explorer.mechanics import forces
+
+    grid0 = np.linspace(0.0, 2.0 * math.pi, 4097)
+    c1, c2, c3 = grid0[1000], grid0[2000], grid0[2500]
+
+    class Slope:  # d1 = 0 exactly at c1 (- to +), c2 (+ to -), touching 0 at c3, flat beyond 5 rad
+        def breakpoints(self):
+            return np.zeros(0)
+
+        def derivatives(self, theta):
+            theta = np.asarray(theta, dtype=float)
+            d1 = np.where(theta < c2, theta - c1, c2 - theta)
+            d1 = np.where(theta == c2, 0.0, d1)
+            d1 = np.where((theta > c2) & (theta <= c3 + 1e-9), -(theta - c3) ** 2, d1)
+            d1 = np.where(theta > 5.0, 0.0, d1)
+            return np.stack([np.zeros_like(theta), d1, np.zeros_like(theta), np.zeros_like(theta)])
+
+    for lift in (Slope(), build_lift(load_scene(SCENES / "valve_float_demo.toml"))):
+        grid = np.unique(np.concatenate([grid0, np.asarray(lift.breakpoints(), dtype=float)]))
+        sg = np.sign(lift.derivatives(grid)[1])
+        looped = [grid[i] for i in np.nonzero(sg[1:-1] == 0.0)[0] + 1 if sg[i - 1] * sg[i + 1] < 0.0]
+        got = forces.velocity_zeros(lift, 4096)
+        assert set(looped) <= set(got.tolist())
+        brent = [r for r in got.tolist() if r not in set(looped)]
+        assert np.array_equal(got, np.mod(np.asarray(brent + looped, dtype=float), 2.0 * math.pi))
+        # the synthetic slope's two crossings through an exact 0 (not the touch, not the flat);
+        # the float demo's slope is 0 only on flat stretches (base circle, dwell)
+        assert looped == ([c1, c2] if isinstance(lift, Slope) else [])

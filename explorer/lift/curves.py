@@ -14,7 +14,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .laws import law as normalised_law
+from .laws import ALL_ROWS, law_rows
 
 TWO_PI = 2.0 * math.pi
 
@@ -38,9 +38,14 @@ class LawLift:
     return_law: str
 
     def derivatives(self, theta) -> np.ndarray:
+        return self.derivative_rows(theta, ALL_ROWS)
+
+    def derivative_rows(self, theta, rows: tuple[int, ...]) -> np.ndarray:
+        """derivatives(theta)[list(rows)] (rows: of 0..3, in the order wanted), the same floats,
+        computing only those rows (each row is its own arithmetic; lift_rows below)."""
         theta = np.asarray(theta, dtype=float)
         x = _wrap(theta.reshape(-1) - self.start)  # angle since the rise began
-        out = np.zeros((4, x.size))
+        out = np.zeros((len(rows), x.size))
         h = self.height
         # Classify by the signs of successive differences, not by comparing x with sums such as
         # rise + dwell: (x - rise) - dwell and x < rise + dwell round differently, which left a
@@ -49,21 +54,30 @@ class LawLift:
         x_ret = x_top - self.dwell
         rising = _selection(x_top < 0.0)
         if rising is not None:
-            f = normalised_law(self.rise_law)(x[rising] / self.rise)
+            f = law_rows(self.rise_law, x[rising] / self.rise, rows)
             f *= h
-            f /= np.array([self.rise**k for k in range(4)])[:, None]  # h f[k] / rise**k
+            f /= np.array([self.rise**k for k in rows])[:, None]  # h f[k] / rise**k
             out[:, rising] = f
-        top = (x_top >= 0.0) & (x_ret < 0.0)
-        out[0][top] = h
+        if 0 in rows:
+            top = (x_top >= 0.0) & (x_ret < 0.0)
+            out[rows.index(0)][top] = h
         falling = _selection((x_ret >= 0.0) & (x_ret < self.ret))
         if falling is not None:
-            g = normalised_law(self.return_law)(x_ret[falling] / self.ret)
-            out[0, falling] = h * (1.0 - g[0])
-            g = g[1:]
-            g *= -h
-            g /= np.array([self.ret**k for k in range(1, 4)])[:, None]  # -h g[k] / ret**k
-            out[1:, falling] = g
-        return out.reshape((4,) + theta.shape)
+            g = law_rows(self.return_law, x_ret[falling] / self.ret, rows)
+            slopes = [i for i, k in enumerate(rows) if k]  # the derivatives' rows
+            if len(slopes) < len(rows):
+                out[rows.index(0), falling] = h * (1.0 - g[rows.index(0)])
+            if slopes:
+                block = slopes == list(range(slopes[0], slopes[-1] + 1))  # all four: rows 1..3
+                g = g[slopes[0]:slopes[-1] + 1] if block else g[slopes]
+                g *= -h
+                g /= np.array([self.ret**rows[i] for i in slopes])[:, None]  # -h g[k] / ret**k
+                if block:
+                    out[slopes[0]:slopes[-1] + 1, falling] = g
+                else:
+                    for i, row in zip(slopes, g):
+                        out[i, falling] = row
+        return out.reshape((len(rows),) + theta.shape)
 
     def breakpoints(self) -> np.ndarray:
         top = self.rise + self.dwell  # the running sums of np.cumsum, in plain Python (4 values)
@@ -78,9 +92,20 @@ def law_lift(spec) -> LawLift:
                    rise_law=spec.law, return_law=spec.return_law or spec.law)
 
 
+def lift_rows(lift, theta, rows: tuple[int, ...]) -> np.ndarray:
+    """lift.derivatives(theta)[list(rows)]: from the lift's derivative_rows when it has one (the
+    same floats, only those rows computed: LawLift), else its derivatives."""
+    own = getattr(lift, "derivative_rows", None)
+    return own(theta, rows) if own is not None else lift.derivatives(theta)[list(rows)]
+
+
 def _wrap(x: np.ndarray) -> np.ndarray:
     """np.mod(x, 2 pi) from fmod and one correction (np.mod also computes the quotient and costs
-    three times as much; the drive is evaluated at every node of every revolution)."""
+    three times as much; the drive is evaluated at every node of every revolution). x itself when
+    it is within [0, 2 pi) already (fmod returns such an x exactly, and the correction adds
+    nothing): two reductions instead of fmod, the sweep's zoom of an open stretch's angles."""
+    if x.size and x.min() >= 0.0 and x.max() < TWO_PI:  # (a NaN fails both: the general form)
+        return x
     x = np.fmod(x, TWO_PI)
     np.add(x, TWO_PI, out=x, where=x < 0.0)
     return x

@@ -20,44 +20,49 @@ import numpy as np
 TWO_PI = 2.0 * math.pi
 
 
+# Every law below is evaluate(u, rows=ALL_ROWS): the rows of f and its first three derivatives
+# asked for, in that order. Each row is its own arithmetic, so a row asked for alone is the same
+# floats as among all four (the sweep's zoom, forces._zoom_minima, needs only f and f'').
+ALL_ROWS = (0, 1, 2, 3)
+
+
 def _polynomial(coefficients: tuple[float, ...]):
     """f(u) = sum c_k u^k, with exact derivatives."""
     p0 = np.polynomial.Polynomial(coefficients)
-    rows = [tuple(float(c) for c in p0.deriv(k).coef) for k in range(4)]
+    rows_of = [tuple(float(c) for c in p0.deriv(k).coef) for k in range(4)]
 
-    def evaluate(u: np.ndarray) -> np.ndarray:
+    def evaluate(u: np.ndarray, rows: tuple[int, ...] = ALL_ROWS) -> np.ndarray:
         # Horner for each derivative into one array (numpy's polyval, without its per-call
         # domain mapping and stacking: the elastic solver evaluates the drive every revolution)
         u = np.asarray(u, dtype=float)
         x = u.reshape(-1)
-        out = np.empty((4, x.size))
-        for row, c in zip(out, rows):
+        out = np.empty((len(rows), x.size))
+        for row, k in zip(out, rows):
+            c = rows_of[k]
             row[...] = c[-1]
             for ck in c[-2::-1]:
                 row *= x
                 row += ck
-        return out.reshape((4,) + u.shape)
+        return out.reshape((len(rows),) + u.shape)
 
     return evaluate
 
 
-def _cycloidal(u: np.ndarray) -> np.ndarray:
+def _cycloidal(u: np.ndarray, rows: tuple[int, ...] = ALL_ROWS) -> np.ndarray:
     a = TWO_PI * u
-    return np.stack(
-        [u - np.sin(a) / TWO_PI, 1.0 - np.cos(a), TWO_PI * np.sin(a), TWO_PI**2 * np.cos(a)]
-    )
+    s = np.sin(a) if {0, 2} & set(rows) else None
+    c = np.cos(a) if {1, 3} & set(rows) else None
+    row = {0: lambda: u - s / TWO_PI, 1: lambda: 1.0 - c, 2: lambda: TWO_PI * s, 3: lambda: TWO_PI**2 * c}
+    return np.stack([row[k]() for k in rows])
 
 
-def _harmonic(u: np.ndarray) -> np.ndarray:
+def _harmonic(u: np.ndarray, rows: tuple[int, ...] = ALL_ROWS) -> np.ndarray:
     a = math.pi * u
-    return np.stack(
-        [
-            0.5 * (1.0 - np.cos(a)),
-            0.5 * math.pi * np.sin(a),
-            0.5 * math.pi**2 * np.cos(a),
-            -0.5 * math.pi**3 * np.sin(a),
-        ]
-    )
+    s = np.sin(a) if {1, 3} & set(rows) else None
+    c = np.cos(a) if {0, 2} & set(rows) else None
+    row = {0: lambda: 0.5 * (1.0 - c), 1: lambda: 0.5 * math.pi * s, 2: lambda: 0.5 * math.pi**2 * c,
+           3: lambda: -0.5 * math.pi**3 * s}
+    return np.stack([row[k]() for k in rows])
 
 
 @dataclass(frozen=True)
@@ -82,7 +87,7 @@ def _piecewise_harmonic(segments: list[_Segment]):
         v, s = _segment_state(seg, x, v, s)[:2]
     scale = 1.0 / s  # makes f(1) = 1 exactly (up to rounding)
 
-    def evaluate(u: np.ndarray) -> np.ndarray:
+    def evaluate(u: np.ndarray, rows: tuple[int, ...] = ALL_ROWS) -> np.ndarray:
         u = np.asarray(u, dtype=float)
         out = np.empty((4,) + u.shape)
         index = np.clip(np.searchsorted(starts, u, side="right") - 1, 0, len(segments) - 1)
@@ -96,7 +101,7 @@ def _piecewise_harmonic(segments: list[_Segment]):
             out[1][mask] = vv * scale
             out[2][mask] = aa * scale
             out[3][mask] = jj * scale
-        return out
+        return out if rows == ALL_ROWS else out[list(rows)]  # a segment's state comes whole
 
     return evaluate
 
@@ -140,8 +145,24 @@ LAWS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
 }
 
 
-def law(name: str) -> Callable[[np.ndarray], np.ndarray]:
-    """The normalised law `name`: u -> array (4, ...) of f, f', f'', f'''."""
+for _evaluate in LAWS.values():  # the closed forms above take rows (a plug-in's law may not)
+    _evaluate.takes_rows = True
+
+
+def law_rows(name: str, u, rows: tuple[int, ...] = ALL_ROWS) -> np.ndarray:
+    """The rows of the law `name` at u: all four as the law gives them; fewer from the law itself
+    when it takes rows (the closed forms: the same floats), else its four rows' selection (a law
+    registered as a plug-in, explorer.lift.registry.register_law: u -> (4, ...) only)."""
+    function = LAWS[name]
+    if rows == ALL_ROWS:
+        return function(u)
+    if getattr(function, "takes_rows", False):
+        return function(u, rows)
+    return function(u)[list(rows)]
+
+
+def law(name: str) -> Callable[..., np.ndarray]:
+    """The normalised law `name`: u -> array (4, ...) of f, f', f'', f''' (law_rows: some of them)."""
     return LAWS[name]
 
 

@@ -39,6 +39,7 @@ import numpy as np
 
 from ..core.errors import InputError, echo
 from ..core.roots import root_in
+from ..lift.curves import lift_rows
 from .kinematics import lash_crossings
 
 
@@ -146,15 +147,16 @@ def velocity_zeros(lift, n_grid: int = 4096) -> np.ndarray:
     """Angles where dL/dtheta changes sign (isolated zeros), polished by Brent's method."""
     grid = np.linspace(0.0, TWO_PI, n_grid + 1)
     grid = np.unique(np.concatenate([grid, np.asarray(lift.breakpoints(), dtype=float)]))
-    d1 = lift.derivatives(grid)[1]
+    d1 = lift_rows(lift, grid, (1,))[0]  # the slope only (lift_rows: the lift's derivatives' floats)
     sg = np.sign(d1)
     roots = []
     for i in np.nonzero(sg[:-1] * sg[1:] < 0.0)[0]:
-        f = lambda th: float(lift.derivatives(np.array([th]))[1, 0])  # noqa: E731
+        f = lambda th: float(lift_rows(lift, np.array([th]), (1,))[0, 0])  # noqa: E731
         roots.append(root_in(f, grid[i], grid[i + 1], fa=d1[i], fb=d1[i + 1], xtol=1e-15, maxiter=200))
-    for i in np.nonzero(sg[1:-1] == 0.0)[0] + 1:  # an exact zero on a grid point between opposite signs
-        if sg[i - 1] * sg[i + 1] < 0.0:
-            roots.append(grid[i])
+    # an exact zero on a grid point between opposite signs (in grid order, as a loop over them
+    # would append them; vectorised: a base circle is thousands of zeros of the slope)
+    zeros = np.nonzero(sg[1:-1] == 0.0)[0] + 1
+    roots.extend(grid[zeros[sg[zeros - 1] * sg[zeros + 1] < 0.0]].tolist())
     return np.mod(np.asarray(roots, dtype=float), TWO_PI)
 
 
@@ -170,7 +172,7 @@ def smooth_pieces(lift, ratio: float, lash: float, n_grid: int = 4096) -> Pieces
         start = cuts
         end = np.append(cuts[1:], cuts[0] + TWO_PI)
     mid = 0.5 * (start + end)
-    d = lift.derivatives(mid)
+    d = lift_rows(lift, mid, (0, 1, 2))
     return Pieces(
         start=start,
         end=end,
@@ -221,8 +223,14 @@ def minimise_on_pieces(
     theta, direction, owner, chosen = sample_pieces(pieces, select, n_grid)
     if chosen.size == 0:
         return math.inf, math.nan
-    counts = np.bincount(owner, minlength=chosen.size)
     values = fun(lift.derivatives(np.mod(theta, TWO_PI)), direction)
+    return _minimise_sampled(lift, pieces, fun, theta, owner, chosen, values, refine)
+
+
+def _minimise_sampled(lift, pieces: Pieces, fun, theta, owner, chosen, values, refine: bool = True):
+    """minimise_on_pieces from its samples (sample_pieces: theta, owner, chosen; chosen not empty)
+    and fun's values there."""
+    counts = np.bincount(owner, minlength=chosen.size)
     best_value, best_theta = math.inf, math.nan
     offsets = np.concatenate([[0], np.cumsum(counts)])
     grid_min = np.array([values[offsets[k] : offsets[k + 1]].min() for k in range(chosen.size)])
@@ -309,31 +317,64 @@ def grid_load_parts(scene, lift, n: int | None = None):
     loads = TrainLoads.from_scene(scene)
     n = n or scene.solver.steps_per_revolution
     theta = np.arange(n) * (TWO_PI / n)  # the floats simulate samples at
-    d = lift.derivatives(theta)
+    d = lift_rows(lift, theta, (0, 1, 2))  # no jerk read (lift_rows: the same floats)
     lash = scene.valve.lash if scene.valve is not None else 0.0
     a_coef, g_part, is_open = load_parts(d, friction_direction(d[1], d[2]), loads, scene.follower.ratio, lash)
     return theta, a_coef, g_part, is_open
 
 
+@dataclass(frozen=True)
+class SampledParts:
+    """The open pieces' samples (sample_pieces) and A, G of F = w^2 A + G there (load_parts of the
+    lift's derivatives): what float_speed and min_contact_forces read at every speed, made once
+    for a sweep's chunks (studies/sweep_rigid.py keeps it with the pieces)."""
+
+    theta: np.ndarray  # rad, the samples (ends just inside their pieces)
+    direction: np.ndarray  # the friction sign per sample
+    owner: np.ndarray  # per sample: its index into chosen
+    chosen: np.ndarray  # the open pieces' indices
+    a_coef: np.ndarray
+    g_part: np.ndarray
+
+
+def sampled_parts(lift, loads: TrainLoads, ratio: float, lash: float, pieces: Pieces, n_grid: int = 4096) -> SampledParts:
+    theta, direction, owner, chosen = sample_pieces(pieces, None, n_grid)
+    if chosen.size == 0:
+        a_coef = g_part = np.zeros(0)
+    else:
+        d = lift_rows(lift, np.mod(theta, TWO_PI), (0, 2))  # the rows load_parts reads
+        a_coef, g_part, _ = load_parts((d[0], None, d[1]), direction, loads, ratio, lash)
+    return SampledParts(theta, direction, owner, chosen, a_coef, g_part)
+
+
 def float_speed(lift, loads: TrainLoads, ratio: float = 1.0, lash: float = 0.0, pieces: Pieces | None = None,
-                n_grid: int = 4096) -> FloatSpeed:
-    """Exact float (jump) speed of the rigid train: w^2 = min over open, decelerating stretches of G/(-A)."""
+                n_grid: int = 4096, parts: SampledParts | None = None) -> FloatSpeed:
+    """Exact float (jump) speed of the rigid train: w^2 = min over open, decelerating stretches of G/(-A).
+    `parts`: sampled_parts of these arguments (a sweep's, shared with min_contact_forces), else made here."""
     pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
+    parts = parts or sampled_parts(lift, loads, ratio, lash, pieces, n_grid)
 
     def static(d, direction):
         return load_parts(d, direction, loads, ratio, lash)[1]
 
-    g_min, g_theta = minimise_on_pieces(lift, pieces, static, n_grid=n_grid)
-    if g_min < 0.0:
-        return FloatSpeed(0.0, g_theta, True)
-
-    def quotient(d, direction):
-        a_coef, g_part, _ = load_parts(d, direction, loads, ratio, lash)
+    def quotient_of(a_coef, g_part):
         with np.errstate(divide="ignore", invalid="ignore"):
             q = g_part / -a_coef
         return np.where(a_coef < 0.0, q, np.inf)
 
-    q_min, q_theta = minimise_on_pieces(lift, pieces, quotient, n_grid=n_grid)
+    def quotient(d, direction):
+        a_coef, g_part, _ = load_parts(d, direction, loads, ratio, lash)
+        return quotient_of(a_coef, g_part)
+
+    if parts.chosen.size == 0:  # no open piece (minimise_on_pieces: nothing applies)
+        g_min, g_theta, q_min, q_theta = math.inf, math.nan, math.inf, math.nan
+    else:  # minimise_on_pieces of each, its samples' values from the parts (the same floats)
+        sampled = (parts.theta, parts.owner, parts.chosen)
+        g_min, g_theta = _minimise_sampled(lift, pieces, static, *sampled, parts.g_part)
+        if g_min >= 0.0:
+            q_min, q_theta = _minimise_sampled(lift, pieces, quotient, *sampled, quotient_of(parts.a_coef, parts.g_part))
+    if g_min < 0.0:
+        return FloatSpeed(0.0, g_theta, True)
     if not math.isfinite(q_min):
         return FloatSpeed(math.inf, math.nan, False)
     return FloatSpeed(math.sqrt(max(q_min, 0.0)), q_theta, False)
@@ -352,20 +393,24 @@ def min_contact_force(lift, loads: TrainLoads, omega: float, ratio: float = 1.0,
 
 
 def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash: float = 0.0,
-                       pieces: Pieces | None = None, n_grid: int = 4096) -> tuple[np.ndarray, np.ndarray]:
+                       pieces: Pieces | None = None, n_grid: int = 4096,
+                       parts: SampledParts | None = None) -> tuple[np.ndarray, np.ndarray]:
     """min_contact_force at every speed of `omegas` at once: (values, angles), each speed's the
     same floats as min_contact_force's. The samples, the lift there and A, G of F = w^2 A + G are
     shared by all speeds; the zoom of every speed's candidate pieces runs as one batch, one lift
-    evaluation a round for all of them (minimise_on_pieces and _zoom_minimum, row by row)."""
+    evaluation a round for all of them (minimise_on_pieces and _zoom_minimum, row by row).
+    `parts`: sampled_parts of these arguments (a sweep's chunks share it), else made here."""
     from .sweep_loops import piece_minima  # compiled: the compiled sweep's path only
 
     pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
     w2 = np.asarray(omegas, dtype=float).ravel() ** 2
     values_out, theta_out = np.full(w2.size, math.inf), np.full(w2.size, math.nan)
-    theta, direction, owner, chosen = sample_pieces(pieces, None, n_grid)
-    if chosen.size == 0 or w2.size == 0:
+    if w2.size == 0:
         return values_out, theta_out
-    a_coef, g_part, _ = load_parts(lift.derivatives(np.mod(theta, TWO_PI)), direction, loads, ratio, lash)
+    parts = parts or sampled_parts(lift, loads, ratio, lash, pieces, n_grid)
+    theta, owner, chosen, a_coef, g_part = parts.theta, parts.owner, parts.chosen, parts.a_coef, parts.g_part
+    if chosen.size == 0:
+        return values_out, theta_out
     counts = np.bincount(owner, minlength=chosen.size)
     offsets = np.concatenate([[0], np.cumsum(counts)])
     # the grid minimum of every (speed, piece) and where it is, compiled (sweep_kernels.piece_minima:
@@ -419,7 +464,10 @@ def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash
 def _mod_two_pi(x: np.ndarray) -> np.ndarray:
     """np.mod(x, 2 pi) from fmod and one correction: the same floats (np.mod is fmod, plus 2 pi
     where that is negative; a zero is +0 as np.mod makes it, for the zoom's angles, which are
-    >= 0) at a third of np.mod's cost, which also computes the quotient."""
+    >= 0) at a third of np.mod's cost, which also computes the quotient; a copy of x when it is
+    within [0, 2 pi) already (fmod returns such an x exactly), which two reductions tell."""
+    if x.size and x.min() >= 0.0 and x.max() < TWO_PI:  # (a NaN fails both: the general form)
+        return x.copy()
     x = np.fmod(x, TWO_PI)
     np.add(x, TWO_PI, out=x, where=x < 0.0)
     return x
@@ -430,28 +478,31 @@ def _zoom_minima(lift, loads, w2, ratio, lash, direction, lo, hi, xatol: float =
     same samples (np.linspace's floats), the same narrowing and the same stop as on its own.
     The rows are zoomed in the order of their brackets' starts (each row's arithmetic is its own,
     so the order changes no float): the samples then come in runs of one stretch of the lift,
-    which its derivatives take as slices instead of gathering and scattering by index; the speeds
-    and friction signs broadcast over a row's samples instead of being repeated."""
+    which its derivatives take as slices instead of gathering and scattering by index. Each round
+    evaluates only the lift and its second derivative (lift_rows), and each row's F = w^2 A + G
+    (load_parts) and its minimum are one compiled pass (sweep_kernels.zoom_minima, the numpy
+    form's floats). (Rows of one bracket -- a chunk's slow speeds -- could share the lift there;
+    measured, it did not pay: such rows are a few rounds of a few chunks.)"""
+    from .sweep_loops import zoom_minima  # compiled: the compiled sweep's path only
+
     n = lo.size
     order = np.argsort(lo, kind="stable")
     lo, hi = lo[order], hi[order]
-    w2, direction = w2[order][:, None], direction[order][:, None]
+    w2, direction = w2[order], direction[order]
     best_value, best_theta = np.full(n, math.inf), lo.copy()
     idx = np.arange(n)  # the rows still zooming
     steps = np.arange(ZOOM_POINTS, dtype=float)
+    # load_parts' constants as it forms them (loads.mass * ratio first: Python's left to right)
+    constants = (ratio, lash, loads.mass * ratio, loads.preload, loads.rate, loads.friction, loads.closing)
     for _ in range(60):
         if idx.size == 0:
             break
         a, b = lo[idx], hi[idx]
         ts = steps * ((b - a) / (ZOOM_POINTS - 1))[:, None] + a[:, None]  # np.linspace(a, b, 33)
         ts[:, -1] = b
-        d = lift.derivatives(_mod_two_pi(ts))
-        a_coef, g_part, _ = load_parts(d, direction[idx], loads, ratio, lash)
-        values = w2[idx] * a_coef + g_part
-        values[~np.isfinite(values)] = math.inf
-        j = np.argmin(values, axis=1)
+        d = lift_rows(lift, _mod_two_pi(ts), (0, 2))  # L and L'': what load_parts reads
+        v, j = zoom_minima(d[0], d[1], w2[idx], direction[idx], *constants)
         r = np.arange(idx.size)
-        v = values[r, j]
         better = v < best_value[idx]
         best_value[idx[better]] = v[better]
         best_theta[idx[better]] = ts[r, j][better]

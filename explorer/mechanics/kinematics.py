@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from ..core.roots import root_in
+from ..lift.curves import lift_rows
 
 
 
@@ -26,21 +27,23 @@ def lash_crossings(lift, ratio: float, lash: float, n_grid: int = 4096) -> tuple
     """
     grid = np.linspace(0.0, 2.0 * math.pi, n_grid + 1)
     grid = np.unique(np.concatenate([grid, np.asarray(lift.breakpoints(), dtype=float)]))
-    d = lift.derivatives(grid)
+    # only the rows each evaluation reads (lift_rows: the lift's derivatives' floats; one row of
+    # one angle costs half of all four, and Brent takes some 14 of them a sweep)
+    d = lift_rows(lift, grid, (0, 1))
     g = ratio * d[0] - lash
 
     def f(th: float) -> float:
-        return float(ratio * lift.derivatives(np.array([th]))[0, 0] - lash)
+        return float(ratio * lift_rows(lift, np.array([th]), (0,))[0, 0] - lash)
 
     def slope(th: float) -> float:
-        return float(lift.derivatives(np.array([th]))[1, 0])
+        return float(lift_rows(lift, np.array([th]), (1,))[0, 0])
 
     hidden = np.nonzero((d[1][:-1] > 0.0) & (d[1][1:] < 0.0) & (g[:-1] <= 0.0) & (g[1:] <= 0.0))[0]
     if hidden.size:
         peaks = [root_in(slope, grid[i], grid[i + 1], fa=d[1][i], fb=d[1][i + 1], xtol=1e-15, maxiter=200)
                  for i in hidden]
         grid = np.unique(np.concatenate([grid, peaks]))
-        g = ratio * lift.derivatives(grid)[0] - lash
+        g = ratio * lift_rows(lift, grid, (0,))[0] - lash
 
     # The valve is open where ratio*L - lash > 0 (the kinematics' own test), so only changes of
     # that state count: a lift that just touches the lash (g = 0 at a point, or on a whole dwell)
@@ -72,16 +75,16 @@ def lash_take_ups(lift, ratio: float, lashes, n_grid: int = 4096) -> np.ndarray:
     lashes = np.atleast_1d(np.asarray(lashes, dtype=float))
     grid = np.linspace(0.0, 2.0 * math.pi, n_grid + 1)
     grid = np.unique(np.concatenate([grid, np.asarray(lift.breakpoints(), dtype=float)]))
-    d = lift.derivatives(grid)
+    d = lift_rows(lift, grid, (0, 1))  # the rows read (lift_rows: the same floats)
 
     def slope(th: float) -> float:
-        return float(lift.derivatives(np.array([th]))[1, 0])
+        return float(lift_rows(lift, np.array([th]), (1,))[0, 0])
 
     peaks = np.nonzero((d[1][:-1] > 0.0) & (d[1][1:] < 0.0))[0]
     if peaks.size:
         extra = [root_in(slope, grid[i], grid[i + 1], fa=d[1][i], fb=d[1][i + 1], xtol=1e-15) for i in peaks]
         grid = np.unique(np.concatenate([grid, extra]))
-        d = lift.derivatives(grid)
+        d = lift_rows(lift, grid, (0, 1))
     level = ratio * d[0]
     # the first grid point above each lash (the running maximum is sorted); the take-up is the
     # interval before it -- unless the valve is open at 0 already, then the first rise after a
@@ -119,7 +122,7 @@ def lash_take_ups(lift, ratio: float, lashes, n_grid: int = 4096) -> np.ndarray:
             los = np.stack([los, mid], axis=2).reshape(idx.size, -1)  # children (lo, mid), (mid, hi)
             his = np.stack([mid, his], axis=2).reshape(idx.size, -1)
         mids = np.concatenate(tree, axis=1)
-        f = ratio * lift.derivatives(mids.ravel())[0].reshape(mids.shape) - lashes[idx][:, None]  # as lash_crossings' f
+        f = ratio * lift_rows(lift, mids.ravel(), (0,))[0].reshape(mids.shape) - lashes[idx][:, None]  # as lash_crossings' f
         rows = np.arange(idx.size)
         l, h = lo[idx], hi[idx]
         alive = np.ones(idx.size, bool)

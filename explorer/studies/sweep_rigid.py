@@ -25,7 +25,8 @@ import numpy as np
 from ..core.memo import remember
 from ..effects.contact import peak_torques, torque_factors
 from ..effects.pipeline import Context, figures
-from ..mechanics.forces import TrainLoads, float_speed, grid_load_parts, min_contact_forces, smooth_pieces
+from ..mechanics.forces import (TrainLoads, float_speed, grid_load_parts, min_contact_forces, sampled_parts,
+                                smooth_pieces)
 
 RIGID = ("min_contact_force_N", "float_speed_rpm", "max_camshaft_torque_Nm")
 
@@ -53,10 +54,14 @@ def rigid_over_speeds(scene, omegas, names, shared, group=None) -> dict[str, np.
         loads = TrainLoads.from_scene(scene)
         n_grid = max(4096, scene.solver.steps_per_revolution)
         pieces = remember(shared.of("forces pieces"), (ratio, lash, n_grid), lambda: smooth_pieces(lift, ratio, lash, n_grid))
-        f_min, _ = min_contact_forces(lift, loads, omegas, ratio, lash, pieces, n_grid)
+        # the open pieces' samples and A, G there: the same for every chunk of the sweep and for
+        # the float speed (made once, as the pieces)
+        parts = remember(shared.of("forces samples"), (ratio, lash, n_grid, loads),
+                         lambda: sampled_parts(lift, loads, ratio, lash, pieces, n_grid))
+        f_min, _ = min_contact_forces(lift, loads, omegas, ratio, lash, pieces, n_grid, parts)
         out["min_contact_force_N"] = f_min  # +inf: the valve never opens, as effects.forces.forces_row writes it
         jump = remember(shared.of("forces jumps"), (ratio, lash, n_grid, loads),
-                        lambda: float_speed(lift, loads, ratio, lash, pieces, n_grid))
+                        lambda: float_speed(lift, loads, ratio, lash, pieces, n_grid, parts))
         out["float_speed_rpm"] = np.full(omegas.size, jump.rpm if math.isfinite(jump.omega) else math.nan)
     if "max_camshaft_torque_Nm" in names:
         # speed-independent: made once per distinct loads, lash and grid (as the pieces above)

@@ -128,7 +128,8 @@ def run_plan(scene, plan: Plan, *, workers: int | None = None, scheduler: str | 
     capped: worker_count)."""
     names = result_columns(scene)
     workers = worker_count(workers)[0]
-    engine = engine_for(scene, _Shared())
+    shared = _Shared()  # this process's chunks share it (a serial sweep); workers make their own
+    engine = engine_for(scene, shared)
     size = chunk or chunk_size(plan.runs, workers if scheduler is None else 8, engine.max_chunk)
     starts = list(range(0, plan.runs, size))
     results: dict[int, np.ndarray] = {}
@@ -145,9 +146,8 @@ def run_plan(scene, plan: Plan, *, workers: int | None = None, scheduler: str | 
         if scheduler is not None:
             _run_dask(scene, plan, names, starts, size, scheduler, done)
         elif workers == 1 or len(starts) <= 2 or plan.runs < engine.pool_min_runs:
-            shared = _Shared()
-            for start in starts:
-                done(start, compute_chunk(scene, plan.keys, plan.values[start:start + size], names, shared))
+            for start in starts:  # the engine chosen once for the sweep, not again per chunk
+                done(start, compute_chunk(scene, plan.keys, plan.values[start:start + size], names, shared, engine))
         else:
             _run_local(scene, plan, names, starts, size, workers, done)
         complete = True
