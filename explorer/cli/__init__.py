@@ -4,8 +4,16 @@ modules are light to import (viser and rerun load only inside the command that r
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
+
+# One LAPACK thread unless the user chose otherwise, set before anything loads numpy: a threaded
+# LAPACK sums in another order, and results would then depend on the machine's cores in their
+# last digits (the tabulated law's spline and the spring chain's eigen-decomposition move by
+# ~1e-9 relative between one and two threads). The matrices are small: threads gain nothing.
+# The children the commands start (compute, viewers, Dask workers) inherit it.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from ..core.errors import InputError, echo
 from ..core.plugins import resolve
