@@ -244,6 +244,84 @@ def test_a_field_typed_in_shows_the_value_used_once_the_typing_settles_or_at_onc
     assert lash.value == "0.5 mm" and app.error_text == ""
 
 
+def test_a_pages_value_stored_as_the_loop_writes_the_same_control_leaves_the_control_the_loops(app):
+    """viser stores a page's value on its event loop's thread; it can come right after the loop
+    found the control free (requests.Inbox.write) and before the loop's write lands over it. The
+    page's request still comes (here a scrub to 300 degrees) and the control stays the loop's:
+    the loop's own write is newer than what the page's request was made from. The loop used to
+    take the page's older state as the last it heard, and the control as in flight for ever: the
+    cam-angle sliders stopped following the animation."""
+    app.loop.stop()  # the test plays the loop
+    app.tick(0.0)
+    app.playback.speed = 0.01
+    app.play.value = True
+    app.tick(0.02)
+    assert app.playback.playing
+    inbox, checked, raced = app.inbox, app.inbox.in_flight, []
+
+    def racing(handle):
+        free = checked(handle)
+        if handle is app.plot_angle and not raced:
+            raced.append(True)
+            _page_sends(app, app.plot_angle, 300.0)  # between the loop's check and its write
+        return free
+
+    inbox.in_flight = racing
+    app.tick(0.05)  # the animation moves on: the loop's write lands over the page's 300
+    del inbox.in_flight
+    assert raced and app.plot_angle.value != 300.0
+    app.tick(0.0)  # the page's request: a scrub to 300 degrees, shown on both sliders
+    assert app.playback.angle_deg == 300.0 and not app.playback.playing
+    assert app.plot_angle.value == 300.0 and app.angle.value == 300.0
+    app.play.value = True
+    app.tick(0.05)
+    shown = round(app.playback.angle_deg, 1) % 360.0
+    assert shown != 300.0 and app.plot_angle.value == pytest.approx(shown) and app.angle.value == pytest.approx(shown)
+
+
+def test_a_choice_arriving_while_a_frame_forces_the_dropdown_leaves_it_the_loops(app):
+    """A law chosen on a page while the frame shows a result that does not offer it: the loop
+    sets the dropdown to the result's law (viser's value setter) after the page's request was
+    recorded. The dropdown stays the loop's: a later result's law is shown on it (it used to be
+    taken as in flight for ever, and kept a law the result did not use)."""
+    import dataclasses
+
+    from explorer.view.browser.requests import Computed
+
+    app.loop.stop()  # the test plays the loop
+    app.tick(0.0)
+    law, current = app.fields.handles["lift.law"], app.current
+    used = current.values["lift.law"]
+    others = [name for name in current.laws if name != used]
+    assert len(others) >= 2 and law.value == used
+    chosen, later = others[0], others[1]
+    serial = 10 ** 6  # newer than any request of this test
+
+    def result(laws, values):
+        return dataclasses.replace(current, request=dataclasses.replace(current.request, serial=serial + len(values)),
+                                   laws=laws, values=values)
+
+    show, raced = app.fields.show, []
+
+    def racing(prepared, now):
+        if not raced:
+            raced.append(True)
+            _page_sends(app, law, chosen)  # the page's choice, recorded while the frame runs
+        show(prepared, now)
+
+    app.fields.show = racing
+    app.inbox.put(Computed(result((used,), dict(current.values))))  # offers only its own law
+    app.tick(0.0)
+    del app.fields.show
+    assert raced and law.value == used and law.options == (used,)
+    app.tick(0.0)  # the page's choice, not offered by the result shown: refused
+    app.tick(0.0)  # (the message)
+    assert law.value == used and chosen in app.error_text
+    app.inbox.put(Computed(result(current.laws, {**current.values, "lift.law": later, "x": 0})))
+    app.tick(0.0)
+    assert law.value == later
+
+
 def _plot_labels(app):
     return [s["label"] for h in app.plots.handles for s in h.series]
 

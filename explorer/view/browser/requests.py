@@ -18,10 +18,15 @@ taken. A control whose value or update time differs from that holds a page's val
 the loop, and is left alone. (A comparison of viser's update time with the time a frame began
 lost values twice under load: viser stores a page's value before its time, and records the
 request after both, and a frame could run in either gap; two clock readings can also be equal.)
+What the loop hears is ordered by when it was read (`Heard.seq`): a page's request made from a
+state older than the loop's own write since (viser's thread stored the page's value between the
+loop's check and its write, or the loop set a dropdown itself while the request waited) does not
+replace what the loop knows; else the control would stay "in flight" for ever.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import threading
 import time
@@ -139,6 +144,7 @@ class Heard:
     handle: Any
     value: Any
     stamp: float
+    seq: int  # when it was read (Inbox.hear): of two, the loop knows the later
 
 
 class Inbox:
@@ -152,6 +158,7 @@ class Inbox:
         self._recorded = 0
         self._applied = 0
         self._known: dict[int, Heard] = {}  # id(handle) ->
+        self._reads = itertools.count()  # Heard.seq (next() is atomic: any thread may `hear`)
         self.arrived = threading.Event()  # set by `put`: the frame loop waits on it (loop.FrameLoop)
 
     def put(self, item, heard: Heard | None = None) -> None:
@@ -172,8 +179,18 @@ class Inbox:
                 self.know(heard)
         return [item for item, _ in out]
 
+    def hear(self, handle) -> Heard:
+        """The control's value and update time now (any thread). The number is drawn before
+        they are read: a write read after it has the higher number."""
+        seq = next(self._reads)
+        return Heard(handle, handle.value, handle.update_timestamp, seq)
+
     def know(self, heard: Heard) -> None:
-        self._known[id(heard.handle)] = heard
+        """The loop has heard `heard`, unless it heard the control later (its own write read
+        after the page's request was made)."""
+        known = self._known.get(id(heard.handle))
+        if known is None or heard.seq > known.seq:
+            self._known[id(heard.handle)] = heard
 
     def in_flight(self, handle) -> bool:
         """Whether the page changed `handle` since the loop last heard from it or wrote it."""
@@ -207,18 +224,18 @@ def wire(handle, inbox, make: Callable[[Any, bool, float], Any], echo: Callable[
 
     async def from_page(event) -> None:
         if event.client is not None:
-            value = handle.value
-            inbox.put(make(value, True, time.monotonic()), Heard(handle, value, handle.update_timestamp))
+            heard = inbox.hear(handle)
+            inbox.put(make(heard.value, True, time.monotonic()), heard)
 
     def from_python(event) -> None:
         if event.client is None:
-            value, stamp = handle.value, handle.update_timestamp
+            heard = inbox.hear(handle)
             if echo():  # the loop's own write, in its thread, right after viser stored it
-                inbox.know(Heard(handle, value, stamp))
+                inbox.know(heard)
             else:
-                inbox.put(make(value, False, time.monotonic()), Heard(handle, value, stamp))
+                inbox.put(make(heard.value, False, time.monotonic()), heard)
 
-    inbox.know(Heard(handle, handle.value, handle.update_timestamp))
+    inbox.know(inbox.hear(handle))
     # the plain one first: viser calls a handle's callbacks in order, and scheduling the async
     # one on the event loop lets other threads run; the value set from Python is read before
     handle.on_update(from_python)
