@@ -15,8 +15,8 @@ from conftest import ROOT, kill_tree, process_timeout
 
 CHILD = """
 import sys
+import explorer.cli  # first, as the `explorer` command does: before numpy or scipy load OpenBLAS
 import numpy as np
-import explorer.cli  # what the `explorer` command imports first
 from explorer import load_scene, simulate
 result = simulate(load_scene(sys.argv[1]))
 np.savez(sys.argv[2], **{k: np.asarray(v) for k, v in result.columns.items() if np.asarray(v).dtype.kind == "f"})
