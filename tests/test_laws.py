@@ -128,12 +128,12 @@ def test_a_law_lifts_derivative_rows_are_its_derivatives_rows():
 
 
 def test_the_wraps_to_one_revolution_are_np_mod_floats():
-    """lift.curves._wrap and mechanics.forces._mod_two_pi (fmod and a correction, or the angles
+    """lift.curves.wrap_two_pi and mechanics.forces._mod_two_pi (fmod and a correction, or the angles
     themselves when all are within [0, 2 pi) already) against the general form (fmod, plus 2 pi
     where negative; np.mod's floats for x >= 0), bit for bit and sign of zero included: arrays
     all inside (the fast path), with one angle outside (below 0, at 2 pi, beyond), -0.0 (fmod
     keeps its sign, and so does the fast path), NaN, empty."""
-    from explorer.lift.curves import _wrap
+    from explorer.lift.curves import wrap_two_pi as _wrap
     from explorer.mechanics.forces import _mod_two_pi
 
     two_pi = 2.0 * math.pi

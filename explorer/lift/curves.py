@@ -44,7 +44,7 @@ class LawLift:
         """derivatives(theta)[list(rows)] (rows: of 0..3, in the order wanted), the same floats,
         computing only those rows (each row is its own arithmetic; lift_rows below)."""
         theta = np.asarray(theta, dtype=float)
-        x = _wrap(theta.reshape(-1) - self.start)  # angle since the rise began
+        x = wrap_two_pi(theta.reshape(-1) - self.start)  # angle since the rise began
         out = np.zeros((len(rows), x.size))
         h = self.height
         # Classify by the signs of successive differences, not by comparing x with sums such as
@@ -99,7 +99,13 @@ def lift_rows(lift, theta, rows: tuple[int, ...]) -> np.ndarray:
     return own(theta, rows) if own is not None else lift.derivatives(theta)[list(rows)]
 
 
-def _wrap(x: np.ndarray) -> np.ndarray:
+def lift_at(lift, theta: float, row: int) -> float:
+    """Row `row` of the lift's derivatives at one angle (lift_rows: only that row computed), for
+    the root searches of one angle at a time."""
+    return float(lift_rows(lift, np.array([theta]), (row,))[0, 0])
+
+
+def wrap_two_pi(x: np.ndarray) -> np.ndarray:
     """np.mod(x, 2 pi) from fmod and one correction (np.mod also computes the quotient and costs
     three times as much; the drive is evaluated at every node of every revolution). x itself when
     it is within [0, 2 pi) already (fmod returns such an x exactly, and the correction adds

@@ -39,7 +39,7 @@ import numpy as np
 
 from ..core.errors import InputError, echo
 from ..core.roots import root_in
-from ..lift.curves import lift_rows
+from ..lift.curves import lift_at, lift_rows, wrap_two_pi
 from .kinematics import lash_crossings
 
 
@@ -151,7 +151,7 @@ def velocity_zeros(lift, n_grid: int = 4096) -> np.ndarray:
     sg = np.sign(d1)
     roots = []
     for i in np.nonzero(sg[:-1] * sg[1:] < 0.0)[0]:
-        f = lambda th: float(lift_rows(lift, np.array([th]), (1,))[0, 0])  # noqa: E731
+        f = lambda th: lift_at(lift, th, 1)  # noqa: E731
         roots.append(root_in(f, grid[i], grid[i + 1], fa=d1[i], fb=d1[i + 1], xtol=1e-15, maxiter=200))
     # an exact zero on a grid point between opposite signs (in grid order, as a loop over them
     # would append them; vectorised: a base circle is thousands of zeros of the slope)
@@ -462,15 +462,10 @@ def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash
 
 
 def _mod_two_pi(x: np.ndarray) -> np.ndarray:
-    """np.mod(x, 2 pi) from fmod and one correction: the same floats (np.mod is fmod, plus 2 pi
-    where that is negative; a zero is +0 as np.mod makes it, for the zoom's angles, which are
-    >= 0) at a third of np.mod's cost, which also computes the quotient; a copy of x when it is
-    within [0, 2 pi) already (fmod returns such an x exactly), which two reductions tell."""
-    if x.size and x.min() >= 0.0 and x.max() < TWO_PI:  # (a NaN fails both: the general form)
-        return x.copy()
-    x = np.fmod(x, TWO_PI)
-    np.add(x, TWO_PI, out=x, where=x < 0.0)
-    return x
+    """lift.curves.wrap_two_pi (np.mod's floats for the zoom's angles, which are >= 0), always a
+    new array: the zoom keeps its samples, and a lift may be given its angles to keep."""
+    wrapped = wrap_two_pi(x)
+    return wrapped.copy() if wrapped is x else wrapped
 
 
 def _zoom_minima(lift, loads, w2, ratio, lash, direction, lo, hi, xatol: float = 1e-10):

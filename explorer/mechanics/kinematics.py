@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ..core.roots import root_in
-from ..lift.curves import lift_rows
+from ..lift.curves import lift_at, lift_rows
 
 
 
@@ -33,10 +33,10 @@ def lash_crossings(lift, ratio: float, lash: float, n_grid: int = 4096) -> tuple
     g = ratio * d[0] - lash
 
     def f(th: float) -> float:
-        return float(ratio * lift_rows(lift, np.array([th]), (0,))[0, 0] - lash)
+        return float(ratio * lift_at(lift, th, 0) - lash)
 
     def slope(th: float) -> float:
-        return float(lift_rows(lift, np.array([th]), (1,))[0, 0])
+        return lift_at(lift, th, 1)
 
     hidden = np.nonzero((d[1][:-1] > 0.0) & (d[1][1:] < 0.0) & (g[:-1] <= 0.0) & (g[1:] <= 0.0))[0]
     if hidden.size:
@@ -78,7 +78,7 @@ def lash_take_ups(lift, ratio: float, lashes, n_grid: int = 4096) -> np.ndarray:
     d = lift_rows(lift, grid, (0, 1))  # the rows read (lift_rows: the same floats)
 
     def slope(th: float) -> float:
-        return float(lift_rows(lift, np.array([th]), (1,))[0, 0])
+        return lift_at(lift, th, 1)
 
     peaks = np.nonzero((d[1][:-1] > 0.0) & (d[1][1:] < 0.0))[0]
     if peaks.size:

@@ -24,6 +24,7 @@ from functools import cached_property
 import numpy as np
 
 from ...core import jets
+from ..curves import wrap_two_pi
 
 TWO_PI = 2.0 * math.pi
 
@@ -262,7 +263,7 @@ class ArcLift:
 
     def active_arc(self, theta) -> np.ndarray:
         """Index of the arc the roller touches at cam angle theta (the later arc at a junction)."""
-        x = _wrap(np.asarray(theta, dtype=float))
+        x = wrap_two_pi(np.asarray(theta, dtype=float))
         i = self.sorted_angles.searchsorted(x, side="right") - 1  # -1 wraps to the last
         return self.order[i]
 
@@ -379,14 +380,6 @@ def _roller_height4(x, y, rho, sign, theta, offset: float, y0: float) -> np.ndar
     np.multiply(sign, g3, out=o3)
     np.subtract(o3, A, out=o3)
     return out
-
-
-def _wrap(theta: np.ndarray) -> np.ndarray:
-    """np.mod(theta, 2 pi) for the comparisons of active_arc (fmod and one correction: np.mod
-    also computes the quotient and costs three times as much)."""
-    x = np.fmod(theta, TWO_PI)
-    np.add(x, TWO_PI, out=x, where=x < 0.0)
-    return x
 
 
 def make_arc_lift(contour: ArcContour, roller_radius: float, offset: float, base_radius: float) -> ArcLift:
