@@ -70,7 +70,8 @@ class SweepView:
 
     def show(self, current, write, compiling: str = "", speed_pending: bool = False) -> None:
         """Draw the sweep for the result shown (its speed marked), or say why there is none;
-        `write`: the loop's write of a control (requests.Inbox.write); `compiling`: a line while the compiled solver is prepared (explorer.view.browser.kernels);
+        `write`: the loop's write of a control (requests.Inbox.write); `compiling`: a line while
+        the compiled solver is prepared (explorer.view.browser.kernels);
         `speed_pending`: a new speed is being computed (the slider keeps it meanwhile)."""
         sweep = self.sweep
         if not isinstance(sweep, SpeedSweep) or current is None:
