@@ -175,3 +175,76 @@ def test_derivative_rows_of_a_plug_in_law_without_rows(monkeypatch):
         assert np.array_equal(lift.derivative_rows(theta, rows), full[list(rows)]), rows
     assert all(getattr(laws.LAWS[name], "takes_rows", False) for name in COEFFICIENTS)
     assert not getattr(toy, "takes_rows", False)
+
+
+def test_one_angle_at_a_time_is_the_same_float_as_in_an_array():
+    """laws.law_at (each closed form's scalar `at`) and LawLift.row_at, which the root searches
+    call one angle at a time (curves.lift_at), against the array evaluation of that one angle
+    (oracle: law_rows / derivative_rows on np.array([x]), the floats lift_at returned before),
+    bit for bit: every law and row at random u, at the piecewise laws' segment joints and their
+    neighbouring floats, beyond [0, 1]; every pair of rise and return laws with and without a
+    dwell at random angles (beyond 0 and 2 pi too), at the breakpoints and their neighbours; and a
+    non-finite angle. A plug-in law without `at` falls back to its array form; lift_at of a lift
+    without row_at is its lift_rows."""
+    import itertools
+
+    from explorer.lift import laws
+    from explorer.lift.curves import LawLift, lift_at, lift_rows
+
+    rng = np.random.default_rng(11)
+    joints = np.array([0.0, 0.125, 0.375, 0.625, 0.875, 1.0])
+    u_all = np.concatenate([rng.uniform(0.0, 1.0, 400), joints, np.nextafter(joints, -1.0),
+                            np.nextafter(joints, 2.0), rng.uniform(-0.5, 1.5, 40)])
+    for name in COEFFICIENTS:
+        assert getattr(LAWS[name], "at", None) is not None, name
+        for u, row in itertools.product(u_all.tolist(), range(4)):
+            expected = float(laws.law_rows(name, np.array([u]), (row,))[0, 0])
+            assert laws.law_at(name, u, row) == expected, (name, u, row)
+    for (rise, ret), dwell in itertools.product(itertools.product(COEFFICIENTS, repeat=2), (0.0, 0.3)):
+        lift = LawLift(height=0.009, start=0.5, rise=1.3, dwell=dwell, ret=1.1, rise_law=rise, return_law=ret)
+        marks = lift.breakpoints()
+        theta = np.concatenate([rng.uniform(-1.0, 8.0, 40), marks, np.nextafter(marks, 0.0), np.nextafter(marks, 7.0)])
+        for x, row in itertools.product(theta.tolist(), range(4)):
+            expected = float(lift.derivative_rows(np.array([x]), (row,))[0, 0])
+            assert lift.row_at(x, row) == expected == lift_at(lift, x, row), (rise, ret, dwell, x, row)
+    lift = LawLift(0.009, 0.5, 1.3, 0.3, 1.1, "cycloidal", "polynomial-345")
+    with np.errstate(invalid="ignore"):
+        for x in (math.nan, math.inf):
+            assert np.array_equal(lift.row_at(x, 0), lift.derivative_rows(np.array([x]), (0,))[0, 0], equal_nan=True)
+
+    class Plain:  # a lift curve with derivatives only
+        def derivatives(self, theta):
+            return lift.derivatives(theta)
+
+    assert lift_at(Plain(), 1.0, 2) == float(lift_rows(lift, np.array([1.0]), (2,))[0, 0])
+
+
+def test_a_plug_in_law_without_at_is_evaluated_on_an_array_of_one(monkeypatch):
+    from explorer.lift import laws
+
+    def toy(u):
+        u = np.asarray(u, dtype=float)
+        return np.stack([3 * u**2 - 2 * u**3, 6 * u - 6 * u**2, 6 - 12 * u, np.full_like(u, -12.0)])
+
+    monkeypatch.setitem(laws.LAWS, "toy-cubic", toy)
+    for u in (0.0, 0.3, 0.7, 1.0):
+        for row in range(4):
+            assert laws.law_at("toy-cubic", u, row) == float(toy(np.array([u]))[row, 0])
+
+
+def test_grid_with_is_np_unique_of_the_grid_and_the_points():
+    """curves.grid_with (the points merged into a sorted grid) against np.unique(np.concatenate)
+    (oracle), bit for bit and sign of zero included: breakpoints inside, on grid points, repeated,
+    beyond 2 pi, none, -0.0, negative, NaN."""
+    from explorer.lift.curves import grid_with
+
+    grid = np.linspace(0.0, 2.0 * math.pi, 4097)
+    rng = np.random.default_rng(12)
+    cases = [rng.uniform(0.0, 6.2, 4), grid[[0, 7, 4096]], np.array([1.0, 1.0, 2.0]), np.array([7.0, 0.5]),
+             np.zeros(0), np.array([-0.0, 1.0]), np.array([-0.5, 3.0]), np.array([np.nan, 1.0]),
+             np.nextafter(grid[[5, 9]], 0.0), [3.0]]
+    for points in cases:
+        expected = np.unique(np.concatenate([grid, np.asarray(points, dtype=float)]))
+        got = grid_with(grid, points)
+        assert np.array_equal(got, expected, equal_nan=True), points
+        assert np.array_equal(np.signbit(got), np.signbit(expected))

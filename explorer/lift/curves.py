@@ -14,7 +14,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .laws import ALL_ROWS, law_rows
+from .laws import ALL_ROWS, law_at, law_rows
 
 TWO_PI = 2.0 * math.pi
 
@@ -79,6 +79,31 @@ class LawLift:
                         out[i, falling] = row
         return out.reshape((len(rows),) + theta.shape)
 
+    def row_at(self, theta: float, row: int) -> float:
+        """derivative_rows(np.array([theta]), (row,))[0, 0], the same float at a tenth of the cost:
+        the wrap, the stretch and the scaling in Python floats (+, -, *, /, fmod and ** of floats are
+        the same IEEE operations numpy does), the law on a one-element array as there. The root
+        searches (lift_at) evaluate one angle at a time, some 30 times a revolution."""
+        x = float(theta) - self.start
+        if not math.isfinite(x):
+            return float(self.derivative_rows(np.array([theta], dtype=float), (row,))[0, 0])
+        if not 0.0 <= x < TWO_PI:  # wrap_two_pi's fmod and correction
+            x = math.fmod(x, TWO_PI)
+            if x < 0.0:
+                x += TWO_PI
+        h = self.height
+        x_top = x - self.rise
+        x_ret = x_top - self.dwell
+        value = 0.0  # the stretches in derivative_rows' order of writing (they do not overlap)
+        if x_top < 0.0:
+            value = law_at(self.rise_law, x / self.rise, row) * h / self.rise**row
+        if row == 0 and x_top >= 0.0 and x_ret < 0.0:
+            value = h
+        if x_ret >= 0.0 and x_ret < self.ret:
+            g = law_at(self.return_law, x_ret / self.ret, row)
+            value = h * (1.0 - g) if row == 0 else g * -h / self.ret**row
+        return value
+
     def breakpoints(self) -> np.ndarray:
         top = self.rise + self.dwell  # the running sums of np.cumsum, in plain Python (4 values)
         marks = [x + self.start for x in (0.0, self.rise, top, top + self.ret)]
@@ -100,9 +125,29 @@ def lift_rows(lift, theta, rows: tuple[int, ...]) -> np.ndarray:
 
 
 def lift_at(lift, theta: float, row: int) -> float:
-    """Row `row` of the lift's derivatives at one angle (lift_rows: only that row computed), for
-    the root searches of one angle at a time."""
+    """Row `row` of the lift's derivatives at one angle (lift_rows: only that row computed; the
+    lift's own row_at where it has one, the same float), for the root searches of one angle at a
+    time."""
+    own = getattr(lift, "row_at", None)
+    if own is not None:
+        return own(theta, row)
     return float(lift_rows(lift, np.array([theta]), (row,))[0, 0])
+
+
+def grid_with(grid: np.ndarray, points) -> np.ndarray:
+    """np.unique(np.concatenate([grid, points])), the same floats, for a strictly increasing grid
+    (a revolution's 4097 angles and a lift's few breakpoints): the points merged in, not the grid
+    sorted again (np.unique's sort was a third of a lash search). Negative, -0.0 or non-finite
+    points take np.unique itself (where its order of equal values would matter)."""
+    points = np.asarray(points, dtype=float).reshape(-1)
+    if points.size == 0:
+        return grid.copy()
+    if not np.isfinite(points).all() or np.signbit(points).any():
+        return np.unique(np.concatenate([grid, points]))
+    points = np.unique(points)
+    at = np.searchsorted(grid, points)
+    new = (at >= grid.size) | (grid[np.minimum(at, grid.size - 1)] != points)
+    return np.insert(grid, at[new], points[new])
 
 
 def wrap_two_pi(x: np.ndarray) -> np.ndarray:

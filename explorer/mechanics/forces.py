@@ -39,7 +39,7 @@ import numpy as np
 
 from ..core.errors import InputError, echo
 from ..core.roots import root_in
-from ..lift.curves import lift_at, lift_rows, wrap_two_pi
+from ..lift.curves import grid_with, lift_at, lift_rows, wrap_two_pi
 from .kinematics import lash_crossings
 
 
@@ -146,7 +146,7 @@ class Pieces:
 def velocity_zeros(lift, n_grid: int = 4096) -> np.ndarray:
     """Angles where dL/dtheta changes sign (isolated zeros), polished by Brent's method."""
     grid = np.linspace(0.0, TWO_PI, n_grid + 1)
-    grid = np.unique(np.concatenate([grid, np.asarray(lift.breakpoints(), dtype=float)]))
+    grid = grid_with(grid, lift.breakpoints())
     d1 = lift_rows(lift, grid, (1,))[0]  # the slope only (lift_rows: the lift's derivatives' floats)
     sg = np.sign(d1)
     roots = []

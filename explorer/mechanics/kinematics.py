@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ..core.roots import root_in
-from ..lift.curves import lift_at, lift_rows
+from ..lift.curves import grid_with, lift_at, lift_rows
 
 
 
@@ -26,7 +26,7 @@ def lash_crossings(lift, ratio: float, lash: float, n_grid: int = 4096) -> tuple
     root is polished with Brent's method on the analytic curve to machine precision.
     """
     grid = np.linspace(0.0, 2.0 * math.pi, n_grid + 1)
-    grid = np.unique(np.concatenate([grid, np.asarray(lift.breakpoints(), dtype=float)]))
+    grid = grid_with(grid, lift.breakpoints())
     # only the rows each evaluation reads (lift_rows: the lift's derivatives' floats; one row of
     # one angle costs half of all four, and Brent takes some 14 of them a sweep)
     d = lift_rows(lift, grid, (0, 1))
@@ -42,7 +42,7 @@ def lash_crossings(lift, ratio: float, lash: float, n_grid: int = 4096) -> tuple
     if hidden.size:
         peaks = [root_in(slope, grid[i], grid[i + 1], fa=d[1][i], fb=d[1][i + 1], xtol=1e-15, maxiter=200)
                  for i in hidden]
-        grid = np.unique(np.concatenate([grid, peaks]))
+        grid = grid_with(grid, peaks)
         g = ratio * lift_rows(lift, grid, (0,))[0] - lash
 
     # The valve is open where ratio*L - lash > 0 (the kinematics' own test), so only changes of
@@ -74,7 +74,7 @@ def lash_take_ups(lift, ratio: float, lashes, n_grid: int = 4096) -> np.ndarray:
     in a few vectorised evaluations of the lift (a tolerance study draws a new lash every run)."""
     lashes = np.atleast_1d(np.asarray(lashes, dtype=float))
     grid = np.linspace(0.0, 2.0 * math.pi, n_grid + 1)
-    grid = np.unique(np.concatenate([grid, np.asarray(lift.breakpoints(), dtype=float)]))
+    grid = grid_with(grid, lift.breakpoints())
     d = lift_rows(lift, grid, (0, 1))  # the rows read (lift_rows: the same floats)
 
     def slope(th: float) -> float:
@@ -83,7 +83,7 @@ def lash_take_ups(lift, ratio: float, lashes, n_grid: int = 4096) -> np.ndarray:
     peaks = np.nonzero((d[1][:-1] > 0.0) & (d[1][1:] < 0.0))[0]
     if peaks.size:
         extra = [root_in(slope, grid[i], grid[i + 1], fa=d[1][i], fb=d[1][i + 1], xtol=1e-15) for i in peaks]
-        grid = np.unique(np.concatenate([grid, extra]))
+        grid = grid_with(grid, extra)
         d = lift_rows(lift, grid, (0, 1))
     level = ratio * d[0]
     # the first grid point above each lash (the running maximum is sorted); the take-up is the
