@@ -49,26 +49,67 @@ from .residual import residual_figures
 # steps, 26 s). The shipped scenes need a few thousand; the output grid itself is the scene's
 # choice (solver.steps_per_revolution) and is not counted.
 MAX_SOLVER_NODES = 100_000
+REFERENCE_REVOLUTION_S = 0.1  # a revolution at 600 rpm: which key a refusal blames (check_resolution)
+
+
+def _rates(model) -> dict[str, float]:
+    """The linkage's rates (1/s): the contact phase's oscillation or, overdamped, its fast real
+    root ("damped"); the flight's (the spring against the valve alone)."""
+    alpha = 0.5 * model.damping / model.oscillating_mass
+    w2 = (model.stiffness + model.spring_rate) / model.oscillating_mass
+    contact = ("damped", alpha + math.sqrt(alpha * alpha - w2)) if alpha * alpha > w2 else ("contact", math.sqrt(w2))
+    return dict([contact, ("flight", math.sqrt(model.spring_rate / model.mass))])
 
 
 def fastest_rate(model) -> float:
     """rho (1/s): the linkage's fastest rate in contact (overdamped: the fast real root) or flight."""
-    alpha = 0.5 * model.damping / model.oscillating_mass
-    w2 = (model.stiffness + model.spring_rate) / model.oscillating_mass
-    rho = alpha + math.sqrt(alpha * alpha - w2) if alpha * alpha > w2 else math.sqrt(w2)
-    return max(rho, math.sqrt(model.spring_rate / model.mass))
+    return max(_rates(model).values())
+
+
+# The entries that set each rate, with a typical valve train's value and whether the rate grows
+# with the entry (+1) or falls (-1): a refusal names the entry furthest from its typical value
+# (in decades), the one a user most likely mistyped or pushed too far.
+_TYPICAL = {"linkage.stiffness": ("stiffness", 1e7, +1), "spring.rate": ("spring_rate", 5e4, +1),
+            "valve.mass": ("oscillating_mass", 0.1, -1), "linkage.damping": ("damping", 50.0, +1)}
+_SET_BY = {"contact": ("linkage.stiffness", "spring.rate", "valve.mass"),
+           "damped": ("linkage.damping", "valve.mass"), "flight": ("spring.rate", "valve.mass")}
+_SLOWER = {"linkage.stiffness": "a softer linkage (linkage.stiffness)", "spring.rate": "a softer spring (spring.rate)",
+           "valve.mass": "a heavier valve (valve.mass)", "linkage.damping": "less damping (linkage.damping)"}
+
+
+def _blamed(model, rate: str) -> str:
+    """The entry of those setting `rate` furthest from a typical valve train's (_TYPICAL)."""
+    def decades(key):
+        field, typical, sign = _TYPICAL[key]
+        value = float(getattr(model, field))
+        return sign * math.log10(value / typical) if value > 0.0 and math.isfinite(value) else math.inf
+    return max(_SET_BY[rate], key=decades)
 
 
 def check_resolution(model, t, method: str, file: str) -> None:
-    """InputError (naming drive.rpm) when resolving the linkage's vibration over the times t
-    would take more than MAX_SOLVER_NODES steps."""
+    """InputError when resolving the linkage's vibration over the times t would take more than
+    MAX_SOLVER_NODES steps. The steps are the linkage's fastest rate times the revolution's time:
+    the refusal names drive.rpm when the linkage would fit the budget over a revolution at 600 rpm
+    (a slow revolution), else the linkage's entry furthest from a typical train's (_blamed); its
+    reason gives the rate, the revolution's time and both remedies."""
     if registry.solver(method).fixed_step or len(t) < 2:  # a fixed-step scheme takes only the output grid
         return
-    nodes = fastest_rate(model) * float(t[-1] - t[0]) / 0.5
+    rates = _rates(model)
+    fastest = max(rates, key=rates.__getitem__)
+    span = float(t[-1] - t[0])
+    nodes = rates[fastest] * span / 0.5
     if not nodes <= MAX_SOLVER_NODES:  # also NaN
-        raise InputError(file, "drive.rpm", f"resolving the linkage's vibration over this revolution needs about "
-                         f"{nodes:.3g} solver steps (at most {MAX_SOLVER_NODES:g}): raise drive.rpm, or change the "
-                         f"linkage (softer, less damped) or the valve (heavier)")
+        rate = rates[fastest]
+        shown = f"decay rate {rate:.3g} 1/s" if fastest == "damped" else f"{rate / (2.0 * math.pi):.3g} Hz"
+        steps = f"{math.ceil(nodes):,}" if math.isfinite(nodes) else "unboundedly many"
+        entry = _blamed(model, fastest)
+        slower = " or ".join(_SLOWER[k] for k in (entry, *(k for k in _SET_BY[fastest] if k != entry)))
+        if rate * REFERENCE_REVOLUTION_S / 0.5 <= MAX_SOLVER_NODES:
+            key, advice = "drive.rpm", f"a higher drive.rpm, or {slower}"
+        else:
+            key, advice = entry, f"{slower}, or a higher drive.rpm"
+        raise InputError(file, key, f"resolving the linkage's vibration ({shown}) over a revolution of {span:.3g} s "
+                         f"needs about {steps} solver steps (at most {MAX_SOLVER_NODES:,}): {advice}")
 
 
 def solve_reporting(model, drive, t, method: str, options: dict, file: str = "<memory>") -> tuple:
