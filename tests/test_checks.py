@@ -743,6 +743,11 @@ def test_command_writes_json_and_csv_and_exits_1_on_a_fail(tmp_path, capsys):
     assert data["verdict"] == "fail" and {r["name"] for r in data["results"]} == {s.name for s in rules()}
     hertz = next(r for r in data["results"] if r["name"] == "hertz_stress")
     assert hertz["unit"] == "MPa" and hertz["value_shown"] == pytest.approx(hertz["value"] / 1e6)
+    # every SI value carries its unit beside it (the audit read 0.0035 "mm/deg" for 0.0035 m/rad)
+    units = {r["name"]: (r["si_unit"], r["unit"]) for r in data["results"]}
+    assert units["hertz_stress"] == ("Pa", "MPa") and units["ramp_velocity"] == ("m/rad", "mm/deg")
+    assert units["float_margin"] == ("rad/s", "rpm") and units["pressure_angle"] == ("rad", "deg")
+    assert list(hertz)[list(hertz).index("value") + 1] == "si_unit"
     table = capsys.readouterr().out
     assert "hertz_stress" in table and "verdict: FAIL" in table
     csv_out = tmp_path / "r.csv"
@@ -841,3 +846,20 @@ def test_the_guide_holds_the_rule_table():
     start = page.index("<!-- rules table:")
     body = page[page.index("\n", start) + 1:page.index("<!-- end of the rules table -->")]
     assert body == rules_markdown(), "regenerate: python -m explorer.checks"
+
+
+def test_a_margin_the_search_did_not_reach_is_shown_as_a_bound(tmp_path):
+    """float_margin with no separation up to the highest speed searched is at least that margin:
+    the RuleResult says so (bound), the table shows '>= ', the CSV's bound column and the browser
+    line too; a margin found is no bound."""
+    from explorer.checks.viewer import line
+
+    r = explorer.check(FLOAT, rpm="800:1200:3", only=("float_margin",), workers=1)
+    fm = r.result("float_margin")
+    assert fm.verdict == "pass" and fm.bound == "at least" and "at least" in fm.note
+    assert f">= {fm.shown(fm.value):.4g} rpm" in r.table_text()
+    assert line(fm).shown.startswith(">= ")
+    rows = [row for row in r.to_csv().splitlines() if row.startswith("float_margin,")]
+    assert rows[0].endswith(",at least")
+    found = explorer.check(FLOAT, rpm="800:2000:13", only=("float_margin",), workers=1).result("float_margin")
+    assert found.bound == "" and found.bound_mark == "" and found.speed_rpm is not None

@@ -28,6 +28,11 @@ UNITS: Mapping[str, tuple[float, float]] = MappingProxyType({
     "": (1.0, 0.0), "deg": (1.0 / DEG, 0.0), "rpm": (1.0 / RPM, 0.0), "m/s": (1.0, 0.0), "MPa": (1e-6, 0.0),
     "mm": (1e3, 0.0), "mm/deg": (1e3 * DEG, 0.0), "degC": (1.0, -273.15), "um": (1e6, 0.0),
 })
+# the SI unit of a value whose display unit is the key (the JSON report names both)
+SI_UNITS: Mapping[str, str] = MappingProxyType({
+    "": "", "deg": "rad", "rpm": "rad/s", "m/s": "m/s", "MPa": "Pa", "mm": "m", "mm/deg": "m/rad", "degC": "K",
+    "um": "m",
+})
 
 NORTON_DOM = "R. L. Norton, Design of Machinery, ch. 8 (cam design: pressure angle), and his DYNACAM help"
 TRADE_CAM = "cam designer's notes, camprofiledesigns.com ('cam talk', Jan 2024)"

@@ -12,7 +12,10 @@ import json
 import math
 from dataclasses import asdict, dataclass
 
-from .registry import show
+from .registry import SI_UNITS, show
+
+
+_BOUND_MARKS = {"at least": ">= ", "at most": "<= "}
 
 
 @dataclass(frozen=True)
@@ -46,6 +49,12 @@ class RuleResult:
     sample_method: str = ""
     sample_verified: int | None = None  # two-phase: draws run over every speed of the range
     sample_missed: int | None = None  # two-phase: of those, failing there though not at the nominal's worst speeds
+    bound: str = ""  # "at least" / "at most": value is a bound (rule.Measure.bound), shown as >= / <=
+
+    @property
+    def bound_mark(self) -> str:
+        """">= " / "<= " before the value where it is a bound (`bound`), else ""."""
+        return _BOUND_MARKS.get(self.bound, "")
 
     def shown(self, value: float | None) -> float | None:
         if value is None or not math.isfinite(value):
@@ -94,9 +103,16 @@ class CheckReport:
         out = asdict(self)
         out["speeds_rpm"] = {"low": min(self.speeds_rpm), "high": max(self.speeds_rpm), "count": len(self.speeds_rpm)}
         out["verdict"] = self.verdict
+        results = []
         for r, d in zip(self.results, out["results"]):
+            # value, fail and warn are SI: their unit beside value (the display unit, `unit`, is
+            # that of the *_shown figures)
+            d = dict(item for key, value in d.items() for item in
+                     (((key, value),) if key != "value" else ((key, value), ("si_unit", SI_UNITS[r.unit]))))
             for key in ("value", "fail", "warn"):
                 d[f"{key}_shown"] = r.shown(getattr(r, key))
+            results.append(d)
+        out["results"] = results
         return clean(out)
 
     def to_json(self) -> str:
@@ -104,7 +120,7 @@ class CheckReport:
 
     CSV_COLUMNS = ("rule", "verdict", "value", "unit", "speed_rpm", "cam_angle_deg", "fail", "warn", "source",
                    "firmness", "samples", "p_fail", "p_fail_low", "p_fail_high", "p_warn", "p_warn_low", "p_warn_high",
-                   "sample_method", "note")
+                   "sample_method", "note", "bound")
 
     def to_csv(self) -> str:
         buf = io.StringIO()
@@ -120,7 +136,7 @@ class CheckReport:
             w.writerow([r.name, r.verdict, _num(r.shown(r.value)), r.unit, _num(r.speed_rpm), _num(r.cam_angle_deg),
                         _num(r.shown(r.fail)), _num(r.shown(r.warn)), r.source, r.firmness, r.samples or "",
                         _num(r.p_fail), _num(lo), _num(hi), _num(r.p_warn), _num(wlo), _num(whi),
-                        r.sample_method, r.note or r.reason])
+                        r.sample_method, r.note or r.reason, r.bound])
         return buf.getvalue()
 
     def table_text(self) -> str:
@@ -145,7 +161,8 @@ class CheckReport:
             if r.cam_angle_deg is not None and math.isfinite(r.cam_angle_deg):
                 where.append(f"{r.cam_angle_deg:.2f} deg")
             limit = f"{_fmt(r.shown(r.fail))} / {_fmt(r.shown(r.warn))} {r.unit}".replace("- / - ", "- / -")
-            row = [r.name, r.verdict.upper() if r.verdict == "fail" else r.verdict, f"{_fmt(r.shown(r.value))} {r.unit}",
+            worst = f"{r.bound_mark}{_fmt(r.shown(r.value))} {r.unit}"
+            row = [r.name, r.verdict.upper() if r.verdict == "fail" else r.verdict, worst,
                    ", ".join(where), limit]
             if self.samples:
                 mark = "~" if r.sample_method.startswith("two-phase") else ""

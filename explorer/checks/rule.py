@@ -117,6 +117,9 @@ class Measure:
     speed_exact: bool = True
     applicable: bool = True
     reason: str = ""
+    # "at least" / "at most": the value is a bound, not the figure itself (a search that ended
+    # before it found what it looked for: no separation up to the highest speed searched)
+    bound: str = ""
 
     @staticmethod
     def not_applicable(reason: str) -> "Measure":

@@ -51,7 +51,8 @@ def measure(case, settings) -> Measure:
     sep = fig["separations"][0] > 0
     if not sep.any():
         return Measure.of([[(speeds[-1] - high) * RPM]], [[np.nan]], None, settings,
-                          note=f"no separation up to {speeds[-1]:.6g} rpm (searched): the margin is at least this")
+                          note=f"no separation up to {speeds[-1]:.6g} rpm (searched): the margin is at least this",
+                          bound="at least")
     k = int(np.argmax(sep))
     lo, hi = (speeds[k - 1], speeds[k]) if k > 0 else (None, speeds[k])
     angle = fig["first_separation_deg"][0, k]
