@@ -253,3 +253,63 @@ def test_a_brief_opening_inside_one_grid_cell_is_found():
     half = math.acos(2 * lash / h - 1)
     assert 2 * math.degrees(half) < 360 / 4096
     assert ups == pytest.approx([c - half], abs=1e-9) and downs == pytest.approx([c + half], abs=1e-9)
+
+
+def test_summary_peaks_and_open_angle_are_exact_not_sampled():
+    """The summary's velocity and acceleration peaks and the open angle against the closed forms
+    above on a coarse grid of 97 samples, where no sample lies on a peak (the samples' extremes
+    miss them by up to a few %): cycloidal rise, peak acceleration 2 pi H / RISE^2 at u = 1/4 and
+    -2 pi H / RISE^2 at u = 3/4, velocity 2 H / RISE at u = 1/2; harmonic return, velocity
+    -pi H / (2 RET) at u = 1/2; open from the take-up (brentq on the closed-form cycloid) to the
+    seating, arccos(2 lash / (ratio H) - 1) / pi of the return. Tolerance 1e-12 relative (Brent
+    to ~1e-15 rad on the analytic curve; the peaks are flat there)."""
+    coarse = loads_scene(SCENE.replace("steps_per_revolution = 7200", "steps_per_revolution = 97"))
+    s = simulate(coarse).summary
+    accel, vel = RATIO * W**2 * 2 * math.pi * H / RISE**2, RATIO * W * 2 * H / RISE
+    assert s["max_valve_accel_m_s2"] == pytest.approx(accel, rel=1e-12)
+    assert s["min_valve_accel_m_s2"] == pytest.approx(-accel, rel=1e-12)
+    assert s["max_valve_velocity_m_s"] == pytest.approx(vel, rel=1e-12)
+    assert s["min_valve_velocity_m_s"] == pytest.approx(-RATIO * W * math.pi * H / (2 * RET), rel=1e-12)
+    u_up = brentq(lambda u: RATIO * H * (u - math.sin(2 * math.pi * u) / (2 * math.pi)) - LASH, 0.0, 1.0, xtol=1e-15)
+    u_down = math.acos(2 * LASH / (RATIO * H) - 1.0) / math.pi
+    open_deg = math.degrees(RISE + DWELL + u_down * RET - u_up * RISE)
+    assert s["valve_open_angle_deg"] == pytest.approx(open_deg, abs=1e-9)
+    sampled = simulate(coarse).columns["valve_accel_m_s2"]
+    assert sampled.max() < accel and sampled.min() > -accel  # the samples do miss the peaks
+
+
+def test_a_jump_of_the_acceleration_counts_with_its_one_sided_limit():
+    """A harmonic rise into a dwell: the acceleration jumps from -pi^2 H / (2 RISE^2) to 0 where the
+    dwell begins (the valve open, at full lift), the largest deceleration of the revolution (the
+    return is longer): valve_extremes gives that one-sided limit (1e-9 relative: it is taken 1e-12
+    rad inside the rise) on any grid, the samples only near it. The largest acceleration is at the
+    take-up (the open stretch's start: one of the `ends`). A valve never open: its
+    motion is 0."""
+    from explorer.lift.curves import LawLift
+    from explorer.mechanics.kinematics import valve_extremes
+
+    h, rise, dwell, ret = 0.008, math.radians(60), math.radians(20), math.radians(90)
+    lift = LawLift(h, math.radians(30), rise, dwell, ret, "harmonic", "harmonic")
+    theta = np.linspace(0.0, 2 * math.pi, 101, endpoint=False)
+    d = lift.derivatives(theta)
+    from explorer.mechanics.kinematics import lash_crossings
+
+    top, bottom = valve_extremes(lift, theta, d, 1.0, 1e-4, 2, 1.0, np.concatenate(lash_crossings(lift, 1.0, 1e-4)))
+    assert bottom == pytest.approx(-math.pi**2 * h / (2 * rise**2), rel=1e-9)
+    assert bottom < d[2].min()  # below every sample
+    # the largest acceleration: the harmonic rise's start, pi^2 H / (2 RISE^2) cos(pi u) at the
+    # take-up (ratio L = lash: u = arccos(1 - 2 lash / H) / pi), the acceleration falling from there
+    u_up = math.acos(1 - 2e-4 / h) / math.pi
+    assert top == pytest.approx(math.pi**2 * h / (2 * rise**2) * math.cos(math.pi * u_up), rel=1e-12)
+    assert valve_extremes(lift, theta, d, 1.0, 1.0, 2, 1.0) == (0.0, 0.0)  # never open: at rest
+
+
+def test_open_angle_of_crossings_wraps_and_handles_always_open():
+    from explorer.mechanics.kinematics import open_angle
+
+    two_pi = 2 * math.pi
+    assert open_angle(np.array([1.0]), np.array([2.5]), False) == pytest.approx(1.5, abs=1e-15)
+    assert open_angle(np.array([6.0]), np.array([0.5]), False) == pytest.approx(two_pi - 6.0 + 0.5, abs=1e-15)
+    assert open_angle(np.array([1.0, 4.0]), np.array([2.0, 4.5]), False) == pytest.approx(1.5, abs=1e-15)
+    assert open_angle(np.array([]), np.array([]), False) == 0.0
+    assert open_angle(np.array([]), np.array([]), True) == two_pi

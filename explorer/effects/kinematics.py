@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ..core.memo import remember
-from ..mechanics.kinematics import lash_crossings
+from ..mechanics.kinematics import lash_crossings, open_angle, valve_extremes
 from ..result import EffectOutput, Event
 
 
@@ -33,15 +33,21 @@ def kinematics_effect(ctx) -> EffectOutput:
     columns = {**follower, **valve}
     # the rigid motion stays available under its own name when a later effect refines valve_*
     columns.update({f"rigid_{k}": v for k, v in valve.items()})
+    # the peaks of velocity and acceleration exact (between samples, one-sided at a jump), as is
+    # the open angle (from the take-up and seating angles); the jerk's sampled (no fourth derivative)
+    ups, downs = lash_crossings(ctx.lift, ratio, lash)
+    ends = np.concatenate([ups, downs])
+    v_max, v_min = valve_extremes(ctx.lift, ctx.theta, d, ratio, lash, 1, ratio * w, ends)
+    a_max, a_min = valve_extremes(ctx.lift, ctx.theta, d, ratio, lash, 2, ratio * w**2, ends)
     summary = {
         "max_follower_lift_m": float(d[0].max()),
         "max_valve_lift_m": float(valve["valve_lift_m"].max()),
-        "max_valve_velocity_m_s": float(valve["valve_velocity_m_s"].max()),
-        "min_valve_velocity_m_s": float(valve["valve_velocity_m_s"].min()),
-        "max_valve_accel_m_s2": float(valve["valve_accel_m_s2"].max()),
-        "min_valve_accel_m_s2": float(valve["valve_accel_m_s2"].min()),
+        "max_valve_velocity_m_s": v_max,
+        "min_valve_velocity_m_s": v_min,
+        "max_valve_accel_m_s2": a_max,
+        "min_valve_accel_m_s2": a_min,
         "max_abs_valve_jerk_m_s3": float(np.abs(valve["valve_jerk_m_s3"]).max()),
-        "valve_open_angle_deg": float(360.0 * np.count_nonzero(is_open) / is_open.size),
+        "valve_open_angle_deg": math.degrees(open_angle(ups, downs, bool(is_open.all()))),
     }
     # the gear's own figures (a translating roller's pressure angle and radii of curvature; InputError
     # when its cam fails the validity checks of every cam, explorer.lift.validity)

@@ -13,9 +13,15 @@ import math
 import numpy as np
 
 from ..core.roots import root_in
-from ..lift.curves import grid_with, lift_at, lift_rows
+from ..lift.curves import TWO_PI, grid_with, lift_at, lift_rows
 
 
+
+
+# the last lash_crossings asked for: the kinematics effect (the open angle) and the lash effect ask
+# for the same lift object's crossings in one run; one entry, held with the lift itself (so that the
+# object compared by identity is alive), its arrays read-only
+_LAST: list = [None]
 
 
 def lash_crossings(lift, ratio: float, lash: float, n_grid: int = 4096) -> tuple[np.ndarray, np.ndarray]:
@@ -23,8 +29,20 @@ def lash_crossings(lift, ratio: float, lash: float, n_grid: int = 4096) -> tuple
 
     Brackets come from a grid refined at the curve's breakpoints and at the lift's local maxima
     between closed grid points (a brief opening narrower than a grid cell would hide there); each
-    root is polished with Brent's method on the analytic curve to machine precision.
+    root is polished with Brent's method on the analytic curve to machine precision. The arrays
+    are read-only (the last call's are returned again for the same lift object and arguments).
     """
+    last = _LAST[0]
+    if last is not None and last[0] is lift and last[1] == (ratio, lash, n_grid):
+        return last[2]
+    found = _lash_crossings(lift, ratio, lash, n_grid)
+    for array in found:
+        array.setflags(write=False)
+    _LAST[0] = (lift, (ratio, lash, n_grid), found)
+    return found
+
+
+def _lash_crossings(lift, ratio: float, lash: float, n_grid: int) -> tuple[np.ndarray, np.ndarray]:
     grid = np.linspace(0.0, 2.0 * math.pi, n_grid + 1)
     grid = grid_with(grid, lift.breakpoints())
     # only the rows each evaluation reads (lift_rows: the lift's derivatives' floats; one row of
@@ -60,6 +78,65 @@ def lash_crossings(lift, ratio: float, lash: float, n_grid: int = 4096) -> tuple
     return np.unique(ups), np.unique(downs)
 
 
+
+
+ONE_SIDED = 1e-12  # rad either side of a breakpoint: its one-sided limits (a derivative may jump there)
+
+
+def open_angle(ups: np.ndarray, downs: np.ndarray, always_open: bool) -> float:
+    """The angle (rad) the valve is open in a revolution, from lash_crossings' take-ups and seatings
+    (each take-up opens until the next seating, around the revolution); 2 pi or 0 without
+    crossings (always_open: the valve never closes)."""
+    if ups.size == 0 or downs.size == 0:
+        return TWO_PI if always_open else 0.0
+    marks = sorted([(float(a), 1) for a in ups] + [(float(a), -1) for a in downs])
+    total, opened = 0.0, None
+    for angle, kind in marks + [(a + TWO_PI, k) for a, k in marks]:  # twice round: intervals that wrap
+        if kind > 0 and opened is None:
+            opened = angle
+        elif kind < 0 and opened is not None:
+            if opened < TWO_PI:
+                total += angle - opened
+            opened = None
+    return total
+
+
+def valve_extremes(lift, theta: np.ndarray, d: np.ndarray, ratio: float, lash: float, row: int,
+                   scale: float, ends=()) -> tuple[float, float]:
+    """The largest and smallest scale * L^(row) (row 1, scale ratio w: the valve's velocity; row 2,
+    scale ratio w^2: its acceleration, the floats of the kinematics' columns at a sample) over the
+    revolution, exact rather than sampled: the samples theta (d: the
+    lift's derivatives there), the one-sided limits at the lift's breakpoints (a derivative that
+    jumps there has its supremum as the figure: Schenker's p at F, -117 -> +159 m/s^2), and the
+    extrema between samples, where L^(row+1) changes sign (Brent on the analytic curve), and the
+    open stretches' ends (`ends`: lash_crossings' take-ups and seatings, where the valve's motion
+    starts and stops: a peak there is its limit from inside). Where the
+    valve is closed (ratio L - lash <= 0) its motion is 0, and 0 counts when it is closed anywhere.
+    An extremum hidden between two samples with two sign changes of L^(row+1) is not seen (a
+    sample grid of degrees or finer: none in the shipped laws)."""
+    marks = np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI)
+    sides = np.concatenate([marks - ONE_SIDED, marks + ONE_SIDED])
+    angles = np.concatenate([theta, [theta[0] + TWO_PI], sides])
+    rows = np.concatenate([d[[0, row, row + 1]], d[[0, row, row + 1]][:, :1], lift_rows(lift, sides, (0, row, row + 1))],
+                          axis=1)
+    order = np.argsort(angles, kind="stable")
+    angles, rows = angles[order], rows[:, order]
+    sampled = scale * rows[1][ratio * rows[0] - lash > 0.0]
+    values = [float(sampled.max()), float(sampled.min())] if sampled.size else []
+    if not (ratio * d[0] - lash > 0.0).all():
+        values.append(0.0)
+    slope = rows[2]
+    # the brackets within a breakpoint's two one-sided angles (across a jump, not a zero of L^(row+1))
+    across = ((angles[:-1, None] >= marks - ONE_SIDED) & (angles[1:, None] <= marks + ONE_SIDED)).any(axis=1)
+    for i in np.nonzero((np.sign(slope[:-1]) * np.sign(slope[1:]) < 0.0) & ~across)[0]:
+        x = root_in(lambda th: lift_at(lift, th, row + 1), float(angles[i]), float(angles[i + 1]),
+                    fa=float(slope[i]), fb=float(slope[i + 1]), xtol=1e-15, maxiter=200)
+        if ratio * lift_at(lift, x, 0) - lash > 0.0:
+            values.append(scale * lift_at(lift, x, row))
+    values.extend(scale * lift_at(lift, float(x), row) for x in np.asarray(ends, dtype=float).reshape(-1))
+    if not values:
+        return math.nan, math.nan
+    return float(max(values)), float(min(values))
 
 
 BISECT_LEVELS = 6  # halvings per evaluation of the lift in lash_take_ups (63 angles a bracket)
