@@ -863,3 +863,21 @@ def test_a_margin_the_search_did_not_reach_is_shown_as_a_bound(tmp_path):
     assert rows[0].endswith(",at least")
     found = explorer.check(FLOAT, rpm="800:2000:13", only=("float_margin",), workers=1).result("float_margin")
     assert found.bound == "" and found.bound_mark == "" and found.speed_rpm is not None
+
+
+def test_hertz_without_a_named_allowable_says_it_judged_by_the_1902_default():
+    """A scene without [contact] is judged against seed 004's large-gas allowable (343 MPa, cast
+    iron of 1902): the result's source says that no allowable was given and how to name a modern
+    one; a scene that gives [contact] allowable_stress is judged against it (the modern demo
+    scenes name theirs: 1200 MPa, assumed, for hardened steel)."""
+    from explorer.scene.scene import loads_scene
+
+    text = open("assets/scenes/cycloidal_demo.toml").read()
+    start = text.index("[contact]")
+    bare = text[:start] + text[text.index("\n[", start + 1) + 1:]
+    assert "[contact]" not in bare
+    r = judge(loads_scene(bare), "hertz_stress")
+    assert r.fail == pytest.approx(3500.0 * 9.80665e4) and r.source.startswith("no [contact] allowable_stress given")
+    assert "1902 cast iron" in r.source and "[contact] allowable_stress" in r.source
+    named = judge("assets/scenes/cycloidal_demo.toml", "hertz_stress")
+    assert named.fail == pytest.approx(1200e6) and named.source == "[contact] allowable_stress"

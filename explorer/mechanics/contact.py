@@ -83,6 +83,9 @@ class ContactSpec:
     width_rule_k: float = WIDTH_RULE_K["exhaust"]  # Pa
     engine: str = "large-gas"
     allowable_stress: float = ALLOWABLE["large-gas"]  # Pa
+    # whether the scene chose the allowable ([contact] engine or allowable_stress), or it is the
+    # 1902 default (the hertz_stress rule says which judged)
+    allowable_named: bool = False
     sliding_friction: float = 0.0  # mu of a face or pad sliding on the cam (the gears of #24; rollers take none)
     tip_friction: float = 0.0  # mu of a valve pad sliding on the valve tip
 

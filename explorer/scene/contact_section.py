@@ -52,6 +52,7 @@ def parse_contact_section(table, fields) -> ContactSpec:
         width_rule_k=table.quantity("width_rule_k", "pressure", WIDTH_RULE_K[valve], positive=True),
         engine=engine,
         allowable_stress=table.quantity("allowable_stress", "pressure", ALLOWABLE[engine], positive=True),
+        allowable_named=table.has("engine") or table.has("allowable_stress"),
         sliding_friction=table.number("sliding_friction", 0.0, minimum=0.0, maximum=1.0),
         tip_friction=table.number("tip_friction", 0.0, minimum=0.0, maximum=1.0),
     )
