@@ -294,14 +294,14 @@ def test_a_jump_of_the_acceleration_counts_with_its_one_sided_limit():
     d = lift.derivatives(theta)
     from explorer.mechanics.kinematics import lash_crossings
 
-    top, bottom = valve_extremes(lift, theta, d, 1.0, 1e-4, 2, 1.0, np.concatenate(lash_crossings(lift, 1.0, 1e-4)))
+    top, bottom = valve_extremes(lift, theta, d, 1.0, 1e-4, {2: 1.0}, np.concatenate(lash_crossings(lift, 1.0, 1e-4)))[2]
     assert bottom == pytest.approx(-math.pi**2 * h / (2 * rise**2), rel=1e-9)
     assert bottom < d[2].min()  # below every sample
     # the largest acceleration: the harmonic rise's start, pi^2 H / (2 RISE^2) cos(pi u) at the
     # take-up (ratio L = lash: u = arccos(1 - 2 lash / H) / pi), the acceleration falling from there
     u_up = math.acos(1 - 2e-4 / h) / math.pi
     assert top == pytest.approx(math.pi**2 * h / (2 * rise**2) * math.cos(math.pi * u_up), rel=1e-12)
-    assert valve_extremes(lift, theta, d, 1.0, 1.0, 2, 1.0) == (0.0, 0.0)  # never open: at rest
+    assert valve_extremes(lift, theta, d, 1.0, 1.0, {2: 1.0}) == {2: (0.0, 0.0)}  # never open: at rest
 
 
 def test_open_angle_of_crossings_wraps_and_handles_always_open():

@@ -37,8 +37,8 @@ def kinematics_effect(ctx) -> EffectOutput:
     # the open angle (from the take-up and seating angles); the jerk's sampled (no fourth derivative)
     ups, downs = lash_crossings(ctx.lift, ratio, lash)
     ends = np.concatenate([ups, downs])
-    v_max, v_min = valve_extremes(ctx.lift, ctx.theta, d, ratio, lash, 1, ratio * w, ends)
-    a_max, a_min = valve_extremes(ctx.lift, ctx.theta, d, ratio, lash, 2, ratio * w**2, ends)
+    peaks = valve_extremes(ctx.lift, ctx.theta, d, ratio, lash, {1: ratio * w, 2: ratio * w**2}, ends)
+    (v_max, v_min), (a_max, a_min) = peaks[1], peaks[2]
     summary = {
         "max_follower_lift_m": float(d[0].max()),
         "max_valve_lift_m": float(valve["valve_lift_m"].max()),

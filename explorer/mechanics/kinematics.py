@@ -101,42 +101,49 @@ def open_angle(ups: np.ndarray, downs: np.ndarray, always_open: bool) -> float:
     return total
 
 
-def valve_extremes(lift, theta: np.ndarray, d: np.ndarray, ratio: float, lash: float, row: int,
-                   scale: float, ends=()) -> tuple[float, float]:
-    """The largest and smallest scale * L^(row) (row 1, scale ratio w: the valve's velocity; row 2,
-    scale ratio w^2: its acceleration, the floats of the kinematics' columns at a sample) over the
-    revolution, exact rather than sampled: the samples theta (d: the
+def valve_extremes(lift, theta: np.ndarray, d: np.ndarray, ratio: float, lash: float, scales: dict[int, float],
+                   ends=()) -> dict[int, tuple[float, float]]:
+    """The largest and smallest scale * L^(row) of each row of `scales` (row 1, scale ratio w: the
+    valve's velocity; row 2, scale ratio w^2: its acceleration, the floats of the kinematics'
+    columns at a sample) over the revolution, exact rather than sampled: the samples theta (d: the
     lift's derivatives there), the one-sided limits at the lift's breakpoints (a derivative that
-    jumps there has its supremum as the figure: Schenker's p at F, -117 -> +159 m/s^2), and the
-    extrema between samples, where L^(row+1) changes sign (Brent on the analytic curve), and the
-    open stretches' ends (`ends`: lash_crossings' take-ups and seatings, where the valve's motion
-    starts and stops: a peak there is its limit from inside). Where the
-    valve is closed (ratio L - lash <= 0) its motion is 0, and 0 counts when it is closed anywhere.
-    An extremum hidden between two samples with two sign changes of L^(row+1) is not seen (a
-    sample grid of degrees or finer: none in the shipped laws)."""
-    marks = np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI)
-    sides = np.concatenate([marks - ONE_SIDED, marks + ONE_SIDED])
-    angles = np.concatenate([theta, [theta[0] + TWO_PI], sides])
-    rows = np.concatenate([d[[0, row, row + 1]], d[[0, row, row + 1]][:, :1], lift_rows(lift, sides, (0, row, row + 1))],
-                          axis=1)
-    order = np.argsort(angles, kind="stable")
-    angles, rows = angles[order], rows[:, order]
-    sampled = scale * rows[1][ratio * rows[0] - lash > 0.0]
-    values = [float(sampled.max()), float(sampled.min())] if sampled.size else []
-    if not (ratio * d[0] - lash > 0.0).all():
-        values.append(0.0)
-    slope = rows[2]
+    jumps there has its supremum as the figure: Schenker's p at F, -117 -> +159 m/s^2), the extrema
+    between samples, where L^(row+1) changes sign (Brent on the analytic curve), and the open
+    stretches' ends (`ends`: lash_crossings' take-ups and seatings, where the valve's motion starts
+    and stops: a peak there is its limit from inside). Where the valve is closed (ratio L - lash
+    <= 0) its motion is 0, and 0 counts when it is closed anywhere. An extremum hidden between two
+    samples with two sign changes of L^(row+1) is not seen (a sample grid of degrees or finer:
+    none in the shipped laws)."""
+    needed = sorted({0, *scales, *(row + 1 for row in scales)})
+    marks = np.sort(np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI))
+    sides = np.sort(np.concatenate([marks - ONE_SIDED, marks + ONE_SIDED]))
+    # the samples closed round the revolution, the one-sided angles merged in (theta is sorted)
+    angles = np.append(theta, theta[0] + TWO_PI)
+    rows = np.concatenate([d[needed], d[needed][:, :1]], axis=1)
+    at = np.searchsorted(angles, sides)
+    angles = np.insert(angles, at, sides)
+    rows = np.insert(rows, at, lift_rows(lift, sides, tuple(needed)), axis=1)
+    line = dict(zip(needed, rows))
+    is_open = ratio * line[0] - lash > 0.0
+    closed_somewhere = not (ratio * d[0] - lash > 0.0).all()
     # the brackets within a breakpoint's two one-sided angles (across a jump, not a zero of L^(row+1))
     across = ((angles[:-1, None] >= marks - ONE_SIDED) & (angles[1:, None] <= marks + ONE_SIDED)).any(axis=1)
-    for i in np.nonzero((np.sign(slope[:-1]) * np.sign(slope[1:]) < 0.0) & ~across)[0]:
-        x = root_in(lambda th: lift_at(lift, th, row + 1), float(angles[i]), float(angles[i + 1]),
-                    fa=float(slope[i]), fb=float(slope[i + 1]), xtol=1e-15, maxiter=200)
-        if ratio * lift_at(lift, x, 0) - lash > 0.0:
-            values.append(scale * lift_at(lift, x, row))
-    values.extend(scale * lift_at(lift, float(x), row) for x in np.asarray(ends, dtype=float).reshape(-1))
-    if not values:
-        return math.nan, math.nan
-    return float(max(values)), float(min(values))
+    ends = np.asarray(ends, dtype=float).reshape(-1)
+    out = {}
+    for row, scale in scales.items():
+        sampled = scale * line[row][is_open]
+        values = [float(sampled.max()), float(sampled.min())] if sampled.size else []
+        if closed_somewhere:
+            values.append(0.0)
+        slope = line[row + 1]
+        for i in np.nonzero((np.sign(slope[:-1]) * np.sign(slope[1:]) < 0.0) & ~across)[0]:
+            x = root_in(lambda th, k=row + 1: lift_at(lift, th, k), float(angles[i]), float(angles[i + 1]),
+                        fa=float(slope[i]), fb=float(slope[i + 1]), xtol=1e-15, maxiter=200)
+            if ratio * lift_at(lift, x, 0) - lash > 0.0:
+                values.append(scale * lift_at(lift, x, row))
+        values.extend(scale * lift_at(lift, float(x), row) for x in ends)
+        out[row] = (max(values), min(values)) if values else (math.nan, math.nan)
+    return out
 
 
 BISECT_LEVELS = 6  # halvings per evaluation of the lift in lash_take_ups (63 angles a bracket)
