@@ -120,9 +120,10 @@ def valve_extremes(lift, theta: np.ndarray, d: np.ndarray, ratio: float, lash: f
     # the samples closed round the revolution, the one-sided angles merged in (theta is sorted)
     angles = np.append(theta, theta[0] + TWO_PI)
     rows = np.concatenate([d[needed], d[needed][:, :1]], axis=1)
-    at = np.searchsorted(angles, sides)
-    angles = np.insert(angles, at, sides)
-    rows = np.insert(rows, at, lift_rows(lift, sides, tuple(needed)), axis=1)
+    if sides.size:  # (a lift without breakpoints: a contour followed by a face)
+        at = np.searchsorted(angles, sides)
+        angles = np.insert(angles, at, sides)
+        rows = np.insert(rows, at, lift_rows(lift, sides, tuple(needed)), axis=1)
     line = dict(zip(needed, rows))
     is_open = ratio * line[0] - lash > 0.0
     closed_somewhere = not (ratio * d[0] - lash > 0.0).all()
