@@ -159,7 +159,7 @@ def test_ctrl_c_keeps_the_finished_runs_as_a_valid_file_marked_incomplete(tmp_pa
     out, log = tmp_path / "s.parquet", tmp_path / "err.txt"
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     with open(log, "w") as err:
-        proc = spawn([sys.executable, "-m", "explorer", "sweep", str(FLOAT), "--vary", "drive.rpm=3000:6000:20000",
+        proc = spawn([sys.executable, "-m", "explorer", "sweep", str(FLOAT), "--vary", "drive.rpm=3000:6000:200000",
                       "-o", str(out), "--workers", "2"], stdout=subprocess.PIPE, stderr=err, text=True,
                      env=env, cwd=ROOT)
     try:
@@ -175,8 +175,8 @@ def test_ctrl_c_keeps_the_finished_runs_as_a_valid_file_marked_incomplete(tmp_pa
     assert proc.returncode == 130, out_text
     assert "INCOMPLETE" in out_text
     table = read_table(out)
-    assert not table.complete and 0 < len(table) < 20000
-    assert table.metadata["runs_planned"] == 20000 and table.metadata["runs_finished"] == len(table)
+    assert not table.complete and 0 < len(table) < 200000
+    assert table.metadata["runs_planned"] == 200000 and table.metadata["runs_finished"] == len(table)
     runs = np.asarray(table.columns["run"])
     assert np.all(np.diff(runs) > 0)  # in run order, each once
 
