@@ -1,7 +1,9 @@
 """The `exact` solver compiled (numba): the same model, closed forms and events as exact.py, for the
 batch engine of sweeps (explorer/effects/elastic_batch.py, which the sweep engine and the browser's
-speed sweep use). Only elastic_batch imports this module, and only this module imports the compiled
-parts (numba costs ~0.4 s to import; `import explorer` must not pay it).
+speed sweep use) and as the solver table's `exact-compiled` (solve: one revolution, a scene's
+[solver] method). Only elastic_batch and the solver table's entry import this module, and only
+this module imports the compiled parts (numba costs ~0.4 s to import; `import explorer` must not
+pay it).
 
 The compiled code follows the Python solver's seams, one module each:
   kernel_grid     the grid (exact_grid.build_grid, called in Python and passed in as arrays; a
@@ -33,10 +35,11 @@ The LinkageModel without stiffness_profile only (constant coefficients): `suppor
 
 `python -m explorer.dynamics.exact_kernel --warm` compiles (and caches beside the modules) every
 compiled function once: `make` runs it at install and when a source changes, so the first sweep
-does not compile. `--aot` compiles the batch entry point (revolutions) ahead of time into
-_exact_kernel_aot (explorer/core/aot.py), which run_batch uses while it is current: this module
-imports the numba modules (kernel_phase, kernel_figures, kernel_grid, kernel_events) only inside
-the functions that run them.
+does not compile. `--aot` compiles the batch entry point (revolutions) and solve's compiled call
+(kernel_phase.solve_nodes) ahead of time into _exact_kernel_aot (explorer/core/aot.py), which
+run_batch and solve use while it is current: this module imports the numba modules (kernel_phase,
+kernel_figures, kernel_grid, kernel_events) only inside the functions that run them, so a sweep or
+a `simulate` with exact-compiled loads no numba then.
 """
 
 from __future__ import annotations
