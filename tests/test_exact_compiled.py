@@ -195,3 +195,19 @@ def test_bad_output_times_are_refused_as_the_python_solver_refuses_them(times):
             assert "\n" not in str(err)
             outcome.append(str(err))
     assert outcome[0] == outcome[1]
+
+
+def test_a_sweep_of_a_scene_naming_it_runs_the_compiled_batch_as_exact():
+    """Its batch module is the exact solver's (solvers.py: batch_entry): a speed sweep of a scene
+    with exact-compiled takes the compiled path and gives the rows of the same scene with exact,
+    bit for bit (one kernel, one model)."""
+    from explorer.studies.sweep_engine import _Shared, compute_chunk, engine_for, result_columns
+
+    rows = []
+    for method in ("exact", "exact-compiled"):
+        base = load_scene(SCENES / "elastic_float.toml", [f'solver.method="{method}"'])
+        shared = _Shared()
+        assert engine_for(base, shared).name == "compiled"
+        rows.append(compute_chunk(base, ("drive.rpm",), np.linspace(1500.0, 6000.0, 40)[:, None], result_columns(base),
+                                  shared))
+    assert np.array_equal(rows[0], rows[1], equal_nan=True)

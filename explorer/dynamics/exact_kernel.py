@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Mapping
 from types import MappingProxyType
 
 import numpy as np
@@ -129,9 +130,10 @@ def _solve(model: LinkageModel, drive, t, initial_state, zeno_height: float, max
         s0, v0 = (float(x) for x in initial_state)
         phase0, sigma0 = phase_of_state(float(g.Dn[0, 0]), float(g.Dn[1, 0]), k, c, lash, s0, v0, W0, rate, R)
         start = (phase0, s0, v0, sigma0, v0 == 0.0)
+    cont = np.ascontiguousarray  # (the exported signature's layout: a copy of P.T only; the rest already are)
     out_s, out_v, out_sigma, out_phase, ev, status, n_detail = kernel(
-        g.nodes, g.h, np.ascontiguousarray(g.PT), g.Dn, g.Sb, g.hidx.astype(np.int64, copy=False), g.h_unique, *args,
-        float(zeno_height), int(max_events), int(N), *start)
+        cont(g.nodes), cont(g.h), cont(g.PT), cont(g.Dn), cont(g.Sb), cont(g.hidx, dtype=np.int64), cont(g.h_unique),
+        *args, float(zeno_height), int(max_events), int(N), *start)
     _check(status)
     stats = {"method": "exact-compiled", "nodes": int(g.nodes.size), "steps": int(g.h.size), "taylor_terms": N,
              "detail_searches": int(n_detail), "events": int(ev.shape[0]), "warnings": []}
@@ -140,7 +142,7 @@ def _solve(model: LinkageModel, drive, t, initial_state, zeno_height: float, max
 
 
 @functools.lru_cache(maxsize=64)
-def _phases(M: float, M1: float, k: float, c: float, rate: float) -> dict:
+def _phases(M: float, M1: float, k: float, c: float, rate: float) -> Mapping[int, LinearPhase]:
     """The LinearPhase of contact and flight (exact_phase.PhaseStepper's), by phase code: a
     model's are built once (a scene's revolutions reuse them)."""
     return MappingProxyType({CONTACT: LinearPhase(M1, c, k + rate, k, c), FLIGHT: LinearPhase(M, 0.0, rate, 0.0, 0.0)})

@@ -34,7 +34,7 @@ SOLVERS: Registry[SolverInfo] = Registry("solver", {info.name: info for info in 
     SolverInfo("exact-compiled", "explorer.dynamics.exact_kernel:solve",
                "the exact solver compiled: the same grid, closed forms, events and output (constant k)",
                varying_stiffness=False, options=("initial_state", "zeno_height", "max_events"),
-               contract_tolerance_m=1e-15),
+               contract_tolerance_m=1e-15, batch_entry="explorer.dynamics.exact_kernel:"),
     SolverInfo("schenker1902", "explorer.dynamics.schenker1902:solve",
                "Schenker's 1902 fixed-step scheme (printed or Newmark), second order",
                varying_stiffness=True,
