@@ -112,6 +112,21 @@ def test_stopping_drive_separates_and_lands_as_the_closed_form():
     assert got.events[1]["time_s"] == pytest.approx(case.t_re, abs=1e-15)
 
 
+@pytest.mark.parametrize("friction", [150.0, 300.0])
+@pytest.mark.parametrize("start", [(0.0, 0.0), (1e-4, 0.0), (3e-4, 0.0), (0.0, 0.3), (2e-4, -0.3), (5e-4, 0.2)])
+def test_initial_states_as_the_python_exact_solver(start, friction):
+    """initial_state (s, v) at the first output time: seated, released from above the seat (falling
+    against 150 N of friction, or held by 300 N against the 235 N preload: stuck), thrown up or
+    down, in the phase phases.phase_of_state gives both solvers."""
+    model, drive, t = _revolution("elastic_float.toml", f"loads.friction={friction}", "seat.restitution=0.6")
+    ref = solve(model, drive, t, method="exact", initial_state=start)
+    got = solve(model, drive, t, method="exact-compiled", initial_state=start)
+    _agree(got, ref)
+    assert got.phase[0] == ref.phase[0]
+    if friction == 300.0 and start[0] > 0.0 and start[1] == 0.0:
+        assert got.phase[0] == PHASE_CODES["stuck"]
+
+
 @pytest.mark.parametrize("e", [0.5, 0.8, 0.95])
 def test_chatter_zeno_tail_as_the_series(e):
     """Thrown up from 1 mm at 2 m/s, restitution e: bounces whose heights fall geometrically, the
