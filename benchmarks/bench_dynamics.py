@@ -5,8 +5,9 @@
 
 Baseline: scipy solve_ivp DOP853 at rtol 1e-10 (atol 1e-13 m), with event functions (plain
 sign-change detection) and the step bounded by Tn/4 (explorer.dynamics.reference). Measured against it in the same process,
-alternating run by run: the exact solver at the scene's default steps (3600 per revolution), and
-for comparison the 1902 scheme at the same steps. Prints the median CPU time of each, the ratio
+alternating run by run: the solver table's piecewise solvers (exact, exact-compiled, taylor) at the
+scene's default steps (3600 per revolution), and for comparison its fixed-step ones (the 1902
+scheme) at the same steps where stable. Prints the median CPU time of each, the ratio
 to the baseline (issue 4: exact >= 30x faster, goal 100x, at equal or better accuracy) and each
 one's largest valve-lift error against a converged reference (DOP853 at rtol 1e-12).
 
@@ -32,7 +33,7 @@ CASES = [
 
 def measure(scene, repeat: int) -> list[tuple[str, float, float]]:
     from explorer.studies.bench import model_and_drive
-    from explorer.dynamics import schenker1902
+    from explorer.dynamics import solvers
     from explorer.dynamics.solvers import solve
 
     model, drive = model_and_drive(scene)
@@ -42,10 +43,14 @@ def measure(scene, repeat: int) -> list[tuple[str, float, float]]:
     runs = {
         "scipy DOP853 rtol 1e-10 (baseline)": lambda: solve(model, drive, t, method="scipy", rtol=1e-10, atol=1e-13,
                                                             watch_extrema=False),
-        f"exact, {n} steps": lambda: solve(model, drive, t, method="exact"),
     }
-    if n >= schenker1902.min_stable_steps(model, drive.omega):
-        runs[f"schenker1902, {n} steps"] = lambda: solve(model, drive, t, method="schenker1902")
+    # the solver table's piecewise solvers that take this model, and its fixed-step ones where stable
+    varying = model.stiffness_profile is not None
+    for name in solvers.of_kind("piecewise", varying):
+        runs[f"{name}, {n} steps"] = lambda name=name: solve(model, drive, t, method=name)
+    for name in solvers.of_kind("fixed-step", varying):
+        if n >= solvers.solver(name).min_stable_steps(model, drive.omega):
+            runs[f"{name}, {n} steps"] = lambda name=name: solve(model, drive, t, method=name)
     errors = {name: float(np.abs(fn().s - reference.s).max()) for name, fn in runs.items()}  # also the warm-up
     medians = median_times(runs, repeat, warmup=0, clock=time.process_time)
     kinds = sorted({e["kind"] for e in reference.events})

@@ -9,6 +9,7 @@ as long again as it computes, and a wall clock would time the waits).
     .venv/bin/python benchmarks/bench_wait.py /tmp/before [--rounds 5] [--pool]
     .venv/bin/python benchmarks/bench_wait.py --stages [--rounds 5]   # this checkout's fresh process
     .venv/bin/python benchmarks/bench_wait.py --aot [--rounds 5]      # this checkout: numba's JIT vs AOT
+    .venv/bin/python benchmarks/bench_wait.py --single [--rounds 5]   # this checkout: #27.8 alone
 
 Rows (medians over the rounds; the ratio after / before or the ratio the target names):
 - #27.5: a 1000-speed sweep of valve_float_demo.toml with all its effects (forces, contact,
@@ -19,7 +20,9 @@ Rows (medians over the rounds; the ratio after / before or the ratio the target 
   fresh process, `python -m explorer`, its rusage);
 - #27.8: `simulate` of one elastic revolution (the float scenes) against scipy DOP853 at rtol
   1e-10 on the same model (explorer.studies.bench.speed_ratio's baseline), and the solver alone
-  (solve(method="exact")) against it: the difference is the cost outside the solver;
+  (solve(method="exact")) against it: the difference is the cost outside the solver; the same with
+  only the elastic effect and [solver] method = "exact-compiled" (where the checkout has it), that
+  solver alone, and the effects' own times in that simulate (what is left outside the solver);
 - #27.3 (--aot, this checkout only): the #27.5 sweep, elastic revolutions/s of one batch in one
   process, and the same three whole processes with numba's kernels (from
   its cache; EXPLORER_AOT=0) and with the kernels compiled ahead of time (explorer/core/aot.py),
@@ -61,13 +64,19 @@ def child_sweep(root: str, speeds: int, repeat: int) -> None:
     print(json.dumps(statistics.median(times)))
 
 
+COMPILED = "exact-compiled"  # the solver table's compiled exact solver (a checkout without it: its rows "-")
+
+
 def child_single(root: str, repeat: int) -> None:
-    """simulate whole, the exact solver alone and DOP853 on the float scenes (CPU, alternating)."""
+    """simulate whole, the exact solver alone and DOP853 on the float scenes (CPU, alternating);
+    where the checkout's solver table has exact-compiled, simulate with only the elastic effect and
+    that solver, the solver alone, and simulate's effects' own times in that run (Result.timings)."""
     sys.path.insert(0, root)
     import math
 
     import numpy as np
 
+    from explorer.dynamics import solvers
     from explorer.dynamics.solvers import solve
     from explorer.effects.pipeline import simulate
     from explorer.scene.scene import load_scene
@@ -86,15 +95,28 @@ def child_single(root: str, repeat: int) -> None:
             "simulate_elastic": lambda: simulate(elastic),
             "simulate": lambda: simulate(scene),
         }
+        effects: dict[str, list[float]] = {}
+        if COMPILED in solvers.names():
+            compiled = load_scene(Path(root) / "assets" / "scenes" / name,
+                                  ['effects=["elastic"]', f'solver.method="{COMPILED}"'])
+
+            def simulate_compiled():
+                result = simulate(compiled)
+                for effect, timing in result.timings.items():
+                    effects.setdefault(f"effect:{effect}", []).append(timing.compute_time_s)
+
+            runs["simulate_compiled"] = simulate_compiled
+            runs["compiled"] = lambda: solve(model, drive, t, method=COMPILED)
         samples = {k: [] for k in runs}
         for fn in runs.values():
             fn()
+        effects.clear()
         for _ in range(repeat):
             for k, fn in runs.items():
                 c = time.process_time()
                 fn()
                 samples[k].append(time.process_time() - c)
-        out[name] = {k: statistics.median(v) for k, v in samples.items()}
+        out[name] = {k: statistics.median(v) for k, v in {**samples, **effects}.items()}
     print(json.dumps(out))
 
 
@@ -237,6 +259,50 @@ FIRST = ("import explorer; explorer.sweep('assets/scenes/valve_float_demo.toml',
          "workers=1)")
 
 
+def single_rows(scene: str, trees: list[dict]) -> list:
+    """The #27.8 rows of one scene: (case, a value per checkout's medians, target); "-" where a
+    checkout has no exact-compiled solver."""
+    def ratio(m, x, y):
+        return f"{m[f'{scene}:{x}'] / m[f'{scene}:{y}']:.1f}x" if f"{scene}:{y}" in m else "-"
+
+    def ms(m, names):
+        return " | ".join(f"{1e3 * m[f'{scene}:{x}']:.2f}" if f"{scene}:{x}" in m else "-" for x in names)
+
+    effects = sorted({k.split(":", 1)[1] for m in trees for k in m if k.startswith(f"{scene}:effect:")})
+    return [
+        [f"#27.8 {scene}: DOP853 rtol 1e-10 / simulate (its effects, solver exact)",
+         [ratio(m, "dop853", "simulate") for m in trees], ">= 100x"],
+        [f"#27.8 {scene}: DOP853 / simulate (elastic effect only, solver exact)",
+         [ratio(m, "dop853", "simulate_elastic") for m in trees], ">= 100x"],
+        [f"#27.8 {scene}: DOP853 / simulate (elastic effect only, solver {COMPILED})",
+         [ratio(m, "dop853", "simulate_compiled") for m in trees], ">= 100x"],
+        [f"#27.8 {scene}: DOP853 / exact solver alone", [ratio(m, "dop853", "solver") for m in trees], ""],
+        [f"#27.8 {scene}: DOP853 / {COMPILED} solver alone", [ratio(m, "dop853", "compiled") for m in trees], ""],
+        [f"#27.8 {scene}: CPU ms DOP853 | exact | {COMPILED} | simulate elastic (exact) | (with {COMPILED}) | "
+         "simulate", [ms(m, ("dop853", "solver", "compiled", "simulate_elastic", "simulate_compiled", "simulate"))
+                      for m in trees], ""],
+        [f"#27.8 {scene}: simulate elastic with {COMPILED}, effects' wall ms {' | '.join(e.split(':')[1] for e in effects)}",
+         [ms(m, effects) for m in trees], ""],
+    ]
+
+
+def single_revolution(rounds: int) -> None:
+    """#27.8 alone, in this checkout: child processes of child_single, medians over the rounds."""
+    load0 = os.getloadavg()[0]
+    figures: dict[str, list[float]] = {}
+    for _ in range(rounds):
+        for scene, values in run_child(ROOT, "single", 5).items():
+            for k, v in values.items():
+                figures.setdefault(f"{scene}:{k}", []).append(v)
+    med = {k: statistics.median(v) for k, v in figures.items()}
+    print(f"bench_wait --single: {ROOT}; medians of {rounds} child processes (each the median of 5 alternating "
+          f"runs), CPU time (the effects' own times: wall, in the same runs); load average {load0:.1f} -> "
+          f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    print_table(["case", "this checkout", "target"],
+                [[case, values[0], target] for scene in ("valve_float_demo.toml", "elastic_float.toml")
+                 for case, values, target in single_rows(scene, [med])])
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("before", type=Path, nargs="?", help="checkout of the code before (git archive)")
@@ -246,6 +312,7 @@ def main() -> None:
     parser.add_argument("--stages", action="store_true", help="only: a fresh process's first sweep by stage")
     parser.add_argument("--aot", action="store_true", help="only: #27.3 with numba's JIT kernels vs the AOT ones")
     parser.add_argument("--sweep-only", action="store_true", help="only the #27.5 row (the 1000-speed sweep)")
+    parser.add_argument("--single", action="store_true", help="only: #27.8 (one revolution) in this checkout")
     parser.add_argument("--child", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.stages:
@@ -253,6 +320,9 @@ def main() -> None:
         return
     if args.aot:
         aot_rows(args.rounds, args.speeds)
+        return
+    if args.single:
+        single_revolution(args.rounds)
         return
     if args.child:
         root, *rest = args.child
@@ -312,19 +382,7 @@ def main() -> None:
          f"{a['cli_sweep'] / a['cli_simulate']:.2f}x", "", "<= 1.2x"],
     ]
     for scene in ("valve_float_demo.toml", "elastic_float.toml"):
-        k = lambda m, x: m[f"{scene}:{x}"]  # noqa: E731
-        rows.append([f"#27.8 {scene}: DOP853 rtol 1e-10 / simulate (its effects)",
-                     f"{k(b, 'dop853') / k(b, 'simulate'):.1f}x", f"{k(a, 'dop853') / k(a, 'simulate'):.1f}x", "",
-                     ">= 100x"])
-        rows.append([f"#27.8 {scene}: DOP853 / simulate (elastic effect only)",
-                     f"{k(b, 'dop853') / k(b, 'simulate_elastic'):.1f}x",
-                     f"{k(a, 'dop853') / k(a, 'simulate_elastic'):.1f}x", "", ">= 100x"])
-        rows.append([f"#27.8 {scene}: DOP853 / exact solver alone",
-                     f"{k(b, 'dop853') / k(b, 'solver'):.1f}x", f"{k(a, 'dop853') / k(a, 'solver'):.1f}x", "", ""])
-        rows.append([f"#27.8 {scene}: CPU ms DOP853 | solver | simulate elastic | simulate",
-                     " | ".join(f"{1e3 * k(b, x):.1f}" for x in ("dop853", "solver", "simulate_elastic", "simulate")),
-                     " | ".join(f"{1e3 * k(a, x):.1f}" for x in ("dop853", "solver", "simulate_elastic", "simulate")),
-                     "", ""])
+        rows += [[case, *values, "", target] for case, values, target in single_rows(scene, [b, a])]
     print_table(["case", "before", "after", "after/before", "target"], rows)
 
     if args.pool:

@@ -141,3 +141,49 @@ def test_a_module_built_from_other_sources_is_not_used(monkeypatch, tmp_path, mo
     monkeypatch.undo()
     monkeypatch.setenv(aot.ENV, "0")
     assert aot.load(exact_kernel.AOT_MODULE, sources) is None
+
+
+def test_aot_solver_equals_jit_bit_for_bit(modules):
+    """The `exact-compiled` solver's compiled call (kernel_phase.solve_nodes) from the AOT module
+    and from numba, on the float scenes and on 40 seeded random models of elastic_float
+    (test_sweep_kernel's: stiff, chattering, with friction, some from a thrown start): every node
+    record, event and count the same bits."""
+    from explorer.dynamics.kernel_phase import solve_nodes
+    from explorer.dynamics.model import Drive, LinkageModel
+    from explorer.effects.lift import build_lift
+    from explorer.studies.bench import model_and_drive
+    from explorer.studies.sweep_spec import scene_for
+    from test_sweep_kernel import KEYS as RUN_KEYS
+
+    elastic = modules[0]
+    cases = []
+    for name in ("valve_float_demo.toml", "elastic_float.toml"):
+        model, drive = model_and_drive(load_scene(SCENES / name))
+        cases.append((model, drive, 3600, None))
+    scene = load_scene(SCENES / "elastic_float.toml")
+    lift = build_lift(scene)
+    for q, row in enumerate(_random_values(np.random.default_rng(11), 40, (1500.0, 6000.0), 1e10)):
+        sc = scene_for(scene, RUN_KEYS, row)
+        start = (2e-4, 0.5) if q % 4 == 0 else None
+        cases.append((LinkageModel.from_scene(sc), Drive(lift, sc.follower.ratio, sc.drive.omega), 1200, start))
+    for model, drive, n, start in cases:
+        t = np.arange(n + 1) * (2.0 * np.pi / n) / drive.omega
+        got, expected = (exact_kernel._solve(model, drive, t, start, 1e-12, 100_000, kernel)
+                         for kernel in (elastic.solve_nodes, solve_nodes))
+        for column in ("s", "v", "a", "linkage_force", "phase"):
+            assert np.array_equal(getattr(got, column), getattr(expected, column))
+        assert got.events == expected.events
+
+
+SIMULATE = ("import sys, explorer; explorer.simulate(explorer.load_scene(sys.argv[1], "
+            "['effects=[\"elastic\"]', 'solver.method=\"exact-compiled\"'])); print('numba' in sys.modules)")
+
+
+@pytest.mark.parametrize("setting, loads_numba", [("1", "False"), ("0", "True")])
+def test_simulate_with_exact_compiled_loads_no_numba_with_the_aot_module(modules, setting, loads_numba):
+    """A fresh process's `simulate` of the float demo with [solver] method = "exact-compiled" runs
+    the AOT module's solve_nodes and imports no numba while it is current; EXPLORER_AOT=0: numba's."""
+    env = {**os.environ, aot.ENV: setting}
+    out = subprocess.run([sys.executable, "-c", SIMULATE, str(SCENES / "valve_float_demo.toml")], capture_output=True,
+                         text=True, check=True, env=env)
+    assert out.stdout.strip().splitlines()[-1] == loads_numba

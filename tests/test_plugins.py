@@ -436,9 +436,13 @@ def _module_of(reference: str) -> str:
     return reference.partition(":")[0]
 
 
-def _owned(graph, roots: dict[str, set[str]]) -> dict[str, str]:
-    """module -> the plug-in that owns it: the plug-in's own modules, and the modules of the package
-    that only that plug-in's modules reach through their imports (its helpers)."""
+def _owned(graph, roots: dict[str, set[str]], families: bool = False) -> dict[str, frozenset[str]]:
+    """module -> the plug-ins that own it: a plug-in's own modules, and the modules of the package
+    that only that plug-in's modules reach through their imports (its helpers). families: plug-ins
+    that share an own module are one family and own together what only they reach (the solver
+    table's exact-compiled is the exact solver's batch module run as a solver: it reaches the exact
+    solver's modules, which may still name "exact"; a helper every solver reaches, phases.py, no
+    solver's name)."""
     reach: dict[str, set[str]] = {}
     for plugin, modules in roots.items():
         seen, stack = set(), list(modules)
@@ -450,7 +454,15 @@ def _owned(graph, roots: dict[str, set[str]]) -> dict[str, str]:
             stack.extend(graph.get(m, ()))
         for m in seen:
             reach.setdefault(m, set()).add(plugin)
-    return {m: next(iter(p)) for m, p in reach.items() if len(p) == 1}
+    family = {plugin: {plugin} for plugin in roots}
+    if families:
+        for a in roots:
+            for b in roots:
+                if a != b and roots[a] & roots[b]:
+                    joined = family[a] | family[b]
+                    for plugin in joined:
+                        family[plugin] = joined
+    return {m: frozenset(p) for m, p in reach.items() if all(family[q] == family[next(iter(p))] for q in p)}
 
 
 def _string_literals(path: Path):
@@ -472,7 +484,7 @@ def name_leaks(package: Path = PACKAGE) -> list[str]:
     gear_roots = {name: {_module_of(GEARS.raw(name)), _module_of(VIEWS.raw(name))} for name in GEARS.names()}
     solver_roots = {info.name: {_module_of(t) for t in (info.entry, info.chain_entry, info.batch_entry, info.stable_steps)
                                 if t} for info in SOLVERS.entries()}
-    owners = {**_owned(graph, gear_roots), **_owned(graph, solver_roots)}
+    owners = {**_owned(graph, gear_roots), **_owned(graph, solver_roots, families=True)}
     tables = {"explorer.gears.registry", "explorer.view.gear_views", "explorer.dynamics.solvers"}
     problems = []
     for module, path in sorted(_modules(package).items()):
@@ -480,7 +492,7 @@ def name_leaks(package: Path = PACKAGE) -> list[str]:
             continue
         for line, value in _string_literals(path):
             if value in GEARS or value in SOLVERS:
-                if owners.get(module) != value:
+                if value not in owners.get(module, ()):
                     problems.append(f"{module}:{line} names {value!r}")
     return problems
 

@@ -302,7 +302,9 @@ def test_failing_runs_are_marked_on_the_compiled_path():
 
 def test_numba_is_imported_by_the_kernel_module_only():
     """numba (~0.3 s to import) only in the compiled exact solver's modules (dynamics/kernel_*.py,
-    imported only by dynamics/exact_kernel.py, which only the sweep's compiled path imports), and
+    imported only by dynamics/exact_kernel.py, which only the sweep's compiled path and the solver
+    table's exact-compiled import, and the latter loads no numba while the AOT module is current:
+    tests/test_aot_kernels.py), and
     in dynamics/chain_kernels.py, which only the spring chain's exact solver imports (scenes with
     spring.elements > 0), and in mechanics/sweep_kernels.py, imported inside sweep_loops.kernels
     (the compiled sweep's rigid figures when no current ahead-of-time module of them exists), and in

@@ -12,27 +12,41 @@ from ..core.files import check_path
 from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, write_checked
 from .simulate import add_scene_arguments, scene_from_args
 
-HELP = """\
-Time every dynamics solver on the scene's elastic model over one revolution and measure its
-accuracy: exact and schenker1902 at 90 ... 360 000 steps per revolution (schenker1902 only where
-it is stable), scipy DOP853 at rtol 1e-3 ... 1e-12. Each run's largest valve-lift error against a
-converged reference of the other kind (exact and schenker1902 against scipy DOP853 rtol 1e-12,
-scipy against exact at the finest grid; the two references are cross-checked), CPU time
-(median of repeats) and events found. Also the speed ratio exact (default steps) vs scipy DOP853 rtol 1e-10,
-measured side by side, and the errors of v and p when a measured lift is differentiated.
+def _names(names) -> str:
+    names = list(names)
+    return ", ".join(names[:-1]) + " and " + names[-1] if len(names) > 1 else "".join(names)
 
-Prints a table and writes into --output-dir: bench_<scene>.csv (one row per run),
-bench_<scene>.png (error versus CPU time, the Pareto front), bench_<scene>.txt (the table) and,
-with the differentiation study, bench_<scene>_differentiation.csv/.png.
-The scene needs [valve], [spring] and [linkage]; its effects list does not matter. A rolling lever
-with its own stiffness (k changing along the cycle) cannot be run by the exact solver: the taylor
-solver takes its place everywhere, up to 36 000 steps.
-"""
+
+def _help() -> str:
+    """The help text, naming the solvers from the solver table (explorer/dynamics/solvers.py)."""
+    import textwrap
+
+    from ..dynamics import solvers
+
+    closed = [n for n in solvers.of_kind("piecewise") if not solvers.solver(n).varying_stiffness]
+    stepped = _names([*closed, *solvers.of_kind("fixed-step")])
+    ref = solvers.reference()
+    baseline = f"{ref.name} {ref.reference.label}"
+    varying = solvers.of_kind("piecewise", varying=True)[0]
+    first = (f"Time every dynamics solver on the scene's elastic model over one revolution and measure its "
+             f"accuracy: {stepped} at 90 ... 360 000 steps per revolution ({_names(solvers.of_kind('fixed-step'))} "
+             f"only where it is stable), {baseline} at rtol 1e-3 ... 1e-12. Each run's largest valve-lift error "
+             f"against a converged reference of the other kind ({stepped} against {baseline} rtol 1e-12, {ref.name} "
+             f"against {closed[0]} at the finest grid; the two references are cross-checked), CPU time (median of "
+             f"repeats) and events found. Also the speed ratio {closed[0]} (default steps) vs {baseline} rtol 1e-10, "
+             f"measured side by side, and the errors of v and p when a measured lift is differentiated.")
+    last = (f"The scene needs [valve], [spring] and [linkage]; its effects list does not matter. A rolling lever "
+            f"with its own stiffness (k changing along the cycle) cannot be run by the closed forms: the {varying} "
+            f"solver takes their place everywhere, up to 36 000 steps.")
+    return (textwrap.fill(first, 96) + "\n\nPrints a table and writes into --output-dir: bench_<scene>.csv (one row "
+            "per run),\nbench_<scene>.png (error versus CPU time, the Pareto front), bench_<scene>.txt (the table) "
+            "and,\nwith the differentiation study, bench_<scene>_differentiation.csv/.png.\n" + textwrap.fill(last, 96)
+            + "\n")
 
 
 def register(sub) -> None:
     p = sub.add_parser("bench", help="accuracy versus time of the dynamics solvers (table, CSV, chart)",
-                       description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=_help() + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--output-dir", default=".", metavar="DIR", help="where the CSV, PNG and text files go (default: .)")
     p.add_argument("--quick", action="store_true", help="few resolutions (90, 900, 3600 steps; rtol 1e-4, 1e-8): seconds, for tests")

@@ -223,20 +223,7 @@ def solve(
     chunk: fewest steps propagated and scanned at once at the start of a moving phase (then twice
       the last phase of its kind, growing 8x while no event is found).
     """
-    t_req = np.asarray(t, dtype=float).ravel()
-    steps = t_req[1:] - t_req[:-1]
-    hmin = float(np.minimum.reduce(steps)) if steps.size else 0.0
-    if t_req.size == 0 or hmin < 0.0 or not np.isfinite(t_req).all():
-        raise ValueError("output times must be a non-empty, sorted array of finite numbers")
-    if t_req.size > 1 and hmin > 0.0:  # strictly increasing: the nodes themselves
-        t_nodes, inverse = t_req, None
-    else:
-        t_nodes, inverse = np.unique(t_req, return_inverse=True)
-        inverse = inverse.ravel()
-        if t_nodes.size == 1:  # one instant: the state itself
-            t_nodes = np.array([t_nodes[0], t_nodes[0] + 1e-9])
-            inverse = np.zeros(t_req.size, dtype=np.int64)
-        hmin = float(np.minimum.reduce(t_nodes[1:] - t_nodes[:-1]))
+    t_req, t_nodes, inverse, hmin = exact_output.output_nodes(t)
     solver = _Solver(model, drive, t_nodes, initial_state, zeno_height, max_events, chunk, hmin)
     solver.run()
     return solver.solution(t_req, inverse)

@@ -1,7 +1,9 @@
 """The `exact` solver compiled (numba): the same model, closed forms and events as exact.py, for the
 batch engine of sweeps (explorer/effects/elastic_batch.py, which the sweep engine and the browser's
-speed sweep use). Only elastic_batch imports this module, and only this module imports the compiled
-parts (numba costs ~0.4 s to import; `import explorer` must not pay it).
+speed sweep use) and as the solver table's `exact-compiled` (solve: one revolution, a scene's
+[solver] method). Only elastic_batch and the solver table's entry import this module, and only
+this module imports the compiled parts (numba costs ~0.4 s to import; `import explorer` must not
+pay it).
 
 The compiled code follows the Python solver's seams, one module each:
   kernel_grid     the grid (exact_grid.build_grid, called in Python and passed in as arrays; a
@@ -33,16 +35,19 @@ The LinkageModel without stiffness_profile only (constant coefficients): `suppor
 
 `python -m explorer.dynamics.exact_kernel --warm` compiles (and caches beside the modules) every
 compiled function once: `make` runs it at install and when a source changes, so the first sweep
-does not compile. `--aot` compiles the batch entry point (revolutions) ahead of time into
-_exact_kernel_aot (explorer/core/aot.py), which run_batch uses while it is current: this module
-imports the numba modules (kernel_phase, kernel_figures, kernel_grid, kernel_events) only inside
-the functions that run them.
+does not compile. `--aot` compiles the batch entry point (revolutions) and solve's compiled call
+(kernel_phase.solve_nodes) ahead of time into _exact_kernel_aot (explorer/core/aot.py), which
+run_batch and solve use while it is current: this module imports the numba modules (kernel_phase,
+kernel_figures, kernel_grid, kernel_events) only inside the functions that run them, so a sweep or
+a `simulate` with exact-compiled loads no numba then.
 """
 
 from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Mapping
+from types import MappingProxyType
 
 import numpy as np
 
@@ -53,7 +58,7 @@ from .exact_steps import LinearPhase, taylor_terms
 from .kernel_shared import (FIGURES, NO_PROGRESS, OK, RUN_PARAMETERS, TOO_MANY_EVENTS,  # noqa: F401
                             RevolutionGrid, revolution_grid, split_parts)
 from .model import Drive, DynamicsSolution, LinkageModel
-from .phases import CONTACT, FLIGHT
+from .phases import CONTACT, FLIGHT, SEATED, phase_of_state
 
 # the batch entry point (revolutions) compiled ahead of time by `make` (build_aot below): used when
 # it was built from the kernel's current sources (explorer/core/aot.py), so that a sweep's process
@@ -83,10 +88,8 @@ def model_arguments(model: LinkageModel) -> tuple:
 
 def phase_rates(model: LinkageModel) -> float:
     """rho: the fastest rate of the contact and flight phases (exact_phase.PhaseStepper's)."""
-    lins = (LinearPhase(model.oscillating_mass, model.damping, model.stiffness + model.spring_rate, model.stiffness,
-                        model.damping),
-            LinearPhase(model.mass, 0.0, model.spring_rate, 0.0, 0.0))
-    return max(lin.rho for lin in lins)
+    M, M1, k, c, _, _, rate, _, _ = model_arguments(model)
+    return max(lin.rho for lin in _phases(M, M1, k, c, rate).values())
 
 
 def events_list(ev: np.ndarray) -> list[dict]:
@@ -100,36 +103,49 @@ def events_list(ev: np.ndarray) -> list[dict]:
     return out
 
 
-def solve(model: LinkageModel, drive, t: np.ndarray, zeno_height: float = 1e-12,
-          max_events: int = 100_000) -> DynamicsSolution:
-    """exact.solve compiled: the same grid and output (exact_output.solution), the stepping and
-    the events in compiled code; the valve starts at rest on its seat at t[0] (strictly
-    increasing output times)."""
+def solve(model: LinkageModel, drive, t: np.ndarray, initial_state: tuple[float, float] | None = None,
+          zeno_height: float = 1e-12, max_events: int = 100_000) -> DynamicsSolution:
+    """exact.solve compiled (the solver table's `exact-compiled`): the same grid, start and output
+    (exact_grid.build_grid, phases.phase_of_state, exact_output), the stepping and the events in
+    one compiled call (nodes_function: the ahead-of-time module's solve_nodes while it is current,
+    so a process that runs it need not import numba). initial_state: (s, v) at t[0], default at
+    rest on the seat; zeno_height, max_events: exact.solve's. RuntimeError where exact.py raises."""
+    return _solve(model, drive, t, initial_state, zeno_height, max_events, nodes_function())
+
+
+def _solve(model: LinkageModel, drive, t, initial_state, zeno_height: float, max_events: int,
+           kernel) -> DynamicsSolution:
+    """solve() with the compiled solve_nodes `kernel` (the AOT module's or numba's)."""
     if not supports(model):
         raise ValueError("the compiled exact solver needs a constant linkage stiffness")
-    t_req = np.asarray(t, dtype=float).ravel()
-    if t_req.size < 2 or not np.isfinite(t_req).all() or np.any(np.diff(t_req) <= 0.0):
-        raise ValueError("output times must be a sorted array of at least two distinct finite times")
-    from .kernel_grid import grid_bounds
-    from .kernel_phase import solve_nodes
-
-    hmin = float(np.min(np.diff(t_req)))
-    rho = phase_rates(model)
-    g = build_grid(drive, t_req, rho, hmin)
+    t_req, t_nodes, inverse, hmin = exact_output.output_nodes(t)
+    M, M1, k, c, lash, W0, rate, R, e = args = model_arguments(model)
+    lins = _phases(M, M1, k, c, rate)
+    rho = max(lin.rho for lin in lins.values())
+    g = build_grid(drive, t_nodes, rho, hmin)
     N = taylor_terms(rho * g.h_max)
-    Sb = np.ascontiguousarray(g.Sb)
-    out_s, out_v, out_sigma, out_phase, ev, status, n_detail = solve_nodes(
-        g.nodes, g.h, np.ascontiguousarray(g.PT), g.Dn, Sb, g.hidx.astype(np.int64), g.h_unique,
-        *model_arguments(model), float(zeno_height), int(max_events), int(N), *grid_bounds(g.h, g.Dn, Sb))
+    if initial_state is None:
+        start = (SEATED, 0.0, 0.0, 1.0, False)
+    else:  # (exact._Solver.run's start: the drive at the first node is the first step's polynomial's)
+        s0, v0 = (float(x) for x in initial_state)
+        phase0, sigma0 = phase_of_state(float(g.Dn[0, 0]), float(g.Dn[1, 0]), k, c, lash, s0, v0, W0, rate, R)
+        start = (phase0, s0, v0, sigma0, v0 == 0.0)
+    cont = np.ascontiguousarray  # (the exported signature's layout: a copy of P.T only; the rest already are)
+    out_s, out_v, out_sigma, out_phase, ev, status, n_detail = kernel(
+        cont(g.nodes), cont(g.h), cont(g.PT), cont(g.Dn), cont(g.Sb), cont(g.hidx, dtype=np.int64), cont(g.h_unique),
+        *args, float(zeno_height), int(max_events), int(N), *start)
     _check(status)
-    lins = {CONTACT: LinearPhase(model.oscillating_mass, model.damping, model.stiffness + model.spring_rate,
-                                 model.stiffness, model.damping),
-            FLIGHT: LinearPhase(model.mass, 0.0, model.spring_rate, 0.0, 0.0)}
     stats = {"method": "exact-compiled", "nodes": int(g.nodes.size), "steps": int(g.h.size), "taylor_terms": N,
              "detail_searches": int(n_detail), "events": int(ev.shape[0]), "warnings": []}
-    return exact_output.solution(t_req, None, out_s, out_v, out_sigma, out_phase, g.Dn, g.is_out, lins,
-                                 model.stiffness, model.damping, model.lash, model.seated_resistance,
-                                 model.friction, events_list(ev), stats)
+    return exact_output.solution(t_req, inverse, out_s, out_v, out_sigma, out_phase, g.Dn, g.is_out, lins, k, c,
+                                 lash, W0, R, events_list(ev), stats)
+
+
+@functools.lru_cache(maxsize=64)
+def _phases(M: float, M1: float, k: float, c: float, rate: float) -> Mapping[int, LinearPhase]:
+    """The LinearPhase of contact and flight (exact_phase.PhaseStepper's), by phase code: a
+    model's are built once (a scene's revolutions reuse them)."""
+    return MappingProxyType({CONTACT: LinearPhase(M1, c, k + rate, k, c), FLIGHT: LinearPhase(M, 0.0, rate, 0.0, 0.0)})
 
 
 def run_revolution(grid: RevolutionGrid, omega: float, model: LinkageModel, ratio: float, take_up_s: float,
@@ -168,7 +184,8 @@ def run_batch(grid: RevolutionGrid, ratio: float, runs: np.ndarray, ref: np.ndar
 
 def aot_sources() -> list:
     """The sources the ahead-of-time module compiles: the kernel's (kernel_stamp.SOURCES: every file
-    whose code or constants the compiled code reads, kernel_figures' exported signature among them)."""
+    whose code or constants the compiled code reads, the exported functions and their signatures
+    among them: kernel_figures' revolutions, kernel_phase's solve_nodes)."""
     return [kernel_stamp.HERE / name for name in kernel_stamp.SOURCES]
 
 
@@ -184,13 +201,27 @@ def batch_function():
     return revolutions
 
 
-def build_aot() -> float:
-    """Compile revolutions (with its callees inlined in its object code) ahead of time, for the
-    argument types run_batch passes (kernel_figures.aot_exports); the seconds it took."""
-    from ..core.aot_build import build
-    from .kernel_figures import aot_exports
+@functools.cache
+def nodes_function():
+    """solve_nodes (the `exact-compiled` solver's compiled call): the ahead-of-time module's when it
+    was built from the current sources (it imports no numba), else numba's kernel_phase.solve_nodes."""
+    module = aot.load(AOT_MODULE, aot_sources())
+    if module is not None and hasattr(module, "solve_nodes"):
+        return module.solve_nodes
+    from .kernel_phase import solve_nodes
 
-    return build(AOT_MODULE, kernel_stamp.HERE, aot_exports(), aot_sources())
+    return solve_nodes
+
+
+def build_aot() -> float:
+    """Compile revolutions and solve_nodes (each with its callees in its object code) ahead of
+    time into one module, for the argument types run_batch and solve pass
+    (kernel_figures.aot_exports, kernel_phase.aot_exports); the seconds it took."""
+    from ..core.aot_build import build
+    from . import kernel_figures, kernel_phase
+
+    return build(AOT_MODULE, kernel_stamp.HERE, {**kernel_figures.aot_exports(), **kernel_phase.aot_exports()},
+                 aot_sources())
 
 
 def revolution_events(rev: np.ndarray) -> list[dict]:
@@ -213,7 +244,9 @@ def warm() -> None:
                          spring_rate=3e4, friction=5.0, restitution=0.5)
     omega = 2 * math.pi * 100.0
     t = np.linspace(0.0, 2 * math.pi / omega, 181)
-    solve(model, Drive(_Lift(), 1.0, omega), t)
+    from .kernel_phase import solve_nodes  # (numba's, even where the AOT module is current: the fallback)
+
+    _solve(model, Drive(_Lift(), 1.0, omega), t, None, 1e-12, 100_000, solve_nodes)
     grid = revolution_grid(_Lift(), 1.0, 180)
     ref = np.zeros(180)
     run_revolution(grid, omega, model, 1.0, 0.0, ref, -1, math.nan)

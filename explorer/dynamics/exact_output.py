@@ -1,7 +1,8 @@
 """Part of the `exact` solver (exact.py): the output. The solver records s, v, the phase and the
 friction sign at every node; acceleration, jerk and linkage force follow here from the phase
 ODEs at all nodes at once (exact: the closed form's derivatives), and the output times are
-picked from the nodes."""
+picked from the nodes (output_nodes: the nodes of the output times; the compiled exact solver,
+exact_kernel.py, shares both)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,26 @@ import numpy as np
 
 from .model import DynamicsSolution
 from .phases import CONTACT, FLIGHT
+
+
+def output_nodes(t) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, float]:
+    """(the output times as a flat float array, the grid's output nodes: the distinct times, the
+    node of each output time (None: the nodes are the output times), the shortest step between
+    nodes). ValueError (one line) for times that are empty, unsorted or not finite. One instant
+    alone gets a second node 1e-9 s later (the state itself is the answer)."""
+    t_req = np.asarray(t, dtype=float).ravel()
+    steps = t_req[1:] - t_req[:-1]
+    hmin = float(np.minimum.reduce(steps)) if steps.size else 0.0
+    if t_req.size == 0 or hmin < 0.0 or not np.isfinite(t_req).all():
+        raise ValueError("output times must be a non-empty, sorted array of finite numbers")
+    if t_req.size > 1 and hmin > 0.0:  # strictly increasing: the nodes themselves
+        return t_req, t_req, None, hmin
+    t_nodes, inverse = np.unique(t_req, return_inverse=True)
+    inverse = inverse.ravel()
+    if t_nodes.size == 1:  # one instant: the state itself
+        t_nodes = np.array([t_nodes[0], t_nodes[0] + 1e-9])
+        inverse = np.zeros(t_req.size, dtype=np.int64)
+    return t_req, t_nodes, inverse, float(np.minimum.reduce(t_nodes[1:] - t_nodes[:-1]))
 
 
 def solution(t_req: np.ndarray, inverse, s: np.ndarray, v: np.ndarray, sigma: np.ndarray, phase: np.ndarray, Dn,

@@ -28,7 +28,7 @@ from .exact_phase import MAX_BOUND_Q, RELEASE_RESIDUAL
 from .exact_events import MAX_DEPTH
 from .kernel_events import (LIFT_OFF, MIN, RECONTACT, SEARCH_ROWS, SEAT, SEPARATION, UP, VZERO, coeffs, earliest,
                             moving_table, static_table, zero_flags)
-from .kernel_grid import BLOCK, WINDOW, drive_at, node_time
+from .kernel_grid import BLOCK, WINDOW, drive_at, grid_bounds, node_time
 from .kernel_shared import NO_PROGRESS, OK, TOO_MANY_EVENTS  # a run's status (exact.py's RuntimeErrors)
 from .kernel_steps import deriv_into, expand, fsum, horner, shift_into, step, step_tables_into
 from .phases import CONTACT, FLIGHT, SEATED, STUCK
@@ -622,15 +622,19 @@ def _handle_event(which, phase, s, v, sigma, j, u, nodes, h, inv, PT, Dn, sw1, M
 
 @njit(cache=True)
 def run_nodes(nodes, h, inv, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height,
-              max_events, N, blk, win, buffers):
+              max_events, N, blk, win, buffers, phase0=SEATED, s0=0.0, v0=0.0, sigma0=1.0, release0=False):
     """One run over the grid (exact_grid.build_grid's nodes, h, P.T, Dn, hidx, h_unique; Sb its
     bounds of the drive's first three derivatives per step), read at the speed sw1: node positions
     and step lengths times inv are times, S' and the bounds times sw1, sw1^2, sw1^3 are per time
-    (a grid in cam angle at the speed sw1 = 1 / inv; inv = sw1 = 1 for a grid in time), starting
-    at rest on the seat, into `buffers` (run_buffers: the node records s, v, friction sign, phase
-    code). Returns (the events: rows of code, time, velocity, Zeno accumulation time or NaN; the
-    status: OK, or TOO_MANY_EVENTS / NO_PROGRESS, exact.py's RuntimeErrors; the steps searched in
-    detail). blk, win: grid_bounds of the grid at the speed 1."""
+    (a grid in cam angle at the speed sw1 = 1 / inv; inv = sw1 = 1 for a grid in time), into
+    `buffers` (run_buffers: the node records s, v, friction sign, phase code). Returns (the events:
+    rows of code, time, velocity, Zeno accumulation time or NaN; the status: OK, or TOO_MANY_EVENTS
+    / NO_PROGRESS, exact.py's RuntimeErrors; the steps searched in detail). blk, win: grid_bounds
+    of the grid at the speed 1.
+    It starts at rest on the seat; or, given phase0, s0, v0, sigma0, release0, in that phase and
+    state at the first node (exact._Solver.run's start from an initial_state: the phase and
+    friction sign of phases.phase_of_state, release0 when v0 == 0). (Defaults: numba compiles a
+    call that omits them with the constants, so the sweep's runs are the code they were.)"""
     out_s, out_v, out_sigma, out_phase, ev, tabs, ws = buffers
     hu, tmp = ws[17], ws[19]
     ns = h.size
@@ -643,13 +647,13 @@ def run_nodes(nodes, h, inv, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash,
     step_tables_into(tabs[CONTACT], M1, c, k + rate, k, c, hu, N, ws[0], ws[2])
     step_tables_into(tabs[FLIGHT], M, 0.0, rate, 0.0, 0.0, hu, N, ws[0], ws[2])
 
-    phase = SEATED
-    s = 0.0
-    v = 0.0
-    sigma = 1.0
+    phase = phase0
+    s = s0
+    v = v0
+    sigma = sigma0
     j = 0
     u = 0.0
-    release = False
+    release = release0
     same_time = 0
     last_time = np.nan
     status = OK
@@ -696,10 +700,25 @@ def run_nodes(nodes, h, inv, PT, Dn, Sb, sw1, hidx, h_unique, M, M1, k, c, lash,
 
 @njit(cache=True)
 def solve_nodes(nodes, h, PT, Dn, Sb, hidx, h_unique, M, M1, k, c, lash, W0, rate, R, e, zeno_height, max_events, N,
-                blk, win):
-    """run_nodes on a grid in time, with buffers of its own: (out_s, out_v, out_sigma, out_phase,
-    events, status, steps searched in detail)."""
+                phase0, s0, v0, sigma0, release0):
+    """run_nodes on a grid in time (its grid_bounds computed here), from the given start (run_nodes'
+    phase0 ... release0), with buffers of its own: (out_s, out_v, out_sigma, out_phase, events,
+    status, steps searched in detail). The `exact-compiled` solver's one compiled call
+    (exact_kernel.solve)."""
+    blk, win = grid_bounds(h, Dn, Sb)
     buffers = run_buffers(h.size + 1, N, h_unique.size)
     ev, status, n_detail = run_nodes(nodes, h, 1.0, PT, Dn, Sb, 1.0, hidx, h_unique, M, M1, k, c, lash, W0, rate, R,
-                                     e, zeno_height, max_events, N, blk, win, buffers)
+                                     e, zeno_height, max_events, N, blk, win, buffers, phase0, s0, v0, sigma0,
+                                     release0)
     return buffers[0], buffers[1], buffers[2], buffers[3], ev, status, n_detail
+
+
+def aot_exports() -> dict:
+    """What the ahead-of-time module exports of this module (exact_kernel.build_aot): solve_nodes,
+    for the types and layouts exact_kernel.solve passes."""
+    from numba import types as T
+
+    A1, A2, I1, F = T.float64[::1], T.float64[:, ::1], T.int64[::1], T.float64
+    signature = T.Tuple((A1, A1, A1, T.int8[::1], A2, T.int64, T.int64))(
+        A1, A1, A2, A2, A2, I1, A1, F, F, F, F, F, F, F, F, F, F, T.int64, T.int64, T.int64, F, F, F, T.boolean)
+    return {"solve_nodes": (signature, solve_nodes)}

@@ -115,7 +115,8 @@ class SolverInfo:
     kind: str = "piecewise"  # "piecewise", "fixed-step" or "adaptive" (item 5)
     # largest difference from the exact solution on the contract test's smooth cases (a rise in
     # contact over 6000 steps, a manufactured k(t) motion over 800) at default settings, m: what
-    # this solver claims there (measured: schenker1902 2e-10, scipy 3e-13, taylor 8e-16)
+    # this solver claims there (measured: schenker1902 2e-10, scipy 3e-13, taylor 8e-16, exact-compiled
+    # 2e-17: the rounding of the same closed forms carried step by step)
     contract_tolerance_m: float = 0.0
     chain_entry: str | None = None  # "module:function" solving the spring-chain model (item 4)
     batch_entry: str | None = None  # "module:" compiled for many runs at once (item 4)

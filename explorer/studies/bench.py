@@ -2,6 +2,7 @@
 
 For the scene's elastic model (valve, spring, loads, linkage) over one camshaft revolution:
   exact         piecewise-exact, at 90 ... 360 000 steps per revolution
+  exact-compiled  the same compiled (the table's other closed-form piecewise solvers), the same grids
   schenker1902  the 1902 scheme at the same steps, where it is stable (h < 0.390 Tn)
   scipy         solve_ivp DOP853 with events, rtol 1e-3 ... 1e-12 (atol = rtol/1000 m), on the
                 scene's own output grid; plain sign-change event detection and the step bounded
@@ -129,11 +130,11 @@ class BenchReport:
             f"{self.reference_check_m:.1e} m",
             f"reference events: {' '.join(self.reference_events) or 'none'}",
             "",
-            f"{'method':<13} {'setting':<20} {'max error m':>12} {'CPU ms':>10} {'wall ms':>10} {'runs':>4} {'events':>6} {'steps':>8} {'nfev':>8}",
+            f"{'method':<15} {'setting':<20} {'max error m':>12} {'CPU ms':>10} {'wall ms':>10} {'runs':>4} {'events':>6} {'steps':>8} {'nfev':>8}",
         ]
         for r in self.runs:
             lines.append(
-                f"{r.method:<13} {r.setting:<20} {r.max_error_m:12.2e} {1e3 * r.cpu_time_s:10.2f} {1e3 * r.wall_time_s:10.2f} "
+                f"{r.method:<15} {r.setting:<20} {r.max_error_m:12.2e} {1e3 * r.cpu_time_s:10.2f} {1e3 * r.wall_time_s:10.2f} "
                 f"{r.repeats:4d} {r.events:6d} {r.solver_steps if r.solver_steps is not None else '':>8} "
                 f"{r.nfev if r.nfev is not None else '':>8}"
             )
@@ -214,6 +215,11 @@ def run_bench(
     # the solvers, by their kind in the registry: the first piecewise one that takes this model,
     # every fixed-step one at the steps where it is stable, scipy (the adaptive reference) by rtol
     fast = solver_registry.of_kind("piecewise", varying)[0]
+    # the other piecewise solvers of the same model at the same grids: for a constant k those that
+    # need it (closed forms: the exact solver compiled), not the k(t) ones (taylor: 100x slower
+    # there, it runs in fast's place for a k(t) only)
+    also = tuple(name for name in solver_registry.of_kind("piecewise", varying)[1:]
+                 if not varying and not solver_registry.solver(name).varying_stiffness)
     fixed = solver_registry.of_kind("fixed-step", varying)
     ref_info = solver_registry.reference()
     ref_name, ref_setting = ref_info.name, ref_info.reference
@@ -222,7 +228,8 @@ def run_bench(
     stable_steps = {name: [n for n in steps if n >= min_stable[name]] for name in fixed}
     ratio_repeats = max(5, repeats)
 
-    total = 2 + len(steps) + sum(map(len, stable_steps.values())) + len(rtols) + 1 + (1 if differentiation else 0)
+    total = (2 + len(steps) * (1 + len(also)) + sum(map(len, stable_steps.values())) + len(rtols) + 1
+             + (1 if differentiation else 0))
     done = 0
 
     def tick(label: str) -> None:
@@ -271,7 +278,7 @@ def run_bench(
     runs: list[Run] = []
     notes: list[str] = []
     # warm-up: the first call of each solver pays for imports and caches, not for the method
-    for method in (fast, *fixed, ref_name):
+    for method in (fast, *also, *fixed, ref_name):
         options = solver_registry.solver(method).unstable_options()
         solve(model, drive, grid(360), method=method, **options)
 
@@ -291,6 +298,11 @@ def run_bench(
         if finest % n == 0:
             return fast_fine.s[:: finest // n]
         return solve(model, drive, grid(n), method=fast).s
+    for method in also:
+        for n in steps:
+            tick(f"{method} at {n} steps")
+            t = t_on(n)
+            runs.append(record(method, f"{n} steps", n, None, lambda t=t, m=method: solve(model, drive, t, method=m)))
     for method in fixed:
         for n in stable_steps[method]:
             tick(f"{method} at {n} steps")
@@ -328,7 +340,7 @@ def run_bench(
     return BenchReport(
         scene=scene.name, rpm=scene.drive.rpm, default_steps=default_steps, natural_period_s=model.natural_period(),
         revolution_s=revolution,
-        reference=(f"{' and '.join((fast, *fixed))} against {ref_label} rtol {REFERENCE_RTOL:g} atol "
+        reference=(f"{' and '.join((fast, *also, *fixed))} against {ref_label} rtol {REFERENCE_RTOL:g} atol "
                    f"{ref_setting.options(REFERENCE_RTOL)['atol']:g} m (events, max step Tn/4"
                    f"{', drive and k(t) tabulated' if varying else ''}); {ref_name} against {fast}; both at {finest} steps"),
         reference_check_m=reference_check, reference_events=tuple(e["kind"] for e in ref.events),
