@@ -54,28 +54,26 @@ def law_4567(u):
     return 35 * u**4 - 84 * u**5 + 70 * u**6 - 20 * u**7, 420 * u**2 - 1680 * u**3 + 2100 * u**4 - 840 * u**5
 
 
-def float_scan(law, height, rise_deg, ratio, lash, mass, preload, rate, closing, n=1_000_001):
-    """(float speed rpm, least contact force at `rpm` given later) of the rigid train on the rise:
-    the return is the rise mirrored (the same law and angle), and without friction its loads are
-    the same, so the rise holds the minimum."""
-    u = np.linspace(0.0, 1.0, n)
-    s, a = law(u)
-    beta = math.radians(rise_deg)
-    valve = ratio * height * s - lash  # valve travel, > 0 open
-    accel = ratio * height * a / beta**2  # valve acceleration per w^2
+def rise(law, height, rise_deg, ratio, lash, n=1_000_001):
+    """(valve travel, > 0 open; valve acceleration per w^2) on n samples of the rise. The return
+    is the rise mirrored (the same law and angle) and without friction its loads are the same,
+    so the rise holds the minima below."""
+    s, a = law(np.linspace(0.0, 1.0, n))
+    return ratio * height * s - lash, ratio * height * a / math.radians(rise_deg) ** 2
+
+
+def float_scan(law, height, rise_deg, ratio, lash, mass, preload, rate, closing):
+    """The rigid float speed (rpm): w^2 = min over open, decelerating samples of G / (-M p/w^2)."""
+    valve, accel = rise(law, height, rise_deg, ratio, lash)
     static = preload + rate * np.maximum(valve, 0.0) + closing
-    inertia = mass * accel
-    take = (valve > 0.0) & (inertia < 0.0)
-    return math.sqrt(np.min(static[take] / -inertia[take])) * RPM
+    take = (valve > 0.0) & (accel < 0.0)
+    return math.sqrt(np.min(static[take] / -(mass * accel[take]))) * RPM
 
 
-def least_force_scan(law, height, rise_deg, ratio, lash, mass, preload, rate, closing, rpm, n=1_000_001):
-    u = np.linspace(0.0, 1.0, n)
-    s, a = law(u)
-    beta = math.radians(rise_deg)
-    valve = ratio * height * s - lash
-    w = rpm / RPM
-    force = mass * ratio * height * a / beta**2 * w**2 + preload + rate * valve + closing
+def least_force_scan(law, height, rise_deg, ratio, lash, mass, preload, rate, closing, rpm):
+    """The least rigid contact force (N) while the valve is open, at `rpm`."""
+    valve, accel = rise(law, height, rise_deg, ratio, lash)
+    force = mass * accel * (rpm / RPM) ** 2 + preload + rate * valve + closing
     return float(np.min(force[valve > 0.0]))
 
 
