@@ -13,7 +13,8 @@ Stores in DIR (default /tmp/gears-golden), per scene:
 - a digest of the 3D parts (.parts.json): the layout, every part's vertices and faces and every
   pose of the browser's and the recordings' drawing (explorer.view.parts), as SHA-256 of the bytes.
 Columns are compared with np.array_equal (bit for bit, NaN-aware via equal_nan where the golden
-column has NaNs), summaries with ==, texts and digests as strings.
+column has NaNs), summaries with == (a difference names its keys: +added, -gone, changed), texts and
+digests as strings.
 Golden data is never committed: it is made from the code before a change.
 """
 
@@ -122,6 +123,18 @@ def save(directory: Path) -> None:
         print(f"saved {path.stem}: {len(columns)} columns, sweep, parts")
 
 
+def summary_differences(golden, new, prefix: str = "") -> list[str]:
+    """The summary's keys that differ, dotted paths: +key added, -key gone, key changed."""
+    if not (isinstance(golden, dict) and isinstance(new, dict)):
+        return [] if golden == new else [prefix or "(the summary)"]
+    out = [f"+{prefix}{k}" for k in sorted(set(new) - set(golden))]
+    out += [f"-{prefix}{k}" for k in sorted(set(golden) - set(new))]
+    for k in sorted(set(golden) & set(new)):
+        out += summary_differences(golden[k], new[k], f"{prefix}{k}.") if isinstance(golden[k], dict) else (
+            [] if golden[k] == new[k] else [f"{prefix}{k}"])
+    return out
+
+
 def check(directory: Path) -> int:
     failures = 0
     checked = [path for path in SCENES if (directory / f"{path.stem}.npz").exists()]
@@ -139,7 +152,7 @@ def check(directory: Path) -> int:
                     problems.append(f"column {name} differs")
         golden_summary = json.loads((directory / f"{path.stem}.json").read_text())
         if json.loads(json.dumps(summary, sort_keys=True)) != golden_summary:
-            problems.append("summary differs")
+            problems.append("summary differs (" + ", ".join(summary_differences(golden_summary, summary)) + ")")
         if (directory / f"{path.stem}.txt").exists() and json_text(path) != (directory / f"{path.stem}.txt").read_text():
             problems.append("JSON text differs")
         if (directory / f"{path.stem}.sweep.npz").exists():

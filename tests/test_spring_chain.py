@@ -370,9 +370,10 @@ def test_surge_scene_separates_below_the_rigid_float_speed():
     assert s["spring_elements"] == 8
     assert s["surge_amplitude_N"] > 10.0
     # the valve leaves the cam on the lift flank (before the nose at 67.5 + ... deg), far below the
-    # rigid train's jump speed of the forces effect
+    # rigid train's jump speed of the forces effect (3886 rpm: its mass is the valve and a third of
+    # the spring, which the scene models as masses; tests/test_rigid_mass.py)
     assert s["first_separation_deg"] is not None and 60.0 < s["first_separation_deg"] < 105.0
-    assert s["jump_speed_rpm"] > 1.5 * s["rpm"]
+    assert s["jump_speed_rpm"] > 1.45 * s["rpm"]
     f1 = s["spring_modal_frequencies_Hz"][0]
     # the closed form of the chain, and the continuous spring within the 1/N^2 lumping error
     assert f1 == pytest.approx(0.5 * math.sqrt(30.6e3 / 0.0446) * math.sin(math.pi / 18) / (math.pi / 18), rel=2e-3)

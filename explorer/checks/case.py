@@ -33,6 +33,7 @@ from ..mechanics.contact import ContactSpec, effective_modulus, hertz_width
 from ..mechanics.forces import friction_direction
 from ..mechanics.gear_contact import GearContact, NotApplicable
 from ..mechanics.kinematics import lash_crossings
+from ..mechanics.moving_mass import RigidMass, rigid_mass
 from ..studies.sweep_engine import _Shared, compute_chunk, result_columns
 from ..studies.sweep_run import run_plan
 from ..studies.sweep_spec import Plan, scene_for
@@ -143,6 +144,11 @@ class Case:
         if self.scene.valve is None or self.scene.spring is None:
             raise NotApplicable("needs the valve train's loads: [valve] mass and [spring] preload and rate")
 
+    @cached_property
+    def rigid_mass(self) -> RigidMass:
+        """valve.mass and the parts moving with it, referred to the valve (mechanics.moving_mass)."""
+        return rigid_mass(self.scene)
+
     def valve_lift(self, lash=None) -> np.ndarray:
         """ratio L - lash (N, n) or (1, n): the valve's travel, > 0 where it is open."""
         lash = self.param("valve.lash") if lash is None else lash
@@ -174,7 +180,9 @@ class Case:
         is_open = x > 0.0
         s = np.where(is_open, x, 0.0)
         direction = friction_direction(d[1], d[2])[None, :]
-        a_coef = np.atleast_2d(p("valve.mass")) * (ratio * d[2])[None, :]
+        # the rigid train's mass: each draw's valve.mass plus the parts moving with it (the floats
+        # of TrainLoads.from_scene's mass for the nominal design)
+        a_coef = np.atleast_2d(self.rigid_mass.of_valve(p("valve.mass"))) * (ratio * d[2])[None, :]
         g_part = (np.atleast_2d(p("spring.preload")) + np.atleast_2d(p("spring.rate")) * s
                   + np.atleast_2d(p("loads.friction")) * direction + self.scene.loads.closing_total)
         shape = (max(a_coef.shape[0], g_part.shape[0]), d.shape[1])

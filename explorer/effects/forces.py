@@ -9,6 +9,7 @@ import numpy as np
 from ..core.memo import remember
 from ..mechanics.forces import (TrainLoads, contact_loss_intervals, float_speed, loss_report, min_contact_force,
                                 rigid_train_forces, side_extremes, smooth_pieces)
+from ..mechanics.moving_mass import rigid_mass
 from ..result import EffectOutput, Event
 
 
@@ -42,6 +43,8 @@ def forces_effect(ctx) -> EffectOutput:
         "valve_floats": bool(math.isfinite(jump.omega) and w >= jump.omega),
         "friction_N": loads.friction,
         "closing_loads_N": loads.closing,
+        # the mass M of F = M p + ...: valve.mass and every part moving with it, referred to the valve
+        **rigid_mass_summary(scene),
         # Schenker's judgement of the lift curve: spring force needed on each side and his optimum
         "opening_side": sides["opening"],
         "closing_side": sides["closing"],
@@ -79,6 +82,13 @@ def forces_effect(ctx) -> EffectOutput:
         )
     # [spring_design] adds its block to this summary through the pipeline (the effect table's sections)
     return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
+
+
+def rigid_mass_summary(scene) -> dict:
+    """rigid_mass_kg (the M the rigid forces use, TrainLoads.from_scene's) and its shares by part
+    (kg at the valve: valve.mass, each part of the train, the spring's third where it is masses)."""
+    rigid = rigid_mass(scene)
+    return {"rigid_mass_kg": rigid.total, "rigid_mass_parts_kg": rigid.shares()}
 
 
 def forces_figures(ctx, cache) -> EffectOutput:

@@ -17,6 +17,7 @@ from ..core.errors import InputError, echo
 from ..core.reader import Table
 from ..lift.registry import law_spec, scene_lift
 from ..mechanics.gear_contact import NotApplicable
+from ..mechanics.moving_mass import ReferredMass, train_parts
 
 _NONE: Mapping[str, Any] = MappingProxyType({})
 
@@ -94,6 +95,15 @@ class Gear:
         sweep take its runs (a constant ratio to the valve); else every run is `simulate` whole.
     11. Import only from its own layer and below (core ... effects): names of view, studies or cli
         never appear in it; heavy or optional packages (scipy, numba) only inside functions.
+    12. Say what moves with the valve: `moving_parts(scene)` -> the parts of the rigid train beyond
+        valve.mass, each a mechanics.moving_mass.ReferredMass (its mass referred to the valve:
+        m / r^2 with r the valve's travel per the part's, J / a^2 for a lever of inertia J about
+        its pivot and arm a to the valve). The default is the scene's [[linkage.elements]] and
+        the spring's third where valve.mass leaves it out (moving_mass.train_parts); a gear with
+        moving parts of its own returns those too (super().moving_parts(scene) + its own). The
+        rigid forces (the forces effect, the sweep engine's rigid figures, the design rules) take
+        valve.mass plus their sum (moving_mass.rigid_mass); the elastic models take their parts
+        from [[linkage.elements]], so a part a gear adds here counts in the rigid figures only.
     """
 
     type: str = ""
@@ -229,6 +239,12 @@ class Gear:
     def shares_lift(self, scene) -> bool:
         """True when a sweep's runs share one lift curve and the generic effects."""
         return not self.effects and self.lift_reads(scene) == ()
+
+    # -- 12. the rigid train's moving parts -----------------------------------------------------
+    def moving_parts(self, scene) -> tuple[ReferredMass, ...]:
+        """The rigid train's parts beyond valve.mass, referred to the valve (default: the scene's
+        [[linkage.elements]] and the spring's share when it is modelled as masses)."""
+        return train_parts(scene)
 
     # -- explorer fit --------------------------------------------------------------------------
     def fit(self, scene, theta) -> tuple[dict, list[str]]:

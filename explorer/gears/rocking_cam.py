@@ -31,6 +31,7 @@ from ..lift.registry import closed_form_names
 from ..lift.validity import cam_fault, entered_error
 from ..mechanics.gear_contact import GearContact
 from ..mechanics.kinematics import lash_crossings
+from ..mechanics.moving_mass import rigid_mass
 from ..mechanics.tribology import rolling_roller_motion
 from ..result import EffectOutput
 from .base import Gear
@@ -185,7 +186,8 @@ def symmetry_report(scene, lift) -> dict:
         deceleration_difference_m_s2=p2 - p1,
     )
     if scene.valve is not None:
-        out["schenker_2R_over_M_m_s2"] = 2.0 * scene.loads.friction / scene.valve.mass
+        # M: the rigid train's mass at the valve (the forces effect's, mechanics.moving_mass)
+        out["schenker_2R_over_M_m_s2"] = 2.0 * scene.loads.friction / rigid_mass(scene).total
     return out
 
 

@@ -69,6 +69,7 @@ import numpy as np
 from ..dynamics import solvers
 from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel
 from ..effects.elastic import elastic_jerk, solve_reporting
+from ..effects.forces import rigid_mass_summary
 from ..mechanics.forces import (Pieces, TrainLoads, float_speed, friction_direction, load_parts, loss_report,
                                 minimise_on_pieces, velocity_zeros)
 from ..mechanics.forces import loss_intervals as intervals_of
@@ -324,6 +325,7 @@ def trip_forces_effect(ctx) -> EffectOutput:
         "valve_floats": bool(math.isfinite(jump.omega) and w >= jump.omega),
         "friction_N": loads.friction,
         "closing_loads_N": loads.closing,
+        **rigid_mass_summary(scene),  # the M of the latch force (the forces effect's keys)
         "max_camshaft_torque_Nm": float(torque[i_t]),
         "max_camshaft_torque_cam_angle_deg": float(np.degrees(ctx.theta[i_t])),
         "min_camshaft_torque_Nm": float(torque[on].min()) if on.any() else 0.0,

@@ -1,7 +1,8 @@
 """Rigid valve-train loads along the cycle: spring, friction, closing loads, contact force, float speed.
 
-Schenker (1902, section 4): the valve, with all moving masses M referred to it, is driven open by
-the linkage (cam, roller, levers) and pushed back by the spring, the stuffing-box friction R and
+Schenker (1902, section 4): the valve, with all moving masses M referred to it (from a scene:
+explorer.mechanics.moving_mass.rigid_mass, valve.mass and the gear's moving parts), is driven
+open by the linkage (cam, roller, levers) and pushed back by the spring, the stuffing-box friction R and
 constant closing loads D (steam on stem and valve, unbalanced weights, spring weight). With the
 valve lift s, velocity v and acceleration p of the rigid (prescribed) motion, the force the
 linkage must transmit is
@@ -41,6 +42,7 @@ from ..core.errors import InputError, echo
 from ..core.roots import root_in
 from ..lift.curves import grid_with, lift_at, lift_rows, wrap_two_pi
 from .kinematics import lash_crossings
+from .moving_mass import rigid_mass
 
 
 TWO_PI = 2.0 * math.pi
@@ -54,7 +56,7 @@ _INSIDE = 1e-11
 class TrainLoads:
     """The loads of a rigid valve train, referred to the valve, SI."""
 
-    mass: float  # kg, all moving masses referred to the valve
+    mass: float  # kg, all moving masses referred to the valve (from a scene: moving_mass.rigid_mass)
     preload: float  # N, spring force at closed valve
     rate: float  # N/m
     friction: float = 0.0  # N, Coulomb, opposes valve motion
@@ -82,7 +84,7 @@ class TrainLoads:
         if scene.spring is None:
             raise InputError(scene.source, "spring", "missing section: effect 'forces' needs [spring] preload and rate")
         return TrainLoads(
-            mass=scene.valve.mass,
+            mass=rigid_mass(scene).total,
             preload=scene.spring.preload,
             rate=scene.spring.rate,
             friction=scene.loads.friction,
