@@ -292,3 +292,21 @@ def test_a_plug_in_gears_own_parts_count_in_the_rigid_forces(toy_gears, tmp_path
         # the sweep engine asks the same hook
         table = sweep(scene, vary={"drive.rpm": [2500.0, 3000.0]}, workers=1).columns
         assert np.all(table["float_speed_rpm"] == s["jump_speed_rpm"])
+
+
+def test_min_spring_margin_is_over_the_open_valve():
+    """The summary's min_spring_margin_N is the spring's least reserve against the inertia while the
+    valve is open (audit: rocking_cam gave 439 N, the seated valve's preload plus loads, against
+    455.7 N open); a valve that never opens has none."""
+    import numpy as np
+
+    from explorer.effects.pipeline import simulate
+    from explorer.scene.scene import load_scene
+
+    r = simulate(load_scene("assets/scenes/rocking_cam.toml"))
+    c = r.columns
+    is_open = np.asarray(c["rigid_valve_lift_m"]) > 0.0
+    assert r.summary["min_spring_margin_N"] == float(c["spring_margin_N"][is_open].min())
+    assert r.summary["min_spring_margin_N"] > float(c["spring_margin_N"][~is_open].min())
+    shut = simulate(load_scene("assets/scenes/cycloidal_demo.toml", ['valve.lash="20 mm"']))
+    assert shut.summary["min_spring_margin_N"] is None

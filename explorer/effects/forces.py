@@ -37,7 +37,9 @@ def forces_effect(ctx) -> EffectOutput:
         "max_contact_force_cam_angle_deg": float(np.degrees(ctx.theta[i_max])),
         "max_follower_force_N": float(ratio * contact[i_max]),
         "max_spring_force_N": float(columns["spring_force_N"].max()),
-        "min_spring_margin_N": float(columns["spring_margin_N"].min()),
+        # over the open valve: the spring's reserve against the inertia (a seated valve's margin is
+        # its seat load, another figure); None when the valve never opens
+        "min_spring_margin_N": float(columns["spring_margin_N"][is_open].min()) if is_open.any() else None,
         "jump_speed_rpm": jump.rpm if math.isfinite(jump.omega) else None,
         "jump_cam_angle_deg": math.degrees(jump.theta) if math.isfinite(jump.theta) else None,
         "valve_floats": bool(math.isfinite(jump.omega) and w >= jump.omega),
