@@ -100,20 +100,52 @@ def _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, r_lo, r_hi, col0, omeg
 
 
 @njit(cache=True, inline="always")
-def _largest_open(out_s, out_nodes, r_lo, r_hi, init):
-    """max(init, the valve lift at the run samples [r_lo, r_hi)) (four running maxima: one would be a chain of n dependent compares)."""
-    m0 = m1 = m2 = m3 = init
-    r = r_lo
-    while r + 4 <= r_hi:
-        m0 = max(m0, out_s[out_nodes[r]])
-        m1 = max(m1, out_s[out_nodes[r + 1]])
-        m2 = max(m2, out_s[out_nodes[r + 2]])
-        m3 = max(m3, out_s[out_nodes[r + 3]])
-        r += 4
-    while r < r_hi:
-        m0 = max(m0, out_s[out_nodes[r]])
-        r += 1
-    return max(max(m0, m1), max(m2, m3))
+def _rigid_open(c, n, i0, out_nodes, Dn, lash):
+    """Whether the rigid valve is open at output column c: S - lash > 0 at its node (the
+    kinematics' test, ratio L > lash)."""
+    return Dn[0, out_nodes[c - i0 if c >= i0 else c + n - i0]] - lash > 0.0
+
+
+@njit(cache=True)
+def _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, is_float):
+    """effects/elastic_events.valve_periods on the revolution's events `rev` (time order): the
+    largest bounce, and is_float[q] = True for the separations while the valve is open (its
+    float). The same walk: from the rigid valve's first opening on the grid (column 0: none), each
+    event at the first sample after it, open from an opening to the first seat impact, seated from
+    there to the next opening (its lift there: the bounce)."""
+    m = rev.shape[0]
+    start = 0
+    prev = _rigid_open(n - 1, n, i0, out_nodes, Dn, lash)
+    for c in range(n):
+        now = _rigid_open(c, n, i0, out_nodes, Dn, lash)
+        if now and not prev:
+            start = c
+            break
+        prev = now
+    at = np.empty(m, dtype=np.int64)
+    for q in range(m):
+        at[q] = (_first_sample(n, omega, rev[q, 1], True) % n - start) % n
+    order = np.argsort(at, kind="mergesort")  # (stable: events of one sample keep their time order)
+    best = 0.0
+    seated = False
+    p = 0
+    prev = _rigid_open(start - 1 if start > 0 else n - 1, n, i0, out_nodes, Dn, lash)
+    for w in range(n):
+        c = start + w if start + w < n else start + w - n
+        now = _rigid_open(c, n, i0, out_nodes, Dn, lash)
+        if now and not prev:
+            seated = False
+        prev = now
+        while p < m and at[order[p]] == w:
+            q = order[p]
+            p += 1
+            if int(rev[q, 0]) == SEAT:
+                seated = True
+            elif int(rev[q, 0]) == SEPARATION and not seated:
+                is_float[q] = True
+        if seated:
+            best = max(best, out_s[out_nodes[c - i0 if c >= i0 else c + n - i0]])
+    return best
 
 
 @njit(cache=True, error_model="numpy")  # (numpy's: no zero check at the samples' W / k; k > 0)
@@ -172,38 +204,23 @@ def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1
     rev = rev[:m]
     order = np.argsort(rev[:, 1], kind="mergesort")  # (stable: equal instants keep the solver's order)
     rev = rev[order]
-    best_bounce = 0.0
+    is_float = np.zeros(m, dtype=np.bool_)
+    fig[9] = _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, is_float)
     seat_v = np.inf
     delay = np.inf
     for q in range(m):
         code = int(rev[q, 0])
-        if code == SEPARATION:
+        if code == SEPARATION and is_float[q]:  # the valve's float (_valve_periods)
             if fig[1] == 0.0:
                 fig[0] = rev[q, 3]
             fig[1] += 1.0
         elif code == SEAT:
             fig[8] += 1.0
             seat_v = min(seat_v, rev[q, 2])
-            t0 = rev[q, 1]
-            t1 = np.inf
-            for p in range(m):
-                if rev[p, 1] > t0:
-                    t1 = min(t1, rev[p, 1])
-            if t1 == np.inf:
-                t1 = (n - 1) * (2.0 * math.pi / n) / omega + 1.0
-            # the samples after t0 and before t1 (the first after t0 up to the first at or after t1):
-            # output columns [lo, hi), the run samples of those at or after i0 and of those before
-            lo = _first_sample(n, omega, t0, True)
-            hi = _first_sample(n, omega, t1, False)
-            if hi > max(lo, i0):
-                best_bounce = _largest_open(out_s, out_nodes, max(lo, i0) - i0, hi - i0, best_bounce)
-            if min(hi, i0) > lo:
-                best_bounce = _largest_open(out_s, out_nodes, lo + n - i0, min(hi, i0) + n - i0, best_bounce)
         elif code == LIFT_OFF and not math.isnan(take_up_s):
             delay = min(delay, np.fmod(rev[q, 1] - take_up_s + period, period))
     fig[6] = delay if delay < np.inf else np.nan
     fig[7] = seat_v if fig[8] > 0.0 else np.nan
-    fig[9] = best_bounce
     # residual vibration (effects/residual.residual_figures)
     if dwell >= 0:
         q = out_nodes[dwell - i0 if dwell >= i0 else dwell + n - i0]
