@@ -111,8 +111,9 @@ def _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, is_float):
     """effects/elastic_events.valve_periods on the revolution's events `rev` (time order): the
     largest bounce, and is_float[q] = True for the separations while the valve is open (its
     float). The same walk: from the rigid valve's first opening on the grid (column 0: none), each
-    event at the first sample after it, open from an opening to the first seat impact, seated from
-    there to the next opening (its lift there: the bounce)."""
+    event at the first sample after it, open from an opening to the first seat impact (not one
+    while the rigid valve is open and rising: S' > 0, the sign of the rigid valve's velocity),
+    seated from there to the next opening (its lift there: the bounce)."""
     m = rev.shape[0]
     start = 0
     prev = _rigid_open(n - 1, n, i0, out_nodes, Dn, lash)
@@ -140,7 +141,7 @@ def _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, is_float):
             q = order[p]
             p += 1
             if int(rev[q, 0]) == SEAT:
-                seated = True
+                seated = seated or not (now and Dn[1, out_nodes[c - i0 if c >= i0 else c + n - i0]] > 0.0)
             elif int(rev[q, 0]) == SEPARATION and not seated:
                 is_float[q] = True
         if seated:

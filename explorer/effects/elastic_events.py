@@ -83,8 +83,8 @@ def elastic_row(result) -> dict[str, float]:
     lift_offs = [float(e.time_s) for e in elastic if e.kind == "lift-off"]
     ups = [float(e.time_s) for e in events if e.kind == "lash-take-up"]
     columns = result.columns
-    floats, bounce = valve_periods(np.asarray(columns["time_s"]), np.asarray(columns["valve_lift_m"]),
-                                   np.asarray(columns["rigid_valve_lift_m"]) > 0.0,
+    floats, bounce = valve_periods(columns["time_s"], columns["valve_lift_m"], columns["rigid_valve_lift_m"],
+                                   columns["rigid_valve_velocity_m_s"],
                                    [e for e in elastic if e.kind in ("separation", "seat")])
     row = {
         "first_separation_deg": float(floats[0].cam_angle_deg) if floats else math.nan,
@@ -105,11 +105,11 @@ def elastic_row(result) -> dict[str, float]:
     return row
 
 
-def valve_periods(time_s, lift, rigid_open, events) -> tuple[list, float]:
+def valve_periods(time_s, lift, rigid_lift, rigid_velocity, events) -> tuple[list, float]:
     """(the separations while the valve is open: its float, in time order; the largest bounce) of a
-    revolution on its output grid (time_s, the valve's lift, whether the rigid valve is open there:
-    ratio L > lash, the kinematics' test) from its events in time order (kinds "separation" and
-    "seat"; others are ignored). The compiled path computes the same: dynamics/kernel_figures.py,
+    revolution on its output grid (time_s, the valve's lift, the rigid valve's lift and velocity:
+    open where its lift is > 0, the kinematics' test ratio L > lash) from its events in time order
+    (kinds "separation" and "seat"; others are ignored). The compiled path computes the same: dynamics/kernel_figures.py,
     _valve_periods.
 
     The revolution is walked once, periodically, from the rigid valve's first opening on the grid
@@ -125,10 +125,13 @@ def valve_periods(time_s, lift, rigid_open, events) -> tuple[list, float]:
     of rigid lift, W/k) starts the seated period there: what follows on the ramp's end is bounce,
     the ramp lifting the valve again by at most what it has left. A separation after the seat
     impact (the rebound leaving the linkage, a lifter bouncing on the base circle inside the lash)
-    is not float. A valve still bouncing when the cam opens it again is open from that opening."""
+    is not float. A valve still bouncing when the cam opens it again is open from that opening: a
+    seat impact while the rigid valve is open and rising (at the sample after it) ends no open
+    period, and what the cam then lifts is no bounce."""
     t = np.asarray(time_s, dtype=float)
     s = np.asarray(lift, dtype=float)
-    rigid_open = np.asarray(rigid_open, dtype=bool)
+    rigid_open = np.asarray(rigid_lift, dtype=float) > 0.0
+    rising = rigid_open & (np.asarray(rigid_velocity, dtype=float) > 0.0)
     n = t.size
     opens = rigid_open & ~np.roll(rigid_open, 1)
     ups = np.flatnonzero(opens)
@@ -138,6 +141,7 @@ def valve_periods(time_s, lift, rigid_open, events) -> tuple[list, float]:
     at = (np.searchsorted(t, [float(e.time_s) for e in events], side="right") % n - start) % n
     order = np.argsort(at, kind="stable")  # (events of one sample keep their time order)
     walk_s = np.roll(s, -start)
+    walk_rising = np.roll(rising, -start)
     breaks = sorted({0, *np.flatnonzero(walk_opens).tolist(), *at.tolist()}) + [n]
     floats, best, seated, q = [], 0.0, False, 0
     for b, end in zip(breaks[:-1], breaks[1:]):  # the state holds from a break to the next
@@ -147,7 +151,7 @@ def valve_periods(time_s, lift, rigid_open, events) -> tuple[list, float]:
             e = events[order[q]]
             q += 1
             if e.kind == "seat":
-                seated = True
+                seated = seated or not walk_rising[b]
             elif e.kind == "separation" and not seated:
                 floats.append(e)
         if seated:
