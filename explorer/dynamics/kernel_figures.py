@@ -100,29 +100,67 @@ def _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, r_lo, r_hi, col0, omeg
 
 
 @njit(cache=True, inline="always")
-def _rigid_open(c, n, i0, out_nodes, Dn, lash):
-    """Whether the rigid valve is open at output column c: S - lash > 0 at its node (the
-    kinematics' test, ratio L > lash)."""
-    return Dn[0, out_nodes[c - i0 if c >= i0 else c + n - i0]] - lash > 0.0
+def _largest_open(out_s, out_nodes, r_lo, r_hi, init):
+    """max(init, the valve lift at the run samples [r_lo, r_hi)) (four running maxima: one would be a chain of n dependent compares)."""
+    m0 = m1 = m2 = m3 = init
+    r = r_lo
+    while r + 4 <= r_hi:
+        m0 = max(m0, out_s[out_nodes[r]])
+        m1 = max(m1, out_s[out_nodes[r + 1]])
+        m2 = max(m2, out_s[out_nodes[r + 2]])
+        m3 = max(m3, out_s[out_nodes[r + 3]])
+        r += 4
+    while r < r_hi:
+        m0 = max(m0, out_s[out_nodes[r]])
+        r += 1
+    return max(max(m0, m1), max(m2, m3))
+
+
+@njit(cache=True, inline="always")
+def _node(c, n, i0, out_nodes):
+    """The node of output column c (run sample c - i0, modulo n)."""
+    return out_nodes[c - i0 if c >= i0 else c + n - i0]
+
+
+@njit(cache=True, inline="always")
+def _span_max(out_s, out_nodes, n, i0, c_lo, c_hi, init):
+    """max(init, the valve lift at the output columns [c_lo, c_hi)), 0 <= c_lo <= c_hi <= n: the
+    run samples of those at or after i0 and of those before."""
+    if c_hi > max(c_lo, i0):
+        init = _largest_open(out_s, out_nodes, max(c_lo, i0) - i0, c_hi - i0, init)
+    if min(c_hi, i0) > c_lo:
+        init = _largest_open(out_s, out_nodes, c_lo + n - i0, min(c_hi, i0) + n - i0, init)
+    return init
 
 
 @njit(cache=True)
-def _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, is_float):
+def openings(n, i0, out_nodes, Dn, lash, opens):
+    """The output columns where the rigid valve opens (S - lash > 0 there, not at the column
+    before, periodically), in column order, into `opens` (n entries); returns how many. They
+    depend on the grid and the lash, not on the speed: revolutions() finds them once per lash."""
+    k = 0
+    prev = Dn[0, _node(n - 1, n, i0, out_nodes)] - lash > 0.0
+    for c in range(n):
+        now = Dn[0, _node(c, n, i0, out_nodes)] - lash > 0.0
+        if now and not prev:
+            opens[k] = c
+            k += 1
+        prev = now
+    return k
+
+
+@njit(cache=True)
+def _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, opens, k, is_float):
     """effects/elastic_events.valve_periods on the revolution's events `rev` (time order): the
     largest bounce, and is_float[q] = True for the separations while the valve is open (its
-    float). The same walk: from the rigid valve's first opening on the grid (column 0: none), each
-    event at the first sample after it, open from an opening to the first seat impact (not one
-    while the rigid valve is open and rising: S' > 0, the sign of the rigid valve's velocity),
-    seated from there to the next opening (its lift there: the bounce)."""
+    float). The same walk: from the rigid valve's first opening on the grid (S - lash > 0 at a
+    column, not at the one before; column 0: none), each event at the first sample after it, open
+    from an opening to the first seat impact (not one while the rigid valve is open and rising:
+    S' > 0, the sign of the rigid valve's velocity), seated from there to the next opening (its
+    lift there: the bounce); the state holds from one opening or event to the next. opens[:k]:
+    the openings' columns (openings())."""
     m = rev.shape[0]
-    start = 0
-    prev = _rigid_open(n - 1, n, i0, out_nodes, Dn, lash)
-    for c in range(n):
-        now = _rigid_open(c, n, i0, out_nodes, Dn, lash)
-        if now and not prev:
-            start = c
-            break
-        prev = now
+    start = opens[0] if k > 0 else 0
     at = np.empty(m, dtype=np.int64)
     for q in range(m):
         at[q] = (_first_sample(n, omega, rev[q, 1], True) % n - start) % n
@@ -130,29 +168,43 @@ def _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, is_float):
     best = 0.0
     seated = False
     p = 0
-    prev = _rigid_open(start - 1 if start > 0 else n - 1, n, i0, out_nodes, Dn, lash)
-    for w in range(n):
-        c = start + w if start + w < n else start + w - n
-        now = _rigid_open(c, n, i0, out_nodes, Dn, lash)
-        if now and not prev:
+    j = 0
+    pos = 0
+    while pos < n:  # walk positions: column (start + pos) mod n
+        if j < k and opens[j] - start == pos:
             seated = False
-        prev = now
-        while p < m and at[order[p]] == w:
+            j += 1
+        c = start + pos if start + pos < n else start + pos - n
+        while p < m and at[order[p]] == pos:
             q = order[p]
             p += 1
             if int(rev[q, 0]) == SEAT:
-                seated = seated or not (now and Dn[1, out_nodes[c - i0 if c >= i0 else c + n - i0]] > 0.0)
+                g = _node(c, n, i0, out_nodes)
+                seated = seated or not (Dn[0, g] - lash > 0.0 and Dn[1, g] > 0.0)
             elif int(rev[q, 0]) == SEPARATION and not seated:
                 is_float[q] = True
+        nxt = n
+        if j < k:
+            nxt = opens[j] - start
+        if p < m:
+            nxt = min(nxt, at[order[p]])
         if seated:
-            best = max(best, out_s[out_nodes[c - i0 if c >= i0 else c + n - i0]])
+            lo, hi = start + pos, start + nxt
+            if hi <= n:
+                best = _span_max(out_s, out_nodes, n, i0, lo, hi, best)
+            elif lo >= n:
+                best = _span_max(out_s, out_nodes, n, i0, lo - n, hi - n, best)
+            else:
+                best = _span_max(out_s, out_nodes, n, i0, lo, n, best)
+                best = _span_max(out_s, out_nodes, n, i0, 0, hi - n, best)
+        pos = nxt
     return best
 
 
 @njit(cache=True, error_model="numpy")  # (numpy's: no zero check at the samples' W / k; k > 0)
 def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1, k, c, lash, W0, rate, R, e,
                zeno_height, max_events, N, ratio, preload_closing, take_up_s, ref, dwell, S_dwell, blk, win, buffers,
-               acc):
+               acc, opens, n_opens):
     """One revolution of the elastic effect at the speed omega, on a grid built in cam angle
     (RevolutionGrid: the n output samples from the drive's lowest point, out_nodes their nodes):
     the FIGURES, the events of the revolution (rows: code, time within the revolution, velocity,
@@ -164,7 +216,8 @@ def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1
     of the run for one period, times modulo the period (effects/elastic.py, elastic_events.py);
     the residual figures from the lift the cam is made for at the output angles, ref, the dwell's
     first sample (-1: none) and the valve-referred drive there, S_dwell
-    (effects/residual.residual_reference); blk, win: grid_bounds of the grid in cam angle."""
+    (effects/residual.residual_reference); blk, win: grid_bounds of the grid in cam angle; opens,
+    n_opens: where the rigid valve opens on the grid at this lash (openings())."""
     inv = 1.0 / omega  # the grid at this speed: times theta / omega, S' times omega
     ev, status, n_detail = run_nodes(nodes, h, inv, PT, Dn, Sb, omega, hidx, h_unique, M, M1, k, c, lash, W0, rate,
                                      R, e, zeno_height, max_events, N, blk, win, buffers)
@@ -206,7 +259,7 @@ def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1
     order = np.argsort(rev[:, 1], kind="mergesort")  # (stable: equal instants keep the solver's order)
     rev = rev[order]
     is_float = np.zeros(m, dtype=np.bool_)
-    fig[9] = _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, is_float)
+    fig[9] = _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, opens, n_opens, is_float)
     seat_v = np.inf
     delay = np.inf
     for q in range(m):
@@ -245,6 +298,9 @@ def revolutions(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, h_max, rati
         terms[r] = taylor_terms(phase_rate(p[1], p[2], p[3], p[4], p[7]) * h_max / p[0])
     owned = run_buffers(h.size + 1, terms.max() if R else 1, h_unique.size)
     acc_owned = np.empty(6)
+    opens_owned = np.empty(out_nodes.size, dtype=np.int64)  # openings() of the lash of the run before
+    n_opens = 0
+    last_lash = np.nan
     # every array the runs read or write, borrowed (kernel_phase.borrowed: no reference counting in
     # the runs); the owners live to the end of this function
     buffers = borrowed_buffers(owned)
@@ -252,15 +308,20 @@ def revolutions(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, h_max, rati
     nodes, h, PT, Dn, Sb = borrowed(nodes), borrowed(h), borrowed(PT), borrowed(Dn), borrowed(Sb)
     hidx, h_unique, out_nodes, ref = borrowed(hidx), borrowed(h_unique), borrowed(out_nodes), borrowed(ref)
     blk, win = borrowed(blk_owned), borrowed(win_owned)
+    opens = borrowed(opens_owned)
     for r in range(R):
         p = runs[r]
+        if not p[5] == last_lash:  # (a batch's runs share one lash: exact_kernel.run_batch)
+            n_opens = openings(out_nodes.size, i0, out_nodes, Dn, p[5], opens)
+            last_lash = p[5]
         fig, rev, st = revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, p[0], p[1], p[2], p[3], p[4],
                                   p[5], p[6], p[7], p[8], p[9], zeno_height, max_events, terms[r], ratio, p[10], p[11],
-                                  ref, dwell, S_dwell, blk, win, buffers, acc)
+                                  ref, dwell, S_dwell, blk, win, buffers, acc, opens, n_opens)
         figs[r] = fig
         status[r] = st
     # (the owners of the borrowed arrays, used last here)
     owned[0][0] = acc_owned[0] = blk_owned[0, 0] = win_owned[0, 0] = 0.0
+    opens_owned[0] = 0
     return figs, status
 
 
