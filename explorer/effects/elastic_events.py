@@ -125,7 +125,11 @@ def valve_periods(time_s, lift, rigid_lift, rigid_velocity, events) -> tuple[lis
     of rigid lift, W/k) starts the seated period there: what follows on the ramp's end is bounce,
     the ramp lifting the valve again by at most what it has left. A separation after the seat
     impact (the rebound leaving the linkage, a lifter bouncing on the base circle inside the lash)
-    is not float. A valve still bouncing when the cam opens it again is open from that opening: a
+    is not float. The same for every model: the walk reads no lift-off (the massless linkage's is
+    the cam lifting a resting valve, the spring chain's and the train's each crossing of the seat
+    upwards, every rebound too), and a separation is any contact's (the train's joints: its
+    lifter leaving the cam included). A valve still bouncing when the cam opens it again is open
+    from that opening: a
     seat impact while the rigid valve is open and rising (at the sample after it) ends no open
     period, and what the cam then lifts is no bounce."""
     t = np.asarray(time_s, dtype=float)
