@@ -102,7 +102,7 @@ _BUILTIN: tuple[RuleSpec, ...] = (
                          "trade practice", minimum=0.0),
              ), "dynamics", (Plotted("valve_velocity_m_s", sign=-1.0),)),  # the closing (negative) velocity
     RuleSpec("float_margin", f"{_R}.float_margin:measure", "Float margin",
-             "speed of first separation - highest operating speed", "rpm", "min", (
+             "speed of first separation while the valve is open - highest operating speed", "rpm", "min", (
                  Setting("fail", 100.0 * RPM, "speed", "rpm", "Race Engine Technology, 'Peace and harmony': float "
                          "a couple of hundred rpm above the highest engine speed (200 engine rpm = 100 camshaft rpm "
                          "on a four-stroke)", "trade practice", minimum=0.0),

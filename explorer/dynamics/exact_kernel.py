@@ -153,18 +153,20 @@ def run_revolution(grid: RevolutionGrid, omega: float, model: LinkageModel, rati
     """revolution() on a RevolutionGrid: (FIGURES, valve lift at the output samples, revolution
     events as the elastic effect lists them). RuntimeError where exact.py raises. ref, dwell,
     S_dwell: the residual figures' (revolution())."""
-    from .kernel_figures import revolution
+    from .kernel_figures import openings, revolution
     from .kernel_grid import grid_bounds
     from .kernel_phase import run_buffers
 
     rho = phase_rates(model)
     N = taylor_terms(rho * grid.h_max / omega)
     buffers = run_buffers(grid.nodes.size, int(N), grid.h_unique.size)
+    opens = np.empty(grid.n, dtype=np.int64)
+    n_opens = openings(grid.n, grid.i0, grid.out_nodes, grid.Dn, float(model.lash), opens)
     fig, rev, status = revolution(
         grid.nodes, grid.h, grid.PT, grid.Dn, grid.Sb, grid.hidx, grid.h_unique, grid.out_nodes, grid.i0, float(omega),
         *model_arguments(model), float(zeno_height), int(max_events), int(N), float(ratio),
         float(model.preload + model.closing_load), float(take_up_s), np.ascontiguousarray(ref, dtype=float),
-        int(dwell), float(S_dwell), *grid_bounds(grid.h, grid.Dn, grid.Sb), buffers, np.empty(6))
+        int(dwell), float(S_dwell), *grid_bounds(grid.h, grid.Dn, grid.Sb), buffers, np.empty(6), opens, n_opens)
     _check(status)
     return fig, np.roll(buffers[0][grid.out_nodes], grid.i0), rev  # output column (r + i0) mod n: run sample r
 

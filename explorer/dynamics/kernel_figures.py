@@ -116,10 +116,95 @@ def _largest_open(out_s, out_nodes, r_lo, r_hi, init):
     return max(max(m0, m1), max(m2, m3))
 
 
+@njit(cache=True, inline="always")
+def _node(c, n, i0, out_nodes):
+    """The node of output column c (run sample c - i0, modulo n)."""
+    return out_nodes[c - i0 if c >= i0 else c + n - i0]
+
+
+@njit(cache=True, inline="always")
+def _span_max(out_s, out_nodes, n, i0, c_lo, c_hi, init):
+    """max(init, the valve lift at the output columns [c_lo, c_hi)), 0 <= c_lo <= c_hi <= n: the
+    run samples of those at or after i0 and of those before."""
+    if c_hi > max(c_lo, i0):
+        init = _largest_open(out_s, out_nodes, max(c_lo, i0) - i0, c_hi - i0, init)
+    if min(c_hi, i0) > c_lo:
+        init = _largest_open(out_s, out_nodes, c_lo + n - i0, min(c_hi, i0) + n - i0, init)
+    return init
+
+
+@njit(cache=True)
+def openings(n, i0, out_nodes, Dn, lash, opens):
+    """The output columns where the rigid valve opens (S - lash > 0 there, not at the column
+    before, periodically), in column order, into `opens` (n entries); returns how many. They
+    depend on the grid and the lash, not on the speed: revolutions() finds them once per lash."""
+    k = 0
+    prev = Dn[0, _node(n - 1, n, i0, out_nodes)] - lash > 0.0
+    for c in range(n):
+        now = Dn[0, _node(c, n, i0, out_nodes)] - lash > 0.0
+        if now and not prev:
+            opens[k] = c
+            k += 1
+        prev = now
+    return k
+
+
+@njit(cache=True)
+def _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, opens, k, is_float):
+    """effects/elastic_events.valve_periods on the revolution's events `rev` (time order): the
+    largest bounce, and is_float[q] = True for the separations while the valve is open (its
+    float). The same walk: from the rigid valve's first opening on the grid (S - lash > 0 at a
+    column, not at the one before; column 0: none), each event at the first sample after it, open
+    from an opening to the first seat impact (not one while the rigid valve is open and rising:
+    S' > 0, the sign of the rigid valve's velocity), seated from there to the next opening (its
+    lift there: the bounce); the state holds from one opening or event to the next. opens[:k]:
+    the openings' columns (openings())."""
+    m = rev.shape[0]
+    start = opens[0] if k > 0 else 0
+    at = np.empty(m, dtype=np.int64)
+    for q in range(m):
+        at[q] = (_first_sample(n, omega, rev[q, 1], True) % n - start) % n
+    order = np.argsort(at, kind="mergesort")  # (stable: events of one sample keep their time order)
+    best = 0.0
+    seated = False
+    p = 0
+    j = 0
+    pos = 0
+    while pos < n:  # walk positions: column (start + pos) mod n
+        if j < k and opens[j] - start == pos:
+            seated = False
+            j += 1
+        c = start + pos if start + pos < n else start + pos - n
+        while p < m and at[order[p]] == pos:
+            q = order[p]
+            p += 1
+            if int(rev[q, 0]) == SEAT:
+                g = _node(c, n, i0, out_nodes)
+                seated = seated or not (Dn[0, g] - lash > 0.0 and Dn[1, g] > 0.0)
+            elif int(rev[q, 0]) == SEPARATION and not seated:
+                is_float[q] = True
+        nxt = n
+        if j < k:
+            nxt = opens[j] - start
+        if p < m:
+            nxt = min(nxt, at[order[p]])
+        if seated:
+            lo, hi = start + pos, start + nxt
+            if hi <= n:
+                best = _span_max(out_s, out_nodes, n, i0, lo, hi, best)
+            elif lo >= n:
+                best = _span_max(out_s, out_nodes, n, i0, lo - n, hi - n, best)
+            else:
+                best = _span_max(out_s, out_nodes, n, i0, lo, n, best)
+                best = _span_max(out_s, out_nodes, n, i0, 0, hi - n, best)
+        pos = nxt
+    return best
+
+
 @njit(cache=True, error_model="numpy")  # (numpy's: no zero check at the samples' W / k; k > 0)
 def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1, k, c, lash, W0, rate, R, e,
                zeno_height, max_events, N, ratio, preload_closing, take_up_s, ref, dwell, S_dwell, blk, win, buffers,
-               acc):
+               acc, opens, n_opens):
     """One revolution of the elastic effect at the speed omega, on a grid built in cam angle
     (RevolutionGrid: the n output samples from the drive's lowest point, out_nodes their nodes):
     the FIGURES, the events of the revolution (rows: code, time within the revolution, velocity,
@@ -131,7 +216,8 @@ def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1
     of the run for one period, times modulo the period (effects/elastic.py, elastic_events.py);
     the residual figures from the lift the cam is made for at the output angles, ref, the dwell's
     first sample (-1: none) and the valve-referred drive there, S_dwell
-    (effects/residual.residual_reference); blk, win: grid_bounds of the grid in cam angle."""
+    (effects/residual.residual_reference); blk, win: grid_bounds of the grid in cam angle; opens,
+    n_opens: where the rigid valve opens on the grid at this lash (openings())."""
     inv = 1.0 / omega  # the grid at this speed: times theta / omega, S' times omega
     ev, status, n_detail = run_nodes(nodes, h, inv, PT, Dn, Sb, omega, hidx, h_unique, M, M1, k, c, lash, W0, rate,
                                      R, e, zeno_height, max_events, N, blk, win, buffers)
@@ -172,38 +258,23 @@ def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1
     rev = rev[:m]
     order = np.argsort(rev[:, 1], kind="mergesort")  # (stable: equal instants keep the solver's order)
     rev = rev[order]
-    best_bounce = 0.0
+    is_float = np.zeros(m, dtype=np.bool_)
+    fig[9] = _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, opens, n_opens, is_float)
     seat_v = np.inf
     delay = np.inf
     for q in range(m):
         code = int(rev[q, 0])
-        if code == SEPARATION:
+        if code == SEPARATION and is_float[q]:  # the valve's float (_valve_periods)
             if fig[1] == 0.0:
                 fig[0] = rev[q, 3]
             fig[1] += 1.0
         elif code == SEAT:
             fig[8] += 1.0
             seat_v = min(seat_v, rev[q, 2])
-            t0 = rev[q, 1]
-            t1 = np.inf
-            for p in range(m):
-                if rev[p, 1] > t0:
-                    t1 = min(t1, rev[p, 1])
-            if t1 == np.inf:
-                t1 = (n - 1) * (2.0 * math.pi / n) / omega + 1.0
-            # the samples after t0 and before t1 (the first after t0 up to the first at or after t1):
-            # output columns [lo, hi), the run samples of those at or after i0 and of those before
-            lo = _first_sample(n, omega, t0, True)
-            hi = _first_sample(n, omega, t1, False)
-            if hi > max(lo, i0):
-                best_bounce = _largest_open(out_s, out_nodes, max(lo, i0) - i0, hi - i0, best_bounce)
-            if min(hi, i0) > lo:
-                best_bounce = _largest_open(out_s, out_nodes, lo + n - i0, min(hi, i0) + n - i0, best_bounce)
         elif code == LIFT_OFF and not math.isnan(take_up_s):
             delay = min(delay, np.fmod(rev[q, 1] - take_up_s + period, period))
     fig[6] = delay if delay < np.inf else np.nan
     fig[7] = seat_v if fig[8] > 0.0 else np.nan
-    fig[9] = best_bounce
     # residual vibration (effects/residual.residual_figures)
     if dwell >= 0:
         q = out_nodes[dwell - i0 if dwell >= i0 else dwell + n - i0]
@@ -227,6 +298,9 @@ def revolutions(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, h_max, rati
         terms[r] = taylor_terms(phase_rate(p[1], p[2], p[3], p[4], p[7]) * h_max / p[0])
     owned = run_buffers(h.size + 1, terms.max() if R else 1, h_unique.size)
     acc_owned = np.empty(6)
+    opens_owned = np.empty(out_nodes.size, dtype=np.int64)  # openings() of the lash of the run before
+    n_opens = 0
+    last_lash = np.nan
     # every array the runs read or write, borrowed (kernel_phase.borrowed: no reference counting in
     # the runs); the owners live to the end of this function
     buffers = borrowed_buffers(owned)
@@ -234,15 +308,20 @@ def revolutions(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, h_max, rati
     nodes, h, PT, Dn, Sb = borrowed(nodes), borrowed(h), borrowed(PT), borrowed(Dn), borrowed(Sb)
     hidx, h_unique, out_nodes, ref = borrowed(hidx), borrowed(h_unique), borrowed(out_nodes), borrowed(ref)
     blk, win = borrowed(blk_owned), borrowed(win_owned)
+    opens = borrowed(opens_owned)
     for r in range(R):
         p = runs[r]
+        if not p[5] == last_lash:  # (a batch's runs share one lash: exact_kernel.run_batch)
+            n_opens = openings(out_nodes.size, i0, out_nodes, Dn, p[5], opens)
+            last_lash = p[5]
         fig, rev, st = revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, p[0], p[1], p[2], p[3], p[4],
                                   p[5], p[6], p[7], p[8], p[9], zeno_height, max_events, terms[r], ratio, p[10], p[11],
-                                  ref, dwell, S_dwell, blk, win, buffers, acc)
+                                  ref, dwell, S_dwell, blk, win, buffers, acc, opens, n_opens)
         figs[r] = fig
         status[r] = st
     # (the owners of the borrowed arrays, used last here)
     owned[0][0] = acc_owned[0] = blk_owned[0, 0] = win_owned[0, 0] = 0.0
+    opens_owned[0] = 0
     return figs, status
 
 

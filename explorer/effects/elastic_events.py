@@ -74,17 +74,21 @@ def linkage_outputs(s, v, a, jerk, force, back_pressure, deviation, contact, sep
 
 def elastic_row(result) -> dict[str, float]:
     """A sweep row's elastic figures from a run (its summary, events in time order and columns; the
-    lash effect's take-up events give the lift-off delay)."""
+    lash effect's take-up events give the lift-off delay). The separations counted are the valve's
+    float, those while it is open (valve_periods); the largest bounce is valve_periods' too."""
     summary, events = result.summary, result.events
     elastic = [e for e in events if e.effect == "elastic"]
     period = float(summary["revolution_time_s"])
-    seps = [e for e in elastic if e.kind == "separation"]
     seats = [e for e in elastic if e.kind == "seat"]
     lift_offs = [float(e.time_s) for e in elastic if e.kind == "lift-off"]
     ups = [float(e.time_s) for e in events if e.kind == "lash-take-up"]
+    columns = result.columns
+    floats, bounce = valve_periods(columns["time_s"], columns["valve_lift_m"], columns["rigid_valve_lift_m"],
+                                   columns["rigid_valve_velocity_m_s"],
+                                   [e for e in elastic if e.kind in ("separation", "seat")])
     row = {
-        "first_separation_deg": float(seps[0].cam_angle_deg) if seps else math.nan,
-        "separations": float(len(seps)),
+        "first_separation_deg": float(floats[0].cam_angle_deg) if floats else math.nan,
+        "separations": float(len(floats)),
         "flight_time_s": float(summary["separated_angle_deg"]) / 360.0 * period,
         "max_deviation_m": float(summary["max_deviation_m"]),
         "peak_linkage_force_N": float(summary["peak_linkage_force_N"]),
@@ -93,7 +97,7 @@ def elastic_row(result) -> dict[str, float]:
                              if ups and lift_offs else math.nan),
         "seating_velocity_m_s": min(float(e["velocity_m_s"]) for e in seats) if seats else math.nan,
         "seat_impacts": float(len(seats)),
-        "largest_bounce_m": _largest_bounce(elastic, seats, result.columns),
+        "largest_bounce_m": bounce,
     }
     for name in ("residual_deviation_m", "residual_amplitude_m"):  # the elastic effect's (effects/residual.py)
         value = summary.get(name)
@@ -101,18 +105,60 @@ def elastic_row(result) -> dict[str, float]:
     return row
 
 
-def _largest_bounce(elastic, seats, columns) -> float:
-    """Highest valve lift on the output grid after a seat impact, before the next elastic event."""
-    if not seats:
-        return 0.0
-    t, s = np.asarray(columns["time_s"]), np.asarray(columns["valve_lift_m"])
-    times = [float(e.time_s) for e in elastic]
-    best = 0.0
-    for ev in seats:
-        t0 = float(ev.time_s)
-        later = [x for x in times if x > t0]
-        t1 = min(later) if later else float(t[-1]) + 1.0
-        inside = (t > t0) & (t < t1)
-        if inside.any():
-            best = max(best, float(s[inside].max()))
-    return best
+def valve_periods(time_s, lift, rigid_lift, rigid_velocity, events) -> tuple[list, float]:
+    """(the separations while the valve is open: its float, in time order; the largest bounce) of a
+    revolution on its output grid (time_s, the valve's lift, the rigid valve's lift and velocity:
+    open where its lift is > 0, the kinematics' test ratio L > lash) from its events in time order
+    (kinds "separation" and "seat"; others are ignored). The compiled path computes the same: dynamics/kernel_figures.py,
+    _valve_periods.
+
+    The revolution is walked once, periodically, from the rigid valve's first opening on the grid
+    (the lash take-up: the first sample where it is open after one where it is closed; column 0
+    when it never opens or never closes), each event at the first sample after it (an event within
+    the grid step before an opening counts as after it). The valve is *open* from each opening to
+    its first seat impact after it: a separation there is float. From that impact to the next
+    opening it is *seated*: the highest lift on those samples (strictly after the impact) is its
+    bounce -- what the valve does after it has landed, before the cam opens it again, the flight
+    of every rebound and the Zeno tail's summed chatter included; 0 without a seat impact (a valve
+    that never seats floats; its separations say so). A seat impact before the rigid closing point
+    (the linkage's compression seats the elastic valve while the closing ramp still has a few um
+    of rigid lift, W/k) starts the seated period there: what follows on the ramp's end is bounce,
+    the ramp lifting the valve again by at most what it has left. A separation after the seat
+    impact (the rebound leaving the linkage, a lifter bouncing on the base circle inside the lash)
+    is not float. The same for every model: the walk reads no lift-off (the massless linkage's is
+    the cam lifting a resting valve, the spring chain's and the train's each crossing of the seat
+    upwards, every rebound too), and a separation is any contact's (the train's joints: its
+    lifter leaving the cam included). A valve still bouncing when the cam opens it again is open
+    from that opening: a
+    seat impact while the rigid valve is open and rising (at the sample after it) ends no open
+    period, and what the cam then lifts is no bounce."""
+    t = np.asarray(time_s, dtype=float)
+    s = np.asarray(lift, dtype=float)
+    rigid_open = np.asarray(rigid_lift, dtype=float) > 0.0
+    rising = rigid_open & (np.asarray(rigid_velocity, dtype=float) > 0.0)
+    n = t.size
+    opens = rigid_open & ~np.roll(rigid_open, 1)
+    ups = np.flatnonzero(opens)
+    start = int(ups[0]) if ups.size else 0
+    # walk positions (samples from `start`) of the openings and of the sample after each event
+    walk_opens = np.roll(opens, -start)
+    at = (np.searchsorted(t, [float(e.time_s) for e in events], side="right") % n - start) % n
+    order = np.argsort(at, kind="stable")  # (events of one sample keep their time order)
+    walk_s = np.roll(s, -start)
+    walk_rising = np.roll(rising, -start)
+    breaks = sorted({0, *np.flatnonzero(walk_opens).tolist(), *at.tolist()}) + [n]
+    floats, best, seated, q = [], 0.0, False, 0
+    for b, end in zip(breaks[:-1], breaks[1:]):  # the state holds from a break to the next
+        if walk_opens[b]:
+            seated = False
+        while q < order.size and at[order[q]] == b:
+            e = events[order[q]]
+            q += 1
+            if e.kind == "seat":
+                seated = seated or not walk_rising[b]
+            elif e.kind == "separation" and not seated:
+                floats.append(e)
+        if seated:
+            best = max(best, float(walk_s[b:end].max()))
+    floats.sort(key=lambda e: e.time_s)
+    return floats, best

@@ -31,15 +31,17 @@ Which engine computes a chunk's rows is a table (ENGINES, the first that accepts
 Columns (SI units in the names, as in `simulate`'s CSV), by effect:
   forces   min_contact_force_N (rigid, refined), float_speed_rpm (rigid; NaN: never floats)
   contact  max_camshaft_torque_Nm
-  elastic  first_separation_deg (cam angle; NaN: none), separations, flight_time_s (time with the
-           valve open and the linkage unloaded, on the output grid), max_deviation_m,
-           peak_linkage_force_N, peak_camshaft_back_pressure_N, lift_off_delay_s (from the lash
-           take-up to the valve's lift-off: Schenker's t0), seating_velocity_m_s (the hardest seat
-           impact, < 0; NaN: none), seat_impacts, largest_bounce_m (highest rise after a seat
-           impact before the next event, on the output grid; 0: none), residual_deviation_m and
-           residual_amplitude_m (from the lift the cam is made for: explorer.effects.residual; NaN
-           where the effect does not compute them, the spring chain's, and the amplitude where the
-           lift has no dwell after the rise)
+  elastic  first_separation_deg (cam angle; NaN: none) and separations, the valve's float (while
+           it is open: from the rigid opening to its first seat impact, elastic_events.
+           valve_periods), flight_time_s (time with the valve open and the linkage unloaded, on the
+           output grid), max_deviation_m, peak_linkage_force_N, peak_camshaft_back_pressure_N,
+           lift_off_delay_s (from the lash take-up to the valve's lift-off: Schenker's t0),
+           seating_velocity_m_s (the hardest seat impact, < 0; NaN: none), seat_impacts,
+           largest_bounce_m (highest lift after a seat impact before the cam opens the valve
+           again, on the output grid; 0: none), residual_deviation_m and residual_amplitude_m
+           (from the lift the cam is made for: explorer.effects.residual; NaN where the effect
+           does not compute them, the spring chain's, and the amplitude where the lift has no
+           dwell after the rise)
 and always run_failed (1: the run raised; its figures NaN) after the varied inputs.
 """
 

@@ -1,6 +1,8 @@
 """Float margin: the lowest speed at which the valve leaves the cam (the elastic linkage's first
-separation, found on the speed grid and refined by bisection; without a linkage the rigid float
-speed) less the highest operating speed.
+separation while the valve is open, from the rigid opening to its first seat impact: the sweep's
+`separations`, effects/elastic_events.valve_periods -- one after the valve has landed is its
+bounce; found on the speed grid and refined by bisection; without a linkage the rigid float speed)
+less the highest operating speed.
 
 With tolerance draws each draw runs at the speeds its Case gives the rule (the nominal first
 separation, if within reach, and the highest speed plus the margin; over the whole range for the

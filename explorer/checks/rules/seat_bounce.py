@@ -1,5 +1,7 @@
 """Seat bounce: how often the valve lands again after its first seat impact in a revolution
-(elastic linkage, sweep engine), counted when its largest bounce rises above `min_height`."""
+(elastic linkage, sweep engine), counted when its largest bounce (the highest lift after a seat
+impact before the cam opens the valve again: effects/elastic_events.valve_periods) rises above
+`min_height`."""
 
 from __future__ import annotations
 

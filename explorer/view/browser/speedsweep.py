@@ -86,7 +86,7 @@ class SpeedSweep:
     float_rpm: float  # rev/min, exact rigid float speed (nan: never floats)
     span: tuple[float, float]  # rev/min, the plotted range
     elastic_rpm: np.ndarray  # rev/min, the coarser elastic speeds (empty: no elastic effect)
-    first_separation_deg: np.ndarray  # cam angle of the first separation (nan: none)
+    first_separation_deg: np.ndarray  # cam angle of the first separation while the valve is open (nan: none)
     seating_velocity: np.ndarray  # m/s, hardest seat impact, < 0 (nan: none)
     max_deviation: np.ndarray  # m, largest deviation of the valve from the rigid lift
     peak_torque: np.ndarray | None = None  # N m, rigid camshaft torque peak (None: no contact effect)
