@@ -107,11 +107,14 @@ class CheckReport:
         for r, d in zip(self.results, out["results"]):
             # value, fail and warn are SI: their unit beside value (the display unit, `unit`, is
             # that of the *_shown figures)
-            d = dict(item for key, value in d.items() for item in
-                     (((key, value),) if key != "value" else ((key, value), ("si_unit", SI_UNITS[r.unit]))))
+            ordered = {}
+            for key, value in d.items():
+                ordered[key] = value
+                if key == "value":
+                    ordered["si_unit"] = SI_UNITS[r.unit]
             for key in ("value", "fail", "warn"):
-                d[f"{key}_shown"] = r.shown(getattr(r, key))
-            results.append(d)
+                ordered[f"{key}_shown"] = r.shown(getattr(r, key))
+            results.append(ordered)
         out["results"] = results
         return clean(out)
 

@@ -61,6 +61,12 @@ def _rates(model) -> dict[str, float]:
     return dict([contact, ("flight", math.sqrt(model.spring_rate / model.mass))])
 
 
+def _steps(rate: float, span: float) -> float:
+    """Solver steps to resolve a rate (1/s) over span seconds: the exact and taylor solvers' pieces
+    of at most 0.5 / rate."""
+    return rate * span / 0.5
+
+
 def fastest_rate(model) -> float:
     """rho (1/s): the linkage's fastest rate in contact (overdamped: the fast real root) or flight."""
     return max(_rates(model).values())
@@ -97,14 +103,14 @@ def check_resolution(model, t, method: str, file: str) -> None:
     rates = _rates(model)
     fastest = max(rates, key=rates.__getitem__)
     span = float(t[-1] - t[0])
-    nodes = rates[fastest] * span / 0.5
+    nodes = _steps(rates[fastest], span)
     if not nodes <= MAX_SOLVER_NODES:  # also NaN
         rate = rates[fastest]
         shown = f"decay rate {rate:.3g} 1/s" if fastest == "damped" else f"{rate / (2.0 * math.pi):.3g} Hz"
         steps = f"{math.ceil(nodes):,}" if math.isfinite(nodes) else "unboundedly many"
         entry = _blamed(model, fastest)
         slower = " or ".join(_SLOWER[k] for k in (entry, *(k for k in _SET_BY[fastest] if k != entry)))
-        if rate * REFERENCE_REVOLUTION_S / 0.5 <= MAX_SOLVER_NODES:
+        if _steps(rate, REFERENCE_REVOLUTION_S) <= MAX_SOLVER_NODES:
             key, advice = "drive.rpm", f"a higher drive.rpm, or {slower}"
         else:
             key, advice = entry, f"{slower}, or a higher drive.rpm"

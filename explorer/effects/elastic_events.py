@@ -109,8 +109,8 @@ def valve_periods(time_s, lift, rigid_lift, rigid_velocity, events) -> tuple[lis
     """(the separations while the valve is open: its float, in time order; the largest bounce) of a
     revolution on its output grid (time_s, the valve's lift, the rigid valve's lift and velocity:
     open where its lift is > 0, the kinematics' test ratio L > lash) from its events in time order
-    (kinds "separation" and "seat"; others are ignored). The compiled path computes the same: dynamics/kernel_figures.py,
-    _valve_periods.
+    (kinds "separation" and "seat"; others are ignored). The compiled path computes the same:
+    dynamics/kernel_figures.py, _valve_periods.
 
     The revolution is walked once, periodically, from the rigid valve's first opening on the grid
     (the lash take-up: the first sample where it is open after one where it is closed; column 0
@@ -129,9 +129,8 @@ def valve_periods(time_s, lift, rigid_lift, rigid_velocity, events) -> tuple[lis
     the cam lifting a resting valve, the spring chain's and the train's each crossing of the seat
     upwards, every rebound too), and a separation is any contact's (the train's joints: its
     lifter leaving the cam included). A valve still bouncing when the cam opens it again is open
-    from that opening: a
-    seat impact while the rigid valve is open and rising (at the sample after it) ends no open
-    period, and what the cam then lifts is no bounce."""
+    from that opening: a seat impact while the rigid valve is open and rising (at the sample after
+    it) ends no open period, and what the cam then lifts is no bounce."""
     t = np.asarray(time_s, dtype=float)
     s = np.asarray(lift, dtype=float)
     rigid_open = np.asarray(rigid_lift, dtype=float) > 0.0

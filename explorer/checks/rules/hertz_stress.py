@@ -32,8 +32,9 @@ def allowable(case, settings) -> tuple[float, str]:
         return spec.allowable_stress, "[contact] allowable_stress"
     m = CONTACT_MATERIALS[spec.engine]
     if not spec.allowable_named:  # the 1902 default: say so, and how to name a modern one
-        return m.allowable, (f"no [contact] allowable_stress given: seed 004's {spec.engine!r} default of 1902 cast iron, {m.source} "
-                             "(a modern hardened pair: [contact] allowable_stress, or the rule's material setting)")
+        return m.allowable, (f"no [contact] allowable_stress given: seed 004's {spec.engine!r} default of 1902 cast "
+                             f"iron, {m.source} (a modern hardened pair: [contact] allowable_stress, or the rule's "
+                             "material setting)")
     return m.allowable, f"[contact] engine = {spec.engine!r}: {m.source}"
 
 
