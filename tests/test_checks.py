@@ -293,6 +293,40 @@ def test_hertz_stress_against_the_scene_allowable():
     assert at.value == pytest.approx(explorer.simulate(load_scene(FLOAT)).summary["max_hertz_stress_Pa"], rel=1e-9)
 
 
+def test_dynamic_hertz_stress_judges_the_elastic_trains_force():
+    """The float demo at 4000 rpm lands on the cam after its float: the contact effect's dynamic
+    stress (its own test: tests/test_dynamic_contact.py, hand formulas on the elastic force), the
+    same allowable as hertz_stress; sigma ~ width^-1/2 at a given force (the elastic force does not
+    depend on the cam's width), so the width at the limit is found in closed form."""
+    at = judge(FLOAT, "dynamic_hertz_stress", rpm="4000")
+    summary = explorer.simulate(load_scene(FLOAT)).summary
+    assert at.value == pytest.approx(summary["max_dynamic_hertz_stress_Pa"], rel=1e-12)
+    assert at.cam_angle_deg == summary["max_dynamic_hertz_stress_cam_angle_deg"] and at.speed_rpm == 4000.0
+    rigid = judge(FLOAT, "hertz_stress", rpm="4000")
+    assert at.fail == rigid.fail and at.value > 1.4 * rigid.value
+    width = 0.014 * (at.value / at.fail) ** 2
+
+    def make(w):
+        return scene_with(FLOAT, f'contact.width="{w} m"')
+
+    good, bad = assert_sides(make, width, "dynamic_hertz_stress", "above", rpm="4000")
+    assert bad.value == pytest.approx(bad.fail, rel=0.006)
+    # over a range: the worst of the speeds' own revolutions
+    worst = judge(FLOAT, "dynamic_hertz_stress", rpm="3000:4000:3")
+    each = [explorer.simulate(scene_with(FLOAT, f"drive.rpm={v}")).summary["max_dynamic_hertz_stress_Pa"]
+            for v in (3000, 3500, 4000)]
+    assert worst.value == pytest.approx(max(each), rel=1e-12)
+    # a tolerance study judges the nominal design and says the draws were not propagated; a scene
+    # without an elastic linkage is not judged
+    drawn = explorer.check(FLOAT, rpm="4000", sample={"valve.lash": "normal(0.25 mm, 0.01 mm)"}, runs=5, seed=1,
+                           only=("dynamic_hertz_stress",), workers=1).result("dynamic_hertz_stress")
+    assert drawn.verdict == "fail" and drawn.value == at.value
+    assert drawn.sample_note.startswith("tolerances not propagated") and "nominal design" in drawn.sample_note
+    rigid_only = loads_scene(FLOAT_TEXT.replace('[linkage]\nstiffness = "3 kN/mm"\ndamping = "8 N*s/m"\n', "")
+                             .replace('"contact", "elastic"]', '"contact"]'))
+    assert judge(rigid_only, "dynamic_hertz_stress").verdict == "n/a"
+
+
 # --- tribology -------------------------------------------------------------------------------------------
 
 

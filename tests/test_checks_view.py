@@ -106,9 +106,13 @@ def test_the_viewers_lines_are_the_reports_with_the_limits_on_the_columns():
     # a rule with no limit drawn has none; every drawn rule names a column a result has
     assert check_line(report.result("float_margin")).thresholds == ()
     columns = set(simulate_columns(scene))
-    assert {"pressure_angle_deg", "valve_velocity_m_s", "hertz_stress_Pa"} <= columns
+    assert {"pressure_angle_deg", "valve_velocity_m_s", "hertz_stress_Pa", "dynamic_hertz_stress_Pa"} <= columns
     drawn = {spec.name for spec in rules() if spec.plotted}
-    assert drawn == {"pressure_angle", "seating_velocity", "hertz_stress"} and drawn <= {r.name for r in report.results}
+    assert drawn == {"pressure_angle", "seating_velocity", "hertz_stress", "dynamic_hertz_stress"}
+    assert drawn <= {r.name for r in report.results}
+    dynamic = summary.line("dynamic_hertz_stress").thresholds
+    assert dynamic[0].column == "dynamic_hertz_stress_Pa"
+    assert dynamic[0].values == (pytest.approx(report.result("dynamic_hertz_stress").fail),)
 
 
 def simulate_columns(scene):
@@ -147,8 +151,14 @@ def test_limits_are_dashed_lines_on_the_plots_of_their_columns():
     cols = prepared.result.columns
     assert np.nanmax(angle.series[0][1]) == pytest.approx(np.max(cols["pressure_angle_deg"]))
     fail = summary.line("hertz_stress").thresholds[0].values[0]
-    assert stress.series[1][1][0] == pytest.approx(fail * 1e-6)  # MPa
+    # the rigid and the elastic train's stress, each rule's allowable once (hertz_stress names three
+    # columns, the line contact's, a crown's and a tip's: one line)
+    assert [label for label, _, _ in stress.series] == [
+        "Hertz", "Hertz, elastic train", "Contact (Hertz) stress fail 392.3",
+        "Contact (Hertz) stress, elastic train fail 392.3"]
+    assert stress.series[2][1][0] == pytest.approx(fail * 1e-6)  # MPa
     assert np.nanmax(stress.series[0][1]) == pytest.approx(np.max(cols["hertz_stress_Pa"]) * 1e-6)
+    assert np.nanmax(stress.series[1][1]) == pytest.approx(np.max(cols["dynamic_hertz_stress_Pa"]) * 1e-6)
     # a scene whose checks limit neither gets neither plot
     assert len(with_limits(prepared.plots, CheckSummary("s", "", ()), prepared.result)) == len(titles)
 

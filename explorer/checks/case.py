@@ -27,6 +27,7 @@ from typing import Callable, Iterator
 import numpy as np
 
 from ..core.errors import InputError
+from ..effects.contact import DYNAMIC_SOURCE
 from ..effects.lift import build_lift
 from ..effects.pipeline import simulate
 from ..mechanics.contact import ContactSpec, effective_modulus, hertz_width
@@ -267,6 +268,19 @@ class Case:
     @cached_property
     def _shared(self):
         return _Shared()
+
+    def elastic_cam_force(self, rpm: float) -> np.ndarray | None:
+        """The elastic train's cam force referred to the valve (N) at the check's angles, from one
+        elastic revolution of the nominal design at `rpm` (the column the contact effect's dynamic
+        figures read: effects.contact.DYNAMIC_SOURCE); None when the run is refused."""
+        self.needs_linkage()
+        effect, column = DYNAMIC_SOURCE
+        scene = scene_for(self.scene.with_changes(effects=(effect,)), ("drive.rpm",), (rpm,))
+        lift = self.lift if self.scene.gear_plugin.lift_reads(self.scene) == () else None
+        try:
+            return np.asarray(simulate(scene, lift=lift).columns[column], dtype=float)
+        except (InputError, RuntimeError, ValueError, ArithmeticError):
+            return None
 
     def elastic_event_angle(self, rpm: float, kind: str, pick: str = "first", draw: int = 0) -> float:
         """Cam angle (deg) of an elastic event of one run, from `simulate` (for "where")."""

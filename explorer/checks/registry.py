@@ -127,6 +127,16 @@ _BUILTIN: tuple[RuleSpec, ...] = (
              ), "contact",
              # the line contact's, a bucket tappet's crown, a pushrod train's lifter tip
              (Plotted("hertz_stress_Pa"), Plotted("face_hertz_stress_Pa"), Plotted("tip_hertz_stress_Pa"))),
+    RuleSpec("dynamic_hertz_stress", f"{_R}.dynamic_hertz_stress:measure", "Contact (Hertz) stress, elastic train",
+             "largest Hertz pressure under the elastic train's cam force", "MPa", "max", (
+                 Setting("material", "scene", "choice", "", "as hertz_stress", "material-specific",
+                         choices=("scene", "large-gas", "diesel", "through-hardened-300HB", "carburized-grade-1",
+                                  "carburized-grade-2")),
+                 Setting("fail", None, "pressure", "MPa", "the material's allowable (setting `material`)",
+                         "material-specific", minimum=0.0),
+                 Setting("warn", None, "pressure", "MPa", "none by default", "-", minimum=0.0),
+             ), "dynamics",
+             (Plotted("dynamic_hertz_stress_Pa"), Plotted("dynamic_face_hertz_stress_Pa"))),
     RuleSpec("film_parameter", f"{_R}.film_parameter:measure", "Film parameter (lambda)",
              "smallest h_min / composite roughness over the loaded contact", "", "min", (
                  Setting("fail", 1.0, "number", "", HAMROCK + ": below 1 the asperities carry the load",

@@ -4,6 +4,7 @@ physics; the gear gives its contact geometry and may add figures of its own)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from types import MappingProxyType
 
 import numpy as np
@@ -11,6 +12,7 @@ import numpy as np
 from ..mechanics.contact import (ContactGeometry, ContactSpec, contact_loads, effective_modulus, hertz_line_stress,
                                  hertz_width)
 from ..result import EffectOutput
+from .registry import declared
 
 
 def contact_geometry(ctx) -> ContactGeometry:
@@ -19,21 +21,28 @@ def contact_geometry(ctx) -> ContactGeometry:
     return ctx.gear.contact_geometry(ctx)
 
 
-def contact_effect(ctx) -> EffectOutput:
-    scene = ctx.scene
-    spec: ContactSpec = scene.contact if scene.contact is not None else ContactSpec()
-    geometry = contact_geometry(ctx)
-    c = ctx.columns
-    alpha, contour_radius = np.asarray(geometry.pressure_angle), np.asarray(geometry.contour_radius)
-    rho = spec.friction_angle
-    columns = contact_loads(geometry, c["contact_force_N"], c["follower_velocity_m_s"], rho)
-    normal, torque, margin = columns["cam_normal_force_N"], columns["camshaft_torque_Nm"], columns["self_locking_margin_deg"]
+# The effect that gives the cam's dynamic load, referred to the valve, as linkage_force_N: the
+# elastic effect in every form (one mass, the spring chain, the train of parts: its cam contact's
+# force). When a scene has it, the statics run a second time on that force (the `dynamic_` figures):
+# the cam carries the elastic train's force, not the rigid train's (beyond the float speed the
+# rigid one is even negative where the elastic valve still presses on the cam after a rebound).
+DYNAMIC_SOURCE = ("elastic", "linkage_force_N")
+# The figures of the statics that scale with the force and that a designer judges: the normal force,
+# the camshaft torque and every Hertz stress (the gear's own: the tip's, the face's, ...).
+DYNAMIC_FIGURES = ("cam_normal_force_N", "camshaft_torque_Nm", "*hertz_stress_Pa")
 
-    finite_normal = np.where(np.isfinite(normal), normal, np.nan)
-    max_normal = float(np.nanmax(finite_normal)) if np.isfinite(finite_normal).any() else 0.0
-    e_star = effective_modulus(spec.youngs_modulus, spec.poisson_ratio, spec.roller_youngs_modulus, spec.roller_poisson_ratio)
+
+def _statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: float, width: float | None,
+             force) -> tuple[dict, dict, float, str]:
+    """(columns, the gear's summary, the width, its rule) of the contact statics for the valve-side
+    contact force `force` (on ctx.theta); `width` None: the scene's width, else the width rule's
+    for these loads."""
+    alpha, contour_radius = np.asarray(geometry.pressure_angle), np.asarray(geometry.contour_radius)
+    columns = contact_loads(geometry, force, ctx.columns["follower_velocity_m_s"], spec.friction_angle)
+    normal = columns["cam_normal_force_N"]
     required_width, rule = hertz_width(normal, geometry, spec, e_star)
-    width = spec.width if spec.width is not None else required_width
+    if width is None:
+        width = spec.width if spec.width is not None else required_width
     if width > 0.0:
         sigma = hertz_line_stress(normal, width, geometry.counter_radius, contour_radius, e_star)
     else:
@@ -44,7 +53,23 @@ def contact_effect(ctx) -> EffectOutput:
         columns["contour_radius_m"] = contour_radius
     gear_columns, gear_summary = ctx.gear.contact_figures(ctx, geometry, MappingProxyType(columns))
     columns.update(gear_columns)
+    return columns, gear_summary, width, (required_width, rule)
 
+
+def contact_effect(ctx) -> EffectOutput:
+    scene = ctx.scene
+    spec: ContactSpec = scene.contact if scene.contact is not None else ContactSpec()
+    geometry = contact_geometry(ctx)
+    e_star = effective_modulus(spec.youngs_modulus, spec.poisson_ratio, spec.roller_youngs_modulus, spec.roller_poisson_ratio)
+    columns, gear_summary, width, (required_width, rule) = _statics(ctx, geometry, spec, e_star, None,
+                                                                  ctx.columns["contact_force_N"])
+    alpha, contour_radius = np.asarray(geometry.pressure_angle), np.asarray(geometry.contour_radius)
+    rho = spec.friction_angle
+    normal, torque, margin = columns["cam_normal_force_N"], columns["camshaft_torque_Nm"], columns["self_locking_margin_deg"]
+    sigma = columns["hertz_stress_Pa"]
+
+    finite_normal = np.where(np.isfinite(normal), normal, np.nan)
+    max_normal = float(np.nanmax(finite_normal)) if np.isfinite(finite_normal).any() else 0.0
     theta_deg = np.degrees(ctx.theta)
     i_alpha = int(np.argmax(np.abs(alpha)))
     i_margin = int(np.argmin(margin))
@@ -99,7 +124,66 @@ def contact_effect(ctx) -> EffectOutput:
             if rule != "P/(k D)" else
             f"cam width {spec.width * 1e3:.4g} mm is below the width rule b = P/(k D) = {required_width * 1e3:.4g} mm"
         )
+    effect, column = DYNAMIC_SOURCE
+    if effect in ctx.done:
+        dynamic, dynamic_summary, dynamic_warnings = dynamic_statics(ctx, geometry, spec, e_star, width,
+                                                                     ctx.columns[column])
+        columns.update(dynamic)
+        summary.update(dynamic_summary)
+        warnings.extend(dynamic_warnings)
     return EffectOutput(columns=columns, summary=summary, warnings=tuple(warnings))
+
+
+def dynamic_statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: float, width: float,
+                    force) -> tuple[dict, dict, list[str]]:
+    """The statics on the elastic train's cam force `force` (valve-referred, >= 0): the same
+    geometry, friction and contact width as the rigid statics (the width is the design's, not one
+    the rule would give for these loads), the gear's own figures computed on that force (its
+    ctx sees it as contact_force_N). Columns `dynamic_<name>` for each DYNAMIC_FIGURES column, and
+    per column its largest value (max_dynamic_<name>) and cam angle; the Hertz utilisation and a
+    warning beyond the allowable."""
+    force = np.asarray(force, dtype=float)
+    dctx = replace(ctx, columns=MappingProxyType({**ctx.columns, "contact_force_N": force}))
+    statics, _, _, _ = _statics(dctx, geometry, spec, e_star, width, force)
+    theta_deg = np.degrees(ctx.theta)
+    columns: dict[str, np.ndarray] = {}
+    summary: dict = {"dynamic_contact_force_from": f"{DYNAMIC_SOURCE[1]} of the {DYNAMIC_SOURCE[0]} effect"}
+    for name, values in statics.items():
+        if not declared(name, DYNAMIC_FIGURES):
+            continue
+        values = np.asarray(values, dtype=float)
+        columns[f"dynamic_{name}"] = values
+        finite = np.where(np.isfinite(values), values, -np.inf)
+        i = int(np.argmax(finite))
+        stem, _, unit = name.rpartition("_")
+        summary[f"max_dynamic_{name}"] = float(values[i]) if np.isfinite(values[i]) else None
+        summary[f"max_dynamic_{stem}_cam_angle_deg"] = float(theta_deg[i]) if np.isfinite(values[i]) else None
+    sigma = columns["dynamic_hertz_stress_Pa"]
+    i = int(np.argmax(np.where(np.isfinite(sigma), sigma, -1.0)))
+    summary["dynamic_hertz_utilisation"] = float(sigma[i] / spec.allowable_stress)
+    warnings = []
+    if sigma[i] > spec.allowable_stress:
+        warnings.append(
+            f"contact stress under the elastic train's force: Hertz {sigma[i] / 1e6:.4g} MPa at cam angle "
+            f"{theta_deg[i]:.2f} deg exceeds the allowable {spec.allowable_stress / 1e6:.4g} MPa for width "
+            f"{width * 1e3:.4g} mm"
+        )
+    return columns, summary, warnings
+
+
+def contact_figures(ctx, cache) -> EffectOutput:
+    """The contact effect's figures for sweeps: the rigid statics (a sweep row holds the rigid peak
+    camshaft torque: the compiled sweep computes it at every speed from the rigid forces), without
+    the dynamic pass, whose figures no row holds."""
+    scene = ctx.scene
+    spec: ContactSpec = scene.contact if scene.contact is not None else ContactSpec()
+    geometry = contact_geometry(ctx)
+    e_star = effective_modulus(spec.youngs_modulus, spec.poisson_ratio, spec.roller_youngs_modulus, spec.roller_poisson_ratio)
+    columns, _, _, _ = _statics(ctx, geometry, spec, e_star, None, ctx.columns["contact_force_N"])
+    torque = columns["camshaft_torque_Nm"]
+    finite = np.where(np.isfinite(torque), torque, np.nan)
+    peak = float(np.nanmax(finite)) if np.isfinite(finite).any() else None
+    return EffectOutput(columns=columns, summary={"max_camshaft_torque_Nm": peak})
 
 
 def contact_row(result) -> dict[str, float]:

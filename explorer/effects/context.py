@@ -223,6 +223,7 @@ class Context:
     lift: LiftCurve
     columns: Mapping[str, np.ndarray]  # computed so far
     summary: Mapping[str, Any]  # computed so far
+    done: tuple[str, ...] = ()  # the effects run before it, in order
 
     @property
     def omega(self) -> float:

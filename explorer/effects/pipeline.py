@@ -121,8 +121,10 @@ def _run(scene, lift, effects, function_of, timed: bool) -> Result:
     timings: dict[str, EffectTiming] = {}
     events: list[Event] = []
     warnings: list[str] = []
+    done: list[str] = []
     for name in registry.order(effects):
-        ctx = Context(scene, theta, t_time, lift_curve, MappingProxyType(columns), MappingProxyType(summary))
+        ctx = Context(scene, theta, t_time, lift_curve, MappingProxyType(columns), MappingProxyType(summary),
+                      tuple(done))
         # import outside the timing: cost of the effect, not of Python
         function = function_of(name, gear)
         started = time.perf_counter()
@@ -137,6 +139,7 @@ def _run(scene, lift, effects, function_of, timed: bool) -> Result:
         warnings.extend(out.warnings)
         if timed:
             timings[name] = EffectTiming(compute_time_s=seconds, requested=name in scene.effects)
+        done.append(name)
     return Result.build(scene, columns, summary, sorted(events, key=lambda e: e.time_s), warnings, timings)
 
 

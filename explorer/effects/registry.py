@@ -38,7 +38,9 @@ class EffectSpec:
        before it; it asks the scene's gear (ctx.gear) for what is particular to the gear, never
        follower.type. Columns of a later effect replace earlier ones of the same name (valve_* holds
        the most detailed motion; rigid_valve_* keeps the rigid one).
-    2. List `depends` (effects that must run before it: the pipeline runs them first, in order) and
+    2. List `depends` (effects that must run before it: the pipeline runs them first, in order),
+       `after` (effects it reads when the scene has them, which then run before it but are not
+       added: the contact statics take the elastic effect's cam force when there is one) and
        `requires` (scene sections it needs, such as "valve": the scene loader refuses a scene that
        lists it without them).
     3. Declare its `columns` (names or fnmatch patterns, "coil_*_displacement_m"); a gear declares
@@ -62,6 +64,7 @@ class EffectSpec:
     name: str
     function: Callable | str  # item 1
     depends: tuple[str, ...] = ()  # item 2
+    after: tuple[str, ...] = ()
     requires: tuple[str, ...] = ()
     columns: tuple[str, ...] = ()  # item 3
     sections: tuple[tuple[str, str], ...] = ()  # item 5
@@ -108,10 +111,14 @@ EFFECTS: Registry[EffectSpec] = Registry("effect", {spec.name: spec for spec in 
                figures="explorer.effects.forces:forces_figures",
                description="rigid valve-train loads, the float (jump) speed, Schenker's side figures"),
     EffectSpec("contact", "explorer.effects.contact:contact_effect", depends=("kinematics", "lash", "forces"),
+               after=("elastic",),  # its cam force, when the scene has it: the dynamic_* figures
                columns=("cam_normal_force_N", "cam_tangential_force_N", "camshaft_torque_Nm", "self_locking_margin_deg",
-                        "hertz_stress_Pa", "pressure_angle_deg", "contour_radius_m"),
+                        "hertz_stress_Pa", "pressure_angle_deg", "contour_radius_m",
+                        "dynamic_cam_normal_force_N", "dynamic_camshaft_torque_Nm", "dynamic_*hertz_stress_Pa"),
                sweep_figures=("max_camshaft_torque_Nm",), row="explorer.effects.contact:contact_row",
-               description="contact statics: normal force with friction, camshaft torque, Hertz stress, cam width"),
+               figures="explorer.effects.contact:contact_figures",
+               description="contact statics: normal force with friction, camshaft torque, Hertz stress, cam width; "
+                           "with the elastic effect, the same on its cam force (dynamic_*)"),
     EffectSpec("elastic", "explorer.effects.elastic:elastic_effect", depends=("kinematics", "lash"),
                requires=("valve", "spring", "linkage"),
                columns=("valve_lift_m", "valve_velocity_m_s", "valve_accel_m_s2", "valve_jerk_m_s3", "linkage_force_N",
@@ -148,7 +155,18 @@ def names() -> tuple[str, ...]:
 
 
 def order(effects) -> list[str]:
-    """The effects and what they depend on, dependencies first (RuntimeError on a cycle)."""
+    """The effects and what they depend on, dependencies first (RuntimeError on a cycle); an effect
+    another lists in `after` runs before that one when it is among them."""
+    wanted: set[str] = set()
+
+    def close(name: str) -> None:
+        if name not in wanted:
+            wanted.add(name)
+            for dep in EFFECTS[name].depends:
+                close(dep)
+
+    for effect in effects:
+        close(effect)
     out: list[str] = []
 
     def visit(name: str, path: tuple[str, ...]) -> None:
@@ -156,7 +174,8 @@ def order(effects) -> list[str]:
             return
         if name in path:
             raise RuntimeError(f"effect dependency cycle: {' -> '.join(path + (name,))}")
-        for dep in EFFECTS[name].depends:
+        spec = EFFECTS[name]
+        for dep in spec.depends + tuple(a for a in spec.after if a in wanted):
             visit(dep, path + (name,))
         out.append(name)
 

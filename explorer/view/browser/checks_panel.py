@@ -37,7 +37,11 @@ LIMIT_DASH = [3, 3]
 LIMIT_PLOTS: tuple[tuple[str, str, tuple[tuple[str, str], ...], float], ...] = (
     ("Pressure angle α", "α [°]", (("pressure_angle_deg", "pressure angle"),), 1.0),
     ("Contact stress σ (Hertz)", "σ [MPa]", (("hertz_stress_Pa", "Hertz"), ("face_hertz_stress_Pa", "face (crown)"),
-                                            ("tip_hertz_stress_Pa", "lifter tip")), 1e-6),
+                                            ("tip_hertz_stress_Pa", "lifter tip"),
+                                            # the same under the elastic train's cam force (the contact effect's dynamic_*)
+                                            ("dynamic_hertz_stress_Pa", "Hertz, elastic train"),
+                                            ("dynamic_face_hertz_stress_Pa", "face, elastic train"),
+                                            ("dynamic_tip_hertz_stress_Pa", "lifter tip, elastic train")), 1e-6),
 )
 
 
@@ -115,11 +119,16 @@ def with_limits(plots, summary: CheckSummary | None, result=None) -> list:
         plots = list(plots) + limit_plots(result, summary)
     out = []
     for plot in plots:
-        extra, styles = [], []
+        extra, styles, drawn = [], [], set()
         for column, factor in plot_columns(plot.title):
             for line, threshold in summary.thresholds(column):
                 for value in threshold.values:
                     height = value * factor
+                    # a rule's limit once per plot (hertz_stress names the line contact's, the
+                    # crown's and the tip's columns: one allowable)
+                    if (line.rule, threshold.limit, height) in drawn:
+                        continue
+                    drawn.add((line.rule, threshold.limit, height))
                     extra.append((f"{line.title} {threshold.limit} {height:.4g}",
                                   np.full(len(plot.x), height), hex_colour(RGB[threshold.limit])))
                     styles.append({"width": 1.2, "dash": LIMIT_DASH})
