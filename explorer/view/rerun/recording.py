@@ -31,8 +31,9 @@ rules, first match wins:
 - valve_<q>               -> /valve/<q>         valve_lift_m -> /valve/lift, valve_velocity_m_s ->
                                                 /valve/velocity, valve_accel_m_s2 ->
                                                 /valve/acceleration, valve_jerk_m_s3 -> /valve/jerk
-- follower_<q>            -> /follower/<q>      follower_lift_m -> /follower/lift (roller centre, lash
-                                                included)
+- follower_<q>            -> /follower/<q>      follower_lift_m -> /follower/lift (the gear's lift
+                                                curve, lash included: a translating roller's centre,
+                                                a lever gear's drive referred to the valve)
 - other lengths, unit m   -> /lengths/<stem>    contour_radius_m -> /lengths/contour_radius
 - anything else           -> /other/<column>
 ("accel" is spelled out as "acceleration".) `cam_angle_deg` and `time_s` are the timelines, not
