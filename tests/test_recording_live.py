@@ -240,7 +240,8 @@ def test_checks_join_their_results_recording_as_explorer_record_writes_them(tmp_
                    "-o", recorded)
     assert proc.returncode == 0, proc.stderr
     want = check_entities(read_rrd(recorded)[0])
-    assert len(want["/events/checks"]["TextLog:text"]) == 5 and len(want) == 6  # 5 FAIL markers, 5 limit lines
+    # 6 FAIL markers (hertz_stress and dynamic_hertz_stress among them), 6 limit lines
+    assert len(want["/events/checks"]["TextLog:text"]) == 6 and len(want) == 7, sorted(want)
 
     scene = load_scene(FLOAT, list(FLOAT_RANGE))
     first, second, never = simulate(scene), simulate(scene), result_at(600)

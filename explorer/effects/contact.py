@@ -12,7 +12,6 @@ import numpy as np
 from ..mechanics.contact import (ContactGeometry, ContactSpec, contact_loads, effective_modulus, hertz_line_stress,
                                  hertz_width)
 from ..result import EffectOutput
-from .registry import declared
 
 
 def contact_geometry(ctx) -> ContactGeometry:
@@ -29,7 +28,12 @@ def contact_geometry(ctx) -> ContactGeometry:
 DYNAMIC_SOURCE = ("elastic", "linkage_force_N")
 # The figures of the statics that scale with the force and that a designer judges: the normal force,
 # the camshaft torque and every Hertz stress (the gear's own: the tip's, the face's, ...).
-DYNAMIC_FIGURES = ("cam_normal_force_N", "camshaft_torque_Nm", "*hertz_stress_Pa")
+DYNAMIC_FIGURES = ("cam_normal_force_N", "camshaft_torque_Nm")
+DYNAMIC_STRESSES = "hertz_stress_Pa"  # each column ending so
+
+
+def _dynamic(name: str) -> bool:
+    return name in DYNAMIC_FIGURES or name.endswith(DYNAMIC_STRESSES)
 
 
 def _statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: float, width: float | None,
@@ -139,7 +143,7 @@ def dynamic_statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: f
     """The statics on the elastic train's cam force `force` (valve-referred, >= 0): the same
     geometry, friction and contact width as the rigid statics (the width is the design's, not one
     the rule would give for these loads), the gear's own figures computed on that force (its
-    ctx sees it as contact_force_N). Columns `dynamic_<name>` for each DYNAMIC_FIGURES column, and
+    ctx sees it as contact_force_N). Columns `dynamic_<name>` for each DYNAMIC_FIGURES column and Hertz stress, and
     per column its largest value (max_dynamic_<name>) and cam angle; the Hertz utilisation and a
     warning beyond the allowable."""
     force = np.asarray(force, dtype=float)
@@ -149,7 +153,7 @@ def dynamic_statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: f
     columns: dict[str, np.ndarray] = {}
     summary: dict = {"dynamic_contact_force_from": f"{DYNAMIC_SOURCE[1]} of the {DYNAMIC_SOURCE[0]} effect"}
     for name, values in statics.items():
-        if not declared(name, DYNAMIC_FIGURES):
+        if not _dynamic(name):
             continue
         values = np.asarray(values, dtype=float)
         columns[f"dynamic_{name}"] = values
