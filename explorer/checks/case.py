@@ -29,7 +29,7 @@ import numpy as np
 from ..core.errors import InputError
 from ..effects.contact import DYNAMIC_SOURCE
 from ..effects.lift import build_lift
-from ..effects.pipeline import simulate
+from ..effects.pipeline import RunCache, figures, simulate
 from ..mechanics.contact import ContactSpec, effective_modulus, hertz_width
 from ..mechanics.forces import friction_direction
 from ..mechanics.gear_contact import GearContact, NotApplicable
@@ -276,9 +276,11 @@ class Case:
         self.needs_linkage()
         effect, column = DYNAMIC_SOURCE
         scene = scene_for(self.scene.with_changes(effects=(effect,)), ("drive.rpm",), (rpm,))
-        lift = self.lift if self.scene.gear_plugin.lift_reads(self.scene) == () else None
+        # the figures-only run (the kinematics without its exact summary peaks, which the
+        # elastic effect does not read), the check's lift shared by every speed
+        cache = RunCache(lift=self.lift if self.scene.gear_plugin.lift_reads(self.scene) == () else None)
         try:
-            return np.asarray(simulate(scene, lift=lift).columns[column], dtype=float)
+            return np.asarray(figures(scene, cache).columns[column], dtype=float)
         except (InputError, RuntimeError, ValueError, ArithmeticError):
             return None
 

@@ -13,6 +13,18 @@ from ..result import EffectOutput, Event
 
 
 def kinematics_effect(ctx) -> EffectOutput:
+    return _kinematics(ctx, exact=True)
+
+
+def kinematics_figures(ctx, cache) -> EffectOutput:
+    """The kinematics effect's figures-only form (sweeps, the design checks' elastic revolutions):
+    its columns and the gear's, without the exact peaks and open angle of its summary, which no
+    sweep row and no later effect reads (on a gear whose lift is implicit, a rocking cam, their
+    root searches are most of a revolution's cost)."""
+    return _kinematics(ctx, exact=False)
+
+
+def _kinematics(ctx, exact: bool) -> EffectOutput:
     scene, w = ctx.scene, ctx.omega
     d = ctx.lift.derivatives(ctx.theta)
     ratio, lash = scene.follower.ratio, scene.valve.lash if scene.valve else 0.0
@@ -33,22 +45,25 @@ def kinematics_effect(ctx) -> EffectOutput:
     columns = {**follower, **valve}
     # the rigid motion stays available under its own name when a later effect refines valve_*
     columns.update({f"rigid_{k}": v for k, v in valve.items()})
-    # the peaks of velocity and acceleration exact (between samples, one-sided at a jump), as is
-    # the open angle (from the take-up and seating angles); the jerk's sampled (no fourth derivative)
-    ups, downs = lash_crossings(ctx.lift, ratio, lash)
-    ends = np.concatenate([ups, downs])
-    peaks = valve_extremes(ctx.lift, ctx.theta, d, ratio, lash, {1: ratio * w, 2: ratio * w**2}, ends)
-    (v_max, v_min), (a_max, a_min) = peaks[1], peaks[2]
     summary = {
         "max_follower_lift_m": float(d[0].max()),
         "max_valve_lift_m": float(valve["valve_lift_m"].max()),
-        "max_valve_velocity_m_s": v_max,
-        "min_valve_velocity_m_s": v_min,
-        "max_valve_accel_m_s2": a_max,
-        "min_valve_accel_m_s2": a_min,
-        "max_abs_valve_jerk_m_s3": float(np.abs(valve["valve_jerk_m_s3"]).max()),
-        "valve_open_angle_deg": math.degrees(open_angle(ups, downs, bool(is_open.all()))),
     }
+    if exact:
+        # the peaks of velocity and acceleration exact (between samples, one-sided at a jump), as is
+        # the open angle (from the take-up and seating angles); the jerk's sampled (no fourth derivative)
+        ups, downs = lash_crossings(ctx.lift, ratio, lash)
+        ends = np.concatenate([ups, downs])
+        peaks = valve_extremes(ctx.lift, ctx.theta, d, ratio, lash, {1: ratio * w, 2: ratio * w**2}, ends)
+        (v_max, v_min), (a_max, a_min) = peaks[1], peaks[2]
+        summary.update({
+            "max_valve_velocity_m_s": v_max,
+            "min_valve_velocity_m_s": v_min,
+            "max_valve_accel_m_s2": a_max,
+            "min_valve_accel_m_s2": a_min,
+            "max_abs_valve_jerk_m_s3": float(np.abs(valve["valve_jerk_m_s3"]).max()),
+            "valve_open_angle_deg": math.degrees(open_angle(ups, downs, bool(is_open.all()))),
+        })
     # the gear's own figures (a translating roller's pressure angle and radii of curvature; InputError
     # when its cam fails the validity checks of every cam, explorer.lift.validity)
     gear_columns, gear_summary = ctx.gear.kinematics(ctx, d)

@@ -96,7 +96,7 @@ _HLA_FIGURES = ("pump_up_valve_lift_m", "hla_lash_taken_up_m", "hla_plunger_trav
                 "hla_chamber_pressure_max_Pa")
 
 EFFECTS: Registry[EffectSpec] = Registry("effect", {spec.name: spec for spec in (
-    EffectSpec("kinematics", f"{_KIN}:kinematics_effect",
+    EffectSpec("kinematics", f"{_KIN}:kinematics_effect", figures=f"{_KIN}:kinematics_figures",
                columns=("follower_lift_m", "follower_velocity_m_s", "follower_accel_m_s2", "follower_jerk_m_s3",
                         "valve_lift_m", "valve_velocity_m_s", "valve_accel_m_s2", "valve_jerk_m_s3", "rigid_valve_*"),
                description="rigid motion of follower and valve (lift, velocity, acceleration, jerk)"),
