@@ -4,6 +4,7 @@ effect's train variant, the built-in scenes, bad input, and sweeps through the s
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from dataclasses import replace
@@ -122,6 +123,16 @@ def test_finger_scene_pumps_up():
     for col in ("hla_plunger_travel_m", "hla_chamber_pressure_Pa", "hla_check_valve_open"):
         assert np.all(np.isfinite(r.columns[col]))
     assert hla["check_valve_openings"] > 0
+    # the adjuster's conductances in the JSON (12 digits: 1e-11 rel), by hand from the TOML: the
+    # leak-down gap's Poiseuille pi d c^3 / (12 mu L), d 12 mm, c 6 um, mu 10 mPa s, L 8 mm; the
+    # check valve's orifice secant C_d A_o sqrt(2 / (rho dp_ref)), 0.7, 1 mm, 850 kg/m^3, 0.5 bar
+    printed = json.loads(r.json_text())["hla"]
+    assert printed["leak_conductance_m3_s_Pa"] == pytest.approx(
+        math.pi * 12e-3 * (6e-6) ** 3 / (12 * 0.01 * 8e-3), rel=1e-11)
+    assert printed["refill_conductance_m3_s_Pa"] == pytest.approx(
+        0.7 * math.pi * (1e-3) ** 2 / 4 * math.sqrt(2 / (850 * 0.5e5)), rel=1e-11)
+    assert printed["leak_conductance_m3_s_Pa"] == pytest.approx(8.4823e-15, rel=1e-4)
+    assert printed["refill_conductance_m3_s_Pa"] == pytest.approx(1.19264e-10, rel=1e-5)
     # the running modes (test_finger_train_modes_are_the_running_trains_hand_assembled) as cam
     # orders at 4800 rpm: f / 80 Hz
     f = _finger_hand_frequencies()
