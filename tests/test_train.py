@@ -305,6 +305,10 @@ def test_secant_modulus_against_the_scenes_peak():
     assert peak.effective_bulk_modulus == pytest.approx(243.4e6, rel=1e-3)
     assert h.oil_stiffness == pytest.approx(24.3e6, rel=1e-3)
     assert peak.oil_stiffness == pytest.approx(15.57e6, rel=1e-3)
+    tr = TrainModel.from_scene(load_scene(scenes_dir() / "finger_hla_pumpup.toml"))
+    for hh, lowest in ((h, 2528.4), (peak, 2256.3)):  # the train's lowest running mode, Hz
+        tt = replace(tr, hla=hh)
+        assert tt.natural_frequencies(tt.running_key())[0] == pytest.approx(lowest, rel=1e-4)
 
     def tangent(p):
         return 1.0 / ((1 - X) / bl + X * (ps + atm) / (p + atm) ** 2)
