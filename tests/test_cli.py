@@ -301,3 +301,9 @@ def test_printable_rule():
     assert printable(-1.2699e-3) == -1.2699e-3
     assert printable(1.003992514422124e-09, "closure_relative_error") == 1.00399251442e-09
     assert printable(2.5e-9) == 2.5e-9
+    # a hydraulic conductance's working values lie far below the floor: its key's unit keeps them
+    # (an adjuster's leak-down 8.48e-15 m^3/(s Pa)); a length, force or pressure that small is noise
+    assert printable(8.482300164692441e-15, "leak_conductance_m3_s_Pa") == 8.48230016469e-15
+    assert printable(-1.2e-20, "x_m3_s_Pa") == -1.2e-20
+    for key in ("lift_m", "force_N", "pressure_Pa", "m3_s_Pa_count"):
+        assert printable(8.48e-15, key) == 0.0

@@ -9,6 +9,7 @@ the orifice law, and scipy DOP853 on the same model."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -73,7 +74,7 @@ def test_two_masses_natural_frequencies_closed_form(spring_rate):
     a, b = m1 * m2, m1 * (k2 + spring_rate) + m2 * (k1 + k2)
     c = (k1 + k2) * (k2 + spring_rate) - k2 * k2
     w2 = np.sort([(b - math.sqrt(b * b - 4 * a * c)) / (2 * a), (b + math.sqrt(b * b - 4 * a * c)) / (2 * a)])
-    key = tr.closed_key()
+    key = tr.running_key()
     np.testing.assert_allclose(tr.natural_frequencies(key), np.sqrt(w2) / (2 * math.pi), rtol=1e-12)
     # the solver's decomposition of that (undamped) phase: eigenvalues +-i w
     lam = tr.phase_modes(key).lam
@@ -93,7 +94,7 @@ def test_n_masses_against_the_tridiagonal_system():
     T = 2 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
     T[-1, -1] = 1.0
     np.testing.assert_allclose(np.sqrt(np.linalg.eigvalsh(T * k / m)), closed, rtol=1e-12)
-    lam = tr.phase_modes(tr.closed_key()).lam
+    lam = tr.phase_modes(tr.running_key()).lam
     np.testing.assert_allclose(np.sort(lam.imag[lam.imag > 0]), closed, rtol=1e-11)
 
 
@@ -243,7 +244,8 @@ def test_refill_against_the_orifice_formula():
     # supply, the check valve opens, and the plunger settles to the speed at which the refill
     # (and the leak, both ways) feeds the growing chamber. With the load set so that the pressure
     # drop is the refill law's reference dp_ref, the refill flow equals the orifice formula
-    # C_d A_o sqrt(2 dp / rho) there (elsewhere the linear law gives sqrt(dp_ref/dp) of it)
+    # C_d A_o sqrt(2 dp / rho) there (elsewhere the linear law gives G_r dp / orifice(dp) =
+    # sqrt(dp / dp_ref) times it: twice at 4 dp_ref, half at dp_ref / 4)
     dp = 0.05e6
     h = _hla(refill_pressure_drop=dp, spring_rate=1e-3, check_diameter=0.3e-3)
     load = h.spring_preload + h.area * (h.supply_pressure - dp)  # A P = load - F_0 at P = P_s - dp
@@ -262,6 +264,8 @@ def test_refill_against_the_orifice_formula():
     assert refill == pytest.approx(h.orifice_flow(dp), rel=1e-6)
     assert h.refill_flow(dp) == pytest.approx(h.orifice_flow(dp), rel=1e-15)
     assert h.refill_flow(4 * dp) == pytest.approx(2 * h.orifice_flow(4 * dp), rel=1e-15)
+    for x in (0.01, 0.25, 3.0, 100.0):
+        assert h.refill_flow(x * dp) == pytest.approx(math.sqrt(x) * h.orifice_flow(x * dp), rel=1e-14)
 
 
 def test_aerated_oil_secant_modulus():
@@ -275,6 +279,41 @@ def test_aerated_oil_secant_modulus():
     dV = (1 - X) * (pr - ps) / ha.bulk_modulus + X * (1.0 - ps / pr)
     assert ha.effective_bulk_modulus == pytest.approx((pr - ps) / dV, rel=1e-14)
     assert ha.effective_bulk_modulus < 0.3 * h.bulk_modulus
+
+
+def test_secant_modulus_against_the_scenes_peak():
+    # the secant is the chord of the mixture's pressure-volume curve: a chamber compressed
+    # linearly from p_s by beta_e loses, at p_r, the volume the curve loses (oil (1 - X) dp /
+    # beta_l, air X (1 - p_s/p_r), isothermal) -- 1e-12 rel, round-off. The figures the docstring
+    # quotes for finger_hla_pumpup (2 % air, 3 bar, peak 5.687 MPa in its summary): 380 MPa to
+    # the default 10 MPa, 243 MPa to the peak; oil columns A^2 beta / V; tangent moduli
+    # 1 / ((1 - X)/beta_l + X p_s/p^2), 20 MPa at the supply, 1.1 GPa at the peak (1e-3: quoted
+    # to 2-3 digits)
+    h = load_scene(scenes_dir() / "finger_hla_pumpup.toml").hla.hla
+    atm, X, bl = 101_325.0, 0.02, 1.5e9
+    ps = h.supply_pressure
+    assert (X, bl, ps, h.polytropic_index) == (h.aeration, h.bulk_modulus, 0.3e6, 1.0)
+
+    def chord(p):
+        return (1 - X) * (p - ps) / bl + X * (1 - (ps + atm) / (p + atm))
+
+    for pr in (1e6, 5.687e6, 10e6, 50e6):
+        hp = replace(h, reference_pressure=pr)
+        assert hp.capacitance * (pr - ps) / hp.chamber_volume == pytest.approx(chord(pr), rel=1e-12)
+    peak = replace(h, reference_pressure=5.687e6)
+    assert h.effective_bulk_modulus == pytest.approx(380e6, rel=1e-3)
+    assert peak.effective_bulk_modulus == pytest.approx(243.4e6, rel=1e-3)
+    assert h.oil_stiffness == pytest.approx(24.3e6, rel=1e-3)
+    assert peak.oil_stiffness == pytest.approx(15.57e6, rel=1e-3)
+    tr = TrainModel.from_scene(load_scene(scenes_dir() / "finger_hla_pumpup.toml"))
+    for hh, lowest in ((h, 2528.4), (peak, 2256.3)):  # the train's lowest running mode, Hz
+        tt = replace(tr, hla=hh)
+        assert tt.natural_frequencies(tt.running_key())[0] == pytest.approx(lowest, rel=1e-4)
+
+    def tangent(p):
+        return 1.0 / ((1 - X) / bl + X * (ps + atm) / (p + atm) ** 2)
+
+    assert tangent(ps) == pytest.approx(19.8e6, rel=1e-3) and tangent(5.687e6) == pytest.approx(1.12e9, rel=1e-3)
 
 
 # -- against scipy --------------------------------------------------------------------------------
@@ -319,8 +358,6 @@ def test_pushrod_train_rattling_in_its_lash_matches_scipy():
     # the cam contact, the rocker's cup and the pad open and close, parts fly free of both
     # neighbours (their rigid-body modes) -- 54 events, every one as scipy finds it; measured
     # 7e-13 m over the revolution
-    from dataclasses import replace
-
     scene = load_scene(scenes_dir() / "pushrod_train.toml")
     els = scene.linkage.elements
     series = 1.0 / (1.0 / els[1].stiffness + 1.0 / els[2].stiffness)

@@ -4,7 +4,10 @@ effect's train variant, the built-in scenes, bad input, and sweeps through the s
 
 from __future__ import annotations
 
+import json
 import math
+import re
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -120,6 +123,72 @@ def test_finger_scene_pumps_up():
     for col in ("hla_plunger_travel_m", "hla_chamber_pressure_Pa", "hla_check_valve_open"):
         assert np.all(np.isfinite(r.columns[col]))
     assert hla["check_valve_openings"] > 0
+    # the adjuster's conductances in the JSON (12 digits: 1e-11 rel), by hand from the TOML: the
+    # leak-down gap's Poiseuille pi d c^3 / (12 mu L), d 12 mm, c 6 um, mu 10 mPa s, L 8 mm; the
+    # check valve's orifice secant C_d A_o sqrt(2 / (rho dp_ref)), 0.7, 1 mm, 850 kg/m^3, 0.5 bar
+    printed = json.loads(r.json_text())["hla"]
+    assert printed["leak_conductance_m3_s_Pa"] == pytest.approx(
+        math.pi * 12e-3 * (6e-6) ** 3 / (12 * 0.01 * 8e-3), rel=1e-11)
+    assert printed["refill_conductance_m3_s_Pa"] == pytest.approx(
+        0.7 * math.pi * (1e-3) ** 2 / 4 * math.sqrt(2 / (850 * 0.5e5)), rel=1e-11)
+    assert printed["leak_conductance_m3_s_Pa"] == pytest.approx(8.4823e-15, rel=1e-4)
+    assert printed["refill_conductance_m3_s_Pa"] == pytest.approx(1.19264e-10, rel=1e-5)
+    # the running modes (test_finger_train_modes_are_the_running_trains_hand_assembled) as cam
+    # orders at 4800 rpm: f / 80 Hz
+    f = _finger_hand_frequencies()
+    assert r.summary["train_natural_frequencies_Hz"] == pytest.approx(f, rel=1e-11)
+    orders = r.summary["train_modes_cam_orders"]
+    assert [m["cam_order"] for m in orders] == pytest.approx(f / 80.0, rel=1e-11)
+    assert [sorted(m["exciting_orders"]) for m in orders] == [
+        sorted({str(math.floor(x)), str(math.ceil(x))}) for x in f / 80.0]
+
+
+def _finger_hand_frequencies(stop_stiffness: float = 0.0) -> np.ndarray:
+    """finger_hla_pumpup's running modes assembled by hand from its TOML (valve-referred, DOFs
+    [valve s, finger q, plunger p]): the roller on the cam k_0 = 100 N/um / 1.7^2 compressed by
+    S - q - g p (g = 0.7, the lever: the plunger going in lowers the finger's pivot), the pad
+    k_1 = 150 N/um by q - s, the valve spring 40 N/mm on s (off its seat), the plunger spring
+    5 N/mm and the shut chamber's oil column A^2 beta_e / V on p (beta_e the secant of 2 % air,
+    isothermal, from 3 bar to 100 bar gauge, oil 1.5 GPa); the finger 0.35 kg cm^2 / (40 mm)^2."""
+    from scipy.linalg import eigh
+
+    atm, X, ps, pr = 101_325.0, 0.02, 0.3e6, 10e6
+    beta_e = (pr - ps) / ((1 - X) * (pr - ps) / 1.5e9 + X * (1 - (ps + atm) / (pr + atm)))
+    oil = (math.pi * 0.012**2 / 4) ** 2 * beta_e / 200e-9
+    k0, k1, kv, kp, g = 100e6 / 1.7**2, 150e6, 40e3, 5e3, 0.7
+    K = np.array([[k1 + kv, -k1, 0.0],
+                  [-k1, k0 + k1, k0 * g],
+                  [0.0, k0 * g, k0 * g * g + kp + oil + stop_stiffness]])
+    M = np.diag([0.05, 0.35e-4 / 0.04**2, 0.012])
+    return np.sqrt(eigh(K, M, eigvals_only=True)) / (2 * math.pi)
+
+
+def test_finger_train_modes_are_the_running_trains_hand_assembled():
+    # the audit's finding: the modes closed the plunger's retaining stop (1e8 N/m), 1 mm away in
+    # running, and came out 3116 / 15958 / 17987 Hz. The running train has the load path closed
+    # and the stop open: the hand eigenproblem above. Tolerance 1e-12 rel: two dense
+    # eigensolvers on a 3x3 pair whose stiffness spread is ~50 (round-off ~1e-15)
+    scene = load_scene(FINGER)
+    tr = TrainModel.from_scene(scene)
+    f = tr.natural_frequencies(tr.running_key())
+    hand = _finger_hand_frequencies()
+    np.testing.assert_allclose(f, hand, rtol=1e-12)
+    # the auditor's printed hand figures (0.1 Hz: 5e-5 rel)
+    np.testing.assert_allclose(f, [2528.4, 9277.5, 16863.4], rtol=5e-5)
+    # the stop's travel does not enter the running modes: without hla.travel the same, bit for bit
+    text = FINGER.read_text()
+    assert text.count("\ntravel = ") == 1
+    no_stop = TrainModel.from_scene(loads_scene(re.sub(r"\ntravel = [^\n]*", "", text)))
+    assert no_stop.hla.travel is None and len(no_stop.all_joints) == len(tr.all_joints) - 1
+    assert np.array_equal(no_stop.natural_frequencies(no_stop.running_key()), f)
+    # a plunger that rests on its stop (a travel below its rest: pressed on it by its spring and
+    # the supply) has the stop in its modes: the hand matrix with the stop's 1e8 N/m on p, the
+    # audit's 3116 Hz
+    on_stop = replace(tr, hla=replace(tr.hla, travel=-1e-5))
+    assert on_stop.running_key()[0] == (True, True, True)
+    stiff = _finger_hand_frequencies(1e8)
+    np.testing.assert_allclose(on_stop.natural_frequencies(on_stop.running_key()), stiff, rtol=1e-12)
+    np.testing.assert_allclose(stiff[0], 3116.14, rtol=5e-6)
 
 
 def test_finger_scene_below_its_float_speed_seats_every_revolution():

@@ -366,21 +366,28 @@ AT = G0 * 1e4  # Pa per technical atmosphere (kgf/cm^2)
 
 
 # Printed figures: a summary holds differences of equal quantities (a deceleration difference,
-# a closure integral, a saving of zero) that come out as round-off, 1e-12 instead of 0. No figure
-# this program prints means anything below a nanometre, a nanonewton or a nano-anything in SI,
-# so smaller magnitudes print as 0; dimensionless relative errors (keys with "relative") keep
-# theirs, they are the figure. The rest keep 12 significant digits: 53.400000000000006 is 53.4,
-# and no computed quantity here is known to better than that.
+# a closure integral, a saving of zero) that come out as round-off, 1e-12 instead of 0. No
+# length, force, speed, time, pressure ... this program prints means anything below a nano of its
+# SI unit, so smaller magnitudes print as 0. Two kinds keep theirs, they are the figure:
+# dimensionless relative errors (keys with "relative"), and quantities whose SI unit is so large
+# against their working values that those lie far below the floor -- a hydraulic conductance in
+# m^3/(s Pa): an adjuster's leak-down gap passes ~1e-14 m^3/s per Pa, its check valve ~1e-10 --
+# named by their key's unit suffix (SMALL_SI_UNITS). Those are material and geometry figures (a
+# Poiseuille or orifice law), never the difference of two equal figures, so they carry no such
+# round-off. The rest keep 12 significant digits: 53.400000000000006 is 53.4, and no computed
+# quantity here is known to better than that.
 NOISE_FLOOR_SI = 1e-9
+SMALL_SI_UNITS = ("_m3_s_Pa",)  # key suffixes: hydraulic conductance
 PRINTED_DIGITS = 12
 
 
 def printable(value: float, key: str = "") -> float:
     """`value` without round-off noise for printing: |value| < NOISE_FLOOR_SI -> 0.0 (unless
-    `key` names a relative figure), 12 significant digits, and never -0.0."""
+    `key` names a relative figure or ends in a unit of SMALL_SI_UNITS), 12 significant digits,
+    and never -0.0."""
     if not math.isfinite(value):
         return value
-    if abs(value) < NOISE_FLOOR_SI and "relative" not in key:
+    if abs(value) < NOISE_FLOOR_SI and "relative" not in key and not key.endswith(SMALL_SI_UNITS):
         return 0.0
     value = float(f"{value:.{PRINTED_DIGITS}g}")
     return value + 0.0  # -0.0 + 0.0 is +0.0

@@ -559,6 +559,23 @@ class TrainModel:
         w2 = np.linalg.eigvalsh(mh[:, None] * K * mh[None, :])
         return np.sqrt(np.maximum(w2, 0.0)) / (2.0 * math.pi)
 
-    def closed_key(self):
-        """The phase with every joint closed, the valve off its seat, the check valve shut."""
-        return (tuple(True for _ in self.one_sided), False, 1, False if self.hla is not None else None)
+    def running_key(self):
+        """The phase of the train in normal running, whose modes natural_frequencies reports: the
+        load path closed -- every joint from the cam to the valve (self.joints) carries the cam's
+        force while the valve is open --, the valve off its seat and moving, the check valve shut
+        (the oil column a spring: natural_frequencies). The plunger's retaining stop is not in the
+        load path: the lever's load pushes the plunger into its body, away from the stop, which
+        carries load only where the plunger has come out by hla.travel (the cam contact lost or the
+        adjuster pumped up to its limit: transient, not normal running). So the stop is as it is at
+        rest on the base circle (static_state): closed only if the plunger rests on it with a
+        positive force there -- never with a positive hla.travel (the scene's rule), which puts
+        the stop that far beyond the plunger's rest. Closing it anyway (1e8 N/m) made
+        finger_hla_pumpup's modes 3116 / 15958 / 17987 Hz instead of 2528 / 9277 / 16863 Hz."""
+        load_path = len(self.joints)
+        extra = [j for j in self.one_sided if j >= load_path]
+        at_rest = {}
+        if extra:
+            _, rest = self.static_state(0.0)
+            at_rest = dict(zip(self.one_sided, rest[0]))
+        contacts = tuple(bool(j < load_path or at_rest[j]) for j in self.one_sided)
+        return (contacts, False, 1, False if self.hla is not None else None)

@@ -121,7 +121,7 @@ def train_elastic_effect(ctx) -> EffectOutput:
         if name is not None and e.kind in ("separation", "contact-opens"):
             counts[name] = counts.get(name, 0) + 1
             first.setdefault(name, e.cam_angle_deg)
-    freqs = model.natural_frequencies(model.closed_key())
+    freqs = model.natural_frequencies(model.running_key())
     summary = {
         "elastic_method": scene.solver.method,
         "elastic_model": f"valve train of {len(model.parts)} parts"
