@@ -201,6 +201,48 @@ def test_self_locking_warning():
     assert w and f"{s['max_pressure_angle_deg']:.3f}" in w[0]
 
 
+def _cycloidal_by_hand(theta, h, start, rise, dwell, ret):
+    """Lift L and dL/dtheta of a cycloidal rise and return (rad; the law's textbook form,
+    L = h (u - sin(2 pi u) / (2 pi)) over the rise, mirrored over the return), written out here."""
+    u = (theta - start) / rise
+    v = (theta - start - rise - dwell) / ret
+    rising, returning = (u > 0) & (u < 1), (v > 0) & (v < 1)
+    lift = np.where(rising, h * (u - np.sin(2 * np.pi * u) / (2 * np.pi)), 0.0)
+    lift = np.where((u >= 1) & (v <= 0), h, lift)
+    lift = np.where(returning, h * (1 - v + np.sin(2 * np.pi * v) / (2 * np.pi)), lift)
+    rate = np.where(rising, h / rise * (1 - np.cos(2 * np.pi * u)), 0.0)
+    rate = np.where(returning, -h / ret * (1 - np.cos(2 * np.pi * v)), rate)
+    return lift, rate
+
+
+def test_self_locking_margin_only_while_the_cam_lifts():
+    """Seed 004's margin 90 - rho - |alpha| counts only where the cam lifts the follower: on the
+    closing flank the spring drives and the cam cannot lock. A centred roller (e = 0) has
+    tan alpha = (dL/dtheta) / (r_b + r_r + L). A 70 deg rise and a steeper 50 deg return (12 mm,
+    r_b + r_r = 40 mm) with rho = 63 deg: the lifting margin is positive, the return's negative.
+    The summary's margin and angle are the hand formula's at its worst lifting sample (1e-9 deg:
+    rounding), the column keeps the whole revolution, and nothing warns."""
+    text = SCENE.format(**(DEFAULTS | dict(contact='friction_angle = "63 deg"'))).replace(
+        'return = "80 deg"', 'return = "50 deg"')
+    out = simulate(loads_scene(text))
+    c, s = out.columns, out.report()
+    theta = np.radians(c["cam_angle_deg"])
+    lift, rate = _cycloidal_by_hand(theta, 0.012, math.radians(30), math.radians(70), math.radians(10),
+                                    math.radians(50))
+    assert np.allclose(c["follower_lift_m"], lift, rtol=0, atol=1e-15)
+    alpha = np.degrees(np.arctan(np.abs(rate) / (0.040 + lift)))
+    assert np.allclose(np.abs(c["pressure_angle_deg"]), alpha, rtol=0, atol=1e-9)
+    margin = 90.0 - 63.0 - alpha
+    lifting = rate > 0.0
+    i = int(np.argmin(np.where(lifting, margin, np.inf)))
+    assert s["min_self_locking_margin_deg"] == pytest.approx(margin[i], abs=1e-9)
+    assert s["min_self_locking_margin_cam_angle_deg"] == pytest.approx(c["cam_angle_deg"][i], abs=1e-12)
+    assert 0.0 < margin[i] and np.min(margin[~lifting]) < 0.0  # locks on the return only: no warning
+    assert c["self_locking_margin_deg"].min() == pytest.approx(np.min(margin), abs=1e-9)
+    assert not any("self-locking" in x for x in s["warnings"])
+    assert np.isfinite(c["cam_normal_force_N"]).all()
+
+
 def test_no_self_locking_warning_with_margin():
     out, c, s = _run(contact='friction_angle = "5 deg"')
     assert s["min_self_locking_margin_deg"] > 0 and not any("self-locking" in x for x in s["warnings"])

@@ -10,7 +10,7 @@ from types import MappingProxyType
 import numpy as np
 
 from ..mechanics.contact import (ContactGeometry, ContactSpec, contact_loads, effective_modulus, hertz_line_stress,
-                                 hertz_width)
+                                 hertz_width, self_locking_worst)
 from ..result import EffectOutput
 from .registry import declared
 
@@ -72,7 +72,7 @@ def contact_effect(ctx) -> EffectOutput:
     max_normal = float(np.nanmax(finite_normal)) if np.isfinite(finite_normal).any() else 0.0
     theta_deg = np.degrees(ctx.theta)
     i_alpha = int(np.argmax(np.abs(alpha)))
-    i_margin = int(np.argmin(margin))
+    i_margin = self_locking_worst(margin, ctx.columns["follower_velocity_m_s"])
     finite_torque = np.where(np.isfinite(torque), torque, np.nan)
     i_torque = int(np.nanargmax(finite_torque)) if np.isfinite(finite_torque).any() else 0
     i_sigma = int(np.argmax(np.where(np.isfinite(sigma), sigma, -1.0)))
@@ -107,9 +107,9 @@ def contact_effect(ctx) -> EffectOutput:
     warnings: list[str] = []
     if margin[i_margin] <= 0.0:
         warnings.append(
-            f"self-locking: pressure angle {summary['max_pressure_angle_deg']:.3f} deg + friction angle "
-            f"{math.degrees(rho):.3f} deg reaches 90 deg at cam angle {theta_deg[i_margin]:.2f} deg "
-            f"(margin {margin[i_margin]:.3f} deg)"
+            f"self-locking: pressure angle {math.degrees(abs(alpha[i_margin])):.3f} deg + friction angle "
+            f"{math.degrees(rho):.3f} deg reaches 90 deg at cam angle {theta_deg[i_margin]:.2f} deg while the cam "
+            f"lifts the follower (margin {margin[i_margin]:.3f} deg)"
         )
     if not np.isfinite(normal).all():
         warnings.append("contact: the cam cannot lift the follower where it is self-locked (infinite normal force)")

@@ -211,6 +211,18 @@ def contact_loads(geometry: ContactGeometry, valve_force, velocity, friction_ang
     }
 
 
+def self_locking_worst(margin, lift_rate) -> int:
+    """Index of the smallest self-locking margin while the cam lifts the follower (lift_rate > 0:
+    dL/dtheta, or the follower's velocity at a positive speed). Only there can the guide lock: on
+    the closing flank the spring drives the follower down and the cam only holds it back. A cam
+    that never lifts: the whole revolution. The contact effect's summary and the self_locking
+    rule both take it."""
+    lifting = np.asarray(lift_rate, dtype=float) > 0.0
+    if not lifting.any():
+        lifting = np.ones_like(lifting)
+    return int(np.argmin(np.where(lifting, margin, np.inf)))
+
+
 def hertz_width(normal, geometry: ContactGeometry, spec: ContactSpec, e_star: float) -> tuple[float, str]:
     """Required contact width and the rule that gave it: seed 004's b = P/(k D) on the largest
     normal force for a roller; for rolling faces the width at which the peak Hertz stress equals
