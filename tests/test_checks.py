@@ -931,3 +931,9 @@ def test_hertz_without_a_named_allowable_says_it_judged_by_the_1902_default():
     assert "1902 cast iron" in r.source and "[contact] allowable_stress" in r.source
     named = judge("assets/scenes/cycloidal_demo.toml", "hertz_stress")
     assert named.fail == pytest.approx(1200e6) and named.source == "[contact] allowable_stress"
+    # the source is where the allowable was given (the scene's parse), not guessed from its value:
+    # seed 004's own figure written as allowable_stress is the scene's, a named engine is the engine's
+    cast = judge(scene_with(FLOAT, 'contact.allowable_stress="3500 kgf/cm^2"'), "hertz_stress")
+    assert cast.fail == pytest.approx(3500.0 * 9.80665e4) and cast.source == "[contact] allowable_stress"
+    diesel = judge(FLOAT, "hertz_stress")
+    assert diesel.fail == pytest.approx(4000.0 * 9.80665e4) and diesel.source.startswith("[contact] engine = 'diesel'")

@@ -9,8 +9,8 @@ from types import MappingProxyType
 
 import numpy as np
 
-from ..mechanics.contact import (ContactGeometry, ContactSpec, contact_loads, effective_modulus, hertz_line_stress,
-                                 hertz_width, self_locking_worst)
+from ..mechanics.contact import (ContactGeometry, ContactSpec, allowable_label, contact_loads, effective_modulus,
+                                 hertz_line_stress, hertz_width, self_locking_worst)
 from ..result import EffectOutput
 from .registry import declared
 
@@ -96,6 +96,7 @@ def contact_effect(ctx) -> EffectOutput:
         "hertz_width_from_rule": spec.width is None,
         "effective_modulus_Pa": e_star,
         "hertz_allowable_Pa": spec.allowable_stress,
+        "hertz_allowable_source": spec.allowable_source,
         "hertz_utilisation": float(sigma[i_sigma] / spec.allowable_stress),
         "required_cam_width_m": required_width,
         "required_cam_width_rule": rule,
@@ -116,7 +117,8 @@ def contact_effect(ctx) -> EffectOutput:
     if sigma[i_sigma] > spec.allowable_stress:
         warnings.append(
             f"contact stress: Hertz {sigma[i_sigma] / 1e6:.4g} MPa at cam angle {theta_deg[i_sigma]:.2f} deg exceeds "
-            f"the allowable {spec.allowable_stress / 1e6:.4g} MPa ({spec.engine}, seed 004) for width {width * 1e3:.4g} mm"
+            f"the allowable {spec.allowable_stress / 1e6:.4g} MPa ({allowable_label(spec)}) for width "
+            f"{width * 1e3:.4g} mm"
         )
     if spec.width is not None and spec.width < required_width:
         warnings.append(
@@ -165,8 +167,8 @@ def dynamic_statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: f
     if sigma[i] > spec.allowable_stress:
         warnings.append(
             f"contact stress under the elastic train's force: Hertz {sigma[i] / 1e6:.4g} MPa at cam angle "
-            f"{theta_deg[i]:.2f} deg exceeds the allowable {spec.allowable_stress / 1e6:.4g} MPa for width "
-            f"{width * 1e3:.4g} mm"
+            f"{theta_deg[i]:.2f} deg exceeds the allowable {spec.allowable_stress / 1e6:.4g} MPa "
+            f"({allowable_label(spec)}) for width {width * 1e3:.4g} mm"
         )
     return columns, summary, warnings
 
