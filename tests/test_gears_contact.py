@@ -230,13 +230,20 @@ def _theta_of_swing(gear, w):
 @pytest.mark.parametrize("name", GEARS)
 def test_self_locking_warning_names_the_angle(name):
     """A friction angle of 80 deg leaves no margin on any of the gears (largest pressure angles 18,
-    33 and 64 deg): seed 004's self-locking, warned with the pressure angle and the cam angle."""
+    33 and 64 deg): seed 004's self-locking, warned with the pressure angle and the cam angle.
+    The margin is 10 deg less the largest |pressure angle| while the cam lifts the follower (its
+    velocity > 0; on the closing flank the spring drives and the cam cannot lock), found here from
+    the columns by hand."""
     r = run(name, 'contact.friction_angle="80 deg"')
-    s = r.report()
-    assert s["min_self_locking_margin_deg"] == pytest.approx(10.0 - s["max_pressure_angle_deg"], abs=1e-9)
+    s, c = r.report(), r.columns
+    lifting = c["follower_velocity_m_s"] > 0.0
+    worst = np.max(np.abs(c["pressure_angle_deg"])[lifting])
+    assert s["min_self_locking_margin_deg"] == pytest.approx(10.0 - worst, abs=1e-9)
     assert s["min_self_locking_margin_deg"] < 0.0
+    i = int(np.argmin(np.abs(c["cam_angle_deg"] - s["min_self_locking_margin_cam_angle_deg"])))
+    assert lifting[i] and abs(c["pressure_angle_deg"][i]) == pytest.approx(worst, abs=1e-12)
     w = [x for x in s["warnings"] if "self-locking" in x]
-    assert len(w) == 1 and f"{s['max_pressure_angle_deg']:.3f} deg" in w[0]
+    assert len(w) == 1 and f"{worst:.3f} deg" in w[0] and "while the cam lifts" in w[0]
     assert f"{s['min_self_locking_margin_cam_angle_deg']:.2f} deg" in w[0]
 
 

@@ -58,7 +58,8 @@ _BUILTIN: tuple[RuleSpec, ...] = (
                          "follower below about 35 deg", "textbook rule of thumb"),
                  Setting("warn", None, "angle", "deg", "none by default", "-"),
              ), "kinematics", (Plotted("pressure_angle_deg", 180.0 / math.pi, mirrored=True),)),
-    RuleSpec("self_locking", f"{_R}.self_locking:measure", "Self-locking margin", "smallest 90 - rho - |alpha|",
+    RuleSpec("self_locking", f"{_R}.self_locking:measure", "Self-locking margin",
+             "smallest 90 - rho - |alpha| while the cam lifts",
              "deg", "min", (
                  Setting("fail", 0.0, "angle", "deg", SEED_004 + ": self-locking at alpha + rho = 90 deg",
                          "geometric necessity"),

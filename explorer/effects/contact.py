@@ -9,8 +9,8 @@ from types import MappingProxyType
 
 import numpy as np
 
-from ..mechanics.contact import (ContactGeometry, ContactSpec, contact_loads, effective_modulus, hertz_line_stress,
-                                 hertz_width)
+from ..mechanics.contact import (ContactGeometry, ContactSpec, allowable_label, contact_loads, effective_modulus,
+                                 hertz_line_stress, hertz_width, self_locking_worst)
 from ..result import EffectOutput
 
 
@@ -76,7 +76,7 @@ def contact_effect(ctx) -> EffectOutput:
     max_normal = float(np.nanmax(finite_normal)) if np.isfinite(finite_normal).any() else 0.0
     theta_deg = np.degrees(ctx.theta)
     i_alpha = int(np.argmax(np.abs(alpha)))
-    i_margin = int(np.argmin(margin))
+    i_margin = self_locking_worst(margin, ctx.columns["follower_velocity_m_s"])
     finite_torque = np.where(np.isfinite(torque), torque, np.nan)
     i_torque = int(np.nanargmax(finite_torque)) if np.isfinite(finite_torque).any() else 0
     i_sigma = int(np.argmax(np.where(np.isfinite(sigma), sigma, -1.0)))
@@ -100,6 +100,7 @@ def contact_effect(ctx) -> EffectOutput:
         "hertz_width_from_rule": spec.width is None,
         "effective_modulus_Pa": e_star,
         "hertz_allowable_Pa": spec.allowable_stress,
+        "hertz_allowable_source": spec.allowable_source,
         "hertz_utilisation": float(sigma[i_sigma] / spec.allowable_stress),
         "required_cam_width_m": required_width,
         "required_cam_width_rule": rule,
@@ -111,16 +112,17 @@ def contact_effect(ctx) -> EffectOutput:
     warnings: list[str] = []
     if margin[i_margin] <= 0.0:
         warnings.append(
-            f"self-locking: pressure angle {summary['max_pressure_angle_deg']:.3f} deg + friction angle "
-            f"{math.degrees(rho):.3f} deg reaches 90 deg at cam angle {theta_deg[i_margin]:.2f} deg "
-            f"(margin {margin[i_margin]:.3f} deg)"
+            f"self-locking: pressure angle {math.degrees(abs(alpha[i_margin])):.3f} deg + friction angle "
+            f"{math.degrees(rho):.3f} deg reaches 90 deg at cam angle {theta_deg[i_margin]:.2f} deg while the cam "
+            f"lifts the follower (margin {margin[i_margin]:.3f} deg)"
         )
     if not np.isfinite(normal).all():
         warnings.append("contact: the cam cannot lift the follower where it is self-locked (infinite normal force)")
     if sigma[i_sigma] > spec.allowable_stress:
         warnings.append(
             f"contact stress: Hertz {sigma[i_sigma] / 1e6:.4g} MPa at cam angle {theta_deg[i_sigma]:.2f} deg exceeds "
-            f"the allowable {spec.allowable_stress / 1e6:.4g} MPa ({spec.engine}, seed 004) for width {width * 1e3:.4g} mm"
+            f"the allowable {spec.allowable_stress / 1e6:.4g} MPa ({allowable_label(spec)}) for width "
+            f"{width * 1e3:.4g} mm"
         )
     if spec.width is not None and spec.width < required_width:
         warnings.append(
@@ -169,8 +171,8 @@ def dynamic_statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: f
     if sigma[i] > spec.allowable_stress:
         warnings.append(
             f"contact stress under the elastic train's force: Hertz {sigma[i] / 1e6:.4g} MPa at cam angle "
-            f"{theta_deg[i]:.2f} deg exceeds the allowable {spec.allowable_stress / 1e6:.4g} MPa for width "
-            f"{width * 1e3:.4g} mm"
+            f"{theta_deg[i]:.2f} deg exceeds the allowable {spec.allowable_stress / 1e6:.4g} MPa "
+            f"({allowable_label(spec)}) for width {width * 1e3:.4g} mm"
         )
     return columns, summary, warnings
 

@@ -30,8 +30,13 @@ Hertz line contact between two cylinders of signed radii r1, r2 (> 0 convex, < 0
 sigma_max = sqrt(N E* / (pi b R*)), 1/R* = 1/r1 + 1/r2, 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2.
 Seed 004's allowables: 3500 kgf/cm^2 for large gas engines, about 4000 kgf/cm^2 for Diesel
 engines; and the width rule b = P/(k D) with the roller diameter D, k = 10 (intake) or up to 40
-(exhaust) kgf/cm^2. A rolling lever has no roller: it is sized as seed 004 says rolling levers
-are, by the Hertz allowable (the width at which the peak stress equals it).
+(exhaust) kgf/cm^2. The width rule belongs to those cast-iron allowables: it sizes a roller only
+while the allowable is seed 004's (the engine's, or the default). A scene that gives its own
+allowable_stress (a modern hardened pair, several times seed 004's) is sized by it: the required
+width is the one at which the peak Hertz stress equals that allowable, b = N E* (1/r1 + 1/r2) /
+(pi sigma^2) at the worst angle (the finger follower's 1500 MPa pair needs 2.3 mm where the 1902
+rule asks 12.9 mm). A rolling lever has no roller: it is sized as seed 004 says rolling levers
+are, by the Hertz allowable, whichever allowable that is.
 
 The trip gear has no cam surface: its latch lifts the valve spindle directly and lets go. Its
 contact statics are the latch face's (explorer.gears.trip_latched, its variant of this effect in
@@ -44,9 +49,10 @@ Scene section [contact] (all optional):
     friction_coefficient  mu = tan(rho)
     youngs_modulus, poisson_ratio                cam material (default steel: 210 GPa, 0.3)
     roller_youngs_modulus, roller_poisson_ratio  roller material (default: as the cam)
-    width                 contact width b (default: the width rule's width)
+    width                 contact width b (default: the required width, hertz_width)
     valve                 "exhaust" (default) or "intake": picks the width-rule k
-    width_rule_k          k of b = P/(k D) (default 40 kgf/cm^2 exhaust, 10 kgf/cm^2 intake)
+    width_rule_k          k of b = P/(k D) (default 40 kgf/cm^2 exhaust, 10 kgf/cm^2 intake); not
+                          with allowable_stress (which sizes the width by the Hertz stress instead)
     engine                "large-gas" (default, 3500 kgf/cm^2) or "diesel" (4000 kgf/cm^2)
     allowable_stress      explicit allowable contact stress (replaces the engine's)
     sliding_friction      mu of a face or pad sliding on the cam (default 0; read by the gears
@@ -58,7 +64,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Literal, Protocol
 
 import numpy as np
 
@@ -70,6 +76,12 @@ STEEL_NU = 0.3
 ALLOWABLE = {"large-gas": 3500.0 * AT, "diesel": 4000.0 * AT}  # Pa, seed 004
 WIDTH_RULE_K = {"intake": 10.0 * AT, "exhaust": 40.0 * AT}  # Pa (kgf/cm^2), seed 004
 
+# Where ContactSpec.allowable_stress comes from: seed 004's large-gas figure because the scene named
+# none ("default"), seed 004's figure for the [contact] engine the scene named ("engine"), or the
+# scene's own [contact] allowable_stress ("given"). It decides the required width (hertz_width) and
+# what the warnings and the hertz_stress rule call the allowable.
+AllowableSource = Literal["default", "engine", "given"]
+
 
 @dataclass(frozen=True)
 class ContactSpec:
@@ -78,14 +90,12 @@ class ContactSpec:
     poisson_ratio: float = STEEL_NU
     roller_youngs_modulus: float = STEEL_E  # Pa
     roller_poisson_ratio: float = STEEL_NU
-    width: float | None = None  # m; None: the width rule's width
+    width: float | None = None  # m; None: the required width (hertz_width)
     valve: str = "exhaust"
     width_rule_k: float = WIDTH_RULE_K["exhaust"]  # Pa
     engine: str = "large-gas"
     allowable_stress: float = ALLOWABLE["large-gas"]  # Pa
-    # whether the scene chose the allowable ([contact] engine or allowable_stress), or it is the
-    # 1902 default (the hertz_stress rule says which judged)
-    allowable_named: bool = False
+    allowable_source: AllowableSource = "default"  # see AllowableSource
     sliding_friction: float = 0.0  # mu of a face or pad sliding on the cam (the gears of #24; rollers take none)
     tip_friction: float = 0.0  # mu of a valve pad sliding on the valve tip
 
@@ -211,12 +221,34 @@ def contact_loads(geometry: ContactGeometry, valve_force, velocity, friction_ang
     }
 
 
+def allowable_label(spec: ContactSpec) -> str:
+    """Where the allowable contact stress comes from, for a warning."""
+    if spec.allowable_source == "given":
+        return "[contact] allowable_stress"
+    if spec.allowable_source == "engine":
+        return f"[contact] engine = {spec.engine!r}, seed 004"
+    return f"seed 004's {spec.engine!r} default of 1902 cast iron: no [contact] allowable_stress given"
+
+
+def self_locking_worst(margin, lift_rate) -> int:
+    """Index of the smallest self-locking margin while the cam lifts the follower (lift_rate > 0:
+    dL/dtheta, or the follower's velocity at a positive speed). Only there can the guide lock: on
+    the closing flank the spring drives the follower down and the cam only holds it back. A cam
+    that never lifts: the whole revolution. The contact effect's summary and the self_locking
+    rule both take it."""
+    lifting = np.asarray(lift_rate, dtype=float) > 0.0
+    if not lifting.any():
+        lifting = np.ones_like(lifting)
+    return int(np.argmin(np.where(lifting, margin, np.inf)))
+
+
 def hertz_width(normal, geometry: ContactGeometry, spec: ContactSpec, e_star: float) -> tuple[float, str]:
     """Required contact width and the rule that gave it: seed 004's b = P/(k D) on the largest
-    normal force for a roller; for rolling faces the width at which the peak Hertz stress equals
-    the allowable, b = N E* / (pi sigma^2 R*) at its worst angle."""
+    normal force for a roller judged by seed 004's allowables (the engine's or the default);
+    otherwise (a roller under the scene's own allowable_stress, or rolling faces) the width at
+    which the peak Hertz stress equals the allowable, b = N E* / (pi sigma^2 R*) at its worst angle."""
     finite = np.where(np.isfinite(normal), normal, np.nan)
-    if geometry.roller_diameter is not None:
+    if geometry.roller_diameter is not None and spec.allowable_source != "given":
         max_normal = float(np.nanmax(finite)) if np.isfinite(finite).any() else 0.0
         return width_rule(max_normal, geometry.roller_diameter, spec.width_rule_k), "P/(k D)"
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -38,6 +38,11 @@ def parse_contact_section(table, fields) -> ContactSpec:
             raise table.error("friction_angle", f"must lie in [0 deg, 90 deg), got {echo(table.raw('friction_angle'))}")
     e_cam = table.quantity("youngs_modulus", "pressure", STEEL_E, positive=True)
     nu_cam = table.number("poisson_ratio", STEEL_NU, minimum=-1.0, maximum=0.5, open_minimum=True, open_maximum=True)
+    if table.has("allowable_stress") and table.has("width_rule_k"):
+        # the width rule is seed 004's for its cast-iron allowables; a scene's own allowable sizes
+        # the width by the Hertz stress (explorer.mechanics.contact.hertz_width)
+        raise table.error("width_rule_k", "give allowable_stress (the width is then the one its Hertz stress "
+                                          "needs) or width_rule_k (seed 004's width rule), not both")
     valve = table.string("valve", "exhaust", choices=tuple(WIDTH_RULE_K))
     engine = table.string("engine", "large-gas", choices=tuple(ALLOWABLE))
     return ContactSpec(
@@ -52,7 +57,7 @@ def parse_contact_section(table, fields) -> ContactSpec:
         width_rule_k=table.quantity("width_rule_k", "pressure", WIDTH_RULE_K[valve], positive=True),
         engine=engine,
         allowable_stress=table.quantity("allowable_stress", "pressure", ALLOWABLE[engine], positive=True),
-        allowable_named=table.has("engine") or table.has("allowable_stress"),
+        allowable_source=("given" if table.has("allowable_stress") else "engine" if table.has("engine") else "default"),
         sliding_friction=table.number("sliding_friction", 0.0, minimum=0.0, maximum=1.0),
         tip_friction=table.number("tip_friction", 0.0, minimum=0.0, maximum=1.0),
     )

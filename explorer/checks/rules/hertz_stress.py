@@ -26,12 +26,10 @@ def allowable(case, settings) -> tuple[float, str]:
         m = CONTACT_MATERIALS[material]
         return m.allowable, f"{m.name}: {m.source}"
     spec = case.contact_spec
-    contact = case.scene.contact
-    given = contact is not None and not math.isclose(spec.allowable_stress, CONTACT_MATERIALS[spec.engine].allowable)
-    if given:
+    if spec.allowable_source == "given":
         return spec.allowable_stress, "[contact] allowable_stress"
     m = CONTACT_MATERIALS[spec.engine]
-    if not spec.allowable_named:  # the 1902 default: say so, and how to name a modern one
+    if spec.allowable_source == "default":  # the 1902 default: say so, and how to name a modern one
         return m.allowable, (f"no [contact] allowable_stress given: seed 004's {spec.engine!r} default of 1902 cast "
                              f"iron, {m.source} (a modern hardened pair: [contact] allowable_stress, or the rule's "
                              "material setting)")

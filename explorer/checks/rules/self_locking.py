@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from ...mechanics.contact import self_locking_worst
 from ...mechanics.gear_contact import NotApplicable
 from ..rule import Measure
 
@@ -18,10 +19,6 @@ def measure(case, settings) -> Measure:
         return Measure.not_applicable(str(exc))
     rho = case.contact_spec.friction_angle
     margin = 0.5 * math.pi - rho - np.abs(np.asarray(contact.geometry.pressure_angle, dtype=float))
-    lifting = case.derivs[1] > 0.0
-    if not lifting.any():
-        lifting = np.ones_like(lifting)
-    masked = np.where(lifting, margin, np.inf)
-    i = int(np.argmin(masked))
+    i = self_locking_worst(margin, case.derivs[1])
     return Measure.of([[margin[i]]], [[case.theta_deg[i]]], None, settings,
                       note=f"while the cam lifts the follower; friction angle {math.degrees(rho):.4g} deg ([contact])")
