@@ -44,12 +44,13 @@ def _values(rng, n):
     return v
 
 
-def tables(root: Path) -> dict[str, np.ndarray]:
+def tables(root: Path) -> tuple[dict[str, np.ndarray], dict[str, tuple[str, ...]]]:
+    """(table per key, its column names)."""
     sys.path.insert(0, str(root))
     from explorer.scene.scene import load_scene
     from explorer.studies.sweep_engine import _Shared, compute_chunk, engine_for, result_columns
 
-    out = {}
+    out, columns = {}, {}
     rng = np.random.default_rng(2704)
     for name in SCENES:
         base = load_scene(root / "assets" / "scenes" / name, ['effects=["elastic"]'])
@@ -57,9 +58,10 @@ def tables(root: Path) -> dict[str, np.ndarray]:
         shared = _Shared()
         assert engine_for(base, shared).name == "compiled"
         out[f"{name}:all"] = compute_chunk(base, KEYS, _values(rng, RUNS), names, shared)
+        columns[f"{name}:all"] = columns[f"{name}:rpm"] = tuple(names)
         rpm = rng.uniform(1500.0, 6000.0, (SPEED_RUNS, 1))
         out[f"{name}:rpm"] = compute_chunk(base, ("drive.rpm",), rpm, names, shared)
-    return out
+    return out, columns
 
 
 def main() -> None:
@@ -68,7 +70,7 @@ def main() -> None:
     ap.add_argument("file")
     ap.add_argument("--root", default=str(Path(__file__).resolve().parents[1]))
     args = ap.parse_args()
-    got = tables(Path(args.root).resolve())
+    got, columns = tables(Path(args.root).resolve())
     if args.mode == "record":
         np.savez(args.file, **got)
         print(f"recorded {sum(t.shape[0] for t in got.values())} rows to {args.file}")
@@ -78,6 +80,12 @@ def main() -> None:
     for key, table in got.items():
         same = table.shape == ref[key].shape and np.array_equal(table, ref[key], equal_nan=True)
         print(f"{key:32s} {table.shape[0]:4d} rows  {'identical' if same else 'DIFFERENT'}")
+        if not same and table.shape == ref[key].shape:  # which columns, in how many rows
+            for j, name in enumerate(columns[key]):
+                a, b = table[:, j], ref[key][:, j]
+                rows = int(np.count_nonzero(~((a == b) | (np.isnan(a) & np.isnan(b)))))
+                if rows:
+                    print(f"    {name}: {rows} rows differ")
         bad += not same
     print(f"{sum(t.shape[0] for t in got.values())} rows: {'all identical' if not bad else f'{bad} tables differ'}")
     sys.exit(1 if bad else 0)

@@ -138,7 +138,6 @@ def test_the_design_rules_read_the_flat_face(flat):
     width = result.result("face_width")
     assert width.verdict != "n/a"
     d = build_lift(scene).derivatives(np.linspace(0.0, 2.0 * math.pi, 3600, endpoint=False))
-    assert width.value == pytest.approx(0.015 - np.max(np.abs(d[1])), rel=1e-6)
     assert result.result("face_curvature").value == pytest.approx(np.min(RB + d[0] + d[2]), rel=1e-12)
     contact = scene.gear_plugin.cam_contact(scene, build_lift(scene), np.linspace(0.0, 6.0, 50))
     from explorer.mechanics.tribology import flat_face_motion
@@ -148,6 +147,42 @@ def test_the_design_rules_read_the_flat_face(flat):
     np.testing.assert_allclose(contact.motion.cam_rate, oracle.cam_rate, rtol=1e-12)
     np.testing.assert_allclose(contact.motion.follower_rate, oracle.follower_rate, rtol=1e-12, atol=1e-15)
     assert contact.oscillating is False and contact.face_half_width == 0.015
+
+
+def test_the_face_width_rule_reaches_the_contact_lines_far_end(flat):
+    """The flat face touches the 14 mm lobe (1.5 mm off the axis) along a line across the
+    camshaft: its far end is sqrt(s'^2 + (|e| + b/2)^2) from the axis. By hand: the 3-4-5 rise's
+    largest s' is 1.875 h / beta (at its middle, 72.5 deg: a sample of the 0.1 deg grid) =
+    1.875 x 9 mm / 85 deg = 11.3749 mm, the far end sqrt(11.3749^2 + 8.5^2) = 14.1999 mm, so of
+    the 15 mm half-width 0.8001 mm is left, 0.5501 mm after half the 0.5 mm face margin -- the
+    figure, equal to (face_diameter - face_diameter_needed_m) / 2 of the gear's own report. (Was
+    15 - 11.375 = 3.625 mm: 6.6 x the margin, the lobe's width and offset and the face margin left
+    out.) Tolerance 1e-12 relative: the same closed form, evaluated in another order."""
+    import explorer
+
+    s1 = 1.875 * 0.009 / math.radians(85.0)
+    hand = 0.015 - math.hypot(s1, 0.0015 + 0.007) - 0.00025
+    assert hand == pytest.approx(0.5501e-3, abs=1e-7)
+    r = explorer.check(flat_scene(), only=("face_width",), workers=1).result("face_width")
+    assert r.value == pytest.approx(hand, rel=1e-12) and r.cam_angle_deg == pytest.approx(72.5, abs=1e-9)
+    g = flat.summary["gear"]
+    assert r.value == pytest.approx(0.5 * (g["face_diameter_m"] - g["face_diameter_needed_m"]), rel=1e-12)
+    assert r.cam_angle_deg == pytest.approx(g["face_diameter_needed_cam_angle_deg"], abs=1e-9)
+    assert "14.2 mm of the 15 mm half-width" in r.note and r.verdict == "pass"
+    # a face 2 x 0.5501 mm - 1 um smaller than the scene's still loads (the gear's check) and has
+    # 0.5 um left: the rule's fail limit 0 is where the gear's load check refuses the face
+    tight = flat_scene(f'gear.tappet.face_diameter="{(0.030 - 2.0 * hand + 1e-6) * 1e3!r} mm"')
+    t = explorer.check(tight, only=("face_width",), workers=1).result("face_width")
+    assert t.value == pytest.approx(0.5e-6, rel=1e-6)
+    # the crown touches in the plane through the axis: its reach is the contact's offset alone
+    crowned = explorer.check(load_scene(SCENE), only=("face_width",), workers=1).result("face_width")
+    need = simulate(load_scene(SCENE)).summary["gear"]["face_diameter_needed_m"]
+    assert crowned.value == pytest.approx(0.5 * (0.030 - need), rel=1e-12)
+    # tolerance draws vary no key of the face: every draw gets the nominal figure and verdict
+    drawn = explorer.check(flat_scene(), only=("face_width",), sample={"spring.preload": "normal(220 N, 10 N)",
+                                                                       "valve.lash": "uniform(0 mm, 0.05 mm)"},
+                           runs=20, seed=3, workers=1).result("face_width")
+    assert drawn.value == r.value and drawn.samples == 20 and drawn.p_fail == 0.0
 
 
 def test_sweep_over_speed_every_engine_equals_simulate():

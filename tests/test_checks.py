@@ -923,6 +923,33 @@ def test_a_margin_the_search_did_not_reach_is_shown_as_a_bound(tmp_path):
     assert found.bound == "" and found.bound_mark == "" and found.speed_rpm is not None
 
 
+def test_a_separation_at_the_lowest_speed_checked_is_shown_as_an_upper_bound(tmp_path):
+    """The spring-surge scene checked at its own speed alone (2600 rpm) separates there: its first
+    separation is at or below 2600 rpm, so the margin is at most 0 rpm -- '<= 0 rpm', bound 'at
+    most' in the table, the browser line, the CSV and the JSON (it printed an exact 0 rpm). The
+    oracle: its sweep over 1500..2600 rpm (12 speeds) separates from between 2400 and 2500 rpm, so
+    the true margin lies in (-200, -100) rpm, below the bound; the check over that range finds it
+    (bisected: no bound) there."""
+    from explorer.checks.viewer import line
+
+    scene = load_scene("assets/scenes/spring_surge.toml")
+    r = explorer.check(scene, only=("float_margin",), workers=1)
+    fm = r.result("float_margin")
+    assert fm.verdict == "fail" and fm.bound == "at most" and fm.value == 0.0 and fm.speed_rpm == 2600.0
+    assert "at or below" in fm.note
+    assert "<= 0 rpm" in r.table_text() and line(fm).shown == "<= 0 rpm"
+    rows = [row for row in r.to_csv().splitlines() if row.startswith("float_margin,")]
+    assert rows[0].endswith(",at most")
+    (result,) = [d for d in json.loads(r.to_json())["results"] if d["name"] == "float_margin"]
+    assert result["bound"] == "at most"
+    swept = explorer.sweep(scene, vary={"drive.rpm": np.linspace(1500.0, 2600.0, 12)}, workers=1).columns
+    separates = np.asarray(swept["drive_rpm"])[np.asarray(swept["separations"]) > 0]
+    assert 2400.0 < separates.min() <= 2500.0
+    found = explorer.check(scene, rpm="1500:2600:12", only=("float_margin",), workers=1).result("float_margin")
+    assert found.bound == "" and -200.0 < found.value / RPM < -100.0 and found.value < fm.value
+    assert 2400.0 < found.speed_rpm < 2500.0
+
+
 def test_hertz_without_a_named_allowable_says_it_judged_by_the_1902_default():
     """A scene without [contact] is judged against seed 004's large-gas allowable (343 MPa, cast
     iron of 1902): the result's source says that no allowable was given and how to name a modern

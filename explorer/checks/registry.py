@@ -82,10 +82,11 @@ _BUILTIN: tuple[RuleSpec, ...] = (
                  Setting("warn", None, "length", "mm", "none by default (a minimum radius for grinding or "
                          "stress is the design's)", "-", minimum=0.0),
              ), "kinematics"),
-    RuleSpec("face_width", f"{_R}.face_width:measure", "Face width used", "face half-width - largest |offset|",
-             "mm", "min", (
+    RuleSpec("face_width", f"{_R}.face_width:measure", "Face width left",
+             "face half-width - the contact's farthest reach - half the gear's face margin", "mm", "min", (
                  Setting("fail", 0.0, "length", "mm", "R. L. Norton, Cam Design and Manufacturing Handbook: the face "
-                         "must cover the contact offset ds/dtheta on both sides", "geometric necessity",
+                         "must cover the contact offset ds/dtheta on both sides (the contact line's far end across "
+                         "the lobe's width and offset; the gear's face_margin included)", "geometric necessity",
                          minimum=0.0),
                  Setting("warn", None, "length", "mm", "none by default", "-", minimum=0.0),
              ), "kinematics"),

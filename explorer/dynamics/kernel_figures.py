@@ -12,7 +12,7 @@ from numba import njit
 
 from . import kernel_stamp  # noqa: F401 (the cache is stale when a source it depends on changed)
 from .free_vibration import free_amplitude
-from .kernel_events import LIFT_OFF, SEAT, SEPARATION
+from .kernel_events import LIFT_OFF, RECONTACT, SEAT, SEPARATION
 from .kernel_grid import grid_bounds
 from .kernel_phase import borrowed, borrowed_buffers, run_buffers, run_nodes
 from .kernel_shared import FIGURES, RUN_PARAMETERS  # noqa: F401 (RUN_PARAMETERS: the rows of revolutions())
@@ -42,8 +42,8 @@ def _first_sample(n, omega, t, after):
 
 @njit(cache=True, inline="always")
 def _sample(out_s, out_v, out_phase, Dn, q, omega, k, c, lash, rate, R, preload_closing):
-    """Node q's linkage force (exact_output.solution's), its distance from S - lash - W/k while the
-    valve is open (else 0) and whether it is open with the linkage unloaded (1, else 0)."""
+    """Node q's linkage force (exact_output.solution's) and its distance from S - lash - W/k while
+    the valve is open (else 0)."""
     s = out_s[q]
     v = out_v[q]
     ph = out_phase[q]
@@ -59,8 +59,8 @@ def _sample(out_s, out_v, out_phase, Dn, q, omega, k, c, lash, rate, R, preload_
         force = max(k * x, 0.0) * (0.0 if ph == FLIGHT else 1.0)
     if s > 0.0:
         W = preload_closing + rate * s + R * (-1.0 if v < 0.0 else 1.0)
-        return force, abs(s - (Dn[0, q] - lash - W / k)), 0 if force > 0.0 else 1
-    return force, 0.0, 0
+        return force, abs(s - (Dn[0, q] - lash - W / k))
+    return force, 0.0
 
 
 @njit(cache=True, inline="always")
@@ -69,8 +69,7 @@ def _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, r_lo, r_hi, col0, omeg
     """The run samples r in [r_lo, r_hi) (output column r + col0) into the running maxima acc:
     [0, 1] the linkage force, [2, 3] the distance from S - lash - W/k while open, [4, 5] |s - ref|
     (two of each, a sample to each in turn: one would be a chain of dependent compares; max is
-    exact in any order); returns the samples open with the linkage unloaded."""
-    separated = 0
+    exact in any order)."""
     pk0, pk1, dv0, dv1, rs0, rs1 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5]
     r = r_lo
     while r + 1 < r_hi:
@@ -78,25 +77,22 @@ def _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, r_lo, r_hi, col0, omeg
         # index wraparound, a third of this loop's instructions; all are >= 0)
         q0 = np.uint64(out_nodes[r])
         q1 = np.uint64(out_nodes[r + 1])
-        f0, d0, o0 = _sample(out_s, out_v, out_phase, Dn, q0, omega, k, c, lash, rate, R, preload_closing)
-        f1, d1, o1 = _sample(out_s, out_v, out_phase, Dn, q1, omega, k, c, lash, rate, R, preload_closing)
+        f0, d0 = _sample(out_s, out_v, out_phase, Dn, q0, omega, k, c, lash, rate, R, preload_closing)
+        f1, d1 = _sample(out_s, out_v, out_phase, Dn, q1, omega, k, c, lash, rate, R, preload_closing)
         pk0 = max(pk0, f0)
         pk1 = max(pk1, f1)
         dv0 = max(dv0, d0)
         dv1 = max(dv1, d1)
         rs0 = max(rs0, abs(out_s[q0] - ref[np.uint64(r + col0)]))
         rs1 = max(rs1, abs(out_s[q1] - ref[np.uint64(r + 1 + col0)]))
-        separated += o0 + o1
         r += 2
     if r < r_hi:
         q0 = np.uint64(out_nodes[r])
-        f0, d0, o0 = _sample(out_s, out_v, out_phase, Dn, q0, omega, k, c, lash, rate, R, preload_closing)
+        f0, d0 = _sample(out_s, out_v, out_phase, Dn, q0, omega, k, c, lash, rate, R, preload_closing)
         pk0 = max(pk0, f0)
         dv0 = max(dv0, d0)
         rs0 = max(rs0, abs(out_s[q0] - ref[np.uint64(r + col0)]))
-        separated += o0
     acc[0], acc[1], acc[2], acc[3], acc[4], acc[5] = pk0, pk1, dv0, dv1, rs0, rs1
-    return separated
 
 
 @njit(cache=True, inline="always")
@@ -149,23 +145,35 @@ def openings(n, i0, out_nodes, Dn, lash, opens):
     return k
 
 
+@njit(cache=True, inline="always")
+def _elapsed(t0, t1, period):
+    """elastic_events._elapsed: the time from t0 to t1, t1 in the next revolution when before t0."""
+    d = t1 - t0
+    return d + period if d < 0.0 else d
+
+
 @njit(cache=True)
 def _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, opens, k, is_float):
-    """effects/elastic_events.valve_periods on the revolution's events `rev` (time order): the
-    largest bounce, and is_float[q] = True for the separations while the valve is open (its
-    float). The same walk: from the rigid valve's first opening on the grid (S - lash > 0 at a
-    column, not at the one before; column 0: none), each event at the first sample after it, open
-    from an opening to the first seat impact (not one while the rigid valve is open and rising:
-    S' > 0, the sign of the rigid valve's velocity), seated from there to the next opening (its
-    lift there: the bounce); the state holds from one opening or event to the next. opens[:k]:
-    the openings' columns (openings())."""
+    """effects/elastic_events.valve_periods on the revolution's events `rev` (time order): (the
+    largest bounce, the float's flight time), and is_float[q] = True for the separations while the
+    valve is open (its float). The same walk: from the rigid valve's first opening on the grid
+    (S - lash > 0 at a column, not at the one before; column 0: none), each event at the first
+    sample after it, open from an opening to the first seat impact (not one while the rigid valve
+    is open and rising: S' > 0, the sign of the rigid valve's velocity), seated from there to the
+    next opening (its lift there: the bounce); the state holds from one opening or event to the
+    next; a float separation flies to the next re-contact or seat impact (round once more past the
+    walk's end for it; with neither, to the walk's end). opens[:k]: the openings' columns
+    (openings())."""
     m = rev.shape[0]
+    period = 2.0 * math.pi / omega
     start = opens[0] if k > 0 else 0
     at = np.empty(m, dtype=np.int64)
     for q in range(m):
         at[q] = (_first_sample(n, omega, rev[q, 1], True) % n - start) % n
     order = np.argsort(at, kind="mergesort")  # (stable: events of one sample keep their time order)
     best = 0.0
+    flight = 0.0
+    flying = -1.0  # the time of the float separation the valve flies from; < 0: not flying
     seated = False
     p = 0
     j = 0
@@ -178,11 +186,17 @@ def _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, opens, k, is_f
         while p < m and at[order[p]] == pos:
             q = order[p]
             p += 1
-            if int(rev[q, 0]) == SEAT:
+            code = int(rev[q, 0])
+            if (code == SEAT or code == RECONTACT) and flying >= 0.0:
+                flight += _elapsed(flying, rev[q, 1], period)
+                flying = -1.0
+            if code == SEAT:
                 g = _node(c, n, i0, out_nodes)
                 seated = seated or not (Dn[0, g] - lash > 0.0 and Dn[1, g] > 0.0)
-            elif int(rev[q, 0]) == SEPARATION and not seated:
+            elif code == SEPARATION and not seated:
                 is_float[q] = True
+                if flying < 0.0:
+                    flying = rev[q, 1]
         nxt = n
         if j < k:
             nxt = opens[j] - start
@@ -198,7 +212,15 @@ def _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, opens, k, is_f
                 best = _span_max(out_s, out_nodes, n, i0, lo, n, best)
                 best = _span_max(out_s, out_nodes, n, i0, 0, hi - n, best)
         pos = nxt
-    return best
+    if flying >= 0.0:  # round once more to the end of the flight, or to the walk's end
+        end = float(start) * (2.0 * math.pi / n) / omega  # (the time_s column's operations)
+        for p in range(m):
+            code = int(rev[order[p], 0])
+            if code == SEAT or code == RECONTACT:
+                end = rev[order[p], 1]
+                break
+        flight += _elapsed(flying, end, period)
+    return best, flight
 
 
 @njit(cache=True, error_model="numpy")  # (numpy's: no zero check at the samples' W / k; k > 0)
@@ -212,8 +234,9 @@ def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1
     `buffers` (kernel_phase.run_buffers for the grid), the valve lift at output column c is
     out_s[out_nodes[(c - i0) mod n]]. acc: 6 scratch values.
     The figures are the elastic effect's summary read as sweep_engine.row_scalars reads it:
-    force, deviation from S - lash - W/k, separation on the output samples, events from the start
-    of the run for one period, times modulo the period (effects/elastic.py, elastic_events.py);
+    force and deviation from S - lash - W/k on the output samples, events from the start of the
+    run for one period, times modulo the period (effects/elastic.py, elastic_events.py; the
+    float's separations, flight time and the bounce: _valve_periods);
     the residual figures from the lift the cam is made for at the output angles, ref, the dwell's
     first sample (-1: none) and the valve-referred drive there, S_dwell
     (effects/residual.residual_reference); blk, win: grid_bounds of the grid in cam angle; opens,
@@ -229,14 +252,13 @@ def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1
     # r - (n - i0)
     acc[0] = acc[1] = -np.inf
     acc[2] = acc[3] = acc[4] = acc[5] = 0.0
-    separated = _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, 0, n - i0, i0, omega, k, c, lash, rate, R,
-                         preload_closing, acc)
-    separated += _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, n - i0, n, -(n - i0), omega, k, c, lash, rate,
-                          R, preload_closing, acc)
+    _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, 0, n - i0, i0, omega, k, c, lash, rate, R,
+             preload_closing, acc)
+    _samples(out_s, out_v, out_phase, out_nodes, Dn, ref, n - i0, n, -(n - i0), omega, k, c, lash, rate, R,
+             preload_closing, acc)
     peak = max(acc[0], acc[1])
     fig[1] = 0.0
     fig[8] = 0.0
-    fig[2] = 360.0 * separated / n / 360.0 * period
     fig[3] = max(acc[2], acc[3])
     fig[4] = peak
     fig[5] = ratio * peak  # = max(ratio force): the product rounds monotonically (the scene has ratio > 0)
@@ -259,7 +281,7 @@ def revolution(nodes, h, PT, Dn, Sb, hidx, h_unique, out_nodes, i0, omega, M, M1
     order = np.argsort(rev[:, 1], kind="mergesort")  # (stable: equal instants keep the solver's order)
     rev = rev[order]
     is_float = np.zeros(m, dtype=np.bool_)
-    fig[9] = _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, opens, n_opens, is_float)
+    fig[9], fig[2] = _valve_periods(rev, n, omega, i0, out_s, out_nodes, Dn, lash, opens, n_opens, is_float)
     seat_v = np.inf
     delay = np.inf
     for q in range(m):

@@ -4,6 +4,7 @@ the summary lists them, the valve's motion figures and columns, the run put back
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -75,7 +76,8 @@ def linkage_outputs(s, v, a, jerk, force, back_pressure, deviation, contact, sep
 def elastic_row(result) -> dict[str, float]:
     """A sweep row's elastic figures from a run (its summary, events in time order and columns; the
     lash effect's take-up events give the lift-off delay). The separations counted are the valve's
-    float, those while it is open (valve_periods); the largest bounce is valve_periods' too."""
+    float, those while it is open (valve_periods); the flight time (from each of them to the valve's
+    re-contact or landing, event to event) and the largest bounce are valve_periods' too."""
     summary, events = result.summary, result.events
     elastic = [e for e in events if e.effect == "elastic"]
     period = float(summary["revolution_time_s"])
@@ -83,13 +85,14 @@ def elastic_row(result) -> dict[str, float]:
     lift_offs = [float(e.time_s) for e in elastic if e.kind == "lift-off"]
     ups = [float(e.time_s) for e in events if e.kind == "lash-take-up"]
     columns = result.columns
-    floats, bounce = valve_periods(columns["time_s"], columns["valve_lift_m"], columns["rigid_valve_lift_m"],
-                                   columns["rigid_valve_velocity_m_s"],
-                                   [e for e in elastic if e.kind in ("separation", "seat")])
+    periods = valve_periods(columns["time_s"], columns["valve_lift_m"], columns["rigid_valve_lift_m"],
+                            columns["rigid_valve_velocity_m_s"],
+                            [e for e in elastic if e.kind in ("separation", "re-contact", "seat")], period)
+    floats = periods.floats
     row = {
         "first_separation_deg": float(floats[0].cam_angle_deg) if floats else math.nan,
         "separations": float(len(floats)),
-        "flight_time_s": float(summary["separated_angle_deg"]) / 360.0 * period,
+        "flight_time_s": periods.flight_s,
         "max_deviation_m": float(summary["max_deviation_m"]),
         "peak_linkage_force_N": float(summary["peak_linkage_force_N"]),
         "peak_camshaft_back_pressure_N": float(summary["peak_camshaft_back_pressure_N"]),
@@ -97,7 +100,7 @@ def elastic_row(result) -> dict[str, float]:
                              if ups and lift_offs else math.nan),
         "seating_velocity_m_s": min(float(e["velocity_m_s"]) for e in seats) if seats else math.nan,
         "seat_impacts": float(len(seats)),
-        "largest_bounce_m": bounce,
+        "largest_bounce_m": periods.bounce,
     }
     for name in ("residual_deviation_m", "residual_amplitude_m"):  # the elastic effect's (effects/residual.py)
         value = summary.get(name)
@@ -105,12 +108,20 @@ def elastic_row(result) -> dict[str, float]:
     return row
 
 
-def valve_periods(time_s, lift, rigid_lift, rigid_velocity, events) -> tuple[list, float]:
-    """(the separations while the valve is open: its float, in time order; the largest bounce) of a
-    revolution on its output grid (time_s, the valve's lift, the rigid valve's lift and velocity:
-    open where its lift is > 0, the kinematics' test ratio L > lash) from its events in time order
-    (kinds "separation" and "seat"; others are ignored). The compiled path computes the same:
-    dynamics/kernel_figures.py, _valve_periods.
+class ValvePeriods(NamedTuple):
+    """What valve_periods finds in a revolution."""
+
+    floats: list  # the separations while the valve is open (its float), in time order
+    bounce: float  # m, the largest bounce
+    flight_s: float  # s, the time the valve flies off the linkage in its float
+
+
+def valve_periods(time_s, lift, rigid_lift, rigid_velocity, events, period: float) -> ValvePeriods:
+    """(the separations while the valve is open: its float, in time order; the largest bounce; the
+    float's flight time) of a revolution of `period` s on its output grid (time_s, the valve's lift,
+    the rigid valve's lift and velocity: open where its lift is > 0, the kinematics' test ratio L >
+    lash) from its events in time order (kinds "separation", "re-contact" and "seat"; others are
+    ignored). The compiled path computes the same: dynamics/kernel_figures.py, _valve_periods.
 
     The revolution is walked once, periodically, from the rigid valve's first opening on the grid
     (the lash take-up: the first sample where it is open after one where it is closed; column 0
@@ -130,7 +141,15 @@ def valve_periods(time_s, lift, rigid_lift, rigid_velocity, events) -> tuple[lis
     upwards, every rebound too), and a separation is any contact's (the train's joints: its
     lifter leaving the cam included). A valve still bouncing when the cam opens it again is open
     from that opening: a seat impact while the rigid valve is open and rising (at the sample after
-    it) ends no open period, and what the cam then lifts is no bounce."""
+    it) ends no open period, and what the cam then lifts is no bounce.
+
+    Flight: each float separation's flight lasts from its instant to the next re-contact or seat
+    impact (the valve back on the linkage, or landed: its open period ends there), from the exact
+    event times (t_end - t_sep, plus the period where the end is in the next revolution: the walk
+    goes round once more for it); with neither in the revolution (a valve still flying when the run
+    ends) to the walk's end, the first opening's sample. A separation while the valve is already
+    flying starts no second flight. The flights of the bounce (after the seat impact) are not in it:
+    the bounce's figures are the largest bounce and the seat impacts."""
     t = np.asarray(time_s, dtype=float)
     s = np.asarray(lift, dtype=float)
     rigid_open = np.asarray(rigid_lift, dtype=float) > 0.0
@@ -147,17 +166,33 @@ def valve_periods(time_s, lift, rigid_lift, rigid_velocity, events) -> tuple[lis
     walk_rising = np.roll(rising, -start)
     breaks = sorted({0, *np.flatnonzero(walk_opens).tolist(), *at.tolist()}) + [n]
     floats, best, seated, q = [], 0.0, False, 0
+    flight, flying = 0.0, None  # flying: the time of the float separation the valve flies from
     for b, end in zip(breaks[:-1], breaks[1:]):  # the state holds from a break to the next
         if walk_opens[b]:
             seated = False
         while q < order.size and at[order[q]] == b:
             e = events[order[q]]
             q += 1
+            if e.kind in ("seat", "re-contact") and flying is not None:
+                flight += _elapsed(flying, float(e.time_s), period)
+                flying = None
             if e.kind == "seat":
                 seated = seated or not walk_rising[b]
             elif e.kind == "separation" and not seated:
                 floats.append(e)
+                if flying is None:
+                    flying = float(e.time_s)
         if seated:
             best = max(best, float(walk_s[b:end].max()))
+    if flying is not None:  # round once more to the end of the flight, or to the walk's end
+        ends = [float(events[i].time_s) for i in order if events[i].kind in ("seat", "re-contact")]
+        flight += _elapsed(flying, ends[0] if ends else float(t[start]), period)
     floats.sort(key=lambda e: e.time_s)
-    return floats, best
+    return ValvePeriods(floats, best, flight)
+
+
+def _elapsed(t0: float, t1: float, period: float) -> float:
+    """The time from t0 to t1 (both within the revolution), t1 in the next revolution when before
+    t0 (kernel_figures._elapsed: the same operations)."""
+    d = t1 - t0
+    return d + period if d < 0.0 else d

@@ -242,8 +242,9 @@ class BucketTappet(Gear):
 
     def cam_contact(self, scene, lift, theta) -> GearContact:
         """The face slides on the cam (SurfaceMotion of both surfaces past the contact); the
-        tappet translates (not oscillating); the contact's offset on the face and the face's
-        half-width for the face-width rule."""
+        tappet translates (not oscillating); for the face-width rule the contact's offset on the
+        face, its reach (BucketTappetGear.face_reach: the lobe's width and offset included), the
+        face's half-width and its margin."""
         gear = lift.gear if hasattr(lift, "gear") else self.build_lift(scene).gear
         spec = scene.contact if scene.contact is not None else ContactSpec()
         k = gear.kinematics(np.asarray(theta, dtype=float))
@@ -253,7 +254,8 @@ class BucketTappet(Gear):
         # a crown touches the cam in an ellipse, not the line the generic rule assumes
         stress = (lambda normal, e_star: gear.hertz_stress(k, normal, e_star)) if gear.tappet.crowned else None
         return GearContact(geometry, motion, oscillating=False, pitch_radius=None, face_offset=k.contact_offset,
-                           face_half_width=None if d is None else 0.5 * d, stress=stress)
+                           face_half_width=None if d is None else 0.5 * d, face_reach=gear.face_reach(k),
+                           face_margin=gear.tappet.face_margin, stress=stress)
 
     # -- 8. the 'gear' effect --------------------------------------------------------------------
     def report(self, ctx) -> EffectOutput:

@@ -222,15 +222,23 @@ class BucketTappetGear:
                                 pressure_angle=pressure, velocities=velocities)
 
     # -- the face ----------------------------------------------------------------------------------
-    def face_diameter_needed(self, k: TappetKinematics) -> tuple[float, float]:
-        """(diameter, cam angle of the widest contact): 2 max|ds/dtheta| + margin for a flat face
-        (with the lobe's width and offset: the contact line's far end), 2 max|x_contact| + margin
-        for a crown."""
+    def face_reach(self, k: TappetKinematics) -> np.ndarray:
+        """How far from the tappet's axis the contact reaches on the face, per angle (m): a flat
+        face touches the lobe along a line across the camshaft, from the lobe's centre (offset e)
+        out to |e| + b/2 (width b), so its far end is sqrt(s'^2 + (|e| + b/2)^2); without a width,
+        or on a crown (which touches in the plane through the axis), |x_contact|. The one formula
+        the face's diameter check, the gear's report and the face_width design rule read."""
         t = self.tappet
         across = 0.0 if t.crowned or t.cam_width is None else abs(t.offset) + 0.5 * t.cam_width
-        reach = np.hypot(k.contact_offset, across)
+        return np.hypot(k.contact_offset, across)
+
+    def face_diameter_needed(self, k: TappetKinematics) -> tuple[float, float]:
+        """(diameter, cam angle of the widest contact): 2 max face_reach + face_margin (a flat
+        face: the contact line's far end, 2 max sqrt(s'^2 + (|e| + b/2)^2) + margin; a crown:
+        2 max|x_contact| + margin)."""
+        reach = self.face_reach(k)
         i = int(np.argmax(reach))
-        return 2.0 * float(reach[i]) + t.face_margin, float(k.theta[i])
+        return 2.0 * float(reach[i]) + self.tappet.face_margin, float(k.theta[i])
 
     def check(self, n: int = 3600) -> TappetKinematics:
         """Cusp (rho <= 0) and the face's diameter over a revolution: one-line InputErrors. A given

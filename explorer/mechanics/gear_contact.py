@@ -17,6 +17,11 @@ judge). It holds:
    convex; undercut where 0 < pitch_radius <= roller radius); None without a roller.
 5. `face_offset`, `face_half_width`: a flat-faced follower's contact position along its face
    from the follower axis (m, per angle) and the half-width of face available; None otherwise.
+   `face_reach`: how far from the axis the contact reaches on the face (m, per angle; None:
+   |face_offset|, a point contact in the cam plane) -- a flat face touching a lobe of width b
+   offset e along the camshaft reaches sqrt(offset^2 + (|e| + b/2)^2), the gear's own formula
+   (the one its face check uses); `face_margin`: the allowance the gear adds to the face's
+   diameter (m, 0: none). The face_width rule judges face_half_width - max reach - face_margin/2.
 
 Everything per angle is an array of the grid's shape; SI.
 """
@@ -40,11 +45,20 @@ class GearContact:
     pitch_radius: np.ndarray | None = None
     face_offset: np.ndarray | None = None
     face_half_width: float | None = None
+    face_reach: np.ndarray | None = None  # None: |face_offset| (item 5)
+    face_margin: float = 0.0
     motion_note: str = ""  # why motion is None
     # the gear's own peak contact pressure (normal force per angle, any leading axes; E*) -> Pa,
     # where a line contact over [contact] width does not describe the contact: a crowned face on
     # the cam is a Hertz ellipse, about twice the line contact's pressure (the hertz_stress rule)
     stress: Callable[[np.ndarray, float], np.ndarray] | None = None
+
+    def reach(self) -> np.ndarray | None:
+        """The contact's reach on a flat face (item 5): face_reach, or |face_offset|; None
+        without a face."""
+        if self.face_reach is not None:
+            return np.asarray(self.face_reach, dtype=float)
+        return None if self.face_offset is None else np.abs(np.asarray(self.face_offset, dtype=float))
 
     @property
     def roller_radius(self) -> float | None:

@@ -33,8 +33,9 @@ Columns (SI units in the names, as in `simulate`'s CSV), by effect:
   contact  max_camshaft_torque_Nm
   elastic  first_separation_deg (cam angle; NaN: none) and separations, the valve's float (while
            it is open: from the rigid opening to its first seat impact, elastic_events.
-           valve_periods), flight_time_s (time with the valve open and the linkage unloaded, on the
-           output grid), max_deviation_m, peak_linkage_force_N, peak_camshaft_back_pressure_N,
+           valve_periods), flight_time_s (the float's flight: from each of those separations to
+           the next re-contact or seat impact, by the events' instants; the bounce's flights
+           after the seat impact are not in it), max_deviation_m, peak_linkage_force_N, peak_camshaft_back_pressure_N,
            lift_off_delay_s (from the lash take-up to the valve's lift-off: Schenker's t0),
            seating_velocity_m_s (the hardest seat impact, < 0; NaN: none), seat_impacts,
            largest_bounce_m (highest lift after a seat impact before the cam opens the valve

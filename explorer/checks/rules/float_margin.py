@@ -4,6 +4,15 @@ separation while the valve is open, from the rigid opening to its first seat imp
 bounce; found on the speed grid and refined by bisection; without a linkage the rigid float speed)
 less the highest operating speed.
 
+A valve that separates already at the lowest speed of the range has its first separation at or
+below it: the figure is then an upper bound (Measure.bound "at most", shown "<= "), as a margin
+the search above the range did not reach is a lower one ("at least", ">= "). The rule
+does not search below the range for the figure -- it fails there whatever lies below (the limit
+is a margin above the highest speed), separation need not be monotone in the speed (a linkage
+resonance separates in a band), so a search down would need a floor of its own and end in the
+same bound when the floor separates; the bound costs no run, and `explorer sweep --vary drive.rpm`
+or a lower --rpm locates it.
+
 With tolerance draws each draw runs at the speeds its Case gives the rule (the nominal first
 separation, if within reach, and the highest speed plus the margin; over the whole range for the
 draws the checks verify): its first separation among them. A draw that separates at none of them
@@ -66,9 +75,14 @@ def measure(case, settings) -> Measure:
                 hi, angle = mid, f["first_separation_deg"][0, 0]
             else:
                 lo = mid
-    note = f"first separation at {hi:.6g} rpm, cam angle {angle:.4g} deg (elastic)"
     if k == 0:
-        note += "; already at the lowest speed checked"
+        # the first separation is at or below the lowest speed checked, where nothing was run:
+        # the margin is at most this (the module docstring says why no search below the range)
+        note = (f"separates already at the lowest speed checked, {hi:.6g} rpm (cam angle {angle:.4g} deg, elastic): "
+                "the first separation is at or below it, the margin at most this; widen --rpm downwards to find it")
+        return Measure(np.array([[(hi - high) * RPM]]), np.array([[angle]]), np.array([hi]), settings["fail"],
+                       settings["warn"], note=note, bound="at most")
+    note = f"first separation at {hi:.6g} rpm, cam angle {angle:.4g} deg (elastic)"
     return Measure(np.array([[(hi - high) * RPM]]), np.array([[angle]]), np.array([hi]), settings["fail"],
                    settings["warn"], note=note)
 
