@@ -330,6 +330,9 @@ def test_dynamic_hertz_stress_judges_the_elastic_trains_force():
                            only=("dynamic_hertz_stress",), workers=1).result("dynamic_hertz_stress")
     assert drawn.verdict == "fail" and drawn.value == at.value
     assert drawn.sample_note.startswith("tolerances not propagated") and "nominal design" in drawn.sample_note
+    table = explorer.check(FLOAT, rpm="4000", sample={"valve.lash": "normal(0.25 mm, 0.01 mm)"}, runs=5, seed=1,
+                           only=("dynamic_hertz_stress",), workers=1).table_text()
+    assert "nominal only" in next(line for line in table.splitlines() if line.startswith("dynamic_hertz_stress"))
     rigid_only = loads_scene(FLOAT_TEXT.replace('[linkage]\nstiffness = "3 kN/mm"\ndamping = "8 N*s/m"\n', "")
                              .replace('"contact", "elastic"]', '"contact"]'))
     assert judge(rigid_only, "dynamic_hertz_stress").verdict == "n/a"

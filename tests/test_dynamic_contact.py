@@ -91,7 +91,8 @@ def test_dynamic_statics_equal_the_hand_formulas_on_the_elastic_force():
     # against 828 N), and a warning says what the stress is under that force
     assert s["max_dynamic_cam_normal_force_N"] > 2.0 * s["max_cam_normal_force_N"]
     assert s["max_dynamic_hertz_stress_Pa"] > 1.4 * s["max_hertz_stress_Pa"]
-    assert any("under the elastic train's force: Hertz 691.2 MPa" in w for w in result.warnings)
+    assert any("under the elastic train's force: dynamic_hertz_stress_Pa 691.2 MPa" in w for w in result.warnings)
+    assert s["dynamic_governing_hertz_stress"] == "dynamic_hertz_stress_Pa"
     # the rigid statics are those of the rigid force, as before (where it is negative, the rigid
     # train would need the cam to pull: passed through without friction, P / cos a)
     f = np.asarray(c["contact_force_N"])
@@ -156,3 +157,27 @@ def test_a_gears_own_stresses_are_computed_on_the_elastic_force_too(name):
     for key in stresses:
         assert (c[key][force == 0.0] == 0.0).all(), key
         assert result.summary[f"max_{key}"] > 0.0
+
+
+def test_the_governing_stress_is_the_largest_hertz_column_with_its_warnings():
+    """A crowned bucket's face (the ellipse, the gear's own column) carries more stress than the
+    line contact of the same force: the utilisation is the face's, in the rigid and the dynamic
+    figures, and an allowable between the two warns on the face, as the hertz_stress rules judge it
+    (they take the gear's own stress)."""
+    import explorer
+
+    scene = load_scene(f"{SCENES}/bucket_tappet.toml", ['contact.allowable_stress="800 MPa"'])
+    result = simulate(scene)
+    s = result.summary
+    assert s["max_dynamic_face_hertz_stress_Pa"] > 800e6 > s["max_dynamic_hertz_stress_Pa"]
+    assert s["dynamic_governing_hertz_stress"] == "dynamic_face_hertz_stress_Pa"
+    assert s["dynamic_hertz_utilisation"] == pytest.approx(s["max_dynamic_face_hertz_stress_Pa"] / 800e6, rel=1e-12)
+    face = float(np.max(result.columns["face_hertz_stress_Pa"]))
+    assert s["governing_hertz_stress"] == "face_hertz_stress_Pa"
+    assert s["governing_hertz_utilisation"] == pytest.approx(face / 800e6, rel=1e-12) and face > 800e6
+    assert any(w.startswith("contact stress face_hertz_stress_Pa") for w in result.warnings)
+    assert any("elastic train's force: dynamic_face_hertz_stress_Pa" in w for w in result.warnings)
+    report = explorer.check(scene, only=("hertz_stress", "dynamic_hertz_stress"), workers=1)
+    assert report.result("hertz_stress").verdict == report.result("dynamic_hertz_stress").verdict == "fail"
+    assert report.result("dynamic_hertz_stress").value == pytest.approx(s["max_dynamic_face_hertz_stress_Pa"],
+                                                                        rel=1e-12)

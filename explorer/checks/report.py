@@ -169,7 +169,9 @@ class CheckReport:
                    ", ".join(where), limit]
             if self.samples:
                 mark = "~" if r.sample_method.startswith("two-phase") else ""
-                row.append("" if r.p_fail is None else
+                # a judged rule without a probability did not propagate the tolerances (its
+                # sample_note says why): the cell says so rather than stay empty
+                row.append(("nominal only" if r.verdict in ("pass", "warn", "fail") else "") if r.p_fail is None else
                            f"{mark}{r.p_fail:.3g} [{r.p_fail_interval[0]:.3g}, {r.p_fail_interval[1]:.3g}]")
             row.append(_short(r.source))
             rows.append(row)

@@ -124,6 +124,12 @@ def contact_effect(ctx) -> EffectOutput:
             f"the allowable {spec.allowable_stress / 1e6:.4g} MPa ({allowable_label(spec)}) for width "
             f"{width * 1e3:.4g} mm"
         )
+    # the gear's own contact stresses (a crowned face's ellipse, a valve tip's): judged against the
+    # same allowable, named by their column
+    for name, values in columns.items():
+        if name != "hertz_stress_Pa" and name.endswith(DYNAMIC_STRESSES):
+            warnings.extend(_beyond(name, np.asarray(values, dtype=float), theta_deg, spec, ""))
+    summary.update(_governing(columns, spec, ""))
     if spec.width is not None and spec.width < required_width:
         warnings.append(
             f"cam width {spec.width * 1e3:.4g} mm is below the required {required_width * 1e3:.4g} mm ({rule})"
@@ -145,9 +151,10 @@ def dynamic_statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: f
     """The statics on the elastic train's cam force `force` (valve-referred, >= 0): the same
     geometry, friction and contact width as the rigid statics (the width is the design's, not one
     the rule would give for these loads), the gear's own figures computed on that force (its
-    ctx sees it as contact_force_N). Columns `dynamic_<name>` for each DYNAMIC_FIGURES column and Hertz stress, and
-    per column its largest value (max_dynamic_<name>) and cam angle; the Hertz utilisation and a
-    warning beyond the allowable."""
+    ctx sees it as contact_force_N). Columns `dynamic_<name>` for each DYNAMIC_FIGURES column and
+    Hertz stress, and per column its largest value (max_dynamic_<name>) and cam angle; the
+    governing stress's utilisation (the largest Hertz column's) and a warning for each column
+    beyond the allowable."""
     force = np.asarray(force, dtype=float)
     dctx = replace(ctx, columns=MappingProxyType({**ctx.columns, "contact_force_N": force}))
     statics, _, _, _ = _statics(dctx, geometry, spec, e_star, width, force)
@@ -164,17 +171,32 @@ def dynamic_statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: f
         stem, _, unit = name.rpartition("_")
         summary[f"max_dynamic_{name}"] = float(values[i]) if np.isfinite(values[i]) else None
         summary[f"max_dynamic_{stem}_cam_angle_deg"] = float(theta_deg[i]) if np.isfinite(values[i]) else None
-    sigma = columns["dynamic_hertz_stress_Pa"]
-    i = int(np.argmax(np.where(np.isfinite(sigma), sigma, -1.0)))
-    summary["dynamic_hertz_utilisation"] = float(sigma[i] / spec.allowable_stress)
+    summary.update(_governing(columns, spec, "dynamic_"))
+    summary["dynamic_hertz_utilisation"] = summary.pop("dynamic_governing_hertz_utilisation")
     warnings = []
-    if sigma[i] > spec.allowable_stress:
-        warnings.append(
-            f"contact stress under the elastic train's force: Hertz {sigma[i] / 1e6:.4g} MPa at cam angle "
-            f"{theta_deg[i]:.2f} deg exceeds the allowable {spec.allowable_stress / 1e6:.4g} MPa "
-            f"({allowable_label(spec)}) for width {width * 1e3:.4g} mm"
-        )
+    for name, values in columns.items():
+        if name.endswith(DYNAMIC_STRESSES):
+            warnings.extend(_beyond(name, values, theta_deg, spec, "under the elastic train's force: "))
     return columns, summary, warnings
+
+
+def _governing(columns, spec: ContactSpec, prefix: str) -> dict:
+    """The largest of the Hertz stress columns (the line contact's and the gear's own: a crowned
+    face, a valve tip), which governs the design: its column and its ratio to the allowable."""
+    stresses = {name: float(np.max(np.where(np.isfinite(v), v, np.inf)))
+                for name, v in columns.items() if name.startswith(prefix) and name.endswith(DYNAMIC_STRESSES)}
+    name = max(stresses, key=stresses.get)
+    return {f"{prefix}governing_hertz_stress": name,
+            f"{prefix}governing_hertz_utilisation": stresses[name] / spec.allowable_stress}
+
+
+def _beyond(name: str, values: np.ndarray, theta_deg: np.ndarray, spec: ContactSpec, how: str) -> list[str]:
+    """A warning when the stress column `name` exceeds the allowable (none otherwise)."""
+    i = int(np.argmax(np.where(np.isfinite(values), values, np.inf)))
+    if not values[i] > spec.allowable_stress:
+        return []
+    return [f"contact stress {how}{name} {values[i] / 1e6:.4g} MPa at cam angle {theta_deg[i]:.2f} deg exceeds the "
+            f"allowable {spec.allowable_stress / 1e6:.4g} MPa ({allowable_label(spec)})"]
 
 
 def contact_figures(ctx, cache) -> EffectOutput:
