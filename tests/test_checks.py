@@ -293,6 +293,15 @@ def test_hertz_stress_against_the_scene_allowable():
     assert at.value == pytest.approx(explorer.simulate(load_scene(FLOAT)).summary["max_hertz_stress_Pa"], rel=1e-9)
 
 
+def test_float_margin_says_where_on_the_lift_the_valve_first_separates():
+    """The float demo first separates at 50.6 deg, on the opening flank: its lift (3-4-5 from 30 deg
+    over a 75 deg rise) peaks at 105 deg, so 54.4 deg before it -- the linkage's vibration after the
+    take-up, not the inertia float over the nose that the rigid float speed (3727 rpm) predicts."""
+    r = judge(FLOAT, "float_margin", rpm="800:6500:200")
+    assert r.cam_angle_deg == pytest.approx(50.6, abs=1e-3)  # the event's angle, between samples
+    assert "on the opening flank, 54.4 deg before the rigid valve's peak lift (105 deg)" in r.note
+
+
 def test_dynamic_hertz_stress_judges_the_elastic_trains_force():
     """The float demo at 4000 rpm lands on the cam after its float: the contact effect's dynamic
     stress (its own test: tests/test_dynamic_contact.py, hand formulas on the elastic force), the

@@ -82,7 +82,7 @@ def measure(case, settings) -> Measure:
                 "the first separation is at or below it, the margin at most this; widen --rpm downwards to find it")
         return Measure(np.array([[(hi - high) * RPM]]), np.array([[angle]]), np.array([hi]), settings["fail"],
                        settings["warn"], note=note, bound="at most")
-    note = f"first separation at {hi:.6g} rpm, cam angle {angle:.4g} deg (elastic)"
+    note = f"first separation at {hi:.6g} rpm, cam angle {angle:.4g} deg (elastic){_where_in_lift(case, angle)}"
     return Measure(np.array([[(hi - high) * RPM]]), np.array([[angle]]), np.array([hi]), settings["fail"],
                    settings["warn"], note=note)
 
@@ -107,3 +107,16 @@ def _rigid(case, settings, high) -> Measure:
     value = omega - high * RPM
     return Measure.of(np.broadcast_to(value[:, None], (case.n, 1)), np.full((case.n, 1), np.nan), None, settings,
                       note="rigid float speed on the grid (no [linkage])")
+
+
+def _where_in_lift(case, angle_deg: float) -> str:
+    """Where on the lift a separation is, against the rigid valve's opening and its peak lift (an
+    early separation on the opening flank is the linkage's vibration after the take-up, not the
+    inertia float over the nose that the rigid float speed predicts): '' when it does not open."""
+    lift = case.valve_lift()[0]
+    if not (lift > 0.0).any() or not math.isfinite(angle_deg):
+        return ""
+    peak = float(case.theta_deg[int(np.argmax(lift))])
+    if angle_deg < peak:
+        return f"; on the opening flank, {peak - angle_deg:.4g} deg before the rigid valve's peak lift ({peak:.4g} deg)"
+    return f"; on the closing flank, {angle_deg - peak:.4g} deg after the rigid valve's peak lift ({peak:.4g} deg)"
