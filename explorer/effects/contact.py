@@ -60,11 +60,16 @@ def _statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: float, w
     return columns, gear_summary, width, (required_width, rule)
 
 
+def _contact(ctx) -> tuple[ContactSpec, ContactGeometry, float]:
+    """The scene's [contact] (or the defaults), its gear's contact geometry and E*."""
+    spec: ContactSpec = ctx.scene.contact if ctx.scene.contact is not None else ContactSpec()
+    e_star = effective_modulus(spec.youngs_modulus, spec.poisson_ratio, spec.roller_youngs_modulus, spec.roller_poisson_ratio)
+    return spec, contact_geometry(ctx), e_star
+
+
 def contact_effect(ctx) -> EffectOutput:
     scene = ctx.scene
-    spec: ContactSpec = scene.contact if scene.contact is not None else ContactSpec()
-    geometry = contact_geometry(ctx)
-    e_star = effective_modulus(spec.youngs_modulus, spec.poisson_ratio, spec.roller_youngs_modulus, spec.roller_poisson_ratio)
+    spec, geometry, e_star = _contact(ctx)
     columns, gear_summary, width, (required_width, rule) = _statics(ctx, geometry, spec, e_star, None,
                                                                   ctx.columns["contact_force_N"])
     alpha, contour_radius = np.asarray(geometry.pressure_angle), np.asarray(geometry.contour_radius)
@@ -168,7 +173,7 @@ def dynamic_statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: f
         columns[f"dynamic_{name}"] = values
         finite = np.where(np.isfinite(values), values, -np.inf)
         i = int(np.argmax(finite))
-        stem, _, unit = name.rpartition("_")
+        stem = name.rpartition("_")[0]
         summary[f"max_dynamic_{name}"] = float(values[i]) if np.isfinite(values[i]) else None
         summary[f"max_dynamic_{stem}_cam_angle_deg"] = float(theta_deg[i]) if np.isfinite(values[i]) else None
     summary.update(_governing(columns, spec, "dynamic_"))
@@ -183,7 +188,7 @@ def dynamic_statics(ctx, geometry: ContactGeometry, spec: ContactSpec, e_star: f
 def _governing(columns, spec: ContactSpec, prefix: str) -> dict:
     """The largest of the Hertz stress columns (the line contact's and the gear's own: a crowned
     face, a valve tip), which governs the design: its column and its ratio to the allowable."""
-    stresses = {name: float(np.max(np.where(np.isfinite(v), v, np.inf)))
+    stresses = {name: float(np.max(v))
                 for name, v in columns.items() if name.startswith(prefix) and name.endswith(DYNAMIC_STRESSES)}
     name = max(stresses, key=stresses.get)
     return {f"{prefix}governing_hertz_stress": name,
@@ -192,7 +197,7 @@ def _governing(columns, spec: ContactSpec, prefix: str) -> dict:
 
 def _beyond(name: str, values: np.ndarray, theta_deg: np.ndarray, spec: ContactSpec, how: str) -> list[str]:
     """A warning when the stress column `name` exceeds the allowable (none otherwise)."""
-    i = int(np.argmax(np.where(np.isfinite(values), values, np.inf)))
+    i = int(np.argmax(values))
     if not values[i] > spec.allowable_stress:
         return []
     return [f"contact stress {how}{name} {values[i] / 1e6:.4g} MPa at cam angle {theta_deg[i]:.2f} deg exceeds the "
@@ -203,10 +208,7 @@ def contact_figures(ctx, cache) -> EffectOutput:
     """The contact effect's figures for sweeps: the rigid statics (a sweep row holds the rigid peak
     camshaft torque: the compiled sweep computes it at every speed from the rigid forces), without
     the dynamic pass, whose figures no row holds."""
-    scene = ctx.scene
-    spec: ContactSpec = scene.contact if scene.contact is not None else ContactSpec()
-    geometry = contact_geometry(ctx)
-    e_star = effective_modulus(spec.youngs_modulus, spec.poisson_ratio, spec.roller_youngs_modulus, spec.roller_poisson_ratio)
+    spec, geometry, e_star = _contact(ctx)
     columns, _, _, _ = _statics(ctx, geometry, spec, e_star, None, ctx.columns["contact_force_N"])
     torque = columns["camshaft_torque_Nm"]
     finite = np.where(np.isfinite(torque), torque, np.nan)

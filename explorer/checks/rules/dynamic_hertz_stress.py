@@ -45,7 +45,7 @@ def measure(case, settings) -> Measure:
     speeds = case.rule_speeds("dynamic_hertz_stress")
     peak = np.asarray(case.elastic(speeds)["peak_linkage_force_N"], dtype=float).reshape(-1)
     with np.errstate(invalid="ignore"):  # (one call for all the speeds: the gear's own stress is costly a call)
-        bounds = np.max(stress(case, contact, width, case.normal(peak[:, None] * np.ones(case.theta.size))), axis=1)
+        bounds = np.max(stress(case, contact, width, case.normal(peak[:, None])), axis=1)
     bounds = np.where(np.isnan(bounds), np.inf, bounds) * (1.0 + BOUND_SLACK)  # a run the engine refused: run it
     run: dict[int, tuple[float, float]] = {}
     best = -np.inf
@@ -58,7 +58,7 @@ def measure(case, settings) -> Measure:
             continue
         value, angle = reduce_angles(stress(case, contact, width, case.normal(force)), "max", case.theta_deg)
         run[int(j)] = (float(value), float(angle))
-        if value == value:
+        if not np.isnan(value):
             best = max(best, float(value))
     idx = np.array(sorted(run), dtype=int)
     limit, source = allowable(case, settings)
