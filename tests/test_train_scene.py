@@ -143,16 +143,17 @@ def test_finger_scene_pumps_up():
         sorted({str(math.floor(x)), str(math.ceil(x))}) for x in f / 80.0]
 
 
-def _finger_hand_frequencies(stop_stiffness: float = 0.0) -> np.ndarray:
+def _finger_hand_frequencies(stop_stiffness: float = 0.0, pr: float = 5.7e6) -> np.ndarray:
     """finger_hla_pumpup's running modes assembled by hand from its TOML (valve-referred, DOFs
     [valve s, finger q, plunger p]): the roller on the cam k_0 = 100 N/um / 1.7^2 compressed by
     S - q - g p (g = 0.7, the lever: the plunger going in lowers the finger's pivot), the pad
     k_1 = 150 N/um by q - s, the valve spring 40 N/mm on s (off its seat), the plunger spring
     5 N/mm and the shut chamber's oil column A^2 beta_e / V on p (beta_e the secant of 2 % air,
-    isothermal, from 3 bar to 100 bar gauge, oil 1.5 GPa); the finger 0.35 kg cm^2 / (40 mm)^2."""
+    isothermal, from 3 bar to the scene's reference_pressure pr, 5.7 MPa gauge, oil 1.5 GPa); the
+    finger 0.35 kg cm^2 / (40 mm)^2."""
     from scipy.linalg import eigh
 
-    atm, X, ps, pr = 101_325.0, 0.02, 0.3e6, 10e6
+    atm, X, ps = 101_325.0, 0.02, 0.3e6
     beta_e = (pr - ps) / ((1 - X) * (pr - ps) / 1.5e9 + X * (1 - (ps + atm) / (pr + atm)))
     oil = (math.pi * 0.012**2 / 4) ** 2 * beta_e / 200e-9
     k0, k1, kv, kp, g = 100e6 / 1.7**2, 150e6, 40e3, 5e3, 0.7
@@ -161,6 +162,36 @@ def _finger_hand_frequencies(stop_stiffness: float = 0.0) -> np.ndarray:
                   [0.0, k0 * g, k0 * g * g + kp + oil + stop_stiffness]])
     M = np.diag([0.05, 0.35e-4 / 0.04**2, 0.012])
     return np.sqrt(eigh(K, M, eigvals_only=True)) / (2 * math.pi)
+
+
+def test_a_secant_modulus_far_from_the_chambers_peak_warns():
+    # the linear chamber runs on the aerated oil's secant to hla.reference_pressure; the summary
+    # gives the secant to the chamber's peak as well, by the chord (hand: (p - p_s) over the oil's
+    # (1 - X)(p - p_s)/beta_l plus the air's X (1 - p_s,abs/p_abs), isothermal; 1e-12 rel), and
+    # the run warns when the two are more than 50 % apart. The scene sets 5.7 MPa, near its peak:
+    # no warning; the default 10 MPa: the secant 380 MPa against 243 MPa at the 5.69 MPa peak, +56 %
+    atm, X, ps = 101_325.0, 0.02, 0.3e6
+
+    def secant(p):
+        return (p - ps) / ((1 - X) * (p - ps) / 1.5e9 + X * (1 - (ps + atm) / (p + atm)))
+
+    for pr, warned in ((None, False), (10e6, True)):
+        r = simulate(load_scene(FINGER, [] if pr is None else [f'hla.reference_pressure="{pr / 1e6:g} MPa"']))
+        hla = r.summary["hla"]
+        peak = hla["chamber_pressure_max_Pa"]
+        assert hla["secant_modulus_at_peak_Pa"] == pytest.approx(secant(peak), rel=1e-12)
+        assert hla["effective_bulk_modulus_Pa"] == pytest.approx(secant(pr or 5.7e6), rel=1e-12)
+        lines = [w for w in r.warnings if w.startswith("the oil's modulus")]
+        assert bool(lines) is warned
+        if warned:
+            assert peak == pytest.approx(5.687e6, rel=1e-3)
+            assert "10 MPa (380 MPa)" in lines[0] and "5.69 MPa, where the secant is 243 MPa (+56 %)" in lines[0]
+        else:
+            assert abs(hla["effective_bulk_modulus_Pa"] / hla["secant_modulus_at_peak_Pa"] - 1.0) < 0.05
+    # oil without air has one modulus at every pressure: no secant to the peak, no warning
+    r = simulate(load_scene(FINGER, ["hla.aeration=0.0"]))
+    assert "secant_modulus_at_peak_Pa" not in r.summary["hla"]
+    assert not any(w.startswith("the oil's modulus") for w in r.warnings)
 
 
 def test_finger_train_modes_are_the_running_trains_hand_assembled():
@@ -173,8 +204,11 @@ def test_finger_train_modes_are_the_running_trains_hand_assembled():
     f = tr.natural_frequencies(tr.running_key())
     hand = _finger_hand_frequencies()
     np.testing.assert_allclose(f, hand, rtol=1e-12)
-    # the auditor's printed hand figures (0.1 Hz: 5e-5 rel)
-    np.testing.assert_allclose(f, [2528.4, 9277.5, 16863.4], rtol=5e-5)
+    # the auditor's printed hand figures, for the secant to the default 10 MPa (0.1 Hz: 5e-5 rel)
+    ten = replace(tr, hla=replace(tr.hla, reference_pressure=10e6))
+    np.testing.assert_allclose(ten.natural_frequencies(ten.running_key()), [2528.4, 9277.5, 16863.4], rtol=5e-5)
+    np.testing.assert_allclose(ten.natural_frequencies(ten.running_key()), _finger_hand_frequencies(pr=10e6),
+                               rtol=1e-12)
     # the stop's travel does not enter the running modes: without hla.travel the same, bit for bit
     text = FINGER.read_text()
     assert text.count("\ntravel = ") == 1
@@ -188,7 +222,7 @@ def test_finger_train_modes_are_the_running_trains_hand_assembled():
     assert on_stop.running_key()[0] == (True, True, True)
     stiff = _finger_hand_frequencies(1e8)
     np.testing.assert_allclose(on_stop.natural_frequencies(on_stop.running_key()), stiff, rtol=1e-12)
-    np.testing.assert_allclose(stiff[0], 3116.14, rtol=5e-6)
+    np.testing.assert_allclose(_finger_hand_frequencies(1e8, pr=10e6)[0], 3116.14, rtol=5e-6)  # with 10 MPa's secant
 
 
 def test_finger_scene_below_its_float_speed_seats_every_revolution():

@@ -34,10 +34,12 @@ Physics (all SI; the plunger's travel p is positive into the body, "collapse"):
               modulus 1 / ((1 - X) / beta_l + X p_s,abs^(1/n) / (n p_abs^(1 + 1/n))) rises from
               20 MPa at 3 bar to 1.1 GPa at 5.7 MPa with 2 % air). reference_pressure is an input
               (default 10 MPa), not fitted to the run: it should sit near the chamber's peak
-              pressure, which the summary reports (hla.chamber_pressure_max_Pa). In
-              finger_hla_pumpup the peak is 5.7 MPa against the default's 10 MPa: the secant to
-              5.7 MPa is 243 MPa against 380 MPa, the oil column 15.6 against 24.3 N/um, the train's
-              lowest mode 2256 against 2528 Hz (tests: test_secant_modulus_against_the_scenes_peak).
+              pressure, which the summary reports (hla.chamber_pressure_max_Pa, and the secant to
+              it, secant_modulus_at_peak_Pa; a run warns where the two secants are over 50 %
+              apart: effects/train_elastic.py). Run with the default 10 MPa, finger_hla_pumpup
+              peaked at 5.7 MPa: the secant to 5.7 MPa is 243 MPa against 380 MPa, the oil column
+              15.6 against 24.3 N/um, the train's lowest mode 2256 against 2528 Hz (tests:
+              test_secant_modulus_against_the_scenes_peak); the scene sets 5.7 MPa.
 Linearised about the chamber's volume V (the plunger's travel changes it by A p, a few per cent
 over a lift). Each phase (check valve shut / open) is linear, so the exact solver's closed forms
 apply: the chamber pressure is a first-order state of phase_system.py (Cap = V / beta_e, H = A on

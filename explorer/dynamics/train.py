@@ -570,7 +570,8 @@ class TrainModel:
         rest on the base circle (static_state): closed only if the plunger rests on it with a
         positive force there -- never with a positive hla.travel (the scene's rule), which puts
         the stop that far beyond the plunger's rest. Closing it anyway (1e8 N/m) made
-        finger_hla_pumpup's modes 3116 / 15958 / 17987 Hz instead of 2528 / 9277 / 16863 Hz."""
+        finger_hla_pumpup's modes 3116 / 15958 / 17987 Hz instead of 2528 / 9277 / 16863 Hz (with
+        the oil's secant to 10 MPa, before the scene set its reference pressure)."""
         load_path = len(self.joints)
         extra = [j for j in self.one_sided if j >= load_path]
         at_rest = {}
