@@ -30,7 +30,7 @@ from ..core.errors import InputError
 from ..effects.contact import DYNAMIC_SOURCE
 from ..effects.lift import build_lift
 from ..effects.pipeline import RunCache, figures, simulate
-from ..mechanics.contact import ContactSpec, effective_modulus, hertz_width
+from ..mechanics.contact import ContactSpec, WIDTH_RULE_WORDS, effective_modulus, hertz_width
 from ..mechanics.forces import friction_direction
 from ..mechanics.gear_contact import GearContact, NotApplicable
 from ..mechanics.kinematics import lash_crossings
@@ -218,7 +218,7 @@ class Case:
         force = np.where(is_open[0], self.scene.drive.omega ** 2 * a_coef[0] + g_part[0], 0.0)
         normal = self.normal(force)
         width, rule = hertz_width(normal, self.contact().geometry, spec, self.e_star)
-        return width, f"width rule {rule} at {self.scene.drive.rpm:g} rpm"
+        return width, f"{WIDTH_RULE_WORDS[rule]}, at {self.scene.drive.rpm:g} rpm"
 
     # -- elastic figures ----------------------------------------------------------------------
     def needs_linkage(self) -> None:

@@ -242,6 +242,13 @@ def self_locking_worst(margin, lift_rate) -> int:
     return int(np.argmin(np.where(lifting, margin, np.inf)))
 
 
+# hertz_width's rules (the summary's required_cam_width_rule) in words, for notes and tables
+WIDTH_RULE_WORDS = {
+    "P/(k D)": "seed 004's width rule b = P/(k D)",
+    "hertz allowable": "the width at which the Hertz stress reaches the allowable",
+}
+
+
 def hertz_width(normal, geometry: ContactGeometry, spec: ContactSpec, e_star: float) -> tuple[float, str]:
     """Required contact width and the rule that gave it: seed 004's b = P/(k D) on the largest
     normal force for a roller judged by seed 004's allowables (the engine's or the default);
