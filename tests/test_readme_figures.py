@@ -29,10 +29,29 @@ def test_the_float_speed_the_readme_quotes_is_the_computed_one():
 
 
 def test_the_readme_walkthrough_speeds_are_either_side_of_the_float_speed():
-    slow = float(_quoted(r"Type `(\d+)` into \*\*Camshaft rpm\*\*: the warning goes").group(1))
+    slow = float(_quoted(r"Type `(\d+)` into \*\*Camshaft rpm\*\*: the warning goes, but the elastic float "
+                         r"warning stays").group(1))
     fast = float(_quoted(r"it warns that (\d+) rpm is above the float speed").group(1))
     float_speed = explorer.simulate(explorer.load_scene(DEMO)).summary["jump_speed_rpm"]
     assert slow < float_speed < fast
+    # ... and the elastic valve floats there all the same (the float warning of the elastic effect)
+    result = explorer.simulate(explorer.load_scene(DEMO, [f"drive.rpm={slow:g}"]))
+    assert not any(w.startswith("valve float") for w in result.warnings)
+    assert any(w.startswith("elastic float") for w in result.warnings)
+
+
+def test_the_tutorials_elastic_float_figures_are_the_computed_ones():
+    text = " ".join((ROOT / "docs" / "tutorial.md").read_text(encoding="utf-8").split())
+    match = re.search(r"Type `(\d+)` into \*\*Camshaft rpm\*\* and pause: the float warning goes\. An elastic "
+                      r"float warning stays: .* loses the valve (\w+) times while it is open, from ([\d.]+)° on, "
+                      r"for ([\d.]+) ms in all", text)
+    assert match, "the tutorial no longer quotes the elastic float at the slow speed"
+    rpm, times, first, flight = match.groups()
+    s = explorer.simulate(explorer.load_scene(DEMO, [f"drive.rpm={rpm}"])).summary
+    words = {"two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7}
+    assert s["float_separations"] == words[times]
+    assert round(s["first_separation_deg"], 1) == float(first)
+    assert round(1e3 * s["float_flight_time_s"], 1) == float(flight)
 
 
 def test_the_elastic_lift_off_speed_the_readme_quotes_is_the_swept_one():

@@ -22,10 +22,10 @@ import math
 
 import numpy as np
 
-from ..dynamics.chain import CHAIN_EVENT_KINDS, FRICTION_EVENT_KINDS, ChainModel
+from ..dynamics.chain import CHAIN_EVENT_KINDS, FRICTION_EVENT_KINDS, ChainModel, continuous_frequencies
 from ..result import EffectOutput
 from .chain_run import chain_run
-from .elastic_events import linkage_outputs, output_order, revolution_events
+from .elastic_events import float_report, linkage_outputs, not_at_rest, output_order, revolution_events
 
 
 def exciting_orders(frequencies_hz: np.ndarray, omega: float, drive_values: np.ndarray, count: int = 3) -> list:
@@ -74,8 +74,11 @@ def chain_elastic_effect(ctx) -> EffectOutput:
     if clashes:
         warnings.append(f"coil clash: the spring reaches its solid height {len(clashes)} time(s), first at "
                         f"{clashes[0]['cam_angle_deg']:.2f} deg (the model goes on without the coils' contact)")
-    separations = [e.cam_angle_deg for e in events if e.kind == "separation"]
     motion, columns = linkage_outputs(s, v, a, jerk, force, ratio * force, deviation, contact, separated, events, kinds)
+    floats, float_warnings = float_report(ctx, s, events, period)
+    warnings.extend(float_warnings)
+    # (the elastic seat's phase, code 0: the valve on its seat; the run starts there at rest)
+    warnings.extend(not_at_rest(int(sol.phase[-1]) == 0, math.degrees(omega * float(t_run[0])) % 360.0))
     freqs = model.spring_modal_frequencies()
     summary = {
         "elastic_method": scene.solver.method,
@@ -84,11 +87,16 @@ def chain_elastic_effect(ctx) -> EffectOutput:
         "spring_mass_kg": model.spring_mass,
         "spring_elements": model.elements,
         "spring_modal_frequencies_Hz": [float(f) for f in freqs[:5]],
+        # the continuous spring's (j/2) sqrt(k/m_s), ends held, beside the chain's: their
+        # difference is the chain's discretisation (spring_surge, 8 masses: -0.5 % at the first
+        # mode, -12 % at the fifth)
+        "spring_continuous_frequencies_Hz": [float(f) for f in continuous_frequencies(
+            min(5, freqs.size), model.spring_rate, model.spring_mass)],
         "spring_modes_cam_orders": exciting_orders(freqs, omega, D[0]),
         "surge_amplitude_N": float(np.max(np.abs(retainer - static))),
         "peak_spring_force_retainer_N": float(retainer.max()),
-        "first_separation_deg": separations[0] if separations else None,
         **motion,
+        **floats,
         "elastic_solver": dict(sol.stats),
     }
     columns.update({

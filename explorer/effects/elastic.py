@@ -38,7 +38,7 @@ from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel, Stif
 from ..dynamics.solvers import solve
 from ..result import EffectOutput
 from .chain_elastic import chain_elastic_effect
-from .elastic_events import linkage_outputs, output_order, revolution_events
+from .elastic_events import float_report, linkage_outputs, not_at_rest, output_order, revolution_events
 from .residual import residual_figures
 
 
@@ -205,11 +205,7 @@ def elastic_effect(ctx) -> EffectOutput:
     if sol.phase is not None:
         phase = np.empty(n, dtype=np.int64)
         phase[back] = np.asarray(sol.phase)[:n]
-    if not (sol.s[-1] == 0.0 and sol.v[-1] == 0.0):
-        warnings.append(
-            "the valve has not come back to rest on its seat one revolution after the start angle "
-            f"({math.degrees(omega * t_run[0]) % 360.0:.3f} deg): the motion shown is not periodic"
-        )
+    warnings.extend(not_at_rest(sol.s[-1] == 0.0 and sol.v[-1] == 0.0, math.degrees(omega * t_run[0]) % 360.0))
 
     # Schenker's curve S - lash - W/k, with W the resistance the valve feels
     W = model.preload + model.closing_load + model.spring_rate * s + model.friction * np.where(v < 0.0, -1.0, 1.0)
@@ -226,12 +222,15 @@ def elastic_effect(ctx) -> EffectOutput:
     stats = {k: v for k, v in sol.stats.items() if k != "warnings"}
     if model.stiffness_profile is not None:
         stats["stiffness_min_N_m"], stats["stiffness_max_N_m"] = model.stiffness_profile.bounds()
+    floats, float_warnings = float_report(ctx, s, events, period)
+    warnings.extend(float_warnings)
     summary = {
         "elastic_method": method,
         "elastic_natural_period_s": model.natural_period(),
         "elastic_steps_per_natural_period": model.natural_period() / (period / n),
         "lift_off_compression_m": (model.seated_resistance + model.friction) / _stiffness_at_lift_off(model, events),
         **motion,
+        **floats,
         **residual_figures(ctx.lift, ratio, model, ctx.theta, s, v),
         "elastic_solver": stats,
     }

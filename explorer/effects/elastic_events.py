@@ -73,6 +73,45 @@ def linkage_outputs(s, v, a, jerk, force, back_pressure, deviation, contact, sep
     return summary, columns
 
 
+def not_at_rest(on_seat_at_end: bool, start_deg: float) -> list[str]:
+    """The warning of a run whose valve is not back on its seat one revolution after it started
+    there (the run begins at rest on the seat at the drive's lowest point): what it shows is one
+    revolution of a motion that has not closed on itself, not the periodic motion."""
+    if on_seat_at_end:
+        return []
+    return ["the valve has not come back to rest on its seat one revolution after the start angle "
+            f"({start_deg:.3f} deg): the motion shown is not periodic"]
+
+
+FLOAT_KINDS = ("separation", "re-contact", "seat")  # the events valve_periods walks
+
+
+def float_report(ctx, lift, events: list[Event], period: float) -> tuple[dict, list[str]]:
+    """(summary entries, warnings) of the elastic valve's float in the reported revolution: the
+    separations while it is open, as the sweep counts them (valve_periods on the rigid valve's
+    columns), the first one's cam angle and the float's flight time; a warning when it floats, which
+    says whether the rigid train would keep contact at this speed (the forces effect's float speed:
+    below it, the float is the train's vibration, not the inertia over the nose)."""
+    periods = valve_periods(ctx.time, lift, ctx.columns["rigid_valve_lift_m"], ctx.columns["rigid_valve_velocity_m_s"],
+                            [e for e in events if e.kind in FLOAT_KINDS], period)
+    floats = periods.floats
+    summary = {
+        "first_separation_deg": float(floats[0].cam_angle_deg) if floats else None,
+        "float_separations": len(floats),
+        "float_flight_time_s": periods.flight_s,
+    }
+    warnings = []
+    if floats:
+        text = (f"elastic float: contact with the cam is lost {len(floats)} time(s) while the valve is open, first "
+                f"at {floats[0].cam_angle_deg:.1f} deg, {1e3 * periods.flight_s:.3g} ms in flight")
+        jump = ctx.summary.get("jump_speed_rpm")
+        if jump is not None and ctx.scene.drive.rpm < jump:
+            text += (f"; below the rigid train's float speed ({jump:.0f} rpm): the train's vibration throws it off, "
+                     "not the inertia over the nose")
+        warnings.append(text)
+    return summary, warnings
+
+
 def elastic_row(result) -> dict[str, float]:
     """A sweep row's elastic figures from a run (its summary, events in time order and columns; the
     lash effect's take-up events give the lift-off delay). The separations counted are the valve's

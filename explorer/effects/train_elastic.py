@@ -37,7 +37,7 @@ from ..dynamics.train import TrainModel
 from ..result import EffectOutput, Event
 from .chain_elastic import exciting_orders
 from .chain_run import chain_run
-from .elastic_events import linkage_outputs, output_order
+from .elastic_events import float_report, linkage_outputs, not_at_rest, output_order
 
 # how far (relative) the oil's secant modulus to hla.reference_pressure may sit from the secant to
 # the chamber's peak before the run warns: the oil column's stiffness is off by as much, its own
@@ -102,6 +102,8 @@ def train_elastic_effect(ctx) -> EffectOutput:
                     key=lambda e: e.time_s)
     motion, columns = linkage_outputs(s, v, a, jerk, force, ratio * force, deviation, contact, separated, events,
                                       TRAIN_KINDS)
+    floats, float_warnings = float_report(ctx, s, events, period)
+    warnings.extend(float_warnings)
     columns["valve_phase"] = phase
     columns["seat_force_N"] = col(sol.seat_force)
     retainer = col(sol.retainer_force)
@@ -141,6 +143,7 @@ def train_elastic_effect(ctx) -> EffectOutput:
         "contact_openings": counts,
         "contact_first_opening_deg": first,
         **motion,
+        **floats,
         "elastic_solver": dict(sol.stats),
     }
     clashes = [e for e in events if e.kind == "coil-clash"]
@@ -157,6 +160,8 @@ def train_elastic_effect(ctx) -> EffectOutput:
         columns["hla_plunger_travel_m"] = col(sol.plunger) - p_rest
         columns["hla_chamber_pressure_Pa"] = col(sol.chamber_pressure)
         columns["hla_check_valve_open"] = col(sol.check_open)
+    if not summary.get("hla", {}).get("pump_up"):  # (pump-up has its own warning: the valve held off its seat)
+        warnings.extend(not_at_rest(int(np.asarray(sol.phase)[-1]) == 0, math.degrees(omega * float(t_run[0])) % 360.0))
     return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
 
 
