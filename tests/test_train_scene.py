@@ -139,7 +139,7 @@ def test_finger_scene_pumps_up():
     assert r.summary["train_natural_frequencies_Hz"] == pytest.approx(f, rel=1e-11)
     orders = r.summary["train_modes_cam_orders"]
     assert [m["cam_order"] for m in orders] == pytest.approx(f / 80.0, rel=1e-11)
-    assert [sorted(m["exciting_orders"]) for m in orders] == [
+    assert [sorted(m["exciting_accel_m_s2"]) for m in orders] == [
         sorted({str(math.floor(x)), str(math.ceil(x))}) for x in f / 80.0]
 
 

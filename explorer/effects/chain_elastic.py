@@ -29,8 +29,13 @@ from .elastic_events import float_report, linkage_outputs, not_at_rest, output_o
 
 
 def exciting_orders(frequencies_hz: np.ndarray, omega: float, drive_values: np.ndarray, count: int = 3) -> list:
-    """Per mode: its frequency as a cam order (f / camshaft frequency) and the drive's harmonic
-    amplitudes at the integer orders around it (the cam orders that excite it)."""
+    """Per mode: its frequency as a cam order (f / camshaft frequency) and the drive's acceleration
+    harmonics at the integer orders around it (the cam orders that excite it), amplitudes in m/s^2.
+
+    The acceleration, not the displacement: a mode driven through its base feels m times the base's
+    acceleration (m z'' + c z' + k z = -m y''), which is also what `explorer spectrum` reports. Each
+    is (k omega)^2 times the displacement's Fourier amplitude (exact for a periodic drive: the FFT
+    of the sampled displacement, smooth, aliases far less than that of an acceleration with jumps)."""
     f_cam = omega / (2.0 * math.pi)
     S = np.asarray(drive_values, dtype=float)
     spectrum = np.abs(np.fft.rfft(S)) * 2.0 / S.size
@@ -40,7 +45,7 @@ def exciting_orders(frequencies_hz: np.ndarray, omega: float, drive_values: np.n
         near = [int(math.floor(order)), int(math.ceil(order))]
         near = sorted({k for k in near if 1 <= k < spectrum.size})
         out.append({"frequency_Hz": float(f), "cam_order": float(order),
-                    "exciting_orders": {str(k): float(spectrum[k]) for k in near}})
+                    "exciting_accel_m_s2": {str(k): float((k * omega) ** 2 * spectrum[k]) for k in near}})
     return out
 
 
