@@ -225,3 +225,38 @@ def test_the_scene_file_holds_the_arcs_the_design_gives():
 
     scene = Path(__file__).resolve().parents[1] / "assets" / "scenes" / "schenker1902_fig2.toml"
     assert toml_arcs().strip() in scene.read_text()
+
+
+def test_the_summary_lists_where_the_cams_acceleration_jumps(figures):
+    """Schenker's lesson: where two arcs meet the acceleration jumps (the jerk unbounded there,
+    whatever the samples' max_abs_valve_jerk_m_s3 says). The summary's valve_accel_jumps gives
+    each junction's one-sided limits; the oracle is each arc's own formula at the junction
+    (fig2.figures: arc_candidate, exact), 1e-8 rel (the summary's limits are taken 1e-12 rad
+    either side: the jerk moves them by ~1e-10 rel). At F -116.99 -> +158.99 m/s^2, the paper's
+    -117 / +159; before D his p1 = -35; E starts the return's arc at -57.42."""
+    jumps = simulate(load_scene(SCENE)).summary["valve_accel_jumps"]
+    at = {round(j["cam_angle_deg"], 3): (j["before_m_s2"], j["after_m_s2"]) for j in jumps}
+    f = max(at, key=lambda x: at[x][1] - at[x][0])  # the largest upward jump
+    assert at[f][0] == pytest.approx(figures["a_before_F"], rel=1e-8)
+    assert at[f][1] == pytest.approx(figures["a_after_F"], rel=1e-8)
+    assert (round(at[f][0]), round(at[f][1])) == (-117, 159)
+    d = [x for x in at if at[x][0] == pytest.approx(figures["a_before_D"], rel=1e-8) and at[x][1] == 0.0]
+    e = [x for x in at if at[x][0] == 0.0 and at[x][1] == pytest.approx(figures["a_after_E"], rel=1e-8)]
+    assert len(d) == 1 and len(e) == 1 and round(figures["a_before_D"]) == -35
+    assert len(jumps) == 5  # the five junctions on the open valve where the curvature changes
+
+
+def test_a_smooth_law_has_no_jump_and_a_harmonic_cam_has_two():
+    # cycloidal: acceleration continuous everywhere (its jerk jumps): none listed. The harmonic
+    # law's acceleration jumps from 0 to h pi^2 / (2 beta^2) w^2 where the rise starts and back
+    # from there to 0 where the return ends (at the nose, rise into return without a dwell, it is
+    # continuous); with no lash the valve sees both: closed form, 1e-9 rel
+    path = SCENES / "cycloidal_demo.toml"
+    assert simulate(load_scene(path)).summary["valve_accel_jumps"] == []
+    scene = load_scene(path, ['lift.law="harmonic"', 'valve.lash="0 mm"', 'effects=["kinematics"]'])
+    jumps = simulate(scene).summary["valve_accel_jumps"]
+    h, beta, w = 10.3e-3, math.radians(70.0), scene.drive.omega
+    edge = h * math.pi**2 / (2.0 * beta**2) * w**2
+    assert [round(j["cam_angle_deg"], 9) for j in jumps] == [20.0, 160.0]
+    assert jumps[0]["before_m_s2"] == 0.0 and jumps[0]["after_m_s2"] == pytest.approx(edge, rel=1e-9)
+    assert jumps[1]["before_m_s2"] == pytest.approx(edge, rel=1e-9) and jumps[1]["after_m_s2"] == 0.0

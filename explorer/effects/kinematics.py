@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ..core.memo import remember
-from ..mechanics.kinematics import lash_crossings, open_angle, valve_extremes
+from ..mechanics.kinematics import accel_jumps, lash_crossings, open_angle, valve_extremes
 from ..result import EffectOutput, Event
 
 
@@ -63,6 +63,10 @@ def _kinematics(ctx, exact: bool) -> EffectOutput:
             "min_valve_accel_m_s2": a_min,
             "max_abs_valve_jerk_m_s3": float(np.abs(valve["valve_jerk_m_s3"]).max()),
             "valve_open_angle_deg": math.degrees(open_angle(ups, downs, bool(is_open.all()))),
+            # where the cam's acceleration jumps (the jerk unbounded there), one-sided limits
+            "valve_accel_jumps": [
+                {"cam_angle_deg": math.degrees(x), "before_m_s2": before, "after_m_s2": after}
+                for x, before, after in accel_jumps(ctx.lift, ratio, lash, ratio * w**2, max(abs(a_max), abs(a_min)))],
         })
     # the gear's own figures (a translating roller's pressure angle and radii of curvature; InputError
     # when its cam fails the validity checks of every cam, explorer.lift.validity)

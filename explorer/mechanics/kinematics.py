@@ -224,3 +224,37 @@ def lash_take_ups(lift, ratio: float, lashes, n_grid: int = 4096) -> np.ndarray:
         steps += levels
     root = np.where(at_a, a, 0.5 * (lo + hi))
     return np.where(has, np.fmod(root, 2.0 * math.pi), np.nan)
+
+
+JUMP_TOLERANCE = 1e-6  # of the valve's largest |acceleration|: a smaller step is a smooth joint's round-off
+OPEN_PROBE = 1e-6  # rad either side of a breakpoint where accel_jumps asks whether the valve is open
+
+
+def accel_jumps(lift, ratio: float, lash: float, scale: float, peak: float) -> list[tuple[float, float, float]]:
+    """(angle rad, before, after) at each breakpoint of the lift where the open valve's
+    acceleration (scale L'', scale = ratio omega^2) jumps: its one-sided limits there (ONE_SIDED
+    either side; 0 on a side where the valve is closed), where they differ by more than
+    JUMP_TOLERANCE of `peak` (the largest |acceleration|). Schenker's lesson (1902): where two
+    circular arcs of a cam meet, the acceleration jumps (his Fig. 2 at F: -117 -> +159 m/s^2), and
+    there the jerk is unbounded, whatever the samples' jerk says. The valve's own jumps at the lash
+    take-up and seating (from 0 to the follower's) are the impact's, not the cam's: not listed,
+    unless one falls on a breakpoint (no lash: the valve leaves its seat where the rise begins, and
+    a harmonic rise's acceleration jumps there from 0)."""
+    marks = np.unique(np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI))
+    if not marks.size:
+        return []
+    sides = np.concatenate([marks - ONE_SIDED, marks + ONE_SIDED])
+    # open on a side: a micro-radian in (with no lash the valve leaves its seat at a rise's first
+    # breakpoint, where 1 - cos of 1e-12 rad is 0 in floats)
+    probe = lift_rows(lift, np.concatenate([marks - OPEN_PROBE, marks + OPEN_PROBE]), (0,))[0]
+    is_open = ratio * probe - lash > 0.0
+    accel = np.where(is_open, scale * lift_rows(lift, sides, (2,))[0], 0.0)
+    n = marks.size
+    out = []
+    for i in range(n):
+        if not (is_open[i] or is_open[n + i]):
+            continue
+        before, after = float(accel[i]), float(accel[n + i])
+        if abs(after - before) > JUMP_TOLERANCE * peak:
+            out.append((float(marks[i]), before, after))
+    return out
