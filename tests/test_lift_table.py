@@ -238,3 +238,34 @@ def test_cross_validation_does_not_degenerate_towards_interpolation():
     for row in study.rows:
         assert row.relative_velocity_error < 0.03, row
         assert row.relative_accel_error < 0.40, row
+
+
+@pytest.mark.parametrize("slip_mm, flagged", [(0.0, False), (0.05, True), (0.5, True), (5.0, True)])
+def test_a_gross_error_in_the_table_is_named(tmp_path, slip_mm, flagged):
+    # the audit's case: 5 mm added at 90 deg to the shipped 1-degree table (0.005 mm gauge noise)
+    # passed without a warning (the rms rule, 5 % of the peak, never fired) while the smoothing bent
+    # the peak lift 3.8 % and the peak acceleration 6 %. The robust scale: 1.4826 x the residuals'
+    # median absolute deviation (by hand here), a sample beyond 8 of them is named; the clean table's
+    # worst is 2.7 (no warning), a 0.05 mm slip (10x the noise) is 9
+    rows = [line for line in (SCENES.parent / "data" / "measured_lift.csv").read_text().splitlines()
+            if line and (line[0].isdigit() or line[0] == "-")]  # (no comments, no header)
+    angles, lifts = (np.array(c) for c in zip(*[(float(a), float(b)) for a, b in (r.split(",")[:2] for r in rows)]))
+    lifts[np.isclose(angles, 90.0)] += slip_mm
+    table = tmp_path / "slip.csv"
+    table.write_text("".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(angles, lifts)))
+    text = (SCENES / "table_demo.toml").read_text().replace("../data/measured_lift.csv", str(table))
+    (tmp_path / "scene.toml").write_text(text)
+    r = simulate(load_scene(tmp_path / "scene.toml"))
+    fit = fit_periodic_spline(np.radians(angles), 1e-3 * lifts)
+    residual = 1e-3 * lifts - fit.derivatives(np.radians(angles))[0]
+    sigma = 1.4826 * np.median(np.abs(residual - np.median(residual)))
+    i = int(np.argmax(np.abs(residual)))
+    assert r.summary["table_max_residual_m"] == residual[i]
+    assert r.summary["table_max_residual_angle_deg"] == pytest.approx(angles[i], abs=1e-12)
+    named = [w for w in r.warnings if "robust standard deviations" in w]
+    assert bool(named) is flagged
+    if flagged:
+        assert angles[i] == 90.0 and f"by {1e3 * residual[i]:+.3g} mm" in named[0]
+        assert f"{int(np.count_nonzero(np.abs(residual) > 8 * sigma))} sample(s)" in named[0]
+    else:
+        assert np.abs(residual).max() < 3 * sigma
