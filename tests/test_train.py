@@ -141,14 +141,17 @@ def test_energy_balance_over_a_revolution_without_damping():
     # a lifter and a rocker, undamped joints (the cam one-sided, the pad one-sided), an undamped
     # massless spring; only the seat damps. The change of the train's energy (kinetic, closed
     # joints, spring, seat) equals the work of the cam's force on the drive's motion and of the
-    # constant loads minus the seat damper's loss. Trapezoid rule on 36 000 steps (the seat
-    # damper's force jumps at each seat crossing: first order there); bound 1e-3 of the energy
-    # turned over
+    # constant loads minus the seat damper's loss, and minus the energy (c v)^2 / (2 k) the seat
+    # keeps where it lets go (its force 0, still compressed by c v / k: the massless seat's own,
+    # its damper takes it as it relaxes; 0.02 J at this 7 m/s rebound, 1 % of the energy turned
+    # over). Trapezoid rule on 144 000 steps (the seat damper's power c v^2 jumps at each seat
+    # impact and release: first order there, measured 1.5e-3, 7.9e-4, 2.3e-4 of the energy turned
+    # over on 36 000, 72 000, 144 000 steps; 8.5e-3 without the seat's released energy); bound 1e-3
     rpm = 4200
     tr = TrainModel(_valve(damping=0.0, spring_mass=0.0, lash=0.0),
                     (Part("lifter", 0.04), Part("rocker", 0.03)),
                     (Joint("cam", 4e7, 0.0, 0.2e-3), Joint("pushrod", 2e7, 0.0, one_sided=False), Joint("pad", 5e7)))
-    t = _grid(rpm, 36000)
+    t = _grid(rpm, 144000)
     drive = _drive(rpm)
     sol = chain_exact.solve(tr, drive, t)
     kinds = {(e["kind"], e.get("contact")) for e in sol.events}
@@ -165,6 +168,9 @@ def test_energy_balance_over_a_revolution_without_damping():
     power = (sol.joint_forces["cam"] * D[1] - (c.preload + c.closing_load) * sol.v
              - np.where(seat, c.seat_damping * sol.v**2, 0.0))
     work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(t))])
+    for e in sol.events:
+        if e["kind"] == "lift-off":
+            work[t > e["time_s"]] -= 0.5 * (c.seat_damping * e["velocity_m_s"]) ** 2 / c.seat_stiffness
     scale = np.max(np.abs(E - E[0]))
     assert np.max(np.abs(E - E[0] - work)) < 1e-3 * scale, np.max(np.abs(E - E[0] - work)) / scale
 
