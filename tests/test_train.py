@@ -363,8 +363,8 @@ def test_pushrod_train_rattling_in_its_lash_matches_scipy():
     # the pushrod scene's lifter and rocker (the pushrod in series with the rocker's cup) with the
     # lash at the valve tip: after the valve seats, the lifter and the rocker rattle in the lash --
     # the cam contact, the rocker's cup and the pad open and close, parts fly free of both
-    # neighbours (their rigid-body modes) -- 54 events, every one as scipy finds it; measured
-    # 7e-13 m over the revolution
+    # neighbours (their rigid-body modes) -- 56 events, every one as scipy finds it; measured
+    # 4.8e-13 m over the revolution
     scene = load_scene(scenes_dir() / "pushrod_train.toml")
     els = scene.linkage.elements
     series = 1.0 / (1.0 / els[1].stiffness + 1.0 / els[2].stiffness)
@@ -387,7 +387,7 @@ def test_parts_with_the_spring_as_a_chain_match_scipy():
     # issue #25 item 1, "the spring's chain where the scene asks for it": a lifter and a rocker on
     # a valve whose spring is 8 coil masses that clash; the cam contact (with its lash) opens and
     # closes -- the exact solver against scipy DOP853 at rtol 1e-11 on the same model, 48 events;
-    # measured 2.1e-12 m in the lift and the coils. (With the pad one-sided as well the parts
+    # measured 4.9e-12 m in the lift and the coils. (With the pad one-sided as well the parts
     # rattle in the lash after the valve seats, ~100 events at grazing contacts that amplify
     # scipy's own error: 1.7e-5, 4.2e-6, 1.3e-7, 2.5e-9 m at rtol 1e-10 ... 1e-13, converging on
     # the exact solution; test_pushrod_train_rattling_in_its_lash_matches_scipy is a rattling case
