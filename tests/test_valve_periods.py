@@ -268,11 +268,13 @@ def test_pushrod_train_floats_at_the_nose_not_on_the_base_circle():
 
 # the audit's scenes: largest_bounce_m (and float counts) at their own speeds, each bounce equal to
 # the valve's highest lift in the CSV after the first seat impact (before the next opening, which
-# the revolution does not reach again after 0 deg in these scenes)
+# the revolution does not reach again after 0 deg in these scenes). The elastic seat letting go
+# where its force falls to 0 (not at s = 0, its damper pulling) raised spring_surge's from
+# 158.82 um and pushrod_train's from 8.400 um (docs/theory/spring-chain.md)
 AUDIT = {
-    "spring_surge": (1.588213655657458e-04, 14, 2),
+    "spring_surge": (1.600324122676291e-04, 14, 2),
     "elastic_float": (1.0875441457495925e-03, 10, 3),
-    "pushrod_train": (8.39963887967427e-06, 5, 0),
+    "pushrod_train": (8.523676813506128e-06, 5, 0),
 }
 
 

@@ -12,9 +12,11 @@ lift direction), u_1 next to the retainer, u_N next to the seat. Element j (0..N
 by x_j - x_{j+1} beyond its installed state (x_{N+1} = 0, the seat). Equations:
     M x'' + C x' + K x = f(t)
 with K the chain's stiffness, plus the linkage's k_l on s while the linkage is loaded (contact:
-force k_l (S - lash - s) + c_l (S' - s') > 0) and the seat's k_seat on s while the valve is below
-its seat (s < 0, force -k_seat s - c_seat s', a Kelvin-Voigt seat: with damping it may pull a
-little as the valve leaves). f holds preload and closing loads on the valve and the drive.
+force k_l (S - lash - s) + c_l (S' - s') > 0) and the seat's k_seat on s while it is engaged
+(a Kelvin-Voigt seat, force -k_seat s - c_seat s' >= 0: engaged where the valve comes down
+through s = 0, released where that force falls to 0 -- with damping a little below s = 0, as a
+seat cannot pull -- and engaged again where it turns positive while the valve is still below
+s = 0: chain_exact.seat_events). f holds preload and closing loads on the valve and the drive.
 The spring's own damping: modal damping ratio zeta on the chain's modes relative to its
 quasi-static shape (u_j = s (1 - j/(N+1))), so the quasi-static compression is not damped and
 each mode of the chain with its ends held has exactly the ratio zeta.

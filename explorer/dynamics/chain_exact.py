@@ -16,8 +16,9 @@ with the phi functions of exponential integrators (series for |lambda h| < 1, th
 beyond). A run of steps is the affine recurrence z_(j+1) = E_j z_j + Q_j (|E| <= 1, so no
 growth), E and the phi tables once per phase type and step length.
 
-Events (separation, re-contact, lift-off, seat, coil clash; with friction the valve's velocity
-reaching 0 and the held valve's release) are zero crossings of functions
+Events (separation, re-contact, lift-off and seat -- the seat's force falling to 0, the lift
+falling through 0 or the seat's force turning positive below it --, coil clash; with friction the
+valve's velocity reaching 0 and the held valve's release) are zero crossings of functions
 linear in y and the drive, g = a.y + alpha S + beta S' + g0. A step is certified free of a
 crossing by bounds: g(tau) >= g(0) + g'(0) tau - M2 tau^2 / 2 from the left and the same from the
 right, with M2 >= |g''| over the step from |z_i''(tau)| <= |z_i''(0)| + tau max|Gamma_i''|
@@ -156,10 +157,8 @@ class ChainPhases:
             coef, alpha, beta, const = m.net_force_row(contact, seat)
             ev.append(Event("release", coef, alpha, beta, const - m.friction, +1.0, index=+1))
             ev.append(Event("release", coef, alpha, beta, const + m.friction, -1.0, index=-1))
-        elif seat:
-            ev.append(Event("lift-off", e_s, 0.0, 0.0, 0.0, +1.0))
         else:
-            ev.append(Event("seat", e_s, 0.0, 0.0, 0.0, -1.0, guard=True))
+            ev.extend(seat_events(m, 2 * n, n, seat))
         if mode != 0 and m.friction > 0.0:  # the velocity reaches 0: the valve sticks or turns
             ev.append(Event("velocity-zero", -mode * e_v, 0.0, 0.0, 0.0, +1.0))
         if math.isfinite(m.clash_compression):
@@ -174,13 +173,17 @@ class ChainPhases:
     def apply_event(self, key, e: Event, y: np.ndarray, S: float, S1: float) -> Transition:
         kind = e.kind
         contact, seat, mode = key
+        if kind == "seat-force":
+            if not seat_closes(y):
+                return Transition(None, key, y)
+            kind = "seat"
         if kind == "velocity-zero":
             kind, mode = stick_or_turn(self.model, y, S, S1, contact, seat)
             y[self.n] = 0.0  # (a rounding away from 0)
         elif kind == "release":
             mode = e.index
         item = {"kind": kind}
-        if kind == "seat":
+        if kind in ("seat", "lift-off"):  # the impact speed; the speed the valve leaves with
             item["velocity_m_s"] = float(y[self.n])
         if kind == "coil-clash":
             item["element"] = e.index
@@ -445,6 +448,43 @@ def start_state(model: ChainModel, drive, t0: float):
     D = np.asarray(drive(np.array([t0])), dtype=float)[:, 0]
     x, contact, seat = static_equilibrium(model, float(D[0]), float(D[1]))
     return x, np.zeros_like(x), (contact, seat, 0 if model.friction > 0.0 else 1)
+
+
+def seat_events(model: ChainModel, size: int, n: int, seat: bool) -> list[Event]:
+    """The elastic seat's event functions for a moving valve (lift s = y[0], velocity v = y[n], a
+    state of `size`), as the train's one-sided joints open and close (train.py): the seat carries
+    F = -k_seat s - c_seat v only while F >= 0 (it cannot pull).
+    Engaged: "lift-off" where F falls to 0 -- below s = 0 (s = -c v / k) when the valve leaves
+    with a damped seat; for an undamped one F = -k s falls to 0 where s rises through 0, and the
+    function is the lift row itself (the arithmetic the undamped seat's results were made with).
+    Open: "seat" where s falls through 0, and with damping "seat-force" where the force it would
+    carry turns positive: the valve released below its seat (s < 0) and slowing down closes it
+    again there, before it could turn round below s = 0 and fly through it (seat_closes: above the
+    seat that crossing is the damper's pull on a valve still in the air, and nothing happens). Both
+    are guards: the scipy reference restarts at their turning points (the apex; the force's least
+    value), or a hop or a dip of F below 0 shorter than its step (a valve released at 8 mm/s is
+    back on its seat 1.4 us later) would go unseen."""
+    e_s = np.zeros(size)
+    e_s[0] = 1.0
+    k, c = model.seat_stiffness, model.seat_damping
+    if c > 0.0:
+        force = np.zeros(size)
+        force[0], force[n] = -k, -c
+    if seat:
+        if c > 0.0:
+            return [Event("lift-off", force, 0.0, 0.0, 0.0, -1.0)]
+        return [Event("lift-off", e_s, 0.0, 0.0, 0.0, +1.0)]
+    ev = [Event("seat", e_s, 0.0, 0.0, 0.0, -1.0, guard=True)]
+    if c > 0.0:
+        ev.append(Event("seat-force", force, 0.0, 0.0, 0.0, +1.0, guard=True))
+    return ev
+
+
+def seat_closes(y: np.ndarray) -> bool:
+    """At a "seat-force" crossing (the open seat's force -k s - c v turning positive): True where
+    the valve is on or below its seat (s <= 0: the seat closes with F = 0), False above it (the
+    gap is open: no contact)."""
+    return bool(y[0] <= 0.0)
 
 
 def stick_or_turn(model: ChainModel, y: np.ndarray, S: float, S1: float, contact: bool, seat: bool):

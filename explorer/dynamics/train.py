@@ -19,7 +19,9 @@ carries load only while closed (f > 0: it separates where f falls to 0, closes a
 delta rises through 0, as the linkage of model.py, or -- damped, in a train with parts -- where
 the force it would carry turns positive while delta is still > 0: a part pushed back within the
 remainder a damped separation leaves); a bonded one always. The seat is one-sided
-at the valve (chain.py's elastic seat), the spring acts on the valve, Coulomb friction on the
+at the valve (chain.py's elastic seat, the same rules: released where its force falls to 0,
+closed again where s falls through 0 or, still below it, where its force turns positive:
+chain_exact.seat_events), the spring acts on the valve, Coulomb friction on the
 valve as in chain.py. The adjuster's chamber pressure P is a first-order state (hla.py):
     m_p p'' = (g f_0) - A P - F_0 - k_s p,      (V / beta_e) P' = A p' - G_l (P - P_s) [+ G_r (P_s - P_c - P)]
 the bracket while its check valve is open.
@@ -46,7 +48,7 @@ from functools import cached_property
 import numpy as np
 
 from .chain import ChainModel
-from .chain_exact import STRUCTURED_FROM, valve_derivatives
+from .chain_exact import STRUCTURED_FROM, seat_closes, seat_events, valve_derivatives
 from .chain_kernels import NOISE
 from .chain_modes import chain_phase_modes
 from .hla import HLA
@@ -383,10 +385,8 @@ class TrainModel:
             coef, alpha, beta, const = self.net_force_row(key)
             ev.append(Event("release", coef, alpha, beta, const - c.friction, +1.0, index=+1))
             ev.append(Event("release", coef, alpha, beta, const + c.friction, -1.0, index=-1))
-        elif seat:
-            ev.append(Event("lift-off", e_s, 0.0, 0.0, 0.0, +1.0))
         else:
-            ev.append(Event("seat", e_s, 0.0, 0.0, 0.0, -1.0, guard=True))
+            ev.extend(seat_events(c, self.size, n, seat))
         if mode != 0 and c.friction > 0.0:
             ev.append(Event("velocity-zero", -mode * e_v, 0.0, 0.0, 0.0, +1.0))
         if self.hla is not None:
@@ -408,6 +408,10 @@ class TrainModel:
         contacts, seat, mode, check = key
         kind = e.kind
         n = self.n
+        if kind == "seat-force":
+            if not seat_closes(y):
+                return Transition(None, key, y)
+            kind = "seat"
         item: dict = {"kind": kind}
         if kind == "re-contact-force":
             gap, _ = self.joint_rows(e.index)
@@ -436,6 +440,7 @@ class TrainModel:
             mode = e.index
         elif kind == "lift-off":
             seat = False
+            item["velocity_m_s"] = float(y[n])  # the speed the valve leaves its seat with
         elif kind == "seat":
             seat = True
             item["velocity_m_s"] = float(y[n])
