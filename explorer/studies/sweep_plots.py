@@ -125,17 +125,33 @@ def histograms_png(table) -> bytes:
         for j in range(len(figs), rows * cols):
             grid[j // cols][j % cols].axis("off")
         title = _title(table)
-        if "separations" in table.columns and len(table):
-            share = float(np.mean(np.asarray(table.columns["separations"]) > 0))
-            title += f"\n{100.0 * share:.2f} % of the runs separate"
+        share = separating_share(table)
+        if share is not None:
+            title += f"\n{share_text(table, share)}"
         fig.suptitle(title, fontsize=10)
         return png(fig)
 
 
 def separating_share(table) -> float | None:
+    """The share of the runs that finished (a failed run's figures are NaN: it neither separates
+    nor stays seated) whose valve separates; None without the column or a finished run."""
     if "separations" not in table.columns or len(table) == 0:
         return None
-    return float(np.mean(np.asarray(table.columns["separations"]) > 0))
+    sep = np.asarray(table.columns["separations"], float)
+    finished = np.isfinite(sep)
+    if not finished.any():
+        return None
+    return float(np.mean(sep[finished] > 0))
+
+
+def failed_runs(table) -> int:
+    return int(np.sum(np.asarray(table.columns["run_failed"]))) if "run_failed" in table.columns else 0
+
+
+def share_text(table, share: float) -> str:
+    failed = failed_runs(table)
+    text = f"{100.0 * share:.2f} % of the runs separate"
+    return text + (f" (of {len(table) - failed} finished; {failed} failed)" if failed else "")
 
 
 def _title(table) -> str:

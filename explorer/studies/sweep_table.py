@@ -23,7 +23,9 @@ from ..core.errors import InputError
 from ..core.outputs import as_output, write_output
 
 FORMATS = (".parquet", ".csv")
-# integer-valued figures, stored as integers (counts, the run index, the failure flag)
+# integer-valued figures, stored as integers (counts, the run index, the failure flag); a count
+# column with a failed run's NaN in it stays float so the failure reads NaN in every format
+# (a cast would make it int64's minimum, -9223372036854775808)
 INTEGER_COLUMNS = frozenset({"run", "separations", "seat_impacts", "run_failed"})
 
 
@@ -40,7 +42,7 @@ class SweepTable:
         frozen = {}
         for name, values in columns.items():
             arr = np.asarray(values)
-            if name in INTEGER_COLUMNS and arr.dtype.kind == "f":
+            if name in INTEGER_COLUMNS and arr.dtype.kind == "f" and not np.isnan(arr).any():
                 arr = arr.astype(np.int64)
             arr.setflags(write=False)
             frozen[name] = arr
