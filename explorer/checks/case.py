@@ -55,8 +55,11 @@ class Draws:
 
 class Case:
     def __init__(self, scene, speeds_rpm, draws: Draws | None = None, focus: dict | None = None,
-                 workers: int | None = None, progress: Callable | None = None):
+                 workers: int | None = None, progress: Callable | None = None,
+                 speeds_from: tuple[str, str] = ("--rpm", "drive.rpm")):
         self.scene = scene
+        # (file, key) a failed run at an operating speed is reported against
+        self.speeds_from = speeds_from
         self.speeds = np.asarray(speeds_rpm, dtype=float)
         self.draws = draws
         # sampling: rule -> the speeds (rpm) it judges the draws at: where the nominal design is worst
@@ -254,11 +257,25 @@ class Case:
                 if not out.complete:
                     raise KeyboardInterrupt
                 columns = {name: out.columns[name] for name in names}
+            self._refuse_failed(missing, np.asarray(columns["run_failed"], dtype=float).reshape(n, s))
             for j, speed in enumerate(missing):
                 self._elastic[float(speed)] = {name: np.asarray(col, dtype=float).reshape(n, s)[:, j]
                                                for name, col in columns.items()}
         names = self._elastic[float(speeds[0])].keys() if speeds.size else ()
         return {name: np.stack([self._elastic[float(v)][name] for v in speeds], axis=1) for name in names}
+
+    def _refuse_failed(self, speeds: np.ndarray, failed: np.ndarray) -> None:
+        """A run that raised has NaN figures, which a rule would read as "no seat impact" or drop
+        silently: an operating speed whose runs failed is refused (one line, exit 2) naming it.
+        Speeds outside the range (the float margin's search above it) keep their NaN: that search
+        reads a failed run as no separation found there."""
+        bad = [float(v) for j, v in enumerate(speeds) if failed[:, j].any() and np.any(np.isclose(self.speeds, v))]
+        if bad:
+            shown = ", ".join(f"{v:g}" for v in bad[:6]) + (", ..." if len(bad) > 6 else "")
+            file, key = self.speeds_from
+            raise InputError(file, key, f"the engine cannot run the scene at {shown} rpm (see `explorer simulate "
+                             f"{self.scene.source or 'SCENE'} --set drive.rpm={bad[0]:g}` for why, e.g. a speed too "
+                             "slow for the solver's step budget): give a range without it")
 
     @cached_property
     def elastic_scene(self):

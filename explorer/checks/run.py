@@ -99,7 +99,9 @@ def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | 
             raise InputError("--verify", str(verify), "a whole number of draws, at least 1")
 
     specs = all_rules()  # the table as it is now (a plug-in may have registered a rule)
-    nominal = Case(scene, speeds, workers=workers, progress=progress)
+    speeds_from = (("--rpm", "drive.rpm") if range_from == "--rpm" else
+                   (str(scene.source), "drive.operating_range" if scene.drive.operating_range is not None else "drive.rpm"))
+    nominal = Case(scene, speeds, workers=workers, progress=progress, speeds_from=speeds_from)
     measures: dict[str, Measure] = {}
     for spec in specs:
         if spec.name not in off:
@@ -111,7 +113,7 @@ def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | 
         focus = {spec.name: _focus_speeds(spec, measures[spec.name], speeds) for spec in specs
                  if spec.name in measures and measures[spec.name].applicable}
         ends = np.array([speeds.min(), speeds.max()])
-        sampled = Case(scene, ends, draws, focus, workers, progress)
+        sampled = Case(scene, ends, draws, focus, workers, progress, speeds_from=speeds_from)
         drawn = {spec.name: measure_function(spec)(sampled, settings[spec.name]) for spec in specs
                  if spec.name in measures and measures[spec.name].applicable}
         # one speed: every draw ran at it (and the float margin above it as every draw would)
