@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..core.errors import InputError
 from ..core.files import check_path
-from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, write_checked
+from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, distinct_outputs, write_checked
 from .simulate import add_scene_arguments, scene_from_args
 
 def _names(names) -> str:
@@ -94,6 +94,7 @@ def _bench(args, scene, out_dir: Path) -> int:
     # every file checked before the minutes of timing, so that a directory that takes no file
     # costs one line, not a run
     outs = {name: check_output(f"{base}{name}", "--output-dir") for name in names}
+    distinct_outputs(outs.values(), (scene.source,))
     report = run_bench(scene, quick=args.quick, repeats=args.repeats, progress=ProgressBar(sys.stderr),
                        differentiation=not args.no_differentiation)
     table = report.table()

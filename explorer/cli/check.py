@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from ..core.errors import InputError
-from ..core.outputs import HELP as OUTPUT_HELP, check_output, write_checked
+from ..core.outputs import HELP as OUTPUT_HELP, check_output, distinct_outputs, write_checked
 from .simulate import add_scene_arguments, scene_from_args
 from .sweep import Progress, _split
 
@@ -87,6 +87,7 @@ def run(args) -> int:
         if out.direct and kind not in FORMATS:
             kind = ".json"
     scene = scene_from_args(args)
+    distinct_outputs((out,), (scene.source, args.rules))
     progress = Progress(sys.stderr)
     try:
         report = check(scene, args.rpm, sample or None, runs=args.runs, seed=args.seed, rules=args.rules,

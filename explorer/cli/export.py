@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..core.errors import InputError, echo
-from ..core.outputs import HELP as OUTPUT_HELP, check_output, write_checked
+from ..core.outputs import HELP as OUTPUT_HELP, check_output, distinct_outputs, write_checked
 from ..core.units import to_si
 from ..view.exports import FORMATS
 from .simulate import add_scene_arguments, scene_from_args
@@ -92,6 +92,7 @@ def run(args) -> int:
     scene = scene_from_args(args)
     name = args.output if args.output is not None else f"{Path(scene.source).stem if scene.source != '<memory>' else 'cam'}{EXTENSIONS[args.format]}"
     out = check_output(name, "--output")
+    distinct_outputs((out,), (scene.source,))
     src = exports.cam_source(scene)
     if args.format == "csv":
         data = exports.point_table(src, points)

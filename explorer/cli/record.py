@@ -8,7 +8,7 @@ import math
 import sys
 
 from ..core.errors import InputError, echo
-from ..core.outputs import HELP as OUTPUT_HELP
+from ..core.outputs import HELP as OUTPUT_HELP, distinct_outputs
 from ..scene.builtin import default_scene
 
 # Each recording costs ~0.1-0.3 s and ~1-4 MB of the file at 3600 steps with the parts: a thousand
@@ -188,6 +188,7 @@ def run(args) -> int:
     magnification = parse_magnification(args.magnification, args.no_parts)
     out = check_rrd_path(args.output, "--output")
     plans = plan_runs(args.scenes, args.overrides, args.sweep)  # every input error before any work
+    distinct_outputs((out,), {scene.source for _, scene in plans})
     done = []  # (label, steps, events, warnings): all that is kept of a run once it is written
 
     def runs():

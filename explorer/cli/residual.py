@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, write_checked
+from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, distinct_outputs, write_checked
 from .simulate import add_scene_arguments, scene_from_args
 from .sweep import Progress, check_workers
 
@@ -45,6 +45,7 @@ def run(args) -> int:
     else:
         kind, table_out = ".csv", check_output("-", "--output")
     plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot is not None else None
+    distinct_outputs((table_out, plot_out), (scene.source,))
     workers = check_workers(args.workers)
     progress = Progress(sys.stderr)
     try:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, write_checked
+from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, distinct_outputs, write_checked
 from ..scene.builtin import default_scene
 
 
@@ -52,6 +52,7 @@ def run(args) -> int:
     # and the summary missing
     csv_out = check_output(args.output, "--output") if args.output is not None else None
     json_out = check_output(args.summary, "--summary") if args.summary is not None else None
+    distinct_outputs((csv_out, json_out), (scene.source,))
     result = simulate(scene)
     with all_or_none():  # the columns and the summary, or neither
         if csv_out is not None:

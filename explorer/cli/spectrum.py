@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..core.errors import InputError
-from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, write_checked
+from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, distinct_outputs, write_checked
 from .simulate import add_scene_arguments, scene_from_args
 
 HELP = """\
@@ -35,6 +35,7 @@ def run(args) -> int:
     scene = scene_from_args(args)
     table_out = check_output("-" if args.output is None else args.output, "--output")
     plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot is not None else None
+    distinct_outputs((table_out, plot_out), (scene.source,))
     spectrum = acceleration_spectrum(scene, build_lift(scene), args.orders)
     with all_or_none():  # the table and its chart, or neither
         write_checked(table_out, table_text(scene, spectrum))

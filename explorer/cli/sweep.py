@@ -7,7 +7,7 @@ import sys
 import time
 
 from ..core.errors import InputError
-from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output
+from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, distinct_outputs
 from ..scene.builtin import default_scene
 from ..studies.sweep_spec import SWEEP_KEYS
 
@@ -162,6 +162,7 @@ def run(args) -> int:
     out = check_output(args.output, "--output")
     plot_out = check_output(args.plot, "--plot", ".png") if args.plot is not None else None
     record_out = check_output(args.record, "--record", ".rrd") if args.record is not None else None
+    distinct_outputs((out, plot_out, record_out), (scene.source,))
     workers = check_workers(args.workers, args.scheduler)
     report = sys.stderr if out.is_stdout() else sys.stdout
     progress = Progress(sys.stderr)

@@ -15,6 +15,9 @@ rules decides what a path the user named may become.
 - Directories, block devices, sockets: refused before any work; so is a file that its mode makes
   read-only for this user, as the shell's `>` would (root may write anything, here as there).
 
+`distinct_outputs` refuses an output file that is the same file as an input of the command (its
+scene) or as another of its outputs, before any work.
+
 `check_output` applies these rules before anything is computed, including a real probe that the
 directory accepts a new file (as root, or on a read-only file system, the permission bits say
 nothing): a wrong path costs one line and exit status 2, not a simulation.
@@ -55,7 +58,8 @@ new file gets 0666 less the umask, a replaced file keeps its mode; a symlink is 
 target written). `-` (stdout), /dev/stdout, /dev/null, terminals and FIFOs are written directly,
 no temporary.
 Directories, block devices, sockets, read-only files and directories that take no new file are
-refused before any work (exit status 2).
+refused before any work (exit status 2); so is an output that is the same file as an input (the
+scene) or as another output of the same command.
 """
 
 
@@ -166,6 +170,31 @@ def check_output(path: str | os.PathLike, option: str, suffix: str | None = None
         raise out.error(f"directory {directory} is not writable")
     _probe_directory(out, directory)
     return out
+
+
+def _same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
+    """True when the two paths name one file: the same inode where both exist (links, hard links
+    and `..` all resolved by the kernel), else the same resolved path."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them is not there yet
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def distinct_outputs(outputs: Iterable[Output | None], inputs: Iterable[str | os.PathLike | None] = ()) -> None:
+    """Refuse, before any work, an output file that is the same file as one of the command's
+    inputs (the scene it reads) or as another of its outputs: the rename would replace the input,
+    or one output the other. Devices, FIFOs and standard output are written through, not
+    replaced, and are not compared (`-o - --summary -` writes both, in order)."""
+    files = [o for o in outputs if o is not None and not o.direct]
+    sources = [os.fspath(p) for p in inputs if p is not None and os.fspath(p) not in ("", "-", "<memory>")]
+    for i, out in enumerate(files):
+        for src in sources:
+            if os.path.exists(src) and _same_file(out.target, src):
+                raise out.error(f"is the input file {src}: writing it would replace the input; choose another name")
+        for other in files[:i]:
+            if _same_file(out.target, other.target):
+                raise out.error(f"is the same file as {other.option} {other.name}: choose another name for one of them")
 
 
 def as_output(path_or_output, option: str = "output") -> Output:
