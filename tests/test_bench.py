@@ -145,6 +145,8 @@ def test_command_writes_table_csv_and_charts(tmp_path, scenes_dir):
     "args, key",
     [
         (["--repeats", "0"], "--repeats"),
+        (["--repeats", "101"], "--repeats"),
+        (["--repeats", "100000000"], "--repeats"),
         (["--output-dir", "/nonexistent-dir/sub"], "--output-dir"),
     ],
 )
