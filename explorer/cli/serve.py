@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import ipaddress
+import re
+import socket
 import sys
 
 from ..core.errors import InputError
@@ -60,7 +62,55 @@ def _is_loopback(host: str) -> bool:
         return False
 
 
+# RFC 1123 host names: dot-separated labels of letters, digits and inner hyphens, 253 at most
+_HOST_NAME = re.compile(r"(?=.{1,253}$)([A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?)(\.[A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?)*\.?")
+
+
+def check_host(host: str) -> None:
+    """Refuse, before any server starts, a --host no socket can bind: an IP literal is checked by
+    ipaddress (999.1.1.1 is none), "localhost" is taken as it is, and a name must be a host name
+    that resolves (getaddrinfo: the hosts file, or DNS where there is one). Without this, viser's
+    bind failure surfaced as no URL and a 20 s stop."""
+    if host == "localhost":
+        return
+    try:
+        ipaddress.ip_address(host)
+    except ValueError:
+        pass
+    else:
+        _check_bindable(host, socket.getaddrinfo(host, None, type=socket.SOCK_STREAM,
+                                                 flags=socket.AI_NUMERICHOST))
+        return
+    if not host.strip():
+        raise InputError("--host", "--host", "empty: give an address such as 127.0.0.1 or a host name")
+    if re.fullmatch(r"[0-9.]+", host) or ":" in host:
+        raise InputError("--host", "--host", f"{host!r} is not an IP address")
+    if not _HOST_NAME.fullmatch(host):
+        raise InputError("--host", "--host", f"{host!r} is neither an IP address nor a host name")
+    try:
+        infos = socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError) as exc:
+        raise InputError("--host", "--host", f"{host!r} does not resolve "
+                         f"({exc.args[-1] if exc.args else exc})") from None
+    _check_bindable(host, infos)
+
+
+def _check_bindable(host: str, infos) -> None:
+    """A name's addresses must include one of this machine's: bind a socket to port 0 (any free
+    port, closed at once; no network traffic) on each until one takes it."""
+    reason = "no address"
+    for family, kind, proto, _, address in infos:
+        try:
+            with socket.socket(family, kind, proto) as probe:
+                probe.bind((address[0], 0, *address[2:]))
+            return
+        except OSError as exc:
+            reason = exc.strerror or str(exc)
+    raise InputError("--host", "--host", f"{host!r} is not an address of this machine ({reason})")
+
+
 def run(args) -> int:
+    check_host(args.host)
     scene = scene_from_args(args)  # bad scene or --set: the usual one-line error, before any server
     if not 0 <= args.port <= 65535:
         raise InputError("--port", "--port", f"must be between 0 and 65535, got {args.port}")
