@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from ..lift.contours.translating import pitch_geometry, translating_profile
-from ..lift.validity import cam_fault, entered_error
+from ..lift.validity import cam_fault, entered_error, lift_fault
 from .lift import build_lift
 
 
@@ -39,14 +39,19 @@ def pitch_curve(scene, lift=None, n: int = 720) -> np.ndarray:
     return _profile(scene, lift, n).pitch
 
 
-def geometry_columns(scene, theta: np.ndarray, d: np.ndarray, dip: float = 0.0) -> tuple[dict, dict]:
+def geometry_columns(scene, theta: np.ndarray, d: np.ndarray, dip: float = 0.0, lift=None) -> tuple[dict, dict]:
     """Columns pressure_angle_deg, pitch_radius_m, contour_radius_m (signed: > 0 convex,
     < 0 concave; +-inf where the curve is straight) and their summary; InputError when the cam
-    fails a validity check (explorer.lift.validity.cam_fault, the one every cam passes; dip: how far
-    the lift may go below the base circle, a measured table's noise)."""
+    fails a validity check. With the lift curve given, the verdict is lift_fault's, the very check
+    of a computed cam (explorer.lift.validity: the law's breakpoints and a fine grid inside each
+    stretch between them), so it does not depend on the run's sample grid; without it, cam_fault on
+    the samples (dip: how far the lift may go below the base circle, a measured table's noise)."""
     f = scene.follower
     phi, rho = pitch_geometry(d, f.base_radius, f.roller_radius, f.offset)
-    fault = cam_fault(theta, d, pressure_angle=phi, pitch_radius=rho, roller_radius=f.roller_radius, dip=dip)
+    if lift is not None:
+        fault = lift_fault(lift, f, dip)
+    else:
+        fault = cam_fault(theta, d, pressure_angle=phi, pitch_radius=rho, roller_radius=f.roller_radius, dip=dip)
     if fault is not None:
         raise entered_error(fault, scene.source)
     contour_radius = rho - f.roller_radius
