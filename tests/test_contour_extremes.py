@@ -120,3 +120,24 @@ def test_extremes_do_not_move_with_steps():
     phi, rho, _ = norton(scene)
     assert fine["max_abs_pressure_angle_deg"] == pytest.approx(phi, rel=REL)
     assert fine["min_convex_pitch_radius_m"] == pytest.approx(rho, rel=REL)
+
+
+def test_schenker_fig2_pressure_angle_is_its_limit_at_f():
+    """Schenker's Fig. 2 (schenker1902_fig2.toml: arcs EF and FG meet at F, where the acceleration
+    jumps -117 -> +159 m/s^2): the largest pressure angle is the one-sided limit at the junction F,
+    49.962 deg (an audit's hand figure; the scene's comment says 49.9 deg), not the 3600 samples'
+    49.938 deg, and it is placed at F."""
+    from explorer.lift.contours.translating import pitch_geometry
+
+    scene = load_scene(SCENES / "schenker1902_fig2.toml")
+    lift = build_lift(scene)
+    got = summary(scene, 3600)
+    f = scene.follower
+    # F: the breakpoint where the sampled maximum lies (the nose EF meets the flank FG)
+    marks = np.mod(lift.breakpoints(), 2.0 * math.pi)
+    at_f = float(marks[np.argmin(np.abs(np.degrees(marks) - 147.5))])
+    sides = np.array([at_f - 1e-12, at_f + 1e-12])
+    phi, _ = pitch_geometry(lift.derivatives(sides), f.base_radius, f.roller_radius, f.offset)
+    assert got["max_abs_pressure_angle_deg"] == pytest.approx(math.degrees(np.abs(phi).max()), rel=REL)
+    assert round(got["max_abs_pressure_angle_deg"], 3) == 49.962
+    assert got["max_abs_pressure_angle_at_deg"] == pytest.approx(math.degrees(at_f), abs=1e-6)

@@ -62,11 +62,14 @@ def geometry_columns(scene, theta: np.ndarray, d: np.ndarray, dip: float = 0.0, 
     if lift is not None:  # the exact extremes (geometry_extremes), the run's samples among them
         x, p, r = geometry_extremes(lift, f)
         theta, phi, rho = np.concatenate([theta, x]), np.concatenate([phi, p]), np.concatenate([rho, r])
-    k = int(np.argmax(np.abs(phi)))
+    # where: the earliest angle of the largest |phi| (a symmetric rise and return tie to rounding)
+    top = np.abs(phi)
+    at = np.mod(theta, TWO_PI)
+    k = int(np.argmin(np.where(top >= top.max() * (1.0 - 1e-12), at, np.inf)))
     convex = rho > 0.0
     summary = {
         "max_abs_pressure_angle_deg": float(abs(math.degrees(phi[k]))),
-        "max_abs_pressure_angle_at_deg": float(math.degrees(theta[k] % TWO_PI)),
+        "max_abs_pressure_angle_at_deg": float(math.degrees(at[k])),
         "min_convex_pitch_radius_m": float(rho[convex].min()) if np.any(convex) else None,
         "min_convex_contour_radius_m": float(rho[convex].min() - f.roller_radius) if np.any(convex) else None,
         "min_concave_contour_radius_m": float(f.roller_radius - rho[~convex].max()) if np.any(~convex) else None,
