@@ -178,7 +178,10 @@ def test_geometry_columns_for_law_scenes_and_cam_contour():
     base = result.columns["follower_lift_m"] == 0.0
     assert np.allclose(result.columns["pressure_angle_deg"][base], 0.0, atol=1e-12)
     assert np.allclose(result.columns["pitch_radius_m"][base], 0.042, rtol=1e-12)
-    assert result.summary["max_abs_pressure_angle_deg"] == pytest.approx(np.abs(result.columns["pressure_angle_deg"]).max())
+    # the summary's figure is exact (tests/test_contour_extremes.py): at least the samples' largest,
+    # and within the sampling's second-order error of it (0.1 deg steps: ~4e-6 relative here)
+    sampled = np.abs(result.columns["pressure_angle_deg"]).max()
+    assert sampled <= result.summary["max_abs_pressure_angle_deg"] == pytest.approx(sampled, rel=1e-5)
     pts = cam_contour(scene, n=360)
     assert pts.shape == (360, 2)
     pitch = pitch_curve(scene, n=360)

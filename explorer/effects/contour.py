@@ -13,8 +13,11 @@ import math
 
 import numpy as np
 
+from ..core.roots import root_in
 from ..lift.contours.translating import pitch_geometry, translating_profile
-from ..lift.validity import cam_fault, entered_error
+from ..lift.curves import TWO_PI, lift_rows
+from ..lift.validity import cam_fault, entered_error, lift_fault, sample_angles
+from ..mechanics.kinematics import ONE_SIDED
 from .lift import build_lift
 
 
@@ -39,26 +42,91 @@ def pitch_curve(scene, lift=None, n: int = 720) -> np.ndarray:
     return _profile(scene, lift, n).pitch
 
 
-def geometry_columns(scene, theta: np.ndarray, d: np.ndarray, dip: float = 0.0) -> tuple[dict, dict]:
+def geometry_columns(scene, theta: np.ndarray, d: np.ndarray, dip: float = 0.0, lift=None) -> tuple[dict, dict]:
     """Columns pressure_angle_deg, pitch_radius_m, contour_radius_m (signed: > 0 convex,
     < 0 concave; +-inf where the curve is straight) and their summary; InputError when the cam
-    fails a validity check (explorer.lift.validity.cam_fault, the one every cam passes; dip: how far
-    the lift may go below the base circle, a measured table's noise)."""
+    fails a validity check. With the lift curve given, the verdict is lift_fault's, the very check
+    of a computed cam (explorer.lift.validity: the law's breakpoints and a fine grid inside each
+    stretch between them), so it does not depend on the run's sample grid; without it, cam_fault on
+    the samples (dip: how far the lift may go below the base circle, a measured table's noise)."""
     f = scene.follower
     phi, rho = pitch_geometry(d, f.base_radius, f.roller_radius, f.offset)
-    fault = cam_fault(theta, d, pressure_angle=phi, pitch_radius=rho, roller_radius=f.roller_radius, dip=dip)
+    if lift is not None:
+        fault = lift_fault(lift, f, dip)
+    else:
+        fault = cam_fault(theta, d, pressure_angle=phi, pitch_radius=rho, roller_radius=f.roller_radius, dip=dip)
     if fault is not None:
         raise entered_error(fault, scene.source)
     contour_radius = rho - f.roller_radius
-    phi_deg = np.degrees(phi)
-    k = int(np.argmax(np.abs(phi_deg)))
+    columns = {"pressure_angle_deg": np.degrees(phi), "pitch_radius_m": rho, "contour_radius_m": contour_radius}
+    if lift is not None:  # the exact extremes (geometry_extremes), the run's samples among them
+        x, p, r = geometry_extremes(lift, f)
+        theta, phi, rho = np.concatenate([theta, x]), np.concatenate([phi, p]), np.concatenate([rho, r])
+    # where: the earliest angle of the largest |phi| (a symmetric rise and return tie to rounding)
+    top = np.abs(phi)
+    at = np.mod(theta, TWO_PI)
+    k = int(np.argmin(np.where(top >= top.max() * (1.0 - 1e-12), at, np.inf)))
     convex = rho > 0.0
     summary = {
-        "max_abs_pressure_angle_deg": float(abs(phi_deg[k])),
-        "max_abs_pressure_angle_at_deg": float(math.degrees(theta[k])),
+        "max_abs_pressure_angle_deg": float(abs(math.degrees(phi[k]))),
+        "max_abs_pressure_angle_at_deg": float(math.degrees(at[k])),
         "min_convex_pitch_radius_m": float(rho[convex].min()) if np.any(convex) else None,
-        "min_convex_contour_radius_m": float(contour_radius[convex].min()) if np.any(convex) else None,
-        "min_concave_contour_radius_m": float(-contour_radius[~convex].max()) if np.any(~convex) else None,
+        "min_convex_contour_radius_m": float(rho[convex].min() - f.roller_radius) if np.any(convex) else None,
+        "min_concave_contour_radius_m": float(f.roller_radius - rho[~convex].max()) if np.any(~convex) else None,
     }
-    columns = {"pressure_angle_deg": phi_deg, "pitch_radius_m": rho, "contour_radius_m": contour_radius}
     return columns, summary
+
+
+def _rates(d, y0: float, e: float):
+    """Signs of d(phi)/d(theta) and d(rho)/d(theta) of the translating roller's pitch curve, and the
+    curvature's numerator C (rho = N^1.5 / C, N = y^2 + (s1 - e)^2, y = y0 + s; C > 0 convex), from
+    the lift's rows s, s1, s2, s3 (derivatives per radian): tan(phi) = (s1 - e) / y, so
+    phi' = (s2 y - (s1 - e) s1) / N; rho' = N^0.5 (1.5 N' C - N C') / C^2 with
+    N' = 2 y s1 + 2 (s1 - e) s2, C = (s1 - e)(2 s1 - e) - y (s2 - y), C' = 3 (s1 - e) s2 + 2 y s1 - y s3."""
+    y = y0 + d[0]
+    ty = d[1] - e
+    n = y * y + ty * ty
+    c = ty * (2.0 * d[1] - e) - y * (d[2] - y)
+    dn = 2.0 * y * d[1] + 2.0 * ty * d[2]
+    dc = 3.0 * ty * d[2] + 2.0 * y * d[1] - y * d[3]
+    return d[2] * y - ty * d[1], 1.5 * dn * c - n * dc, c
+
+
+def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Angles (rad), pressure angles (rad) and signed pitch-curve radii (m) of a translating
+    roller's cam where its extremes can be, so that the summary's largest pressure angle and
+    smallest radii are exact rather than sampled (as valve_extremes does for the valve's peaks):
+    lift_fault's angles (7200, the breakpoints, 256 inside every stretch between them), the
+    one-sided limits at the breakpoints (s2 may jump there: the supremum is a limit), and every zero
+    of phi' or rho' between two of them (Brent, bounded, on the closed-form derivatives; not across
+    a breakpoint, nor where rho passes infinity). An extremum hidden between two of those angles
+    with two sign changes of its rate is not seen."""
+    f = follower
+    rp = f.base_radius + f.roller_radius
+    e = f.offset
+    y0 = math.sqrt(rp * rp - e * e)
+    rows = (0, 1, 2, 3)
+    marks = np.unique(np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI))
+    angles = np.unique(np.concatenate([sample_angles(lift), np.mod(marks - ONE_SIDED, TWO_PI),
+                                       marks + ONE_SIDED]))
+    angles = np.append(angles, angles[0] + TWO_PI)  # closed round the revolution
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        d = lift_rows(lift, angles, rows)
+        rate_phi, rate_rho, c = _rates(d, y0, e)
+    # a bracket no wider than a breakpoint's two one-sided angles spans a jump, not a zero
+    wide = np.diff(angles) > 4.0 * ONE_SIDED
+    found = []
+    for k, rate in ((0, rate_phi), (1, rate_rho)):
+        change = wide & (np.sign(rate[:-1]) * np.sign(rate[1:]) < 0.0)
+        if k == 1:  # rho passes infinity where C changes sign: no extremum of rho there
+            change &= np.sign(c[:-1]) * np.sign(c[1:]) > 0.0
+        for i in np.nonzero(change)[0]:
+            def fun(th, k=k):
+                with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                    return float(_rates(lift_rows(lift, np.array([th]), rows), y0, e)[k][0])
+            found.append(root_in(fun, float(angles[i]), float(angles[i + 1]), fa=float(rate[i]),
+                                 fb=float(rate[i + 1]), xtol=1e-15, maxiter=200))
+    x = np.concatenate([angles[:-1], np.asarray(found, dtype=float)])
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        phi, rho = pitch_geometry(lift_rows(lift, x, rows), f.base_radius, f.roller_radius, e)
+    return x, phi, rho

@@ -64,7 +64,7 @@ class TranslatingRoller(Gear):
         """Pressure angle and radii of curvature (closed forms); InputError when the cam fails the
         validity checks of every cam (explorer.lift.validity: finite, lift range, pressure angle,
         undercut; a measured table's lift may dip below the base circle by its `dip_allowance`)."""
-        return resolve(_GEOMETRY_COLUMNS)(ctx.scene, ctx.theta, d, getattr(ctx.lift, "dip_allowance", 0.0))
+        return resolve(_GEOMETRY_COLUMNS)(ctx.scene, ctx.theta, d, getattr(ctx.lift, "dip_allowance", 0.0), ctx.lift)
 
     def contact_geometry(self, ctx) -> ContactGeometry:
         """The kinematics' geometry columns when the cam provides them, otherwise the exact closed

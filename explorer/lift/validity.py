@@ -39,6 +39,10 @@ MAX_LIFT = 1.0  # m: no valve gear lifts more; a bigger lift means a wrong unit 
 ROUNDING_DIP = RANGES["length"][0]  # 1 nm: below the base circle by less is rounding, not a dip
 MAX_PRESSURE_ANGLE = 0.5 * math.pi  # rad, exclusive
 SAMPLES = 7200  # cam angles per revolution for a lift curve (plus its breakpoints)
+# angles inside each stretch between two breakpoints besides the revolution's grid: a short event
+# (a 0.1 deg rise falls between two of the 7200) is checked as finely as a long one, so the verdict
+# depends on the law alone, never on a run's sample grid (docs/reference/validity.md)
+SEGMENT_SAMPLES = 256
 CHECKS = ("finite", "lift range", "pressure angle", "undercut")
 
 
@@ -109,11 +113,18 @@ def translating_fault(theta, d, follower, dip: float = 0.0) -> CamFault | None:
     return cam_fault(theta, d, pressure_angle=phi, pitch_radius=rho, roller_radius=follower.roller_radius, dip=dip)
 
 
-def sample_angles(lift, n: int = SAMPLES) -> np.ndarray:
-    """n cam angles over the revolution plus the lift's breakpoints (where a derivative may jump)."""
+def sample_angles(lift, n: int = SAMPLES, per_segment: int = SEGMENT_SAMPLES) -> np.ndarray:
+    """n cam angles over the revolution plus the lift's breakpoints (where a derivative may jump)
+    plus per_segment equally spaced angles inside each stretch between consecutive breakpoints
+    (however short: a 0.1 deg rise gets as many as a 100 deg one)."""
     grid = np.arange(int(n)) * (TWO_PI / int(n))
-    marks = np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI)
-    return np.unique(np.concatenate([grid, marks]))
+    marks = np.unique(np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI))
+    parts = [grid, marks]
+    if marks.size and per_segment > 0:
+        ends = np.append(marks, marks[0] + TWO_PI)
+        t = np.arange(1, int(per_segment) + 1) / (int(per_segment) + 1.0)
+        parts.append(np.mod((ends[:-1, None] + np.diff(ends)[:, None] * t).reshape(-1), TWO_PI))
+    return np.unique(np.concatenate(parts))
 
 
 def lift_fault(lift, follower, dip: float | None = None, n: int = SAMPLES) -> CamFault | None:
