@@ -141,3 +141,49 @@ def test_schenker_fig2_pressure_angle_is_its_limit_at_f():
     assert got["max_abs_pressure_angle_deg"] == pytest.approx(math.degrees(np.abs(phi).max()), rel=REL)
     assert round(got["max_abs_pressure_angle_deg"], 3) == 49.962
     assert got["max_abs_pressure_angle_at_deg"] == pytest.approx(math.degrees(at_f), abs=1e-6)
+
+
+def test_schenker_fig2_arcs_radii_without_a_search_per_sample(monkeypatch):
+    """On a circular arc the pitch radius is constant (arc radius + roller radius convex, arc radius
+    - roller radius concave), so its rate is rounding and changes sign at random samples (1599 of
+    them on Schenker's Fig. 2: 2 s of Brent searches a run before). Those brackets are not searched
+    (contour.RATE_ROUNDING), and the figures are still the arcs' own: the nose EF (9.46 mm) + the
+    10 mm roller as the smallest convex pitch radius, and FG's 86.1 mm as the smallest concave
+    contour radius, to rounding. The searches left are bounded by the genuine extrema (a few)."""
+    import explorer.effects.contour as contour
+
+    calls = []
+    real = contour.root_in
+
+    def counting(*args, **kwargs):
+        calls.append(args[1])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(contour, "root_in", counting)
+    got = summary(load_scene(SCENES / "schenker1902_fig2.toml"), 3600)
+    assert got["min_convex_pitch_radius_m"] == pytest.approx(9.46e-3 + 10e-3, rel=1e-12)
+    assert got["min_convex_contour_radius_m"] == pytest.approx(9.46e-3, rel=1e-12)
+    assert got["min_concave_contour_radius_m"] == pytest.approx(86.1e-3, rel=1e-12)
+    assert len(calls) <= 10, len(calls)
+
+
+def test_rounding_filter_keeps_every_true_extremum():
+    """The filter drops a bracket only where the rate is below RATE_ROUNDING of its terms at both
+    ends; at the true extrema of every built-in translating-roller cam the rate is 5e-3 of its terms
+    or more at one end, so the figures are those found with no filter (the filter set to -1)."""
+    import explorer.effects.contour as contour
+
+    for path in sorted(SCENES.glob("*.toml")):
+        scene = load_scene(path)
+        if not getattr(scene.follower, "roller_envelope", False) or path.stem == "schenker1902_fig2":
+            continue
+        lift = build_lift(scene)
+        filtered = contour.geometry_extremes(lift, scene.follower)
+        old = contour.RATE_ROUNDING
+        try:
+            contour.RATE_ROUNDING = -1.0
+            unfiltered = contour.geometry_extremes(lift, scene.follower)
+        finally:
+            contour.RATE_ROUNDING = old
+        for a, b in zip(filtered, unfiltered):
+            np.testing.assert_array_equal(a, b, err_msg=path.stem)

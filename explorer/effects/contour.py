@@ -92,6 +92,26 @@ def _rates(d, y0: float, e: float):
     return d[2] * y - ty * d[1], 1.5 * dn * c - n * dc, c
 
 
+def _rate_scales(d, y0: float, e: float):
+    """The sizes of the terms whose difference _rates' two rates are (|s2 y| + |(s1 - e) s1| and
+    |1.5 N' C| + |N C'|): a rate far below its terms' size is their rounding, not a slope."""
+    y = y0 + d[0]
+    ty = d[1] - e
+    n = y * y + ty * ty
+    c = ty * (2.0 * d[1] - e) - y * (d[2] - y)
+    dn = 2.0 * y * d[1] + 2.0 * ty * d[2]
+    dc = 3.0 * ty * d[2] + 2.0 * y * d[1] - y * d[3]
+    return np.abs(d[2] * y) + np.abs(ty * d[1]), np.abs(1.5 * dn * c) + np.abs(n * dc)
+
+
+# A sign change of a rate whose size at both ends of its bracket is below this fraction of its
+# terms' size is rounding on a stretch where the figure is constant (a circular arc's pitch
+# radius: Schenker Fig. 2 has 1599 such brackets, their rates 6e-17 .. 1.5e-13 of their terms;
+# the true extrema of every built-in cam have 5e-3 or more). The figure's samples there already
+# hold its value to rounding, so no root is searched (1599 Brent searches cost 2 s a run).
+RATE_ROUNDING = 1e-10
+
+
 def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Angles (rad), pressure angles (rad) and signed pitch-curve radii (m) of a translating
     roller's cam where its extremes can be, so that the summary's largest pressure angle and
@@ -99,7 +119,8 @@ def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarra
     lift_fault's angles (7200, the breakpoints, 256 inside every stretch between them), the
     one-sided limits at the breakpoints (s2 may jump there: the supremum is a limit), and every zero
     of phi' or rho' between two of them (Brent, bounded, on the closed-form derivatives; not across
-    a breakpoint, nor where rho passes infinity). An extremum hidden between two of those angles
+    a breakpoint, nor where rho passes infinity, nor where a rate is rounding at both ends:
+    RATE_ROUNDING). An extremum hidden between two of those angles
     with two sign changes of its rate is not seen."""
     f = follower
     rp = f.base_radius + f.roller_radius
@@ -113,11 +134,13 @@ def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarra
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         d = lift_rows(lift, angles, rows)
         rate_phi, rate_rho, c = _rates(d, y0, e)
+        scale_phi, scale_rho = _rate_scales(d, y0, e)
     # a bracket no wider than a breakpoint's two one-sided angles spans a jump, not a zero
     wide = np.diff(angles) > 4.0 * ONE_SIDED
     found = []
-    for k, rate in ((0, rate_phi), (1, rate_rho)):
-        change = wide & (np.sign(rate[:-1]) * np.sign(rate[1:]) < 0.0)
+    for k, rate, scale in ((0, rate_phi, scale_phi), (1, rate_rho, scale_rho)):
+        flat = np.abs(rate) <= RATE_ROUNDING * scale
+        change = wide & (np.sign(rate[:-1]) * np.sign(rate[1:]) < 0.0) & ~(flat[:-1] & flat[1:])
         if k == 1:  # rho passes infinity where C changes sign: no extremum of rho there
             change &= np.sign(c[:-1]) * np.sign(c[1:]) > 0.0
         for i in np.nonzero(change)[0]:
