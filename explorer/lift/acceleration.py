@@ -7,10 +7,10 @@ is linear (`interpolation = "linear"`, the default) or held constant until the n
 rests on the base circle.
 
 Units: `angle_unit` (default deg) for the angles; `acceleration_unit` either a time-based
-acceleration (default m/s**2), taken at `reference_rpm` (default: the scene's drive.rpm) and
-converted with L'' = a / w_ref^2, or a lift per angle squared such as mm/deg**2, which fixes
-the cam regardless of speed. To keep the cam when sweeping drive.rpm with time-based values,
-set reference_rpm.
+acceleration (default m/s**2), taken at `reference_rpm` (default: the drive.rpm the scene
+file was written with, Drive.cam_omega) and converted with L'' = a / w_ref^2, or a lift per angle
+squared such as mm/deg**2. Either way the cam is fixed once the file is read: running it at
+another speed (--set drive.rpm, a sweep, the browser) does not reshape it.
 
 The acceleration is a scipy PPoly; its second antiderivative is the lift, so L, L', L'', L'''
 are exact piecewise polynomials (no quadrature, no finite differences). A valve gear must end
@@ -72,7 +72,7 @@ def parse_acceleration_options(table: Table, fields: dict[str, Any]) -> Accelera
         if table.has("reference_rpm"):
             omega_ref = table.quantity("reference_rpm", "speed", positive=True)
         else:
-            omega_ref = fields["drive"].omega
+            omega_ref = fields["drive"].cam_omega
         scale /= omega_ref**2  # a = w^2 L''  ->  L'' = a / w^2
         reference_rpm = omega_ref * 60.0 / TWO_PI
     elif table.has("reference_rpm"):

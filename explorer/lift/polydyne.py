@@ -299,7 +299,7 @@ def parse_polydyne_options(table, fields: dict[str, Any]) -> PolydyneOptions:
     if table.has("design_rpm"):
         omega = table.quantity("design_rpm", "speed", positive=True)
     else:
-        omega = fields["drive"].omega
+        omega = fields["drive"].cam_omega
     spline = None
     if wanted_law == SPLINE:
         spline = _parse_wanted_spline(table, omega)

@@ -14,9 +14,9 @@ get C // n coefficients, the longest C mod n one more. The square system is solv
 (a singular one is an error naming the stations). With s, v, a given at both ends of one segment
 this is the 3-4-5 polynomial, with s, v, a, j the 4-5-6-7 (tests).
 
-Velocity, acceleration, jerk and snap are given in time units at `reference_rpm` (default
-drive.rpm) and stored per radian (v/w, a/w^2, j/w^3, snap/w^4), so the cam does not change when
-the speed is swept.
+Velocity, acceleration, jerk and snap are given in time units at `reference_rpm` (default the
+file's own drive.rpm, Drive.cam_omega, whatever speed an override runs it at) and stored per
+radian (v/w, a/w^2, j/w^3, snap/w^4), so the cam does not change when the speed is changed.
 The event must start and end on the base circle: s = 0 given at the first and last station.
 Outside the event the lift is 0. Derivatives come from the polynomials, exactly, to any order.
 
@@ -188,7 +188,7 @@ def parse_spline_options(table, fields: dict[str, Any]) -> SplineOptions:
     if table.has("reference_rpm"):
         omega = table.quantity("reference_rpm", "speed", positive=True)
     else:
-        omega = fields["drive"].omega
+        omega = fields["drive"].cam_omega
     options, lift = parse_stations(table, continuity, omega)
     check_spline_shape(table, lift, fields["follower"], fields["lift"].start)
     return options

@@ -64,11 +64,22 @@ SECTION_KEYS = {"valve": "mass", "spring": "preload and rate", "linkage": "stiff
 class Drive:
     rpm: float  # rev/min, > 0
     operating_range: tuple[float, float] | None = None  # rev/min, lowest and highest (explorer check)
+    # rev/min as the scene file wrote drive.rpm, where an override (--set, the browser's speed) ran
+    # it at another: None when the run's speed is the file's (cam_omega)
+    written_rpm: float | None = None
 
     @property
     def omega(self) -> float:
         """Camshaft angular speed in rad/s."""
         return self.rpm * 2.0 * math.pi / 60.0
+
+    @property
+    def cam_omega(self) -> float:
+        """The speed (rad/s) at which a lift law given in time units (an acceleration, a spline's
+        stations, a polydyne's design) defines its cam when it names no speed of its own: the
+        file's drive.rpm. A cam is steel: running it at another speed (--set drive.rpm, a sweep,
+        the browser's speed) must not reshape it, so all of them take the same cam."""
+        return (self.rpm if self.written_rpm is None else self.written_rpm) * 2.0 * math.pi / 60.0
 
 
 @dataclass(frozen=True)
@@ -215,9 +226,10 @@ def load_scene(path: str | os.PathLike, overrides: list[str] | tuple[str, ...] =
     """Read and validate a scene file; `overrides` are "section.key=value" strings (TOML values)."""
     # errors name the file as given; its relative data files are found beside the file itself
     # (`explorer simulate table_demo.toml` from any directory reads the package's data)
-    data = read_scene_data(path, overrides)
+    written = read_scene_data(path)
+    data = apply_overrides(written, overrides, str(path))
     folder = os.path.dirname(os.path.abspath(find_scene(path)))
-    return scene_from_dict(data, str(path), folder=folder)
+    return scene_from_dict(data, str(path), folder=folder, written=written)
 
 
 def read_scene_data(path: str | os.PathLike, overrides=()) -> dict:
@@ -238,7 +250,8 @@ MAX_NESTING = 32
 
 
 def loads_scene(text: str, source: str = "<memory>", overrides=()) -> Scene:
-    return scene_from_dict(_toml_data(text, source, overrides), source)
+    written = _toml_data(text, source, ())
+    return scene_from_dict(apply_overrides(written, overrides, source), source, written=written)
 
 
 def _toml_data(text: str, source: str, overrides) -> dict:
@@ -304,7 +317,34 @@ def apply_overrides(data: dict, overrides, file: str) -> dict:
     return data
 
 
-def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>", folder: str = "") -> Scene:
+def _rpm(drive_t) -> float:
+    """drive.rpm in rev/min (InputError naming it when it is no speed or beyond MAX_RPM)."""
+    rpm_si = drive_t.quantity("rpm", "speed", positive=True)
+    raw_rpm = drive_t.raw("rpm")
+    # a bare number is rev/min already: keep it exact rather than round-tripping through rad/s
+    rpm = float(raw_rpm) if isinstance(raw_rpm, (int, float)) else rpm_si * 60.0 / (2.0 * math.pi)
+    if rpm > MAX_RPM:
+        raise drive_t.error("rpm", f"more than {MAX_RPM:g} rpm is outside any valve gear, got {echo(raw_rpm)}")
+    return rpm
+
+
+def _written_rpm(written: Mapping[str, Any] | None, file: str, rpm: float) -> float | None:
+    """The file's own drive.rpm (rev/min) where an override changed it, else None. A file whose own
+    value is missing or no speed (the override supplies it) has no other speed: None."""
+    drive = written.get("drive") if isinstance(written, Mapping) else None
+    if not isinstance(drive, Mapping) or "rpm" not in drive:
+        return None
+    try:
+        own = _rpm(Table({"rpm": drive["rpm"]}, file, "drive"))
+    except InputError:
+        return None
+    return None if own == rpm else own
+
+
+def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>", folder: str = "",
+                    written: Mapping[str, Any] | None = None) -> Scene:
+    """The validated scene of TOML tables `data`; `written`: the file's tables before overrides,
+    whose drive.rpm defines the cam of laws given in time units (Drive.cam_omega)."""
     top = Table(data, file, "")
     top.reject_unknown(TOP_KEYS)
     name = top.string("name", default=Path(file).stem if file != "<memory>" else "scene")
@@ -322,13 +362,8 @@ def scene_from_dict(data: Mapping[str, Any], file: str = "<memory>", folder: str
 
     drive_t = top.table("drive")
     drive_t.reject_unknown(("rpm", "operating_range"))
-    rpm_si = drive_t.quantity("rpm", "speed", positive=True)
-    raw_rpm = drive_t.raw("rpm")
-    # a bare number is rev/min already: keep it exact rather than round-tripping through rad/s
-    rpm = float(raw_rpm) if isinstance(raw_rpm, (int, float)) else rpm_si * 60.0 / (2.0 * math.pi)
-    if rpm > MAX_RPM:
-        raise drive_t.error("rpm", f"more than {MAX_RPM:g} rpm is outside any valve gear, got {echo(raw_rpm)}")
-    drive = Drive(rpm=rpm, operating_range=_operating_range(drive_t))
+    rpm = _rpm(drive_t)
+    drive = Drive(rpm=rpm, operating_range=_operating_range(drive_t), written_rpm=_written_rpm(written, file, rpm))
 
     follower = _parse_follower(top.table("follower", required=False), file)
     lift = _parse_lift(top.table("lift"), file)
