@@ -314,6 +314,14 @@ def _descendants(proc) -> list:
         return []
 
 
+def _is_worker(p) -> bool:
+    try:
+        line = " ".join(p.cmdline())
+    except Exception:  # ended meanwhile
+        return False
+    return "python" in line and "resource_tracker" not in line
+
+
 def test_sweep_workers_end_with_the_parent_on_sigterm(tmp_path):
     """A sweep on a pool of forked workers, stopped by SIGTERM while they work: the parent exits
     with 128 + 15 and writes nothing, and no worker outlives it (each has the signal's default
@@ -332,7 +340,9 @@ def test_sweep_workers_end_with_the_parent_on_sigterm(tmp_path):
         deadline = time.monotonic() + process_timeout(0.5)
         workers = []
         while time.monotonic() < deadline and proc.poll() is None:
-            workers = [p for p in _descendants(proc) if "resource_tracker" not in " ".join(p.cmdline())]
+            # the pool's Python workers only: not multiprocessing's resource tracker, nor a short-lived
+            # helper a worker runs while importing (ctypes.util.find_library's `/sbin/ldconfig -p`)
+            workers = [p for p in _descendants(proc) if _is_worker(p)]
             if len(workers) >= min(2, local_cores()):
                 break
             time.sleep(0.05)
