@@ -30,7 +30,7 @@ DEMO = SCENES / "polydyne_demo.toml"
 ERROR_LINE = re.compile(r"^error: [^:\n]+: [^:\n]+: .+$")
 
 
-@pytest.mark.parametrize("name", ["cycloidal", "harmonic", "polynomial-345", "polynomial-4567"])
+@pytest.mark.parametrize("name", ["cycloidal", "harmonic", "polynomial-345", "polynomial-4567", "polynomial-56789"])
 def test_high_derivatives_by_complex_step(name):
     u = np.linspace(0.013, 0.987, 41)
     h = 1e-30  # complex step: f'(u) = Im f(u + i h) / h, no subtraction, no truncation at this h
@@ -97,7 +97,7 @@ def test_cam_is_the_formula_and_smooth_to_its_slope():
 def test_closed_form_integral_against_quadrature():
     for name, coefficients in RISE_POLYNOMIALS.items():
         accel = np.polynomial.Polynomial(coefficients).deriv(2)
-        for lam in (0.7, 5.0, 23.4, 140.0):
+        for lam in (0.7, 3.9, 4.1, 5.0, 23.4, 140.0):  # both sides of SERIES_LAM
             re_part = quad(lambda u: accel(u) * math.cos(lam * u), 0, 1, limit=400, epsabs=1e-13)[0]
             im_part = quad(lambda u: accel(u) * math.sin(lam * u), 0, 1, limit=400, epsabs=1e-13)[0]
             got = _polynomial_fourier(accel.coef, lam)

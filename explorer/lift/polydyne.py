@@ -50,7 +50,7 @@ import numpy as np
 
 from ..core.errors import InputError, echo
 from ..core.ranges import RANGES
-from .laws import HIGH_ORDER_LAWS, LAWS, law_derivatives
+from .laws import HIGH_ORDER_LAWS, LAWS, POLYNOMIAL_56789, law_derivatives
 from .validity import computed_error, lift_fault
 from .spline import MAX_CONTINUITY, SplineLift, SplineOptions, check_spline_shape, parse_stations, solve_spline
 
@@ -466,9 +466,27 @@ def build_polydyne_lift(scene) -> PolydyneLift:
 # Off the design speed
 
 
+SERIES_LAM = 4.0  # below it _polynomial_fourier sums the Taylor series (its terms stay below e^4 ~ 55)
+SERIES_TERMS = 80  # bound: 4^n / n! < 1e-18 from n ~ 40
+
+
 def _polynomial_fourier(coefficients, lam: float) -> complex:
     """Integral over [0, 1] of p(u) exp(i lam u) for the polynomial p (ascending coefficients), in
-    closed form: sum_k (-1)^k [p^(k)(u) e^(i lam u)]_0^1 / (i lam)^(k+1)."""
+    closed form: sum_k (-1)^k [p^(k)(u) e^(i lam u)]_0^1 / (i lam)^(k+1).
+
+    That sum cancels for small lam (its terms grow as p^(k)/lam^(k+1): 5-6-7-8-9's acceleration at
+    lam = 0.7 loses 8 digits), so there the Taylor series of the exponential is summed instead,
+    sum_n (i lam)^n / n! integral_0^1 p(u) u^n du, whose terms stay below e^|lam| times the integral's
+    size (at lam <= SERIES_LAM: ~2 digits)."""
+    if abs(lam) <= SERIES_LAM:
+        moments = lambda n: sum(c / (m + n + 1) for m, c in enumerate(coefficients))  # noqa: E731
+        total, term = 0.0 + 0.0j, 1.0 + 0.0j  # term = (i lam)^n / n!
+        for n in range(SERIES_TERMS):
+            total += term * moments(n)
+            term *= 1j * lam / (n + 1)
+            if abs(term) < 1e-18:  # moments are at most max|p|: the rest is below rounding
+                break
+        return complex(total)
     p = np.polynomial.Polynomial(coefficients)
     total = 0.0 + 0.0j
     k = 0
@@ -482,7 +500,8 @@ def _polynomial_fourier(coefficients, lam: float) -> complex:
     return complex(total)
 
 
-RISE_POLYNOMIALS = {"polynomial-345": (0, 0, 0, 10, -15, 6), "polynomial-4567": (0, 0, 0, 0, 35, -84, 70, -20)}
+RISE_POLYNOMIALS = {"polynomial-345": (0, 0, 0, 10, -15, 6), "polynomial-4567": (0, 0, 0, 0, 35, -84, 70, -20),
+                    "polynomial-56789": POLYNOMIAL_56789}
 
 
 def residual_amplitude(lift: PolydyneLift, rpm: float) -> float:
