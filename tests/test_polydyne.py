@@ -236,6 +236,76 @@ def test_residual_bad_speeds(tmp_path, capsys, rpm):
     assert list(tmp_path.iterdir()) == []
 
 
+# ---------------------------------------------------------------------------------------------
+# Steps in the cam's acceleration: the wanted lift's snap (explorer.lift.polydyne.acceleration_steps)
+
+M, K, H, BETA = 0.12, 2e6, 0.01, math.radians(70)  # polydyne_demo's valve mass, linkage, height, rise
+W_D = 2000 * 2 * math.pi / 60
+
+
+def _cam_acceleration_steps(lift, scene):
+    """The valve-referred cam acceleration's one-sided limits at every breakpoint of the lift, at the
+    design speed: evaluated 1e-9 rad either side (the cam's jerk moves it by ~1e-4 m/s**2 there)."""
+    w, ratio = scene.omega, scene.follower.ratio
+    out = []
+    for b in lift.breakpoints():
+        before, after = lift.derivatives(np.array([b - 1e-9, b + 1e-9]))[2] * ratio * w**2
+        out.append((math.degrees(b), after - before))
+    return out
+
+
+def test_a_4567_wanted_lift_warns_of_the_cam_acceleration_steps():
+    """4-5-6-7: its snap at the ends is 4! 35 = 840 h / beta^4 (Norton's coefficients, not the code),
+    so the cam's acceleration [s'' (1 + rate/k) + (M w^2/k) s^(4)] steps by (M w^4/k) 840 h / beta^4
+    = 435.27 m/s**2 at each end of the rise and return (the dwell's sides). The run warns once, in
+    one line naming the law, each cam angle and step, and the 5-6-7-8-9 law; the steps agree with
+    the cam's own one-sided accelerations and with the kinematics summary's valve_accel_jumps."""
+    from explorer.lift.polydyne import acceleration_steps
+
+    expected = M * W_D**4 / K * 840 * H / BETA**4
+    assert expected == pytest.approx(435.27, rel=1e-4)
+    scene = load_scene(DEMO, ['lift.wanted_law="polynomial-4567"'])
+    lift = build_lift(scene)
+    steps = acceleration_steps(lift)
+    assert [round(math.degrees(s.cam_angle), 9) for s in steps] == [60, 130, 150, 220]
+    signs = [1, 1, -1, -1]  # the acceleration rises into the rise and out of its end, falls at the return's
+    for s, sign in zip(steps, signs):
+        assert s.jump == pytest.approx(sign * expected, rel=1e-10)
+    cam = dict((round(a, 6), jump) for a, jump in _cam_acceleration_steps(lift, scene))
+    for s, sign in zip(steps, signs):
+        assert cam[round(math.degrees(s.cam_angle), 6)] == pytest.approx(sign * expected, rel=1e-6)
+
+    result = simulate(scene)
+    lines = [w for w in result.warnings if w.startswith("polydyne:")]
+    assert len(lines) == 1 and "\n" not in lines[0], result.warnings
+    line = lines[0]
+    for angle, sign in zip((60, 130, 150, 220), signs):
+        assert f"{sign * expected:+.4g} m/s**2 at cam angle {angle} deg" in line, line
+    assert "polynomial-4567" in line and "such as polynomial-56789" in line
+    jumps = result.summary["valve_accel_jumps"]
+    assert [j["after_m_s2"] - j["before_m_s2"] for j in jumps] == pytest.approx([s * expected for s in signs], rel=1e-6)
+
+
+def test_a_56789_polydyne_cam_has_a_continuous_acceleration():
+    """5-6-7-8-9 (snap 0 at its ends): no step, no warning, an empty valve_accel_jumps. Tolerance
+    1e-3 m/s**2 on the cam's one-sided accelerations 1e-9 rad apart (the jerk moves them ~1e-4
+    m/s**2), under 3e-6 of the 435.27 m/s**2 the 4-5-6-7 law makes (previous test); the same
+    evaluation of the 4-5-6-7 cam finds its steps, so the bound can fail."""
+    from explorer.lift.polydyne import acceleration_steps
+
+    scene = load_scene(DEMO, ['lift.wanted_law="polynomial-56789"'])
+    lift = build_lift(scene)
+    steps = _cam_acceleration_steps(lift, scene)
+    assert len(steps) == 6  # the ramps' two ends and the event's four joints
+    assert max(abs(jump) for _, jump in steps) < 1e-3
+    assert acceleration_steps(lift) == [] and lift.warnings == ()
+    rough = load_scene(DEMO, ['lift.wanted_law="polynomial-4567"'])
+    assert max(abs(jump) for _, jump in _cam_acceleration_steps(build_lift(rough), rough)) > 435.0
+    result = simulate(scene)
+    assert result.summary["valve_accel_jumps"] == []
+    assert not [w for w in result.warnings if w.startswith("polydyne:")]
+
+
 from hypothesis import HealthCheck, given, settings, strategies as st  # noqa: E402
 
 
