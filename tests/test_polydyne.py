@@ -107,7 +107,7 @@ def test_closed_form_integral_against_quadrature():
 def test_residual_vibration_matches_the_closed_form():
     """Off design, in contact: the exact solver's dwell amplitude equals the linear closed form."""
     scene = load_scene(DEMO)
-    rows = residual_sweep(scene, [1000, 1300, 1700, 1950, 2000, 2050, 2300, 2400])
+    rows = residual_sweep(scene, [1000, 1300, 1700, 1950, 2000, 2050, 2200, 2300])  # contact kept to 2300
     for row in rows:
         assert row.contact_kept
         assert row.closed_form_m is not None
@@ -120,9 +120,11 @@ def test_residual_vibration_matches_the_closed_form():
 
 def test_residual_closed_form_by_hand():
     """At w -> w_d the amplitude falls as |w_d^2 - w^2| (the forcing's factor): halving the
-    distance from the design speed about halves the amplitude, to first order."""
+    distance from the design speed about halves the amplitude, to first order. (The integral's own
+    change with the speed is ~4 % a rpm for the 5-6-7-8-9 rise, near a zero of it: 0.01 rpm keeps it
+    at 4e-4.)"""
     lift = build_lift(load_scene(DEMO))
-    a1, a2 = residual_amplitude(lift, 2000 - 2.0), residual_amplitude(lift, 2000 - 1.0)
+    a1, a2 = residual_amplitude(lift, 2000 - 0.02), residual_amplitude(lift, 2000 - 0.01)
     assert a1 / a2 == pytest.approx(2.0, rel=2e-3)
 
 
@@ -333,12 +335,12 @@ def test_follows_the_wanted_lift_for_any_train(stiffness, mass, preload, rate, l
 
 
 def test_closed_form_only_while_the_rise_keeps_contact():
-    """At 2500 rpm the valve leaves the cam once, after the dwell began (on the return): the dwell
-    amplitude still has its closed form, and agrees. At 2600 rpm the linkage unloads during the
+    """At 2350 rpm the valve leaves the cam once, after the dwell began (on the return, 173 deg): the
+    dwell amplitude still has its closed form, and agrees. At 2400 rpm the linkage unloads during the
     rise: no closed form (NaN), though the solver's amplitude is there."""
     from explorer.studies.residual import residual_table
 
-    table = residual_table(load_scene(DEMO), [2500.0, 2600.0], workers=1)
+    table = residual_table(load_scene(DEMO), [2350.0, 2400.0], workers=1)
     c = table.columns
     assert list(c["separations"]) == [1, 2]
     assert 130.0 < c["first_separation_deg"][0] and c["first_separation_deg"][1] < 130.0  # the dwell starts at 130 deg
