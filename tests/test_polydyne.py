@@ -346,3 +346,20 @@ def test_closed_form_only_while_the_rise_keeps_contact():
     assert 130.0 < c["first_separation_deg"][0] and c["first_separation_deg"][1] < 130.0  # the dwell starts at 130 deg
     assert abs(c["residual_amplitude_m"][0] - c["residual_closed_form_m"][0]) <= 1e-8 * c["residual_closed_form_m"][0]
     assert math.isnan(c["residual_closed_form_m"][1]) and c["residual_amplitude_m"][1] > 1e-6
+
+
+def test_the_warning_agrees_with_the_laws_declared_continuity():
+    """The check reads each joint's own derivatives; the law table declares each closed form's
+    smoothness (LawSpec.smoothness, into a dwell). They agree: every closed form a polydyne takes
+    (continuous to its jerk) warns of acceleration steps exactly when its declared smoothness stops
+    short of the snap (4)."""
+    from explorer.lift import registry
+    from explorer.lift.laws import HIGH_ORDER_LAWS
+    from explorer.lift.polydyne import acceleration_steps
+
+    taken = [registry.law_spec(n) for n in registry.closed_form_names()
+             if n in HIGH_ORDER_LAWS and registry.law_spec(n).smoothness >= 3]
+    assert {spec.smoothness for spec in taken} == {3, 4}  # both outcomes are exercised
+    for spec in taken:
+        lift = build_lift(load_scene(DEMO, [f'lift.wanted_law="{spec.name}"']))
+        assert bool(acceleration_steps(lift)) == (spec.smoothness < 4), spec.name
