@@ -255,7 +255,7 @@ def test_float_margin_elastic_bisects_the_first_separation():
     # ending 100 rpm plus a little below it passes, a little above fails
     poly = "assets/scenes/polydyne_demo.toml"
     onset = judge(poly, "float_margin", rpm="2000:2600:61").speed_rpm
-    assert 2400.0 < onset < 2500.0
+    assert 2300.0 < onset < 2310.0  # explorer residual: no separation at 2300 rpm, one at 2310
     good = judge(poly, "float_margin", rpm=f"1500:{onset - 100.0 - 1.0}:30")
     bad = judge(poly, "float_margin", rpm=f"1500:{onset - 100.0 + 1.0}:30")
     assert (good.verdict, bad.verdict) == ("pass", "fail")

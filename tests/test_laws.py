@@ -20,6 +20,9 @@ COEFFICIENTS = {
     "harmonic": (math.pi / 2, math.pi**2 / 2, math.pi**3 / 2),
     "polynomial-345": (1.875, 5.7735, 60.0),
     "polynomial-4567": (2.1875, 7.5132, 52.5),
+    # 5-6-7-8-9, by hand from f' = 630 u^4 (1-u)^4 with t = u - 1/2: f'' = -5040 t (1/4 - t^2)^3 peaks
+    # at t^2 = 1/28; the jerk -5040 (1/4 - t^2)^2 (1/4 - 7 t^2) peaks at t = 0
+    "polynomial-56789": (630 / 256, 5040 / math.sqrt(28) * (3 / 14) ** 3, 5040 / 64),
     "modified-trapezoid": (2.0, 4.8881, 61.426),
     "modified-sine": (1.7596, 5.5280, 69.466),
 }
@@ -78,10 +81,15 @@ def test_the_law_table_states_the_closed_forms_smoothness():
         ends = spec.function()(np.array([0.0, 1.0]))
         scale = np.abs(spec.function()(np.linspace(0.0, 1.0, 2001))).max(axis=1)
         assert ends[0].tolist() == pytest.approx([0.0, 1.0], abs=1e-15), spec.name
+        if spec.smoothness >= 3:  # beyond the jerk: the closed-form higher derivatives (polydyne's)
+            from explorer.lift.laws import law_derivatives
+
+            order = spec.smoothness + 1
+            ends = law_derivatives(spec.name, np.array([0.0, 1.0]), order)
+            scale = np.abs(law_derivatives(spec.name, np.linspace(0.0, 1.0, 2001), order)).max(axis=1)
         for k in range(1, spec.smoothness + 1):
             assert np.abs(ends[k]).max() <= 1e-9 * scale[k], (spec.name, k)
-        if spec.smoothness < 3:
-            assert np.abs(ends[spec.smoothness + 1]).max() > 1e-3 * scale[spec.smoothness + 1], spec.name
+        assert np.abs(ends[spec.smoothness + 1]).max() > 1e-3 * scale[spec.smoothness + 1], spec.name
 
 
 @pytest.mark.parametrize("name", COEFFICIENTS)
@@ -248,3 +256,41 @@ def test_grid_with_is_np_unique_of_the_grid_and_the_points():
         got = grid_with(grid, points)
         assert np.array_equal(got, expected, equal_nan=True), points
         assert np.array_equal(np.signbit(got), np.signbit(expected))
+
+
+def test_polynomial_56789_coefficients_from_their_conditions_and_closed_form():
+    """Oracle 1 (Norton, Cam Design and Manufacturing Handbook, polynomial cams: one coefficient per
+    boundary condition): the degree-9 polynomial with f(0) = 0, f(1) = 1 and its first four
+    derivatives 0 at both ends, solved here in exact rationals, is
+    126 u^5 - 420 u^6 + 540 u^7 - 315 u^8 + 70 u^9. Oracle 2, a closed form independent of the
+    coefficients: f is the regularised incomplete beta function
+    I_u(5, 5) = sum_{j=5..9} C(9, j) u^j (1 - u)^(9 - j), whose derivative is 630 u^4 (1 - u)^4.
+    The law's rows against both to 1e-12 of each row's peak (rounding of a degree-9 Horner sum with
+    coefficients ~500 is ~1e-13), and its first four derivatives exactly 0 at the ends."""
+    from fractions import Fraction
+
+    from explorer.lift.laws import POLYNOMIAL_56789, law_derivatives
+
+    def row(k: int, u: int) -> list[Fraction]:  # k-th derivative of u^m at u in {0, 1}, m = 0..9
+        return [Fraction(math.perm(m, k)) * Fraction(u) ** (m - k) if m >= k else Fraction(0) for m in range(10)]
+
+    a = [row(k, u) + [Fraction(1 if (k, u) == (0, 1) else 0)] for u in (0, 1) for k in range(5)]
+    for col in range(10):  # Gauss-Jordan in exact rationals (the system is regular)
+        pivot = next(i for i in range(col, 10) if a[i][col] != 0)
+        a[col], a[pivot] = a[pivot], a[col]
+        a[col] = [x / a[col][col] for x in a[col]]
+        for i in range(10):
+            if i != col and a[i][col] != 0:
+                a[i] = [x - a[i][col] * y for x, y in zip(a[i], a[col])]
+    assert tuple(r[-1] for r in a) == tuple(Fraction(c) for c in POLYNOMIAL_56789)
+
+    u = np.linspace(0.0, 1.0, 2001)
+    beta = sum(math.comb(9, j) * u**j * (1.0 - u) ** (9 - j) for j in range(5, 10))
+    f = law_derivatives("polynomial-56789", u, 5)
+    assert np.array_equal(f[:4], LAWS["polynomial-56789"](u))
+    assert np.abs(f[0] - beta).max() < 1e-12
+    assert np.abs(f[1] - 630.0 * u**4 * (1.0 - u) ** 4).max() < 1e-12 * 630 / 256
+    ends = law_derivatives("polynomial-56789", np.array([0.0, 1.0]), 5)
+    assert ends[0].tolist() == [0.0, 1.0] and np.all(ends[1:5] == 0.0)
+    # the first derivative not 0 at the ends: f^(5) = 630 * 4! = 15120 at both (f' symmetric about 1/2)
+    assert ends[5].tolist() == pytest.approx([15120.0, 15120.0], rel=1e-12)

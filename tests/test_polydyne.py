@@ -30,7 +30,7 @@ DEMO = SCENES / "polydyne_demo.toml"
 ERROR_LINE = re.compile(r"^error: [^:\n]+: [^:\n]+: .+$")
 
 
-@pytest.mark.parametrize("name", ["cycloidal", "harmonic", "polynomial-345", "polynomial-4567"])
+@pytest.mark.parametrize("name", ["cycloidal", "harmonic", "polynomial-345", "polynomial-4567", "polynomial-56789"])
 def test_high_derivatives_by_complex_step(name):
     u = np.linspace(0.013, 0.987, 41)
     h = 1e-30  # complex step: f'(u) = Im f(u + i h) / h, no subtraction, no truncation at this h
@@ -97,7 +97,7 @@ def test_cam_is_the_formula_and_smooth_to_its_slope():
 def test_closed_form_integral_against_quadrature():
     for name, coefficients in RISE_POLYNOMIALS.items():
         accel = np.polynomial.Polynomial(coefficients).deriv(2)
-        for lam in (0.7, 5.0, 23.4, 140.0):
+        for lam in (0.7, 3.9, 4.1, 5.0, 23.4, 140.0):  # both sides of SERIES_LAM
             re_part = quad(lambda u: accel(u) * math.cos(lam * u), 0, 1, limit=400, epsabs=1e-13)[0]
             im_part = quad(lambda u: accel(u) * math.sin(lam * u), 0, 1, limit=400, epsabs=1e-13)[0]
             got = _polynomial_fourier(accel.coef, lam)
@@ -107,7 +107,7 @@ def test_closed_form_integral_against_quadrature():
 def test_residual_vibration_matches_the_closed_form():
     """Off design, in contact: the exact solver's dwell amplitude equals the linear closed form."""
     scene = load_scene(DEMO)
-    rows = residual_sweep(scene, [1000, 1300, 1700, 1950, 2000, 2050, 2300, 2400])
+    rows = residual_sweep(scene, [1000, 1300, 1700, 1950, 2000, 2050, 2200, 2300])  # contact kept to 2300
     for row in rows:
         assert row.contact_kept
         assert row.closed_form_m is not None
@@ -120,9 +120,11 @@ def test_residual_vibration_matches_the_closed_form():
 
 def test_residual_closed_form_by_hand():
     """At w -> w_d the amplitude falls as |w_d^2 - w^2| (the forcing's factor): halving the
-    distance from the design speed about halves the amplitude, to first order."""
+    distance from the design speed about halves the amplitude, to first order. (The integral's own
+    change with the speed is ~4 % a rpm for the 5-6-7-8-9 rise, near a zero of it: 0.01 rpm keeps it
+    at 4e-4.)"""
     lift = build_lift(load_scene(DEMO))
-    a1, a2 = residual_amplitude(lift, 2000 - 2.0), residual_amplitude(lift, 2000 - 1.0)
+    a1, a2 = residual_amplitude(lift, 2000 - 0.02), residual_amplitude(lift, 2000 - 0.01)
     assert a1 / a2 == pytest.approx(2.0, rel=2e-3)
 
 
@@ -236,6 +238,76 @@ def test_residual_bad_speeds(tmp_path, capsys, rpm):
     assert list(tmp_path.iterdir()) == []
 
 
+# ---------------------------------------------------------------------------------------------
+# Steps in the cam's acceleration: the wanted lift's snap (explorer.lift.polydyne.acceleration_steps)
+
+M, K, H, BETA = 0.12, 2e6, 0.01, math.radians(70)  # polydyne_demo's valve mass, linkage, height, rise
+W_D = 2000 * 2 * math.pi / 60
+
+
+def _cam_acceleration_steps(lift, scene):
+    """The valve-referred cam acceleration's one-sided limits at every breakpoint of the lift, at the
+    design speed: evaluated 1e-9 rad either side (the cam's jerk moves it by ~1e-4 m/s**2 there)."""
+    w, ratio = scene.omega, scene.follower.ratio
+    out = []
+    for b in lift.breakpoints():
+        before, after = lift.derivatives(np.array([b - 1e-9, b + 1e-9]))[2] * ratio * w**2
+        out.append((math.degrees(b), after - before))
+    return out
+
+
+def test_a_4567_wanted_lift_warns_of_the_cam_acceleration_steps():
+    """4-5-6-7: its snap at the ends is 4! 35 = 840 h / beta^4 (Norton's coefficients, not the code),
+    so the cam's acceleration [s'' (1 + rate/k) + (M w^2/k) s^(4)] steps by (M w^4/k) 840 h / beta^4
+    = 435.27 m/s**2 at each end of the rise and return (the dwell's sides). The run warns once, in
+    one line naming the law, each cam angle and step, and the 5-6-7-8-9 law; the steps agree with
+    the cam's own one-sided accelerations and with the kinematics summary's valve_accel_jumps."""
+    from explorer.lift.polydyne import acceleration_steps
+
+    expected = M * W_D**4 / K * 840 * H / BETA**4
+    assert expected == pytest.approx(435.27, rel=1e-4)
+    scene = load_scene(DEMO, ['lift.wanted_law="polynomial-4567"'])
+    lift = build_lift(scene)
+    steps = acceleration_steps(lift)
+    assert [round(math.degrees(s.cam_angle), 9) for s in steps] == [60, 130, 150, 220]
+    signs = [1, 1, -1, -1]  # the acceleration rises into the rise and out of its end, falls at the return's
+    for s, sign in zip(steps, signs):
+        assert s.jump == pytest.approx(sign * expected, rel=1e-10)
+    cam = dict((round(a, 6), jump) for a, jump in _cam_acceleration_steps(lift, scene))
+    for s, sign in zip(steps, signs):
+        assert cam[round(math.degrees(s.cam_angle), 6)] == pytest.approx(sign * expected, rel=1e-6)
+
+    result = simulate(scene)
+    lines = [w for w in result.warnings if w.startswith("polydyne:")]
+    assert len(lines) == 1 and "\n" not in lines[0], result.warnings
+    line = lines[0]
+    for angle, sign in zip((60, 130, 150, 220), signs):
+        assert f"{sign * expected:+.4g} m/s**2 at cam angle {angle} deg" in line, line
+    assert "polynomial-4567" in line and "such as polynomial-56789" in line
+    jumps = result.summary["valve_accel_jumps"]
+    assert [j["after_m_s2"] - j["before_m_s2"] for j in jumps] == pytest.approx([s * expected for s in signs], rel=1e-6)
+
+
+def test_a_56789_polydyne_cam_has_a_continuous_acceleration():
+    """5-6-7-8-9 (snap 0 at its ends): no step, no warning, an empty valve_accel_jumps. Tolerance
+    1e-3 m/s**2 on the cam's one-sided accelerations 1e-9 rad apart (the jerk moves them ~1e-4
+    m/s**2), under 3e-6 of the 435.27 m/s**2 the 4-5-6-7 law makes (previous test); the same
+    evaluation of the 4-5-6-7 cam finds its steps, so the bound can fail."""
+    from explorer.lift.polydyne import acceleration_steps
+
+    scene = load_scene(DEMO, ['lift.wanted_law="polynomial-56789"'])
+    lift = build_lift(scene)
+    steps = _cam_acceleration_steps(lift, scene)
+    assert len(steps) == 6  # the ramps' two ends and the event's four joints
+    assert max(abs(jump) for _, jump in steps) < 1e-3
+    assert acceleration_steps(lift) == [] and lift.warnings == ()
+    rough = load_scene(DEMO, ['lift.wanted_law="polynomial-4567"'])
+    assert max(abs(jump) for _, jump in _cam_acceleration_steps(build_lift(rough), rough)) > 435.0
+    result = simulate(scene)
+    assert result.summary["valve_accel_jumps"] == []
+    assert not [w for w in result.warnings if w.startswith("polydyne:")]
+
+
 from hypothesis import HealthCheck, given, settings, strategies as st  # noqa: E402
 
 
@@ -263,14 +335,31 @@ def test_follows_the_wanted_lift_for_any_train(stiffness, mass, preload, rate, l
 
 
 def test_closed_form_only_while_the_rise_keeps_contact():
-    """At 2500 rpm the valve leaves the cam once, after the dwell began (on the return): the dwell
-    amplitude still has its closed form, and agrees. At 2600 rpm the linkage unloads during the
+    """At 2350 rpm the valve leaves the cam once, after the dwell began (on the return, 173 deg): the
+    dwell amplitude still has its closed form, and agrees. At 2400 rpm the linkage unloads during the
     rise: no closed form (NaN), though the solver's amplitude is there."""
     from explorer.studies.residual import residual_table
 
-    table = residual_table(load_scene(DEMO), [2500.0, 2600.0], workers=1)
+    table = residual_table(load_scene(DEMO), [2350.0, 2400.0], workers=1)
     c = table.columns
     assert list(c["separations"]) == [1, 2]
     assert 130.0 < c["first_separation_deg"][0] and c["first_separation_deg"][1] < 130.0  # the dwell starts at 130 deg
     assert abs(c["residual_amplitude_m"][0] - c["residual_closed_form_m"][0]) <= 1e-8 * c["residual_closed_form_m"][0]
     assert math.isnan(c["residual_closed_form_m"][1]) and c["residual_amplitude_m"][1] > 1e-6
+
+
+def test_the_warning_agrees_with_the_laws_declared_continuity():
+    """The check reads each joint's own derivatives; the law table declares each closed form's
+    smoothness (LawSpec.smoothness, into a dwell). They agree: every closed form a polydyne takes
+    (continuous to its jerk) warns of acceleration steps exactly when its declared smoothness stops
+    short of the snap (4)."""
+    from explorer.lift import registry
+    from explorer.lift.laws import HIGH_ORDER_LAWS
+    from explorer.lift.polydyne import acceleration_steps
+
+    taken = [registry.law_spec(n) for n in registry.closed_form_names()
+             if n in HIGH_ORDER_LAWS and registry.law_spec(n).smoothness >= 3]
+    assert {spec.smoothness for spec in taken} == {3, 4}  # both outcomes are exercised
+    for spec in taken:
+        lift = build_lift(load_scene(DEMO, [f'lift.wanted_law="{spec.name}"']))
+        assert bool(acceleration_steps(lift)) == (spec.smoothness < 4), spec.name

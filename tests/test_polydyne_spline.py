@@ -145,8 +145,8 @@ def test_off_design_the_valve_deviates():
 
 
 ROUGH = [
-    (["lift.continuity=3"], "lift.continuity", "snap (fourth derivative) continuous"),
     (["lift.continuity=2"], "lift.continuity", "jerk continuous"),
+    (["lift.continuity=1"], "lift.continuity", "acceleration continuous"),
 ]
 
 
@@ -167,7 +167,6 @@ def _replaced(text, station_angle, line, new):
 
 
 @pytest.mark.parametrize("angle,line,new,derivative", [
-    ("160", 'snap = "0 m/s**4"', 'snap = "1e6 m/s**4"', "snap (fourth derivative)"),
     ("0", 'j = "0 m/s**3"', 'j = "100 m/s**3"', "jerk"),
 ])
 def test_end_not_at_rest_names_the_derivative(tmp_path, capsys, angle, line, new, derivative):
@@ -208,3 +207,40 @@ def test_free_values_are_refused():
     with pytest.raises(InputError) as info:
         loads_scene(text, "x.toml")
     assert info.value.key == "lift.stations[1].s" and "explorer design" in info.value.reason
+
+
+def test_an_end_not_at_rest_in_its_snap_warns_of_the_cam_acceleration_step(tmp_path):
+    """A toy spline: the demo's last station with snap = 1e6 m/s**4 (at the design speed, the
+    reference). Its snap drops from 1e6 to 0 onto the ramp, so the cam's acceleration
+    [s'' (1 + rate/k) + (M w^2/k) s^(4)] steps by -(M/k) 1e6 m/s**4 = -0.06 m/s**2 there (the w^4 of
+    the snap's time units and of the formula cancel at the design speed). The same rule as the
+    closed forms': the run goes on and warns once, naming the station, its cam angle and the step."""
+    from explorer.effects.pipeline import simulate
+    from explorer.lift.polydyne import acceleration_steps
+
+    scene = loads_scene(_replaced(DEMO.read_text(), "160", 'snap = "0 m/s**4"', 'snap = "1e6 m/s**4"'), "toy.toml")
+    steps = acceleration_steps(build_lift(scene))
+    assert len(steps) == 1 and math.degrees(steps[0].cam_angle) == pytest.approx(60 + 160, abs=1e-9)
+    assert steps[0].jump == pytest.approx(-0.12 / 2e6 * 1e6, rel=1e-9)
+    lines = [w for w in simulate(scene).warnings if w.startswith("polydyne:")]
+    assert len(lines) == 1 and "-0.06 m/s**2 at cam angle 220 deg (station 4" in lines[0], lines
+    assert "spline" in lines[0] and "polynomial-56789" in lines[0]
+
+
+def test_continuity_3_warns_at_the_interior_stations():
+    """continuity = 3 leaves the snap free to jump at the interior stations (40, 80, 120 deg): the
+    cam's acceleration steps there (warned, as for a closed form), each step (M w^4/k) times the
+    snap's jump read off the polynomials on both sides (numpy's own derivatives of the coefficients)."""
+    from explorer.lift.polydyne import acceleration_steps
+
+    scene = load_scene(DEMO, ["lift.continuity=3"])
+    lift = build_lift(scene)
+    spline, w = lift.wanted.spline, scene.omega
+    steps = acceleration_steps(lift)
+    assert [round(math.degrees(s.cam_angle), 9) for s in steps] == [100, 140, 180]
+    for s, i in zip(steps, (1, 2, 3)):
+        widths = np.diff(spline.knots)
+        snap = [np.polynomial.Polynomial(spline.coefficients[j]).deriv(4)(u) / widths[j] ** 4
+                for j, u in ((i - 1, 1.0), (i, 0.0))]
+        assert s.jump == pytest.approx(0.12 * w**4 / 2e6 * (snap[1] - snap[0]), rel=1e-9)
+    assert len(lift.warnings) == 1 and "station 2" in lift.warnings[0]

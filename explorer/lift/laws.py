@@ -194,11 +194,18 @@ _MOD_SINE = _piecewise_harmonic(
     ]
 )
 
+# 5-6-7-8-9 polynomial (Norton, Cam Design and Manufacturing Handbook, polynomial cams): f(0) = 0,
+# f(1) = 1 and its first four derivatives 0 at both ends, ten conditions for degree 9. Its velocity
+# is f' = 630 u^4 (1 - u)^4 (f is the regularised incomplete beta function I_u(5, 5)). Its snap is
+# continuous into a dwell: the wanted lift of a polydyne cam whose acceleration has no step.
+POLYNOMIAL_56789 = (0, 0, 0, 0, 0, 126, -420, 540, -315, 70)
+
 LAWS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
     "cycloidal": _cycloidal,
     "harmonic": _harmonic,
     "polynomial-345": _polynomial((0, 0, 0, 10, -15, 6)),
     "polynomial-4567": _polynomial((0, 0, 0, 0, 35, -84, 70, -20)),
+    "polynomial-56789": _polynomial(POLYNOMIAL_56789),
     "modified-trapezoid": _MOD_TRAPEZOID,
     "modified-sine": _MOD_SINE,
 }
@@ -264,6 +271,7 @@ HIGH_ORDER_LAWS: dict[str, Callable[[np.ndarray, int], np.ndarray]] = {
     "harmonic": _harmonic_high,
     "polynomial-345": lambda u, order: _polynomial_high((0, 0, 0, 10, -15, 6), u, order),
     "polynomial-4567": lambda u, order: _polynomial_high((0, 0, 0, 0, 35, -84, 70, -20), u, order),
+    "polynomial-56789": lambda u, order: _polynomial_high(POLYNOMIAL_56789, u, order),
 }
 
 

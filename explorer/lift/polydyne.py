@@ -20,19 +20,25 @@ zero velocity and acceleration. After the event the same ramp, reversed, unloads
 
 Smoothness: S is continuous only if s'' is, and its slope only if s''' is: a wanted law whose
 acceleration or jerk jumps (cycloidal and 3-4-5 at their ends) would need a cam with a step or a
-corner, and is refused naming that derivative. The linkage must push throughout
+corner, and is refused naming that derivative. The cam's acceleration holds the wanted snap s^(4),
+so a wanted lift whose snap jumps (4-5-6-7 at its ends, into a dwell or a ramp) makes a cam whose
+acceleration steps by (M1 w_d^2/k) w_d^2 times the jump (valve-referred, m/s^2): a valid cam, whose
+jerk is unbounded there, so the run warns in one line (`acceleration_steps`: the same rule for a
+closed form and a spline, read off the law's own derivatives at each joint) and advises the
+5-6-7-8-9 polynomial, continuous to its snap. The linkage must push throughout
 (M1 w_d^2 s_theta_theta + W(s) > 0), and the model has no term for Coulomb friction (it flips at the
 valve's reversal and would step the cam by 2 R / k) or a damper (then S follows from a differential
 equation): both are refused.
 
 The wanted lift may also be a spline (`wanted_law = "spline"` with [[lift.stations]] as for the
 spline law, explorer.lift.spline): then no closed form is smooth enough by itself, so the spline
-must ask for it. `continuity` (default 4, at least 4) makes s to its fourth derivative (snap)
+must ask for it. `continuity` (default 4, at least 3) makes s to its fourth derivative (snap)
 continuous at every interior station, so that the cam's acceleration
 L_theta_theta = [s_theta_theta (1 + rate/k) + (M1 w_d^2/k) s^(4)] / ratio has no step; and
 s, v, a, j, snap = 0 at the first and last station join the event to the take-up ramps as
-smoothly (at the ramps' ends the cam's slope and acceleration are 0). Either shortfall is refused
-naming the derivative, as for a rough law. The spline's polynomials are exact to any order, so
+smoothly (at the ramps' ends the cam's slope and acceleration are 0). A shortfall up to the jerk
+is refused naming the derivative, as for a rough law; one in the snap (continuity = 3, or an end
+snap not 0) warns, as for a closed form. The spline's polynomials are exact to any order, so
 the cam's jerk (from s^(5)) comes from them too.
 
 Off the design speed the valve deviates: with e = s - s_wanted, in contact
@@ -50,7 +56,7 @@ import numpy as np
 
 from ..core.errors import InputError, echo
 from ..core.ranges import RANGES
-from .laws import HIGH_ORDER_LAWS, LAWS, law_derivatives
+from .laws import HIGH_ORDER_LAWS, LAWS, POLYNOMIAL_56789, law_derivatives
 from .validity import computed_error, lift_fault
 from .spline import MAX_CONTINUITY, SplineLift, SplineOptions, check_spline_shape, parse_stations, solve_spline
 
@@ -58,7 +64,10 @@ TWO_PI = 2.0 * math.pi
 SPLINE = "spline"  # wanted_law: the wanted lift through [[lift.stations]]
 SPLINE_KEYS = ("stations", "continuity", "reference_rpm")  # [lift] keys of the wanted spline only
 SHAPE_KEYS = ("height", "rise", "dwell", "return", "return_law")  # [lift] keys of a closed-form wanted law only
-MIN_SPLINE_CONTINUITY = 4  # s^(4) continuous: the cam's acceleration has no step
+MIN_SPLINE_CONTINUITY = 3  # the jerk continuous: the cam's slope has no corner (a snap jump only warns)
+DEFAULT_SPLINE_CONTINUITY = 4  # s^(4) continuous: the cam's acceleration has no step
+REFUSED_ORDERS = 4  # a jump in s to its jerk is refused (a step or a corner in the cam); in the snap it warns
+SNAP = 4
 DERIVATIVE_NAMES = ("lift", "velocity", "acceleration", "jerk", "snap (fourth derivative)")
 DERIVATIVE_UNITS = ("m", "m/s", "m/s**2", "m/s**3", "m/s**4")
 CONSEQUENCES = ("a step in the cam", "a step in the cam", "a step in the cam",
@@ -95,6 +104,19 @@ class Train:
 
 
 @dataclass(frozen=True)
+class Joint:
+    """Where the wanted lift's pieces meet: its derivatives per radian on both sides."""
+
+    where: str  # for the messages
+    before: np.ndarray  # s, s', ... per rad^k
+    after: np.ndarray
+    law: str  # the law whose end this is
+    beta: float  # rad, its angle (scale of the jump tolerance)
+    key: str  # the scene key that chose it
+    angle: float  # rad since the event starts
+
+
+@dataclass(frozen=True)
 class WantedLift:
     """The valve lift wanted, in event coordinates x (rad since the rise starts): rise of `height`
     over `rise` with `rise_law`, dwell, return with `return_law`; 0 outside [0, end)."""
@@ -105,10 +127,8 @@ class WantedLift:
     ret: float
     rise_law: str
     return_law: str
-    # derivatives checked for jumps at the joints: to the jerk (L and L' continuous); the closed
-    # forms' snap jumps at their ends (a step in the cam's acceleration, as a cycloidal cam has)
-    checked = 4
     advice = "use a law continuous to the jerk, such as polynomial-4567"
+    snap_advice = "use a law continuous to the snap, such as polynomial-56789"
 
     @property
     def end(self) -> float:
@@ -146,26 +166,30 @@ class WantedLift:
             out[0, falling] += h
         return out
 
-    def joints(self) -> list[tuple[str, np.ndarray, np.ndarray, str, float, str]]:
-        """(where, values before, values after, law, its angle, its key) of the lift and its first
-        three derivatives per radian at each joint of the event."""
+    def joints(self, order: int = 3) -> list[Joint]:
+        """The lift and its first `order` derivatives per radian on both sides of each joint of the
+        event (order 4, the snap: the laws' closed-form higher derivatives)."""
         h = self.height
-        powers = np.arange(4)
-        rise0 = h * LAWS[self.rise_law](np.zeros(1))[:, 0] / self.rise**powers
-        rise1 = h * LAWS[self.rise_law](np.ones(1))[:, 0] / self.rise**powers
-        ret0 = -h * LAWS[self.return_law](np.zeros(1))[:, 0] / self.ret**powers
-        ret1 = -h * LAWS[self.return_law](np.ones(1))[:, 0] / self.ret**powers
+        powers = np.arange(order + 1)
+
+        def side(law: str, u: float, beta: float) -> np.ndarray:
+            return h * law_derivatives(law, np.full(1, u), order)[:, 0] / beta**powers
+
+        rise0, rise1 = side(self.rise_law, 0.0, self.rise), side(self.rise_law, 1.0, self.rise)
+        ret0, ret1 = -side(self.return_law, 0.0, self.ret), -side(self.return_law, 1.0, self.ret)
         ret0[0] += h
         ret1[0] += h
-        rest, top = np.zeros(4), np.array([h, 0.0, 0.0, 0.0])
+        rest, top = np.zeros(order + 1), np.zeros(order + 1)
+        top[0] = h
         rise = (self.rise_law, self.rise, "lift.wanted_law")
         ret = (self.return_law, self.ret, "lift.return_law")
-        out = [("the start of the rise", rest, rise0, *rise)]
+        out = [Joint("the start of the rise", rest, rise0, *rise, 0.0)]
         if self.dwell > 0.0:
-            out += [("the end of the rise", rise1, top, *rise), ("the start of the return", top, ret0, *ret)]
+            out += [Joint("the end of the rise", rise1, top, *rise, self.rise),
+                    Joint("the start of the return", top, ret0, *ret, self.rise + self.dwell)]
         else:
-            out += [("the top, where the rise meets the return", rise1, ret0, *rise)]
-        out.append(("the end of the return", ret1, rest, *ret))
+            out += [Joint("the top, where the rise meets the return", rise1, ret0, *rise, self.rise)]
+        out.append(Joint("the end of the return", ret1, rest, *ret, self.end))
         return out
 
 
@@ -177,9 +201,10 @@ class SplineWanted:
     height: float  # largest lift (scale of the jump tolerance)
     rise_law = SPLINE
     return_law = SPLINE
-    checked = 5  # to the snap: see the module doc
-    advice = ("give s, v, a, j and snap = 0 at the first and last station and continuity = "
-              f"{MIN_SPLINE_CONTINUITY} or more")
+    advice = ("give s, v, a and j = 0 at the first and last station and continuity = "
+              f"{DEFAULT_SPLINE_CONTINUITY} or more")
+    snap_advice = (f"give snap = 0 at the first and last station and continuity = {DEFAULT_SPLINE_CONTINUITY} or more, "
+                   "or a closed-form wanted_law continuous to the snap, such as polynomial-56789")
     closed_form_laws = frozenset()  # the polynomials give every derivative exactly
 
     @property
@@ -195,17 +220,17 @@ class SplineWanted:
     def dwell_start(self) -> None:
         return None  # a spline names no dwell
 
-    def joints(self) -> list[tuple[str, np.ndarray, np.ndarray, str, float, str]]:
-        """Every station: the derivatives to the snap from the polynomial on each side (0 off the
+    def joints(self, order: int = 3) -> list[Joint]:
+        """Every station: the derivatives to `order` from the polynomial on each side (0 off the
         event), evaluated at the segment's own end rather than near it."""
         knots, n = self.spline.knots, len(self.spline.coefficients)
         out = []
         for i in range(n + 1):
-            before = self.spline.segment_derivatives(i - 1, 1.0, self.checked - 1) if i > 0 else np.zeros(self.checked)
-            after = self.spline.segment_derivatives(i, 0.0, self.checked - 1) if i < n else np.zeros(self.checked)
+            before = self.spline.segment_derivatives(i - 1, 1.0, order) if i > 0 else np.zeros(order + 1)
+            after = self.spline.segment_derivatives(i, 0.0, order) if i < n else np.zeros(order + 1)
             beta = float(min(knots[j + 1] - knots[j] for j in (i - 1, i) if 0 <= j < n))
             where = f"station {i} ({math.degrees(knots[i]):.6g} deg after the start)"
-            out.append((where, before, after, SPLINE, beta, f"lift.stations[{i}]"))
+            out.append(Joint(where, before, after, SPLINE, beta, f"lift.stations[{i}]", float(knots[i])))
         return out
 
 
@@ -265,6 +290,11 @@ class PolydyneLift:
         w = self.wanted
         marks = [-self.ramp, *w.marks(), w.end + self.ramp]
         return np.array(sorted({(m + self.start) % TWO_PI for m in marks}))
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """Steps in the cam's acceleration (a wanted lift whose snap jumps), for the run's warnings."""
+        return acceleration_step_warnings(self)
 
     @property
     def report(self) -> dict:
@@ -333,12 +363,12 @@ def _parse_wanted_spline(table, design_omega: float) -> SplineOptions:
     for name in SHAPE_KEYS:
         if table.has(name):
             raise table.error(name, "not used with wanted_law = \"spline\" (the stations give the wanted lift); remove it")
-    continuity = int(table.number("continuity", MIN_SPLINE_CONTINUITY, integer=True, minimum=0, maximum=MAX_CONTINUITY))
+    continuity = int(table.number("continuity", DEFAULT_SPLINE_CONTINUITY, integer=True, minimum=0, maximum=MAX_CONTINUITY))
     if continuity < MIN_SPLINE_CONTINUITY:
         raise table.error("continuity", f"'spline' with continuity = {continuity} is too rough for a polydyne cam: the "
                           f"cam lift S = s + (M w^2 s'' + W)/k needs the wanted valve {DERIVATIVE_NAMES[continuity + 1]} "
                           f"continuous at every station, which continuity = {continuity} does not ask for, and a jump "
-                          f"makes {CONSEQUENCES[continuity + 1]}; set continuity = {MIN_SPLINE_CONTINUITY} or more")
+                          f"makes {CONSEQUENCES[continuity + 1]}; set continuity = {DEFAULT_SPLINE_CONTINUITY} or more")
     omega = table.quantity("reference_rpm", "speed", positive=True) if table.has("reference_rpm") else design_omega
     options, lift = parse_stations(table, continuity, omega)
     for i, st in enumerate(options.stations):
@@ -351,18 +381,63 @@ def _parse_wanted_spline(table, design_omega: float) -> SplineOptions:
     return options
 
 
+def _jumps(jump: float, height: float, beta: float, k: int) -> bool:
+    """Whether a derivative k of the wanted lift jumps beyond rounding (relative to h / beta^k)."""
+    return abs(jump) > JUMP_TOLERANCE * height / beta**k
+
+
+@dataclass(frozen=True)
+class AccelerationStep:
+    """Where the wanted lift's snap jumps, the step it makes in the polydyne cam's acceleration."""
+
+    joint: Joint
+    cam_angle: float  # rad, in [0, 2 pi)
+    jump: float  # m/s^2: the cam's acceleration, valve-referred, at the design speed (after - before)
+
+
+def acceleration_steps(lift: PolydyneLift) -> list[AccelerationStep]:
+    """The joints where the wanted lift's snap jumps (its derivatives to the jerk are continuous:
+    check_polydyne refuses the rest). The cam's acceleration is
+    L_theta_theta = [s_theta_theta (1 + rate/k) + (M1 w_d^2/k) s^(4)] / ratio, so a snap jump ds4 (per
+    rad^4) steps the valve-referred cam acceleration by (M1 w_d^2/k) ds4 w_d^2 m/s^2 at the design
+    speed. The same rule for every wanted lift: its own derivatives on both sides of each joint
+    (a closed form's, a spline's polynomials)."""
+    t, w, omega = lift.train, lift.wanted, lift.design_omega
+    out = []
+    for joint in w.joints(SNAP):
+        jump = joint.after[SNAP] - joint.before[SNAP]
+        if _jumps(jump, w.height, joint.beta, SNAP):
+            step = t.mass * omega**2 / t.stiffness * jump * omega**2
+            out.append(AccelerationStep(joint, float((lift.start + joint.angle) % TWO_PI), float(step)))
+    return out
+
+
+def acceleration_step_warnings(lift: PolydyneLift) -> tuple[str, ...]:
+    """One line naming every step in the polydyne cam's acceleration (acceleration_steps): where,
+    by how much and of which law; none for a wanted lift continuous to its snap."""
+    steps = acceleration_steps(lift)
+    if not steps:
+        return ()
+    rpm = lift.design_omega * 60.0 / TWO_PI
+    where = ", ".join(f"{s.jump:+.4g} m/s**2 at cam angle {math.degrees(s.cam_angle):.4g} deg ({s.joint.where}, "
+                      f"{s.joint.law})" for s in steps)
+    return (f"polydyne: the wanted lift's snap (fourth derivative) jumps, so the cam's acceleration steps "
+            f"(valve-referred, at the design speed {rpm:g} rpm) and its jerk is unbounded there: by {where}; "
+            f"{lift.wanted.snap_advice}",)
+
+
 def check_polydyne(lift: PolydyneLift, file: str, follower=None) -> None:
     """InputError when the wanted lift is too rough for a cam, the linkage would have to pull, or
     the cam fails the validity checks every cam passes (explorer.lift.validity; for `follower`)."""
     w = lift.wanted
     omega = lift.design_omega
-    for where, before, after, law_name, beta, key in w.joints():
-        for k in range(w.checked):
-            jump = after[k] - before[k]
-            if abs(jump) > JUMP_TOLERANCE * w.height / beta**k:
-                raise InputError(file, key, f"{echo(law_name)} is too rough for a polydyne cam: the cam lift "
+    for joint in w.joints(REFUSED_ORDERS - 1):
+        for k in range(REFUSED_ORDERS):
+            jump = joint.after[k] - joint.before[k]
+            if _jumps(jump, w.height, joint.beta, k):
+                raise InputError(file, joint.key, f"{echo(joint.law)} is too rough for a polydyne cam: the cam lift "
                                  f"S = s + (M w^2 s'' + W)/k needs the wanted valve {DERIVATIVE_NAMES[k]} continuous, and it "
-                                 f"jumps by {jump * omega**k:.4g} {DERIVATIVE_UNITS[k]} at {where} (at "
+                                 f"jumps by {jump * omega**k:.4g} {DERIVATIVE_UNITS[k]} at {joint.where} (at "
                                  f"{omega * 60 / TWO_PI:g} rpm), which makes {CONSEQUENCES[k]}; {w.advice}")
     for name in sorted(w.closed_form_laws):
         if name not in HIGH_ORDER_LAWS:
@@ -466,9 +541,27 @@ def build_polydyne_lift(scene) -> PolydyneLift:
 # Off the design speed
 
 
+SERIES_LAM = 4.0  # below it _polynomial_fourier sums the Taylor series (its terms stay below e^4 ~ 55)
+SERIES_TERMS = 80  # bound: 4^n / n! < 1e-18 from n ~ 40
+
+
 def _polynomial_fourier(coefficients, lam: float) -> complex:
     """Integral over [0, 1] of p(u) exp(i lam u) for the polynomial p (ascending coefficients), in
-    closed form: sum_k (-1)^k [p^(k)(u) e^(i lam u)]_0^1 / (i lam)^(k+1)."""
+    closed form: sum_k (-1)^k [p^(k)(u) e^(i lam u)]_0^1 / (i lam)^(k+1).
+
+    That sum cancels for small lam (its terms grow as p^(k)/lam^(k+1): 5-6-7-8-9's acceleration at
+    lam = 0.7 loses 8 digits), so there the Taylor series of the exponential is summed instead,
+    sum_n (i lam)^n / n! integral_0^1 p(u) u^n du, whose terms stay below e^|lam| times the integral's
+    size (at lam <= SERIES_LAM: ~2 digits)."""
+    if abs(lam) <= SERIES_LAM:
+        moments = lambda n: sum(c / (m + n + 1) for m, c in enumerate(coefficients))  # noqa: E731
+        total, term = 0.0 + 0.0j, 1.0 + 0.0j  # term = (i lam)^n / n!
+        for n in range(SERIES_TERMS):
+            total += term * moments(n)
+            term *= 1j * lam / (n + 1)
+            if abs(term) < 1e-18:  # moments are at most max|p|: the rest is below rounding
+                break
+        return complex(total)
     p = np.polynomial.Polynomial(coefficients)
     total = 0.0 + 0.0j
     k = 0
@@ -482,7 +575,8 @@ def _polynomial_fourier(coefficients, lam: float) -> complex:
     return complex(total)
 
 
-RISE_POLYNOMIALS = {"polynomial-345": (0, 0, 0, 10, -15, 6), "polynomial-4567": (0, 0, 0, 0, 35, -84, 70, -20)}
+RISE_POLYNOMIALS = {"polynomial-345": (0, 0, 0, 10, -15, 6), "polynomial-4567": (0, 0, 0, 0, 35, -84, 70, -20),
+                    "polynomial-56789": POLYNOMIAL_56789}
 
 
 def residual_amplitude(lift: PolydyneLift, rpm: float) -> float:

@@ -100,6 +100,7 @@ LAWS: Registry[LawSpec] = Registry("law", {spec.name: spec for spec in (
     _closed("harmonic", 1, "simple harmonic: acceleration jumps at the ends"),
     _closed("polynomial-345", 2, "3-4-5 polynomial"),
     _closed("polynomial-4567", 3, "4-5-6-7 polynomial: jerk zero at the ends"),
+    _closed("polynomial-56789", 4, "5-6-7-8-9 polynomial: jerk and snap zero at the ends (a polydyne's wanted lift)"),
     _closed("modified-trapezoid", 2, "modified trapezoidal acceleration"),
     _closed("modified-sine", 2, "modified sine acceleration"),
     LawSpec("table", builder="explorer.lift.table:build_table_lift", parser="explorer.lift.table:parse_table_options",
