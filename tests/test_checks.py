@@ -276,6 +276,27 @@ def test_seat_bounce_counts_bounces_above_min_height():
     assert bad.value == impacts - 1
 
 
+def test_seat_bounce_fails_a_valve_that_never_lands():
+    """finger_hla_pumpup at its 4800 rpm: the adjuster pumps up and the valve stays 0.5 mm off its
+    seat (the run warns so); the sweep counts no seat impact. Before, the rule read that as 'pass 0';
+    a valve that never seats fails (value inf, the note says why)."""
+    scene = load_scene("assets/scenes/finger_hla_pumpup.toml")
+    table = explorer.sweep(scene, vary={"drive.rpm": [scene.drive.rpm]}, workers=1).columns
+    assert float(table["seat_impacts"][0]) == 0.0
+    r = judge(scene, "seat_bounce")
+    assert r.verdict == "fail" and math.isinf(r.value)
+    assert "does not land" in r.note
+
+
+def test_seat_bounce_note_says_what_is_counted():
+    """pushrod_train at 2000 rpm: four re-landings, of which only the first two rise more than 5 um
+    above the seat (an audit's reading of the CSV); the rule counts every re-landing once the largest
+    bounce passes min_height, and its note now says exactly that."""
+    r = judge("assets/scenes/pushrod_train.toml", "seat_bounce")
+    assert r.verdict == "fail" and r.value == 4.0
+    assert "every landing after the first is counted once the largest bounce rises above 5 um" in r.note
+
+
 def test_hertz_stress_against_the_scene_allowable():
     base = judge(FLOAT, "hertz_stress")
     assert base.fail == pytest.approx(4000 * 9.80665e4) and "diesel" in base.source
