@@ -256,7 +256,11 @@ def test_summary_and_columns():
                 "required_cam_width_m"):
         assert isinstance(s[key], float) and math.isfinite(s[key])
     assert np.allclose(c["self_locking_margin_deg"], 90 - 5 - np.abs(c["pressure_angle_deg"]))
-    assert s["min_self_locking_margin_deg"] == pytest.approx(85 - s["max_pressure_angle_deg"])
+    # the margin is the samples' (where the follower moves); the pressure angle's peak is refined
+    # between them (the kinematics' exact extremum), so it is at least the samples' largest
+    sampled = float(np.max(np.abs(c["pressure_angle_deg"])))
+    assert s["min_self_locking_margin_deg"] == pytest.approx(85 - sampled)
+    assert sampled <= s["max_pressure_angle_deg"] <= sampled + 0.05
     # the width rule on the largest roller force, exhaust k = 40 kgf/cm^2, D = 20 mm
     assert s["required_cam_width_m"] == pytest.approx(s["max_cam_normal_force_N"] / (40 * AT * 0.020))
     assert s["hertz_width_m"] == pytest.approx(0.012) and not s["hertz_width_from_rule"]
