@@ -120,11 +120,15 @@ def contact_effect(ctx) -> EffectOutput:
         "hertz_utilisation": float(sigma[i_sigma] / spec.allowable_stress),
         "required_cam_width_m": required_width,
         "required_cam_width_rule": rule,
-        "width_rule_k_Pa": spec.width_rule_k,
-        "valve_kind": spec.valve,
-        "engine": spec.engine,
         **gear_summary,
     }
+    # seed 004's width rule b = P/(k D) and its engines' allowables: named only where they act (the
+    # width rule sizes the width; no allowable of the scene's own), not as 1902 defaults
+    # beside a modern gear's Hertz figures
+    if rule == "P/(k D)":
+        summary.update({"width_rule_k_Pa": spec.width_rule_k, "valve_kind": spec.valve})
+    if spec.allowable_source != "given":
+        summary["engine"] = spec.engine
     warnings: list[str] = []
     if margin[i_margin] <= 0.0:
         warnings.append(
