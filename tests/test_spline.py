@@ -293,6 +293,7 @@ def test_design_command_and_toml_round_trip(tmp_path, capsys):
     (["--objective", "peak-jerk", "--radius-margin", "-2 mm"], "--radius-margin"),
     (["--objective", "peak-jerk", "--contact-margin", "2 mm"], "--contact-margin"),
     (["--objective", "peak-jerk", "--open-area", "7 N"], "--open-area"),
+    (["--objective", "peak-jerk", "--open-area", "5 mm"], "--open-area"),
     (["--objective", "peak-jerk", "--open-area", "0 mm*deg"], "--open-area"),
     (["--objective", "peak-jerk", "--open-area", "-5 mm*deg"], "--open-area"),
 ])

@@ -77,6 +77,19 @@ def _quantity(text, dimension, option):
     return value
 
 
+ANGLE_UNITS = ("radian", "degree", "turn", "revolution", "arcminute", "arcsecond", "gradian", "milliradian")
+
+
+def _angle_power(text: str) -> int:
+    """The power of angle units in a quantity's unit (mm*deg: 1, mm: 0, mm/deg: -1)."""
+    from ..core.units import parse_quantity, registry  # pint: loads when the command runs
+
+    _, unit = parse_quantity(text.strip(), file="<command line>", key="--open-area")
+    if not unit:
+        return 0
+    return int(sum(power for name, power in registry().Unit(unit)._units.items() if name in ANGLE_UNITS))
+
+
 def _speeds(text: str, option: str, interval: bool = False):
     """Speeds in rev/min (a bare number) or with a unit, each in drive.rpm's valid range: one
     speed, or an interval A:B in the range grammar of every command."""
@@ -116,12 +129,15 @@ def run(args) -> int:
         contact_rpm = float(_speeds(args.contact_rpm, "--contact-rpm")[0])
     area = args.open_area
     if area is not None and area.strip() != "keep":
-        # mm*deg has the dimension of a length (deg is a number); its SI value is in m*rad
+        # mm*deg has the dimension of a length (deg is a number); its SI value is in m*rad. So the
+        # angle must be named: "5 mm" would pass as 286 mm*deg (0.005 m*rad) without it
+        wrong = f"expected keep or an area of lift over cam angle such as '1500 mm*deg', got {echo(area)}"
         try:
             area = _quantity(area, "length", "--open-area")
         except InputError:
-            raise InputError("<command line>", "--open-area",
-                             f"expected keep or an area of lift over cam angle such as '1500 mm*deg', got {echo(area)}") from None
+            raise InputError("<command line>", "--open-area", wrong) from None
+        if _angle_power(args.open_area) != 1:
+            raise InputError("<command line>", "--open-area", wrong + " (a lift times one cam-angle unit: mm*deg or m*rad)")
         if area == 0.0:
             raise InputError("<command line>", "--open-area", "must be positive (or keep)")
     elif area is not None:
