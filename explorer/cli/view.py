@@ -11,7 +11,7 @@ import time
 import urllib.parse
 from pathlib import Path
 
-from ..core.errors import InputError
+from ..core.errors import InputError, check_port_number
 from ..core.files import check_regular
 from ..core.processes import Supervisor
 
@@ -46,15 +46,14 @@ def _free_port() -> int:
 
 
 def _check_port(port: int, option: str) -> int:
-    if not 0 <= port <= 65535:
-        raise InputError(option, option, f"must be between 0 and 65535, got {port}")
+    check_port_number(port, option)
     if port == 0:
         return _free_port()
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         try:
             s.bind((HOST, port))
         except OSError:
-            raise InputError(option, option, f"port {port} on {HOST} is in use; pick another (0 = any)") from None
+            raise InputError("<command line>", option, f"port {port} on {HOST} is in use; pick another (0 = any)") from None
     return port
 
 
@@ -104,7 +103,7 @@ def run(args) -> int:
     web_port = _check_port(args.port, "--port")
     grpc_port = 0 if _is_url(source) else _check_port(args.grpc_port, "--grpc-port")
     if web_port == grpc_port:
-        raise InputError("--grpc-port", "--grpc-port", "must differ from --port")
+        raise InputError("<command line>", "--grpc-port", "must differ from --port")
     from ..view.rerun.recording import rerun_executable  # local: loads when the command runs, not at `explorer --help`
 
     try:

@@ -1,0 +1,91 @@
+"""Rough edges of the `explorer` command found by a CLI audit: each bad input is one line naming
+the option (or file) and the reason, exit status 2, no traceback, nothing written."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from explorer import cli
+from conftest import SCENES, run_cli
+
+DEMO = SCENES / "cycloidal_demo.toml"
+
+
+def _one_error_line(capsys, argv, option, reason, written=()):
+    assert cli.main(argv) == 2
+    captured = capsys.readouterr()
+    err = captured.err
+    assert err.startswith("error: ") and err.count("\n") == 1, err
+    assert "Traceback" not in err
+    assert option in err and reason in err, err
+    assert err.count(f"{option}:") == 1, f"option named more than once: {err}"
+    for path in written:
+        assert not path.exists(), f"{path} written despite the error"
+    return err
+
+
+@pytest.mark.parametrize("range_text", ["1000:inf:3", "1000:-inf:3", "-Infinity:6000:3", "nan:6000:3",
+                                        "1000:inf rpm:3"])
+def test_vary_non_finite_end_is_named(tmp_path, capsys, range_text):
+    out = tmp_path / "s.csv"
+    err = _one_error_line(capsys, ["sweep", str(DEMO), "--vary", f"drive.rpm={range_text}", "-o", str(out)],
+                          "--vary", "must be finite", [out])
+    assert "unit" not in err  # was: "unknown unit 'inf'", the word read as the other end's unit
+
+
+def test_record_and_residual_non_finite_end(tmp_path, capsys):
+    out = tmp_path / "r.rrd"
+    _one_error_line(capsys, ["record", str(DEMO), "--sweep", "drive.rpm=1000:inf:3", "-o", str(out)],
+                    "--sweep", "must be finite", [out])
+    _one_error_line(capsys, ["residual", str(DEMO), "--rpm", "1000:inf:3"], "--rpm", "must be finite")
+
+
+@pytest.mark.parametrize(("extra", "reason"), [
+    (["--runs", "5"], "give --sample too"),  # was reported as a --vary error: "nothing to sweep"
+    (["--vary", "drive.rpm=1000:2000:3", "--runs", "5"], "give --sample too"),
+    (["--vary", "drive.rpm=1000:2000:3", "--runs", "0"], "whole number >= 1, got 0"),
+    (["--sample", "valve.lash=normal(0.25 mm, 0.02 mm)"], "needs --runs N"),
+])
+def test_runs_errors_name_runs(tmp_path, capsys, extra, reason):
+    out = tmp_path / "s.csv"
+    err = _one_error_line(capsys, ["sweep", str(DEMO), *extra, "-o", str(out)], "--runs", reason, [out])
+    assert "--vary:" not in err
+
+
+def test_scene_with_utf8_bom_is_read_like_without(tmp_path, capsys):
+    """Windows editors (Notepad) start UTF-8 files with a byte-order mark: the same scene."""
+    plain = tmp_path / "plain.toml"
+    bom = tmp_path / "bom.toml"
+    plain.write_bytes(DEMO.read_bytes())
+    bom.write_bytes(b"\xef\xbb\xbf" + DEMO.read_bytes())
+    summaries = []
+    for scene in (plain, bom):
+        out = tmp_path / f"{scene.stem}.json"
+        assert cli.main(["simulate", str(scene), "--set", "solver.steps_per_revolution=360",
+                         "--summary", str(out)]) == 0
+        summary = json.loads(out.read_text())
+        summary.pop("scene_file", None)
+        summaries.append({k: v for k, v in summary.items() if "time" not in k and k != "effects"})
+    capsys.readouterr()
+    assert summaries[0] == summaries[1]
+
+
+def test_bom_then_garbage_still_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_bytes(b"\xef\xbb\xbf[drive\n")
+    _one_error_line(capsys, ["simulate", str(bad)], str(bad), "malformed TOML")
+
+
+@pytest.mark.parametrize("port", ["70000", "-1"])
+def test_port_out_of_range_one_line(capsys, port):
+    err = _one_error_line(capsys, ["serve", str(DEMO), "--port", port], "--port", "from 1 to 65535, or 0")
+    assert err.startswith("error: <command line>: --port: ")
+
+
+def test_port_message_in_a_subprocess():
+    proc = run_cli("serve", DEMO, "--port", "70000")
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+    assert proc.stderr.startswith("error: <command line>: --port: must be a TCP port from 1 to 65535"), proc.stderr
