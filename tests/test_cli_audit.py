@@ -89,3 +89,36 @@ def test_port_message_in_a_subprocess():
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
     assert proc.stderr.startswith("error: <command line>: --port: must be a TCP port from 1 to 65535"), proc.stderr
+
+
+# ---------------------------------------------------------------- output extensions
+@pytest.mark.parametrize(("fmt", "name", "suffix"), [
+    ("dxf", "cam.stl", ".dxf"), ("stl", "cam.dxf", ".stl"), ("glb", "cam.gltf", ".glb"), ("csv", "cam.txt", ".csv"),
+    ("csv", "cam", ".csv"), ("stl", "cam.csv", ".stl"),
+])
+def test_export_refuses_a_name_of_another_format(tmp_path, capsys, fmt, name, suffix):
+    out = tmp_path / name
+    err = _one_error_line(capsys, ["export", str(DEMO), "--format", fmt, "-o", str(out)], "--output",
+                          f"must end in {suffix}", [out])
+    assert str(out) in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_export_grind_and_spectrum_refuse_a_name_not_csv(tmp_path, capsys):
+    out = tmp_path / "g.dxf"
+    _one_error_line(capsys, ["export", str(DEMO), "--format", "grind", "--grinding-wheel-radius", "150 mm",
+                             "-o", str(out)], "--output", "must end in .csv", [out])
+    out = tmp_path / "s.png"
+    _one_error_line(capsys, ["spectrum", str(DEMO), "--orders", "10", "-o", str(out)], "--output",
+                    "must end in .csv", [out])
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_export_and_spectrum_matching_extension_any_case_are_written(tmp_path, capsys):
+    out = tmp_path / "CAM.DXF"
+    assert cli.main(["export", str(DEMO), "--format", "dxf", "-o", str(out)]) == 0
+    assert out.read_text().lstrip().startswith("0")  # a DXF starts with group code 0
+    capsys.readouterr()
+    table = tmp_path / "s.csv"
+    assert cli.main(["spectrum", str(DEMO), "--orders", "5", "-o", str(table)]) == 0
+    assert table.exists()

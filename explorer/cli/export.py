@@ -36,7 +36,8 @@ def register(sub) -> None:
     add_scene_arguments(p)
     p.add_argument("--format", required=True, choices=FORMATS)
     p.add_argument("-o", "--output", metavar="PATH",
-                   help="where to write (default: the scene's name with the format's extension; - for stdout)")
+                   help="where to write, a name ending in the format's extension (.csv for csv and grind, .dxf, .stl, "
+                        ".glb); default: the scene's name with that extension; - for stdout")
     p.add_argument("--tolerance", default=None, metavar="LENGTH",
                    help=f"largest distance of a chord from the exact curve (dxf, stl, glb; default {DEFAULT_TOLERANCE})")
     p.add_argument("--points", type=int, default=None, metavar="N", help="rows of the csv and grind tables (default 3600)")
@@ -91,7 +92,9 @@ def run(args) -> int:
     tolerance, width, wheel, points = _check_options(args)
     scene = scene_from_args(args)
     name = args.output if args.output is not None else f"{Path(scene.source).stem if scene.source != '<memory>' else 'cam'}{EXTENSIONS[args.format]}"
-    out = check_output(name, "--output")
+    # a name whose extension is another format's (`--format dxf -o cam.stl`) would give a file
+    # that its extension's programs cannot open: refused, as --plot refuses a name not ending in .png
+    out = check_output(name, "--output", EXTENSIONS[args.format])
     distinct_outputs((out,), (scene.source,))
     src = exports.cam_source(scene)
     if args.format == "csv":
