@@ -3,11 +3,14 @@ the option (or file) and the reason, exit status 2, no traceback, nothing writte
 
 from __future__ import annotations
 
+import io
 import json
+import time
 
 import pytest
 
 from explorer import cli
+from explorer.cli import progress
 from conftest import SCENES, run_cli
 
 DEMO = SCENES / "cycloidal_demo.toml"
@@ -122,3 +125,74 @@ def test_export_and_spectrum_matching_extension_any_case_are_written(tmp_path, c
     table = tmp_path / "s.csv"
     assert cli.main(["spectrum", str(DEMO), "--orders", "5", "-o", str(table)]) == 0
     assert table.exists()
+
+
+# ---------------------------------------------------------------- progress on stderr
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_progress_draws_on_a_terminal_after_the_first_second_only(monkeypatch):
+    monkeypatch.delenv(progress.ENV, raising=False)
+    term = _Terminal()
+    p = progress.Progress(term, unit="recordings")
+    p(1, 10, 0.5)  # within the first second: nothing
+    assert term.getvalue() == ""
+    p(5, 10, 2.0)
+    assert "5/10 recordings" in term.getvalue() and "recordings/s" in term.getvalue()
+    assert "2 s left" in term.getvalue()  # 2.5 per second, 5 left
+    p.end()
+    assert term.getvalue().endswith("\n")
+    log = io.StringIO()  # a file or pipe: no carriage-return noise
+    quiet = progress.Progress(log)
+    quiet(5, 10, 2.0)
+    quiet.end()
+    assert log.getvalue() == ""
+    monkeypatch.setenv(progress.ENV, "1")  # asked for, in a log
+    progress.Progress(log)(5, 10, 2.0)
+    assert "5/10 runs" in log.getvalue()
+    monkeypatch.setenv(progress.ENV, "0")
+    silenced = _Terminal()
+    progress.Progress(silenced)(5, 10, 2.0)
+    assert silenced.getvalue() == ""
+
+
+def test_ticking_shows_the_seconds_of_a_long_block_and_nothing_of_a_short_one(monkeypatch):
+    monkeypatch.delenv(progress.ENV, raising=False)
+    short = _Terminal()
+    with progress.ticking(short, "export csv"):
+        pass
+    assert short.getvalue() == ""
+    monkeypatch.setattr(progress, "FIRST_SECONDS", 0.05)
+    monkeypatch.setattr(progress, "EVERY_SECONDS", 0.01)
+    long = _Terminal()
+    with progress.ticking(long, "export csv"):
+        time.sleep(0.3)
+    assert "export csv: working" in long.getvalue() and long.getvalue().endswith("\n")
+
+
+@pytest.fixture
+def eager_progress(monkeypatch):
+    """Progress drawn from the start, into the captured (non-terminal) stderr."""
+    monkeypatch.setenv(progress.ENV, "1")
+    monkeypatch.setattr(progress, "FIRST_SECONDS", 0.0)
+    monkeypatch.setattr(progress, "EVERY_SECONDS", 0.001)
+
+
+def test_record_sweep_export_and_simulate_report_progress(tmp_path, capsys, eager_progress):
+    out = tmp_path / "s.rrd"
+    assert cli.main(["record", str(DEMO), "--no-parts", "--set", "solver.steps_per_revolution=360",
+                     "--sweep", "drive.rpm=1000,2000", "-o", str(out)]) == 0
+    assert "2/2 recordings" in capsys.readouterr().err
+    assert cli.main(["export", str(DEMO), "--format", "csv", "--points", "400000", "-o", str(tmp_path / "p.csv")]) == 0
+    assert "export csv: working" in capsys.readouterr().err
+    assert cli.main(["simulate", str(DEMO), "--set", "solver.steps_per_revolution=100000",
+                     "-o", str(tmp_path / "s.csv")]) == 0
+    assert "simulate: working" in capsys.readouterr().err
+
+
+def test_no_progress_when_stderr_is_not_a_terminal(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv(progress.ENV, raising=False)
+    assert cli.main(["export", str(DEMO), "--format", "csv", "--points", "1000000", "-o", str(tmp_path / "p.csv")]) == 0
+    assert capsys.readouterr().err == ""

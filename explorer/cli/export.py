@@ -10,6 +10,7 @@ from ..core.errors import InputError, echo
 from ..core.outputs import HELP as OUTPUT_HELP, check_output, distinct_outputs, write_checked
 from ..core.units import to_si
 from ..view.exports import FORMATS
+from .progress import ticking
 from .simulate import add_scene_arguments, scene_from_args
 
 HELP = """\
@@ -96,24 +97,30 @@ def run(args) -> int:
     # that its extension's programs cannot open: refused, as --plot refuses a name not ending in .png
     out = check_output(name, "--output", EXTENSIONS[args.format])
     distinct_outputs((out,), (scene.source,))
-    src = exports.cam_source(scene)
-    if args.format == "csv":
-        data = exports.point_table(src, points)
-    elif args.format == "dxf":
-        data = exports.dxf_text(src, tolerance)
-    elif args.format in ("stl", "glb"):
-        if width is None:
-            from ..view.parts import layout  # heavy (PIL, scipy, trimesh): imported on use
-
-            width = layout(scene).cam_width
-        data = (exports.stl_bytes if args.format == "stl" else exports.glb_bytes)(src, tolerance, width)
-    else:
-        data = exports.grinding_text(src, exports.grinding_table(src, wheel, points))
-    write_checked(out, data)
+    with ticking(sys.stderr, f"export {args.format}"):  # a million points, a fine solid: seconds
+        data = _exported(exports, scene, args.format, tolerance, width, wheel, points)
+        write_checked(out, data)  # a million-point table is ~200 MB of text
     if not out.is_stdout():
         size = len(data)
         detail = f" to {tolerance * 1e6:.4g} um" if args.format in ("dxf", "stl", "glb") else ""
         print(f"{scene.name}: {args.format}{detail} -> {out.name} ({size} bytes)",
               file=sys.stdout)
     return 0
+
+
+def _exported(exports, scene, fmt, tolerance, width, wheel, points):
+    src = exports.cam_source(scene)
+    if fmt == "csv":
+        data = exports.point_table(src, points)
+    elif fmt == "dxf":
+        data = exports.dxf_text(src, tolerance)
+    elif fmt in ("stl", "glb"):
+        if width is None:
+            from ..view.parts import layout  # heavy (PIL, scipy, trimesh): imported on use
+
+            width = layout(scene).cam_width
+        data = (exports.stl_bytes if fmt == "stl" else exports.glb_bytes)(src, tolerance, width)
+    else:
+        data = exports.grinding_text(src, exports.grinding_table(src, wheel, points))
+    return data
 

@@ -7,7 +7,8 @@ import sys
 
 from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, distinct_outputs, write_checked
 from .simulate import add_scene_arguments, scene_from_args
-from .sweep import Progress, check_workers
+from .progress import Progress
+from .sweep import check_workers
 
 
 HELP = """\

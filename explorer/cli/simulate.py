@@ -7,6 +7,7 @@ import sys
 
 from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, distinct_outputs, write_checked
 from ..scene.builtin import default_scene
+from .progress import ticking
 
 
 HELP = """\
@@ -53,12 +54,14 @@ def run(args) -> int:
     csv_out = check_output(args.output, "--output") if args.output is not None else None
     json_out = check_output(args.summary, "--summary") if args.summary is not None else None
     distinct_outputs((csv_out, json_out), (scene.source,))
-    result = simulate(scene)
-    with all_or_none():  # the columns and the summary, or neither
-        if csv_out is not None:
-            write_checked(csv_out, result.csv_chunks())  # in pieces: the largest step counts are gigabytes of text
-        if json_out is not None:
-            write_checked(json_out, result.json_text())
+    # hundreds of thousands of steps take seconds: the time elapsed on a terminal's stderr
+    with ticking(sys.stderr, "simulate"):
+        result = simulate(scene)
+        with all_or_none():  # the columns and the summary, or neither
+            if csv_out is not None:
+                write_checked(csv_out, result.csv_chunks())  # in pieces: the largest step counts are gigabytes of text
+            if json_out is not None:
+                write_checked(json_out, result.json_text())
     if csv_out is None and json_out is None:
         sys.stdout.write(result.json_text())
     else:
