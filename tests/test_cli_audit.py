@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import io
 import json
+import shlex
 import time
+from pathlib import Path
 
 import pytest
 
@@ -196,3 +198,39 @@ def test_no_progress_when_stderr_is_not_a_terminal(tmp_path, capsys, monkeypatch
     monkeypatch.delenv(progress.ENV, raising=False)
     assert cli.main(["export", str(DEMO), "--format", "csv", "--points", "1000000", "-o", str(tmp_path / "p.csv")]) == 0
     assert capsys.readouterr().err == ""
+
+
+# ---------------------------------------------------------------- examples in --help
+RUN_EXAMPLES = ("simulate", "design", "export", "residual", "spectrum", "bench")  # each a few seconds
+PARSE_EXAMPLES = ("view", "serve")  # servers that run until stopped: parsed, scenes checked
+
+
+def _examples(command: str) -> list[list[str]]:
+    parser = cli.build_parser()
+    sub = next(a for a in parser._subparsers._group_actions).choices[command]
+    text = sub.format_help()
+    assert "\nexamples:\n" in text, f"explorer {command} --help has no examples"
+    lines = [ln.strip() for ln in text.split("\nexamples:\n", 1)[1].splitlines() if ln.startswith("  explorer ")]
+    assert 2 <= len(lines) <= 4, lines
+    return [shlex.split(ln)[1:] for ln in lines]
+
+
+@pytest.mark.parametrize("command", RUN_EXAMPLES + PARSE_EXAMPLES)
+def test_help_examples_parse_and_name_built_in_scenes(command):
+    from explorer.scene.builtin import find_scene
+
+    for argv in _examples(command):
+        assert argv[0] == command
+        args = cli.build_parser().parse_args(argv)  # argparse exits on a wrong option
+        scene = getattr(args, "scene", None)
+        if scene is not None:
+            assert Path(find_scene(scene)).is_file(), f"{scene}: not a built-in scene"
+
+
+@pytest.mark.parametrize("command", RUN_EXAMPLES)
+def test_help_examples_run(command, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)  # the examples' outputs are relative names
+    for argv in _examples(command):
+        assert cli.main(argv) == 0, (argv, capsys.readouterr().err)
+    capsys.readouterr()
+    assert any(tmp_path.iterdir()) or command in ("design",)

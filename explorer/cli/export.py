@@ -31,9 +31,19 @@ DEFAULT_TOLERANCE = "1 um"
 EXTENSIONS = {"csv": ".csv", "dxf": ".dxf", "stl": ".stl", "glb": ".glb", "grind": ".csv"}
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer export cycloidal_demo.toml --format dxf --tolerance "1 um" -o cam.dxf
+  explorer export cycloidal_demo.toml --format stl --width "12 mm" -o cam.stl
+  explorer export cycloidal_demo.toml --format grind --grinding-wheel-radius "150 mm" -o grind.csv
+  explorer export cycloidal_demo.toml --format csv --points 720 -o points.csv
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("export", help="the cam as a point table, DXF, STL/GLB solid or grinding table",
-                       description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=HELP + "\n" + OUTPUT_HELP, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--format", required=True, choices=FORMATS)
     p.add_argument("-o", "--output", metavar="PATH",

@@ -32,9 +32,18 @@ complete .rrd each.
 """
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer serve
+  explorer serve cycloidal_demo.toml --port 0 --paused
+  explorer serve valve_float_demo.toml --rerun --rerun-save session.rrd
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("serve", help="3D explorer in the browser (viser)", description=HELP,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1; other hosts expose the explorer to the network)")

@@ -37,9 +37,18 @@ def scene_from_args(args):
     return load_scene(path, args.overrides)
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer simulate cycloidal_demo.toml -o run.csv --summary run.json
+  explorer simulate schenker1902_fig2.toml --set drive.rpm=300 --set valve.lash="0.3 mm" --summary slow.json
+  explorer simulate valve_float_demo.toml --set drive.rpm=3500 --set 'effects=["kinematics", "forces"]'
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("simulate", help="one revolution to CSV + JSON summary", description=HELP + "\n" + OUTPUT_HELP,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("-o", "--output", metavar="OUT.csv", help="write the per-step columns here")
     p.add_argument("--summary", metavar="OUT.json", help="write the summary here")

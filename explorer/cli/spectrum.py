@@ -15,9 +15,17 @@ frequency marked as a cam order. Table as CSV (stdout without -o), chart as PNG.
 """
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer spectrum elastic_float.toml --orders 60 -o spectrum.csv --plot spectrum.png
+  explorer spectrum cycloidal_demo.toml --orders 30 --set drive.rpm=6000
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("spectrum", help="harmonics of the valve acceleration against cam order (table, plot)",
-                       description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=HELP + "\n" + OUTPUT_HELP, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--orders", type=int, default=100, metavar="N", help="orders 1..N (default 100)")
     p.add_argument("-o", "--output", metavar="TABLE.csv", help="write the table here, a name ending in .csv (default: stdout)")

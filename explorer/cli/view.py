@@ -28,9 +28,17 @@ DEFAULT_GRPC_PORT = 9877  # not rerun's 9876, which `explorer serve --rerun` use
 STARTUP_TIMEOUT_S = 60.0
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer view run.rrd
+  explorer view run.rrd --port 0 --grpc-port 0
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("view", help="open a .rrd file in rerun's web viewer (127.0.0.1)", description=HELP,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("source", metavar="FILE.rrd|URL", help="a .rrd file, or a rerun+http://127.0.0.1:PORT/proxy address")
     p.add_argument("--port", type=int, default=DEFAULT_WEB_PORT,
                    help=f"web viewer port (default {DEFAULT_WEB_PORT}; 0 = any free port)")
