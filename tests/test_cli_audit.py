@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 import shlex
 import time
 from pathlib import Path
@@ -234,3 +235,62 @@ def test_help_examples_run(command, tmp_path, monkeypatch, capsys):
         assert cli.main(argv) == 0, (argv, capsys.readouterr().err)
     capsys.readouterr()
     assert any(tmp_path.iterdir()) or command in ("design",)
+
+
+# ---------------------------------------------------------------- documented columns and timelines
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+LEADING = re.compile(r"starts with these fourteen columns, in this order:\s*`([^`]+)`", re.S)
+
+
+def _header(tmp_path, scene: str) -> list[str]:
+    out = tmp_path / f"{scene}.csv"
+    assert cli.main(["simulate", scene, "--set", "solver.steps_per_revolution=360", "-o", str(out)]) == 0
+    return out.read_text().splitlines()[0].split(",")
+
+
+def _leading_in(text: str) -> list[str]:
+    return [c.strip() for c in text.split(",") if c.strip()]
+
+
+@pytest.mark.parametrize("scene", ["cycloidal_demo.toml", "schenker1902_fig2.toml", "pushrod_train.toml",
+                                   "trip_gear_dashpot.toml", "rocking_cam.toml"])
+def test_documented_leading_columns_are_the_written_header(tmp_path, capsys, scene):
+    doc = (DOCS / "reference" / "outputs.md").read_text()
+    documented = _leading_in(" ".join(LEADING.search(doc).group(1).split()))
+    helptext = cli.build_parser()._subparsers._group_actions[0].choices["simulate"].format_help()
+    block = helptext.split("in this order (SI units in the names):\n", 1)[1].split("\nthen ", 1)[0]
+    assert _leading_in(block) == documented
+    header = _header(tmp_path, scene)
+    capsys.readouterr()
+    assert header[:len(documented)] == documented, header
+
+
+def test_documented_table_of_a_built_in_scene_is_its_header(tmp_path, capsys):
+    doc = (DOCS / "reference" / "outputs.md").read_text()
+    section = doc.split("### Columns of a built-in scene", 1)[1]
+    rows = re.findall(r"^\| `([^`]+)` \|", section, re.M)
+    header = _header(tmp_path, "cycloidal_demo.toml")
+    capsys.readouterr()
+    assert rows == header
+    assert {"valve_in_contact", "valve_phase"} <= set(rows)
+
+
+def test_documented_valve_phase_codes_are_the_solvers():
+    from explorer.dynamics.phases import PHASE_CODES
+
+    doc = (DOCS / "reference" / "outputs.md").read_text()
+    row = next(ln for ln in doc.splitlines() if ln.startswith("| `valve_phase` |"))
+    for name, code in PHASE_CODES.items():
+        assert f"{code} {name}" in row or f"{code} {dict(contact='moving', flight='in flight', stuck='held', seated='seated')[name]}" in row, (name, row)
+
+
+def test_record_doc_names_the_timelines_the_recording_uses():
+    from explorer.view.rerun.recording import ANGLE_UNITS_PER_DEG, TIMELINE_ANGLE, TIMELINE_STEP, TIMELINE_TIME
+
+    doc = (DOCS / "guide" / "record.md").read_text()
+    named = re.search(r"The timelines: (.+?)\.\s", " ".join(doc.split())).group(1)
+    assert re.findall(r"`([^`]+)` \(", named) == [TIMELINE_ANGLE, TIMELINE_TIME, TIMELINE_STEP], named
+    assert ANGLE_UNITS_PER_DEG == 100 and "hundredths of a degree" in named
+    assert "cam_angle_deg" not in named  # the CSV column's name, not a timeline
+    record_help = cli.build_parser()._subparsers._group_actions[0].choices["record"].format_help()
+    assert f"Timelines: {TIMELINE_ANGLE} (hundredths of a degree" in record_help

@@ -13,11 +13,17 @@ from .progress import ticking
 HELP = """\
 Simulate one revolution of a scene: every effect the scene lists, nothing else.
 
-Writes one CSV row per step (cam_angle_deg, time_s, follower_lift_m, valve_lift_m,
-valve_velocity_m_s, valve_accel_m_s2, valve_jerk_m_s3 and one column per further quantity the
-effects compute; SI units in the names) and a JSON summary (peaks, impact velocities, events,
-each effect with its compute time). Without -o/--summary it prints the summary; with an
-output on /dev/stdout, the brief report goes to stderr.
+Writes one CSV row per step and a JSON summary (peaks, impact velocities, events, each effect
+with its compute time). The CSV's columns, in this order (SI units in the names):
+  cam_angle_deg, time_s,
+  follower_lift_m, follower_velocity_m_s, follower_accel_m_s2, follower_jerk_m_s3,
+  valve_lift_m, valve_velocity_m_s, valve_accel_m_s2, valve_jerk_m_s3,
+  rigid_valve_lift_m, rigid_valve_velocity_m_s, rigid_valve_accel_m_s2, rigid_valve_jerk_m_s3,
+then one column per further quantity the effects compute, in the order the effects run
+(docs/reference/outputs.md lists them; the elastic effect adds valve_in_contact, 1 while the
+linkage is loaded, and valve_phase, 0 seated, 1 contact, 2 flight, 3 stuck).
+Without -o/--summary it prints the summary; with an output on /dev/stdout, the brief report
+goes to stderr.
 """
 
 
