@@ -249,10 +249,12 @@ def test_bad_options_one_line_nothing_written(tmp_path, capsys, args, key, reaso
 
 
 def test_bad_scene_and_paths(tmp_path, capsys):
+    directory = tmp_path / "solid.stl"  # named as the format's file would be: only its kind is wrong
+    directory.mkdir()
     cases = [
         ([str(SCENES / "pivoted_roller_lever.toml"), "--format", "dxf"], "follower.type"),
         ([str(FIG2), "--format", "grind", "--grinding-wheel-radius", "150 mm"], "concave flank of radius 86.1 mm"),
-        ([str(DEMO), "--format", "stl", "-o", str(tmp_path)], "is a directory"),
+        ([str(DEMO), "--format", "stl", "-o", str(directory)], "is a directory"),
         ([str(DEMO), "--format", "dxf", "-o", str(tmp_path / "missing" / "x.dxf")], "does not exist"),
         ([str(DEMO), "--format", "dxf", "--set", "lift.rise=\"20 deg\"", "--set", "lift.return=\"20 deg\""], "undercut"),
     ]

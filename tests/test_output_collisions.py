@@ -52,9 +52,10 @@ def test_simulate_output_over_the_scene_and_summary_over_output(tmp_path, scene,
     _refused(capsys, ["simulate", scene, "-o", o, "--summary", o], "--summary", scene, o)
 
 
-def test_export_and_spectrum_over_the_scene(scene, capsys):
-    _refused(capsys, ["export", scene, "--format", "stl", "-o", scene], "--output", scene)
-    _refused(capsys, ["spectrum", scene, "-o", scene], "--output", scene)
+def test_export_and_spectrum_over_the_scene(tmp_path, scene, capsys):
+    # through links named with the format's extension: `-o X.toml` is refused by its extension first
+    _refused(capsys, ["export", scene, "--format", "stl", "-o", _link(tmp_path, "L.stl", scene)], "--output", scene)
+    _refused(capsys, ["spectrum", scene, "-o", _link(tmp_path, "L.csv", scene)], "--output", scene)
 
 
 def test_sweep_residual_check_record_through_a_link_to_the_scene(tmp_path, scene, capsys):

@@ -168,7 +168,7 @@ def test_view_bad_input(tmp_path, capsys, recording):
         ([str(tmp_path / "missing.rrd")], "file not found"),
         ([str(not_rrd)], "not a rerun recording"),
         ([str(tmp_path)], "directory"),
-        ([str(recording), "--port", "70000"], "between 0 and 65535"),
+        ([str(recording), "--port", "70000"], "from 1 to 65535, or 0"),
     ]
     for args, needle in cases:
         assert main(["view", *args]) == 2

@@ -24,7 +24,7 @@ from conftest import run_cli
 def test_bad_host_is_one_line_exit_2(capsys, host, reason):
     assert cli.main(["serve", "--host", host, "--port", "0"]) == 2
     err = capsys.readouterr().err.splitlines()
-    assert len(err) == 1 and err[0].startswith("error: --host: --host: ") and reason in err[0], err
+    assert len(err) == 1 and err[0].startswith("error: <command line>: --host: ") and reason in err[0], err
 
 
 @pytest.mark.parametrize("host", ["127.0.0.1", "localhost", "0.0.0.0"])
@@ -35,4 +35,4 @@ def test_loopback_and_any_are_accepted(host):
 def test_bad_host_in_a_subprocess_ends_at_once():
     proc = run_cli("serve", "--host", "999.1.1.1", "--port", "0", timeout=60)
     assert proc.returncode == 2 and proc.stdout == ""
-    assert proc.stderr.strip() == "error: --host: --host: '999.1.1.1' is not an IP address"
+    assert proc.stderr.strip() == "error: <command line>: --host: '999.1.1.1' is not an IP address"

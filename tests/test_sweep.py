@@ -157,7 +157,7 @@ def test_ctrl_c_keeps_the_finished_runs_as_a_valid_file_marked_incomplete(tmp_pa
     from explorer.core.processes import spawn
 
     out, log = tmp_path / "s.parquet", tmp_path / "err.txt"
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env = dict(os.environ, PYTHONPATH=str(ROOT), EXPLORER_PROGRESS="1")  # a log, no terminal: asked for
     with open(log, "w") as err:
         proc = spawn([sys.executable, "-m", "explorer", "sweep", str(FLOAT), "--vary", "drive.rpm=3000:6000:200000",
                       "-o", str(out), "--workers", "2"], stdout=subprocess.PIPE, stderr=err, text=True,

@@ -33,7 +33,7 @@ def load_rules_file(path) -> ChecksSpec:
     file = str(path)
     data = read_regular(path, file=file, key="-", limit=MAX_SCENE_FILE_BYTES)
     try:
-        table = tomllib.loads(data.decode("utf-8"))
+        table = tomllib.loads(data.decode("utf-8-sig"))  # a leading byte-order mark dropped
     except UnicodeDecodeError:
         raise InputError(file, "-", "not a UTF-8 text file") from None
     except tomllib.TOMLDecodeError as exc:

@@ -48,9 +48,17 @@ def _help() -> str:
             + "\n")
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer bench schenker1902_fig2.toml --quick --output-dir bench
+  explorer bench cycloidal_demo.toml --quick --repeats 1 --no-differentiation --output-dir bench
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("bench", help="accuracy versus time of the dynamics solvers (table, CSV, chart)",
-                       description=_help() + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=_help() + "\n" + OUTPUT_HELP, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--output-dir", default=".", metavar="DIR", help="where the CSV, PNG and text files go (default: .)")
     p.add_argument("--quick", action="store_true", help="few resolutions (90, 900, 3600 steps; rtol 1e-4, 1e-8): seconds, for tests")

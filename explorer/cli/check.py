@@ -10,7 +10,8 @@ from pathlib import Path
 from ..core.errors import InputError
 from ..core.outputs import HELP as OUTPUT_HELP, check_output, distinct_outputs, write_checked
 from .simulate import add_scene_arguments, scene_from_args
-from .sweep import Progress, _split
+from .progress import Progress
+from .sweep import _split
 
 HELP = """\
 Check a design against the rules of the field (explorer/checks/registry.py): pressure angle and

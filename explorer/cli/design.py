@@ -28,9 +28,17 @@ is then reported as not met, exit status 1); from the first second a line on std
 """
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer design spline_demo.toml --objective peak-acceleration --max-pressure-angle 30
+  explorer design spline_demo.toml --objective peak-jerk --toml
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("design", help="optimise a spline lift (peak acceleration, jerk, residual vibration)",
-                       description=HELP.format(budget=MAX_EVALUATIONS), formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=HELP.format(budget=MAX_EVALUATIONS), epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--objective", required=True, choices=OBJECTIVES)
     p.add_argument("--max-pressure-angle", metavar="ANGLE")

@@ -10,6 +10,7 @@ from ..core.errors import InputError, echo
 from ..core.outputs import HELP as OUTPUT_HELP, check_output, distinct_outputs, write_checked
 from ..core.units import to_si
 from ..view.exports import FORMATS
+from .progress import ticking
 from .simulate import add_scene_arguments, scene_from_args
 
 HELP = """\
@@ -30,13 +31,24 @@ DEFAULT_TOLERANCE = "1 um"
 EXTENSIONS = {"csv": ".csv", "dxf": ".dxf", "stl": ".stl", "glb": ".glb", "grind": ".csv"}
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer export cycloidal_demo.toml --format dxf --tolerance "1 um" -o cam.dxf
+  explorer export cycloidal_demo.toml --format stl --width "12 mm" -o cam.stl
+  explorer export cycloidal_demo.toml --format grind --grinding-wheel-radius "150 mm" -o grind.csv
+  explorer export cycloidal_demo.toml --format csv --points 720 -o points.csv
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("export", help="the cam as a point table, DXF, STL/GLB solid or grinding table",
-                       description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=HELP + "\n" + OUTPUT_HELP, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--format", required=True, choices=FORMATS)
     p.add_argument("-o", "--output", metavar="PATH",
-                   help="where to write (default: the scene's name with the format's extension; - for stdout)")
+                   help="where to write, a name ending in the format's extension (.csv for csv and grind, .dxf, .stl, "
+                        ".glb); default: the scene's name with that extension; - for stdout")
     p.add_argument("--tolerance", default=None, metavar="LENGTH",
                    help=f"largest distance of a chord from the exact curve (dxf, stl, glb; default {DEFAULT_TOLERANCE})")
     p.add_argument("--points", type=int, default=None, metavar="N", help="rows of the csv and grind tables (default 3600)")
@@ -91,26 +103,34 @@ def run(args) -> int:
     tolerance, width, wheel, points = _check_options(args)
     scene = scene_from_args(args)
     name = args.output if args.output is not None else f"{Path(scene.source).stem if scene.source != '<memory>' else 'cam'}{EXTENSIONS[args.format]}"
-    out = check_output(name, "--output")
+    # a name whose extension is another format's (`--format dxf -o cam.stl`) would give a file
+    # that its extension's programs cannot open: refused, as --plot refuses a name not ending in .png
+    out = check_output(name, "--output", EXTENSIONS[args.format])
     distinct_outputs((out,), (scene.source,))
-    src = exports.cam_source(scene)
-    if args.format == "csv":
-        data = exports.point_table(src, points)
-    elif args.format == "dxf":
-        data = exports.dxf_text(src, tolerance)
-    elif args.format in ("stl", "glb"):
-        if width is None:
-            from ..view.parts import layout  # heavy (PIL, scipy, trimesh): imported on use
-
-            width = layout(scene).cam_width
-        data = (exports.stl_bytes if args.format == "stl" else exports.glb_bytes)(src, tolerance, width)
-    else:
-        data = exports.grinding_text(src, exports.grinding_table(src, wheel, points))
-    write_checked(out, data)
+    with ticking(sys.stderr, f"export {args.format}"):  # a million points, a fine solid: seconds
+        data = _exported(exports, scene, args.format, tolerance, width, wheel, points)
+        write_checked(out, data)  # a million-point table is ~200 MB of text
     if not out.is_stdout():
         size = len(data)
         detail = f" to {tolerance * 1e6:.4g} um" if args.format in ("dxf", "stl", "glb") else ""
         print(f"{scene.name}: {args.format}{detail} -> {out.name} ({size} bytes)",
               file=sys.stdout)
     return 0
+
+
+def _exported(exports, scene, fmt, tolerance, width, wheel, points):
+    src = exports.cam_source(scene)
+    if fmt == "csv":
+        data = exports.point_table(src, points)
+    elif fmt == "dxf":
+        data = exports.dxf_text(src, tolerance)
+    elif fmt in ("stl", "glb"):
+        if width is None:
+            from ..view.parts import layout  # heavy (PIL, scipy, trimesh): imported on use
+
+            width = layout(scene).cam_width
+        data = (exports.stl_bytes if fmt == "stl" else exports.glb_bytes)(src, tolerance, width)
+    else:
+        data = exports.grinding_text(src, exports.grinding_table(src, wheel, points))
+    return data
 

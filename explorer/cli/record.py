@@ -6,10 +6,12 @@ import argparse
 import itertools
 import math
 import sys
+import time
 
 from ..core.errors import InputError, echo
 from ..core.outputs import HELP as OUTPUT_HELP, distinct_outputs
 from ..scene.builtin import default_scene
+from .progress import Progress
 
 # Each recording costs ~0.1-0.3 s and ~1-4 MB of the file at 3600 steps with the parts: a thousand
 # is minutes and gigabytes, and a viewer that shows them side by side. Wider sweeps are a typo
@@ -197,15 +199,22 @@ def run(args) -> int:
             run = Run(label=label, result=result) if args.no_parts else _with_parts_or_warn(label, result, magnification)
             yield replace(run, checks=check_design(scene)) if args.checks else run
 
+    progress = Progress(sys.stderr, unit="recordings")  # a --sweep of many values takes minutes
+    started = time.perf_counter()
+
     def written(r) -> None:
         done.append((r.label, len(r.result.columns["time_s"]), len(r.result.events), len(r.result.warnings)))
+        progress(len(done), len(plans), time.perf_counter() - started)
 
     try:
         write_recordings(out, runs(), on_run=written)
     except (OSError, RuntimeError) as exc:  # disk full, rerun CLI missing: not the user's input
+        progress.end()
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
         print(f"error: {InputError(out.name, '--output', f'writing failed: {reason}')}", file=sys.stderr)
         return 1
+    finally:
+        progress.end()
     report = sys.stderr if out.is_stdout() else sys.stdout  # stdout may be the file itself
     steps = sum(d[1] for d in done)
     print(f"{out.name}: {len(done)} recording{'s' if len(done) != 1 else ''}, {steps} steps", file=report)

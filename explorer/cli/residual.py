@@ -7,7 +7,8 @@ import sys
 
 from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, distinct_outputs, write_checked
 from .simulate import add_scene_arguments, scene_from_args
-from .sweep import Progress, check_workers
+from .progress import Progress
+from .sweep import check_workers
 
 
 HELP = """\
@@ -22,9 +23,17 @@ design speed. The table as CSV (stdout without -o) or Parquet (-o X.parquet), wi
 """
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer residual polydyne_demo.toml --rpm 1000:3000:21 -o residual.csv --plot residual.png
+  explorer residual valve_float_demo.toml --rpm 1000,2000,3000 --workers 1 -o residual.parquet
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("residual", help="residual vibration of the elastic valve over a speed range (table, plot)",
-                       description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=HELP + "\n" + OUTPUT_HELP, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--rpm", required=True, metavar="A:B:N|A,B,...", help="speeds: N from A to B rpm, or a list")
     p.add_argument("-o", "--output", metavar="TABLE.csv|TABLE.parquet", help="write the table here (default: stdout, CSV)")

@@ -8,7 +8,7 @@ import re
 import socket
 import sys
 
-from ..core.errors import InputError
+from ..core.errors import InputError, check_port_number
 from ..core.processes import Supervisor
 from .simulate import add_scene_arguments, scene_from_args
 
@@ -32,9 +32,18 @@ complete .rrd each.
 """
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer serve
+  explorer serve cycloidal_demo.toml --port 0 --paused
+  explorer serve valve_float_demo.toml --rerun --rerun-save session.rrd
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("serve", help="3D explorer in the browser (viser)", description=HELP,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1; other hosts expose the explorer to the network)")
@@ -82,15 +91,15 @@ def check_host(host: str) -> None:
                                                  flags=socket.AI_NUMERICHOST))
         return
     if not host.strip():
-        raise InputError("--host", "--host", "empty: give an address such as 127.0.0.1 or a host name")
+        raise InputError("<command line>", "--host", "empty: give an address such as 127.0.0.1 or a host name")
     if re.fullmatch(r"[0-9.]+", host) or ":" in host:
-        raise InputError("--host", "--host", f"{host!r} is not an IP address")
+        raise InputError("<command line>", "--host", f"{host!r} is not an IP address")
     if not _HOST_NAME.fullmatch(host):
-        raise InputError("--host", "--host", f"{host!r} is neither an IP address nor a host name")
+        raise InputError("<command line>", "--host", f"{host!r} is neither an IP address nor a host name")
     try:
         infos = socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)
     except (socket.gaierror, UnicodeError) as exc:
-        raise InputError("--host", "--host", f"{host!r} does not resolve "
+        raise InputError("<command line>", "--host", f"{host!r} does not resolve "
                          f"({exc.args[-1] if exc.args else exc})") from None
     _check_bindable(host, infos)
 
@@ -106,14 +115,13 @@ def _check_bindable(host: str, infos) -> None:
             return
         except OSError as exc:
             reason = exc.strerror or str(exc)
-    raise InputError("--host", "--host", f"{host!r} is not an address of this machine ({reason})")
+    raise InputError("<command line>", "--host", f"{host!r} is not an address of this machine ({reason})")
 
 
 def run(args) -> int:
     check_host(args.host)
     scene = scene_from_args(args)  # bad scene or --set: the usual one-line error, before any server
-    if not 0 <= args.port <= 65535:
-        raise InputError("--port", "--port", f"must be between 0 and 65535, got {args.port}")
+    check_port_number(args.port, "--port")
     if not _is_loopback(args.host):
         print(f"warning: listening on {args.host}: anyone who can reach this machine can open the explorer",
               file=sys.stderr)
@@ -122,7 +130,7 @@ def run(args) -> int:
             # local: rerun is optional (the ImportError below) and loads only with --rerun
             from ..view.rerun.live import open_live_stream
         except ImportError as exc:
-            raise InputError("--rerun", "--rerun", f"rerun streaming is not available ({exc})") from None
+            raise InputError("<command line>", "--rerun", f"rerun streaming is not available ({exc})") from None
 
     import viser
 

@@ -15,12 +15,20 @@ frequency marked as a cam order. Table as CSV (stdout without -o), chart as PNG.
 """
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer spectrum elastic_float.toml --orders 60 -o spectrum.csv --plot spectrum.png
+  explorer spectrum cycloidal_demo.toml --orders 30 --set drive.rpm=6000
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("spectrum", help="harmonics of the valve acceleration against cam order (table, plot)",
-                       description=HELP + "\n" + OUTPUT_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=HELP + "\n" + OUTPUT_HELP, epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scene_arguments(p)
     p.add_argument("--orders", type=int, default=100, metavar="N", help="orders 1..N (default 100)")
-    p.add_argument("-o", "--output", metavar="TABLE.csv", help="write the table here (default: stdout)")
+    p.add_argument("-o", "--output", metavar="TABLE.csv", help="write the table here, a name ending in .csv (default: stdout)")
     p.add_argument("--plot", metavar="CHART.png", help="write the chart here")
     p.set_defaults(run=run)
 
@@ -33,7 +41,7 @@ def run(args) -> int:
     if not 1 <= args.orders <= MAX_ORDERS:
         raise InputError("<command line>", "--orders", f"must be between 1 and {MAX_ORDERS}, got {args.orders}")
     scene = scene_from_args(args)
-    table_out = check_output("-" if args.output is None else args.output, "--output")
+    table_out = check_output("-" if args.output is None else args.output, "--output", suffix=".csv")
     plot_out = check_output(args.plot, "--plot", suffix=".png") if args.plot is not None else None
     distinct_outputs((table_out, plot_out), (scene.source,))
     spectrum = acceleration_spectrum(scene, build_lift(scene), args.orders)

@@ -10,6 +10,7 @@ from ..core.errors import InputError
 from ..core.outputs import HELP as OUTPUT_HELP, all_or_none, check_output, distinct_outputs
 from ..scene.builtin import default_scene
 from ..studies.sweep_spec import SWEEP_KEYS
+from .progress import Progress
 
 HELP = """\
 Sweep a scene over grids of its values and random samples: one run (one revolution, the scene's
@@ -86,33 +87,6 @@ def _split(text: str, option: str) -> tuple[str, str]:
         raise InputError(option, text[:60], "write KEY=VALUE, such as drive.rpm=1000:6000:100")
     key, _, value = text.partition("=")
     return key.strip(), value.strip().strip('"').strip("'")
-
-
-class Progress:
-    """A line on stderr, from the first second on: runs done, rate, time left."""
-
-    def __init__(self, stream):
-        self.stream = stream
-        self.shown = False
-        self.last = 0.0
-
-    def __call__(self, done: int, total: int, seconds: float) -> None:
-        if seconds < 1.0 or (seconds - self.last < 0.2 and done < total):
-            return
-        self.last = seconds
-        rate = done / seconds if seconds > 0 else 0.0
-        left = (total - done) / rate if rate > 0 else float("inf")
-        width = 30
-        filled = int(width * done / max(total, 1))
-        eta = f"{left:5.0f} s left" if left < 1e7 else "   ? s left"
-        self.stream.write(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} runs  {rate:8.1f} runs/s  {eta}")
-        self.stream.flush()
-        self.shown = True
-
-    def end(self) -> None:
-        if self.shown:
-            self.stream.write("\n")
-            self.stream.flush()
 
 
 def check_workers(workers: int | None, scheduler: str | None = None) -> int | None:

@@ -11,7 +11,7 @@ import time
 import urllib.parse
 from pathlib import Path
 
-from ..core.errors import InputError
+from ..core.errors import InputError, check_port_number
 from ..core.files import check_regular
 from ..core.processes import Supervisor
 
@@ -28,9 +28,17 @@ DEFAULT_GRPC_PORT = 9877  # not rerun's 9876, which `explorer serve --rerun` use
 STARTUP_TIMEOUT_S = 60.0
 
 
+# real commands on built-in scenes; tests/test_cli_audit.py runs or parses every line
+EPILOG = """\
+examples:
+  explorer view run.rrd
+  explorer view run.rrd --port 0 --grpc-port 0
+"""
+
+
 def register(sub) -> None:
     p = sub.add_parser("view", help="open a .rrd file in rerun's web viewer (127.0.0.1)", description=HELP,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("source", metavar="FILE.rrd|URL", help="a .rrd file, or a rerun+http://127.0.0.1:PORT/proxy address")
     p.add_argument("--port", type=int, default=DEFAULT_WEB_PORT,
                    help=f"web viewer port (default {DEFAULT_WEB_PORT}; 0 = any free port)")
@@ -46,15 +54,14 @@ def _free_port() -> int:
 
 
 def _check_port(port: int, option: str) -> int:
-    if not 0 <= port <= 65535:
-        raise InputError(option, option, f"must be between 0 and 65535, got {port}")
+    check_port_number(port, option)
     if port == 0:
         return _free_port()
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         try:
             s.bind((HOST, port))
         except OSError:
-            raise InputError(option, option, f"port {port} on {HOST} is in use; pick another (0 = any)") from None
+            raise InputError("<command line>", option, f"port {port} on {HOST} is in use; pick another (0 = any)") from None
     return port
 
 
@@ -104,7 +111,7 @@ def run(args) -> int:
     web_port = _check_port(args.port, "--port")
     grpc_port = 0 if _is_url(source) else _check_port(args.grpc_port, "--grpc-port")
     if web_port == grpc_port:
-        raise InputError("--grpc-port", "--grpc-port", "must differ from --port")
+        raise InputError("<command line>", "--grpc-port", "must differ from --port")
     from ..view.rerun.recording import rerun_executable  # local: loads when the command runs, not at `explorer --help`
 
     try:

@@ -74,3 +74,11 @@ class InputError(Exception):
         self.key = _cut(_text(key), PART_LIMITS["key"])
         self.reason = _cut(_cut_tokens(_text(reason)), PART_LIMITS["reason"], head=800)
         super().__init__(f"{self.file}: {self.key}: {self.reason}")
+
+
+def check_port_number(port: int, option: str) -> int:
+    """A TCP port given on the command line: 1 to 65535, or 0 for any free one (the system picks).
+    One helper, so that every command's message is the same one line naming its option."""
+    if not 0 <= port <= 65535:
+        raise InputError("<command line>", option, f"must be a TCP port from 1 to 65535, or 0 for any free port, got {port}")
+    return port

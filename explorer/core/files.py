@@ -104,6 +104,8 @@ def read_text(path, *, file: str, key: str, prefix: str = "", limit: int = MAX_D
     """read_regular decoded as UTF-8, or InputError."""
     data = read_regular(path, file=file, key=key, prefix=prefix, limit=limit)
     try:
-        return data.decode("utf-8")
+        # "utf-8-sig": a leading byte-order mark (Windows editors, Excel's CSV) is dropped, not read
+        # as the first character of the first line
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise InputError(file, key, f"{prefix}not a UTF-8 text file") from None

@@ -32,6 +32,9 @@ from .errors import InputError, echo
 FORMS = "START:STOP:COUNT[:log] or V1,V2,..."
 _NUMBER = re.compile(r"^\s*[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _COUNT = re.compile(r"^[0-9]{1,12}$")
+# "inf", "-Infinity", "nan" as an end: no number pattern matches them, so without this check the
+# word was read as the other end's unit ("1000:inf:3" -> "unknown unit 'inf'")
+_NON_FINITE = re.compile(r"^\s*[+-]?(?:inf(?:inity)?|nan)(?![a-z])", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -67,6 +70,12 @@ def _count(text: str, *, file: str, key: str, max_points: int) -> int:
     return count
 
 
+def _finite_ends(parts: list[str], *, file: str, key: str) -> None:
+    for end in parts[:2]:
+        if _NON_FINITE.match(end):
+            raise InputError(file, key, f"the ends of a range must be finite numbers, got {echo(end)}")
+
+
 def read(text, *, file: str, key: str, max_points: int, interval: bool = False, lists: bool = True) -> Span | Listed:
     """The shape of a range (module docstring). `interval`: the form START:STOP instead of a
     counted range; `lists`: whether V1,V2,... is accepted."""
@@ -79,12 +88,14 @@ def read(text, *, file: str, key: str, max_points: int, interval: bool = False, 
         if interval:
             if len(parts) != 2 or not all(parts):
                 raise InputError(file, key, f"cannot read {echo(text)}: write {forms}")
+            _finite_ends(parts, file=file, key=key)
             return Span(parts[0], parts[1], None)
         log = False
         if len(parts) == 4 and parts[3].lower() in ("log", "lin"):
             log = parts.pop().lower() == "log"
         if len(parts) != 3 or not all(parts):
             raise InputError(file, key, f"cannot read {echo(text)}: write {forms}")
+        _finite_ends(parts, file=file, key=key)
         return Span(parts[0], parts[1], _count(parts[2], file=file, key=key, max_points=max_points), log)
     if not lists or interval:
         raise InputError(file, key, f"cannot read {echo(text)}: write {forms}")

@@ -238,7 +238,8 @@ def read_scene_data(path: str | os.PathLike, overrides=()) -> dict:
     file = str(path)  # errors name the file as the user gave it
     data = read_regular(find_scene(path), file=file, key="-", limit=MAX_SCENE_FILE_BYTES)
     try:
-        text = data.decode("utf-8")
+        # "utf-8-sig": the byte-order mark Windows editors put first is not TOML; drop it
+        text = data.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise InputError(file, "-", "not a UTF-8 text file") from None
     return _toml_data(text, file, overrides)

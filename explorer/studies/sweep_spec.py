@@ -245,17 +245,18 @@ def make_plan(axes=(), samples=(), runs: int | None = None, seed: int | None = N
     fit in the available memory is refused before anything is allocated, --yes or not)."""
     axes, samples = tuple(axes), tuple(samples)
     keys = [a.key for a in axes] + [s.key for s in samples]
+    # --runs before "nothing to sweep": `--runs 5` alone is a mistake about --runs, not --vary
+    if runs is not None and (runs < 1 or int(runs) != runs):
+        raise InputError("<command line>", "--runs", f"must be a whole number >= 1, got {echo(runs)}")
+    if runs is not None and not samples:
+        raise InputError("<command line>", "--runs", "sets the number of random draws per grid point: give --sample too")
+    if samples and runs is None:
+        raise InputError("<command line>", "--runs", "missing: a --sample needs --runs N (how many draws)")
     if not keys:
         raise InputError(file, "-", "nothing to sweep: give --vary KEY=START:STOP:COUNT or --sample KEY=\"normal(...)\"")
     dup = next((k for k in keys if keys.count(k) > 1), None)
     if dup is not None:
         raise InputError(file, dup, "varied twice")
-    if runs is not None and (runs < 1 or int(runs) != runs):
-        raise InputError("--runs", str(runs), "must be a whole number >= 1")
-    if runs is not None and not samples:
-        raise InputError("--runs", str(runs), "--runs sets the number of random draws: give --sample too")
-    if samples and runs is None:
-        raise InputError("--runs", "-", "a --sample needs --runs N (how many draws)")
     check_seed(seed, samples)
     reps = int(runs) if samples else 1
     grid = math.prod(a.values.size for a in axes)

@@ -42,7 +42,7 @@ import threading
 import uuid
 from pathlib import Path
 
-from ...core.errors import InputError
+from ...core.errors import InputError, check_port_number
 from ...core.outputs import as_output, output_path
 from . import recording  # its functions looked up when called (tests replace them)
 from .worker import RecordingWorker, send
@@ -93,13 +93,12 @@ def check_save_path(path: str):
 def check_port(port: int) -> int:
     """The port, if free on 127.0.0.1 (0 -> a free one). rerun's server sink does not report a
     busy port, it only logs an error later, so test it here."""
-    if not 0 <= port <= 65535:
-        raise InputError("--rerun-port", "--rerun-port", f"must be between 0 and 65535, got {port}")
+    check_port_number(port, "--rerun-port")
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         try:
             s.bind((BIND_IP, port))
         except OSError:
-            raise InputError("--rerun-port", "--rerun-port", f"port {port} on {BIND_IP} is in use") from None
+            raise InputError("<command line>", "--rerun-port", f"port {port} on {BIND_IP} is in use") from None
         return s.getsockname()[1]
 
 

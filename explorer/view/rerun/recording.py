@@ -36,8 +36,8 @@ rules, first match wins:
                                                 a lever gear's drive referred to the valve)
 - other lengths, unit m   -> /lengths/<stem>    contour_radius_m -> /lengths/contour_radius
 - anything else           -> /other/<column>
-("accel" is spelled out as "acceleration".) `cam_angle_deg` and `time_s` are the timelines, not
-series. Should two columns land on one path, the later one goes to /other/<column>.
+("accel" is spelled out as "acceleration".) The columns `cam_angle_deg` and `time_s` are not
+series: they become the timelines `cam_angle_0.01deg` (hundredths of a degree) and `time` (s). Should two columns land on one path, the later one goes to /other/<column>.
 
 Other entities:
 - /parts/<name>   Mesh3D (static, the part in its own frame, z up, metres) and a Transform3D per step
