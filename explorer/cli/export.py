@@ -14,9 +14,12 @@ from .progress import ticking
 from .simulate import add_scene_arguments, scene_from_args
 
 HELP = """\
-Export a scene's cam (translating roller follower) to make it:
+Export a scene's cam to make it: a translating roller's, a bucket tappet's, a finger
+follower's or a rocker arm's (a pivoted roller or a rocking cam is refused, naming why). A cam is
+cut for its own follower: a crowned face's cam read by a flat face lifts less (e^2 / 2 R).
   csv    point table: cam angle, contour and pitch-curve points, outward normal, signed
-         curvature of both, pressure angle (SI units; --points rows, plus the lift's breakpoints)
+         curvature of both, pressure angle (SI units; --points rows, plus the lift's breakpoints;
+         a face follower has no roller, so its pitch columns repeat the contour)
   dxf    drawing in mm: contour (layer CAM) and pitch curve (layer PITCH) as closed polylines
          whose chords stay within --tolerance of the exact curves
   stl    solid cam in mm (contour to --tolerance, extruded over --width along the cam axis z)
