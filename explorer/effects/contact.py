@@ -87,15 +87,12 @@ def contact_effect(ctx) -> EffectOutput:
     i_sigma = int(np.argmax(np.where(np.isfinite(sigma), sigma, -1.0)))
     convex = contour_radius > 0.0
     peak_alpha, peak_at = float(np.degrees(np.abs(alpha[i_alpha]))), float(theta_deg[i_alpha])
-    # where the contact's pressure angles are the kinematics' own column (a translating roller), the
-    # kinematics' extremum refined between the samples (effects/contour.geometry_extremes) is the
-    # figure: one pressure angle under both names, not a sampled one beside an exact one
+    # where the contact's pressure angles are the kinematics' own column (geometry.from_columns: a
+    # translating roller), the kinematics' extremum refined between the samples
+    # (effects/contour.geometry_extremes) is the figure: one pressure angle under both names, not a
+    # sampled one beside an exact one (>=: the column's degrees back from radians, to rounding)
     exact = ctx.summary.get("max_abs_pressure_angle_deg")
-    column = ctx.columns.get("pressure_angle_deg")
-    # (the same angles to rounding: the two compute them by different closed forms, 7e-15 deg apart)
-    if (exact is not None and column is not None and np.shape(column) == alpha.shape
-            and np.allclose(np.degrees(alpha), column, rtol=1e-12, atol=1e-12)
-            and exact >= peak_alpha * (1.0 - 1e-12)):
+    if geometry.from_columns and exact is not None and exact >= peak_alpha * (1.0 - 1e-12):
         peak_alpha, peak_at = float(exact), float(ctx.summary["max_abs_pressure_angle_at_deg"])
     summary = {
         "contact_follower_type": scene.follower.type,

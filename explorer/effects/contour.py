@@ -77,31 +77,26 @@ def geometry_columns(scene, theta: np.ndarray, d: np.ndarray, dip: float = 0.0, 
     return columns, summary
 
 
+def _rate_terms(d, y0: float, e: float):
+    """The two terms whose differences are the rates of d(phi)/d(theta) and d(rho)/d(theta) of the
+    translating roller's pitch curve, and the curvature's numerator C (rho = N^1.5 / C,
+    N = y^2 + (s1 - e)^2, y = y0 + s; C > 0 convex), from the lift's rows s, s1, s2, s3
+    (derivatives per radian): tan(phi) = (s1 - e) / y, so phi' = (s2 y - (s1 - e) s1) / N;
+    rho' = N^0.5 (1.5 N' C - N C') / C^2 with N' = 2 y s1 + 2 (s1 - e) s2,
+    C = (s1 - e)(2 s1 - e) - y (s2 - y), C' = 3 (s1 - e) s2 + 2 y s1 - y s3."""
+    y = y0 + d[0]
+    ty = d[1] - e
+    n = y * y + ty * ty
+    c = ty * (2.0 * d[1] - e) - y * (d[2] - y)
+    dn = 2.0 * y * d[1] + 2.0 * ty * d[2]
+    dc = 3.0 * ty * d[2] + 2.0 * y * d[1] - y * d[3]
+    return (d[2] * y, ty * d[1]), (1.5 * dn * c, n * dc), c
+
+
 def _rates(d, y0: float, e: float):
-    """Signs of d(phi)/d(theta) and d(rho)/d(theta) of the translating roller's pitch curve, and the
-    curvature's numerator C (rho = N^1.5 / C, N = y^2 + (s1 - e)^2, y = y0 + s; C > 0 convex), from
-    the lift's rows s, s1, s2, s3 (derivatives per radian): tan(phi) = (s1 - e) / y, so
-    phi' = (s2 y - (s1 - e) s1) / N; rho' = N^0.5 (1.5 N' C - N C') / C^2 with
-    N' = 2 y s1 + 2 (s1 - e) s2, C = (s1 - e)(2 s1 - e) - y (s2 - y), C' = 3 (s1 - e) s2 + 2 y s1 - y s3."""
-    y = y0 + d[0]
-    ty = d[1] - e
-    n = y * y + ty * ty
-    c = ty * (2.0 * d[1] - e) - y * (d[2] - y)
-    dn = 2.0 * y * d[1] + 2.0 * ty * d[2]
-    dc = 3.0 * ty * d[2] + 2.0 * y * d[1] - y * d[3]
-    return d[2] * y - ty * d[1], 1.5 * dn * c - n * dc, c
-
-
-def _rate_scales(d, y0: float, e: float):
-    """The sizes of the terms whose difference _rates' two rates are (|s2 y| + |(s1 - e) s1| and
-    |1.5 N' C| + |N C'|): a rate far below its terms' size is their rounding, not a slope."""
-    y = y0 + d[0]
-    ty = d[1] - e
-    n = y * y + ty * ty
-    c = ty * (2.0 * d[1] - e) - y * (d[2] - y)
-    dn = 2.0 * y * d[1] + 2.0 * ty * d[2]
-    dc = 3.0 * ty * d[2] + 2.0 * y * d[1] - y * d[3]
-    return np.abs(d[2] * y) + np.abs(ty * d[1]), np.abs(1.5 * dn * c) + np.abs(n * dc)
+    """Signs of d(phi)/d(theta) and d(rho)/d(theta), and C (see _rate_terms)."""
+    (p1, p2), (r1, r2), c = _rate_terms(d, y0, e)
+    return p1 - p2, r1 - r2, c
 
 
 # A sign change of a rate whose size at both ends of its bracket is below this fraction of its
@@ -133,8 +128,10 @@ def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarra
     angles = np.append(angles, angles[0] + TWO_PI)  # closed round the revolution
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         d = lift_rows(lift, angles, rows)
-        rate_phi, rate_rho, c = _rates(d, y0, e)
-        scale_phi, scale_rho = _rate_scales(d, y0, e)
+        (p1, p2), (r1, r2), c = _rate_terms(d, y0, e)
+        # each rate with the size of its two terms: a rate far below that is their rounding, not a slope
+        rate_phi, rate_rho = p1 - p2, r1 - r2
+        scale_phi, scale_rho = np.abs(p1) + np.abs(p2), np.abs(r1) + np.abs(r2)
     # a bracket no wider than a breakpoint's two one-sided angles spans a jump, not a zero
     wide = np.diff(angles) > 4.0 * ONE_SIDED
     found = []
