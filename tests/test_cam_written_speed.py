@@ -93,3 +93,46 @@ def test_the_file_speed_itself_has_no_written_speed():
     assert scene.drive.written_rpm is None
     same = load_scene(SCENES / "valve_float_demo.toml", [f"drive.rpm={scene.drive.rpm:g}"])
     assert same.drive == scene.drive
+
+
+@pytest.mark.parametrize("name, key, rpm", CASES)
+def test_every_way_of_changing_the_speed_keeps_the_cam(name, key, rpm):
+    """The browser's speed field (its override string), a speed with a unit and the Python API /
+    sweep / check route (scene_for replaces the speed in a loaded scene): the file's cam in each."""
+    from explorer.studies.sweep_spec import scene_for
+    from explorer.view.browser.parameters import override
+
+    text = text_without(SCENES / name, key)
+    own = loads_scene(text, source=name)
+    moved = {
+        "browser": loads_scene(text, source=name, overrides=[override("drive.rpm", float(rpm))]),
+        "with a unit": loads_scene(text, source=name, overrides=[f'drive.rpm="{rpm:g} rpm"']),
+        "API / sweep / check": scene_for(own, ("drive.rpm",), (rpm,)),
+    }
+    for how, scene in moved.items():
+        assert scene.drive.rpm == pytest.approx(rpm, rel=1e-15), how
+        np.testing.assert_array_equal(rows(scene), rows(own), err_msg=how)
+
+
+def test_an_explicit_reference_speed_wins_over_the_files():
+    """design_rpm written in [lift] fixes the cam whatever drive.rpm the file writes."""
+    text = (SCENES / "polydyne_demo.toml").read_text()
+    assert "design_rpm" in text and "[drive]\nrpm = 2000" in text
+    other = loads_scene(text.replace("[drive]\nrpm = 2000", "[drive]\nrpm = 1500"), source="x.toml")
+    np.testing.assert_array_equal(rows(other), rows(loads_scene(text, source="x.toml")))
+
+
+def test_a_bad_written_speed_is_refused_even_when_overridden():
+    """The file's own drive.rpm defines the cam of a law in time units, so a bad one is an error
+    though --set replaces it (before, it was skipped silently and the cam built at the override)."""
+    from explorer.core.errors import InputError
+
+    text = text_without(SCENES / "acceleration_demo.toml", "reference_rpm").replace("rpm = 240", 'rpm = "240 m"')
+    assert '"240 m"' in text
+    with pytest.raises(InputError) as err:
+        loads_scene(text, source="bad.toml", overrides=["drive.rpm=480"])
+    assert err.value.key == "drive.rpm" and "the file's value" in err.value.reason and "240 m" in err.value.reason
+    # a file without a speed of its own takes the override as its only one
+    no_speed = re.sub(r"^rpm\s*=.*$", "", text, count=1, flags=re.M)
+    scene = loads_scene(no_speed, source="x.toml", overrides=["drive.rpm=480"])
+    assert scene.drive.rpm == 480.0 and scene.drive.written_rpm is None

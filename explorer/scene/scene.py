@@ -330,15 +330,17 @@ def _rpm(drive_t) -> float:
 
 
 def _written_rpm(written: Mapping[str, Any] | None, file: str, rpm: float) -> float | None:
-    """The file's own drive.rpm (rev/min) where an override changed it, else None. A file whose own
-    value is missing or no speed (the override supplies it) has no other speed: None."""
+    """The file's own drive.rpm (rev/min) where an override changed it, else None. A file without
+    one (the override supplies it) has no other speed: None. A file whose own value is no speed is
+    refused though overridden: a lift law in time units defines its cam at that value."""
     drive = written.get("drive") if isinstance(written, Mapping) else None
     if not isinstance(drive, Mapping) or "rpm" not in drive:
         return None
     try:
         own = _rpm(Table({"rpm": drive["rpm"]}, file, "drive"))
-    except InputError:
-        return None
+    except InputError as exc:
+        raise InputError(file, exc.key, f"{exc.reason} (the file's value, whatever --set says: a lift law in time "
+                         "units defines its cam at it)") from None
     return None if own == rpm else own
 
 
