@@ -263,7 +263,8 @@ def _toml_data(text: str, source: str, overrides) -> dict:
     except RecursionError:
         raise InputError(source, "-", f"malformed TOML: nested too deeply (at most {MAX_NESTING} levels)") from None
     _check_nesting(data, source, "-")
-    return apply_overrides(data, overrides, source)
+    # freshly parsed: no copy to protect (apply_overrides copies before it changes anything)
+    return apply_overrides(data, overrides, source) if overrides else data
 
 
 def _first_line(text: str) -> str:
