@@ -54,8 +54,16 @@ def _kinematics(ctx, exact: bool) -> EffectOutput:
         # the open angle (from the take-up and seating angles); the jerk's sampled (no fourth derivative)
         ups, downs = lash_crossings(ctx.lift, ratio, lash)
         ends = np.concatenate([ups, downs])
-        peaks = valve_extremes(ctx.lift, ctx.theta, d, ratio, lash, {1: ratio * w, 2: ratio * w**2}, ends)
+        peaks = valve_extremes(ctx.lift, ctx.theta, d, ratio, lash, {0: 1.0, 1: ratio * w, 2: ratio * w**2}, ends)
         (v_max, v_min), (a_max, a_min) = peaks[1], peaks[2]
+        # the lift's peak exact too (a spline's nose overshoots its station between samples): the
+        # extremes are taken over the open valve, where the lift's peak is whenever the valve opens;
+        # a valve that never opens leaves the sampled peak
+        lift_top = max(peaks[0][0], summary["max_follower_lift_m"])
+        summary.update({
+            "max_follower_lift_m": lift_top,
+            "max_valve_lift_m": max(ratio * lift_top - lash, 0.0),
+        })
         summary.update({
             "max_valve_velocity_m_s": v_max,
             "min_valve_velocity_m_s": v_min,
