@@ -493,8 +493,30 @@ def test_spring_surge_band():
     assert inside.value == 0.0 and order == pytest.approx(round(order), abs=1e-9)
 
 
+def test_spring_frequency_ratio_against_a_worked_number():
+    """Shigley ch. 10, critical frequency of helical springs: f1 = (1/2) sqrt(k/m_active), both ends
+    fixed, at least 15-20 x the forcing frequency. The spring-surge scene's spring by hand: m = rho
+    pi^2 d^2 D n / 4 (the active coils' wire), k the scene's 30.6 N/mm."""
+    from explorer.dynamics.chain import chain_frequencies
+
+    s = load_scene(SURGE)
+    m = 7850.0 * math.pi**2 * 0.004**2 * 0.024 * 6 / 4  # 44.62 g
+    k = 30.6e3
+    f1 = 0.5 * math.sqrt(k / m)  # 414.03 Hz
+    assert f1 == pytest.approx(414.03, abs=0.005)
+    # the closed form is the limit of the spring cut into ever more masses (error ~ 1/N^2)
+    assert float(chain_frequencies(256, k, m)[0]) / (2 * math.pi) == pytest.approx(f1, rel=1e-5)
+    r = judge(s, "spring_frequency", rpm="1000,1500")
+    assert r.value == pytest.approx(f1 / (1500.0 / 60.0), rel=1e-12) and r.speed_rpm == 1500.0
+    assert r.value == pytest.approx(16.56, abs=0.01) and r.verdict == "warn"
+    for limit, expect in ((20.0, ("pass", "warn")), (15.0, ("warn", "fail"))):
+        top = 60.0 * f1 / limit  # the top speed at which f1 is `limit` x the camshaft's frequency
+        lo, hi = (judge(s, "spring_frequency", rpm=f"1000,{top * x}") for x in (0.99, 1.01))
+        assert (lo.verdict, hi.verdict) == expect and lo.value == pytest.approx(limit / 0.99, rel=1e-12)
+
+
 def test_spring_rules_need_the_wire_geometry():
-    for name in ("spring_stress", "spring_fatigue", "coil_bind", "spring_surge"):
+    for name in ("spring_stress", "spring_fatigue", "coil_bind", "spring_surge", "spring_frequency"):
         assert judge(FLOAT, name).verdict == "n/a"
 
 

@@ -37,6 +37,8 @@ SI_UNITS: Mapping[str, str] = MappingProxyType({
 NORTON_DOM = "R. L. Norton, Design of Machinery, ch. 8 (cam design: pressure angle), and his DYNACAM help"
 TRADE_CAM = "cam designer's notes, camprofiledesigns.com ('cam talk', Jan 2024)"
 SHIGLEY_SPRINGS = "J. E. Shigley et al., Mechanical Engineering Design, ch. 10 (mechanical springs)"
+SHIGLEY_CRITICAL = (SHIGLEY_SPRINGS.replace("(mechanical springs)", "'Critical frequency of helical springs'") +
+                    ", after Wolford and Smith; f1 of both ends fixed: A. M. Wahl, Mechanical Springs (1944)")
 HAMROCK = ("B. J. Hamrock, S. R. Schmid, B. O. Jacobson, Fundamentals of Machine Elements, lubrication chapter: "
            "film parameter ranges (boundary < 1, partial 1-5, elastohydrodynamic 3-10)")
 SEED_004 = "seed 004 ('Oel- und Gasmaschinen', p. 404)"
@@ -186,11 +188,19 @@ _BUILTIN: tuple[RuleSpec, ...] = (
              "distance of a surge frequency from a strong cam harmonic (share of the surge frequency)", "", "min", (
                  Setting("fail", 0.05, "number", "", "judgement: a surge mode within 5 % of a strong harmonic "
                          "resonates", "judgement", minimum=0.0),
-                 Setting("warn", 0.10, "number", "", "judgement; Shigley quotes Wolford and Smith: the spring's "
-                         "fundamental 15-20 x the forcing frequency", "judgement", minimum=0.0),
+                 Setting("warn", 0.10, "number", "", "judgement: twice the fail band (the 15-20 x rule of the "
+                         "spring books is spring_frequency's)", "judgement", minimum=0.0),
                  Setting("strength", 0.10, "number", "", "a harmonic counts as strong from 10 % of the largest",
                          "judgement", minimum=0.0),
                  Setting("modes", 3.0, "number", "", "surge modes checked", "judgement", minimum=1.0),
+             ), "spring"),
+    RuleSpec("spring_frequency", f"{_R}.spring_frequency:measure", "Spring frequency ratio",
+             "first natural frequency f1 = (1/2) sqrt(k/m_active) / the camshaft's frequency at the top speed", "",
+             "min", (
+                 Setting("fail", 15.0, "number", "", SHIGLEY_CRITICAL + ": f1 at least 15 x the forcing frequency "
+                         "(the lower figure)", "textbook rule of thumb", minimum=0.0),
+                 Setting("warn", 20.0, "number", "", SHIGLEY_CRITICAL + ": 15-20 x (the upper figure)",
+                         "textbook rule of thumb", minimum=0.0),
              ), "spring"),
     RuleSpec("trip_latch", f"{_R}.trip_latch:measure", "Trip-gear latch hold",
              "throw-off speed of the latch - highest operating speed", "rpm", "min", (
