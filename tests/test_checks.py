@@ -472,6 +472,67 @@ def test_coil_bind():
         assert_sides(make, ls, "coil_bind", "below", margin=0.002, expect=expect)
 
 
+def shigley_spring_scene(lift_m: float, lash_m: float = 0.0):
+    """A Shigley ch. 10 exercise's spring (music wire, d 1.905 mm, OD 19.380 mm, L0 89.383 mm,
+    14.2 total coils, squared and ground: Na = 12.2, Ls = d Nt; G 81.0 GPa for 1.61-3 mm wire,
+    Shigley table 10-5), preload 10 N, on a cam that lifts the valve `lift_m`."""
+    return loads_scene(f"""name = "Shigley spring"
+effects = ["kinematics"]
+[drive]
+rpm = 1000
+[lift]
+law = "polynomial-345"
+height = "{lift_m + lash_m} m"
+start = "30 deg"
+rise = "90 deg"
+dwell = "0 deg"
+return = "90 deg"
+[follower]
+type = "translating-roller"
+base_radius = "60 mm"
+roller_radius = "10 mm"
+[valve]
+mass = "0.1 kg"
+lash = "{lash_m} m"
+[spring]
+preload = "10 N"
+wire_diameter = "1.905 mm"
+coil_diameter = "17.475 mm"
+active_coils = 12.2
+shear_modulus = "81.0 GPa"
+density = "7850 kg/m**3"
+free_length = "89.383 mm"
+solid_height = "{1.905 * 14.2} mm"
+""")
+
+
+def test_coil_bind_is_shigleys_fractional_overrun_to_closure():
+    """Shigley ch. 10 (helical compression springs for static service): F_s = (1 + xi) F_max, xi the
+    fractional overrun to closure, designed for xi >= 0.15. The exercise's spring between 10 N and
+    F_max = 90 N: its answer xi = 0.42 (F_s = k (L0 - Ls) = 127.7 N). The rule's length form
+    (L2 - Ls)/(L0 - L2) is the same ratio; 0.005: the answer's two digits."""
+    G, d, D, na = 81.0e9, 1.905e-3, 17.475e-3, 12.2
+    k = G * d**4 / (8 * D**3 * na)  # 2.048 N/mm
+    s = shigley_spring_scene((90.0 - 10.0) / k)  # full lift at F_max = 90 N
+    r = judge(s, "coil_bind")
+    f_solid = k * (89.383e-3 - 1.905e-3 * 14.2)
+    assert f_solid == pytest.approx(127.7, abs=0.05)
+    assert r.value == pytest.approx(f_solid / 90.0 - 1.0, rel=1e-9)
+    assert r.value == pytest.approx(0.42, abs=0.005) and r.verdict == "pass"
+    # the lash is taken up before the spring moves: the same cam with a lash gives the same xi
+    assert judge(shigley_spring_scene((90.0 - 10.0) / k, 1e-4), "coil_bind").value == pytest.approx(r.value, rel=1e-9)
+    # F_max at the warn limit: F_s / 1.15
+    s = shigley_spring_scene((f_solid / 1.15 - 10.0) / k)
+    assert judge(s, "coil_bind").value == pytest.approx(0.15, rel=1e-9)
+
+
+def test_spring_frequency_of_shigleys_exercise():
+    """The same exercise's critical frequency, ends held on the plates: 185 Hz (f = (1/2) sqrt(k/m),
+    m = rho pi^2 d^2 D Na / 4 = 14.99 g); 0.5 Hz: the answer's three digits."""
+    r = judge(shigley_spring_scene(0.01), "spring_frequency", rpm="600")
+    assert r.value * 600.0 / 60.0 == pytest.approx(185.0, abs=0.5)
+
+
 def test_spring_surge_band():
     from explorer.dynamics.chain import chain_frequencies
 

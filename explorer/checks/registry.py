@@ -178,11 +178,12 @@ _BUILTIN: tuple[RuleSpec, ...] = (
                  Setting("warn", 1.5, "number", "", SHIGLEY_SPRINGS + ": design factor n_f = 1.5 of its fatigue "
                          "design examples", "textbook design factor", minimum=0.0),
              ), "spring"),
-    RuleSpec("coil_bind", f"{_R}.coil_bind:measure", "Coil bind", "fractional overrun to closure at full lift",
+    RuleSpec("coil_bind", f"{_R}.coil_bind:measure", "Coil bind",
+             "fractional overrun to closure at full lift, xi = F_solid / F_max - 1",
              "", "min", (
                  Setting("fail", 0.0, "number", "", "coils solid at full lift", "geometric necessity", minimum=0.0),
-                 Setting("warn", 0.15, "number", "", SHIGLEY_SPRINGS + ": fractional overrun to closure xi = 0.15",
-                         "textbook design value", minimum=0.0),
+                 Setting("warn", 0.15, "number", "", SHIGLEY_SPRINGS + ", static service: fractional overrun to "
+                         "closure xi >= 0.15, F_solid = (1 + xi) F_max", "textbook design value", minimum=0.0),
              ), "spring"),
     RuleSpec("spring_surge", f"{_R}.spring_surge:measure", "Spring surge",
              "distance of a surge frequency from a strong cam harmonic (share of the surge frequency)", "", "min", (
