@@ -231,6 +231,33 @@ def test_seating_velocity_elastic_is_the_sweeps():
     assert r.speed_rpm in table["drive_rpm"] and math.isfinite(r.cam_angle_deg)
 
 
+def test_seating_velocity_sign_is_labelled_in_check_and_sweep(tmp_path):
+    """The check judges the magnitude of the downward seating velocity, the sweep stores it signed
+    (< 0): the check's table says "downward, magnitude" beside the value, the sweep's table carries
+    the convention in its metadata (CSV comment line), its plots in the titles; the numbers are the
+    same impact (the column's sign unchanged)."""
+    from explorer.studies.sweep_plots import _label
+    from explorer.studies.sweep_table import read_table
+
+    r = explorer.check(FLOAT, rpm="2000:4000:5", only=("seating_velocity",), workers=1)
+    line = next(x for x in r.table_text().splitlines() if x.startswith("seating_velocity"))
+    assert "m/s (downward, magnitude)" in line and "downward" in r.result("seating_velocity").quantity
+    table = explorer.sweep(FLOAT, vary={"drive.rpm": "2000:4000:5"}, workers=1)
+    assert np.nanmax(table.columns["seating_velocity_m_s"]) < 0.0  # signed: downward
+    assert r.result("seating_velocity").value == pytest.approx(-np.nanmin(table.columns["seating_velocity_m_s"]),
+                                                               rel=1e-12)
+    assert "< 0 = downward" in table.metadata["conventions"]["seating_velocity_m_s"]
+    table.write(tmp_path / "t.csv")
+    text = (tmp_path / "t.csv").read_text()
+    assert '# conventions: {"seating_velocity_m_s": "signed:' in text
+    assert read_table(tmp_path / "t.csv").metadata["conventions"] == dict(table.metadata["conventions"])
+    assert _label("seating_velocity_m_s") == "seating_velocity_m_s (signed, < 0 = downward)"
+    assert _label("max_deviation_m") == "max_deviation_m"
+    # a sweep without the figure carries no conventions
+    rigid = explorer.sweep(rigid_float(), vary={"drive.rpm": "2000:4000:3"}, workers=1)
+    assert "seating_velocity_m_s" not in rigid.columns and "conventions" not in rigid.metadata
+
+
 def test_float_margin_rigid():
     from explorer.effects.lift import build_lift
     from explorer.mechanics.forces import TrainLoads, float_speed

@@ -99,12 +99,14 @@ _BUILTIN: tuple[RuleSpec, ...] = (
                  Setting("warn", None, "lift_rate", "mm/deg", "none by default", "-", minimum=0.0),
              ), "dynamics"),
     RuleSpec("seating_velocity", f"{_R}.seating_velocity:measure", "Seating velocity",
-             "hardest seat impact (elastic; rigid without a linkage)", "m/s", "max", (
+             "hardest seat impact: the valve's downward (closing) speed at the seat, a magnitude (elastic; rigid "
+             "without a linkage); a sweep's seating_velocity_m_s is the same impact signed, < 0", "m/s", "max", (
                  Setting("fail", 1.0, "velocity", "m/s", TRADE_CAM + ": below about 1.0 m/s (40 in/s) for high-end "
                          "valve trains", "trade practice", minimum=0.0),
                  Setting("warn", 0.76, "velocity", "m/s", TRADE_CAM + ": about 0.76 m/s (30 in/s) for others",
                          "trade practice", minimum=0.0),
-             ), "dynamics", (Plotted("valve_velocity_m_s", sign=-1.0),)),  # the closing (negative) velocity
+             ), "dynamics", (Plotted("valve_velocity_m_s", sign=-1.0),),  # the closing (negative) velocity
+             qualifier="downward, magnitude"),
     RuleSpec("float_margin", f"{_R}.float_margin:measure", "Float margin",
              "speed of first separation while the valve is open - highest operating speed", "rpm", "min", (
                  Setting("fail", 100.0 * RPM, "speed", "rpm", "Race Engine Technology, 'Peace and harmony': float "

@@ -65,7 +65,7 @@ def cam_forces(valve_force, *, contact: np.ndarray, normal: np.ndarray, tangent:
     cam_jacobian = way * cam_jacobian
     valve_jacobian = way * valve_jacobian
     # sgn(0) = 0: at exactly zero sliding (a scrub's reversal) Coulomb's friction is set-valued,
-    # |F_t| <= mu N; the statics take the frictionless balance, the mean of the two sides' (finite:
+    # |F_t| <= mu N; the statics take the frictionless balance, between the two sides' (finite:
     # nothing divides by the sliding velocity; tests/test_train_statics.py)
     sigma_c = np.sign(cam_sliding)
     drive = _dot(normal, cam_jacobian) + cam_friction * sigma_c * _dot(tangent, cam_jacobian)
