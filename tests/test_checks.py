@@ -203,6 +203,70 @@ def test_ramp_velocity_at_the_lash_take_up():
     assert judge(s, "ramp_velocity").value == pytest.approx(v1 / s.omega, rel=1e-9)
 
 
+RAMP_LIMIT = 0.002 * 0.0254 / math.radians(1.0)  # the trade's 0.002 in/deg, m/rad
+
+
+def test_ramp_velocity_is_the_lifters_with_a_rocker_ratio():
+    """pushrod_train: a lifter lift L with a rocker of fixed ratio 1.5 (follower.ratio): the figure is
+    the lifter's dL/dtheta at the take-up, the valve's over 1.5, and the 0.002 in/deg limit (a lobe
+    figure, tappet-side) judges it -- a lash whose valve-side figure is 1.5 x the limit passes."""
+    s = load_scene("assets/scenes/pushrod_train.toml")
+    r = judge(s, "ramp_velocity")
+    assert r.qualifier == "lifter side" and "lifter side" in explorer.check(s, only=("ramp_velocity",), workers=1) \
+        .table_text()
+    lift = build_lift_of(s)
+    theta = math.radians(r.cam_angle_deg)
+    d = lift.derivatives(np.array([theta]))
+    assert 1.5 * d[0][0] == pytest.approx(s.valve.lash, abs=1e-12)  # the take-up: valve lift = lash
+    assert r.value == pytest.approx(d[1][0], rel=1e-12)
+    v1 = explorer.simulate(s).summary["impact_velocity_opening_m_s"]  # the valve's take-up velocity
+    assert r.value == pytest.approx(v1 / s.omega / 1.5, rel=1e-9)
+
+    def make(lash):
+        return scene_with("assets/scenes/pushrod_train.toml", f'valve.lash="{lash} m"')
+
+    lash = limit_between(lambda x: judge(make(x), "ramp_velocity").value, 1e-4, 1.5e-3, RAMP_LIMIT)
+    good, bad = assert_sides(make, lash, "ramp_velocity", "below")
+    valve_side = explorer.simulate(make(lash * 0.99)).summary["impact_velocity_opening_m_s"] / s.omega
+    assert valve_side == pytest.approx(1.5 * good.value, rel=1e-9) and valve_side > 1.4 * RAMP_LIMIT
+
+
+def build_lift_of(scene):
+    from explorer.effects.lift import build_lift
+
+    return build_lift(scene)
+
+
+@pytest.mark.parametrize("path", ["assets/scenes/ohc_rocker.toml", "assets/scenes/finger_follower.toml",
+                                  "assets/scenes/pushrod_rocker.toml"])
+def test_ramp_velocity_of_a_lever_gear_is_its_cam_sides(path):
+    """The lever gears' [lift] is the valve's; the figure is the travel per cam angle of what the cam
+    drives: the arm's roller centre (arm x dpsi/dtheta) or the pushrod train's lifter (dL/dtheta),
+    here by central differences of the gear's own positions (h = 1e-5 rad: O(h^2) ~ 1e-9 relative;
+    1e-6 allowed), and the valve's ds/dtheta over the gear's ratio at the take-up (ratio != 1)."""
+    s = scene_with(path, 'valve.lash="0.2 mm"')
+    r = judge(s, "ramp_velocity")
+    lift = build_lift_of(s)
+    train, theta, h = lift.gear, math.radians(r.cam_angle_deg), 1e-5
+    at = np.array([theta - h, theta + h])
+    if hasattr(train, "lifter"):
+        side, cam_side = "lifter side", np.diff(train.lifter_lift(at).c[0])[0] / (2 * h)
+    else:
+        side = "roller centre side"
+        cam_side = train.arm.cam_side.arm * abs(np.diff(train.arm_angle(at).c[0])[0]) / (2 * h)
+    assert r.qualifier == side
+    assert r.value == pytest.approx(cam_side, rel=1e-6)
+    valve = lift.derivatives(np.array([theta]))[1][0]
+    ratio = valve / r.value
+    assert 1.4 < ratio < 1.8  # the gears' ratios: ~1.5, ~1.7, ~1.6
+    assert r.value == pytest.approx(valve / float(train.kinematics(np.array([theta])).ratio[0]), rel=1e-12)
+
+
+def test_ramp_velocity_without_a_lifter_is_the_valves_and_says_so():
+    r = judge("assets/scenes/rolling_lever.toml", "ramp_velocity")
+    assert r.qualifier == "valve side" and "no follower between cam and valve" in r.note
+
+
 # --- dynamics --------------------------------------------------------------------------------------------
 
 

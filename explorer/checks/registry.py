@@ -93,11 +93,12 @@ _BUILTIN: tuple[RuleSpec, ...] = (
                  Setting("warn", None, "length", "mm", "none by default", "-", minimum=0.0),
              ), "kinematics"),
     RuleSpec("ramp_velocity", f"{_R}.ramp_velocity:measure", "Opening velocity at the end of the lash ramp",
-             "valve lift per cam angle at the lash take-up", "mm/deg", "max", (
+             "lifter lift per cam angle at the lash take-up (the valve's over the gear's ratio where [lift] is "
+             "the valve's; the valve's where the gear has no lifter)", "mm/deg", "max", (
                  Setting("fail", 0.002 * IN_PER_DEG, "lift_rate", "mm/deg", TRADE_CAM + ": below about 0.002 in/deg "
-                         "for a solid tappet", "trade practice", minimum=0.0),
+                         "for a solid tappet, a lobe (tappet-side) figure", "trade practice", minimum=0.0),
                  Setting("warn", None, "lift_rate", "mm/deg", "none by default", "-", minimum=0.0),
-             ), "dynamics"),
+             ), "dynamics", qualifier="lifter side"),
     RuleSpec("seating_velocity", f"{_R}.seating_velocity:measure", "Seating velocity",
              "hardest seat impact: the valve's downward (closing) speed at the seat, a magnitude (elastic; rigid "
              "without a linkage); a sweep's seating_velocity_m_s is the same impact signed, < 0", "m/s", "max", (

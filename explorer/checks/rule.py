@@ -123,6 +123,9 @@ class Measure:
     # "at least" / "at most": the value is a bound, not the figure itself (a search that ended
     # before it found what it looked for: no separation up to the highest speed searched)
     bound: str = ""
+    # which side or sign the value is, where it depends on the scene (a lever's lifter or valve
+    # side); "" the rule's own (RuleSpec.qualifier)
+    qualifier: str = ""
 
     @staticmethod
     def not_applicable(reason: str) -> "Measure":
