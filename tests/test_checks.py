@@ -306,6 +306,9 @@ def test_seating_velocity_sign_is_labelled_in_check_and_sweep(tmp_path):
     r = explorer.check(FLOAT, rpm="2000:4000:5", only=("seating_velocity",), workers=1)
     line = next(x for x in r.table_text().splitlines() if x.startswith("seating_velocity"))
     assert "m/s (downward, magnitude)" in line and "downward" in r.result("seating_velocity").quantity
+    from explorer.checks.viewer import line as panel_line  # the browser's panel and the recordings
+
+    assert panel_line(r.result("seating_velocity")).shown.endswith(" m/s (downward, magnitude)")
     table = explorer.sweep(FLOAT, vary={"drive.rpm": "2000:4000:5"}, workers=1)
     assert np.nanmax(table.columns["seating_velocity_m_s"]) < 0.0  # signed: downward
     assert r.result("seating_velocity").value == pytest.approx(-np.nanmin(table.columns["seating_velocity_m_s"]),
