@@ -598,7 +598,7 @@ def test_elastic_speed_sweep_figures_each_get_their_own_plot_in_the_page(tmp_pat
         total = app.sweep.elastic_total
         with _connected_page(sync_api, tmp_path, server, width=1400, height=1500) as page:
             expected = {f"Speed sweep (elastic first separation, {total}/{total} speeds)": "first separation [°]",
-                        f"Speed sweep (elastic seating velocity, {total}/{total} speeds)": "seating velocity [m/s]",
+                        f"Speed sweep (elastic seating velocity, {total}/{total} speeds)": "seating velocity, signed (< 0 = downward) [m/s]",
                         f"Speed sweep (elastic deviation, {total}/{total} speeds)":
                             "largest deviation from the rigid lift [mm]"}
             for title, label in expected.items():

@@ -203,6 +203,70 @@ def test_ramp_velocity_at_the_lash_take_up():
     assert judge(s, "ramp_velocity").value == pytest.approx(v1 / s.omega, rel=1e-9)
 
 
+RAMP_LIMIT = 0.002 * 0.0254 / math.radians(1.0)  # the trade's 0.002 in/deg, m/rad
+
+
+def test_ramp_velocity_is_the_lifters_with_a_rocker_ratio():
+    """pushrod_train: a lifter lift L with a rocker of fixed ratio 1.5 (follower.ratio): the figure is
+    the lifter's dL/dtheta at the take-up, the valve's over 1.5, and the 0.002 in/deg limit (a lobe
+    figure, tappet-side) judges it -- a lash whose valve-side figure is 1.5 x the limit passes."""
+    s = load_scene("assets/scenes/pushrod_train.toml")
+    r = judge(s, "ramp_velocity")
+    assert r.qualifier == "lifter side" and "lifter side" in explorer.check(s, only=("ramp_velocity",), workers=1) \
+        .table_text()
+    lift = build_lift_of(s)
+    theta = math.radians(r.cam_angle_deg)
+    d = lift.derivatives(np.array([theta]))
+    assert 1.5 * d[0][0] == pytest.approx(s.valve.lash, abs=1e-12)  # the take-up: valve lift = lash
+    assert r.value == pytest.approx(d[1][0], rel=1e-12)
+    v1 = explorer.simulate(s).summary["impact_velocity_opening_m_s"]  # the valve's take-up velocity
+    assert r.value == pytest.approx(v1 / s.omega / 1.5, rel=1e-9)
+
+    def make(lash):
+        return scene_with("assets/scenes/pushrod_train.toml", f'valve.lash="{lash} m"')
+
+    lash = limit_between(lambda x: judge(make(x), "ramp_velocity").value, 1e-4, 1.5e-3, RAMP_LIMIT)
+    good, bad = assert_sides(make, lash, "ramp_velocity", "below")
+    valve_side = explorer.simulate(make(lash * 0.99)).summary["impact_velocity_opening_m_s"] / s.omega
+    assert valve_side == pytest.approx(1.5 * good.value, rel=1e-9) and valve_side > 1.4 * RAMP_LIMIT
+
+
+def build_lift_of(scene):
+    from explorer.effects.lift import build_lift
+
+    return build_lift(scene)
+
+
+@pytest.mark.parametrize("path", ["assets/scenes/ohc_rocker.toml", "assets/scenes/finger_follower.toml",
+                                  "assets/scenes/pushrod_rocker.toml"])
+def test_ramp_velocity_of_a_lever_gear_is_its_cam_sides(path):
+    """The lever gears' [lift] is the valve's; the figure is the travel per cam angle of what the cam
+    drives: the arm's roller centre (arm x dpsi/dtheta) or the pushrod train's lifter (dL/dtheta),
+    here by central differences of the gear's own positions (h = 1e-5 rad: O(h^2) ~ 1e-9 relative;
+    1e-6 allowed), and the valve's ds/dtheta over the gear's ratio at the take-up (ratio != 1)."""
+    s = scene_with(path, 'valve.lash="0.2 mm"')
+    r = judge(s, "ramp_velocity")
+    lift = build_lift_of(s)
+    train, theta, h = lift.gear, math.radians(r.cam_angle_deg), 1e-5
+    at = np.array([theta - h, theta + h])
+    if hasattr(train, "lifter"):
+        side, cam_side = "lifter side", np.diff(train.lifter_lift(at).c[0])[0] / (2 * h)
+    else:
+        side = "roller centre side"
+        cam_side = train.arm.cam_side.arm * abs(np.diff(train.arm_angle(at).c[0])[0]) / (2 * h)
+    assert r.qualifier == side
+    assert r.value == pytest.approx(cam_side, rel=1e-6)
+    valve = lift.derivatives(np.array([theta]))[1][0]
+    ratio = valve / r.value
+    assert 1.4 < ratio < 1.8  # the gears' ratios: ~1.5, ~1.7, ~1.6
+    assert r.value == pytest.approx(valve / float(train.kinematics(np.array([theta])).ratio[0]), rel=1e-12)
+
+
+def test_ramp_velocity_without_a_lifter_is_the_valves_and_says_so():
+    r = judge("assets/scenes/rolling_lever.toml", "ramp_velocity")
+    assert r.qualifier == "valve side" and "no follower between cam and valve" in r.note
+
+
 # --- dynamics --------------------------------------------------------------------------------------------
 
 
@@ -229,6 +293,36 @@ def test_seating_velocity_elastic_is_the_sweeps():
     table = explorer.sweep(FLOAT, vary={"drive.rpm": "2000:4000:5"}, workers=1).columns
     assert r.value == pytest.approx(float(np.nanmax(-table["seating_velocity_m_s"])), rel=1e-12)
     assert r.speed_rpm in table["drive_rpm"] and math.isfinite(r.cam_angle_deg)
+
+
+def test_seating_velocity_sign_is_labelled_in_check_and_sweep(tmp_path):
+    """The check judges the magnitude of the downward seating velocity, the sweep stores it signed
+    (< 0): the check's table says "downward, magnitude" beside the value, the sweep's table carries
+    the convention in its metadata (CSV comment line), its plots in the titles; the numbers are the
+    same impact (the column's sign unchanged)."""
+    from explorer.studies.sweep_plots import _label
+    from explorer.studies.sweep_table import read_table
+
+    r = explorer.check(FLOAT, rpm="2000:4000:5", only=("seating_velocity",), workers=1)
+    line = next(x for x in r.table_text().splitlines() if x.startswith("seating_velocity"))
+    assert "m/s (downward, magnitude)" in line and "downward" in r.result("seating_velocity").quantity
+    from explorer.checks.viewer import line as panel_line  # the browser's panel and the recordings
+
+    assert panel_line(r.result("seating_velocity")).shown.endswith(" m/s (downward, magnitude)")
+    table = explorer.sweep(FLOAT, vary={"drive.rpm": "2000:4000:5"}, workers=1)
+    assert np.nanmax(table.columns["seating_velocity_m_s"]) < 0.0  # signed: downward
+    assert r.result("seating_velocity").value == pytest.approx(-np.nanmin(table.columns["seating_velocity_m_s"]),
+                                                               rel=1e-12)
+    assert "< 0 = downward" in table.metadata["conventions"]["seating_velocity_m_s"]
+    table.write(tmp_path / "t.csv")
+    text = (tmp_path / "t.csv").read_text()
+    assert '# conventions: {"seating_velocity_m_s": "signed:' in text
+    assert read_table(tmp_path / "t.csv").metadata["conventions"] == dict(table.metadata["conventions"])
+    assert _label("seating_velocity_m_s") == "seating_velocity_m_s (signed, < 0 = downward)"
+    assert _label("max_deviation_m") == "max_deviation_m"
+    # a sweep without the figure carries no conventions
+    rigid = explorer.sweep(rigid_float(), vary={"drive.rpm": "2000:4000:3"}, workers=1)
+    assert "seating_velocity_m_s" not in rigid.columns and "conventions" not in rigid.metadata
 
 
 def test_float_margin_rigid():
@@ -472,6 +566,67 @@ def test_coil_bind():
         assert_sides(make, ls, "coil_bind", "below", margin=0.002, expect=expect)
 
 
+def shigley_spring_scene(lift_m: float, lash_m: float = 0.0):
+    """A Shigley ch. 10 exercise's spring (music wire, d 1.905 mm, OD 19.380 mm, L0 89.383 mm,
+    14.2 total coils, squared and ground: Na = 12.2, Ls = d Nt; G 81.0 GPa for 1.61-3 mm wire,
+    Shigley table 10-5), preload 10 N, on a cam that lifts the valve `lift_m`."""
+    return loads_scene(f"""name = "Shigley spring"
+effects = ["kinematics"]
+[drive]
+rpm = 1000
+[lift]
+law = "polynomial-345"
+height = "{lift_m + lash_m} m"
+start = "30 deg"
+rise = "90 deg"
+dwell = "0 deg"
+return = "90 deg"
+[follower]
+type = "translating-roller"
+base_radius = "60 mm"
+roller_radius = "10 mm"
+[valve]
+mass = "0.1 kg"
+lash = "{lash_m} m"
+[spring]
+preload = "10 N"
+wire_diameter = "1.905 mm"
+coil_diameter = "17.475 mm"
+active_coils = 12.2
+shear_modulus = "81.0 GPa"
+density = "7850 kg/m**3"
+free_length = "89.383 mm"
+solid_height = "{1.905 * 14.2} mm"
+""")
+
+
+def test_coil_bind_is_shigleys_fractional_overrun_to_closure():
+    """Shigley ch. 10 (helical compression springs for static service): F_s = (1 + xi) F_max, xi the
+    fractional overrun to closure, designed for xi >= 0.15. The exercise's spring between 10 N and
+    F_max = 90 N: its answer xi = 0.42 (F_s = k (L0 - Ls) = 127.7 N). The rule's length form
+    (L2 - Ls)/(L0 - L2) is the same ratio; 0.005: the answer's two digits."""
+    G, d, D, na = 81.0e9, 1.905e-3, 17.475e-3, 12.2
+    k = G * d**4 / (8 * D**3 * na)  # 2.048 N/mm
+    s = shigley_spring_scene((90.0 - 10.0) / k)  # full lift at F_max = 90 N
+    r = judge(s, "coil_bind")
+    f_solid = k * (89.383e-3 - 1.905e-3 * 14.2)
+    assert f_solid == pytest.approx(127.7, abs=0.05)
+    assert r.value == pytest.approx(f_solid / 90.0 - 1.0, rel=1e-9)
+    assert r.value == pytest.approx(0.42, abs=0.005) and r.verdict == "pass"
+    # the lash is taken up before the spring moves: the same cam with a lash gives the same xi
+    assert judge(shigley_spring_scene((90.0 - 10.0) / k, 1e-4), "coil_bind").value == pytest.approx(r.value, rel=1e-9)
+    # F_max at the warn limit: F_s / 1.15
+    s = shigley_spring_scene((f_solid / 1.15 - 10.0) / k)
+    assert judge(s, "coil_bind").value == pytest.approx(0.15, rel=1e-9)
+
+
+def test_spring_frequency_of_shigleys_exercise():
+    """The same exercise's critical frequency, ends held on the plates: 185 Hz (f = (1/2) sqrt(k/m),
+    m = rho pi^2 d^2 D Na / 4 = 14.99 g); 0.5 Hz: the answer's three digits."""
+    r = judge(shigley_spring_scene(0.01), "spring_frequency", rpm="600")
+    assert r.value * 600.0 / 60.0 == pytest.approx(185.0, abs=0.5)
+
+
 def test_spring_surge_band():
     from explorer.dynamics.chain import chain_frequencies
 
@@ -493,8 +648,30 @@ def test_spring_surge_band():
     assert inside.value == 0.0 and order == pytest.approx(round(order), abs=1e-9)
 
 
+def test_spring_frequency_ratio_against_a_worked_number():
+    """Shigley ch. 10, critical frequency of helical springs: f1 = (1/2) sqrt(k/m_active), both ends
+    fixed, at least 15-20 x the forcing frequency. The spring-surge scene's spring by hand: m = rho
+    pi^2 d^2 D n / 4 (the active coils' wire), k the scene's 30.6 N/mm."""
+    from explorer.dynamics.chain import chain_frequencies
+
+    s = load_scene(SURGE)
+    m = 7850.0 * math.pi**2 * 0.004**2 * 0.024 * 6 / 4  # 44.62 g
+    k = 30.6e3
+    f1 = 0.5 * math.sqrt(k / m)  # 414.03 Hz
+    assert f1 == pytest.approx(414.03, abs=0.005)
+    # the closed form is the limit of the spring cut into ever more masses (error ~ 1/N^2)
+    assert float(chain_frequencies(256, k, m)[0]) / (2 * math.pi) == pytest.approx(f1, rel=1e-5)
+    r = judge(s, "spring_frequency", rpm="1000,1500")
+    assert r.value == pytest.approx(f1 / (1500.0 / 60.0), rel=1e-12) and r.speed_rpm == 1500.0
+    assert r.value == pytest.approx(16.56, abs=0.01) and r.verdict == "warn"
+    for limit, expect in ((20.0, ("pass", "warn")), (15.0, ("warn", "fail"))):
+        top = 60.0 * f1 / limit  # the top speed at which f1 is `limit` x the camshaft's frequency
+        lo, hi = (judge(s, "spring_frequency", rpm=f"1000,{top * x}") for x in (0.99, 1.01))
+        assert (lo.verdict, hi.verdict) == expect and lo.value == pytest.approx(limit / 0.99, rel=1e-12)
+
+
 def test_spring_rules_need_the_wire_geometry():
-    for name in ("spring_stress", "spring_fatigue", "coil_bind", "spring_surge"):
+    for name in ("spring_stress", "spring_fatigue", "coil_bind", "spring_surge", "spring_frequency"):
         assert judge(FLOAT, name).verdict == "n/a"
 
 

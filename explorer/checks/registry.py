@@ -37,6 +37,8 @@ SI_UNITS: Mapping[str, str] = MappingProxyType({
 NORTON_DOM = "R. L. Norton, Design of Machinery, ch. 8 (cam design: pressure angle), and his DYNACAM help"
 TRADE_CAM = "cam designer's notes, camprofiledesigns.com ('cam talk', Jan 2024)"
 SHIGLEY_SPRINGS = "J. E. Shigley et al., Mechanical Engineering Design, ch. 10 (mechanical springs)"
+SHIGLEY_CRITICAL = (SHIGLEY_SPRINGS.replace("(mechanical springs)", "'Critical frequency of helical springs'") +
+                    ", after Wolford and Smith; f1 of both ends fixed: A. M. Wahl, Mechanical Springs (1944)")
 HAMROCK = ("B. J. Hamrock, S. R. Schmid, B. O. Jacobson, Fundamentals of Machine Elements, lubrication chapter: "
            "film parameter ranges (boundary < 1, partial 1-5, elastohydrodynamic 3-10)")
 SEED_004 = "seed 004 ('Oel- und Gasmaschinen', p. 404)"
@@ -91,18 +93,21 @@ _BUILTIN: tuple[RuleSpec, ...] = (
                  Setting("warn", None, "length", "mm", "none by default", "-", minimum=0.0),
              ), "kinematics"),
     RuleSpec("ramp_velocity", f"{_R}.ramp_velocity:measure", "Opening velocity at the end of the lash ramp",
-             "valve lift per cam angle at the lash take-up", "mm/deg", "max", (
+             "lifter lift per cam angle at the lash take-up (the valve's over the gear's ratio where [lift] is "
+             "the valve's; the valve's where the gear has no lifter)", "mm/deg", "max", (
                  Setting("fail", 0.002 * IN_PER_DEG, "lift_rate", "mm/deg", TRADE_CAM + ": below about 0.002 in/deg "
-                         "for a solid tappet", "trade practice", minimum=0.0),
+                         "for a solid tappet, a lobe (tappet-side) figure", "trade practice", minimum=0.0),
                  Setting("warn", None, "lift_rate", "mm/deg", "none by default", "-", minimum=0.0),
-             ), "dynamics"),
+             ), "dynamics", qualifier="lifter side"),
     RuleSpec("seating_velocity", f"{_R}.seating_velocity:measure", "Seating velocity",
-             "hardest seat impact (elastic; rigid without a linkage)", "m/s", "max", (
+             "hardest seat impact: the valve's downward (closing) speed at the seat, a magnitude (elastic; rigid "
+             "without a linkage); a sweep's seating_velocity_m_s is the same impact signed, < 0", "m/s", "max", (
                  Setting("fail", 1.0, "velocity", "m/s", TRADE_CAM + ": below about 1.0 m/s (40 in/s) for high-end "
                          "valve trains", "trade practice", minimum=0.0),
                  Setting("warn", 0.76, "velocity", "m/s", TRADE_CAM + ": about 0.76 m/s (30 in/s) for others",
                          "trade practice", minimum=0.0),
-             ), "dynamics", (Plotted("valve_velocity_m_s", sign=-1.0),)),  # the closing (negative) velocity
+             ), "dynamics", (Plotted("valve_velocity_m_s", sign=-1.0),),  # the closing (negative) velocity
+             qualifier="downward, magnitude"),
     RuleSpec("float_margin", f"{_R}.float_margin:measure", "Float margin",
              "speed of first separation while the valve is open - highest operating speed", "rpm", "min", (
                  Setting("fail", 100.0 * RPM, "speed", "rpm", "Race Engine Technology, 'Peace and harmony': float "
@@ -176,21 +181,30 @@ _BUILTIN: tuple[RuleSpec, ...] = (
                  Setting("warn", 1.5, "number", "", SHIGLEY_SPRINGS + ": design factor n_f = 1.5 of its fatigue "
                          "design examples", "textbook design factor", minimum=0.0),
              ), "spring"),
-    RuleSpec("coil_bind", f"{_R}.coil_bind:measure", "Coil bind", "fractional overrun to closure at full lift",
+    RuleSpec("coil_bind", f"{_R}.coil_bind:measure", "Coil bind",
+             "fractional overrun to closure at full lift, xi = F_solid / F_max - 1",
              "", "min", (
                  Setting("fail", 0.0, "number", "", "coils solid at full lift", "geometric necessity", minimum=0.0),
-                 Setting("warn", 0.15, "number", "", SHIGLEY_SPRINGS + ": fractional overrun to closure xi = 0.15",
-                         "textbook design value", minimum=0.0),
+                 Setting("warn", 0.15, "number", "", SHIGLEY_SPRINGS + ", static service: fractional overrun to "
+                         "closure xi >= 0.15, F_solid = (1 + xi) F_max", "textbook design value", minimum=0.0),
              ), "spring"),
     RuleSpec("spring_surge", f"{_R}.spring_surge:measure", "Spring surge",
              "distance of a surge frequency from a strong cam harmonic (share of the surge frequency)", "", "min", (
                  Setting("fail", 0.05, "number", "", "judgement: a surge mode within 5 % of a strong harmonic "
                          "resonates", "judgement", minimum=0.0),
-                 Setting("warn", 0.10, "number", "", "judgement; Shigley quotes Wolford and Smith: the spring's "
-                         "fundamental 15-20 x the forcing frequency", "judgement", minimum=0.0),
+                 Setting("warn", 0.10, "number", "", "judgement: twice the fail band (the 15-20 x rule of the "
+                         "spring books is spring_frequency's)", "judgement", minimum=0.0),
                  Setting("strength", 0.10, "number", "", "a harmonic counts as strong from 10 % of the largest",
                          "judgement", minimum=0.0),
                  Setting("modes", 3.0, "number", "", "surge modes checked", "judgement", minimum=1.0),
+             ), "spring"),
+    RuleSpec("spring_frequency", f"{_R}.spring_frequency:measure", "Spring frequency ratio",
+             "first natural frequency f1 = (1/2) sqrt(k/m_active) / the camshaft's frequency at the top speed", "",
+             "min", (
+                 Setting("fail", 15.0, "number", "", SHIGLEY_CRITICAL + ": f1 at least 15 x the forcing frequency "
+                         "(the lower figure)", "textbook rule of thumb", minimum=0.0),
+                 Setting("warn", 20.0, "number", "", SHIGLEY_CRITICAL + ": 15-20 x (the upper figure)",
+                         "textbook rule of thumb", minimum=0.0),
              ), "spring"),
     RuleSpec("trip_latch", f"{_R}.trip_latch:measure", "Trip-gear latch hold",
              "throw-off speed of the latch - highest operating speed", "rpm", "min", (

@@ -50,6 +50,7 @@ class RuleResult:
     sample_verified: int | None = None  # two-phase: draws run over every speed of the range
     sample_missed: int | None = None  # two-phase: of those, failing there though not at the nominal's worst speeds
     bound: str = ""  # "at least" / "at most": value is a bound (rule.Measure.bound), shown as >= / <=
+    qualifier: str = ""  # the rule's (RuleSpec.qualifier): which side, which sign
 
     @property
     def bound_mark(self) -> str:
@@ -165,6 +166,8 @@ class CheckReport:
                 where.append(f"{r.cam_angle_deg:.2f} deg")
             limit = f"{_fmt(r.shown(r.fail))} / {_fmt(r.shown(r.warn))} {r.unit}".replace("- / - ", "- / -")
             worst = f"{r.bound_mark}{_fmt(r.shown(r.value))} {r.unit}"
+            if r.qualifier:
+                worst = f"{worst.rstrip()} ({r.qualifier})"
             row = [r.name, r.verdict.upper() if r.verdict == "fail" else r.verdict, worst,
                    ", ".join(where), limit]
             if self.samples:

@@ -95,6 +95,9 @@ class RuleSpec:
     # the result columns its limits are drawn on, each where a result has it; none: a quantity no
     # column holds (a margin, a ratio, a film parameter) -- its line still moves the gear to its worst
     plotted: tuple[Plotted, ...] = ()
+    # what the value is measured as where a reader could take it otherwise (a side of a lever, a
+    # sign): shown beside the value in the report's table ("downward, magnitude"; "lifter side")
+    qualifier: str = ""
 
     def setting(self, name: str) -> Setting | None:
         return next((s for s in self.settings if s.name == name), None)
@@ -120,6 +123,9 @@ class Measure:
     # "at least" / "at most": the value is a bound, not the figure itself (a search that ended
     # before it found what it looked for: no separation up to the highest speed searched)
     bound: str = ""
+    # which side or sign the value is, where it depends on the scene (a lever's lifter or valve
+    # side); "" the rule's own (RuleSpec.qualifier)
+    qualifier: str = ""
 
     @staticmethod
     def not_applicable(reason: str) -> "Measure":

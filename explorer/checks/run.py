@@ -148,7 +148,7 @@ def _result(spec, settings, m: Measure | None, off: bool) -> RuleResult:
         s = spec.setting("fail")
         return RuleResult(name=spec.name, title=spec.title, group=spec.group, quantity=spec.quantity, unit=spec.unit,
                           sense=spec.sense, fail=fail, warn=warn, source=s.source if s is not None else "",
-                          firmness=s.firmness if s is not None else "", **kw)
+                          firmness=s.firmness if s is not None else "", qualifier=spec.qualifier, **kw)
 
     if off:
         return base(verdict="off", value=None, speed_rpm=None, cam_angle_deg=None, reason="switched off")
@@ -167,7 +167,8 @@ def _result(spec, settings, m: Measure | None, off: bool) -> RuleResult:
     return RuleResult(name=spec.name, title=spec.title, group=spec.group, quantity=spec.quantity, unit=spec.unit,
                       sense=spec.sense, verdict=verdict, value=float(value[i]), speed_rpm=speed,
                       cam_angle_deg=None if math.isnan(angle) else angle, fail=m.fail, warn=m.warn, source=source,
-                      firmness=firmness, note=m.note, details=m.details, bound=m.bound)
+                      firmness=firmness, note=m.note, details=m.details, bound=m.bound,
+                      qualifier=m.qualifier or spec.qualifier)
 
 
 def _limit_source(spec, settings, m: Measure) -> tuple[str, str]:

@@ -39,6 +39,8 @@ def line(result: RuleResult) -> CheckLine:
     shown = result.shown(result.value)
     text = "" if shown is None else (f"{result.bound_mark}{shown:.4g} {result.unit}".strip() if math.isfinite(shown)
                                      else str(shown))
+    if text and result.qualifier:  # which side or sign, as the report's table
+        text += f" ({result.qualifier})"
     limits = [f"{name} {result.shown(v):.4g}" for name, v in (("fail", result.fail), ("warn", result.warn))
               if v is not None and math.isfinite(v)]
     return CheckLine(

@@ -397,6 +397,16 @@ class ArmTrainGear(Gear):
     def oscillating(self, train) -> bool:
         return True
 
+    def lifter_ratio(self, scene, lift, theta):
+        """The train's kinematic ratio (explorer.gears.arm: |ds/dpsi| / arm, the valve's travel per
+        travel of the arm's reference point; explorer.gears.pushrod: ds/dL, per travel of the
+        lifter), the [lift] being the valve's."""
+        train = lift.gear
+        k = train.kinematics(np.asarray(theta, dtype=float))
+        if hasattr(train, "lifter"):
+            return "lifter", np.asarray(k.ratio, dtype=float)
+        return ("roller centre" if train.arm.cam_side.kind == "roller" else "pad crown"), np.asarray(k.ratio, dtype=float)
+
     # -- 8: report ---------------------------------------------------------------------------------
     def report(self, ctx) -> EffectOutput:
         train, k = self._train(ctx), self._kin(ctx)

@@ -246,6 +246,16 @@ class Gear:
         [[linkage.elements]] and the spring's share when it is modelled as masses)."""
         return train_parts(scene)
 
+    # -- 13. the follower the cam drives (the design rules' lifter side) -----------------------
+    def lifter_ratio(self, scene, lift, theta):
+        """(the name of the follower the cam drives, the valve's travel per its travel at the cam
+        angles `theta`) for the figures the trade quotes at the lobe (the ramp velocity: a tappet's
+        lift per cam degree, the lobe being ground to the tappet's lift), or None when the scene's
+        lift is that follower's own and follower.ratio turns it into the valve's (the default: a
+        translating roller, a bucket tappet). A gear whose [lift] is the valve's gives its kinematic
+        ratio; one with no follower between the cam and the valve ("valve", 1)."""
+        return None
+
     # -- explorer fit --------------------------------------------------------------------------
     def fit(self, scene, theta) -> tuple[dict, list[str]]:
         """(report, warnings) of `explorer fit`: the contour chosen for a wanted lift."""

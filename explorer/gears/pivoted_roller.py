@@ -112,6 +112,11 @@ class PivotedRoller(LeverContact, Gear):
         return EffectOutput(columns=columns, summary=summary)
 
 
+    def lifter_ratio(self, scene, lift, theta):
+        """The lever's ratio |ds/dpsi| / a, the valve's travel per travel of the roller centre (the
+        [lift] being the valve's)."""
+        return "roller centre", np.asarray(lift.gear.geometry(np.asarray(theta, dtype=float)).ratio, dtype=float)
+
     def cam_contact(self, scene, lift, theta) -> GearContact:
         """The roller rolls without slipping on the cam (rolling_roller_motion), its centre's path
         traced in the camshaft's frame; the lever swings (oscillating)."""

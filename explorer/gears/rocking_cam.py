@@ -281,6 +281,10 @@ class RockingCam(LeverContact, Gear):
         return target_report(given, fit, fitted, spec.part("target"), spec.part("rocking_cam"), lash, theta)
 
 
+    def lifter_ratio(self, scene, lift, theta):
+        """No follower the trade's lobe figures are quoted at: the valve's own lift ([lift])."""
+        return "valve", np.ones(np.shape(np.asarray(theta, dtype=float)))
+
     def cam_contact(self, scene, lift, theta) -> GearContact:
         """The roller rolls without slipping on the rocking cam (rolling_roller_motion), the pitch
         curve traced in the frame of the rocking body, about its pivot; the lever swings."""

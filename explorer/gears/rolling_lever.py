@@ -160,6 +160,10 @@ class RollingLever(LeverContact, Gear):
         return EffectOutput(columns=columns, summary=summary, events=tuple(events), warnings=tuple(warnings))
 
 
+    def lifter_ratio(self, scene, lift, theta):
+        """No follower the trade's lobe figures are quoted at: the valve's own lift ([lift])."""
+        return "valve", np.ones(np.shape(np.asarray(theta, dtype=float)))
+
     def cam_contact(self, scene, lift, theta) -> GearContact:
         """The faces roll on each other: the contact runs along face A (a spiral rho = rho_c + k w
         about its pivot) at sqrt(k^2 + rho^2) per radian of rolling swing w, both surfaces alike."""

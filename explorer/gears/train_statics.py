@@ -64,6 +64,9 @@ def cam_forces(valve_force, *, contact: np.ndarray, normal: np.ndarray, tangent:
     way = np.where(_dot(valve_axis, valve_jacobian) < 0.0, -1.0, 1.0)[:, None]
     cam_jacobian = way * cam_jacobian
     valve_jacobian = way * valve_jacobian
+    # sgn(0) = 0: at exactly zero sliding (a scrub's reversal) Coulomb's friction is set-valued,
+    # |F_t| <= mu N; the statics take the frictionless balance, between the two sides' (finite:
+    # nothing divides by the sliding velocity; tests/test_train_statics.py)
     sigma_c = np.sign(cam_sliding)
     drive = _dot(normal, cam_jacobian) + cam_friction * sigma_c * _dot(tangent, cam_jacobian)
     free_drive = _dot(normal, cam_jacobian)

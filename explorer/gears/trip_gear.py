@@ -187,6 +187,10 @@ class TripGear(Gear):
         spring, the loads and the lash -- any sweep key."""
         return None
 
+    def lifter_ratio(self, scene, lift, theta):
+        """No follower the trade's lobe figures are quoted at: the valve's own lift ([lift])."""
+        return "valve", np.ones(np.shape(np.asarray(theta, dtype=float)))
+
     def report(self, ctx) -> EffectOutput:
         """Latch lift and force, buffer, the closing, the pick-up impact, Trinks' rule, the buffers compared."""
         lift = ctx.lift if hasattr(ctx.lift, "closing") else self.build_lift(ctx.scene)

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..core.outputs import as_output, output_path
 from .charts import figure, png
-from .sweep_spec import SWEEP_KEYS
+from .sweep_spec import SIGN_LABELS, SWEEP_KEYS
 
 # what a designer looks at first, in this order (those the table has are drawn)
 FIGURES = ("seating_velocity_m_s", "peak_linkage_force_N", "max_deviation_m", "separations", "flight_time_s",
@@ -68,7 +68,7 @@ def lines_png(table) -> bytes:
                 ax.axvline(float_rpm, color="C3", linestyle="--", linewidth=0.9, label=f"rigid float speed {float_rpm:.0f} rpm")
                 if i == 0:
                     ax.legend(fontsize=7)
-            ax.set_title(name, fontsize=9)
+            ax.set_title(_label(name), fontsize=9)
             ax.set_xlabel(_key_column(key), fontsize=8)
             if meta.get("axes") and meta["axes"][0].get("log"):
                 ax.set_xscale("log")
@@ -93,7 +93,7 @@ def heatmaps_png(table) -> bytes:
         for ax, name in zip(grid[0], names):
             z = np.asarray(table.columns[name], float).reshape(na, nb)
             mesh = ax.pcolormesh(xb, xa, z, shading="nearest", cmap="viridis")
-            fig.colorbar(mesh, ax=ax, shrink=0.85).set_label(name, fontsize=8)
+            fig.colorbar(mesh, ax=ax, shrink=0.85).set_label(_label(name), fontsize=8)
             if "separations" in table.columns:
                 sep = np.asarray(table.columns["separations"], float).reshape(na, nb)
                 if (sep > 0).any() and (sep == 0).any():
@@ -103,7 +103,7 @@ def heatmaps_png(table) -> bytes:
             for a, setter in ((meta["axes"][1], ax.set_xscale), (meta["axes"][0], ax.set_yscale)):
                 if a.get("log"):
                     setter("log")
-            ax.set_title(name + ("\n(white: boundary of first separation)" if "separations" in table.columns else ""),
+            ax.set_title(_label(name) + ("\n(white: boundary of first separation)" if "separations" in table.columns else ""),
                          fontsize=8)
         fig.suptitle(_title(table), fontsize=10)
         return png(fig)
@@ -120,7 +120,7 @@ def histograms_png(table) -> bytes:
             data = np.asarray(table.columns[name], float)
             data = data[np.isfinite(data)]
             ax.hist(data, bins=min(60, max(5, int(math.sqrt(data.size)))), color="C0")
-            ax.set_title(name, fontsize=9)
+            ax.set_title(_label(name), fontsize=9)
             ax.grid(alpha=0.3)
         for j in range(len(figs), rows * cols):
             grid[j // cols][j % cols].axis("off")
@@ -152,6 +152,11 @@ def share_text(table, share: float) -> str:
     failed = failed_runs(table)
     text = f"{100.0 * share:.2f} % of the runs separate"
     return text + (f" (of {len(table) - failed} finished; {failed} failed)" if failed else "")
+
+
+def _label(name: str) -> str:
+    """A figure's name, with its sign convention where it has one (SIGN_LABELS)."""
+    return f"{name} ({SIGN_LABELS[name]})" if name in SIGN_LABELS else name
 
 
 def _title(table) -> str:

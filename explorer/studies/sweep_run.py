@@ -37,7 +37,7 @@ from ..core.processes import _PR_SET_PDEATHSIG, _load_prctl
 from ..scene.scene import load_scene
 from .sweep_engine import _Shared, compute_chunk, engine_for, result_columns
 from .sweep_plots import sweep_png, record
-from .sweep_spec import SWEEP_KEYS, Plan, check_scene, make_plan, parse_axis, parse_sample
+from .sweep_spec import SIGN_CONVENTIONS, SWEEP_KEYS, Plan, check_scene, make_plan, parse_axis, parse_sample
 from .sweep_table import SweepTable
 
 # Runs per chunk: enough that a task's overhead (pickling, a round trip; ~1-5 ms locally, more
@@ -104,6 +104,7 @@ def dask_chunk(scene_bytes: bytes, keys, names, start: int, values: np.ndarray):
 
 # ------------------------------------------------------------------ the sweep
 def metadata(scene, plan: Plan, names, complete: bool, finished: int, seconds: float) -> dict:
+    signs = {n: SIGN_CONVENTIONS[n] for n in names if n in SIGN_CONVENTIONS}
     return {
         "scene": scene.name,
         "source": scene.source,
@@ -118,6 +119,7 @@ def metadata(scene, plan: Plan, names, complete: bool, finished: int, seconds: f
         "runs_planned": plan.runs,
         "runs_finished": finished,
         "compute_time_s": seconds,
+        **({"conventions": signs} if signs else {}),
     }
 
 

@@ -38,6 +38,15 @@ class SweepKey:
     upper: float | None = None  # exclusive upper bound (restitution < 1)
 
 
+# figures whose sign a reader could take otherwise: the table's metadata (`conventions`), the plots'
+# titles and the browser's label say it (explorer check's seating_velocity is the magnitude)
+SIGN_CONVENTIONS = {
+    "seating_velocity_m_s": "signed: the valve's velocity at the hardest seat impact, < 0 = downward "
+                            "(closing); explorer check's seating_velocity shows its magnitude",
+}
+SIGN_LABELS = {"seating_velocity_m_s": "signed, < 0 = downward"}
+
+
 SWEEP_KEYS: dict[str, SweepKey] = {k.key: k for k in (
     SweepKey("drive.rpm", "speed", "drive_rpm", True),
     SweepKey("linkage.stiffness", "stiffness", "linkage_stiffness_N_m", True),

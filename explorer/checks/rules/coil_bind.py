@@ -1,6 +1,12 @@
 """Coil bind: the fractional overrun to closure at full lift, xi = (L2 - Ls)/(L0 - L2), with the
 spring installed at L1 = L0 - F1/k and compressed by the valve's lift to L2 (< 0: the coils go
-solid; Shigley designs for xi >= 0.15)."""
+solid).
+
+xi is Shigley's (Mechanical Engineering Design, ch. 10, "Design of helical compression springs for
+static service"): the force at solid F_s = (1 + xi) F_max, F_max the largest working force, and the
+book designs for xi >= 0.15 (the warn limit). For a linear spring F_s = k (L0 - Ls) and F_max =
+k (L0 - L2), so xi = F_s/F_max - 1 = (L2 - Ls)/(L0 - L2): the same figure in lengths (tested against
+a Shigley ch. 10 exercise's xi = 0.42 in tests/test_checks.py)."""
 
 from __future__ import annotations
 

@@ -356,7 +356,7 @@ def sweep_plots(sweep: SpeedSweep, current_rpm: float) -> list[tuple]:
         specs += [(f"Speed sweep (elastic first separation, {done})", "θ [°]", x,
                    [("first separation [°]", sweep.first_separation_deg[computed], "#d68910")]),
                   (f"Speed sweep (elastic seating velocity, {done})", "v [m/s]", x,
-                   [("seating velocity [m/s]", sweep.seating_velocity[computed], "#8e44ad")]),
+                   [("seating velocity, signed (< 0 = downward) [m/s]", sweep.seating_velocity[computed], "#8e44ad")]),
                   (f"Speed sweep (elastic deviation, {done})", "Δs [mm]", x,
                    [("largest deviation from the rigid lift [mm]", sweep.max_deviation[computed] * 1e3, "#27ae60")])]
     out = []
