@@ -1182,3 +1182,27 @@ def test_hertz_without_a_named_allowable_says_it_judged_by_the_1902_default():
     assert cast.fail == pytest.approx(3500.0 * 9.80665e4) and cast.source == "[contact] allowable_stress"
     diesel = judge(FLOAT, "hertz_stress")
     assert diesel.fail == pytest.approx(4000.0 * 9.80665e4) and diesel.source.startswith("[contact] engine = 'diesel'")
+
+
+def test_the_guides_spring_surge_figures_are_the_programs():
+    """docs/guide/checks.md quotes `explorer check` on the spring-surge scene with a lubricant; each
+    quoted `rule VERDICT value` is what the program gives (the guide said film_parameter 0.5077
+    where the program gives 0.5638)."""
+    import re
+    import shlex
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "checks.md").read_text()
+    start = page.index("explorer check assets/scenes/spring_surge.toml")
+    command = page[start:page.index("\n\n", start)].replace("\\\n", " ")
+    words = shlex.split(command)
+    sets = [words[i + 1] for i, word in enumerate(words) if word == "--set"]
+    rpm = words[words.index("--rpm") + 1]
+    quoted = re.findall(r"`(\w+) (FAIL|WARN|pass) ([-\d.]+)", page[start:page.index("## The rules", start)])
+    assert len(quoted) >= 5
+    report = explorer.check(load_scene(SURGE, sets), rpm=rpm,
+                            only=tuple(name for name, _, _ in quoted), workers=1)
+    for name, verdict, value in quoted:
+        r = report.result(name)
+        assert r.verdict == verdict.lower(), name
+        assert f"{r.shown(r.value):.4g}" == value, (name, r.shown(r.value), value)
