@@ -1206,3 +1206,33 @@ def test_the_guides_spring_surge_figures_are_the_programs():
         r = report.result(name)
         assert r.verdict == verdict.lower(), name
         assert f"{r.shown(r.value):.4g}" == value, (name, r.shown(r.value), value)
+
+
+def test_a_tolerance_study_names_its_worst_draw_and_the_draws_that_fail():
+    """Each rule's worst draw: its index in the study's draws (the seeded generator's own values
+    there, the oracle of which draw it is), its value -- what a check of the nominal scene with
+    that draw's values set gives, to 1e-9 (the same computation, other route) -- and the draws known
+    to fail: as many as the exact share of failing draws says. A rule the draws do not change has
+    no worst draw; the table lists the worst draws, the JSON carries them."""
+    from explorer.checks.report import draw_text
+
+    lash, rate = "normal(0.25 mm, 0.02 mm)", "normal(20 N/mm, 1 N/mm)"
+    report = explorer.check(FLOAT, rpm="800:6500:5", sample={"valve.lash": lash, "spring.rate": rate}, runs=40,
+                            seed=7, only=("ramp_velocity", "pressure_angle"), workers=1)
+    ramp = report.result("ramp_velocity")
+    rng = np.random.default_rng(7)
+    drawn = {"valve.lash": rng.normal(0.25e-3, 0.02e-3, 40), "spring.rate": rng.normal(20e3, 1e3, 40)}
+    i = ramp.worst_draw
+    assert dict(ramp.worst_draw_values) == {k: v[i] for k, v in drawn.items()}
+    # the lash sets the ramp's speed where the valve takes it up: the worst draw has the largest lash
+    assert i == int(np.argmax(drawn["valve.lash"]))
+    alone = explorer.check(load_scene(FLOAT, [f'valve.lash="{float(drawn["valve.lash"][i])!r} m"']), rpm="800:6500:5",
+                           only=("ramp_velocity",), workers=1).result("ramp_velocity")
+    assert ramp.worst_draw_value == pytest.approx(alone.value, rel=1e-9)
+    assert ramp.sample_method.startswith("exact") and len(ramp.failing_draws) == round(ramp.p_fail * ramp.samples)
+    assert report.result("pressure_angle").worst_draw is None  # neither key moves the cam's geometry
+    text = report.table_text()
+    assert f"ramp_velocity: draw {i}, " in text and f"valve.lash = {draw_text('valve.lash', drawn['valve.lash'][i])}" in text
+    as_json = json.loads(report.to_json())
+    row = next(r for r in as_json["results"] if r["name"] == "ramp_velocity")
+    assert row["worst_draw"] == i and len(row["failing_draws"]) == len(ramp.failing_draws)

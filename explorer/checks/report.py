@@ -51,6 +51,14 @@ class RuleResult:
     sample_missed: int | None = None  # two-phase: of those, failing there though not at the nominal's worst speeds
     bound: str = ""  # "at least" / "at most": value is a bound (rule.Measure.bound), shown as >= / <=
     qualifier: str = ""  # the rule's (RuleSpec.qualifier): which side, which sign
+    # tolerance study: the draw whose worst value is the worst of all draws (its index in the
+    # study's draws, the same with the same command and --seed), that value (SI) and the draw's
+    # values of the sampled keys (SI); and every draw known to fail (two-phase: found by either
+    # phase -- a draw phase one ran at a few speeds only may fail at others)
+    worst_draw: int | None = None
+    worst_draw_value: float | None = None
+    worst_draw_values: tuple[tuple[str, float], ...] = ()
+    failing_draws: tuple[int, ...] = ()
 
     @property
     def bound_mark(self) -> str:
@@ -181,6 +189,13 @@ class CheckReport:
         widths = [max(len(str(row[i])) for row in rows) for i in range(len(head))]
         for row in rows:
             lines.append("  ".join(str(c).ljust(widths[i]) for i, c in enumerate(row)).rstrip())
+        worst = [r for r in self.results if r.worst_draw is not None and r.verdict in ("pass", "warn", "fail")]
+        if worst:
+            lines.append("worst draw of each rule (index in the draws; the sampled keys' values):")
+            for r in worst:
+                keys = ", ".join(f"{key} = {draw_text(key, value)}" for key, value in r.worst_draw_values)
+                lines.append(f"  {r.name}: draw {r.worst_draw}, {_fmt(r.shown(r.worst_draw_value))} {r.unit}".rstrip()
+                             + f" ({keys}); {len(r.failing_draws)} draw(s) known to fail")
         if any(r.sample_method.startswith("two-phase") for r in self.results):
             lines.append("~ two-phase estimate: every draw judged at the nominal design's worst speeds, a subset over "
                          "every speed of the range to bound what that misses (sample_method in the JSON)")
@@ -189,6 +204,19 @@ class CheckReport:
                      f"{sum(r.verdict == 'pass' for r in self.results)} pass, "
                      f"{sum(r.verdict == 'n/a' for r in self.results)} n/a); {self.seconds:.2f} s")
         return "\n".join(lines) + "\n"
+
+
+# a sampled key's value as an engineer reads it (the sweep keys' dimensions: explorer.studies.sweep_spec)
+DRAW_UNITS = {"length": ("mm", 1e3), "stiffness": ("N/mm", 1e-3), "force": ("N", 1.0), "mass": ("g", 1e3),
+              "damping": ("N*s/m", 1.0), "dimensionless": ("", 1.0), "speed": ("rpm", 30.0 / math.pi)}
+
+
+def draw_text(key: str, value: float) -> str:
+    """A sampled key's SI value in its display unit, e.g. "0.2713 mm"."""
+    from ..studies.sweep_spec import SWEEP_KEYS
+
+    unit, factor = DRAW_UNITS.get(SWEEP_KEYS[key].dimension, ("", 1.0)) if key in SWEEP_KEYS else ("", 1.0)
+    return f"{value * factor:.6g} {unit}".rstrip()
 
 
 def _num(x):

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from typing import Callable
 
 import numpy as np
@@ -125,6 +126,8 @@ def check(scene, rpm=None, sample=None, *, runs: int | None = None, seed: int | 
                 results[spec.name] = _with_probability(results[spec.name], spec, drawn[spec.name],
                                                        draws.values.shape[0], verified.get(spec.name),
                                                        one_speed=speeds.size == 1)
+                results[spec.name] = _with_worst_draw(results[spec.name], spec, drawn[spec.name], draws,
+                                                      verified.get(spec.name))
     return CheckReport(
         scene=scene.name, source=scene.source, speeds_rpm=tuple(float(s) for s in speeds), range_from=range_from,
         results=tuple(results[spec.name] for spec in specs),
@@ -250,6 +253,41 @@ def _with_probability(result: RuleResult, spec, m: Measure, n: int, verified=Non
     return replace(result, samples=k, p_fail=p_fail, p_fail_interval=i_fail, p_warn=p_warn, p_warn_interval=i_warn,
                    sample_note=m.note, sample_method=method, sample_verified=int(idx.size),
                    sample_missed=miss_fail)
+
+
+def _draw_worst(spec, m: Measure, n: int) -> np.ndarray:
+    """Per draw its worst value over the measure's speeds (NaN: none)."""
+    v = np.asarray(m.value, dtype=float)
+    v = np.broadcast_to(v, (n, v.shape[1])) if v.shape[0] == 1 else v
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a draw without any value: NaN, no verdict
+        return np.nanmax(v, axis=1) if spec.sense == "max" else np.nanmin(v, axis=1)
+
+
+def _with_worst_draw(result: RuleResult, spec, m: Measure, draws: Draws, verified=None) -> RuleResult:
+    """The result with the tolerance study's worst draw (its index, value and sampled keys' values)
+    and every draw known to fail: phase one's worst per draw, made worse where phase two ran the
+    draw over the whole range. A measure that does not vary with the draws has no worst draw."""
+    from dataclasses import replace
+
+    n = draws.values.shape[0]
+    if not m.applicable or m.value.size == 0 or m.value.shape[0] != n:
+        return result
+    per_draw = _draw_worst(spec, m, n).copy()
+    fails = _worst_verdicts(spec, m, n) == 2
+    if verified is not None:
+        idx, m2 = verified
+        if m2.applicable and m2.value.size and m2.value.shape[0] == idx.size:
+            whole = _draw_worst(spec, m2, idx.size)
+            pick = np.fmax if spec.sense == "max" else np.fmin
+            per_draw[idx] = pick(per_draw[idx], whole)
+            fails[idx] |= _worst_verdicts(spec, m2, idx.size) == 2
+    i = worst_index(per_draw, spec.sense)
+    if i is None or np.nanmax(per_draw) == np.nanmin(per_draw):  # no draw differs: none is the worst
+        return result
+    return replace(result, worst_draw=int(i), worst_draw_value=float(per_draw[i]),
+                   worst_draw_values=tuple((key, float(v)) for key, v in zip(draws.keys, draws.values[i])),
+                   failing_draws=tuple(int(k) for k in np.nonzero(fails)[0]))
 
 
 def _two_phase(hits: int, k: int, sub, worst2, bad) -> tuple[float, tuple[float, float], int, int]:
