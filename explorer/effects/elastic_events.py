@@ -50,14 +50,61 @@ def valve_motion_summary(s, v, a, events: list[Event], kinds) -> dict:
     }
 
 
-def linkage_outputs(s, v, a, jerk, force, back_pressure, deviation, contact, separated, events, kinds):
+def separated_angle_deg(time_s, separated, boundaries, period: float) -> float:
+    """The cam angle (deg) over which the valve is separated (the mask `separated` on the output
+    samples at time_s, ascending in [0, period)), measured between the exact instants where that
+    can change: `boundaries`, times in [0, period) (the solver's events, every kind, and whatever
+    else bounds the mask). Between two boundaries that are neighbours on the revolution's circle
+    the state is one: a sample strictly between them says which, and the stretch counts whole; the
+    stretch from the last boundary round to the first is one too (a flight that started in the
+    previous revolution). So the figure is the events' and does not move with the output step.
+    A stretch shorter than the step holds no sample: it takes the state the event opening it
+    leaves (separation: off; re-contact: on; a seat impact followed by a landing or a re-contact:
+    a rebound's flight, off), else the state before it. Without boundaries: 360 or 0, as the
+    first sample."""
+    t = np.asarray(time_s, dtype=float)
+    sep = np.asarray(separated, dtype=bool)
+    marks = sorted((float(b), kind) for b, kind in boundaries)
+    if not marks:
+        return 360.0 if sep.size and sep[0] else 0.0
+    times = [m[0] for m in marks]
+    total, state = 0.0, None
+    # the state before the first boundary: the stretch that wraps from the last one
+    for k, (b0, kind) in enumerate(marks):
+        b1 = times[k + 1] if k + 1 < len(marks) else times[0] + period
+        inside = np.flatnonzero((t > b0) & (t < b1)) if b1 <= period else \
+            np.concatenate([np.flatnonzero(t > b0), np.flatnonzero(t < b1 - period)])
+        if inside.size:
+            state = bool(sep[inside[inside.size // 2]])
+        else:
+            nxt = marks[k + 1][1] if k + 1 < len(marks) else marks[0][1]
+            if kind == "separation" or (kind == "seat" and nxt in ("seat", "re-contact")):
+                state = True
+            elif kind == "re-contact":
+                state = False
+            elif state is None:  # the first stretch: what the wrap-round stretch before it holds
+                state = _wrap_state(t, sep, times)
+        if state:
+            total += b1 - b0
+    return float(360.0 * total / period)
+
+
+def _wrap_state(t, sep, times) -> bool:
+    """The state on the stretch from the last boundary round to the first (its samples), False
+    when it holds none (a separated valve is seen on some sample of the revolution)."""
+    inside = np.flatnonzero((t > times[-1]) | (t < times[0]))
+    return bool(sep[inside[inside.size // 2]]) if inside.size else False
+
+
+def linkage_outputs(s, v, a, jerk, force, back_pressure, deviation, contact, separated, events, kinds, time_s,
+                    period: float):
     """(summary entries, columns) of the valve's motion and the linkage's force over the output
-    samples, as both elastic effects report them."""
+    samples (at time_s, within the revolution of `period` s), as both elastic effects report them."""
     summary = {
         "max_deviation_m": float(np.abs(deviation).max()),
         "peak_linkage_force_N": float(force.max()),
         "peak_camshaft_back_pressure_N": float(back_pressure.max()),
-        "separated_angle_deg": float(360.0 * np.count_nonzero(separated) / s.size),
+        "separated_angle_deg": separated_angle_deg(time_s, separated, [(e.time_s, e.kind) for e in events], period),
         **valve_motion_summary(s, v, a, events, kinds),
     }
     columns = {
