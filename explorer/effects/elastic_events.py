@@ -69,13 +69,11 @@ def separated_angle_deg(time_s, separated, boundaries, period: float) -> float:
         return 360.0 if sep.size and sep[0] else 0.0
     times = [m[0] for m in marks]
     total, state = 0.0, None
-    # the state before the first boundary: the stretch that wraps from the last one
     for k, (b0, kind) in enumerate(marks):
         b1 = times[k + 1] if k + 1 < len(marks) else times[0] + period
-        inside = np.flatnonzero((t > b0) & (t < b1)) if b1 <= period else \
-            np.concatenate([np.flatnonzero(t > b0), np.flatnonzero(t < b1 - period)])
-        if inside.size:
-            state = bool(sep[inside[inside.size // 2]])
+        middle = _middle_sample(t, b0, b1, period)
+        if middle is not None:
+            state = bool(sep[middle])
         else:
             nxt = marks[k + 1][1] if k + 1 < len(marks) else marks[0][1]
             if kind == "separation" or (kind == "seat" and nxt in ("seat", "re-contact")):
@@ -83,17 +81,31 @@ def separated_angle_deg(time_s, separated, boundaries, period: float) -> float:
             elif kind == "re-contact":
                 state = False
             elif state is None:  # the first stretch: what the wrap-round stretch before it holds
-                state = _wrap_state(t, sep, times)
+                state = _wrap_state(t, sep, times, period)
         if state:
             total += b1 - b0
     return float(360.0 * total / period)
 
 
-def _wrap_state(t, sep, times) -> bool:
+def _wrap_state(t, sep, times, period: float) -> bool:
     """The state on the stretch from the last boundary round to the first (its samples), False
     when it holds none (a separated valve is seen on some sample of the revolution)."""
-    inside = np.flatnonzero((t > times[-1]) | (t < times[0]))
-    return bool(sep[inside[inside.size // 2]]) if inside.size else False
+    middle = _middle_sample(t, times[-1], times[0] + period, period)
+    return bool(sep[middle]) if middle is not None else False
+
+
+def _middle_sample(t, b0: float, b1: float, period: float) -> int | None:
+    """The index of the middle sample strictly between b0 and b1 (b1 past `period`: round the
+    revolution's end), None if none; t ascending (a bisection: the events times log n)."""
+    lo = int(np.searchsorted(t, b0, side="right"))
+    if b1 <= period:
+        hi = int(np.searchsorted(t, b1, side="left"))
+        return lo + (hi - lo) // 2 if hi > lo else None
+    tail, head = t.size - lo, int(np.searchsorted(t, b1 - period, side="left"))
+    if tail + head == 0:
+        return None
+    m = (tail + head) // 2
+    return lo + m if m < tail else m - tail
 
 
 def linkage_outputs(s, v, a, jerk, force, back_pressure, deviation, contact, separated, events, kinds, time_s,
