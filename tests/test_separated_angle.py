@@ -89,3 +89,23 @@ def test_a_stretch_shorter_than_the_step_takes_its_events_state():
     sep = (t > 0.85) | (t < 0.15)
     got = separated_angle_deg(t, sep, [(0.12, "re-contact"), (0.87, "separation")], 1.0)
     assert got == pytest.approx(360.0 * 0.25, abs=1e-12)
+
+
+def test_trip_float_walk_by_hand():
+    """latched_float on made-up events (cam angles, pick-up at 0 deg, trip at 100 deg, w = 1 rad/s
+    so a flight's time is its angle in rad): a flight still off the latch at the trip ends there;
+    a separation after a seat impact is the rebound's, until the latch lifts the valve again."""
+    from explorer.gears.trip_latched import latched_float
+
+    def ev(kind, deg):
+        return {"kind": kind, "time_s": math.radians(deg), "cam_angle_deg": deg}
+
+    trip = math.radians(100.0)
+    events = [ev("lift-off", 10.0), ev("separation", 20.0), ev("re-contact", 25.0), ev("seat", 40.0),
+              ev("separation", 45.0), ev("lift-off", 50.0), ev("separation", 90.0), ev("release", 100.0),
+              ev("seat", 120.0)]
+    got = latched_float(events, lambda th: th, trip, 1.0)
+    assert got["float_separations"] == 2 and got["first_separation_deg"] == 20.0
+    assert got["float_flight_time_s"] == pytest.approx(math.radians(5.0 + 10.0), rel=1e-14)
+    assert latched_float([ev("lift-off", 10.0)], lambda th: th, trip, 1.0) == {
+        "first_separation_deg": None, "float_separations": 0, "float_flight_time_s": 0.0}
