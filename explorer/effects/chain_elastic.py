@@ -79,7 +79,8 @@ def chain_elastic_effect(ctx) -> EffectOutput:
     if clashes:
         warnings.append(f"coil clash: the spring reaches its solid height {len(clashes)} time(s), first at "
                         f"{clashes[0]['cam_angle_deg']:.2f} deg (the model goes on without the coils' contact)")
-    motion, columns = linkage_outputs(s, v, a, jerk, force, ratio * force, deviation, contact, separated, events, kinds)
+    motion, columns = linkage_outputs(s, v, a, jerk, force, ratio * force, deviation, contact, separated, events, kinds,
+                                      ctx.time, period)
     floats, float_warnings = float_report(ctx, s, events, period)
     warnings.extend(float_warnings)
     # (the elastic seat's phase, code 0: the valve on its seat; the run starts there at rest)

@@ -217,7 +217,7 @@ def elastic_effect(ctx) -> EffectOutput:
 
     events = revolution_events(sol.events, EVENT_KINDS, float(t_run[0]), period, omega)
     motion, columns = linkage_outputs(s, v, a, jerk, force, back_pressure, deviation, contact, separated, events,
-                                      EVENT_KINDS)
+                                      EVENT_KINDS, ctx.time, period)
 
     stats = {k: v for k, v in sol.stats.items() if k != "warnings"}
     if model.stiffness_profile is not None:

@@ -50,14 +50,73 @@ def valve_motion_summary(s, v, a, events: list[Event], kinds) -> dict:
     }
 
 
-def linkage_outputs(s, v, a, jerk, force, back_pressure, deviation, contact, separated, events, kinds):
+def separated_angle_deg(time_s, separated, boundaries, period: float) -> float:
+    """The cam angle (deg) over which the valve is separated (the mask `separated` on the output
+    samples at time_s, ascending in [0, period)), measured between the exact instants where that
+    can change: `boundaries`, times in [0, period) (the solver's events, every kind, and whatever
+    else bounds the mask). Between two boundaries that are neighbours on the revolution's circle
+    the state is one: a sample strictly between them says which, and the stretch counts whole; the
+    stretch from the last boundary round to the first is one too (a flight that started in the
+    previous revolution). So the figure is the events' and does not move with the output step.
+    A stretch shorter than the step holds no sample: it takes the state the event opening it
+    leaves (separation: off; re-contact: on; a seat impact followed by a landing or a re-contact:
+    a rebound's flight, off), else the state before it. Without boundaries: 360 or 0, as the
+    first sample."""
+    t = np.asarray(time_s, dtype=float)
+    sep = np.asarray(separated, dtype=bool)
+    marks = sorted((float(b), kind) for b, kind in boundaries)
+    if not marks:
+        return 360.0 if sep.size and sep[0] else 0.0
+    times = [m[0] for m in marks]
+    total, state = 0.0, None
+    for k, (b0, kind) in enumerate(marks):
+        b1 = times[k + 1] if k + 1 < len(marks) else times[0] + period
+        middle = _middle_sample(t, b0, b1, period)
+        if middle is not None:
+            state = bool(sep[middle])
+        else:
+            nxt = marks[k + 1][1] if k + 1 < len(marks) else marks[0][1]
+            if kind == "separation" or (kind == "seat" and nxt in ("seat", "re-contact")):
+                state = True
+            elif kind == "re-contact":
+                state = False
+            elif state is None:  # the first stretch: what the wrap-round stretch before it holds
+                state = _wrap_state(t, sep, times, period)
+        if state:
+            total += b1 - b0
+    return float(360.0 * total / period)
+
+
+def _wrap_state(t, sep, times, period: float) -> bool:
+    """The state on the stretch from the last boundary round to the first (its samples), False
+    when it holds none (a separated valve is seen on some sample of the revolution)."""
+    middle = _middle_sample(t, times[-1], times[0] + period, period)
+    return bool(sep[middle]) if middle is not None else False
+
+
+def _middle_sample(t, b0: float, b1: float, period: float) -> int | None:
+    """The index of the middle sample strictly between b0 and b1 (b1 past `period`: round the
+    revolution's end), None if none; t ascending (a bisection: the events times log n)."""
+    lo = int(np.searchsorted(t, b0, side="right"))
+    if b1 <= period:
+        hi = int(np.searchsorted(t, b1, side="left"))
+        return lo + (hi - lo) // 2 if hi > lo else None
+    tail, head = t.size - lo, int(np.searchsorted(t, b1 - period, side="left"))
+    if tail + head == 0:
+        return None
+    m = (tail + head) // 2
+    return lo + m if m < tail else m - tail
+
+
+def linkage_outputs(s, v, a, jerk, force, back_pressure, deviation, contact, separated, events, kinds, time_s,
+                    period: float):
     """(summary entries, columns) of the valve's motion and the linkage's force over the output
-    samples, as both elastic effects report them."""
+    samples (at time_s, within the revolution of `period` s), as both elastic effects report them."""
     summary = {
         "max_deviation_m": float(np.abs(deviation).max()),
         "peak_linkage_force_N": float(force.max()),
         "peak_camshaft_back_pressure_N": float(back_pressure.max()),
-        "separated_angle_deg": float(360.0 * np.count_nonzero(separated) / s.size),
+        "separated_angle_deg": separated_angle_deg(time_s, separated, [(e.time_s, e.kind) for e in events], period),
         **valve_motion_summary(s, v, a, events, kinds),
     }
     columns = {

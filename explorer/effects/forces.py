@@ -7,8 +7,8 @@ import math
 import numpy as np
 
 from ..core.memo import remember
-from ..mechanics.forces import (TrainLoads, contact_loss_intervals, float_speed, loss_report, min_contact_force,
-                                rigid_train_forces, side_extremes, smooth_pieces)
+from ..mechanics.forces import (TrainLoads, contact_loss_intervals, float_speed, loss_report, max_contact_force,
+                                min_contact_force, rigid_train_forces, side_extremes, smooth_pieces)
 from ..mechanics.moving_mass import rigid_mass
 from ..result import EffectOutput, Event
 
@@ -26,16 +26,17 @@ def forces_effect(ctx) -> EffectOutput:
     f_min, f_theta = min_contact_force(ctx.lift, loads, w, ratio, lash, pieces, n_grid)
     jump = float_speed(ctx.lift, loads, ratio, lash, pieces, n_grid)
     sides = side_extremes(ctx.lift, loads, w, ratio, lash, pieces, n_grid)
+    f_max, f_max_theta = max_contact_force(ctx.lift, loads, w, ratio, lash, pieces, n_grid)
     is_open = np.asarray(c["rigid_valve_lift_m"]) > 0.0
-    contact = columns["contact_force_N"]
-    i_max = int(np.argmax(np.where(is_open, contact, -np.inf))) if is_open.any() else 0
 
     summary: dict = {
         "min_contact_force_N": f_min if math.isfinite(f_min) else None,
         "min_contact_force_cam_angle_deg": math.degrees(f_theta) if math.isfinite(f_min) else None,
-        "max_contact_force_N": float(contact[i_max]),
-        "max_contact_force_cam_angle_deg": float(np.degrees(ctx.theta[i_max])),
-        "max_follower_force_N": float(ratio * contact[i_max]),
+        # refined as the minimum is; None when the valve never opens
+        "max_contact_force_N": f_max if math.isfinite(f_max) else None,
+        "max_contact_force_cam_angle_deg": math.degrees(f_max_theta) if math.isfinite(f_max) else None,
+        # virtual work through the rigid lever (valve travel = ratio x follower travel): F_f = ratio F_v
+        "max_follower_force_N": ratio * f_max if math.isfinite(f_max) else None,
         "max_spring_force_N": float(columns["spring_force_N"].max()),
         # over the open valve: the spring's reserve against the inertia (a seated valve's margin is
         # its seat load, another figure); None when the valve never opens

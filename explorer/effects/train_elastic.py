@@ -101,7 +101,7 @@ def train_elastic_effect(ctx) -> EffectOutput:
     events = sorted((_event(e, period, omega) for e in sol.events if e["time_s"] >= t_last),
                     key=lambda e: e.time_s)
     motion, columns = linkage_outputs(s, v, a, jerk, force, ratio * force, deviation, contact, separated, events,
-                                      TRAIN_KINDS)
+                                      TRAIN_KINDS, ctx.time, period)
     floats, float_warnings = float_report(ctx, s, events, period)
     warnings.extend(float_warnings)
     columns["valve_phase"] = phase

@@ -69,6 +69,7 @@ import numpy as np
 from ..dynamics import solvers
 from ..dynamics.model import EVENT_KINDS, PHASE_CODES, Drive, LinkageModel
 from ..effects.elastic import elastic_jerk, solve_reporting
+from ..effects.elastic_events import separated_angle_deg
 from ..effects.forces import rigid_mass_summary
 from ..mechanics.forces import (Pieces, TrainLoads, float_speed, friction_direction, load_parts, loss_report,
                                 minimise_on_pieces, velocity_zeros)
@@ -510,6 +511,34 @@ def elastic_trip_motion(scene, lift, theta, method: str = solvers.DEFAULT, optio
                              force_at_trip=f_e, on_latch_at_trip=on_e, events=tuple(events), warnings=tuple(warnings))
 
 
+def latched_float(events, phi_of, phi_trip: float, omega: float) -> dict:
+    """The trip gear's float, in the elastic models' keys: the valve is free by design after the
+    trip, so only its flights off the latch before it count. `events`: the run's (kind, time_s,
+    cam_angle_deg) dicts; phi_of(cam angle rad) the angle from the pick-up stroke's start, the
+    latched phase being phi < phi_trip. Walked in phi order: the valve is open from a lift-off (the
+    latch lifting it off its seat) to the next seat impact; a separation while open is float (one
+    after a seat impact is the rebound's, as valve_periods has it), its flight lasting to the next
+    re-contact or seat impact, or to the trip; a separation while already flying starts none."""
+    walk = sorted(((phi_of(math.radians(e["cam_angle_deg"])), e["kind"], e["cam_angle_deg"]) for e in events),
+                  key=lambda item: item[0])
+    first, count, flight, is_open, flying = None, 0, 0.0, False, None
+    for phi, kind, angle in (item for item in walk if item[0] < phi_trip):
+        if kind in ("seat", "re-contact") and flying is not None:
+            flight += phi - flying
+            flying = None
+        if kind == "lift-off":
+            is_open = True
+        elif kind == "seat":
+            is_open = False
+        elif kind == "separation" and is_open:
+            count += 1
+            first = angle if first is None else first
+            flying = phi if flying is None else flying
+    if flying is not None:  # off the latch at the trip: its flight ends there
+        flight += phi_trip - flying
+    return {"first_separation_deg": first, "float_separations": count, "float_flight_time_s": flight / omega}
+
+
 def trip_elastic_effect(ctx) -> EffectOutput:
     scene, w = ctx.scene, ctx.omega
     lift = trip_lift_of(ctx)
@@ -580,6 +609,7 @@ def trip_elastic_effect(ctx) -> EffectOutput:
         "rigid_apex_lift_m": float(rigid.apex),
     }
     kinds = EVENT_KINDS + ("release",)
+    floats = latched_float(events, lambda th: float(np.mod(th - lift.start, TWO_PI)), lift.phi_trip, w)
     stats = {k: v for k, v in motion.solution.stats.items() if k != "warnings"}
     summary = {
         "elastic_method": method,
@@ -589,14 +619,19 @@ def trip_elastic_effect(ctx) -> EffectOutput:
         "max_deviation_m": float(np.abs(c["deviation"]).max()),
         "peak_linkage_force_N": peak,
         "peak_camshaft_back_pressure_N": peak,
-        # off the latch before the trip (after it the valve is free by design)
-        "separated_angle_deg": float(360.0 * np.count_nonzero(separated) / n),
+        # off the latch before the trip (after it the valve is free by design): between the events
+        # and the latched phase's ends (the pick-up stroke's start, the trip), exactly
+        "separated_angle_deg": separated_angle_deg(
+            ctx.time, separated, [(e["time_s"], e["kind"]) for e in events]
+            + [(math.fmod(np.mod(lift.start + phi_end, TWO_PI) / w, period), "latch") for phi_end in (0.0, lift.phi_trip)],
+            period),
         "elastic_max_valve_lift_m": float(c["s"].max()),
         "elastic_max_valve_velocity_m_s": float(c["v"].max()),
         "elastic_min_valve_velocity_m_s": float(c["v"].min()),
         "elastic_max_valve_accel_m_s2": float(c["a"].max()),
         "elastic_min_valve_accel_m_s2": float(c["a"].min()),
         "elastic_event_counts": {kind: sum(e["kind"] == kind for e in events) for kind in kinds},
+        **floats,
         "elastic_solver": stats,
         "elastic_trip": trip_summary,
     }

@@ -386,12 +386,28 @@ def min_contact_force(lift, loads: TrainLoads, omega: float, ratio: float = 1.0,
                       pieces: Pieces | None = None, n_grid: int = 4096) -> tuple[float, float]:
     """(smallest rigid contact force over the open stretches, its cam angle), refined on the analytic lift."""
     pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
+    return minimise_on_pieces(lift, pieces, _contact_force(loads, omega, ratio, lash), n_grid=n_grid)
+
+
+def max_contact_force(lift, loads: TrainLoads, omega: float, ratio: float = 1.0, lash: float = 0.0,
+                      pieces: Pieces | None = None, n_grid: int = 4096) -> tuple[float, float]:
+    """(largest rigid contact force over the open stretches, its cam angle): min_contact_force's
+    refinement of minus the force (on a piece's end, its one-sided limit: an acceleration step at a
+    breakpoint takes the larger side); (-inf, nan) when the valve never opens."""
+    pieces = pieces or smooth_pieces(lift, ratio, lash, n_grid)
+    force = _contact_force(loads, omega, ratio, lash)
+    value, theta = minimise_on_pieces(lift, pieces, lambda d, direction: -force(d, direction), n_grid=n_grid)
+    return -value, theta
+
+
+def _contact_force(loads: TrainLoads, omega: float, ratio: float, lash: float):
+    """The rigid contact force F = w^2 A + G (load_parts) as minimise_on_pieces' fun(d, direction)."""
 
     def force(d, direction):
         a_coef, g_part, _ = load_parts(d, direction, loads, ratio, lash)
         return omega**2 * a_coef + g_part
 
-    return minimise_on_pieces(lift, pieces, force, n_grid=n_grid)
+    return force
 
 
 def min_contact_forces(lift, loads: TrainLoads, omegas, ratio: float = 1.0, lash: float = 0.0,
