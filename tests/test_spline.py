@@ -268,6 +268,19 @@ def test_design_holds_the_exact_open_area():
     assert _quad_open_area(scene, lift) == pytest.approx(area, rel=1e-9)
 
 
+def test_the_projection_onto_the_exact_area_keeps_an_active_limit():
+    """With the pressure angle active at the optimum (17 deg on spline_demo's peak acceleration),
+    a projection along the area's gradient alone broke it by 9.5e-6 deg; moving only in the null
+    space of the active limits' Jacobian keeps it (main reported -3.5e-12 deg there) and meets the
+    exact area (quad, 1e-9)."""
+    scene = load_scene(DEMO)
+    report = design(scene, "peak-acceleration", DesignLimits(max_pressure_angle=math.radians(17), open_area="keep"))
+    assert report.success and report.slacks["pressure angle [deg]"] >= -1e-9
+    assert -1e-6 < report.slacks["pressure angle [deg]"] < 1e-3  # active indeed
+    lift = solve_spline(report.options.stations, report.options.continuity, scene.lift.start)
+    assert _quad_open_area(scene, lift) == pytest.approx(report.open_area, rel=1e-9)
+
+
 def test_open_area_kept_costs_peak_acceleration_and_standard_laws_are_judged_by_it(capsys):
     """--open-area keep: the optimum holds the starting lift's area; the freedom it takes away can
     only raise the optimum; the standard laws on the same event (another area) are marked."""

@@ -113,6 +113,7 @@ class DesignLimits:
 AREA_TOLERANCE = 1e-9  # relative: the exact area at the reported optimum, after the projection
 PROJECTION_STEPS = 12  # Newton steps onto the exact area at most (2 or 3 suffice: a smooth kink-free equation)
 PROJECTION_TOLERANCE = 1e-13  # relative: where the projection stops, well inside AREA_TOLERANCE
+ACTIVE = 1e-4  # scaled slack (of order 1) below which the projection keeps a limit where it is
 
 
 def open_area(scene, d0, weights) -> float:
@@ -572,7 +573,7 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500, *, m
                                                   options={"maxiter": maxiter, "ftol": 1e-14})
     projection = ""
     if target is not None:
-        z, projection = _project_on_area(exact_area, z, target)
+        z, projection = _project_on_area(exact_area, z, target, limits_of)
     lift = problem.lift(z)
     # the optimum is a computed cam: the checks of every cam (explorer.lift.validity) before it is reported
     check_computed(lift, scene.follower, scene.source, "lift.stations", f"the optimised lift (--objective {objective})",
@@ -600,23 +601,47 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500, *, m
                         with_values(problem.options, values), method, target, limits)
 
 
-def _project_on_area(exact_area, z, target: float) -> tuple[np.ndarray, str]:
+def _held_directions(limits_of, z) -> np.ndarray | None:
+    """An orthonormal basis (free, m) of the moves that leave the limits active at z (scaled slack
+    below ACTIVE) unchanged to first order: the null space of their Jacobian (central differences
+    of limits_of, 2 x free evaluations). None when no limit is active."""
+    slack = limits_of(z)
+    active = slack < ACTIVE
+    if not np.any(active):
+        return None
+    h = 1e-6  # the variables are of order 1; the limits' curvature makes the error ~h^2
+    jac = np.stack([(limits_of(z + h * e)[active] - limits_of(z - h * e)[active]) / (2.0 * h)
+                    for e in np.eye(len(z))], axis=1)
+    _, sv, vt = np.linalg.svd(jac)
+    rank = int(np.sum(sv > 1e-10 * sv[0])) if sv.size and sv[0] > 0.0 else 0
+    return vt[rank:].T
+
+
+def _project_on_area(exact_area, z, target: float, limits_of=None) -> tuple[np.ndarray, str]:
     """(z moved onto exact_area(z) = target, a note for the solver message). Newton's method on the
-    one equation, each step the minimum-norm one, dz = -(A - target) g / |g|^2 (g the gradient in
-    the scaled variables): SLSQP's point, met on the smooth stand-in, is some 1e-7 off the exact
-    area, so the move is that small and the limits shift by as little (evaluated again after).
-    At most PROJECTION_STEPS steps; a step that does not reduce the deviation ends it, and the
-    area is then reported as not met by its slack."""
+    one equation, each step the minimum-norm one: dz = -(A - target) p / (g . p), p the gradient g
+    (in the scaled variables) projected onto the moves that keep the active limits where SLSQP left
+    them (_held_directions; g itself when none is active or when that leaves no grip on the area).
+    SLSQP's point, met on the smooth stand-in, is some 1e-7 off the exact area, so the move is that
+    small; the limits are evaluated again after it. At most PROJECTION_STEPS steps; a step that does
+    not reduce the deviation ends it, and the area is then reported as not met by its slack."""
     z = np.array(z, dtype=float)
     area, grad = exact_area(z)
+    held = _held_directions(limits_of, z) if limits_of is not None else None
     for step in range(PROJECTION_STEPS):
         deviation = area - target
         if abs(deviation) <= PROJECTION_TOLERANCE * abs(target):
             return z, f"; projected onto the exact open area in {step} Newton step{'s' * (step != 1)}"
-        norm2 = float(grad @ grad)
+        direction = grad
+        if held is not None:
+            kept = held @ (held.T @ grad)
+            # an active set that (almost) fixes the area: move along g, and the limits tell
+            if np.linalg.norm(kept) > 1e-3 * np.linalg.norm(grad):
+                direction = kept
+        norm2 = float(grad @ direction)
         if not norm2 > 0.0:
             break
-        trial = z - deviation * grad / norm2
+        trial = z - deviation * direction / norm2
         trial_area, trial_grad = exact_area(trial)
         if not abs(trial_area - target) < abs(deviation):
             break
