@@ -22,8 +22,9 @@ event refined at the stations:
   the points where the valve lift crosses the lash). SLSQP holds a smooth stand-in, Gauss-Legendre
   between the stations (its kink at the lash inside a panel errs by ~5e-7 of spline_demo's area,
   but it is what SLSQP converges on); its answer is then projected onto the exact area by a few
-  Newton steps on the free values (minimum-norm steps along the exact area's gradient), and every
-  limit is evaluated again where the projection ends.
+  Newton steps on the free values (minimum-norm steps along the exact area's gradient, within the
+  moves that keep the limits active there unchanged to first order), and every limit is evaluated
+  again where the projection ends.
 
 The same objective and constraints are evaluated for the standard laws on the same event (same
 height, rise, dwell, return) for the comparison table.
@@ -472,7 +473,7 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500, *, m
     def limits_of(z):
         return np.concatenate(list(constraint_arrays(scene, problem.derivatives(z), limits)[0].values()))
 
-    target, held = None, []  # the open area, an equality (relative to the target)
+    target, held, held_area = None, [], None  # the open area, an equality (relative to the target)
     if limits.open_area is not None:
         xa, wa = _residual_nodes(scene, problem.lift(z0))  # the knots do not move: nodes for every z
         a_base = problem.lift(np.zeros(len(problem.free))).derivatives(scene.lift.start + xa)[0]
