@@ -154,3 +154,23 @@ def test_random_polynomial_pieces_against_quad(coef):
     for a, b in zip(edges[:-1], edges[1:]):
         probes = np.polynomial.polynomial.polyval(np.linspace(a, b, 9)[1:-1], c)
         assert np.all(probes >= -1e-12 * scale) or np.all(probes <= 1e-12 * scale)
+
+
+def test_the_projection_is_bounded_and_says_when_it_fails():
+    """design's Newton projection onto the area: it reaches a reachable level (|z|^2 = 4 from
+    (1, 0.5): quadratic convergence, a few steps, to 1e-13) and, on an area it cannot move (zero
+    gradient) or within PROJECTION_STEPS, stops and says how far off it is."""
+    from explorer.studies.design import PROJECTION_STEPS, _project_on_area
+
+    z, note = _project_on_area(lambda z: (float(z @ z), 2.0 * z), np.array([1.0, 0.5]), 4.0)
+    assert float(z @ z) == pytest.approx(4.0, rel=1e-13) and "projected" in note
+    z, note = _project_on_area(lambda z: (1.0, np.zeros(2)), np.array([1.0, 0.5]), 4.0)
+    assert "stopped 0.75 (relative) off it" in note and np.all(z == [1.0, 0.5])
+    calls = []
+
+    def slow(z):  # a step only halves the deviation: not done within the bound
+        calls.append(1)
+        return 4.0 - 0.5 ** len(calls), np.array([1e30, 0.0])
+
+    z, note = _project_on_area(slow, np.array([0.0, 0.0]), 4.0)
+    assert "stopped" in note and len(calls) == PROJECTION_STEPS + 1
