@@ -18,7 +18,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 QUICK_REPEAT = {"core": "3", "dynamics": "3", "forces": "3", "gears_contact": "3", "contour_points": "3", "recording": "2",
-                "viewer": "5"}
+                "viewer": "5", "design_area": "2"}
 REPEAT_FLAG = {"recording": "--repeats"}
 
 

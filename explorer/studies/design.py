@@ -16,8 +16,15 @@ event refined at the stations:
   the ends of the range suffice); lift >= 0 (no dip below the base circle). The duration is
   fixed: the stations do not move. Optionally the valve's open area (the integral of the valve
   lift max(ratio L - lash, 0) over cam angle, the "lift area" that sets how much the valve
-  passes; trapezoid rule on the event grid) is held at a given value or at the starting lift's
-  ("keep"): an equality, met when within 1e-9 of it, reported as minus its deviation.
+  passes) is held at a given value or at the starting lift's ("keep"): an equality, met when
+  within 1e-9 (relative) of it, reported as minus its deviation. The area that is reported and
+  held is exact (explorer.lift.open_area: each polynomial piece integrated in closed form between
+  the points where the valve lift crosses the lash). SLSQP holds a smooth stand-in, Gauss-Legendre
+  between the stations (its kink at the lash inside a panel errs by ~5e-7 of spline_demo's area,
+  but it is what SLSQP converges on); its answer is then projected onto the exact area by a few
+  Newton steps on the free values (minimum-norm steps along the exact area's gradient, within the
+  moves that keep the limits active there unchanged to first order), and every limit is evaluated
+  again where the projection ends.
 
 The same objective and constraints are evaluated for the standard laws on the same event (same
 height, rise, dwell, return) for the comparison table.
@@ -49,9 +56,11 @@ from ..core.errors import InputError
 from ..core.units import figure
 from ..lift.contours.translating import pitch_geometry
 from ..lift.curves import LawLift
+from ..lift.open_area import affine_open_area, spline_open_area
 from ..lift.spline import NAMES, UNITS, solve_spline, with_values
 from ..lift.validity import check_computed
 from ..mechanics.forces import TrainLoads, friction_direction, load_parts
+from ..mechanics.kinematics import lash_crossings
 from ..scene.scene import MAX_LIFT
 
 TWO_PI = 2.0 * math.pi
@@ -102,15 +111,34 @@ class DesignLimits:
     open_area: float | str | None = None  # m*rad of valve lift over cam angle, or "keep" (the start's)
 
 
-AREA_TOLERANCE = 1e-9  # relative: SLSQP meets the equality (linear while the lift stays open) to ~1e-12
+AREA_TOLERANCE = 1e-9  # relative: the exact area at the reported optimum, after the projection
+PROJECTION_STEPS = 12  # Newton steps onto the exact area at most (2 or 3 suffice: a smooth kink-free equation)
+PROJECTION_TOLERANCE = 1e-13  # relative: where the projection stops, well inside AREA_TOLERANCE
+ACTIVE = 1e-4  # scaled slack (of order 1) below which the projection keeps a limit where it is
 
 
 def open_area(scene, d0, weights) -> float:
-    """Valve open area (m*rad): sum of weights * max(ratio L - lash, 0) at the quadrature nodes
-    where d0 = L was taken (area_nodes: Gauss-Legendre between the lift's breakpoints, exact for a
-    spline's polynomials while the valve lift has no kink at the lash inside an interval)."""
+    """Valve open area (m*rad) by quadrature: sum of weights * max(ratio L - lash, 0) at the nodes
+    where d0 = L was taken (Gauss-Legendre between the lift's breakpoints: exact for a spline's
+    polynomials only while the valve lift crosses the lash at no node interval's inside). The
+    optimiser's smooth stand-in; exact_open_area is the area."""
     lash = scene.valve.lash if scene.valve is not None else 0.0
     return float(np.dot(weights, np.maximum(scene.follower.ratio * np.asarray(d0) - lash, 0.0)))
+
+
+def exact_open_area(scene, lift) -> float:
+    """The valve open area (m*rad): of a spline lift in closed form per piece between its lash
+    crossings (explorer.lift.open_area); of any other lift (the standard laws of the comparison),
+    Gauss-Legendre between its breakpoints and its lash crossings (lash_crossings, Brent to 1e-15
+    rad), so that no panel holds the kink and each integrates a smooth law."""
+    ratio = scene.follower.ratio
+    lash = scene.valve.lash if scene.valve is not None else 0.0
+    coefficients = getattr(lift, "coefficients", None)
+    if coefficients is not None:
+        return spline_open_area(lift.knots, coefficients, ratio, lash)
+    ups, downs = lash_crossings(lift, ratio, lash)
+    x, w = _residual_nodes(scene, lift, np.concatenate([ups, downs]))
+    return open_area(scene, lift.derivatives(scene.lift.start + x)[0], w)
 
 
 def area_slack(area: float, target: float) -> float:
@@ -226,8 +254,7 @@ def evaluate(scene, lift, objective: str, limits: DesignLimits, x=None, area=Non
     d = lift.derivatives(scene.lift.start + x)
     arrays, slacks = constraint_arrays(scene, d, limits)
     if area is not None:
-        xq, wq = _residual_nodes(scene, lift)
-        slacks["open area [mm*deg]"] = area_slack(open_area(scene, lift.derivatives(scene.lift.start + xq)[0], wq), area)
+        slacks["open area [mm*deg]"] = area_slack(exact_open_area(scene, lift), area)
     return objective_value(scene, lift, d, objective, limits), arrays, slacks
 
 
@@ -316,11 +343,13 @@ def _jerk_energy(lift, factor: float) -> float:
     return factor**2 * total
 
 
-def _residual_nodes(scene, lift):
+def _residual_nodes(scene, lift, cuts=()):
     """Gauss-Legendre nodes and weights over the event between the lift's breakpoints (exact for
-    polynomial segments up to degree 95 times the smooth exponential's expansion)."""
+    polynomial segments up to degree 95 times the smooth exponential's expansion); `cuts`: more
+    angles (rad, absolute) to split at."""
     u, wts = np.polynomial.legendre.leggauss(48)
-    b = np.sort(np.mod(lift.breakpoints() - scene.lift.start, TWO_PI))
+    marks = np.concatenate([np.asarray(lift.breakpoints(), dtype=float).reshape(-1), np.asarray(cuts, dtype=float)])
+    b = np.sort(np.mod(marks - scene.lift.start, TWO_PI))
     b = np.unique(np.append(b, TWO_PI))
     nodes = [0.5 * (hi - lo) * (u + 1.0) + lo for lo, hi in zip(b[:-1], b[1:])]
     weights = [0.5 * (hi - lo) * wts for lo, hi in zip(b[:-1], b[1:])]
@@ -444,7 +473,7 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500, *, m
     def limits_of(z):
         return np.concatenate(list(constraint_arrays(scene, problem.derivatives(z), limits)[0].values()))
 
-    target, held = None, []  # the open area, an equality (relative to the target)
+    target, held, held_area = None, [], None  # the open area, an equality (relative to the target)
     if limits.open_area is not None:
         xa, wa = _residual_nodes(scene, problem.lift(z0))  # the knots do not move: nodes for every z
         a_base = problem.lift(np.zeros(len(problem.free))).derivatives(scene.lift.start + xa)[0]
@@ -454,13 +483,29 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500, *, m
         def area_of(z):
             return open_area(scene, a_base + a_cols @ z, wa)
 
-        target = area_of(z0) if limits.open_area == "keep" else float(limits.open_area)
+        # the exact area (and its gradient) of the pieces, whose coefficients are affine in z too
+        n_free = len(problem.free)
+        zero = problem.lift(np.zeros(n_free))
+        m = max(len(c) for c in zero.coefficients)
+
+        def padded(lift):
+            return np.array([np.pad(np.asarray(c, dtype=float), (0, m - len(c))) for c in lift.coefficients])
+
+        c_base = padded(zero)
+        c_cols = np.stack([padded(problem.lift(np.eye(n_free)[i])) - c_base for i in range(n_free)])
+        exact_area = affine_open_area(c_base, c_cols, np.diff(zero.knots), scene.follower.ratio,
+                                      scene.valve.lash if scene.valve is not None else 0.0)
+        target = exact_area(z0)[0] if limits.open_area == "keep" else float(limits.open_area)
         if not target > 0.0:
             raise InputError("<command line>", "--open-area", "the valve never opens: no area to hold")
-        held = [{"type": "eq", "fun": lambda y, n=len(problem.free): area_of(y[:n]) / target - 1.0}]
+        # SLSQP holds the stand-in; "keep" at the stand-in's own value of the start, which the start
+        # meets exactly (asked to hold the exact area's, ~5e-7 off, SLSQP with finite differences
+        # spent the budget on jerk-energy); the projection then meets the exact target
+        held_area = area_of(z0) if limits.open_area == "keep" else target
+        held = [{"type": "eq", "fun": lambda y, n=len(problem.free): area_of(y[:n]) / held_area - 1.0}]
 
-    def area_met(z) -> bool:
-        return target is None or area_slack(area_of(z), target) == 0.0
+    def area_met(z) -> bool:  # the stand-in's (the exact area is met by the projection after)
+        return target is None or area_slack(area_of(z), held_area) == 0.0
 
     method = "SLSQP"
     if peak:
@@ -527,6 +572,9 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500, *, m
         cons = [{"type": "ineq", "fun": limits_of}] + held
         z, message, iterations, spent = _minimize(counter, fun, z0, constraints=cons,
                                                   options={"maxiter": maxiter, "ftol": 1e-14})
+    projection = ""
+    if target is not None:
+        z, projection = _project_on_area(exact_area, z, target, limits_of)
     lift = problem.lift(z)
     # the optimum is a computed cam: the checks of every cam (explorer.lift.validity) before it is reported
     check_computed(lift, scene.follower, scene.source, "lift.stations", f"the optimised lift (--objective {objective})",
@@ -548,9 +596,60 @@ def design(scene, objective: str, limits: DesignLimits, maxiter: int = 500, *, m
     # start that met them too (a start off the held area may have to get worse to reach it)
     start_met = all(v >= -1e-9 for v in evaluate(scene, problem.lift(z0), objective, limits, problem.x, target)[2].values())
     met = all(v >= -1e-9 for v in slacks.values()) and (value <= start_value or not start_met) and not spent
+    message += projection
     return DesignReport(objective, value, start_value, values, slacks, comparison, iterations,
                         met, message if met or spent else message + "; a limit is violated or nothing improved",
                         with_values(problem.options, values), method, target, limits)
+
+
+def _held_directions(limits_of, z) -> np.ndarray | None:
+    """An orthonormal basis (free, m) of the moves that leave the limits active at z (scaled slack
+    below ACTIVE) unchanged to first order: the null space of their Jacobian (central differences
+    of limits_of, 2 x free evaluations). None when no limit is active."""
+    slack = limits_of(z)
+    active = slack < ACTIVE
+    if not np.any(active):
+        return None
+    h = 1e-6  # the variables are of order 1; the limits' curvature makes the error ~h^2
+    jac = np.stack([(limits_of(z + h * e)[active] - limits_of(z - h * e)[active]) / (2.0 * h)
+                    for e in np.eye(len(z))], axis=1)
+    _, sv, vt = np.linalg.svd(jac)
+    rank = int(np.sum(sv > 1e-10 * sv[0])) if sv.size and sv[0] > 0.0 else 0
+    return vt[rank:].T
+
+
+def _project_on_area(exact_area, z, target: float, limits_of=None) -> tuple[np.ndarray, str]:
+    """(z moved onto exact_area(z) = target, a note for the solver message). Newton's method on the
+    one equation, each step the minimum-norm one: dz = -(A - target) p / (g . p), p the gradient g
+    (in the scaled variables) projected onto the moves that keep the active limits where SLSQP left
+    them (_held_directions; g itself when none is active or when that leaves no grip on the area).
+    SLSQP's point, met on the smooth stand-in, is some 1e-7 off the exact area, so the move is that
+    small; the limits are evaluated again after it. At most PROJECTION_STEPS steps; a step that does
+    not reduce the deviation ends it, and the area is then reported as not met by its slack."""
+    z = np.array(z, dtype=float)
+    area, grad = exact_area(z)
+    held = _held_directions(limits_of, z) if limits_of is not None else None
+    for step in range(PROJECTION_STEPS):
+        deviation = area - target
+        if abs(deviation) <= PROJECTION_TOLERANCE * abs(target):
+            return z, f"; projected onto the exact open area in {step} Newton step{'s' * (step != 1)}"
+        direction = grad
+        if held is not None:
+            kept = held @ (held.T @ grad)
+            # an active set that (almost) fixes the area: move along g, and the limits tell
+            if np.linalg.norm(kept) > 1e-3 * np.linalg.norm(grad):
+                direction = kept
+        norm2 = float(grad @ direction)
+        if not norm2 > 0.0:
+            break
+        trial = z - deviation * direction / norm2
+        trial_area, trial_grad = exact_area(trial)
+        if not abs(trial_area - target) < abs(deviation):
+            break
+        z, area, grad = trial, trial_area, trial_grad
+    if abs(area - target) <= PROJECTION_TOLERANCE * abs(target):
+        return z, f"; projected onto the exact open area in {PROJECTION_STEPS} Newton steps"
+    return z, f"; the projection onto the exact open area stopped {abs(area - target) / abs(target):.2g} (relative) off it"
 
 
 def _event_shape(problem) -> tuple[float, float, float, float]:
