@@ -17,11 +17,14 @@ HELP = """\
 Export a scene's cam to make it: a translating roller's, a bucket tappet's, a finger
 follower's or a rocker arm's (a pivoted roller or a rocking cam is refused, naming why). A cam is
 cut for its own follower: a crowned face's cam read by a flat face lifts less (e^2 / 2 R).
-  csv    point table: cam angle, contour and pitch-curve points, outward normal, signed
+Every file names the follower it is cut for (csv and grind: the first comment line; dxf: a note
+on layer NOTES and the header property CUT_FOR).
+  csv    point table: cam angle, contour and centre-path points, outward normal, signed
          curvature of both, pressure angle (SI units; --points rows, plus the lift's breakpoints;
-         a face follower has no roller, so its pitch columns repeat the contour)
-  dxf    drawing in mm: contour (layer CAM) and pitch curve (layer PITCH) as closed polylines
-         whose chords stay within --tolerance of the exact curves
+         the centre path is a roller's pitch curve (pitch_*), a crowned face's or curved pad's
+         centre (face_centre_*); a flat face has none and its table no such columns)
+  dxf    drawing in mm: contour (layer CAM) and centre path (layer PITCH or FACE_CENTRE) as
+         closed polylines whose chords stay within --tolerance of the exact curves
   stl    solid cam in mm (contour to --tolerance, extruded over --width along the cam axis z)
   glb    the same solid in metres (glTF)
   grind  grinding table: wheel-centre distance from the cam axis at --points uniform grinder

@@ -104,20 +104,46 @@ def _drop_repeats(theta: np.ndarray, xy: np.ndarray, within: float) -> tuple[np.
 # explorer.core.outputs, so the usual rules for output files apply).
 
 
+CENTRE_PATHS = {  # CutFor.centre_path -> what the columns and the drawing's layer hold
+    "pitch": ("PITCH", "pitch curve: the roller's centre"),
+    "face_centre": ("FACE_CENTRE", "face_centre: the crowned face's (or curved pad's) centre of curvature, contour + R n"),
+}
+
+
+def cut_for_line(src: CamProfile) -> str:
+    """The header line every export carries: the follower the contour is cut for."""
+    return (f"cut for: {src.cut_for.describe()} (another follower on this contour gives another lift)")
+
+
 def point_table(src: CamProfile, points: int = 3600) -> str:
-    """CSV: one row per cam angle (uniform, plus the lift's breakpoints): contour and pitch point,
-    outward normal, signed curvatures, pressure angle."""
+    """CSV: one row per cam angle (uniform, plus the lift's breakpoints): contour point, the
+    centre path's (a roller's pitch curve, a crowned face's centre; none for a flat face: its
+    columns are left out rather than repeat the contour), outward normal, signed curvatures,
+    pressure angle; the header names the follower the contour is cut for."""
     theta = angles_with(points, src.breakpoints())
     g = src.at(theta)
+    path = src.cut_for.centre_path
     out = io.StringIO()
-    out.write(f"# {src.name}: cam contour and pitch curve in the cam frame (m); the cam turns counter-clockwise,\n"
-              "# the point at cam angle theta touches the roller at that angle; normal outward, unit;\n"
+    out.write(f"# {src.name}: {cut_for_line(src)}\n")
+    centre = (f"# {CENTRE_PATHS[path][1]};\n" if path is not None
+              else "# a flat face has no centre path (its contact runs along the face): no pitch columns;\n")
+    out.write(f"# cam contour in the cam frame (m); the cam turns counter-clockwise,\n{centre}"
+              "# the point at cam angle theta touches the follower at that angle; normal outward, unit;\n"
               "# curvature 1/radius, > 0 convex, < 0 concave, 0 straight\n")
-    out.write("cam_angle_deg,contour_x_m,contour_y_m,pitch_x_m,pitch_y_m,normal_x,normal_y,"
-              "contour_curvature_1_m,pitch_curvature_1_m,pressure_angle_deg\n")
-    table = np.column_stack([np.degrees(theta), g.contour, g.pitch, g.normal, g.contour_curvature,
-                             g.pitch_curvature, np.degrees(g.pressure_angle)])
-    np.savetxt(out, table, delimiter=",", fmt="%.17g")
+    names = ["cam_angle_deg", "contour_x_m", "contour_y_m"]
+    columns = [np.degrees(theta), g.contour]
+    if path is not None:
+        names += [f"{path}_x_m", f"{path}_y_m"]
+        columns.append(g.pitch)
+    names += ["normal_x", "normal_y", "contour_curvature_1_m"]
+    columns += [g.normal, g.contour_curvature]
+    if path is not None:
+        names.append(f"{path}_curvature_1_m")
+        columns.append(g.pitch_curvature)
+    names.append("pressure_angle_deg")
+    columns.append(np.degrees(g.pressure_angle))
+    out.write(",".join(names) + "\n")
+    np.savetxt(out, np.column_stack(columns), delimiter=",", fmt="%.17g")
     return out.getvalue()
 
 
@@ -131,19 +157,33 @@ def contour_polyline(src: CamProfile, tolerance: float, which: str = "contour", 
 
 
 def dxf_text(src: CamProfile, tolerance: float) -> str:
-    """A DXF (R2010, millimetres) with the contour (layer CAM) and pitch curve (layer PITCH) as
-    closed LWPOLYLINEs to the chord tolerance, and the shaft centre as a point."""
+    """A DXF (R2010, millimetres) with the contour (layer CAM) and the centre path (layer PITCH: a
+    roller's pitch curve; FACE_CENTRE: a crowned face's centre; none for a flat face) as closed
+    LWPOLYLINEs to the chord tolerance, the shaft centre as a point, and the follower the contour
+    is cut for as a note (layer NOTES, a TEXT under the cam) and a custom header property CUT_FOR."""
     import ezdxf
     from ezdxf import units
 
     doc = ezdxf.new("R2010", units=units.MM)
     doc.layers.add("CAM", color=7)
-    doc.layers.add("PITCH", color=1, linetype="DASHED")
+    paths = [("CAM", "contour")]
+    path = src.cut_for.centre_path
+    if path is not None:
+        layer = CENTRE_PATHS[path][0]
+        doc.layers.add(layer, color=1, linetype="DASHED")
+        paths.append((layer, "pitch"))
+    doc.layers.add("NOTES", color=7)
     msp = doc.modelspace()
-    for layer, which in (("CAM", "contour"), ("PITCH", "pitch")):
+    lowest = 0.0
+    for layer, which in paths:
         xy = contour_polyline(src, tolerance, which) * 1e3
         msp.add_lwpolyline(xy.tolist(), format="xy", close=True, dxfattribs={"layer": layer})
+        if which == "contour":
+            lowest = float(xy[:, 1].min())
     msp.add_point((0.0, 0.0), dxfattribs={"layer": "CAM"})
+    note = f"{src.name}: {cut_for_line(src)}"
+    doc.header.custom_vars.append("CUT_FOR", note)
+    msp.add_text(note, height=2.5, dxfattribs={"layer": "NOTES", "insert": (0.0, lowest - 10.0)})
     stream = io.StringIO()
     doc.write(stream)
     return stream.getvalue()
@@ -238,7 +278,8 @@ def grinding_table(src: CamProfile, wheel_radius: float, points: int = 3600) -> 
 
 def grinding_text(src: CamProfile, table: GrindingTable) -> str:
     out = io.StringIO()
-    out.write(f"# {src.name}: grinding table for a wheel of radius {table.wheel_radius * 1e3:.9g} mm fed radially;\n"
+    out.write(f"# {src.name}: {cut_for_line(src)}\n")
+    out.write(f"# grinding table for a wheel of radius {table.wheel_radius * 1e3:.9g} mm fed radially;\n"
               "# grinder_angle: the cam's rotation that brings the ground point to the wheel's line;\n"
               "# wheel_centre: distance of the wheel centre from the cam axis; cam_angle: the follower cam angle of that point\n")
     out.write("grinder_angle_deg,wheel_centre_m,cam_angle_deg\n")
