@@ -252,6 +252,9 @@ BAD = [
     (["--format", "grind", "--grinding-wheel-radius", "-5 mm"], "--grinding-wheel-radius", "positive"),
     (["--format", "csv", "--points", "3"], "--points", "between"),
     (["--format", "stl", "--width", "1e5 m"], "--width", "10 m"),
+    (["--format", "csv", "--wheel-margin", "0.1"], "--wheel-margin", "not used"),
+    (["--format", "grind", "--grinding-wheel-radius", "5 mm", "--wheel-margin", "1.5"], "--wheel-margin", "[0, 1)"),
+    (["--format", "grind", "--grinding-wheel-radius", "5 mm", "--wheel-margin", "nan"], "--wheel-margin", "[0, 1)"),
 ]
 
 
@@ -417,3 +420,55 @@ def test_every_file_names_the_follower_it_is_cut_for(tmp_path, scene, says):
     (text,) = doc.modelspace().query('TEXT[layer=="NOTES"]')
     assert f"cut for: {says} " in text.dxf.text
     assert f"cut for: {says} " in doc.header.custom_vars.get("CUT_FOR")
+
+
+# -- the grinding wheel at the concave flank's radius ---------------------------------------------
+FLANK_MM = 86.1  # Schenker's hollow FG: the contour's concave arc (schenker1902_fig2.toml, [[cam.arc]])
+
+
+@pytest.mark.parametrize("wheel_mm, margin, outcome", [
+    (FLANK_MM * (1 - 0.06), None, "clean"),  # 6 % below: outside the default 5 % margin
+    (FLANK_MM * (1 - 1e-6), None, "warned"),  # just below: groundable, but no room for the wheel's tolerance
+    (FLANK_MM * (1 - 1e-6), "0", "clean"),  # the margin is the user's: 0 accepts it silently
+    (FLANK_MM, None, "refused"),  # at the limit: conforms to the flank, refused
+    (FLANK_MM * (1 + 1e-6), None, "refused"),  # just above: cuts the flank
+])
+def test_grinding_wheel_at_the_concave_flank(tmp_path, capsys, wheel_mm, margin, outcome):
+    """A wheel the size of the smallest concave radius is refused (it was accepted to the
+    rounding of -1/curvature before), one within --wheel-margin below it warned of, in one line on
+    stderr and in the table's header; the arc's radius is the oracle."""
+    out = tmp_path / "g.csv"
+    options = ["--wheel-margin", margin] if margin is not None else []
+    code = cli.main(["export", str(FIG2), "--format", "grind", "--points", "16", "--grinding-wheel-radius",
+                     f"{wheel_mm!r} mm", "-o", str(out), *options])
+    err = capsys.readouterr().err
+    if outcome == "refused":
+        assert code == 2 and not out.exists()
+        (line,) = err.splitlines()
+        assert ERROR_LINE.match(line) and "cannot grind the concave flank of radius 86.1 mm" in line
+        return
+    assert code == 0
+    warnings = [line for line in err.splitlines() if line.startswith("warning:")]
+    comments, _ = header_and_rows(out.read_text())
+    if outcome == "warned":
+        (line,) = warnings
+        assert "within 0.05 of the concave flank's radius 86.1 mm" in line
+        assert comments[1] == "# " + line
+    else:
+        assert warnings == [] and not any("warning" in c for c in comments)
+
+
+def test_smallest_concave_radius_is_refined_between_samples():
+    """The polydyne cam's smallest concave radius lies between samples: refined from 28 800
+    samples it equals the minimum of 4 million samples to 1e-10 relative (their own sampling
+    error, 2nd order in the 1.6e-6 rad spacing, ~1e-11), and is never above the sampled one."""
+    from explorer.lift.contours.cam_profile import angles_with
+
+    src = exports.cam_source(load_scene(SCENES / "polydyne_demo.toml"))
+    coarse = angles_with(28_800, src.breakpoints())
+    k = src.at(coarse).contour_curvature
+    radius, _ = exports.smallest_concave_radius(src, coarse, k)
+    dense = angles_with(4_000_000, src.breakpoints())
+    reference = -1.0 / src.at(dense).contour_curvature.min()
+    assert radius <= -1.0 / k.min()
+    assert abs(radius - reference) < 1e-10 * reference

@@ -16,8 +16,9 @@ through the cam axis. A wheel of radius Rw touching the contour has its centre a
 contact + Rw * normal (the contour's offset curve); the table gives, for uniformly spaced grinder
 angles, the distance of that centre from the cam axis. With Rw equal to the roller radius and no
 follower offset the table is the follower's own lift (y0 + L at grinder angle = cam angle): a
-test. A wheel larger than the contour's smallest concave radius would cut into the flank: an
-error naming where.
+test. A wheel as large as the contour's smallest concave radius (exact: refined between the
+samples) or larger would cut into the flank: an error naming where; one within WHEEL_MARGIN below
+it: a warning (in the file's header and on stderr).
 """
 
 from __future__ import annotations
@@ -40,6 +41,13 @@ MIN_TOLERANCE = 1e-9  # m; below this the chords' own rounding (1e-16 relative o
 MAX_TOLERANCE = 1e-3  # m; coarser than any cam drawing
 MAX_POLYLINE_POINTS = 2_000_000  # a 1 nm tolerance on a 50 mm cam needs ~200 000
 MIN_POINTS, MAX_POINTS = 8, 1_000_000
+# A wheel as large as the smallest concave radius conforms to the flank (touches it along an arc
+# rather than at a point): the geometric limit, with nothing left for the wheel's size tolerance,
+# its dressing or the cam's form tolerance, each of which would then cut the flank. At the limit
+# (to rounding) it is refused; within WHEEL_MARGIN below it, warned of (engineering judgement: no
+# grinding standard fixes a figure; --wheel-margin overrides it).
+WHEEL_MARGIN = 0.05  # of the wheel's radius
+AT_LIMIT = 1e-9  # relative: a wheel this close to the radius counts as equal (the radius' own rounding)
 
 
 def cam_source(scene, lift=None) -> CamProfile:
@@ -222,6 +230,7 @@ class GrindingTable:
     wheel_centre: np.ndarray  # m, distance of the wheel centre from the cam axis
     cam_angle: np.ndarray  # rad, the follower cam angle whose contact point the wheel touches
     wheel_radius: float
+    warning: str | None = None  # a wheel within the margin of the smallest concave radius
 
 
 def wheel_centre(src: CamProfile, theta, wheel_radius: float) -> np.ndarray:
@@ -230,21 +239,48 @@ def wheel_centre(src: CamProfile, theta, wheel_radius: float) -> np.ndarray:
     return g.contour + wheel_radius * g.normal
 
 
-def grinding_table(src: CamProfile, wheel_radius: float, points: int = 3600) -> GrindingTable:
+def smallest_concave_radius(src: CamProfile, theta: np.ndarray, curvature: np.ndarray) -> tuple[float, float] | None:
+    """(radius, cam angle) of the contour's smallest concave radius, None for a convex cam: the
+    samples' most negative curvature, refined by a bounded Brent search between its neighbours
+    (the minimum of a smooth flank lies between samples: the sampled one is too large by a
+    second-order amount)."""
+    from scipy.optimize import minimize_scalar
+
+    if not np.any(curvature < 0.0):
+        return None
+    i = int(np.argmin(curvature))
+    n = theta.size
+    lo = theta[i] - (theta[i] - theta[i - 1]) % TWO_PI
+    hi = theta[i] + (theta[(i + 1) % n] - theta[i]) % TWO_PI
+    best_k, best_t = float(curvature[i]), float(theta[i])
+    found = minimize_scalar(lambda t: float(src.at(np.array([t % TWO_PI])).contour_curvature[0]), bounds=(lo, hi),
+                            method="bounded", options={"xatol": 1e-12, "maxiter": 200})
+    if found.fun < best_k:
+        best_k, best_t = float(found.fun), float(found.x % TWO_PI)
+    return -1.0 / best_k, best_t
+
+
+def grinding_table(src: CamProfile, wheel_radius: float, points: int = 3600,
+                   margin: float = WHEEL_MARGIN) -> GrindingTable:
     """Wheel-centre distance at `points` uniform grinder angles. The grinder angle a rotates the
     cam so that the wheel centre lies on the wheel's line, the ground y axis (the follower's
     direction), i.e. a = 90 deg - polar angle of the centre in the cam frame."""
     key = "--grinding-wheel-radius"
     theta = angles_with(8 * points, src.breakpoints())
     g = src.at(theta)
-    concave = g.contour_curvature < 0.0
-    if np.any(concave):
-        radius = -1.0 / g.contour_curvature[concave]
-        i = int(np.argmin(radius))
-        if radius[i] <= wheel_radius:
+    warning = None
+    flank = smallest_concave_radius(src, theta, g.contour_curvature)
+    if flank is not None:
+        radius, at = flank
+        if wheel_radius >= radius * (1.0 - AT_LIMIT):
             raise InputError("<command line>", key,
                              f"a wheel of radius {wheel_radius * 1e3:.6g} mm cannot grind the concave flank of radius "
-                             f"{radius[i] * 1e3:.6g} mm at cam angle {math.degrees(theta[concave][i]):.3f} deg")
+                             f"{radius * 1e3:.6g} mm at cam angle {math.degrees(at):.3f} deg (the wheel must be smaller: "
+                             f"at most {radius / (1.0 + margin) * 1e3:.6g} mm keeps a {margin:.3g} margin)")
+        if wheel_radius * (1.0 + margin) > radius:
+            warning = (f"a wheel of radius {wheel_radius * 1e3:.6g} mm is within {margin:.3g} of the concave flank's "
+                       f"radius {radius * 1e3:.6g} mm at cam angle {math.degrees(at):.3f} deg: the wheel's size "
+                       "tolerance and dressing would cut the flank (--wheel-margin)")
     c = g.contour + wheel_radius * g.normal
     psi = np.unwrap(np.arctan2(c[:, 1], c[:, 0]))
     step = np.diff(np.append(psi, psi[0] - TWO_PI))
@@ -273,12 +309,14 @@ def grinding_table(src: CamProfile, wheel_radius: float, points: int = 3600) -> 
         hi = np.where(above, hi, mid)
     root = 0.5 * (lo + hi)
     centre = wheel_centre(src, root, wheel_radius)
-    return GrindingTable(alpha, np.hypot(centre[:, 0], centre[:, 1]), np.mod(root, TWO_PI), wheel_radius)
+    return GrindingTable(alpha, np.hypot(centre[:, 0], centre[:, 1]), np.mod(root, TWO_PI), wheel_radius, warning)
 
 
 def grinding_text(src: CamProfile, table: GrindingTable) -> str:
     out = io.StringIO()
     out.write(f"# {src.name}: {cut_for_line(src)}\n")
+    if table.warning is not None:
+        out.write(f"# warning: {table.warning}\n")
     out.write(f"# grinding table for a wheel of radius {table.wheel_radius * 1e3:.9g} mm fed radially;\n"
               "# grinder_angle: the cam's rotation that brings the ground point to the wheel's line;\n"
               "# wheel_centre: distance of the wheel centre from the cam axis; cam_angle: the follower cam angle of that point\n")
