@@ -104,3 +104,23 @@ def test_sweep_row_at_the_scene_speed_is_simulates_summary(scene, engine_toleran
         compared += 1
         assert abs(float(row[column]) - float(want)) <= engine_tolerance * max(1.0, abs(float(want))), column
     assert compared >= 6
+
+
+def test_tolerance_study_histograms_show_the_input_whole_counts_and_how_many_runs():
+    """The sampled input comes first (the distribution drawn: its mean within 4 standard errors of
+    the asked 0.25 mm), a count column one bar per integer, and a figure that is NaN in some runs
+    (first_separation_deg where the valve stays on the cam) says how many of the runs it shows."""
+    from explorer.studies.sweep_plots import histograms
+
+    r = _sweep("valve_float_demo.toml", vary={"drive.rpm": "1000,4000"},
+               sample={"valve.lash": "normal(0.25 mm, 0.02 mm)"}, runs=20, seed=1)
+    panels = {p.name: p for p in histograms(r)}
+    first = histograms(r)[0]
+    assert first.name == "valve_lash_m" and "sampled input" in first.title
+    assert abs(first.data.mean() - 0.25e-3) < 4 * 0.02e-3 / math.sqrt(40)
+    sep = panels["separations"]
+    np.testing.assert_array_equal(np.asarray(sep.bins) % 1.0, 0.5)  # edges between the integers
+    assert np.histogram(sep.data, sep.bins)[0].sum() == 40
+    nan = int(np.isnan(r.columns["first_separation_deg"]).sum())
+    assert 0 < nan < 40  # 1000 rpm stays on the cam, 4000 floats
+    assert f"{40 - nan} of 40 runs" in panels["first_separation_deg"].title
