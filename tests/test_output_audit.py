@@ -124,3 +124,18 @@ def test_tolerance_study_histograms_show_the_input_whole_counts_and_how_many_run
     nan = int(np.isnan(r.columns["first_separation_deg"]).sum())
     assert 0 < nan < 40  # 1000 rpm stays on the cam, 4000 floats
     assert f"{40 - nan} of 40 runs" in panels["first_separation_deg"].title
+
+
+def test_recording_summary_writes_undefined_figures_as_the_json_summary_does():
+    """The recording's summary page (/summary, markdown) wrote Python's None and True where the
+    JSON summary and the docs (reference/validity.md) say null and true."""
+    from explorer.view.rerun.recording import summary_markdown
+
+    result = simulate(load_scene(SCENES / "valve_float_demo.toml"))
+    assert result.summary["min_concave_contour_radius_m"] is None and result.summary["valve_floats"] is True
+    page = summary_markdown(result, "Valve float demo")
+    assert "| min_concave_contour_radius_m | null |" in page
+    assert "| valve_floats | true |" in page
+    assert "| None |" not in page and "| True |" not in page and "| False |" not in page
+    # the numbers stay the summary's to the 6 digits shown
+    assert f"| min_contact_force_N | {result.summary['min_contact_force_N']:.6g} |" in page
