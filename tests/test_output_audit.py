@@ -176,3 +176,21 @@ def test_spectrum_table_states_its_convention_and_the_rows_follow_it(tmp_path):
         b = integral(lambda t: math.sin(n * t)) / math.pi
         assert abs(amplitude * math.cos(phase) - a) < 1e-7 * top, n
         assert abs(-amplitude * math.sin(phase) - b) < 1e-7 * top, n
+
+
+@pytest.mark.parametrize("rows, lines", [(7, 1), (5, 2), (1, 2)])
+def test_a_charts_suptitle_leaves_the_panels_titles_free(rows, lines):
+    """The sweep's pictures printed their suptitle over the top panels' titles (tight_layout
+    ignores a suptitle): after charts.png the suptitle's box overlaps no panel title's."""
+    from explorer.studies.charts import figure, png
+
+    with figure(rows, 2, figsize=(10.4, 2.6 * rows + 0.6), dpi=100, squeeze=False) as (fig, grid):
+        for ax in grid.ravel():
+            ax.set_title("seating_velocity_m_s", fontsize=9)
+        fig.suptitle("\n".join(["Valve float demo: 60 runs"] * lines), fontsize=10)
+        assert png(fig)[:4] == b"\x89PNG"
+        renderer = fig.canvas.get_renderer()
+        top = fig._suptitle.get_window_extent(renderer)
+        for ax in grid[0]:
+            box = ax.title.get_window_extent(renderer)
+            assert box.y1 < top.y0, (box, top)

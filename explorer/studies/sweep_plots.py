@@ -27,6 +27,7 @@ FIGURES = ("seating_velocity_m_s", "peak_linkage_force_N", "max_deviation_m", "s
            "first_separation_deg", "peak_camshaft_back_pressure_N", "largest_bounce_m", "lift_off_delay_s",
            "seat_impacts", "min_contact_force_N", "max_camshaft_torque_Nm", "residual_deviation_m",
            "residual_amplitude_m")
+COUNTS = ("separations", "seat_impacts")  # integer columns: steps in a line, one bar per value in a histogram
 HEATMAPS = ("seating_velocity_m_s", "peak_linkage_force_N", "max_deviation_m", "min_contact_force_N")
 
 
@@ -66,7 +67,9 @@ def lines_png(table) -> bytes:
     with figure(rows, cols, figsize=(5.2 * cols, 2.6 * rows + 0.6), dpi=100, squeeze=False) as (fig, grid):
         for i, name in enumerate(figs):
             ax = grid[i // cols][i % cols]
-            ax.plot(x, np.asarray(table.columns[name], float), linewidth=1.0, color="C0")
+            # a count changes in whole steps: drawn as steps, not as slopes between the speeds
+            style = {"drawstyle": "steps-mid", "marker": ".", "markersize": 3} if name in COUNTS else {}
+            ax.plot(x, np.asarray(table.columns[name], float), linewidth=1.0, color="C0", **style)
             if float_rpm is not None:
                 ax.axvline(float_rpm, color="C3", linestyle="--", linewidth=0.9, label=f"rigid float speed {float_rpm:.0f} rpm")
                 if i == 0:
@@ -110,9 +113,6 @@ def heatmaps_png(table) -> bytes:
                          fontsize=8)
         fig.suptitle(_title(table), fontsize=10)
         return png(fig)
-
-
-COUNTS = ("separations", "seat_impacts")  # integer columns: one bar per value
 
 
 @dataclass(frozen=True)
