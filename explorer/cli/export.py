@@ -16,7 +16,7 @@ from .simulate import add_scene_arguments, scene_from_args
 HELP = """\
 Export a scene's cam to make it: a translating roller's, a bucket tappet's, a finger
 follower's or a rocker arm's (a pivoted roller or a rocking cam is refused, naming why). A cam is
-cut for its own follower: a crowned face's cam read by a flat face lifts less (e^2 / 2 R).
+cut for its own follower: a crowned face's cam read by a flat face lifts more (by e^2 / 2 R).
 Every file names the follower it is cut for (csv and grind: the first comment line; dxf: a note
 on layer NOTES and the header property CUT_FOR).
   csv    point table: cam angle, contour and centre-path points, outward normal, signed

@@ -81,7 +81,7 @@ def angles_with(uniform: int, breakpoints) -> np.ndarray:
 class CutFor:
     """The follower a contour is cut for. A cam is cut for its own follower: the same contour read
     by another follower gives another lift (a 3 m crowned bucket's cam read by a flat tappet lifts
-    e^2 / (2 R) less at a contact offset e), so every exported file names it.
+    more, by e^2 / (2 R) at a contact offset e: the crown's sag there), so every exported file names it.
 
     surface: "roller" (radius: the roller's) or "face" (a sliding face, pad or lifter face; radius:
     its crown's, inf for a flat face). The centre path CamGeometry.pitch is the centre of the
