@@ -254,7 +254,7 @@ def smallest_concave_radius(src: CamProfile, theta: np.ndarray, curvature: np.nd
     hi = theta[i] + (theta[(i + 1) % n] - theta[i]) % TWO_PI
     best_k, best_t = float(curvature[i]), float(theta[i])
     found = minimize_scalar(lambda t: float(src.at(np.array([t % TWO_PI])).contour_curvature[0]), bounds=(lo, hi),
-                            method="bounded", options={"xatol": 1e-12, "maxiter": 200})
+                            method="bounded", options={"xatol": 1e-9, "maxiter": 100})
     if found.fun < best_k:
         best_k, best_t = float(found.fun), float(found.x % TWO_PI)
     return -1.0 / best_k, best_t
