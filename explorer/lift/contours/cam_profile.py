@@ -136,9 +136,11 @@ class TranslatingCam:
     name: str
     source: str
 
+    follower: str = "translating roller follower"  # the scene's follower.type (the gear passes it)
+
     @property
     def cut_for(self) -> CutFor:
-        return CutFor("translating-roller", "roller", self.roller_radius)
+        return CutFor(self.follower, "roller", self.roller_radius)
 
     def at(self, theta) -> CamGeometry:
         return geometry(self.lift, theta, self.base_radius, self.roller_radius, self.offset)
