@@ -57,6 +57,20 @@ def arc_distance(points: np.ndarray, arcs) -> np.ndarray:
     return d
 
 
+def header_and_rows(text: str) -> tuple[list[str], list[str]]:
+    """(comment lines, the rest) of an exported table: '#' lines, then the header, then the rows."""
+    lines = text.splitlines()
+    n = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    return lines[:n], lines[n:]
+
+
+def load_table(out) -> np.ndarray:
+    """The numbers of an exported table (a path or its text), below its comments and header."""
+    text = out if isinstance(out, str) else out.read_text()
+    _, rest = header_and_rows(text)
+    return np.loadtxt(io.StringIO("\n".join(rest[1:])), delimiter=",", ndmin=2)
+
+
 def export(tmp_path, scene, fmt, *options, name=None):
     out = tmp_path / (name or f"cam.{ 'csv' if fmt == 'grind' else fmt}")
     assert cli.main(["export", str(scene), "--format", fmt, "-o", str(out), *map(str, options)]) == 0
@@ -68,7 +82,7 @@ def test_point_table_is_the_closed_form(tmp_path):
     the contour, curvatures against a converged central difference of the exact points."""
     scene = load_scene(DEMO)
     out = export(tmp_path, DEMO, "csv", "--points", 720)
-    table = np.loadtxt(out, delimiter=",", comments="#", skiprows=4)
+    table = load_table(out)
     theta = np.radians(table[:, 0])
     contour, pitch, normal = table[:, 1:3], table[:, 3:5], table[:, 5:7]
     f = scene.follower
@@ -187,7 +201,7 @@ def test_grinding_table_with_the_roller_is_the_lift(tmp_path):
     scene = load_scene(DEMO)
     r = scene.follower.roller_radius
     out = export(tmp_path, DEMO, "grind", "--grinding-wheel-radius", f"{r * 1e3} mm", "--points", 1440)
-    table = np.loadtxt(out, delimiter=",", comments="#", skiprows=4)
+    table = load_table(out)
     alpha = np.radians(table[:, 0])
     np.testing.assert_allclose(table[:, 0], np.arange(1440) * 0.25, atol=1e-12)
     np.testing.assert_allclose(np.radians(table[:, 2]), alpha, atol=1e-12)
@@ -201,7 +215,7 @@ def test_grinding_table_wheel_touches_the_arcs(tmp_path):
     scene = load_scene(FIG2)
     wheel = 0.04
     out = export(tmp_path, FIG2, "grind", "--grinding-wheel-radius", "40 mm", "--points", 720)
-    table = np.loadtxt(out, delimiter=",", comments="#", skiprows=4)
+    table = load_table(out)
     alpha, centre = np.radians(table[:, 0]), table[:, 1]
     # the wheel centre in the cam frame: on the ground y axis, rotated back by the grinder angle
     psi = 0.5 * math.pi - alpha
@@ -220,9 +234,11 @@ def test_grinding_table_wheel_touches_the_arcs(tmp_path):
 
 def test_grinding_table_row_count_and_header(tmp_path):
     out = export(tmp_path, FIG2, "grind", "--grinding-wheel-radius", "0.05 m", "--points", 8)
-    lines = out.read_text().splitlines()
-    assert lines[3] == "grinder_angle_deg,wheel_centre_m,cam_angle_deg"
-    assert len(lines) == 4 + 8
+    comments, lines = header_and_rows(out.read_text())
+    assert lines[0] == "grinder_angle_deg,wheel_centre_m,cam_angle_deg"
+    assert len(lines) == 1 + 8
+    assert comments[0].endswith("cut for: translating-roller, roller of radius 10 mm (another follower on this "
+                                "contour gives another lift)")
 
 
 BAD = [
@@ -236,6 +252,9 @@ BAD = [
     (["--format", "grind", "--grinding-wheel-radius", "-5 mm"], "--grinding-wheel-radius", "positive"),
     (["--format", "csv", "--points", "3"], "--points", "between"),
     (["--format", "stl", "--width", "1e5 m"], "--width", "10 m"),
+    (["--format", "csv", "--wheel-margin", "0.1"], "--wheel-margin", "not used"),
+    (["--format", "grind", "--grinding-wheel-radius", "5 mm", "--wheel-margin", "1.5"], "--wheel-margin", "[0, 1)"),
+    (["--format", "grind", "--grinding-wheel-radius", "5 mm", "--wheel-margin", "nan"], "--wheel-margin", "[0, 1)"),
 ]
 
 
@@ -275,7 +294,7 @@ def test_tolerance_too_fine_for_the_point_budget():
 def test_csv_to_stdout(capfd):
     assert cli.main(["export", str(DEMO), "--format", "csv", "--points", "16", "-o", "-"]) == 0
     text = capfd.readouterr().out
-    table = np.loadtxt(io.StringIO(text), delimiter=",", comments="#", skiprows=4)
+    table = load_table(text)
     assert table.shape[1] == 10 and len(table) >= 16
 
 
@@ -297,10 +316,181 @@ def test_grinding_a_convex_cam_with_any_wheel(tmp_path, wheel_mm):
     grid angle (204 deg) once made a zero step that read as the path winding back."""
     scene_path = SCENES / "spline_demo.toml"
     out = export(tmp_path, scene_path, "grind", "--grinding-wheel-radius", f"{wheel_mm} mm", "--points", 720)
-    table = np.loadtxt(out, delimiter=",", comments="#", skiprows=4)
+    table = load_table(out)
     psi = 0.5 * math.pi - np.radians(table[:, 0])
     wc = table[:, 1:2] * np.column_stack([np.cos(psi), np.sin(psi)])
     from scipy.spatial import cKDTree
 
     nearest, _ = cKDTree(dense_exact(exports.cam_source(load_scene(scene_path)), n=200_000)).query(wc)
     assert np.max(np.abs(nearest - wheel_mm * 1e-3)) < 1e-8
+
+
+# -- face followers: what the columns hold, and the follower the cam is cut for ----------------
+BUCKET = SCENES / "bucket_tappet.toml"
+
+
+def _flat_bucket(tmp_path):
+    """bucket_tappet.toml with its crown left out: a flat face."""
+    text = BUCKET.read_text()
+    assert 'face_radius = "3 m"' in text
+    path = tmp_path / "flat_bucket.toml"
+    path.write_text("\n".join(line for line in text.splitlines() if not line.startswith("face_radius")) + "\n")
+    return path
+
+
+def test_crowned_bucket_csv_exports_the_crown_centre(tmp_path):
+    """A crowned face's centre path, checked three independent ways: (1) crown centre = contact +
+    Rf n from the file's own columns; (2) its distance from the cam axis is Rb + Rf + L(theta) (the
+    crown's centre rides the tappet's axis at that height, the lift from the law itself); (3) it is
+    the pitch curve of a translating roller of radius Rf (explorer.lift.contours.cam_profile's
+    closed forms, a different code path), curvature included; and the crown's circle about each
+    centre touches the exact contour without cutting it (the envelope property)."""
+    from scipy.spatial import cKDTree
+
+    from explorer.lift.contours.cam_profile import TranslatingCam
+
+    scene = load_scene(BUCKET)
+    out = export(tmp_path, BUCKET, "csv", "--points", 720)
+    comments, lines = header_and_rows(out.read_text())
+    names = lines[0].split(",")
+    assert not any(n.startswith("pitch") for n in names)  # the header no longer speaks of a roller
+    assert names == ["cam_angle_deg", "contour_x_m", "contour_y_m", "face_centre_x_m", "face_centre_y_m", "normal_x",
+                     "normal_y", "contour_curvature_1_m", "face_centre_curvature_1_m", "pressure_angle_deg"]
+    col = dict(zip(names, load_table(out).T))
+    rf, rb = 3.0, scene.follower.base_radius
+    theta = np.radians(col["cam_angle_deg"])
+    contour = np.column_stack([col["contour_x_m"], col["contour_y_m"]])
+    normal = np.column_stack([col["normal_x"], col["normal_y"]])
+    centre = np.column_stack([col["face_centre_x_m"], col["face_centre_y_m"]])
+    # (1) 3 m times a unit normal written to 17 digits: a few 1e-16 m relative of 3 m
+    np.testing.assert_allclose(centre, contour + rf * normal, rtol=0, atol=1e-14)
+    # (2) the lift from the law, not from the gear's kinematics
+    lift = build_lift(scene).derivatives(theta)[0]
+    np.testing.assert_allclose(np.hypot(*centre.T), rb + rf + lift, rtol=0, atol=1e-14)
+    # (3) a translating roller of radius Rf on the same lift: its pitch curve and curvature
+    roller = TranslatingCam(build_lift(scene), rb, rf, 0.0, "", "").at(theta)
+    np.testing.assert_allclose(centre, roller.pitch, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(col["face_centre_curvature_1_m"], roller.pitch_curvature, rtol=1e-12, atol=0)
+    # the crown circle touches the dense exact contour (spacing ~0.4 um: the chord sag on a
+    # 3 m circle is far below 1e-10 m) and never reaches inside it
+    dense = dense_exact(exports.cam_source(scene), n=400_000)
+    nearest, _ = cKDTree(dense).query(centre)
+    np.testing.assert_allclose(nearest, rf, rtol=0, atol=1e-10)
+    assert comments[0].endswith("cut for: bucket-tappet, crowned (curved) face of radius 3000 mm (another follower on "
+                                "this contour gives another lift)")
+
+
+def test_flat_bucket_csv_has_no_pitch_columns(tmp_path):
+    """A flat face has no centre to trace: no columns that would repeat the contour, a header that
+    says so, and the file names the flat face it is cut for; the DXF has no centre layer."""
+    import ezdxf
+
+    scene = _flat_bucket(tmp_path)
+    out = export(tmp_path, scene, "csv", "--points", 36)
+    comments, lines = header_and_rows(out.read_text())
+    assert lines[0] == ("cam_angle_deg,contour_x_m,contour_y_m,normal_x,normal_y,contour_curvature_1_m,"
+                        "pressure_angle_deg")
+    assert "cut for: bucket-tappet, flat face" in comments[0]
+    assert any("no pitch columns" in c for c in comments)
+    table = load_table(out)
+    col = dict(zip(lines[0].split(","), table.T))
+    # the flat face's contact: |contour|^2 = (Rb + s)^2 + s'^2 (Norton's closed form)
+    d = build_lift(load_scene(scene)).derivatives(np.radians(col["cam_angle_deg"]))
+    np.testing.assert_allclose(np.hypot(col["contour_x_m"], col["contour_y_m"]),
+                               np.hypot(0.018 + d[0], d[1]), rtol=0, atol=1e-15)
+    doc = ezdxf.readfile(export(tmp_path, scene, "dxf"))
+    assert {e.dxf.layer for e in doc.modelspace()} == {"CAM", "NOTES"}
+
+
+@pytest.mark.parametrize("scene, says", [
+    (BUCKET, "bucket-tappet, crowned (curved) face of radius 3000 mm"),
+    (DEMO, "translating-roller, roller of radius 12 mm"),
+    (SCENES / "finger_follower.toml", "finger-follower, roller of radius 9 mm"),
+])
+def test_every_file_names_the_follower_it_is_cut_for(tmp_path, scene, says):
+    """A cam is cut for its own follower (a 3 m crown's cam read by a flat tappet lifts e^2/2R
+    less): the csv's and the grinding table's first comment line, and the DXF's note (TEXT on
+    layer NOTES) and custom header property CUT_FOR, say which, so the file alone tells a machinist."""
+    import ezdxf
+
+    for fmt, options in (("csv", ("--points", 16)), ("grind", ("--points", 16, "--grinding-wheel-radius", "5 mm"))):
+        comments, _ = header_and_rows(export(tmp_path, scene, fmt, *options, name=f"{fmt}.csv").read_text())
+        assert f"cut for: {says} " in comments[0]
+    doc = ezdxf.readfile(export(tmp_path, scene, "dxf", "--tolerance", "10 um"))
+    (text,) = doc.modelspace().query('TEXT[layer=="NOTES"]')
+    assert f"cut for: {says} " in text.dxf.text
+    assert f"cut for: {says} " in doc.header.custom_vars.get("CUT_FOR")
+
+
+# -- the grinding wheel at the concave flank's radius ---------------------------------------------
+FLANK_MM = 86.1  # Schenker's hollow FG: the contour's concave arc (schenker1902_fig2.toml, [[cam.arc]])
+
+
+@pytest.mark.parametrize("wheel_mm, margin, outcome", [
+    (FLANK_MM * (1 - 0.06), None, "clean"),  # 6 % below: outside the default 5 % margin
+    (FLANK_MM * (1 - 1e-6), None, "warned"),  # just below: groundable, but no room for the wheel's tolerance
+    (FLANK_MM * (1 - 1e-6), "0", "clean"),  # the margin is the user's: 0 accepts it silently
+    (FLANK_MM, None, "refused"),  # at the limit: conforms to the flank, refused
+    (FLANK_MM * (1 + 1e-6), None, "refused"),  # just above: cuts the flank
+])
+def test_grinding_wheel_at_the_concave_flank(tmp_path, capsys, wheel_mm, margin, outcome):
+    """A wheel the size of the smallest concave radius is refused (it was accepted to the
+    rounding of -1/curvature before), one within --wheel-margin below it warned of, in one line on
+    stderr and in the table's header; the arc's radius is the oracle."""
+    out = tmp_path / "g.csv"
+    options = ["--wheel-margin", margin] if margin is not None else []
+    code = cli.main(["export", str(FIG2), "--format", "grind", "--points", "16", "--grinding-wheel-radius",
+                     f"{wheel_mm!r} mm", "-o", str(out), *options])
+    err = capsys.readouterr().err
+    if outcome == "refused":
+        assert code == 2 and not out.exists()
+        (line,) = err.splitlines()
+        assert ERROR_LINE.match(line) and "cannot grind the concave flank of radius 86.1 mm" in line
+        return
+    assert code == 0
+    warnings = [line for line in err.splitlines() if line.startswith("warning:")]
+    comments, _ = header_and_rows(out.read_text())
+    if outcome == "warned":
+        (line,) = warnings
+        assert "within 0.05 of the concave flank's radius 86.1 mm" in line
+        assert comments[1] == "# " + line
+    else:
+        assert warnings == [] and not any("warning" in c for c in comments)
+
+
+def test_smallest_concave_radius_is_refined_between_samples():
+    """The polydyne cam's smallest concave radius lies between samples: refined from 28 800
+    samples it equals the minimum of 4 million samples to 1e-10 relative (their own sampling
+    error, 2nd order in the 1.6e-6 rad spacing, ~1e-11), and is never above the sampled one."""
+    from explorer.lift.contours.cam_profile import angles_with
+
+    src = exports.cam_source(load_scene(SCENES / "polydyne_demo.toml"))
+    coarse = angles_with(28_800, src.breakpoints())
+    k = src.at(coarse).contour_curvature
+    radius, _ = exports.smallest_concave_radius(src, coarse, k)
+    dense = angles_with(4_000_000, src.breakpoints())
+    reference = -1.0 / src.at(dense).contour_curvature.min()
+    assert radius <= -1.0 / k.min()
+    assert abs(radius - reference) < 1e-10 * reference
+
+
+def test_a_flat_tappet_on_the_crowned_cam_lifts_more_by_e2_over_2r(tmp_path):
+    """Why a file must name its follower, measured: the bucket cam is cut for its 3 m crown; a flat
+    tappet on the same contour rests on its highest point along the axis (the support function of
+    the exported contour, here of 400 000 exact points: h(theta) = max p . (sin, cos) - Rb), which
+    is the crown's contact point or higher, and that point stands e^2/(2 Rf) above the crown's
+    lowest point (a circle's sag at offset e). So the flat tappet lifts MORE, by e^2/(2 Rf) to
+    leading order (21.2 um at the widest contact offset, 11.3 mm): measured 21.40 um at 72.5 deg;
+    the next order is ~1 % here (0.16 um), the tolerance 2 %. It never lifts less (1e-12 m)."""
+    scene = load_scene(BUCKET)
+    src = exports.cam_source(scene)
+    dense = src.at(np.linspace(0.0, 2 * math.pi, 400_000, endpoint=False)).contour
+    theta = np.linspace(0.0, 2 * math.pi, 720, endpoint=False)
+    flat = np.array([np.max(dense[:, 0] * math.sin(t) + dense[:, 1] * math.cos(t)) for t in theta])
+    flat -= scene.follower.base_radius
+    crowned = build_lift(scene).derivatives(theta)[0]
+    sag = src.gear.kinematics(theta).contact_offset ** 2 / (2.0 * 3.0)
+    more = flat - crowned
+    assert np.all(more > -1e-12)
+    assert np.max(np.abs(more - sag)) < 0.02 * sag.max()
+    assert 20e-6 < more.max() < 22e-6

@@ -16,12 +16,15 @@ from .simulate import add_scene_arguments, scene_from_args
 HELP = """\
 Export a scene's cam to make it: a translating roller's, a bucket tappet's, a finger
 follower's or a rocker arm's (a pivoted roller or a rocking cam is refused, naming why). A cam is
-cut for its own follower: a crowned face's cam read by a flat face lifts less (e^2 / 2 R).
-  csv    point table: cam angle, contour and pitch-curve points, outward normal, signed
+cut for its own follower: a crowned face's cam read by a flat face lifts more (by e^2 / 2 R).
+Every file names the follower it is cut for (csv and grind: the first comment line; dxf: a note
+on layer NOTES and the header property CUT_FOR).
+  csv    point table: cam angle, contour and centre-path points, outward normal, signed
          curvature of both, pressure angle (SI units; --points rows, plus the lift's breakpoints;
-         a face follower has no roller, so its pitch columns repeat the contour)
-  dxf    drawing in mm: contour (layer CAM) and pitch curve (layer PITCH) as closed polylines
-         whose chords stay within --tolerance of the exact curves
+         the centre path is a roller's pitch curve (pitch_*), a crowned face's or curved pad's
+         centre (face_centre_*); a flat face has none and its table no such columns)
+  dxf    drawing in mm: contour (layer CAM) and centre path (layer PITCH or FACE_CENTRE) as
+         closed polylines whose chords stay within --tolerance of the exact curves
   stl    solid cam in mm (contour to --tolerance, extruded over --width along the cam axis z)
   glb    the same solid in metres (glTF)
   grind  grinding table: wheel-centre distance from the cam axis at --points uniform grinder
@@ -57,6 +60,9 @@ def register(sub) -> None:
     p.add_argument("--points", type=int, default=None, metavar="N", help="rows of the csv and grind tables (default 3600)")
     p.add_argument("--width", default=None, metavar="LENGTH", help="cam width of the solid (stl, glb; default: the 3D view's)")
     p.add_argument("--grinding-wheel-radius", default=None, metavar="LENGTH", help="wheel radius (grind; required)")
+    p.add_argument("--wheel-margin", type=float, default=None, metavar="FRACTION",
+                   help="grind: warn when the wheel is within this fraction of the smallest concave radius (default "
+                        "0.05; a wheel at or above that radius is refused)")
     p.set_defaults(run=run)
 
 
@@ -79,6 +85,7 @@ def _check_options(args) -> tuple[float, float | None, float | None, int]:
         "--width": args.width is not None and fmt not in ("stl", "glb"),
         "--points": args.points is not None and fmt not in ("csv", "grind"),
         "--grinding-wheel-radius": args.grinding_wheel_radius is not None and fmt != "grind",
+        "--wheel-margin": args.wheel_margin is not None and fmt != "grind",
     }
     for option, bad in unused.items():
         if bad:
@@ -104,6 +111,7 @@ def _check_options(args) -> tuple[float, float | None, float | None, int]:
 def run(args) -> int:
     from ..view import exports  # local: loads when the command runs, not at `explorer --help`
     tolerance, width, wheel, points = _check_options(args)
+    margin = _margin(args, exports.WHEEL_MARGIN)
     scene = scene_from_args(args)
     name = args.output if args.output is not None else f"{Path(scene.source).stem if scene.source != '<memory>' else 'cam'}{EXTENSIONS[args.format]}"
     # a name whose extension is another format's (`--format dxf -o cam.stl`) would give a file
@@ -111,7 +119,7 @@ def run(args) -> int:
     out = check_output(name, "--output", EXTENSIONS[args.format])
     distinct_outputs((out,), (scene.source,))
     with ticking(sys.stderr, f"export {args.format}"):  # a million points, a fine solid: seconds
-        data = _exported(exports, scene, args.format, tolerance, width, wheel, points)
+        data = _exported(exports, scene, args.format, tolerance, width, wheel, points, margin)
         write_checked(out, data)  # a million-point table is ~200 MB of text
     if not out.is_stdout():
         size = len(data)
@@ -121,7 +129,14 @@ def run(args) -> int:
     return 0
 
 
-def _exported(exports, scene, fmt, tolerance, width, wheel, points):
+def _margin(args, default: float) -> float:
+    margin = default if args.wheel_margin is None else args.wheel_margin
+    if not 0.0 <= margin < 1.0:
+        raise InputError("<command line>", "--wheel-margin", f"must be a fraction in [0, 1), got {echo(args.wheel_margin)}")
+    return margin
+
+
+def _exported(exports, scene, fmt, tolerance, width, wheel, points, margin=None):
     src = exports.cam_source(scene)
     if fmt == "csv":
         data = exports.point_table(src, points)
@@ -134,6 +149,9 @@ def _exported(exports, scene, fmt, tolerance, width, wheel, points):
             width = layout(scene).cam_width
         data = (exports.stl_bytes if fmt == "stl" else exports.glb_bytes)(src, tolerance, width)
     else:
-        data = exports.grinding_text(src, exports.grinding_table(src, wheel, points))
+        table = exports.grinding_table(src, wheel, points, exports.WHEEL_MARGIN if margin is None else margin)
+        if table.warning is not None:
+            print(f"warning: {table.warning}", file=sys.stderr)
+        data = exports.grinding_text(src, table)
     return data
 

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..dynamics.solvers import varying_stiffness
-from ..lift.contours.cam_profile import CamGeometry
+from ..lift.contours.cam_profile import CamGeometry, CutFor
 from ..lift.curves import law_lift
 from ..lift.registry import closed_form_names, law_spec
 from ..mechanics.contact import ContactGeometry, ContactSpec, effective_modulus, hertz_line_stress
@@ -132,14 +132,16 @@ class ContourValveLift:
 @dataclass(frozen=True)
 class TrainCam:
     """The synthesised cam as the exports see it (explorer.lift.contours.cam_profile.CamProfile):
-    the contact point turned into the cam's frame; the pitch curve is the roller's centre (a pad or
-    a flat lifter: the contour itself)."""
+    the contact point turned into the cam's frame; the centre path is the roller's centre, a
+    curved pad's or crowned lifter's centre of curvature (cut_for.radius), a flat one's the contour
+    itself (which the exports leave out)."""
 
     gear: Any
     roller_radius: float  # 0: no roller
     name: str
     source: str
     law: Any
+    cut_for: CutFor = CutFor("", "face", math.inf)
 
     def at(self, theta):
         theta = np.asarray(theta, dtype=float)
@@ -153,8 +155,9 @@ class TrainCam:
         normal = to_cam(s.normal)
         with np.errstate(divide="ignore"):
             curvature = 1.0 / s.radius
-            pitch_curvature = 1.0 / (s.radius + self.roller_radius)
-        return CamGeometry(theta=theta, pitch=s.contour + self.roller_radius * normal, contour=s.contour, normal=normal,
+            centre = self.cut_for.radius if math.isfinite(self.cut_for.radius) else 0.0
+            pitch_curvature = 1.0 / (s.radius + centre)
+        return CamGeometry(theta=theta, pitch=s.contour + centre * normal, contour=s.contour, normal=normal,
                            pitch_curvature=pitch_curvature, contour_curvature=curvature,
                            pressure_angle=pressure_angle(k))
 
@@ -435,4 +438,7 @@ class ArmTrainGear(Gear):
     # -- 9: the cam ---------------------------------------------------------------------------------
     def cam_profile(self, scene, lift=None):
         lift = lift if lift is not None else self.build_lift(scene)
-        return TrainCam(lift.gear, self.roller_radius(lift.gear), scene.name, scene.source, lift.law)
+        roller = self.roller_radius(lift.gear)
+        cut_for = (CutFor(scene.follower.type, "roller", roller) if roller > 0.0
+                   else CutFor(scene.follower.type, "face", self.counter_radius(lift.gear)))
+        return TrainCam(lift.gear, roller, scene.name, scene.source, lift.law, cut_for)

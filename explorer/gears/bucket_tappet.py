@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
-from ..lift.contours.cam_profile import CamGeometry
+from ..lift.contours.cam_profile import CamGeometry, CutFor
 from ..lift.curves import law_lift
 from ..lift.registry import law_spec
 from ..mechanics.contact import ContactGeometry, ContactSpec, effective_modulus
@@ -77,21 +77,31 @@ class BucketLift:
 
 @dataclass(frozen=True)
 class BucketCam:
-    """The cam to make (explorer.lift.contours.cam_profile.CamProfile): the face's envelope. A
-    flat or crowned face has no roller centre to trace: the pitch curve is the contour itself
-    (the face's contact point), its curvature the contour's."""
+    """The cam to make (explorer.lift.contours.cam_profile.CamProfile): the face's envelope, cut
+    for this tappet's face (cut_for). A crown's centre path is the crown centre, contact + Rf n
+    (a translating roller's pitch curve with roller radius Rf, curvature 1/(rho + Rf)); a flat face
+    has no centre to trace: its centre path is the contour itself, which the exports leave out."""
 
     gear: BucketTappetGear
     name: str
     source: str
 
+    @property
+    def cut_for(self) -> CutFor:
+        return CutFor("bucket-tappet", "face", self.gear.tappet.face_radius)
+
     def at(self, theta):
         theta = np.asarray(theta, dtype=float)
         k = self.gear.kinematics(theta)
         curvature = 1.0 / k.surface.radius
-        return CamGeometry(theta=theta, pitch=k.surface.contour, contour=k.surface.contour.copy(),
-                           normal=_rotate_to_cam(theta, k.surface.normal), pitch_curvature=curvature,
-                           contour_curvature=curvature.copy(), pressure_angle=k.pressure_angle)
+        normal = _rotate_to_cam(theta, k.surface.normal)
+        rf = self.gear.tappet.face_radius
+        if self.gear.tappet.crowned:
+            pitch, pitch_curvature = k.surface.contour + rf * normal, 1.0 / (k.surface.radius + rf)
+        else:
+            pitch, pitch_curvature = k.surface.contour.copy(), curvature.copy()
+        return CamGeometry(theta=theta, pitch=pitch, contour=k.surface.contour, normal=normal,
+                           pitch_curvature=pitch_curvature, contour_curvature=curvature, pressure_angle=k.pressure_angle)
 
     def breakpoints(self) -> np.ndarray:
         return np.mod(np.asarray(self.gear.lift.breakpoints(), dtype=float), TWO_PI)

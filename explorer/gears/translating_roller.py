@@ -112,7 +112,7 @@ class TranslatingRoller(Gear):
         f = scene.follower
         cam, translating = resolve(_CAM_PROFILE), resolve(_TRANSLATING)
         src = cam.TranslatingCam(lift if lift is not None else self.build_lift(scene), f.base_radius, f.roller_radius,
-                                 f.offset, scene.name, scene.source)
+                                 f.offset, scene.name, scene.source, f.type)
         theta = cam.angles_with(7200, src.breakpoints())
         g = src.at(theta)
         with np.errstate(divide="ignore"):

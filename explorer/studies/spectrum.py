@@ -67,7 +67,10 @@ def acceleration_spectrum(scene, lift, orders: int = 100, samples: int | None = 
     error = np.abs(c[k] - half[k]) if 2 * orders < n // 2 else np.zeros(orders)
     with np.errstate(divide="ignore", invalid="ignore"):
         phase_error = np.where(np.abs(c[k]) > error, error / np.abs(c[k]), math.pi)
-    return Spectrum(k, 2.0 * np.abs(c[k]), resolved(np.angle(c[k]), phase_error), float(c[0].real), scene.drive.rpm,
+    # the mean too is known only to its aliasing error (a closed event's is 0 exactly: L' returns
+    # to its start; the FFT gave 3.2e-06 m/s^2 on the cycloidal demo)
+    mean = resolved(float(c[0].real), abs(float(c[0].real - half[0].real)))
+    return Spectrum(k, 2.0 * np.abs(c[k]), resolved(np.angle(c[k]), phase_error), mean, scene.drive.rpm,
                     natural, n, spring_surge_orders(scene.spring, w, orders))
 
 
@@ -90,6 +93,10 @@ def table_text(scene, spectrum: Spectrum) -> str:
         marked += "; the spring surges at cam orders " + ", ".join(f"{o:.6g}" for o in spectrum.spring_orders)
     out.write(f"# {scene.name}: harmonics of the drive acceleration ratio w^2 L'' at {spectrum.rpm:g} rpm "
               f"(FFT of {spectrum.samples} samples){marked}\n")
+    # without the convention a phase cannot be used: peak or RMS, cos or sin, from which zero
+    out.write(f"# S''(theta) = {spectrum.mean:.10g} m/s^2 + sum over the orders n of amplitude cos(n theta + phase), "
+              "theta the cam angle from the scene's zero; amplitude is the peak (2 |C_n|), not RMS; "
+              "frequency = n rpm / 60\n")
     out.write("order,frequency_Hz,amplitude_m_s2,phase_rad\n")
     f = spectrum.orders * spectrum.rpm / 60.0
     np.savetxt(out, np.column_stack([spectrum.orders, f, spectrum.amplitude, spectrum.phase]), delimiter=",",

@@ -43,7 +43,9 @@ Columns (SI units in the names, as in `simulate`'s CSV), by effect:
            (from the lift the cam is made for: explorer.effects.residual; NaN where the effect
            does not compute them, the spring chain's, and the amplitude where the lift has no
            dwell after the rise)
-and always run_failed (1: the run raised; its figures NaN) after the varied inputs.
+then, with a [hla] section, its figures (pump_up_valve_lift_m, hla_lash_taken_up_m,
+hla_plunger_travel_per_revolution_m, hla_chamber_pressure_max_Pa), and always run_failed (1: the run
+raised; its figures NaN), the last column (after run, the varied inputs and the figures).
 """
 
 from __future__ import annotations

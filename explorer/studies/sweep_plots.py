@@ -5,13 +5,16 @@ draws its charts) and a rerun recording with the swept key as a timeline.
   key is the speed;
 - two grid keys: heat maps over them (seating velocity, peak linkage force, largest deviation,
   the rigid contact margin: those the table has) with the boundary of first separation drawn;
-- random samples (a tolerance study): histograms of the figures and the share of runs that
-  separate.
+- random samples (a tolerance study): histograms of the sampled inputs and of the figures (a
+  count one bar per integer; a figure that is NaN in some runs says in how many it is shown) and
+  the share of runs that separate.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -24,6 +27,7 @@ FIGURES = ("seating_velocity_m_s", "peak_linkage_force_N", "max_deviation_m", "s
            "first_separation_deg", "peak_camshaft_back_pressure_N", "largest_bounce_m", "lift_off_delay_s",
            "seat_impacts", "min_contact_force_N", "max_camshaft_torque_Nm", "residual_deviation_m",
            "residual_amplitude_m")
+COUNTS = ("separations", "seat_impacts")  # integer columns: steps in a line, one bar per value in a histogram
 HEATMAPS = ("seating_velocity_m_s", "peak_linkage_force_N", "max_deviation_m", "min_contact_force_N")
 
 
@@ -63,7 +67,9 @@ def lines_png(table) -> bytes:
     with figure(rows, cols, figsize=(5.2 * cols, 2.6 * rows + 0.6), dpi=100, squeeze=False) as (fig, grid):
         for i, name in enumerate(figs):
             ax = grid[i // cols][i % cols]
-            ax.plot(x, np.asarray(table.columns[name], float), linewidth=1.0, color="C0")
+            # a count changes in whole steps: drawn as steps, not as slopes between the speeds
+            style = {"drawstyle": "steps-mid", "marker": ".", "markersize": 3} if name in COUNTS else {}
+            ax.plot(x, np.asarray(table.columns[name], float), linewidth=1.0, color="C0", **style)
             if float_rpm is not None:
                 ax.axvline(float_rpm, color="C3", linestyle="--", linewidth=0.9, label=f"rigid float speed {float_rpm:.0f} rpm")
                 if i == 0:
@@ -109,20 +115,49 @@ def heatmaps_png(table) -> bytes:
         return png(fig)
 
 
+@dataclass(frozen=True)
+class Histogram:
+    name: str  # the column
+    data: np.ndarray  # its finite values
+    bins: Any  # a count or the edges
+    title: str
+
+
+def histograms(table) -> list[Histogram]:
+    """The panels of a tolerance study: first the sampled inputs (the distribution actually drawn),
+    then the figures. A count column gets one bar per integer (edges at k +- 1/2: automatic bins
+    put bars between integers); a column with NaN (a figure that does not exist in some runs, such
+    as first_separation_deg of a run that never separates, or a failed run) says how many of the
+    runs it shows, as a histogram of the rest alone would pass for all of them."""
+    inputs = [_key_column(s["key"]) for s in table.metadata.get("samples", [])]
+    panels = []
+    for name in [c for c in inputs if c in table.columns] + [f for f in _figures(table) if f not in inputs]:
+        raw = np.asarray(table.columns[name], float)
+        data = raw[np.isfinite(raw)]
+        if name in COUNTS and data.size:
+            bins = np.arange(np.min(data) - 0.5, np.max(data) + 1.0, 1.0)
+        else:
+            bins = min(60, max(5, int(math.sqrt(max(data.size, 1)))))
+        title = _label(name) + (" (sampled input)" if name in inputs else "")
+        if data.size < raw.size:
+            title += f"\n{data.size} of {raw.size} runs (NaN in {raw.size - data.size}: none there, or failed)"
+        panels.append(Histogram(name, data, bins, title))
+    return panels
+
+
 def histograms_png(table) -> bytes:
-    figs = _figures(table)
-    n = max(1, len(figs))
+    panels = histograms(table)
+    n = max(1, len(panels))
     cols = min(3, n)
     rows = math.ceil(n / cols)
     with figure(rows, cols, figsize=(4.2 * cols, 2.8 * rows + 0.8), dpi=100, squeeze=False) as (fig, grid):
-        for i, name in enumerate(figs):
+        for i, panel in enumerate(panels):
             ax = grid[i // cols][i % cols]
-            data = np.asarray(table.columns[name], float)
-            data = data[np.isfinite(data)]
-            ax.hist(data, bins=min(60, max(5, int(math.sqrt(data.size)))), color="C0")
-            ax.set_title(_label(name), fontsize=9)
+            ax.hist(panel.data, bins=panel.bins, color="C1" if "sampled" in panel.title else "C0")
+            ax.set_title(panel.title, fontsize=9)
+            ax.set_ylabel("runs", fontsize=8)
             ax.grid(alpha=0.3)
-        for j in range(len(figs), rows * cols):
+        for j in range(len(panels), rows * cols):
             grid[j // cols][j % cols].axis("off")
         title = _title(table)
         share = separating_share(table)

@@ -16,8 +16,9 @@ through the cam axis. A wheel of radius Rw touching the contour has its centre a
 contact + Rw * normal (the contour's offset curve); the table gives, for uniformly spaced grinder
 angles, the distance of that centre from the cam axis. With Rw equal to the roller radius and no
 follower offset the table is the follower's own lift (y0 + L at grinder angle = cam angle): a
-test. A wheel larger than the contour's smallest concave radius would cut into the flank: an
-error naming where.
+test. A wheel as large as the contour's smallest concave radius (exact: refined between the
+samples) or larger would cut into the flank: an error naming where; one within WHEEL_MARGIN below
+it: a warning (in the file's header and on stderr).
 """
 
 from __future__ import annotations
@@ -40,6 +41,13 @@ MIN_TOLERANCE = 1e-9  # m; below this the chords' own rounding (1e-16 relative o
 MAX_TOLERANCE = 1e-3  # m; coarser than any cam drawing
 MAX_POLYLINE_POINTS = 2_000_000  # a 1 nm tolerance on a 50 mm cam needs ~200 000
 MIN_POINTS, MAX_POINTS = 8, 1_000_000
+# A wheel as large as the smallest concave radius conforms to the flank (touches it along an arc
+# rather than at a point): the geometric limit, with nothing left for the wheel's size tolerance,
+# its dressing or the cam's form tolerance, each of which would then cut the flank. At the limit
+# (to rounding) it is refused; within WHEEL_MARGIN below it, warned of (engineering judgement: no
+# grinding standard fixes a figure; --wheel-margin overrides it).
+WHEEL_MARGIN = 0.05  # of the wheel's radius
+AT_LIMIT = 1e-9  # relative: a wheel this close to the radius counts as equal (the radius' own rounding)
 
 
 def cam_source(scene, lift=None) -> CamProfile:
@@ -104,20 +112,46 @@ def _drop_repeats(theta: np.ndarray, xy: np.ndarray, within: float) -> tuple[np.
 # explorer.core.outputs, so the usual rules for output files apply).
 
 
+CENTRE_PATHS = {  # CutFor.centre_path -> what the columns and the drawing's layer hold
+    "pitch": ("PITCH", "pitch curve: the roller's centre"),
+    "face_centre": ("FACE_CENTRE", "face_centre: the crowned face's (or curved pad's) centre of curvature, contour + R n"),
+}
+
+
+def cut_for_line(src: CamProfile) -> str:
+    """The header line every export carries: the follower the contour is cut for."""
+    return (f"cut for: {src.cut_for.describe()} (another follower on this contour gives another lift)")
+
+
 def point_table(src: CamProfile, points: int = 3600) -> str:
-    """CSV: one row per cam angle (uniform, plus the lift's breakpoints): contour and pitch point,
-    outward normal, signed curvatures, pressure angle."""
+    """CSV: one row per cam angle (uniform, plus the lift's breakpoints): contour point, the
+    centre path's (a roller's pitch curve, a crowned face's centre; none for a flat face: its
+    columns are left out rather than repeat the contour), outward normal, signed curvatures,
+    pressure angle; the header names the follower the contour is cut for."""
     theta = angles_with(points, src.breakpoints())
     g = src.at(theta)
+    path = src.cut_for.centre_path
     out = io.StringIO()
-    out.write(f"# {src.name}: cam contour and pitch curve in the cam frame (m); the cam turns counter-clockwise,\n"
-              "# the point at cam angle theta touches the roller at that angle; normal outward, unit;\n"
+    out.write(f"# {src.name}: {cut_for_line(src)}\n")
+    centre = (f"# {CENTRE_PATHS[path][1]};\n" if path is not None
+              else "# a flat face has no centre path (its contact runs along the face): no pitch columns;\n")
+    out.write(f"# cam contour in the cam frame (m); the cam turns counter-clockwise,\n{centre}"
+              "# the point at cam angle theta touches the follower at that angle; normal outward, unit;\n"
               "# curvature 1/radius, > 0 convex, < 0 concave, 0 straight\n")
-    out.write("cam_angle_deg,contour_x_m,contour_y_m,pitch_x_m,pitch_y_m,normal_x,normal_y,"
-              "contour_curvature_1_m,pitch_curvature_1_m,pressure_angle_deg\n")
-    table = np.column_stack([np.degrees(theta), g.contour, g.pitch, g.normal, g.contour_curvature,
-                             g.pitch_curvature, np.degrees(g.pressure_angle)])
-    np.savetxt(out, table, delimiter=",", fmt="%.17g")
+    names = ["cam_angle_deg", "contour_x_m", "contour_y_m"]
+    columns = [np.degrees(theta), g.contour]
+    if path is not None:
+        names += [f"{path}_x_m", f"{path}_y_m"]
+        columns.append(g.pitch)
+    names += ["normal_x", "normal_y", "contour_curvature_1_m"]
+    columns += [g.normal, g.contour_curvature]
+    if path is not None:
+        names.append(f"{path}_curvature_1_m")
+        columns.append(g.pitch_curvature)
+    names.append("pressure_angle_deg")
+    columns.append(np.degrees(g.pressure_angle))
+    out.write(",".join(names) + "\n")
+    np.savetxt(out, np.column_stack(columns), delimiter=",", fmt="%.17g")
     return out.getvalue()
 
 
@@ -131,19 +165,33 @@ def contour_polyline(src: CamProfile, tolerance: float, which: str = "contour", 
 
 
 def dxf_text(src: CamProfile, tolerance: float) -> str:
-    """A DXF (R2010, millimetres) with the contour (layer CAM) and pitch curve (layer PITCH) as
-    closed LWPOLYLINEs to the chord tolerance, and the shaft centre as a point."""
+    """A DXF (R2010, millimetres) with the contour (layer CAM) and the centre path (layer PITCH: a
+    roller's pitch curve; FACE_CENTRE: a crowned face's centre; none for a flat face) as closed
+    LWPOLYLINEs to the chord tolerance, the shaft centre as a point, and the follower the contour
+    is cut for as a note (layer NOTES, a TEXT under the cam) and a custom header property CUT_FOR."""
     import ezdxf
     from ezdxf import units
 
     doc = ezdxf.new("R2010", units=units.MM)
     doc.layers.add("CAM", color=7)
-    doc.layers.add("PITCH", color=1, linetype="DASHED")
+    paths = [("CAM", "contour")]
+    path = src.cut_for.centre_path
+    if path is not None:
+        layer = CENTRE_PATHS[path][0]
+        doc.layers.add(layer, color=1, linetype="DASHED")
+        paths.append((layer, "pitch"))
+    doc.layers.add("NOTES", color=7)
     msp = doc.modelspace()
-    for layer, which in (("CAM", "contour"), ("PITCH", "pitch")):
+    lowest = 0.0
+    for layer, which in paths:
         xy = contour_polyline(src, tolerance, which) * 1e3
         msp.add_lwpolyline(xy.tolist(), format="xy", close=True, dxfattribs={"layer": layer})
+        if which == "contour":
+            lowest = float(xy[:, 1].min())
     msp.add_point((0.0, 0.0), dxfattribs={"layer": "CAM"})
+    note = f"{src.name}: {cut_for_line(src)}"
+    doc.header.custom_vars.append("CUT_FOR", note)
+    msp.add_text(note, height=2.5, dxfattribs={"layer": "NOTES", "insert": (0.0, lowest - 10.0)})
     stream = io.StringIO()
     doc.write(stream)
     return stream.getvalue()
@@ -182,6 +230,7 @@ class GrindingTable:
     wheel_centre: np.ndarray  # m, distance of the wheel centre from the cam axis
     cam_angle: np.ndarray  # rad, the follower cam angle whose contact point the wheel touches
     wheel_radius: float
+    warning: str | None = None  # a wheel within the margin of the smallest concave radius
 
 
 def wheel_centre(src: CamProfile, theta, wheel_radius: float) -> np.ndarray:
@@ -190,21 +239,48 @@ def wheel_centre(src: CamProfile, theta, wheel_radius: float) -> np.ndarray:
     return g.contour + wheel_radius * g.normal
 
 
-def grinding_table(src: CamProfile, wheel_radius: float, points: int = 3600) -> GrindingTable:
+def smallest_concave_radius(src: CamProfile, theta: np.ndarray, curvature: np.ndarray) -> tuple[float, float] | None:
+    """(radius, cam angle) of the contour's smallest concave radius, None for a convex cam: the
+    samples' most negative curvature, refined by a bounded Brent search between its neighbours
+    (the minimum of a smooth flank lies between samples: the sampled one is too large by a
+    second-order amount)."""
+    from scipy.optimize import minimize_scalar
+
+    if not np.any(curvature < 0.0):
+        return None
+    i = int(np.argmin(curvature))
+    n = theta.size
+    lo = theta[i] - (theta[i] - theta[i - 1]) % TWO_PI
+    hi = theta[i] + (theta[(i + 1) % n] - theta[i]) % TWO_PI
+    best_k, best_t = float(curvature[i]), float(theta[i])
+    found = minimize_scalar(lambda t: float(src.at(np.array([t % TWO_PI])).contour_curvature[0]), bounds=(lo, hi),
+                            method="bounded", options={"xatol": 1e-9, "maxiter": 100})
+    if found.fun < best_k:
+        best_k, best_t = float(found.fun), float(found.x % TWO_PI)
+    return -1.0 / best_k, best_t
+
+
+def grinding_table(src: CamProfile, wheel_radius: float, points: int = 3600,
+                   margin: float = WHEEL_MARGIN) -> GrindingTable:
     """Wheel-centre distance at `points` uniform grinder angles. The grinder angle a rotates the
     cam so that the wheel centre lies on the wheel's line, the ground y axis (the follower's
     direction), i.e. a = 90 deg - polar angle of the centre in the cam frame."""
     key = "--grinding-wheel-radius"
     theta = angles_with(8 * points, src.breakpoints())
     g = src.at(theta)
-    concave = g.contour_curvature < 0.0
-    if np.any(concave):
-        radius = -1.0 / g.contour_curvature[concave]
-        i = int(np.argmin(radius))
-        if radius[i] <= wheel_radius:
+    warning = None
+    flank = smallest_concave_radius(src, theta, g.contour_curvature)
+    if flank is not None:
+        radius, at = flank
+        if wheel_radius >= radius * (1.0 - AT_LIMIT):
             raise InputError("<command line>", key,
                              f"a wheel of radius {wheel_radius * 1e3:.6g} mm cannot grind the concave flank of radius "
-                             f"{radius[i] * 1e3:.6g} mm at cam angle {math.degrees(theta[concave][i]):.3f} deg")
+                             f"{radius * 1e3:.6g} mm at cam angle {math.degrees(at):.3f} deg (the wheel must be smaller: "
+                             f"at most {radius / (1.0 + margin) * 1e3:.6g} mm keeps a {margin:.3g} margin)")
+        if wheel_radius * (1.0 + margin) > radius:
+            warning = (f"a wheel of radius {wheel_radius * 1e3:.6g} mm is within {margin:.3g} of the concave flank's "
+                       f"radius {radius * 1e3:.6g} mm at cam angle {math.degrees(at):.3f} deg: the wheel's size "
+                       "tolerance and dressing would cut the flank (--wheel-margin)")
     c = g.contour + wheel_radius * g.normal
     psi = np.unwrap(np.arctan2(c[:, 1], c[:, 0]))
     step = np.diff(np.append(psi, psi[0] - TWO_PI))
@@ -233,12 +309,15 @@ def grinding_table(src: CamProfile, wheel_radius: float, points: int = 3600) -> 
         hi = np.where(above, hi, mid)
     root = 0.5 * (lo + hi)
     centre = wheel_centre(src, root, wheel_radius)
-    return GrindingTable(alpha, np.hypot(centre[:, 0], centre[:, 1]), np.mod(root, TWO_PI), wheel_radius)
+    return GrindingTable(alpha, np.hypot(centre[:, 0], centre[:, 1]), np.mod(root, TWO_PI), wheel_radius, warning)
 
 
 def grinding_text(src: CamProfile, table: GrindingTable) -> str:
     out = io.StringIO()
-    out.write(f"# {src.name}: grinding table for a wheel of radius {table.wheel_radius * 1e3:.9g} mm fed radially;\n"
+    out.write(f"# {src.name}: {cut_for_line(src)}\n")
+    if table.warning is not None:
+        out.write(f"# warning: {table.warning}\n")
+    out.write(f"# grinding table for a wheel of radius {table.wheel_radius * 1e3:.9g} mm fed radially;\n"
               "# grinder_angle: the cam's rotation that brings the ground point to the wheel's line;\n"
               "# wheel_centre: distance of the wheel centre from the cam axis; cam_angle: the follower cam angle of that point\n")
     out.write("grinder_angle_deg,wheel_centre_m,cam_angle_deg\n")

@@ -23,10 +23,10 @@ class CamGeometry:
     """Closed-form geometry at cam angles theta (cam frame, metres; normals outward, unit)."""
 
     theta: np.ndarray
-    pitch: np.ndarray  # (N, 2) roller-centre path
+    pitch: np.ndarray  # (N, 2) centre path (CutFor): a roller's centre, a crowned face's; flat face: the contour
     contour: np.ndarray  # (N, 2) contact point on the cam
     normal: np.ndarray  # (N, 2) outward contact normal
-    pitch_curvature: np.ndarray  # 1/m, > 0 convex, 0 straight
+    pitch_curvature: np.ndarray  # 1/m, of the centre path, > 0 convex, 0 straight
     contour_curvature: np.ndarray  # 1/m, > 0 convex
     pressure_angle: np.ndarray  # rad
 
@@ -77,12 +77,48 @@ def angles_with(uniform: int, breakpoints) -> np.ndarray:
     return theta
 
 
+@dataclass(frozen=True)
+class CutFor:
+    """The follower a contour is cut for. A cam is cut for its own follower: the same contour read
+    by another follower gives another lift (a 3 m crowned bucket's cam read by a flat tappet lifts
+    more, by e^2 / (2 R) at a contact offset e: the crown's sag there), so every exported file names it.
+
+    surface: "roller" (radius: the roller's) or "face" (a sliding face, pad or lifter face; radius:
+    its crown's, inf for a flat face). The centre path CamGeometry.pitch is the centre of the
+    follower's curvature at the contact, contour + radius * normal: a roller's centre (the pitch
+    curve), a crowned face's or pad's centre; a flat face has none (pitch is then the contour)."""
+
+    follower: str  # the scene's follower.type
+    surface: str  # "roller" | "face"
+    radius: float  # m; inf: a flat face
+
+    @property
+    def centre_path(self) -> str | None:
+        """The exports' name of the centre path: "pitch" (a roller's centre), "face_centre" (a
+        crowned face's or curved pad's centre of curvature), None (a flat face: no centre)."""
+        if self.surface == "roller":
+            return "pitch"
+        return "face_centre" if math.isfinite(self.radius) else None
+
+    def describe(self) -> str:
+        """One line for a file's header: the follower type, its surface and radius in mm."""
+        if self.surface == "roller":
+            what = f"roller of radius {self.radius * 1e3:.9g} mm"
+        elif math.isfinite(self.radius):
+            what = f"crowned (curved) face of radius {self.radius * 1e3:.9g} mm"
+        else:
+            what = "flat face"
+        return f"{self.follower}, {what}"
+
+
 class CamProfile(Protocol):
     """What an export needs of a cam: its geometry at cam angles, the angles where it may have a
-    corner (the lift's breakpoints, in [0, 2 pi)), the scene's name and file (for the files' headers)."""
+    corner (the lift's breakpoints, in [0, 2 pi)), the scene's name and file (for the files' headers)
+    and the follower it is cut for."""
 
     name: str
     source: str
+    cut_for: CutFor
 
     def at(self, theta) -> CamGeometry: ...
 
@@ -99,6 +135,12 @@ class TranslatingCam:
     offset: float
     name: str
     source: str
+
+    follower: str = "translating roller follower"  # the scene's follower.type (the gear passes it)
+
+    @property
+    def cut_for(self) -> CutFor:
+        return CutFor(self.follower, "roller", self.roller_radius)
 
     def at(self, theta) -> CamGeometry:
         return geometry(self.lift, theta, self.base_radius, self.roller_radius, self.offset)

@@ -80,6 +80,7 @@ every stream made in a process, with its threads, until that process exits.
 from __future__ import annotations
 
 import itertools
+import json
 import math
 import os
 import shutil
@@ -402,7 +403,9 @@ def summary_markdown(result, label: str, magnification: float | None = None) -> 
     for key, value in s.items():
         if isinstance(value, (dict, list, tuple)):
             continue
-        if isinstance(value, (float, np.floating)):
+        if value is None or isinstance(value, (bool, np.bool_)):
+            value = json.dumps(None if value is None else bool(value))  # the JSON summary's null, true, false
+        elif isinstance(value, (float, np.floating)):
             value = f"{float(value):.6g}"
         lines.append(f"| {key} | {value} |")
     if result.timings:
