@@ -15,7 +15,7 @@ import numpy as np
 
 from ..core.roots import roots_in
 from ..lift.contours.translating import pitch_geometry, translating_profile
-from ..lift.curves import TWO_PI, lift_rows
+from ..lift.curves import TWO_PI, grid_with, lift_rows
 from ..lift.validity import cam_fault, entered_error, lift_fault, sample_angles
 from ..mechanics.kinematics import ONE_SIDED
 from .lift import build_lift
@@ -123,8 +123,8 @@ def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarra
     y0 = math.sqrt(rp * rp - e * e)
     rows = (0, 1, 2, 3)
     marks = np.unique(np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI))
-    angles = np.unique(np.concatenate([sample_angles(lift), np.mod(marks - ONE_SIDED, TWO_PI),
-                                       marks + ONE_SIDED]))
+    # np.unique of them all, the same floats (grid_with: the few one-sided angles merged in, no sort)
+    angles = grid_with(sample_angles(lift), np.concatenate([np.mod(marks - ONE_SIDED, TWO_PI), marks + ONE_SIDED]))
     angles = np.append(angles, angles[0] + TWO_PI)  # closed round the revolution
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         d = lift_rows(lift, angles, rows)
@@ -155,7 +155,10 @@ def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarra
     # all searches at once (roots_in: each root the float of its own root_in, one call of the lift per step)
     found = roots_in(rates, angles[at], angles[at + 1], fa=np.concatenate(given[0::2]),
                      fb=np.concatenate(given[1::2]), xtol=1e-15, maxiter=200)
-    x = np.concatenate([angles[:-1], np.asarray(found, dtype=float)])
+    found = np.asarray(found, dtype=float)
+    x = np.concatenate([angles[:-1], found])
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        phi, rho = pitch_geometry(lift_rows(lift, x, rows), f.base_radius, f.roller_radius, e)
+        # the angles' rows are d's (the lift's value at an angle does not depend on the call's others)
+        phi, rho = pitch_geometry(np.concatenate([d[:, :-1], lift_rows(lift, found, rows)], axis=1),
+                                  f.base_radius, f.roller_radius, e)
     return x, phi, rho
