@@ -117,3 +117,57 @@ def test_roots_in_on_a_lifts_rates_equals_root_in(name):
     got = roots_in(g, a, b, fa=fa, fb=fb, xtol=1e-15, maxiter=200)
     assert len(got) >= 4 and all(math.isfinite(x) for x in got)
     assert got == _one_by_one(g, a, b, fa, fb, xtol=1e-15, maxiter=200)
+
+
+def _valve_extremes_one_by_one(lift, theta, d, ratio, lash, scales, ends):
+    """valve_extremes as first written (the oracle): each bracket's root_in on lift_at in turn, the
+    lift at each root and end by lift_at."""
+    from explorer.lift.curves import lift_at
+    from explorer.mechanics.kinematics import ONE_SIDED
+
+    needed = sorted({0, *scales, *(row + 1 for row in scales)})
+    marks = np.sort(np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI))
+    sides = np.sort(np.concatenate([marks - ONE_SIDED, marks + ONE_SIDED]))
+    angles = np.append(theta, theta[0] + TWO_PI)
+    rows = np.concatenate([d[needed], d[needed][:, :1]], axis=1)
+    if sides.size:
+        at = np.searchsorted(angles, sides)
+        angles = np.insert(angles, at, sides)
+        rows = np.insert(rows, at, lift_rows(lift, sides, tuple(needed)), axis=1)
+    line = dict(zip(needed, rows))
+    is_open = ratio * line[0] - lash > 0.0
+    closed_somewhere = not (ratio * d[0] - lash > 0.0).all()
+    across = ((angles[:-1, None] >= marks - ONE_SIDED) & (angles[1:, None] <= marks + ONE_SIDED)).any(axis=1)
+    out = {}
+    for row, scale in scales.items():
+        sampled = scale * line[row][is_open]
+        values = [float(sampled.max()), float(sampled.min())] if sampled.size else []
+        if closed_somewhere:
+            values.append(0.0)
+        slope = line[row + 1]
+        for i in np.nonzero((np.sign(slope[:-1]) * np.sign(slope[1:]) < 0.0) & ~across)[0]:
+            x = root_in(lambda th, k=row + 1: lift_at(lift, th, k), float(angles[i]), float(angles[i + 1]),
+                        fa=float(slope[i]), fb=float(slope[i + 1]), xtol=1e-15, maxiter=200)
+            if ratio * lift_at(lift, x, 0) - lash > 0.0:
+                values.append(scale * lift_at(lift, x, row))
+        values.extend(scale * lift_at(lift, float(x), row) for x in ends)
+        out[row] = (max(values), min(values)) if values else (math.nan, math.nan)
+    return out
+
+
+@pytest.mark.parametrize("scene", ["spline_demo", "table_demo", "schenker1902_fig2", "polydyne_spline",
+                                   "cycloidal_demo"])
+@pytest.mark.parametrize("lash", [0.0, 2e-4, 0.02])
+def test_valve_extremes_as_one_search_at_a_time(scene, lash):
+    """The kinematics' exact peaks (valve_extremes: all brackets through roots_in where the lift has
+    no one-angle form) are the floats of the searches one at a time, open or closed valve."""
+    from explorer.mechanics.kinematics import lash_crossings, valve_extremes
+
+    lift = build_lift(load_scene(SCENES / f"{scene}.toml"))
+    theta = np.arange(3600) * (TWO_PI / 3600)
+    d = lift.derivatives(theta)
+    ups, downs = lash_crossings(lift, 1.3, lash)
+    ends = np.concatenate([ups, downs])
+    scales = {0: 1.0, 1: 1.3 * 500.0, 2: 1.3 * 500.0**2}
+    got = valve_extremes(lift, theta, d, 1.3, lash, scales, ends)
+    assert repr(got) == repr(_valve_extremes_one_by_one(lift, theta, d, 1.3, lash, scales, ends))
