@@ -24,6 +24,11 @@ same float as brentq's (tests/test_roots.py compares them bit for bit). Why not 
 importing scipy.optimize costs ~0.3 s of CPU (it loads scipy.linalg, scipy.sparse, scipy.special
 and more), which was a third of a fresh process's first sweep (issue #27.3) for a routine of 40
 lines; a root search calls f some 10-60 times, so the Python loop costs nothing measurable.
+
+`roots_in` runs many such searches at once (root_in's end checks, then the same Brent steps, one
+generator `_brent_steps` for both) and calls f on all their current points together, once a step:
+where f is an array evaluation (a lift's derivatives) whose cost hardly depends on the number of
+points, a few calls replace hundreds, and every root is still the float root_in gives.
 """
 
 from __future__ import annotations
