@@ -17,8 +17,8 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-QUICK_REPEAT = {"core": "3", "dynamics": "3", "forces": "3", "gears_contact": "3", "contour_points": "3", "recording": "2",
-                "viewer": "5", "design_area": "2"}
+QUICK_REPEAT = {"core": "3", "dynamics": "3", "forces": "3", "gears_contact": "3", "contour_points": "3", "kinematics": "3",
+                "recording": "2", "viewer": "5", "design_area": "2"}
 REPEAT_FLAG = {"recording": "--repeats"}
 
 

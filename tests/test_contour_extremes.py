@@ -153,13 +153,13 @@ def test_schenker_fig2_arcs_radii_without_a_search_per_sample(monkeypatch):
     import explorer.effects.contour as contour
 
     calls = []
-    real = contour.root_in
+    real = contour.roots_in
 
-    def counting(*args, **kwargs):
-        calls.append(args[1])
+    def counting(*args, **kwargs):  # one search per bracket (roots_in runs them all at once)
+        calls.extend(np.asarray(args[1]).reshape(-1))
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(contour, "root_in", counting)
+    monkeypatch.setattr(contour, "roots_in", counting)
     got = summary(load_scene(SCENES / "schenker1902_fig2.toml"), 3600)
     assert got["min_convex_pitch_radius_m"] == pytest.approx(9.46e-3 + 10e-3, rel=1e-12)
     assert got["min_convex_contour_radius_m"] == pytest.approx(9.46e-3, rel=1e-12)

@@ -71,3 +71,53 @@ def test_verdict_does_not_depend_on_steps(rise, ret, steps):
     """Any rise and return from the smallest the scene takes (0.1 deg) to 30 deg: one verdict, one line."""
     scene = short_event(rise, ret)
     assert verdict(scene, steps) == verdict(scene, 360)
+
+
+class _Marks:
+    """A lift reduced to its breakpoints (sample_angles reads nothing else)."""
+
+    def __init__(self, marks):
+        self.marks = np.asarray(marks, dtype=float)
+
+    def breakpoints(self):
+        return self.marks
+
+
+def _sample_angles_by_sorting(lift, n, per_segment):
+    """sample_angles as it was first written (the oracle): every angle concatenated and np.unique."""
+    grid = np.arange(int(n)) * (2.0 * math.pi / int(n))
+    marks = np.unique(np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), 2.0 * math.pi))
+    parts = [grid, marks]
+    if marks.size and per_segment > 0:
+        ends = np.append(marks, marks[0] + 2.0 * math.pi)
+        t = np.arange(1, int(per_segment) + 1) / (int(per_segment) + 1.0)
+        parts.append(np.mod((ends[:-1, None] + np.diff(ends)[:, None] * t).reshape(-1), 2.0 * math.pi))
+    return np.unique(np.concatenate(parts))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.one_of(st.floats(-20.0, 20.0), st.sampled_from([0.0, -0.0, math.pi, 2.0 * math.pi, -1e-300,
+                                                                   math.radians(45.0), math.nan])),
+                max_size=8),
+       st.sampled_from([1, 7, 360, 7200]), st.sampled_from([0, 1, 3, 256]))
+def test_sample_angles_are_the_sorted_union(marks, n, per_segment):
+    """sample_angles merges the breakpoints and the stretches' angles into the sorted grid
+    (grid_with) instead of sorting them all: the same floats, bit for bit, breakpoints on grid
+    angles, outside [0, 2 pi), -0.0 and NaN included."""
+    from explorer.lift.validity import sample_angles
+
+    lift = _Marks(marks)
+    got = sample_angles(lift, n, per_segment)
+    want = _sample_angles_by_sorting(lift, n, per_segment)
+    assert got.dtype == want.dtype and got.shape == want.shape
+    assert np.array_equal(got, want, equal_nan=True) and np.array_equal(np.signbit(got), np.signbit(want))
+
+
+@pytest.mark.parametrize("name", ["cycloidal_demo", "spline_demo", "schenker1902_fig2", "polydyne_spline"])
+def test_sample_angles_of_the_scenes_are_the_sorted_union(name):
+    from explorer.lift.validity import SAMPLES, SEGMENT_SAMPLES, sample_angles
+
+    lift = build_lift(load_scene(SCENES / f"{name}.toml"))
+    got = sample_angles(lift)
+    assert np.array_equal(got, _sample_angles_by_sorting(lift, SAMPLES, SEGMENT_SAMPLES))
+    assert got.size > SAMPLES

@@ -13,9 +13,9 @@ import math
 
 import numpy as np
 
-from ..core.roots import root_in
+from ..core.roots import roots_in
 from ..lift.contours.translating import pitch_geometry, translating_profile
-from ..lift.curves import TWO_PI, lift_rows
+from ..lift.curves import TWO_PI, grid_with, lift_rows
 from ..lift.validity import cam_fault, entered_error, lift_fault, sample_angles
 from ..mechanics.kinematics import ONE_SIDED
 from .lift import build_lift
@@ -123,8 +123,8 @@ def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarra
     y0 = math.sqrt(rp * rp - e * e)
     rows = (0, 1, 2, 3)
     marks = np.unique(np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI))
-    angles = np.unique(np.concatenate([sample_angles(lift), np.mod(marks - ONE_SIDED, TWO_PI),
-                                       marks + ONE_SIDED]))
+    # np.unique of them all, the same floats (grid_with: the few one-sided angles merged in, no sort)
+    angles = grid_with(sample_angles(lift), np.concatenate([np.mod(marks - ONE_SIDED, TWO_PI), marks + ONE_SIDED]))
     angles = np.append(angles, angles[0] + TWO_PI)  # closed round the revolution
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         d = lift_rows(lift, angles, rows)
@@ -134,19 +134,31 @@ def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarra
         scale_phi, scale_rho = np.abs(p1) + np.abs(p2), np.abs(r1) + np.abs(r2)
     # a bracket no wider than a breakpoint's two one-sided angles spans a jump, not a zero
     wide = np.diff(angles) > 4.0 * ONE_SIDED
-    found = []
+    brackets, which, given = [], [], []
     for k, rate, scale in ((0, rate_phi, scale_phi), (1, rate_rho, scale_rho)):
         flat = np.abs(rate) <= RATE_ROUNDING * scale
         change = wide & (np.sign(rate[:-1]) * np.sign(rate[1:]) < 0.0) & ~(flat[:-1] & flat[1:])
         if k == 1:  # rho passes infinity where C changes sign: no extremum of rho there
             change &= np.sign(c[:-1]) * np.sign(c[1:]) > 0.0
-        for i in np.nonzero(change)[0]:
-            def fun(th, k=k):
-                with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-                    return float(_rates(lift_rows(lift, np.array([th]), rows), y0, e)[k][0])
-            found.append(root_in(fun, float(angles[i]), float(angles[i + 1]), fa=float(rate[i]),
-                                 fb=float(rate[i + 1]), xtol=1e-15, maxiter=200))
-    x = np.concatenate([angles[:-1], np.asarray(found, dtype=float)])
+        at = np.nonzero(change)[0]
+        brackets.append(at)
+        which.append(np.full(at.size, k))
+        given.append(rate[at])
+        given.append(rate[at + 1])
+    at, which = np.concatenate(brackets), np.concatenate(which)
+
+    def rates(th, i):  # the rate of each point's search (phi' or rho'), element by element
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            phi_rate, rho_rate = _rates(lift_rows(lift, th, rows), y0, e)[:2]
+        return np.where(which[i] == 0, phi_rate, rho_rate)
+
+    # all searches at once (roots_in: each root the float of its own root_in, one call of the lift per step)
+    found = roots_in(rates, angles[at], angles[at + 1], fa=np.concatenate(given[0::2]),
+                     fb=np.concatenate(given[1::2]), xtol=1e-15, maxiter=200)
+    found = np.asarray(found, dtype=float)
+    x = np.concatenate([angles[:-1], found])
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        phi, rho = pitch_geometry(lift_rows(lift, x, rows), f.base_radius, f.roller_radius, e)
+        # the angles' rows are d's (the lift's value at an angle does not depend on the call's others)
+        phi, rho = pitch_geometry(np.concatenate([d[:, :-1], lift_rows(lift, found, rows)], axis=1),
+                                  f.base_radius, f.roller_radius, e)
     return x, phi, rho

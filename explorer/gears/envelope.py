@@ -232,11 +232,17 @@ def check_no_undercut(surface: CamSurface, circle_radius: float, file: str, key:
 def first_crossing(theta, contour: np.ndarray, start: np.ndarray, end: np.ndarray) -> int | None:
     """Index of the first cam angle at which the segment start -> end (ground, one per angle)
     properly crosses the cam's contour (cam frame polygon, turned by the angle), else None.
-    Touching is not crossing: a working surface resting on the cam is fine."""
+    Touching is not crossing: a working surface resting on the cam is fine.
+
+    Only the angles where some edge can cross are tested (_may_cross: an arm clear of the cam
+    passes every angle's prefilter in one vectorised step); those are tested on every edge in
+    exactly the arithmetic they always were, so the answer is the same index."""
     p = np.asarray(contour, dtype=float)
     q = np.roll(p, -1, axis=0)
-    for i, th in enumerate(np.asarray(theta, dtype=float)):
-        c, s = math.cos(th), math.sin(th)
+    theta = np.asarray(theta, dtype=float)
+    start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    for i in np.nonzero(_may_cross(theta, p, q, start, end))[0]:
+        c, s = math.cos(theta[i]), math.sin(theta[i])
         rot = np.array([[c, -s], [s, c]])
         a, b = start[i], end[i]
         pa, qa = p @ rot.T, q @ rot.T
@@ -245,8 +251,70 @@ def first_crossing(theta, contour: np.ndarray, start: np.ndarray, end: np.ndarra
         d3 = _orient(a[None, :], b[None, :], pa)
         d4 = _orient(a[None, :], b[None, :], qa)
         if np.any((d1 * d2 < 0.0) & (d3 * d4 < 0.0)):
-            return i
+            return int(i)
     return None
+
+
+# The prefilter's margin, relative to the figure's size: the crossing test's rounding (a few ulps
+# of the coordinates, ~1e-16 of them) moves a crossing by far less, so an angle it passes over
+# has no crossing in floating point either.
+CROSSING_MARGIN = 1e-9
+
+
+def _may_cross(theta: np.ndarray, p: np.ndarray, q: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """Per angle, False only where no edge p_j -> q_j of the contour (cam frame) can cross the
+    segment start -> end turned into the cam frame: a crossing point X lies on both, so its
+    distance from the cam centre is at most the edge's far end's, R_j, and at least the segment's
+    nearest point's, D; and its polar angle lies in both their angular spans. So an angle is
+    passed over when every edge within the segment's angular span (widened by the margin) has
+    R_j < D - margin. Where that cannot be told (a segment or an edge through or near the centre,
+    wide edges, non-finite values) the angle is kept: a conservative filter, never a verdict."""
+    n = len(theta)
+    keep = np.ones(n, dtype=bool)
+    if n == 0 or len(p) < 3 or not (np.isfinite(p).all() and np.isfinite(theta).all()):
+        return keep
+    scale = max(float(np.abs(p).max()), float(np.abs(start).max(initial=0.0)), float(np.abs(end).max(initial=0.0)))
+    if not math.isfinite(scale) or scale == 0.0:
+        return keep
+    margin = CROSSING_MARGIN * scale
+    # the edges' angular spans [lo, lo + width] (< pi: an edge clear of the centre) and far radii
+    alpha = np.arctan2(p[:, 1], p[:, 0])
+    turn = np.mod(np.roll(alpha, -1) - alpha + math.pi, TWO_PI) - math.pi  # in [-pi, pi)
+    lo = np.mod(alpha + np.minimum(turn, 0.0), TWO_PI)
+    width = np.abs(turn).max()
+    if _distance_to_centre(p, q).min() <= 1e3 * margin or width > 0.25 * math.pi:
+        return keep  # an edge near the centre sweeps any angle: no filter
+    far = np.maximum(np.hypot(p[:, 0], p[:, 1]), np.hypot(q[:, 0], q[:, 1]))
+    order = np.argsort(lo, kind="stable")
+    lo_all = np.concatenate([lo[order] - TWO_PI, lo[order], lo[order] + TWO_PI])  # windows across 0 are one run
+    far_all = np.tile(far[order], 3)
+    # the segments' angular spans in the cam frame and their distances from the centre
+    near = _distance_to_centre(start, end)
+    ga = np.arctan2(start[:, 1], start[:, 0]) - theta
+    turn = np.mod(np.arctan2(end[:, 1], end[:, 0]) - theta - ga + math.pi, TWO_PI) - math.pi
+    s0 = np.mod(ga + np.minimum(turn, 0.0), TWO_PI)
+    spread = margin / np.maximum(near, margin) + 1e-9  # the margin as an angle at the segment (rad)
+    k0 = np.searchsorted(lo_all, s0 - width - spread)
+    k1 = np.searchsorted(lo_all, s0 + np.abs(turn) + spread, side="right")
+    clear = (near > 1e3 * margin) & (np.abs(turn) < 0.9 * math.pi) & np.isfinite(near) & np.isfinite(turn)
+    nonempty = k1 > k0
+    top = np.full(n, -np.inf)  # the largest far radius of the edges in each window
+    if nonempty.any():
+        bounds = np.stack([k0[nonempty], k1[nonempty]], axis=1).reshape(-1)
+        top[nonempty] = np.maximum.reduceat(np.append(far_all, -np.inf), bounds)[0::2]
+    keep[clear] = ~(top[clear] < near[clear] - margin)
+    return keep
+
+
+def _distance_to_centre(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from the origin to each segment a_i -> b_i (rows of (N, 2) arrays)."""
+    d = b - a
+    length2 = np.einsum("ij,ij->i", d, d)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.clip(-np.einsum("ij,ij->i", a, d) / length2, 0.0, 1.0)
+    t = np.where(length2 > 0.0, t, 0.0)
+    x = a + t[:, None] * d
+    return np.hypot(x[:, 0], x[:, 1])
 
 
 def _orient(u, v, w):

@@ -83,21 +83,30 @@ class SplineLift:
                 continue
             width = knots[i + 1] - knots[i]
             u = (x[mask] - knots[i]) / width
-            p = np.polynomial.Polynomial(c)
-            for k in range(order + 1):
+            for k, p in enumerate(self._chain(i, order)[:order + 1]):
                 out[k, mask] = p(u) / width**k
-                p = p.deriv()
         return out
+
+    def _chain(self, segment: int, order: int) -> list:
+        """Segment's polynomial and its first `order` derivatives, each the .deriv() of the one
+        before: made once per lift and kept (the same coefficients every call; making them was
+        half the cost of evaluating a spline lift at one angle, which the root searches do)."""
+        chains = self.__dict__.setdefault("_chains", {})  # (a frozen dataclass: not a field)
+        chain = chains.get(segment)
+        if chain is None:
+            chain = [np.polynomial.Polynomial(self.coefficients[segment])]
+        while len(chain) <= order:
+            chain = [*chain, chain[-1].deriv()]
+        chains[segment] = chain
+        return chain
 
     def segment_derivatives(self, segment: int, u: float, order: int) -> np.ndarray:
         """(order + 1,): derivatives per radian of one segment's polynomial at its local u (its own
         end at u = 1, where local_derivatives would take the next segment)."""
         width = self.knots[segment + 1] - self.knots[segment]
-        p = np.polynomial.Polynomial(self.coefficients[segment])
         out = np.zeros(order + 1)
-        for k in range(order + 1):
+        for k, p in enumerate(self._chain(segment, order)[:order + 1]):
             out[k] = p(u) / width**k
-            p = p.deriv()
         return out
 
     def derivatives(self, theta) -> np.ndarray:

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from ..core.roots import root_in
+from ..core.roots import root_in, roots_in
 from ..lift.curves import TWO_PI, grid_with, lift_at, lift_rows
 
 
@@ -130,19 +130,53 @@ def valve_extremes(lift, theta: np.ndarray, d: np.ndarray, ratio: float, lash: f
     # the brackets within a breakpoint's two one-sided angles (across a jump, not a zero of L^(row+1))
     across = ((angles[:-1, None] >= marks - ONE_SIDED) & (angles[1:, None] <= marks + ONE_SIDED)).any(axis=1)
     ends = np.asarray(ends, dtype=float).reshape(-1)
-    out = {}
+    # every row's brackets (where L^(row+1) changes sign)
+    brackets = {row: np.nonzero((np.sign(line[row + 1][:-1]) * np.sign(line[row + 1][1:]) < 0.0) & ~across)[0]
+                for row in scales}
+    lower = np.concatenate([brackets[row] for row in scales]).astype(int)  # each bracket's first angle
+    slope_of = np.concatenate([np.full(brackets[row].size, row + 1) for row in scales]).astype(int)
+    slope_rows = tuple(sorted({row + 1 for row in scales}))
+
+    def slopes(th, i):
+        d = lift_rows(lift, th, slope_rows)
+        return d[np.searchsorted(slope_rows, slope_of[i]), np.arange(th.size)]
+
+    fa = np.concatenate([line[row + 1][brackets[row]] for row in scales])
+    fb = np.concatenate([line[row + 1][brackets[row] + 1] for row in scales])
+    if getattr(lift, "row_at", None) is not None:  # one angle in Python floats: cheaper than arrays
+        roots = [root_in(lambda th, k=int(k): lift_at(lift, th, k), float(angles[i]), float(angles[i + 1]),
+                         fa=float(ga), fb=float(gb), xtol=1e-15, maxiter=200)
+                 for i, k, ga, gb in zip(lower, slope_of, fa, fb)]
+
+        def at_root(n: int, row: int) -> float:
+            return lift_at(lift, roots[n], row)
+
+        def at_ends(row: int) -> list[float]:
+            return [lift_at(lift, float(x), row) for x in ends]
+    else:
+        # all at once: roots_in gives each the float of its own root_in on lift_at (an angle's value
+        # is the same float among other angles or alone: lift_at's contract), calling the lift once
+        # a step for all (a spline or table lift at one angle costs as much as at a hundred)
+        roots = roots_in(slopes, angles[lower], angles[lower + 1], fa=fa, fb=fb, xtol=1e-15, maxiter=200)
+        on_roots, on_ends = (dict(zip(needed, lift_rows(lift, x, tuple(needed)).tolist())) if x.size
+                             else {row: [] for row in needed} for x in (np.asarray(roots, dtype=float), ends))
+
+        def at_root(n: int, row: int) -> float:
+            return on_roots[row][n]
+
+        def at_ends(row: int) -> list[float]:
+            return on_ends[row]
+    out, first = {}, 0
     for row, scale in scales.items():
         sampled = scale * line[row][is_open]
         values = [float(sampled.max()), float(sampled.min())] if sampled.size else []
         if closed_somewhere:
             values.append(0.0)
-        slope = line[row + 1]
-        for i in np.nonzero((np.sign(slope[:-1]) * np.sign(slope[1:]) < 0.0) & ~across)[0]:
-            x = root_in(lambda th, k=row + 1: lift_at(lift, th, k), float(angles[i]), float(angles[i + 1]),
-                        fa=float(slope[i]), fb=float(slope[i + 1]), xtol=1e-15, maxiter=200)
-            if ratio * lift_at(lift, x, 0) - lash > 0.0:
-                values.append(scale * lift_at(lift, x, row))
-        values.extend(scale * lift_at(lift, float(x), row) for x in ends)
+        for n in range(first, first + brackets[row].size):
+            if ratio * at_root(n, 0) - lash > 0.0:
+                values.append(scale * at_root(n, row))
+        first += brackets[row].size
+        values.extend(scale * v for v in at_ends(row))
         out[row] = (max(values), min(values)) if values else (math.nan, math.nan)
     return out
 
