@@ -120,24 +120,16 @@ def test_roots_in_on_a_lifts_rates_equals_root_in(name):
 
 
 def _valve_extremes_one_by_one(lift, theta, d, ratio, lash, scales, ends):
-    """valve_extremes as first written (the oracle): each bracket's root_in on lift_at in turn, the
-    lift at each root and end by lift_at."""
+    """valve_extremes' searches as first written (the oracle): each bracket's root_in on lift_at in
+    turn, the lift at each root and end by lift_at (the samples and brackets: closed_lines, which
+    the batching did not change)."""
     from explorer.lift.curves import lift_at
-    from explorer.mechanics.kinematics import ONE_SIDED
+    from explorer.mechanics.kinematics import closed_lines
 
     needed = sorted({0, *scales, *(row + 1 for row in scales)})
-    marks = np.sort(np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI))
-    sides = np.sort(np.concatenate([marks - ONE_SIDED, marks + ONE_SIDED]))
-    angles = np.append(theta, theta[0] + TWO_PI)
-    rows = np.concatenate([d[needed], d[needed][:, :1]], axis=1)
-    if sides.size:
-        at = np.searchsorted(angles, sides)
-        angles = np.insert(angles, at, sides)
-        rows = np.insert(rows, at, lift_rows(lift, sides, tuple(needed)), axis=1)
-    line = dict(zip(needed, rows))
+    angles, line, across = closed_lines(lift, theta, d, needed)
     is_open = ratio * line[0] - lash > 0.0
     closed_somewhere = not (ratio * d[0] - lash > 0.0).all()
-    across = ((angles[:-1, None] >= marks - ONE_SIDED) & (angles[1:, None] <= marks + ONE_SIDED)).any(axis=1)
     out = {}
     for row, scale in scales.items():
         sampled = scale * line[row][is_open]

@@ -134,7 +134,7 @@ def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarra
         scale_phi, scale_rho = np.abs(p1) + np.abs(p2), np.abs(r1) + np.abs(r2)
     # a bracket no wider than a breakpoint's two one-sided angles spans a jump, not a zero
     wide = np.diff(angles) > 4.0 * ONE_SIDED
-    brackets, which, given = [], [], []
+    brackets, which, lows, highs = [], [], [], []
     for k, rate, scale in ((0, rate_phi, scale_phi), (1, rate_rho, scale_rho)):
         flat = np.abs(rate) <= RATE_ROUNDING * scale
         change = wide & (np.sign(rate[:-1]) * np.sign(rate[1:]) < 0.0) & ~(flat[:-1] & flat[1:])
@@ -143,8 +143,8 @@ def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarra
         at = np.nonzero(change)[0]
         brackets.append(at)
         which.append(np.full(at.size, k))
-        given.append(rate[at])
-        given.append(rate[at + 1])
+        lows.append(rate[at])
+        highs.append(rate[at + 1])
     at, which = np.concatenate(brackets), np.concatenate(which)
 
     def rates(th, i):  # the rate of each point's search (phi' or rho'), element by element
@@ -153,8 +153,8 @@ def geometry_extremes(lift, follower) -> tuple[np.ndarray, np.ndarray, np.ndarra
         return np.where(which[i] == 0, phi_rate, rho_rate)
 
     # all searches at once (roots_in: each root the float of its own root_in, one call of the lift per step)
-    found = roots_in(rates, angles[at], angles[at + 1], fa=np.concatenate(given[0::2]),
-                     fb=np.concatenate(given[1::2]), xtol=1e-15, maxiter=200)
+    found = roots_in(rates, angles[at], angles[at + 1], fa=np.concatenate(lows), fb=np.concatenate(highs),
+                     xtol=1e-15, maxiter=200)
     found = np.asarray(found, dtype=float)
     x = np.concatenate([angles[:-1], found])
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):

@@ -101,6 +101,24 @@ def open_angle(ups: np.ndarray, downs: np.ndarray, always_open: bool) -> float:
     return total
 
 
+def closed_lines(lift, theta: np.ndarray, d: np.ndarray, needed) -> tuple[np.ndarray, dict, np.ndarray]:
+    """(angles, line, across) for valve_extremes: the samples theta (sorted; d the lift's
+    derivatives there) closed round the revolution with the one-sided angles at the lift's
+    breakpoints merged in; line[row] the lift's derivative `row` of `needed` at those angles; and
+    which brackets lie within a breakpoint's two one-sided angles (across a jump, not a zero of the
+    next derivative)."""
+    marks = np.sort(np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI))
+    sides = np.sort(np.concatenate([marks - ONE_SIDED, marks + ONE_SIDED]))
+    angles = np.append(theta, theta[0] + TWO_PI)
+    rows = np.concatenate([d[needed], d[needed][:, :1]], axis=1)
+    if sides.size:  # (a lift without breakpoints: a contour followed by a face)
+        at = np.searchsorted(angles, sides)
+        angles = np.insert(angles, at, sides)
+        rows = np.insert(rows, at, lift_rows(lift, sides, tuple(needed)), axis=1)
+    across = ((angles[:-1, None] >= marks - ONE_SIDED) & (angles[1:, None] <= marks + ONE_SIDED)).any(axis=1)
+    return angles, dict(zip(needed, rows)), across
+
+
 def valve_extremes(lift, theta: np.ndarray, d: np.ndarray, ratio: float, lash: float, scales: dict[int, float],
                    ends=()) -> dict[int, tuple[float, float]]:
     """The largest and smallest scale * L^(row) of each row of `scales` (row 1, scale ratio w: the
@@ -115,20 +133,9 @@ def valve_extremes(lift, theta: np.ndarray, d: np.ndarray, ratio: float, lash: f
     samples with two sign changes of L^(row+1) is not seen (a sample grid of degrees or finer:
     none in the shipped laws)."""
     needed = sorted({0, *scales, *(row + 1 for row in scales)})
-    marks = np.sort(np.mod(np.asarray(lift.breakpoints(), dtype=float).reshape(-1), TWO_PI))
-    sides = np.sort(np.concatenate([marks - ONE_SIDED, marks + ONE_SIDED]))
-    # the samples closed round the revolution, the one-sided angles merged in (theta is sorted)
-    angles = np.append(theta, theta[0] + TWO_PI)
-    rows = np.concatenate([d[needed], d[needed][:, :1]], axis=1)
-    if sides.size:  # (a lift without breakpoints: a contour followed by a face)
-        at = np.searchsorted(angles, sides)
-        angles = np.insert(angles, at, sides)
-        rows = np.insert(rows, at, lift_rows(lift, sides, tuple(needed)), axis=1)
-    line = dict(zip(needed, rows))
+    angles, line, across = closed_lines(lift, theta, d, needed)
     is_open = ratio * line[0] - lash > 0.0
     closed_somewhere = not (ratio * d[0] - lash > 0.0).all()
-    # the brackets within a breakpoint's two one-sided angles (across a jump, not a zero of L^(row+1))
-    across = ((angles[:-1, None] >= marks - ONE_SIDED) & (angles[1:, None] <= marks + ONE_SIDED)).any(axis=1)
     ends = np.asarray(ends, dtype=float).reshape(-1)
     # every row's brackets (where L^(row+1) changes sign)
     brackets = {row: np.nonzero((np.sign(line[row + 1][:-1]) * np.sign(line[row + 1][1:]) < 0.0) & ~across)[0]
